@@ -1,0 +1,168 @@
+//! The H-Anim 2.0 humanoid (ISO/IEC 19774-1:2019): the joint vocabulary, levels of
+//! articulation (LOA) 1 to 4 and default joint centres.
+//!
+//! Frame: +Y up, +Z the front of the body, +X the body's left; metres.
+
+mod joint_table;
+
+use glam::DVec3;
+
+/// One joint of the H-Anim 2.0 vocabulary, as listed by the X3D Unified Object Model 4.0.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointDefinition {
+    /// Normative joint name, e.g. `l_shoulder`.
+    pub name: &'static str,
+    /// Lowest level of articulation at which the joint is present (0 for `humanoid_root`).
+    pub first_loa: u8,
+    /// Index (into [`all_joints`]) of the nearest ancestor present at LOA 1, 2, 3, 4.
+    pub parent_by_loa: [Option<usize>; 4],
+    /// Default joint centre in metres, when X3DUOM gives one.
+    pub default_centre: Option<[f64; 3]>,
+    /// Joint centre of the Web3D "Jin" LOA4 example, present for every joint.
+    pub jin_centre: [f64; 3],
+    /// Older or alternative names of the joint (H-Anim 1.1 names among them).
+    pub aliases: &'static [&'static str],
+}
+
+impl JointDefinition {
+    /// The default centre, falling back on the Jin example where X3DUOM gives none.
+    pub fn centre(&self) -> DVec3 {
+        DVec3::from_array(self.default_centre.unwrap_or(self.jin_centre))
+    }
+}
+
+/// A level of articulation: how many joints a humanoid has (H-Anim 2.0, Annex A).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum LevelOfArticulation {
+    /// 18 joints: whole limbs, a 3-joint spine.
+    Loa1 = 1,
+    /// 71 joints: feet, hands with fingers, a fuller spine.
+    Loa2 = 2,
+    /// 94 joints.
+    Loa3 = 3,
+    /// All 146 joints.
+    Loa4 = 4,
+}
+
+impl LevelOfArticulation {
+    /// All levels, lowest first.
+    pub const ALL: [Self; 4] = [Self::Loa1, Self::Loa2, Self::Loa3, Self::Loa4];
+
+    /// The level's number, 1 to 4.
+    pub fn number(self) -> u8 {
+        self as u8
+    }
+}
+
+/// All 146 H-Anim 2.0 joints in X3DUOM index order: a depth-first order, parents first.
+pub fn all_joints() -> &'static [JointDefinition] {
+    joint_table::JOINTS
+}
+
+/// Looks a joint up by its normative name or one of its aliases.
+pub fn joint_by_name(name: &str) -> Option<(usize, &'static JointDefinition)> {
+    all_joints()
+        .iter()
+        .enumerate()
+        .find(|(_, joint)| joint.name == name || joint.aliases.contains(&name))
+}
+
+/// One joint of a humanoid at a given level of articulation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HumanoidJoint {
+    /// The H-Anim definition of the joint.
+    pub definition: &'static JointDefinition,
+    /// Index of the parent in the same [`humanoid_joints`] list; `None` for the root.
+    pub parent: Option<usize>,
+    /// Joint centre in the rest pose, metres.
+    pub rest_centre: DVec3,
+}
+
+/// The joints present at `loa`, parents first, with parents re-indexed into the returned list.
+pub fn humanoid_joints(loa: LevelOfArticulation) -> Vec<HumanoidJoint> {
+    let level = usize::from(loa.number());
+    let mut position_in_list = vec![None; all_joints().len()];
+    let mut joints = Vec::new();
+    for (table_index, definition) in all_joints().iter().enumerate() {
+        if usize::from(definition.first_loa) > level {
+            continue;
+        }
+        let parent = definition.parent_by_loa[level - 1]
+            .and_then(|parent_index| position_in_list.get(parent_index).copied().flatten());
+        position_in_list[table_index] = Some(joints.len());
+        joints.push(HumanoidJoint {
+            definition,
+            parent,
+            rest_centre: definition.centre(),
+        });
+    }
+    joints
+}
+
+#[cfg(test)]
+mod tests {
+    #[cfg(target_arch = "wasm32")]
+    use wasm_bindgen_test::wasm_bindgen_test as test;
+    #[cfg(target_arch = "wasm32")]
+    wasm_bindgen_test::wasm_bindgen_test_configure!(run_in_browser);
+
+    use super::*;
+
+    #[test]
+    fn joint_counts_per_level_match_the_standard() {
+        let counts: Vec<usize> = LevelOfArticulation::ALL
+            .iter()
+            .map(|&loa| humanoid_joints(loa).len())
+            .collect();
+        assert_eq!(counts, vec![18, 71, 94, 146]);
+    }
+
+    #[test]
+    fn every_joint_but_the_root_has_a_parent_listed_before_it() {
+        for loa in LevelOfArticulation::ALL {
+            let joints = humanoid_joints(loa);
+            assert_eq!(joints[0].definition.name, "humanoid_root");
+            assert!(joints[0].parent.is_none());
+            for (index, joint) in joints.iter().enumerate().skip(1) {
+                let parent = joint.parent.unwrap_or_else(|| {
+                    panic!("{} has no parent at {loa:?}", joint.definition.name)
+                });
+                assert!(parent < index);
+            }
+        }
+    }
+
+    #[test]
+    fn skullbase_hangs_from_vc2_at_loa2_and_from_vl5_at_loa1() {
+        let loa2 = humanoid_joints(LevelOfArticulation::Loa2);
+        let skullbase = loa2
+            .iter()
+            .find(|j| j.definition.name == "skullbase")
+            .unwrap();
+        assert_eq!(loa2[skullbase.parent.unwrap()].definition.name, "vc2");
+        let loa1 = humanoid_joints(LevelOfArticulation::Loa1);
+        let skullbase = loa1
+            .iter()
+            .find(|j| j.definition.name == "skullbase")
+            .unwrap();
+        assert_eq!(loa1[skullbase.parent.unwrap()].definition.name, "vl5");
+    }
+
+    #[test]
+    fn aliases_resolve_to_the_normative_joint() {
+        let (_, ankle) = joint_by_name("l_ankle").unwrap();
+        assert_eq!(ankle.name, "l_talocrural");
+        assert!(joint_by_name("no_such_joint").is_none());
+    }
+
+    #[test]
+    fn default_body_is_a_standing_person_about_1_7_metres_tall() {
+        let joints = humanoid_joints(LevelOfArticulation::Loa2);
+        let top = joints.iter().map(|j| j.rest_centre.y).fold(f64::MIN, f64::max);
+        let bottom = joints.iter().map(|j| j.rest_centre.y).fold(f64::MAX, f64::min);
+        assert!((1.55..1.75).contains(&top), "skullbase height {top}");
+        assert!(bottom.abs() < 0.01, "the soles touch the floor: {bottom}");
+        let (_, hip) = joint_by_name("l_hip").unwrap();
+        assert!(hip.centre().x > 0.0, "l_ joints are on +X");
+    }
+}

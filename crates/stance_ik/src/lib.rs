@@ -1,0 +1,1 @@
+//! Kinematics and the prioritized damped least-squares IK solver of Stance.

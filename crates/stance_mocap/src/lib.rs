@@ -1,0 +1,1 @@
+//! Motion-capture sensors: streaming decoders, fusion and calibration.

@@ -1,0 +1,1 @@
+//! stance_render
