@@ -1,1 +1,40 @@
-//! stance_render
+//! The wgpu renderer of Stance: the body as shaded capsules, the floor grid, and the orbit
+//! camera that looks at them. It knows nothing of egui or the browser: it renders a [`Scene`]
+//! into a [`RenderTarget`] texture that the editor shows (or a test reads back).
+
+mod body;
+mod camera;
+#[cfg(not(target_arch = "wasm32"))]
+mod capture;
+mod renderer;
+
+pub use body::{mannequin_capsules, rest_pose_capsules, MannequinJoint, BODY_COLOR_LINEAR};
+pub use camera::OrbitCamera;
+#[cfg(not(target_arch = "wasm32"))]
+pub use capture::{read_pixels, CaptureError, Pixels};
+pub use renderer::{RenderTarget, SceneRenderer, BACKGROUND_SRGB, COLOR_FORMAT, DEPTH_FORMAT};
+
+use glam::Vec3;
+
+/// Every WGSL shader of the renderer, by file name (validated by naga in the tests).
+pub const SHADERS: &[(&str, &str)] = &[
+    ("capsule.wgsl", include_str!("shaders/capsule.wgsl")),
+    ("floor.wgsl", include_str!("shaders/floor.wgsl")),
+];
+
+/// A capsule: the segment from `start_world` to `end_world` swept by a sphere of `radius_m`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Capsule {
+    pub start_world: Vec3,
+    pub end_world: Vec3,
+    pub radius_m: f32,
+    /// Linear RGBA.
+    pub color_linear: [f32; 4],
+}
+
+/// What one frame shows.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Scene {
+    pub capsules: Vec<Capsule>,
+    pub show_floor: bool,
+}

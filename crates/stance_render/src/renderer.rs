@@ -1,0 +1,397 @@
+//! GPU resources and the draw of one frame.
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec2;
+use wgpu::util::DeviceExt;
+
+use crate::{OrbitCamera, Scene, SHADERS};
+
+/// Colour format of the render target: what egui can show as a native texture. The shaders
+/// write sRGB-encoded values into it.
+pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth24Plus;
+/// Background colour, sRGB-encoded.
+pub const BACKGROUND_SRGB: [f32; 4] = [0.13, 0.145, 0.17, 1.0];
+const SAMPLE_COUNT: u32 = 4;
+/// Direction the key light travels (from above, front-left).
+const LIGHT_DIRECTION_WORLD: [f32; 4] = [-0.4, -0.8, -0.45, 0.0];
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct FrameUniforms {
+    clip_from_world: [[f32; 4]; 4],
+    camera_position_world: [f32; 4],
+    light_direction_world: [f32; 4],
+    background: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct CapsuleInstance {
+    start_and_radius: [f32; 4],
+    end_world: [f32; 4],
+    color: [f32; 4],
+}
+
+/// The colour texture a frame is rendered into, with its multisampled and depth companions.
+#[derive(Debug)]
+pub struct RenderTarget {
+    color: wgpu::Texture,
+    color_view: wgpu::TextureView,
+    multisampled_view: wgpu::TextureView,
+    depth_view: wgpu::TextureView,
+    size_px: [u32; 2],
+}
+
+impl RenderTarget {
+    /// A target of `size_px` (each side clamped to 1..=max texture size of the device).
+    pub fn new(device: &wgpu::Device, size_px: [u32; 2]) -> Self {
+        let max_side = device.limits().max_texture_dimension_2d;
+        let size_px = size_px.map(|side| side.clamp(1, max_side));
+        let extent = wgpu::Extent3d {
+            width: size_px[0],
+            height: size_px[1],
+            depth_or_array_layers: 1,
+        };
+        let texture = |label, format, sample_count, usage| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: extent,
+                mip_level_count: 1,
+                sample_count,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let color = texture(
+            "stance viewport colour",
+            COLOR_FORMAT,
+            1,
+            wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+        );
+        let multisampled = texture(
+            "stance viewport colour (multisampled)",
+            COLOR_FORMAT,
+            SAMPLE_COUNT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        );
+        let depth = texture(
+            "stance viewport depth",
+            DEPTH_FORMAT,
+            SAMPLE_COUNT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        );
+        Self {
+            color_view: color.create_view(&wgpu::TextureViewDescriptor::default()),
+            multisampled_view: multisampled.create_view(&wgpu::TextureViewDescriptor::default()),
+            depth_view: depth.create_view(&wgpu::TextureViewDescriptor::default()),
+            color,
+            size_px,
+        }
+    }
+
+    pub fn size_px(&self) -> [u32; 2] {
+        self.size_px
+    }
+
+    /// The resolved colour texture (format [`COLOR_FORMAT`]).
+    pub fn color_texture(&self) -> &wgpu::Texture {
+        &self.color
+    }
+
+    pub fn color_view(&self) -> &wgpu::TextureView {
+        &self.color_view
+    }
+}
+
+/// Pipelines and buffers, created once; each frame only uploads uniforms and instances.
+#[derive(Debug)]
+pub struct SceneRenderer {
+    capsule_pipeline: wgpu::RenderPipeline,
+    floor_pipeline: wgpu::RenderPipeline,
+    frame_uniforms: wgpu::Buffer,
+    frame_bind_group: wgpu::BindGroup,
+    template_vertices: wgpu::Buffer,
+    template_indices: wgpu::Buffer,
+    template_index_count: u32,
+    instances: wgpu::Buffer,
+    instance_capacity: usize,
+}
+
+/// A unit sphere split at the equator: vertices carry (direction, half) with half 1 for the
+/// upper (end) half and 0 for the lower (start) half; the equator appears in both halves so
+/// that the strip between them becomes the capsule's cylinder.
+fn capsule_template() -> (Vec<[f32; 4]>, Vec<u16>) {
+    const RINGS_PER_HALF: u16 = 8;
+    const SEGMENTS: u16 = 24;
+    let mut vertices = Vec::new();
+    let rings = RINGS_PER_HALF * 2 + 2;
+    for ring in 0..rings {
+        // Upper half: rings 0..=RINGS_PER_HALF (pole to equator); lower half mirrored.
+        let (latitude_step, half) = if ring <= RINGS_PER_HALF {
+            (ring, 1.0)
+        } else {
+            (ring - 1, 0.0)
+        };
+        let polar = std::f32::consts::PI * f32::from(latitude_step) / f32::from(RINGS_PER_HALF * 2);
+        let (sin_polar, cos_polar) = polar.sin_cos();
+        for segment in 0..=SEGMENTS {
+            let azimuth = std::f32::consts::TAU * f32::from(segment) / f32::from(SEGMENTS);
+            let (sin_azimuth, cos_azimuth) = azimuth.sin_cos();
+            vertices.push([sin_polar * cos_azimuth, cos_polar, sin_polar * sin_azimuth, half]);
+        }
+    }
+    let stride = SEGMENTS + 1;
+    let mut indices = Vec::new();
+    for ring in 0..rings - 1 {
+        for segment in 0..SEGMENTS {
+            let a = ring * stride + segment;
+            let b = a + stride;
+            indices.extend_from_slice(&[a, a + 1, b, a + 1, b + 1, b]);
+        }
+    }
+    (vertices, indices)
+}
+
+impl SceneRenderer {
+    pub fn new(device: &wgpu::Device) -> Self {
+        let frame_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("stance frame uniforms"),
+            size: std::mem::size_of::<FrameUniforms>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("stance frame layout"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            }],
+        });
+        let frame_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("stance frame bind group"),
+            layout: &frame_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: frame_uniforms.as_entire_binding(),
+            }],
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("stance pipeline layout"),
+            bind_group_layouts: &[Some(&frame_layout)],
+            immediate_size: 0,
+        });
+        let shader = |name: &str| {
+            let source = SHADERS
+                .iter()
+                .find(|(file, _)| *file == name)
+                .map_or("", |(_, source)| *source);
+            device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(name),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            })
+        };
+        let capsule_shader = shader("capsule.wgsl");
+        let floor_shader = shader("floor.wgsl");
+        let depth_stencil = Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: wgpu::StencilState::default(),
+            bias: wgpu::DepthBiasState::default(),
+        });
+        let multisample = wgpu::MultisampleState {
+            count: SAMPLE_COUNT,
+            ..Default::default()
+        };
+        let color_targets = [Some(wgpu::ColorTargetState {
+            format: COLOR_FORMAT,
+            blend: None,
+            write_mask: wgpu::ColorWrites::ALL,
+        })];
+        let template_layout = wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<[f32; 4]>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &wgpu::vertex_attr_array![0 => Float32x4],
+        };
+        let instance_layout = wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<CapsuleInstance>() as u64,
+            step_mode: wgpu::VertexStepMode::Instance,
+            attributes: &wgpu::vertex_attr_array![1 => Float32x4, 2 => Float32x4, 3 => Float32x4],
+        };
+        let capsule_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("stance capsules"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &capsule_shader,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(template_layout), Some(instance_layout)],
+            },
+            primitive: wgpu::PrimitiveState {
+                cull_mode: Some(wgpu::Face::Back),
+                front_face: wgpu::FrontFace::Cw,
+                ..Default::default()
+            },
+            depth_stencil: depth_stencil.clone(),
+            multisample,
+            fragment: Some(wgpu::FragmentState {
+                module: &capsule_shader,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &color_targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let floor_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("stance floor"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &floor_shader,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil,
+            multisample,
+            fragment: Some(wgpu::FragmentState {
+                module: &floor_shader,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &color_targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let (template, indices) = capsule_template();
+        let template_vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("stance capsule template vertices"),
+            contents: bytemuck::cast_slice(&template),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let template_indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("stance capsule template indices"),
+            contents: bytemuck::cast_slice(&indices),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        let instance_capacity = 128;
+        Self {
+            capsule_pipeline,
+            floor_pipeline,
+            frame_uniforms,
+            frame_bind_group,
+            template_vertices,
+            template_indices,
+            template_index_count: u32::try_from(indices.len()).unwrap_or(0),
+            instances: Self::instance_buffer(device, instance_capacity),
+            instance_capacity,
+        }
+    }
+
+    fn instance_buffer(device: &wgpu::Device, capacity: usize) -> wgpu::Buffer {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("stance capsule instances"),
+            size: (capacity * std::mem::size_of::<CapsuleInstance>()) as u64,
+            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    }
+
+    /// Renders `scene` seen by `camera` into `target` and submits the work.
+    pub fn render(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        target: &RenderTarget,
+        camera: &OrbitCamera,
+        scene: &Scene,
+    ) {
+        let [width, height] = target.size_px;
+        let aspect = Vec2::new(width as f32, height as f32);
+        let uniforms = FrameUniforms {
+            clip_from_world: camera.clip_from_world(aspect.x / aspect.y).to_cols_array_2d(),
+            camera_position_world: camera.eye_world().extend(1.0).to_array(),
+            light_direction_world: LIGHT_DIRECTION_WORLD,
+            background: BACKGROUND_SRGB,
+        };
+        queue.write_buffer(&self.frame_uniforms, 0, bytemuck::bytes_of(&uniforms));
+
+        let instances: Vec<CapsuleInstance> = scene
+            .capsules
+            .iter()
+            .filter(|capsule| {
+                capsule.start_world.is_finite()
+                    && capsule.end_world.is_finite()
+                    && capsule.radius_m.is_finite()
+            })
+            .map(|capsule| CapsuleInstance {
+                start_and_radius: capsule.start_world.extend(capsule.radius_m).to_array(),
+                end_world: capsule.end_world.extend(1.0).to_array(),
+                color: capsule.color_linear,
+            })
+            .collect();
+        if instances.len() > self.instance_capacity {
+            self.instance_capacity = instances.len().next_power_of_two();
+            self.instances = Self::instance_buffer(device, self.instance_capacity);
+        }
+        if !instances.is_empty() {
+            queue.write_buffer(&self.instances, 0, bytemuck::cast_slice(&instances));
+        }
+
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("stance frame"),
+        });
+        {
+            let [r, g, b, a] = BACKGROUND_SRGB.map(f64::from);
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("stance scene"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &target.multisampled_view,
+                    depth_slice: None,
+                    resolve_target: Some(&target.color_view),
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a }),
+                        store: wgpu::StoreOp::Discard,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &target.depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, &self.frame_bind_group, &[]);
+            if !instances.is_empty() {
+                pass.set_pipeline(&self.capsule_pipeline);
+                pass.set_vertex_buffer(0, self.template_vertices.slice(..));
+                pass.set_vertex_buffer(1, self.instances.slice(..));
+                pass.set_index_buffer(self.template_indices.slice(..), wgpu::IndexFormat::Uint16);
+                let instance_count = u32::try_from(instances.len()).unwrap_or(u32::MAX);
+                pass.draw_indexed(0..self.template_index_count, 0, 0..instance_count);
+            }
+            if scene.show_floor {
+                pass.set_pipeline(&self.floor_pipeline);
+                pass.draw(0..6, 0..1);
+            }
+        }
+        queue.submit([encoder.finish()]);
+    }
+}

@@ -1,0 +1,123 @@
+//! Renders the viewport scene offscreen on whatever adapter the machine has (lavapipe on
+//! CI) and checks its pixels: body colour where the body is, background elsewhere.
+
+use glam::{Vec2, Vec3};
+use stance_hanim::LevelOfArticulation;
+use stance_render::{
+    read_pixels, rest_pose_capsules, OrbitCamera, Pixels, RenderTarget, Scene, SceneRenderer,
+    BACKGROUND_SRGB,
+};
+
+fn device() -> (wgpu::Device, wgpu::Queue, wgpu::AdapterInfo) {
+    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+        backends: wgpu::Backends::VULKAN | wgpu::Backends::GL,
+        ..wgpu::InstanceDescriptor::new_without_display_handle()
+    });
+    let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+        force_fallback_adapter: false,
+        ..Default::default()
+    }))
+    .expect("no wgpu adapter: install mesa-vulkan-drivers (lavapipe)");
+    let info = adapter.get_info();
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some("stance offscreen test"),
+        required_limits: wgpu::Limits::downlevel_webgl2_defaults(),
+        ..Default::default()
+    }))
+    .expect("device");
+    (device, queue, info)
+}
+
+fn render(camera: &OrbitCamera, size: [u32; 2]) -> Pixels {
+    let (device, queue, info) = device();
+    eprintln!("adapter: {} ({:?})", info.name, info.backend);
+    let mut renderer = SceneRenderer::new(&device);
+    let target = RenderTarget::new(&device, size);
+    let scene = Scene {
+        capsules: rest_pose_capsules(LevelOfArticulation::Loa2),
+        show_floor: true,
+    };
+    renderer.render(&device, &queue, &target, camera, &scene);
+    read_pixels(&device, &queue, &target).expect("read back")
+}
+
+fn is_body_colour([r, g, b, _]: [u8; 4]) -> bool {
+    // The clay tone: red dominant, clearly warmer than the grey floor and blue background.
+    r > 90 && f32::from(r) > 1.35 * f32::from(g) && g > b
+}
+
+fn background() -> [u8; 3] {
+    BACKGROUND_SRGB.map(|c| (c * 255.0).round() as u8)[..3]
+        .try_into()
+        .unwrap()
+}
+
+fn save_artifact(pixels: &Pixels, name: &str) {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../artifacts");
+    let _ = std::fs::create_dir_all(&dir);
+    let path = dir.join(name);
+    // A binary PPM: no image crate needed to look at it.
+    let mut bytes = format!("P6\n{} {}\n255\n", pixels.width, pixels.height).into_bytes();
+    for rgba in pixels.rgba.chunks(4) {
+        bytes.extend_from_slice(&rgba[..3]);
+    }
+    let _ = std::fs::write(path, bytes);
+}
+
+#[test]
+fn the_standing_humanoid_is_drawn_where_its_joints_project() {
+    let camera = OrbitCamera::default();
+    let size = [320u32, 240u32];
+    let pixels = render(&camera, size);
+    save_artifact(&pixels, "offscreen-rest-pose.ppm");
+    let size_px = Vec2::new(size[0] as f32, size[1] as f32);
+    let joints = stance_hanim::humanoid_joints(LevelOfArticulation::Loa2);
+    for name in ["vt6", "vl3", "l_knee", "r_knee", "skullbase", "l_elbow"] {
+        let joint = joints
+            .iter()
+            .find(|joint| joint.definition.name == name)
+            .unwrap();
+        let at = camera
+            .project(joint.rest_centre.as_vec3(), size_px)
+            .unwrap();
+        let pixel = pixels.get(at.x as u32, at.y as u32).unwrap();
+        assert!(is_body_colour(pixel), "{name} at {at}: {pixel:?} is not body-coloured");
+    }
+    // Above the head and beside the body: background (above the horizon of the floor).
+    let above_head = camera.project(Vec3::new(0.0, 2.05, 0.0), size_px).unwrap();
+    let pixel = pixels.get(above_head.x as u32, above_head.y as u32).unwrap();
+    let bg = background();
+    for channel in 0..3 {
+        assert!(pixel[channel].abs_diff(bg[channel]) <= 3, "above the head: {pixel:?} vs {bg:?}");
+    }
+    let body_pixels = pixels
+        .rgba
+        .chunks(4)
+        .filter(|p| is_body_colour([p[0], p[1], p[2], p[3]]))
+        .count();
+    let share = body_pixels as f32 / (size[0] * size[1]) as f32;
+    assert!((0.03..0.4).contains(&share), "body covers {share} of the frame");
+}
+
+#[test]
+fn the_floor_grid_shows_below_the_feet_and_orbiting_changes_the_picture() {
+    let camera = OrbitCamera::default();
+    let size = [200u32, 150u32];
+    let front = render(&camera, size);
+    let size_px = Vec2::new(size[0] as f32, size[1] as f32);
+    let floor = camera.project(Vec3::new(0.6, 0.0, 0.6), size_px).unwrap();
+    let pixel = front.get(floor.x as u32, floor.y as u32).unwrap();
+    assert!(!is_body_colour(pixel));
+    assert_ne!(&pixel[..3], &background()[..], "the floor differs from the sky");
+
+    let mut turned = camera;
+    turned.orbit(Vec2::new(200.0, 0.0));
+    let side = render(&turned, size);
+    let differing = front
+        .rgba
+        .chunks(4)
+        .zip(side.rgba.chunks(4))
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(differing > 500, "only {differing} pixels changed after orbiting");
+}
