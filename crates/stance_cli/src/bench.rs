@@ -1,8 +1,210 @@
-//! `stance bench` (not built yet).
+//! `stance bench`: time the solver on the scenarios S1..S6 (or on one problem file).
+//!
+//! Per scenario: `us_per_iteration` is the median, over many runs, of the time of a solve forced
+//! to take exactly `--iterations` iterations from the start posture (tolerance and stall tests
+//! off, and the cascade off so that every iteration computes every level: the cost of one full
+//! prioritized iteration, line search included) divided by that count; `us_per_solve` is the
+//! median time of a normal solve (default settings) from the start posture, which takes
+//! `iterations` iterations and ends with `status`.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Result;
+use serde::Serialize;
+use stance_ik::scenarios;
+use stance_ik::{Posture, Skeleton, SolveStatus, Solver, SolverSettings, Task};
 
 #[derive(clap::Args, Debug)]
-pub struct BenchArgs {}
+pub struct BenchArgs {
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    /// Time this problem file instead of the built-in scenarios.
+    #[arg(long)]
+    pub problem: Option<PathBuf>,
+    /// Only these scenarios (e.g. `--scenario S2 --scenario S6`).
+    #[arg(long)]
+    pub scenario: Vec<String>,
+    /// Minimum measuring time per figure, in milliseconds.
+    #[arg(long, default_value_t = 300)]
+    pub millis: u64,
+    /// Iterations per timed run for `us_per_iteration`.
+    #[arg(long, default_value_t = 10)]
+    pub iterations: usize,
+}
 
-pub fn run(_args: BenchArgs) -> anyhow::Result<()> {
-    anyhow::bail!("`stance bench` is not available in this build yet")
+#[derive(Debug, Clone, Serialize)]
+pub struct BenchResult {
+    pub us_per_iteration: f64,
+    pub us_per_solve: f64,
+    pub iterations: usize,
+    pub status: SolveStatus,
+    pub dof: usize,
+    pub rows: usize,
+    pub levels: usize,
+}
+
+/// Native targets of the issue (us per iteration; S6: us per converged sample).
+fn target_us(name: &str) -> Option<f64> {
+    match name {
+        "S1" => Some(1.0),
+        "S2" => Some(60.0),
+        "S3" => Some(120.0),
+        "S4" => Some(80.0),
+        "S5" => Some(15.0),
+        "S6" => Some(2000.0),
+        _ => None,
+    }
+}
+
+pub fn run(args: BenchArgs) -> Result<()> {
+    let budget = std::time::Duration::from_millis(args.millis);
+    if let Some(path) = &args.problem {
+        let problem = crate::solve::load_problem(path)?;
+        let r = bench(
+            &problem.skeleton,
+            &problem.tasks,
+            &problem.start,
+            problem.settings,
+            budget,
+            args.iterations,
+        )?;
+        if args.json {
+            println!(
+                "{}",
+                serde_json::json!({
+                    "us_per_iteration": r.us_per_iteration,
+                    "us_per_solve": r.us_per_solve,
+                    "iterations": r.iterations,
+                })
+            );
+        } else {
+            println!(
+                "{}: {:.2} us/iteration, {:.1} us/solve ({} iterations, {:?})",
+                path.display(),
+                r.us_per_iteration,
+                r.us_per_solve,
+                r.iterations,
+                r.status
+            );
+        }
+        return Ok(());
+    }
+    let mut results = serde_json::Map::new();
+    if !args.json {
+        println!(
+            "{:<4} {:>4} {:>5} {:>6} {:>12} {:>12} {:>6} {:>10}  description",
+            "", "DOF", "rows", "levels", "us/iter", "us/solve", "iters", "target"
+        );
+    }
+    for s in scenarios::all()? {
+        if !args.scenario.is_empty()
+            && !args.scenario.iter().any(|n| n.eq_ignore_ascii_case(s.name))
+        {
+            continue;
+        }
+        let settings = SolverSettings::default();
+        let r = bench(
+            &s.skeleton,
+            &s.tasks,
+            &s.start,
+            settings,
+            budget,
+            args.iterations,
+        )?;
+        if args.json {
+            results.insert(s.name.to_owned(), serde_json::to_value(&r)?);
+        } else {
+            let measured = if s.name == "S6" {
+                r.us_per_solve
+            } else {
+                r.us_per_iteration
+            };
+            let target = target_us(s.name)
+                .map(|t| format!("{}{t}", if measured <= t { "ok <= " } else { "MISS " }))
+                .unwrap_or_default();
+            println!(
+                "{:<4} {:>4} {:>5} {:>6} {:>12.2} {:>12.1} {:>6} {:>10}  {} ({:?})",
+                s.name,
+                r.dof,
+                r.rows,
+                r.levels,
+                r.us_per_iteration,
+                r.us_per_solve,
+                r.iterations,
+                target,
+                s.description,
+                r.status
+            );
+        }
+    }
+    if args.json {
+        println!("{}", serde_json::Value::Object(results));
+    }
+    Ok(())
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+/// Times one problem (see the module docs).
+pub fn bench(
+    skeleton: &Skeleton,
+    tasks: &[Task],
+    start: &Posture,
+    settings: SolverSettings,
+    budget: std::time::Duration,
+    iterations: usize,
+) -> Result<BenchResult> {
+    let iterations = iterations.max(1);
+    // Fixed iteration count: tolerance 0 and stall tests off.
+    let fixed = SolverSettings {
+        max_iterations: iterations,
+        tolerance: 0.0,
+        stall_step: 0.0,
+        stall_improvement: 0.0,
+        time_budget_secs: None,
+        cascade: false,
+        ..settings
+    };
+    let mut solver = Solver::new(fixed)?;
+    let mut per_iteration = Vec::new();
+    let t0 = Instant::now();
+    while t0.elapsed() < budget || per_iteration.len() < 5 {
+        let mut p = start.clone();
+        let t = Instant::now();
+        let report = solver.solve(skeleton, tasks, &mut p)?;
+        let dt = t.elapsed().as_secs_f64();
+        per_iteration.push(dt * 1e6 / report.iterations.max(1) as f64);
+    }
+    let mut solver = Solver::new(settings)?;
+    let mut per_solve = Vec::new();
+    let mut last = None;
+    let t0 = Instant::now();
+    while t0.elapsed() < budget || per_solve.len() < 5 {
+        let mut p = start.clone();
+        let t = Instant::now();
+        let report = solver.solve(skeleton, tasks, &mut p)?;
+        per_solve.push(t.elapsed().as_secs_f64() * 1e6);
+        last = Some(report);
+    }
+    let (iters, status, levels) = last
+        .map(|r| (r.iterations, r.status, r.levels.len()))
+        .unwrap_or((0, SolveStatus::Converged, 0));
+    Ok(BenchResult {
+        us_per_iteration: median(per_iteration),
+        us_per_solve: median(per_solve),
+        iterations: iters,
+        status,
+        dof: skeleton.dof_count(),
+        rows: tasks.iter().filter(|t| t.active).map(Task::rows).sum(),
+        levels,
+    })
 }

@@ -8,7 +8,11 @@ mod simulate;
 mod solve;
 
 #[derive(Parser, Debug)]
-#[command(name = "stance", version, about = "Stance posture editor core, headless")]
+#[command(
+    name = "stance",
+    version,
+    about = "Stance posture editor core, headless"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

@@ -1,1 +1,8 @@
-//! stance_editor
+//! The Stance application: the editor shell (menu bar, side panel, status bar) around the 3D
+//! viewport, and the eframe [`App`](eframe::App) that runs it natively and in the browser.
+
+mod app;
+mod viewport;
+
+pub use app::{BackendSummary, HostHooks, NoHostHooks, StanceApp};
+pub use viewport::{CameraGesture, ViewportInput};

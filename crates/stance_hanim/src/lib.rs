@@ -158,8 +158,14 @@ mod tests {
     #[test]
     fn default_body_is_a_standing_person_about_1_7_metres_tall() {
         let joints = humanoid_joints(LevelOfArticulation::Loa2);
-        let top = joints.iter().map(|j| j.rest_centre.y).fold(f64::MIN, f64::max);
-        let bottom = joints.iter().map(|j| j.rest_centre.y).fold(f64::MAX, f64::min);
+        let top = joints
+            .iter()
+            .map(|j| j.rest_centre.y)
+            .fold(f64::MIN, f64::max);
+        let bottom = joints
+            .iter()
+            .map(|j| j.rest_centre.y)
+            .fold(f64::MAX, f64::min);
         assert!((1.55..1.75).contains(&top), "skullbase height {top}");
         assert!(bottom.abs() < 0.01, "the soles touch the floor: {bottom}");
         let (_, hip) = joint_by_name("l_hip").unwrap();

@@ -1,1 +1,36 @@
 //! Kinematics and the prioritized damped least-squares IK solver of Stance.
+//!
+//! Pure `f64` math, no I/O; builds for `wasm32`. The mathematical contract is
+//! `design/SOLVER.md`: variational IK with strict priorities [SIC 91] in the recursive form
+//! of [BAE 98] (Boulic & Baerlocher), damped least squares per level [MAC 90].
+//!
+//! - [`Skeleton`]: joints with 0-3 rotational DOF (the root 6), limits, masses.
+//! - [`Posture`] / [`Frames`]: DOF values (rotation vectors, no Euler singularity) and
+//!   forward kinematics.
+//! - [`Task`]: position, orientation, gaze, centre of mass, posture attraction; each with a
+//!   level, a weight and an active flag.
+//! - [`Solver`]: iterates prioritized steps (joint-limit clamping, shared step budget, line
+//!   search, cascade) and returns a [`SolveReport`]; time budget through an injectable [`Clock`].
+//! - [`prioritized_step`]: one step of [BAE 98] on contiguous slices (the default);
+//!   [`prioritized_step_nalgebra`]: the same on nalgebra matrices (kept for the comparison).
+//! - [`scenarios`]: the benchmark / test bodies built from the H-Anim default joint centres
+//!   (to move to `stance_hanim` once it exists).
+
+mod error;
+mod kernel;
+mod posture;
+mod priority;
+pub mod scenarios;
+mod skeleton;
+mod solver;
+mod task;
+
+pub use error::IkError;
+pub use kernel::prioritized_step;
+pub use posture::{Frames, Posture};
+pub use priority::{Damping, LevelSystem, StepParams, StepWorkspace, prioritized_step_nalgebra};
+pub use skeleton::{Dof, Joint, JointDef, Skeleton};
+#[cfg(not(all(target_arch = "wasm32", target_os = "unknown")))]
+pub use solver::SystemClock;
+pub use solver::{Backend, Clock, LevelReport, SolveReport, SolveStatus, Solver, SolverSettings};
+pub use task::{Axes, Effector, Task, TaskFeature, TaskKind};

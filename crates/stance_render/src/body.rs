@@ -104,11 +104,36 @@ mod tests {
     #[test]
     fn a_leg_gets_a_thigh_thicker_than_its_shank_and_the_skull_a_head() {
         let joints = [
-            MannequinJoint { name: "sacroiliac", parent: None, position_world: Vec3::Y, up_world: Vec3::Y },
-            MannequinJoint { name: "l_hip", parent: Some(0), position_world: Vec3::new(0.1, 0.9, 0.0), up_world: Vec3::Y },
-            MannequinJoint { name: "l_knee", parent: Some(1), position_world: Vec3::new(0.1, 0.5, 0.0), up_world: Vec3::Y },
-            MannequinJoint { name: "l_talocrural", parent: Some(2), position_world: Vec3::new(0.1, 0.07, 0.0), up_world: Vec3::Y },
-            MannequinJoint { name: "skullbase", parent: Some(0), position_world: Vec3::new(0.0, 1.6, 0.0), up_world: Vec3::Y },
+            MannequinJoint {
+                name: "sacroiliac",
+                parent: None,
+                position_world: Vec3::Y,
+                up_world: Vec3::Y,
+            },
+            MannequinJoint {
+                name: "l_hip",
+                parent: Some(0),
+                position_world: Vec3::new(0.1, 0.9, 0.0),
+                up_world: Vec3::Y,
+            },
+            MannequinJoint {
+                name: "l_knee",
+                parent: Some(1),
+                position_world: Vec3::new(0.1, 0.5, 0.0),
+                up_world: Vec3::Y,
+            },
+            MannequinJoint {
+                name: "l_talocrural",
+                parent: Some(2),
+                position_world: Vec3::new(0.1, 0.07, 0.0),
+                up_world: Vec3::Y,
+            },
+            MannequinJoint {
+                name: "skullbase",
+                parent: Some(0),
+                position_world: Vec3::new(0.0, 1.6, 0.0),
+                up_world: Vec3::Y,
+            },
         ];
         let capsules = mannequin_capsules(&joints);
         assert_eq!(capsules.len(), 5);

@@ -71,8 +71,8 @@ impl OrbitCamera {
     /// Moves the target so that the point under the cursor follows a drag of `delta_px`
     /// in a viewport `viewport_height_px` tall.
     pub fn pan(&mut self, delta_px: Vec2, viewport_height_px: f32) {
-        let metres_per_px = 2.0 * self.distance_m * (self.vertical_fov * 0.5).tan()
-            / viewport_height_px.max(1.0);
+        let metres_per_px =
+            2.0 * self.distance_m * (self.vertical_fov * 0.5).tan() / viewport_height_px.max(1.0);
         let world_from_view = self.view_from_world().inverse();
         let right = world_from_view.x_axis.truncate();
         let up = world_from_view.y_axis.truncate();
@@ -136,7 +136,10 @@ mod tests {
         let before = camera.project(point, size).unwrap();
         camera.pan(Vec2::new(50.0, 20.0), size.y);
         let after = camera.project(point, size).unwrap();
-        assert!((after - before - Vec2::new(50.0, 20.0)).length() < 0.5, "{before} {after}");
+        assert!(
+            (after - before - Vec2::new(50.0, 20.0)).length() < 0.5,
+            "{before} {after}"
+        );
     }
 
     #[test]

@@ -8,11 +8,11 @@ mod camera;
 mod capture;
 mod renderer;
 
-pub use body::{mannequin_capsules, rest_pose_capsules, MannequinJoint, BODY_COLOR_LINEAR};
+pub use body::{BODY_COLOR_LINEAR, MannequinJoint, mannequin_capsules, rest_pose_capsules};
 pub use camera::OrbitCamera;
 #[cfg(not(target_arch = "wasm32"))]
-pub use capture::{read_pixels, CaptureError, Pixels};
-pub use renderer::{RenderTarget, SceneRenderer, BACKGROUND_SRGB, COLOR_FORMAT, DEPTH_FORMAT};
+pub use capture::{CaptureError, Pixels, read_pixels};
+pub use renderer::{BACKGROUND_SRGB, COLOR_FORMAT, DEPTH_FORMAT, RenderTarget, SceneRenderer};
 
 use glam::Vec3;
 

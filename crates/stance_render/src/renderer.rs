@@ -4,7 +4,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec2;
 use wgpu::util::DeviceExt;
 
-use crate::{OrbitCamera, Scene, SHADERS};
+use crate::{OrbitCamera, SHADERS, Scene};
 
 /// Colour format of the render target: what egui can show as a native texture. The shaders
 /// write sRGB-encoded values into it.
@@ -142,7 +142,12 @@ fn capsule_template() -> (Vec<[f32; 4]>, Vec<u16>) {
         for segment in 0..=SEGMENTS {
             let azimuth = std::f32::consts::TAU * f32::from(segment) / f32::from(SEGMENTS);
             let (sin_azimuth, cos_azimuth) = azimuth.sin_cos();
-            vertices.push([sin_polar * cos_azimuth, cos_polar, sin_polar * sin_azimuth, half]);
+            vertices.push([
+                sin_polar * cos_azimuth,
+                cos_polar,
+                sin_polar * sin_azimuth,
+                half,
+            ]);
         }
     }
     let stride = SEGMENTS + 1;
@@ -321,7 +326,9 @@ impl SceneRenderer {
         let [width, height] = target.size_px;
         let aspect = Vec2::new(width as f32, height as f32);
         let uniforms = FrameUniforms {
-            clip_from_world: camera.clip_from_world(aspect.x / aspect.y).to_cols_array_2d(),
+            clip_from_world: camera
+                .clip_from_world(aspect.x / aspect.y)
+                .to_cols_array_2d(),
             camera_position_world: camera.eye_world().extend(1.0).to_array(),
             light_direction_world: LIGHT_DIRECTION_WORLD,
             background: BACKGROUND_SRGB,

@@ -4,8 +4,8 @@
 use glam::{Vec2, Vec3};
 use stance_hanim::LevelOfArticulation;
 use stance_render::{
-    read_pixels, rest_pose_capsules, OrbitCamera, Pixels, RenderTarget, Scene, SceneRenderer,
-    BACKGROUND_SRGB,
+    BACKGROUND_SRGB, OrbitCamera, Pixels, RenderTarget, Scene, SceneRenderer, read_pixels,
+    rest_pose_capsules,
 };
 
 fn device() -> (wgpu::Device, wgpu::Queue, wgpu::AdapterInfo) {
@@ -81,14 +81,22 @@ fn the_standing_humanoid_is_drawn_where_its_joints_project() {
             .project(joint.rest_centre.as_vec3(), size_px)
             .unwrap();
         let pixel = pixels.get(at.x as u32, at.y as u32).unwrap();
-        assert!(is_body_colour(pixel), "{name} at {at}: {pixel:?} is not body-coloured");
+        assert!(
+            is_body_colour(pixel),
+            "{name} at {at}: {pixel:?} is not body-coloured"
+        );
     }
     // Above the head and beside the body: background (above the horizon of the floor).
     let above_head = camera.project(Vec3::new(0.0, 2.05, 0.0), size_px).unwrap();
-    let pixel = pixels.get(above_head.x as u32, above_head.y as u32).unwrap();
+    let pixel = pixels
+        .get(above_head.x as u32, above_head.y as u32)
+        .unwrap();
     let bg = background();
     for channel in 0..3 {
-        assert!(pixel[channel].abs_diff(bg[channel]) <= 3, "above the head: {pixel:?} vs {bg:?}");
+        assert!(
+            pixel[channel].abs_diff(bg[channel]) <= 3,
+            "above the head: {pixel:?} vs {bg:?}"
+        );
     }
     let body_pixels = pixels
         .rgba
@@ -96,7 +104,10 @@ fn the_standing_humanoid_is_drawn_where_its_joints_project() {
         .filter(|p| is_body_colour([p[0], p[1], p[2], p[3]]))
         .count();
     let share = body_pixels as f32 / (size[0] * size[1]) as f32;
-    assert!((0.03..0.4).contains(&share), "body covers {share} of the frame");
+    assert!(
+        (0.03..0.4).contains(&share),
+        "body covers {share} of the frame"
+    );
 }
 
 #[test]
@@ -108,7 +119,11 @@ fn the_floor_grid_shows_below_the_feet_and_orbiting_changes_the_picture() {
     let floor = camera.project(Vec3::new(0.6, 0.0, 0.6), size_px).unwrap();
     let pixel = front.get(floor.x as u32, floor.y as u32).unwrap();
     assert!(!is_body_colour(pixel));
-    assert_ne!(&pixel[..3], &background()[..], "the floor differs from the sky");
+    assert_ne!(
+        &pixel[..3],
+        &background()[..],
+        "the floor differs from the sky"
+    );
 
     let mut turned = camera;
     turned.orbit(Vec2::new(200.0, 0.0));
@@ -119,5 +134,8 @@ fn the_floor_grid_shows_below_the_feet_and_orbiting_changes_the_picture() {
         .zip(side.rgba.chunks(4))
         .filter(|(a, b)| a != b)
         .count();
-    assert!(differing > 500, "only {differing} pixels changed after orbiting");
+    assert!(
+        differing > 500,
+        "only {differing} pixels changed after orbiting"
+    );
 }

@@ -1,1 +1,8 @@
-//! stance_web
+//! The wasm entry of Stance: `WebHandle` starts the editor on a canvas of the page that
+//! `web/` serves, tells the page when the first frame is up, and which backend runs it.
+
+#[cfg(target_arch = "wasm32")]
+mod web;
+
+#[cfg(target_arch = "wasm32")]
+pub use web::WebHandle;

@@ -1,0 +1,197 @@
+//! `stance solve` and `stance bench` end to end, through the built binary.
+
+// Helpers outside #[test] functions panic on broken fixtures on purpose.
+#![allow(clippy::expect_used, clippy::unwrap_used, clippy::panic)]
+
+use std::io::Write;
+use std::process::Command;
+
+use serde_json::Value;
+
+const EXAMPLE: &str = r#"{"skeleton":{"joints":[
+ {"name":"humanoid_root","parent":null,"offset":[0,0.824,0.0277],"dofs":["tx","ty","tz","rx","ry","rz"]},
+ {"name":"sacroiliac","parent":"humanoid_root","offset":[0,0.0909,-0.0261],"dofs":["rx","ry","rz"],"mass":10.0,"com":[0,0.05,0]},
+ {"name":"l_hip","parent":"sacroiliac","offset":[0.0961,-0.0025,-0.0017],"dofs":["rx","ry","rz"],"limits":{"rx":[-2.0,0.6]},"mass":9.8,"com":[0,-0.2,0]},
+ {"name":"l_knee","parent":"l_hip","offset":[0.0079,-0.4257,0.0309],"dofs":["rx"],"limits":{"rx":[0,2.4]},"mass":4.0,"com":[0,-0.2,0]},
+ {"name":"vl5","parent":"humanoid_root","offset":[0.0028,0.2328,-0.1053],"dofs":["rx","ry","rz"],"mass":30.0,"com":[0,0.2,0]},
+ {"name":"skullbase","parent":"vl5","offset":[0.0016,0.5641,0.1012],"dofs":["rx","ry","rz"],"mass":5.0,"com":[0,0.1,0]},
+ {"name":"l_shoulder","parent":"vl5","offset":[0.2001,0.3808,0.0389],"dofs":["rx","ry","rz"],"mass":2.0},
+ {"name":"l_elbow","parent":"l_shoulder","offset":[-0.0015,-0.3019,-0.0295],"dofs":["rx"],"limits":{"rx":[-2.5,0]},"mass":1.2},
+ {"name":"l_wrist","parent":"l_elbow","offset":[-0.003,-0.2694,0.0099],"dofs":["rx","rz"]}
+]},
+"tasks":[
+ {"level":1,"kind":"position","joint":"l_wrist","point":[0,0,0],"axes":"xyz","target":[0.25,1.1,0.3],"weight":1.0},
+ {"level":1,"kind":"orientation","joint":"skullbase","target":[0,0,0,1]},
+ {"level":1,"kind":"gaze","joint":"skullbase","axis":[0,0,1],"target":[0.0,1.6,2.0]},
+ {"level":2,"kind":"com","axes":"xz","target":[0.02,0,0.03]},
+ {"level":4,"kind":"posture","weight":0.1}
+],
+"settings":{"max_iterations":200,"tolerance":1e-6}}"#;
+
+fn stance(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_stance"))
+        .args(args)
+        .output()
+        .expect("runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn write_temp(name: &str, text: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("stance-cli-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join(name);
+    let mut f = std::fs::File::create(&path).expect("create");
+    f.write_all(text.as_bytes()).expect("write");
+    path
+}
+
+#[test]
+fn solve_prints_joints_posture_and_report() {
+    let path = write_temp("example.json", EXAMPLE);
+    let (ok, stdout, stderr) = stance(&["solve", path.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    let v: Value = serde_json::from_str(&stdout).expect("one JSON object");
+    let wrist = v["joints"]["l_wrist"].as_array().expect("l_wrist position");
+    let target = [0.25, 1.1, 0.3];
+    for (a, b) in wrist.iter().zip(target) {
+        assert!((a.as_f64().unwrap() - b).abs() < 1e-4, "{wrist:?}");
+    }
+    assert!(v["posture"]["humanoid_root"]["tx"].is_number());
+    assert!(v["posture"]["l_knee"]["rx"].as_f64().unwrap() >= 0.0);
+    let report = &v["report"];
+    assert!(report["status"].is_string());
+    assert!(report["iterations"].as_u64().unwrap() > 0);
+    let levels = report["levels"].as_array().unwrap();
+    assert_eq!(levels.len(), 3);
+    assert!(
+        levels[0]["residual_before"].as_f64().unwrap()
+            > levels[0]["residual_after"].as_f64().unwrap()
+    );
+}
+
+#[test]
+fn solve_starts_from_a_given_posture() {
+    let with_posture = EXAMPLE.replacen(
+        "\"settings\":",
+        "\"posture\":{\"l_knee\":{\"rx\":0.5}},\"tasks_unused\":[],\"settings\":",
+        1,
+    );
+    let no_tasks = with_posture.replace("\"tasks\":[", "\"ignored\":[");
+    let path = write_temp("posture.json", &no_tasks);
+    let (ok, stdout, stderr) = stance(&["solve", path.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    let v: Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(v["posture"]["l_knee"]["rx"].as_f64(), Some(0.5));
+    assert_eq!(v["report"]["iterations"].as_u64(), Some(0));
+}
+
+fn expect_error(name: &str, text: &str, needles: &[&str]) {
+    let path = write_temp(name, text);
+    let (ok, _, stderr) = stance(&["solve", path.to_str().unwrap()]);
+    assert!(!ok, "{name} should fail");
+    for n in needles {
+        assert!(stderr.contains(n), "{name}: `{n}` not in: {stderr}");
+    }
+}
+
+#[test]
+fn malformed_problems_are_rejected_with_the_field_named() {
+    expect_error(
+        "unknown.json",
+        &EXAMPLE.replace("\"joint\":\"l_wrist\"", "\"joint\":\"l_wirst\""),
+        &["tasks[0].joint", "unknown joint `l_wirst`"],
+    );
+    expect_error(
+        "dup.json",
+        &EXAMPLE.replace("{\"name\":\"l_knee\"", "{\"name\":\"l_hip\""),
+        &["duplicate joint name `l_hip`"],
+    );
+    expect_error(
+        "cycle.json",
+        &EXAMPLE.replace(
+            "\"name\":\"vl5\",\"parent\":\"humanoid_root\"",
+            "\"name\":\"vl5\",\"parent\":\"l_wrist\"",
+        ),
+        &["cycle"],
+    );
+    expect_error(
+        "nan.json",
+        &EXAMPLE.replace("[0.25,1.1,0.3]", "[\"NaN\",1.1,0.3]"),
+        &["tasks[0].target[0]", "number"],
+    );
+    expect_error(
+        "inf.json",
+        &EXAMPLE.replace("[0.25,1.1,0.3]", "[1e999,1.1,0.3]"),
+        &["not valid JSON"],
+    );
+    expect_error(
+        "short.json",
+        &EXAMPLE.replace("[0.25,1.1,0.3]", "[0.25,1.1]"),
+        &["tasks[0].target", "3 numbers"],
+    );
+    expect_error(
+        "kind.json",
+        &EXAMPLE.replace("\"kind\":\"gaze\"", "\"kind\":\"stare\""),
+        &["tasks[2].kind", "stare"],
+    );
+    expect_error(
+        "axes.json",
+        &EXAMPLE.replace("\"axes\":\"xz\"", "\"axes\":\"xw\""),
+        &["tasks[3].axes"],
+    );
+    expect_error(
+        "dof.json",
+        &EXAMPLE.replace("\"dofs\":[\"rx\",\"rz\"]", "\"dofs\":[\"rx\",\"rq\"]"),
+        &["dofs[1]", "rq"],
+    );
+    expect_error(
+        "parent.json",
+        &EXAMPLE.replace("\"parent\":\"l_hip\"", "\"parent\":\"l_hop\""),
+        &["unknown parent `l_hop`"],
+    );
+    expect_error(
+        "missing.json",
+        &EXAMPLE.replace("\"target\":[0.02,0,0.03]", "\"targt\":[0.02,0,0.03]"),
+        &["tasks[3].target: missing"],
+    );
+    expect_error(
+        "settings.json",
+        &EXAMPLE.replace("\"tolerance\":1e-6", "\"tolerance\":-1"),
+        &["settings", "tolerance"],
+    );
+    expect_error("json.json", "{", &["not valid JSON"]);
+}
+
+#[test]
+fn bench_times_a_problem_file() {
+    let path = write_temp("bench.json", EXAMPLE);
+    let (ok, stdout, stderr) = stance(&[
+        "bench",
+        "--problem",
+        path.to_str().unwrap(),
+        "--json",
+        "--millis",
+        "20",
+    ]);
+    assert!(ok, "{stderr}");
+    let v: Value = serde_json::from_str(&stdout).unwrap();
+    assert!(v["us_per_iteration"].as_f64().unwrap() > 0.0);
+    assert!(v["us_per_solve"].as_f64().unwrap() > 0.0);
+    assert!(v["iterations"].as_u64().is_some());
+}
+
+#[test]
+fn bench_runs_every_scenario() {
+    let (ok, stdout, stderr) = stance(&["bench", "--json", "--millis", "5"]);
+    assert!(ok, "{stderr}");
+    let v: Value = serde_json::from_str(&stdout).unwrap();
+    for s in ["S1", "S2", "S3", "S4", "S5", "S6"] {
+        assert!(v[s]["us_per_iteration"].as_f64().unwrap() > 0.0, "{s}: {v}");
+        assert!(v[s]["us_per_solve"].as_f64().is_some());
+        assert!(v[s]["iterations"].as_u64().is_some());
+    }
+}

@@ -1,0 +1,240 @@
+//! The 3D viewport: camera gestures from mouse, touch and pen, and the GPU texture that
+//! [`stance_render`] draws into and egui shows.
+
+use egui::{PointerButton, Response, Ui};
+use glam::Vec2;
+use stance_render::{OrbitCamera, RenderTarget, Scene, SceneRenderer};
+
+/// What the user asked the camera to do this frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum CameraGesture {
+    Orbit(Vec2),
+    Pan(Vec2),
+    Zoom(f32),
+    Reset,
+}
+
+/// The input the viewport reads in one frame, extracted from egui so that the mapping from
+/// gestures to camera moves can be tested without a window.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ViewportInput {
+    pub drag_delta_px: Vec2,
+    pub primary_dragged: bool,
+    pub secondary_or_middle_dragged: bool,
+    pub shift_held: bool,
+    pub scroll_px: f32,
+    pub zoom_factor: f32,
+    pub touch_count: usize,
+    pub touch_translation_px: Vec2,
+    pub double_clicked: bool,
+}
+
+impl ViewportInput {
+    /// Reads the viewport's response and the frame's input.
+    pub fn read(ui: &Ui, response: &Response) -> Self {
+        let delta = response.drag_delta();
+        let hovered = response.hovered() || response.dragged();
+        ui.input(|input| {
+            let multi_touch = input.multi_touch();
+            Self {
+                drag_delta_px: Vec2::new(delta.x, delta.y),
+                primary_dragged: response.dragged_by(PointerButton::Primary),
+                secondary_or_middle_dragged: response.dragged_by(PointerButton::Secondary)
+                    || response.dragged_by(PointerButton::Middle),
+                shift_held: input.modifiers.shift,
+                scroll_px: if hovered {
+                    input.smooth_scroll_delta.y
+                } else {
+                    0.0
+                },
+                zoom_factor: if hovered { input.zoom_delta() } else { 1.0 },
+                touch_count: multi_touch.map_or(0, |touch| touch.num_touches),
+                touch_translation_px: multi_touch.map_or(Vec2::ZERO, |touch| {
+                    Vec2::new(touch.translation_delta.x, touch.translation_delta.y)
+                }),
+                double_clicked: response.double_clicked(),
+            }
+        })
+    }
+
+    /// The camera gestures this input means. One finger or the left button orbits; two
+    /// fingers pan and pinch; the right or middle button, or Shift with the left, pans;
+    /// the wheel zooms; a double click frames the body again.
+    pub fn gestures(&self) -> Vec<CameraGesture> {
+        let mut gestures = Vec::new();
+        if self.double_clicked {
+            gestures.push(CameraGesture::Reset);
+            return gestures;
+        }
+        if self.touch_count >= 2 {
+            if self.touch_translation_px != Vec2::ZERO {
+                gestures.push(CameraGesture::Pan(self.touch_translation_px));
+            }
+        } else if self.drag_delta_px != Vec2::ZERO {
+            if self.secondary_or_middle_dragged || (self.primary_dragged && self.shift_held) {
+                gestures.push(CameraGesture::Pan(self.drag_delta_px));
+            } else if self.primary_dragged {
+                gestures.push(CameraGesture::Orbit(self.drag_delta_px));
+            }
+        }
+        let mut zoom = if self.zoom_factor.is_finite() && self.zoom_factor > 0.0 {
+            self.zoom_factor
+        } else {
+            1.0
+        };
+        if self.scroll_px != 0.0 && self.scroll_px.is_finite() {
+            zoom *= (self.scroll_px * 0.002).exp();
+        }
+        if (zoom - 1.0).abs() > 1e-6 {
+            gestures.push(CameraGesture::Zoom(zoom));
+        }
+        gestures
+    }
+}
+
+/// Applies gestures to the camera; returns whether anything changed.
+pub(crate) fn apply_gestures(
+    camera: &mut OrbitCamera,
+    gestures: &[CameraGesture],
+    viewport_height_px: f32,
+) -> bool {
+    for gesture in gestures {
+        match *gesture {
+            CameraGesture::Orbit(delta) => camera.orbit(delta),
+            CameraGesture::Pan(delta) => camera.pan(delta, viewport_height_px),
+            CameraGesture::Zoom(factor) => camera.zoom(factor),
+            CameraGesture::Reset => *camera = OrbitCamera::default(),
+        }
+    }
+    !gestures.is_empty()
+}
+
+/// The renderer and its target texture, registered with egui.
+pub(crate) struct ViewportRenderer {
+    scene_renderer: SceneRenderer,
+    target: Option<(RenderTarget, egui::TextureId)>,
+}
+
+impl ViewportRenderer {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        Self {
+            scene_renderer: SceneRenderer::new(device),
+            target: None,
+        }
+    }
+
+    /// Renders the scene at `size_px` and returns the egui texture that shows it.
+    pub(crate) fn render(
+        &mut self,
+        render_state: &egui_wgpu::RenderState,
+        size_px: [u32; 2],
+        camera: &OrbitCamera,
+        scene: &Scene,
+    ) -> egui::TextureId {
+        let device = &render_state.device;
+        let needs_new_target = self
+            .target
+            .as_ref()
+            .is_none_or(|(target, _)| target.size_px() != size_px);
+        if needs_new_target {
+            let target = RenderTarget::new(device, size_px);
+            let mut egui_renderer = render_state.renderer.write();
+            let texture_id = match self.target.take() {
+                Some((_, texture_id)) => {
+                    egui_renderer.update_egui_texture_from_wgpu_texture(
+                        device,
+                        target.color_view(),
+                        wgpu::FilterMode::Linear,
+                        texture_id,
+                    );
+                    texture_id
+                }
+                None => egui_renderer.register_native_texture(
+                    device,
+                    target.color_view(),
+                    wgpu::FilterMode::Linear,
+                ),
+            };
+            self.target = Some((target, texture_id));
+        }
+        match &self.target {
+            Some((target, texture_id)) => {
+                self.scene_renderer
+                    .render(device, &render_state.queue, target, camera, scene);
+                *texture_id
+            }
+            None => egui::TextureId::default(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn left_drag_orbits_and_shift_left_drag_pans() {
+        let drag = ViewportInput {
+            drag_delta_px: Vec2::new(10.0, 0.0),
+            primary_dragged: true,
+            zoom_factor: 1.0,
+            ..Default::default()
+        };
+        assert_eq!(
+            drag.gestures(),
+            vec![CameraGesture::Orbit(Vec2::new(10.0, 0.0))]
+        );
+        let shifted = ViewportInput {
+            shift_held: true,
+            ..drag
+        };
+        assert_eq!(
+            shifted.gestures(),
+            vec![CameraGesture::Pan(Vec2::new(10.0, 0.0))]
+        );
+    }
+
+    #[test]
+    fn two_fingers_pan_and_pinch_zooms() {
+        let input = ViewportInput {
+            touch_count: 2,
+            touch_translation_px: Vec2::new(3.0, 4.0),
+            zoom_factor: 1.25,
+            drag_delta_px: Vec2::new(3.0, 4.0),
+            primary_dragged: true,
+            ..Default::default()
+        };
+        assert_eq!(
+            input.gestures(),
+            vec![
+                CameraGesture::Pan(Vec2::new(3.0, 4.0)),
+                CameraGesture::Zoom(1.25)
+            ]
+        );
+    }
+
+    #[test]
+    fn wheel_up_zooms_in_and_bad_zoom_factors_are_ignored() {
+        let input = ViewportInput {
+            scroll_px: 100.0,
+            zoom_factor: f32::NAN,
+            ..Default::default()
+        };
+        let mut camera = OrbitCamera::default();
+        let before = camera.distance_m;
+        assert!(apply_gestures(&mut camera, &input.gestures(), 600.0));
+        assert!(camera.distance_m < before);
+    }
+
+    #[test]
+    fn double_click_frames_the_body_again() {
+        let mut camera = OrbitCamera::default();
+        camera.orbit(Vec2::new(300.0, 50.0));
+        let input = ViewportInput {
+            double_clicked: true,
+            ..Default::default()
+        };
+        apply_gestures(&mut camera, &input.gestures(), 600.0);
+        assert_eq!(camera, OrbitCamera::default());
+    }
+}

@@ -1,0 +1,757 @@
+//! The iterative solver: linearise every level, take a prioritized step, enforce joint
+//! limits, repeat until converged, stalled or out of budget; report per-level residuals.
+
+use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
+
+use crate::kernel::prioritized_step;
+use crate::posture::clamp_and_wrap;
+use crate::priority::{Damping, LevelSystem, StepParams, StepWorkspace, prioritized_step_nalgebra};
+use crate::task::StepLimits;
+use crate::{Frames, IkError, Posture, Skeleton, Task};
+
+/// A source of time in seconds, for the wall-clock budget. The solver never reads a clock by
+/// itself on `wasm32-unknown-unknown` (where `std::time::Instant` panics): pass one built on
+/// `performance.now()` there.
+pub trait Clock {
+    /// Monotonic time in seconds (any origin).
+    fn now_secs(&self) -> f64;
+}
+
+impl<F: Fn() -> f64> Clock for F {
+    fn now_secs(&self) -> f64 {
+        self()
+    }
+}
+
+/// `std::time::Instant`, on targets where it works.
+#[cfg(not(all(target_arch = "wasm32", target_os = "unknown")))]
+#[derive(Debug, Clone, Copy)]
+pub struct SystemClock {
+    origin: std::time::Instant,
+}
+
+#[cfg(not(all(target_arch = "wasm32", target_os = "unknown")))]
+impl Default for SystemClock {
+    fn default() -> Self {
+        Self {
+            origin: std::time::Instant::now(),
+        }
+    }
+}
+
+#[cfg(not(all(target_arch = "wasm32", target_os = "unknown")))]
+impl Clock for SystemClock {
+    fn now_secs(&self) -> f64 {
+        self.origin.elapsed().as_secs_f64()
+    }
+}
+
+/// Plain, documented solver settings with defaults.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolverSettings {
+    /// Iteration budget (default 200).
+    pub max_iterations: usize,
+    /// A level is met when the norm of its residuals is at most this (m / rad; default 1e-6).
+    pub tolerance: f64,
+    /// Stalled when no DOF moves more than this in an iteration (default 1e-10).
+    pub stall_step: f64,
+    /// Stalled when for 5 iterations in a row the residuals (in priority order, met levels
+    /// aside) beat the best so far by no more than this (m / rad, default 1e-10) or 1e-4 of
+    /// themselves.
+    pub stall_improvement: f64,
+    /// Wall-clock budget in seconds (needs a [`Clock`]; default none).
+    pub time_budget_secs: Option<f64>,
+    /// Per-level damping (default constant 0.002).
+    pub damping: Damping,
+    /// Relative rank threshold of the projector (default 1e-9).
+    pub rank_tolerance: f64,
+    /// Largest position / centre-of-mass change asked of a task per iteration (m, default 0.1).
+    pub max_linear_step: f64,
+    /// Largest orientation / gaze / posture change asked per iteration (rad, default 0.3).
+    pub max_angular_step: f64,
+    /// Largest DOF change per iteration, shared by the levels in priority order (default 0.2).
+    pub max_dof_step: f64,
+    /// Enforce the joint limits by clamping (default true).
+    pub enforce_limits: bool,
+    /// Linear-algebra implementation of the step (default: the slice kernel).
+    pub backend: Backend,
+    /// Let the levels below the first unmet level wait while it still makes real progress
+    /// (default true; see `Solver::iteration`). With `false` every iteration takes every level.
+    pub cascade: bool,
+}
+
+/// Which implementation computes the prioritized step (same mathematics; kept selectable for
+/// the benchmark comparison).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Backend {
+    /// [`crate::prioritized_step`]: contiguous slices, no allocation per call.
+    #[default]
+    Kernel,
+    /// [`crate::prioritized_step_nalgebra`]: nalgebra dynamic matrices.
+    Nalgebra,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        Self {
+            max_iterations: 200,
+            tolerance: 1e-6,
+            stall_step: 1e-10,
+            stall_improvement: 1e-10,
+            time_budget_secs: None,
+            damping: Damping::default(),
+            rank_tolerance: 1e-9,
+            max_linear_step: 0.1,
+            max_angular_step: 0.3,
+            max_dof_step: 0.2,
+            enforce_limits: true,
+            backend: Backend::Kernel,
+            cascade: true,
+        }
+    }
+}
+
+impl SolverSettings {
+    /// Checks every field.
+    pub fn validate(&self) -> Result<(), IkError> {
+        let pos = |v: f64| v.is_finite() && v > 0.0;
+        if !(self.tolerance.is_finite() && self.tolerance >= 0.0) {
+            return Err(IkError::BadSetting("tolerance"));
+        }
+        if !(self.stall_step.is_finite() && self.stall_step >= 0.0) {
+            return Err(IkError::BadSetting("stall_step"));
+        }
+        if !(self.stall_improvement.is_finite() && self.stall_improvement >= 0.0) {
+            return Err(IkError::BadSetting("stall_improvement"));
+        }
+        if let Some(t) = self.time_budget_secs
+            && !(t.is_finite() && t >= 0.0)
+        {
+            return Err(IkError::BadSetting("time_budget_secs"));
+        }
+        match self.damping {
+            Damping::Constant { lambda } if !(lambda.is_finite() && lambda >= 0.0) => {
+                return Err(IkError::BadSetting("damping.lambda"));
+            }
+            Damping::Adaptive {
+                lambda_max,
+                epsilon,
+            } if !(pos(epsilon) && lambda_max >= 0.0) => {
+                return Err(IkError::BadSetting("damping"));
+            }
+            _ => {}
+        }
+        if !(self.rank_tolerance.is_finite() && self.rank_tolerance > 0.0) {
+            return Err(IkError::BadSetting("rank_tolerance"));
+        }
+        if !pos(self.max_linear_step) {
+            return Err(IkError::BadSetting("max_linear_step"));
+        }
+        if !pos(self.max_angular_step) {
+            return Err(IkError::BadSetting("max_angular_step"));
+        }
+        if !pos(self.max_dof_step) {
+            return Err(IkError::BadSetting("max_dof_step"));
+        }
+        Ok(())
+    }
+
+    fn step_params(&self) -> StepParams {
+        StepParams {
+            damping: self.damping,
+            rank_tolerance: self.rank_tolerance,
+            max_dof_step: self.max_dof_step,
+        }
+    }
+}
+
+/// Relative decrease below which an unmet level counts as not progressing.
+const STALL_RELATIVE: f64 = 1e-4;
+/// Iterations without a meaningful new best (in priority order) before "stalled".
+const STALL_WINDOW: usize = 5;
+
+/// Why the solver stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SolveStatus {
+    /// Every level (posture attraction aside) is within the tolerance.
+    Converged,
+    /// The step became negligible before every level was met (conflict or unreachable goal).
+    Stalled,
+    /// `max_iterations` spent.
+    IterationBudget,
+    /// `time_budget_secs` spent.
+    TimeBudget,
+}
+
+/// Residuals of one priority level.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LevelReport {
+    /// The level number.
+    pub level: u32,
+    /// Active tasks in the level.
+    pub tasks: usize,
+    /// Rows of the level's Jacobian.
+    pub rows: usize,
+    /// Norm of the residuals at the start (m / rad).
+    pub residual_before: f64,
+    /// Norm of the residuals at the end.
+    pub residual_after: f64,
+    /// `residual_after <= tolerance`.
+    pub met: bool,
+    /// Whether the level holds only posture attraction (never required to be met).
+    pub posture_only: bool,
+}
+
+/// The outcome of a solve. Not converging is a normal outcome, reported here.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SolveReport {
+    /// Why it stopped.
+    pub status: SolveStatus,
+    /// Steps taken.
+    pub iterations: usize,
+    /// One entry per level, highest priority first.
+    pub levels: Vec<LevelReport>,
+    /// The highest-priority level (posture-only levels aside) left unmet: the level that gave
+    /// way to the ones above it (or to an unreachable goal).
+    pub gave_way: Option<u32>,
+    /// DOF that sat on a joint limit in the last step.
+    pub clamped_dofs: usize,
+    /// Seconds spent, when a clock was available.
+    pub elapsed_secs: Option<f64>,
+}
+
+/// Cached per-solve task layout.
+#[derive(Debug, Clone, Default)]
+struct LevelLayout {
+    level: u32,
+    tasks: Vec<usize>,
+    rows: usize,
+    posture_only: bool,
+}
+
+/// The prioritized inverse-kinematics solver. Keeps its buffers between solves.
+#[derive(Debug, Clone, Default)]
+pub struct Solver {
+    /// Settings used by [`Solver::solve`].
+    pub settings: SolverSettings,
+    frames: Frames,
+    layout: Vec<LevelLayout>,
+    supports: Vec<Vec<usize>>,
+    systems: Vec<LevelSystem>,
+    residual_sq: Vec<f64>,
+    workspace: StepWorkspace,
+    fixed: DVector<f64>,
+    scratch: Vec<f64>,
+    weighted_sq: Vec<f64>,
+}
+
+impl Solver {
+    /// A solver with these settings (checked).
+    pub fn new(settings: SolverSettings) -> Result<Self, IkError> {
+        settings.validate()?;
+        Ok(Self {
+            settings,
+            ..Self::default()
+        })
+    }
+
+    /// Solves from `posture`, which receives the result; reads the system clock for the time
+    /// budget where one exists (never on `wasm32-unknown-unknown`).
+    pub fn solve(
+        &mut self,
+        skeleton: &Skeleton,
+        tasks: &[Task],
+        posture: &mut Posture,
+    ) -> Result<SolveReport, IkError> {
+        #[cfg(not(all(target_arch = "wasm32", target_os = "unknown")))]
+        {
+            let clock = SystemClock::default();
+            self.solve_with_clock(skeleton, tasks, posture, Some(&clock))
+        }
+        #[cfg(all(target_arch = "wasm32", target_os = "unknown"))]
+        {
+            self.solve_with_clock(skeleton, tasks, posture, None)
+        }
+    }
+
+    /// Solves with an explicit clock (or none: the time budget is then ignored).
+    pub fn solve_with_clock(
+        &mut self,
+        skeleton: &Skeleton,
+        tasks: &[Task],
+        posture: &mut Posture,
+        clock: Option<&dyn Clock>,
+    ) -> Result<SolveReport, IkError> {
+        self.settings.validate()?;
+        self.prepare(skeleton, tasks, posture)?;
+        let start = clock.map(|c| c.now_secs());
+        let values = posture.values_mut();
+        clamp_and_wrap(skeleton, values);
+        let before = self.linearize(skeleton, tasks, values);
+        let mut best_values = values.to_vec();
+        let mut best_residuals = before.clone();
+        let mut iterations = 0;
+        let mut clamped_dofs = 0;
+        let mut flat_iterations = 0;
+        let tol = self.settings.tolerance;
+        let status = loop {
+            if self.all_met(tol) {
+                break SolveStatus::Converged;
+            }
+            if iterations >= self.settings.max_iterations {
+                break SolveStatus::IterationBudget;
+            }
+            if let (Some(c), Some(s), Some(budget)) = (clock, start, self.settings.time_budget_secs)
+                && c.now_secs() - s >= budget
+            {
+                break SolveStatus::TimeBudget;
+            }
+            let (moved, clamped) = self.iteration(skeleton, tasks, values);
+            clamped_dofs = clamped;
+            iterations += 1;
+            if self.meaningfully_better(&self.residual_sq, &best_residuals) {
+                flat_iterations = 0;
+            } else {
+                flat_iterations += 1;
+            }
+            if self.lexicographically_better(&self.residual_sq, &best_residuals) {
+                best_values.copy_from_slice(values);
+                best_residuals.clone_from(&self.residual_sq);
+            }
+            if moved <= self.settings.stall_step || flat_iterations >= STALL_WINDOW {
+                break if self.all_met(tol) {
+                    SolveStatus::Converged
+                } else {
+                    SolveStatus::Stalled
+                };
+            }
+        };
+        // Return the best posture met on the way (the last one unless a lower level's pull left
+        // a higher level worse than it was).
+        if self.lexicographically_better(&best_residuals, &self.residual_sq) {
+            values.copy_from_slice(&best_values);
+            self.residual_sq = best_residuals;
+        }
+        let levels: Vec<LevelReport> = self
+            .layout
+            .iter()
+            .zip(before.iter().zip(&self.residual_sq))
+            .map(|(l, (b, a))| LevelReport {
+                level: l.level,
+                tasks: l.tasks.len(),
+                rows: l.rows,
+                residual_before: b.sqrt(),
+                residual_after: a.sqrt(),
+                met: a.sqrt() <= tol,
+                posture_only: l.posture_only,
+            })
+            .collect();
+        let gave_way = levels
+            .iter()
+            .find(|l| !l.posture_only && !l.met)
+            .map(|l| l.level);
+        Ok(SolveReport {
+            status,
+            iterations,
+            levels,
+            gave_way,
+            clamped_dofs,
+            elapsed_secs: match (clock, start) {
+                (Some(c), Some(s)) => Some(c.now_secs() - s),
+                _ => None,
+            },
+        })
+    }
+
+    /// One prioritized iteration from `posture` (for interactive use: a few per frame).
+    /// Returns the largest DOF change.
+    pub fn iterate(
+        &mut self,
+        skeleton: &Skeleton,
+        tasks: &[Task],
+        posture: &mut Posture,
+    ) -> Result<f64, IkError> {
+        self.settings.validate()?;
+        self.prepare(skeleton, tasks, posture)?;
+        let values = posture.values_mut();
+        clamp_and_wrap(skeleton, values);
+        self.linearize(skeleton, tasks, values);
+        Ok(self.iteration(skeleton, tasks, values).0)
+    }
+
+    /// The linearised levels at `posture` (for tests and tools): `J_k^T` and `dx_k` per level.
+    pub fn linear_systems(
+        &mut self,
+        skeleton: &Skeleton,
+        tasks: &[Task],
+        posture: &Posture,
+    ) -> Result<Vec<LevelSystem>, IkError> {
+        self.prepare(skeleton, tasks, posture)?;
+        self.linearize(skeleton, tasks, posture.values());
+        Ok(self.systems.clone())
+    }
+
+    fn all_met(&self, tol: f64) -> bool {
+        self.layout
+            .iter()
+            .zip(&self.residual_sq)
+            .all(|(l, r)| l.posture_only || r.sqrt() <= tol)
+    }
+
+    fn prepare(
+        &mut self,
+        skeleton: &Skeleton,
+        tasks: &[Task],
+        posture: &Posture,
+    ) -> Result<(), IkError> {
+        if posture.values().len() != skeleton.dof_count() {
+            return Err(IkError::PostureSize {
+                expected: skeleton.dof_count(),
+                got: posture.values().len(),
+            });
+        }
+        if let Some(i) = posture.values().iter().position(|v| !v.is_finite()) {
+            return Err(IkError::NotFinite {
+                what: format!("posture value {i}"),
+            });
+        }
+        for (i, t) in tasks.iter().enumerate() {
+            t.validate(skeleton, i)?;
+        }
+        let mut levels: Vec<u32> = tasks
+            .iter()
+            .filter(|t| t.active && t.rows() > 0)
+            .map(|t| t.level)
+            .collect();
+        levels.sort_unstable();
+        levels.dedup();
+        self.layout = levels
+            .iter()
+            .map(|&level| {
+                let members: Vec<usize> = tasks
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, t)| t.active && t.rows() > 0 && t.level == level)
+                    .map(|(i, _)| i)
+                    .collect();
+                LevelLayout {
+                    level,
+                    rows: members.iter().map(|&i| tasks[i].rows()).sum(),
+                    posture_only: members.iter().all(|&i| tasks[i].is_posture()),
+                    tasks: members,
+                }
+            })
+            .collect();
+        self.supports = tasks.iter().map(|t| t.support(skeleton)).collect();
+        let n = skeleton.dof_count();
+        self.systems.resize_with(self.layout.len(), || LevelSystem {
+            level: 0,
+            jacobian_t: DMatrix::zeros(0, 0),
+            dx: DVector::zeros(0),
+            support: Vec::new(),
+        });
+        for (sys, l) in self.systems.iter_mut().zip(&self.layout) {
+            sys.level = l.level;
+            let mut support: Vec<usize> = l
+                .tasks
+                .iter()
+                .flat_map(|&t| self.supports[t].iter().copied())
+                .collect();
+            support.sort_unstable();
+            support.dedup();
+            sys.support = support;
+            if sys.jacobian_t.shape() != (n, l.rows) {
+                sys.jacobian_t = DMatrix::zeros(n, l.rows);
+                sys.dx = DVector::zeros(l.rows);
+            }
+        }
+        self.residual_sq = vec![0.0; self.layout.len()];
+        self.weighted_sq = vec![0.0; self.layout.len()];
+        Ok(())
+    }
+
+    /// Forward kinematics + all level systems; returns the squared residual per level.
+    fn linearize(&mut self, skeleton: &Skeleton, tasks: &[Task], values: &[f64]) -> Vec<f64> {
+        self.frames.update(skeleton, values);
+        let n = skeleton.dof_count();
+        let limits = StepLimits {
+            linear: self.settings.max_linear_step,
+            angular: self.settings.max_angular_step,
+        };
+        for (((layout, sys), res), wres) in self
+            .layout
+            .iter()
+            .zip(self.systems.iter_mut())
+            .zip(self.residual_sq.iter_mut())
+            .zip(self.weighted_sq.iter_mut())
+        {
+            sys.jacobian_t.fill(0.0);
+            let mut row = 0;
+            *res = 0.0;
+            *wres = 0.0;
+            for &ti in &layout.tasks {
+                let task = &tasks[ti];
+                let rows = task.rows();
+                let err = &mut sys.dx.as_mut_slice()[row..row + rows];
+                let r = task.error(skeleton, &self.frames, values, err, Some(limits));
+                *res += r * r;
+                *wres += task.weight * r * r;
+                let jt = &mut sys.jacobian_t.as_mut_slice()[row * n..(row + rows) * n];
+                task.jacobian_t(skeleton, &self.frames, &self.supports[ti], jt, n);
+                let w = task.weight.sqrt();
+                if w != 1.0 {
+                    err.iter_mut().for_each(|v| *v *= w);
+                    jt.iter_mut().for_each(|v| *v *= w);
+                }
+                row += rows;
+            }
+        }
+        self.residual_sq.clone()
+    }
+
+    /// Forward kinematics and the squared residual per level only (no Jacobian).
+    fn evaluate_residuals(&mut self, skeleton: &Skeleton, tasks: &[Task], values: &[f64]) {
+        self.frames.update(skeleton, values);
+        for ((layout, res), wres) in self
+            .layout
+            .iter()
+            .zip(self.residual_sq.iter_mut())
+            .zip(self.weighted_sq.iter_mut())
+        {
+            *res = 0.0;
+            *wres = 0.0;
+            for &ti in &layout.tasks {
+                let task = &tasks[ti];
+                self.scratch.resize(task.rows(), 0.0);
+                let r = task.error(skeleton, &self.frames, values, &mut self.scratch, None);
+                *res += r * r;
+                *wres += task.weight * r * r;
+            }
+        }
+    }
+
+    /// One iteration from `values`, where the systems are linearised: prioritized step with
+    /// joint limits, then step-length control. While the step makes the residuals clearly
+    /// worse in priority order (see `first_worse_level`), it is halved (up to 3 times); if
+    /// that is not enough, the levels below the one that got worse are dropped and the step
+    /// is recomputed and halved again. Leaves the systems linearised at the new `values`.
+    /// Returns (largest DOF change, clamped DOF count).
+    fn iteration(
+        &mut self,
+        skeleton: &Skeleton,
+        tasks: &[Task],
+        values: &mut [f64],
+    ) -> (f64, usize) {
+        const MAX_HALVINGS: usize = 3;
+        // Cascade: while the first unmet level can still make real progress (its linear model
+        // promises at least a tenth of what it asks), the levels below wait; their null-space
+        // motion would otherwise keep disturbing it through the non-linearity. A level stuck
+        // in a conflict promises little and lets the levels below move. (Its promise does not
+        // depend on the levels below: the priority is strict.)
+        let all_levels = self.layout.len();
+        let first_unmet = self
+            .first_unmet_level()
+            .filter(|&k| self.settings.cascade && k + 1 < all_levels);
+        let (mut step, mut clamped) =
+            self.compute_step(skeleton, values, first_unmet.map_or(all_levels, |k| k + 1));
+        if let Some(k) = first_unmet {
+            let sys = &self.systems[k];
+            let mut rest = sys.dx.clone();
+            rest.gemv_tr(-1.0, &sys.jacobian_t, &step, 1.0);
+            let asked = sys.dx.norm();
+            if asked - rest.norm() <= 0.1 * asked {
+                (step, clamped) = self.compute_step(skeleton, values, all_levels);
+            }
+        }
+        let start = values.to_vec();
+        let old = self.residual_sq.clone();
+        let mut moved: f64;
+        // Candidates after the full step: the lowest levels dropped one at a time (their large
+        // null-space motions disturb the levels above through the non-linearity), then halvings.
+        let mut keep_levels = self.layout.len();
+        let mut halvings = 0;
+        loop {
+            moved = 0.0;
+            for i in 0..values.len() {
+                values[i] = start[i] + step[i];
+                moved = moved.max(step[i].abs());
+            }
+            clamp_and_wrap(skeleton, values);
+            self.evaluate_residuals(skeleton, tasks, values);
+            let Some(worse) = self.rejecting_level(&old) else {
+                break;
+            };
+            if halvings < MAX_HALVINGS {
+                // A shorter step: the disturbance of the levels above is second order.
+                step *= 0.5;
+                halvings += 1;
+                continue;
+            }
+            if keep_levels > worse + 1 {
+                // Still worse: drop every level below the one that got worse and retry (the
+                // step is recomputed: the joint-limit clamping depends on the levels).
+                keep_levels = worse + 1;
+                (step, clamped) = self.compute_step(skeleton, &start, keep_levels);
+                halvings = 0;
+                continue;
+            }
+            break;
+        }
+        self.linearize(skeleton, tasks, values);
+        (moved, clamped)
+    }
+
+    /// Whether `a` beats `b` in priority order by a margin worth iterating for.
+    fn meaningfully_better(&self, a: &[f64], b: &[f64]) -> bool {
+        // Met levels drift a little while the levels below move: up to 10x the tolerance
+        // counts as met here.
+        let tol = 10.0 * self.settings.tolerance;
+        for ((layout, &a), &b) in self.layout.iter().zip(a).zip(b) {
+            let (a, b) = (a.sqrt(), b.sqrt());
+            if layout.posture_only || (a <= tol && b <= tol) {
+                continue;
+            }
+            let margin = self.settings.stall_improvement.max(STALL_RELATIVE * b);
+            if a < b - margin {
+                return true;
+            }
+            if a > b + margin {
+                return false;
+            }
+        }
+        false
+    }
+
+    /// Whether residuals `a` beat `b` in priority order (levels met in both count as equal).
+    fn lexicographically_better(&self, a: &[f64], b: &[f64]) -> bool {
+        let tol2 = self.settings.tolerance * self.settings.tolerance;
+        for ((layout, &a), &b) in self.layout.iter().zip(a).zip(b) {
+            if layout.posture_only || (a <= tol2 && b <= tol2) {
+                continue;
+            }
+            if a < b {
+                return true;
+            }
+            if a > b {
+                return false;
+            }
+        }
+        false
+    }
+
+    /// Index of the first level (posture-only levels aside) not within the tolerance.
+    fn first_unmet_level(&self) -> Option<usize> {
+        let tol2 = self.settings.tolerance * self.settings.tolerance;
+        self.layout
+            .iter()
+            .zip(&self.residual_sq)
+            .position(|(l, &r)| !l.posture_only && r > tol2)
+    }
+
+    /// The level that rejects the candidate step (priority order, posture-only levels aside):
+    /// a met level that drifted (second order, while the levels below moved) by more than a
+    /// tenth of the step limits (the next iteration pulls a smaller drift back), or an unmet
+    /// level whose residual got clearly worse (by more than `1e-3 * old + 10 * tolerance`)
+    /// before any got better.
+    fn rejecting_level(&self, old: &[f64]) -> Option<usize> {
+        let tol = self.settings.tolerance;
+        let drift = 0.1
+            * self
+                .settings
+                .max_linear_step
+                .min(self.settings.max_angular_step);
+        for (k, layout) in self.layout.iter().enumerate() {
+            if layout.posture_only {
+                continue;
+            }
+            let (new, old) = (self.residual_sq[k].sqrt(), old[k].sqrt());
+            let slack = if old <= tol {
+                drift
+            } else {
+                1e-3 * old + 10.0 * tol
+            };
+            if new < old - slack {
+                return None;
+            }
+            if new > old + slack {
+                return Some(k);
+            }
+        }
+        None
+    }
+
+    /// Prioritized step with the joint-limit clamping loop. Returns (step, clamped DOF count);
+    /// `values + step` is inside the limits.
+    fn compute_step(
+        &mut self,
+        skeleton: &Skeleton,
+        values: &[f64],
+        levels: usize,
+    ) -> (DVector<f64>, usize) {
+        let n = skeleton.dof_count();
+        let params = self.settings.step_params();
+        let (lo, hi) = (skeleton.lower_limits(), skeleton.upper_limits());
+        let has_limits = self.settings.enforce_limits
+            && lo
+                .iter()
+                .zip(hi)
+                .any(|(l, h)| l.is_finite() || h.is_finite());
+        let mut clamped = vec![false; n];
+        let mut fixed = std::mem::take(&mut self.fixed);
+        fixed.resize_vertically_mut(n, 0.0);
+        fixed.fill(0.0);
+        let mut any_clamped = false;
+        let mut total;
+        let mut passes = 0;
+        loop {
+            let step_fn = match self.settings.backend {
+                Backend::Kernel => prioritized_step,
+                Backend::Nalgebra => prioritized_step_nalgebra,
+            };
+            let step = step_fn(
+                &self.systems[..levels.min(self.systems.len())],
+                n,
+                &params,
+                any_clamped.then_some(clamped.as_slice()),
+                any_clamped.then_some(&fixed),
+                &mut self.workspace,
+                None,
+            );
+            total = step + &fixed;
+            if !has_limits {
+                break;
+            }
+            let mut new_clamp = false;
+            for i in 0..n {
+                if clamped[i] {
+                    continue;
+                }
+                let next = values[i] + total[i];
+                let bound = if next > hi[i] {
+                    hi[i]
+                } else if next < lo[i] {
+                    lo[i]
+                } else {
+                    continue;
+                };
+                clamped[i] = true;
+                fixed[i] = bound - values[i];
+                new_clamp = true;
+            }
+            passes += 1;
+            if !new_clamp || passes > n {
+                break;
+            }
+            any_clamped = true;
+        }
+        for v in total.iter_mut() {
+            if !v.is_finite() {
+                *v = 0.0;
+            }
+        }
+        self.fixed = fixed;
+        (total, clamped.iter().filter(|&&c| c).count())
+    }
+}

@@ -1,0 +1,170 @@
+//! Skeleton validation, forward kinematics, task Jacobians against finite differences.
+
+// A test crate: on wasm32 `#[test]` becomes `wasm_bindgen_test`, which clippy does not treat
+// as a test, and fixture helpers panic on broken fixtures on purpose.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+#[cfg(target_arch = "wasm32")]
+use wasm_bindgen_test::wasm_bindgen_test as test;
+#[cfg(target_arch = "wasm32")]
+wasm_bindgen_test::wasm_bindgen_test_configure!(run_in_browser);
+
+mod common;
+
+use common::*;
+use glam::{DQuat, DVec3};
+use stance_ik::{Dof, Frames, IkError, JointDef, Posture, Skeleton, Solver, Task};
+
+fn j(name: &str, parent: Option<&str>) -> JointDef {
+    JointDef::new(name, parent, DVec3::Y, &[Dof::Rx])
+}
+
+#[test]
+fn skeleton_rejects_bad_trees() {
+    assert_eq!(
+        Skeleton::new(vec![j("a", None), j("a", Some("a"))]),
+        Err(IkError::DuplicateJoint("a".into()))
+    );
+    assert!(matches!(
+        Skeleton::new(vec![j("a", None), j("b", Some("zz"))]),
+        Err(IkError::UnknownParent { .. })
+    ));
+    assert!(matches!(
+        Skeleton::new(vec![j("a", None), j("b", Some("c")), j("c", Some("b"))]),
+        Err(IkError::Cycle(_))
+    ));
+    assert!(matches!(
+        Skeleton::new(vec![j("b", Some("c")), j("c", Some("b"))]),
+        Err(IkError::Cycle(_))
+    ));
+    assert!(matches!(
+        Skeleton::new(vec![j("a", None), j("b", None)]),
+        Err(IkError::RootCount(2))
+    ));
+    assert_eq!(Skeleton::new(vec![]), Err(IkError::Empty));
+    let dup = JointDef::new("a", None, DVec3::ZERO, &[Dof::Rx, Dof::Rx]);
+    assert!(matches!(
+        Skeleton::new(vec![dup]),
+        Err(IkError::DuplicateDof { .. })
+    ));
+    let bad_limit = j("a", None).with_limit(Dof::Rx, 1.0, -1.0);
+    assert!(matches!(
+        Skeleton::new(vec![bad_limit]),
+        Err(IkError::BadLimit { .. })
+    ));
+    let nan = JointDef::new("a", None, DVec3::new(f64::NAN, 0.0, 0.0), &[]);
+    assert!(matches!(
+        Skeleton::new(vec![nan]),
+        Err(IkError::NotFinite { .. })
+    ));
+}
+
+#[test]
+fn skeleton_sorts_parents_first() {
+    let s = Skeleton::new(vec![j("c", Some("b")), j("b", Some("a")), j("a", None)]).unwrap();
+    let names: Vec<_> = s.joints().iter().map(|j| j.name.as_str()).collect();
+    assert_eq!(names, ["a", "b", "c"]);
+    assert_eq!(s.joints()[2].parent, Some(1));
+    assert_eq!(s.chain_dofs(2), vec![0, 1, 2]);
+}
+
+#[test]
+fn forward_kinematics_of_a_hinge_chain() {
+    let s = Skeleton::new(vec![
+        JointDef::new("a", None, DVec3::ZERO, &[Dof::Rz]),
+        JointDef::new("b", Some("a"), DVec3::X, &[Dof::Rz]),
+        JointDef::new("c", Some("b"), DVec3::X, &[]),
+    ])
+    .unwrap();
+    let p = Posture::from_values(
+        &s,
+        vec![std::f64::consts::FRAC_PI_2, -std::f64::consts::FRAC_PI_2],
+    )
+    .unwrap();
+    let f = Frames::new(&s, &p);
+    assert!((f.joint_position[1] - DVec3::Y).length() < 1e-12);
+    assert!((f.joint_position[2] - DVec3::new(1.0, 1.0, 0.0)).length() < 1e-12);
+}
+
+#[test]
+fn rotations_round_trip_and_wrap() {
+    let mut r = rng(1);
+    let s = random_skeleton(&mut r, 6, false);
+    let q: Vec<DQuat> = (0..s.joint_count())
+        .map(|_| DQuat::from_scaled_axis(vec3(&mut r, 1.5)))
+        .collect();
+    let p = Posture::from_rotations(&s, DVec3::new(0.1, 0.2, 0.3), &q).unwrap();
+    for (i, joint) in s.joints().iter().enumerate() {
+        if joint.rotation_dof.iter().all(Option::is_some) {
+            assert!(p.local_rotation(&s, i).angle_between(q[i]) < 1e-9);
+        }
+    }
+    // A free ball joint past pi is re-wrapped to the same rotation.
+    let ball = Skeleton::new(vec![JointDef::new(
+        "a",
+        None,
+        DVec3::ZERO,
+        &[Dof::Rx, Dof::Ry, Dof::Rz],
+    )])
+    .unwrap();
+    let mut p = Posture::from_values(&ball, vec![4.0, 0.0, 0.0]).unwrap();
+    let before = p.local_rotation(&ball, 0);
+    p.normalize(&ball);
+    assert!(p.values()[0].abs() <= std::f64::consts::PI);
+    assert!(p.local_rotation(&ball, 0).angle_between(before) < 1e-12);
+}
+
+#[test]
+fn every_task_jacobian_matches_finite_differences() {
+    let mut r = rng(2);
+    let mut solver = Solver::default();
+    let mut checked = 0;
+    for _ in 0..40 {
+        let s = random_skeleton(&mut r, 8, false);
+        let p = random_posture(&mut r, &s, 1.2);
+        for _ in 0..6 {
+            let task = random_task(&mut r, &s, 1).with_weight(1.0);
+            let systems = solver
+                .linear_systems(&s, std::slice::from_ref(&task), &p)
+                .unwrap();
+            let analytic = systems[0].jacobian_t.transpose();
+            let numeric = finite_difference_jacobian(&s, &p, &task);
+            let err = (&analytic - &numeric).amax();
+            assert!(
+                err < 1e-6,
+                "{:?}: |J - FD| = {err}\n{analytic}\n{numeric}",
+                task.kind
+            );
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 240);
+}
+
+#[test]
+fn jacobian_is_zero_outside_the_chain() {
+    let mut r = rng(3);
+    let s = random_skeleton(&mut r, 12, false);
+    let p = random_posture(&mut r, &s, 1.0);
+    let mut solver = Solver::default();
+    for joint in 0..s.joint_count() {
+        let task = Task::position(joint, DVec3::X, DVec3::ONE);
+        let jt = &solver.linear_systems(&s, &[task], &p).unwrap()[0].jacobian_t;
+        for d in 0..s.dof_count() {
+            if !s.is_ancestor_or_self(s.dof_joint(d), joint) {
+                assert_eq!(jt.row(d).amax(), 0.0);
+            }
+        }
+    }
+}
+
+#[test]
+fn center_of_mass_is_mass_weighted() {
+    let s = Skeleton::new(vec![
+        JointDef::new("a", None, DVec3::ZERO, &[Dof::Rz]).with_mass(1.0, DVec3::ZERO),
+        JointDef::new("b", Some("a"), DVec3::X * 2.0, &[]).with_mass(3.0, DVec3::Y),
+    ])
+    .unwrap();
+    let f = Frames::new(&s, &Posture::rest(&s));
+    assert!((f.center_of_mass() - DVec3::new(1.5, 0.75, 0.0)).length() < 1e-12);
+}

@@ -1,0 +1,479 @@
+//! The prioritized step: recursive projector == naive oracle, strict priority, joint limits,
+//! robustness in degenerate cases, solver statuses.
+
+// A test crate: on wasm32 `#[test]` becomes `wasm_bindgen_test`, which clippy does not treat
+// as a test, and fixture helpers panic on broken fixtures on purpose.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+#[cfg(target_arch = "wasm32")]
+use wasm_bindgen_test::wasm_bindgen_test as test;
+#[cfg(target_arch = "wasm32")]
+wasm_bindgen_test::wasm_bindgen_test_configure!(run_in_browser);
+
+mod common;
+
+use std::cell::Cell;
+
+use common::*;
+use glam::DVec3;
+use nalgebra::DVector;
+use rand::RngExt;
+use stance_ik::{
+    Damping, Dof, JointDef, LevelSystem, Posture, Skeleton, SolveStatus, Solver, SolverSettings,
+    StepParams, StepWorkspace, Task, prioritized_step,
+};
+
+fn random_problem(seed: u64, limits: bool) -> (Skeleton, Posture, Vec<Task>) {
+    let mut r = rng(seed);
+    let joints = r.random_range(3..14);
+    let s = random_skeleton(&mut r, joints, limits);
+    let p = random_posture(&mut r, &s, 1.0);
+    let levels = r.random_range(1..6);
+    let count = r.random_range(1..9);
+    let tasks = (0..count)
+        .map(|_| {
+            let level = r.random_range(1..=levels);
+            random_task(&mut r, &s, level)
+        })
+        .collect();
+    (s, p, tasks)
+}
+
+fn linearized_residual(level: &LevelSystem, dtheta: &DVector<f64>) -> f64 {
+    (&level.dx - level.jacobian_t.tr_mul(dtheta)).norm()
+}
+
+#[test]
+fn recursive_projector_equals_naive() {
+    let mut compared = 0;
+    for seed in 0..150 {
+        let (s, p, tasks) = random_problem(seed, false);
+        let systems = Solver::default().linear_systems(&s, &tasks, &p).unwrap();
+        let n = s.dof_count();
+        for lambda in [0.0, 0.05] {
+            let params = exact_params(lambda);
+            let mut projectors = Vec::new();
+            let step = prioritized_step(
+                &systems,
+                n,
+                &params,
+                None,
+                None,
+                &mut StepWorkspace::default(),
+                Some(&mut projectors),
+            );
+            let (naive, naive_p) = naive_step(&systems, n, lambda, params.rank_tolerance);
+            for (k, (a, b)) in projectors.iter().zip(&naive_p).enumerate() {
+                assert!(
+                    (a - b).amax() < 1e-8,
+                    "seed {seed}: projector {k} differs by {}",
+                    (a - b).amax()
+                );
+                // Symmetric and idempotent.
+                assert!((a - a.transpose()).amax() < 1e-12);
+                assert!((a * a - a).amax() < 1e-9);
+            }
+            if lambda > 0.0 {
+                let scale = 1.0 + naive.amax();
+                assert!(
+                    (&step - &naive).amax() < 1e-7 * scale,
+                    "seed {seed}: steps differ\n{step}\n{naive}"
+                );
+            }
+            compared += 1;
+        }
+    }
+    assert_eq!(compared, 300);
+}
+
+#[test]
+fn exactly_dependent_levels_give_the_naive_projector() {
+    // The same task at levels 1 and 2: level 2 must get nothing and the projector must not grow.
+    let (s, p, _) = random_problem(7, false);
+    let j = s.joint_count() - 1;
+    let t = Task::position(j, DVec3::X * 0.1, DVec3::new(0.3, 0.2, 0.1));
+    let tasks = vec![t.clone(), t.at_level(2)];
+    let systems = Solver::default().linear_systems(&s, &tasks, &p).unwrap();
+    let mut projectors = Vec::new();
+    let params = exact_params(0.01);
+    prioritized_step(
+        &systems,
+        s.dof_count(),
+        &params,
+        None,
+        None,
+        &mut StepWorkspace::default(),
+        Some(&mut projectors),
+    );
+    let (_, naive_p) = naive_step(&systems, s.dof_count(), 0.01, params.rank_tolerance);
+    assert!((&projectors[0] - &projectors[1]).amax() < 1e-9);
+    assert!((&projectors[1] - &naive_p[1]).amax() < 1e-9);
+}
+
+#[test]
+fn lower_levels_never_change_a_higher_levels_achieved_residual() {
+    let mut checked = 0;
+    for seed in 1000..1200 {
+        let (s, p, tasks) = random_problem(seed, false);
+        let systems = Solver::default().linear_systems(&s, &tasks, &p).unwrap();
+        let n = s.dof_count();
+        for params in [
+            StepParams::default(),
+            StepParams {
+                damping: Damping::Adaptive {
+                    lambda_max: 0.1,
+                    epsilon: 0.1,
+                },
+                ..StepParams::default()
+            },
+        ] {
+            let mut ws = StepWorkspace::default();
+            let full = prioritized_step(&systems, n, &params, None, None, &mut ws, None);
+            for k in 1..systems.len() {
+                let partial =
+                    prioritized_step(&systems[..k], n, &params, None, None, &mut ws, None);
+                for level in &systems[..k] {
+                    let a = linearized_residual(level, &partial);
+                    let b = linearized_residual(level, &full);
+                    assert!(
+                        (a - b).abs() < 1e-9,
+                        "seed {seed}: level {} {a} vs {b}",
+                        level.level
+                    );
+                    checked += 1;
+                }
+            }
+        }
+    }
+    assert!(checked > 200, "{checked}");
+}
+
+#[test]
+fn strict_priority_holds_through_solver_iterations() {
+    // Over several iterations, with and without the lower levels: the top level's linearised
+    // residual of each step is identical, whatever lower levels are added.
+    for seed in 2000..2040 {
+        let (s, p, mut tasks) = random_problem(seed, false);
+        for t in &mut tasks {
+            t.level += 1;
+        }
+        let mut r = rng(seed);
+        let top = Task::position(s.joint_count() - 1, DVec3::ZERO, vec3(&mut r, 1.0));
+        let with: Vec<Task> = std::iter::once(top.clone()).chain(tasks).collect();
+        let mut solver = Solver::default();
+        let mut posture = p.clone();
+        for _ in 0..5 {
+            let systems = solver.linear_systems(&s, &with, &posture).unwrap();
+            let n = s.dof_count();
+            let mut ws = StepWorkspace::default();
+            let params = StepParams::default();
+            let alone = prioritized_step(&systems[..1], n, &params, None, None, &mut ws, None);
+            let all = prioritized_step(&systems, n, &params, None, None, &mut ws, None);
+            let (a, b) = (
+                linearized_residual(&systems[0], &alone),
+                linearized_residual(&systems[0], &all),
+            );
+            assert!((a - b).abs() < 1e-9, "seed {seed}: {a} vs {b}");
+            solver.iterate(&s, &with, &mut posture).unwrap();
+        }
+    }
+}
+
+#[test]
+fn joint_limits_are_never_exceeded() {
+    for seed in 3000..3060 {
+        let (s, p, tasks) = random_problem(seed, true);
+        let mut solver = Solver::new(SolverSettings {
+            max_iterations: 1,
+            ..Default::default()
+        })
+        .unwrap();
+        let mut posture = p;
+        let (lo, hi) = (s.lower_limits().to_vec(), s.upper_limits().to_vec());
+        for _ in 0..25 {
+            solver.solve(&s, &tasks, &mut posture).unwrap();
+            for (i, v) in posture.values().iter().enumerate() {
+                assert!(v.is_finite());
+                assert!(
+                    *v >= lo[i] && *v <= hi[i],
+                    "seed {seed}: DOF {i} = {v} outside [{}, {}]",
+                    lo[i],
+                    hi[i]
+                );
+            }
+        }
+    }
+}
+
+fn all_finite(p: &Posture) -> bool {
+    p.values().iter().all(|v| v.is_finite())
+}
+
+fn straight_chain(links: usize, length: f64) -> Skeleton {
+    let mut defs = vec![JointDef::new(
+        "j0",
+        None,
+        DVec3::ZERO,
+        &[Dof::Rx, Dof::Ry, Dof::Rz],
+    )];
+    for i in 1..links {
+        defs.push(JointDef::new(
+            format!("j{i}"),
+            Some(&format!("j{}", i - 1)),
+            DVec3::Y * length,
+            &[Dof::Rx, Dof::Rz],
+        ));
+    }
+    Skeleton::new(defs).unwrap()
+}
+
+#[test]
+fn no_nan_in_singular_unreachable_coincident_and_zero_length_cases() {
+    let chain = straight_chain(4, 0.5);
+    let tip = chain.joint_count() - 1;
+    let zero = straight_chain(4, 0.0);
+    let cases: Vec<(&str, Skeleton, Vec<Task>)> = vec![
+        // Straight chain pulled along its own axis: singular Jacobian.
+        (
+            "singular",
+            chain.clone(),
+            vec![Task::position(tip, DVec3::ZERO, DVec3::Y * 1.2)],
+        ),
+        (
+            "unreachable",
+            chain.clone(),
+            vec![Task::position(tip, DVec3::ZERO, DVec3::new(5.0, 9.0, -3.0))],
+        ),
+        // Same effector, contradictory goals at two levels, and the same goal twice.
+        (
+            "conflict",
+            chain.clone(),
+            vec![
+                Task::position(tip, DVec3::ZERO, DVec3::X),
+                Task::position(tip, DVec3::ZERO, -DVec3::X).at_level(2),
+                Task::position(tip, DVec3::ZERO, -DVec3::X).at_level(2),
+            ],
+        ),
+        // Goal already reached; gaze target on the eye; gaze target straight behind.
+        (
+            "coincident",
+            chain.clone(),
+            vec![
+                Task::position(tip, DVec3::ZERO, DVec3::Y * 1.5),
+                Task::gaze(tip, DVec3::Z, DVec3::Y * 1.5).at_level(2),
+                Task::gaze(1, DVec3::Z, DVec3::new(0.0, 0.5, -3.0)).at_level(3),
+            ],
+        ),
+        // Every segment has zero length: all Jacobian columns vanish.
+        (
+            "zero-length",
+            zero.clone(),
+            vec![
+                Task::position(tip, DVec3::ZERO, DVec3::ONE),
+                Task::gaze(tip, DVec3::Z, DVec3::ZERO).at_level(2),
+                Task::orientation(tip, glam::DQuat::from_rotation_x(3.1)).at_level(3),
+            ],
+        ),
+    ];
+    for damping in [
+        Damping::Constant { lambda: 0.0 },
+        Damping::Constant { lambda: 0.01 },
+        Damping::Adaptive {
+            lambda_max: 0.05,
+            epsilon: 0.05,
+        },
+    ] {
+        for (name, s, tasks) in &cases {
+            let mut solver = Solver::new(SolverSettings {
+                damping,
+                max_iterations: 60,
+                ..Default::default()
+            })
+            .unwrap();
+            let mut p = Posture::rest(s);
+            let report = solver.solve(s, tasks, &mut p).unwrap();
+            assert!(all_finite(&p), "{name} {damping:?}: {:?}", p.values());
+            for l in &report.levels {
+                assert!(l.residual_after.is_finite(), "{name}: {report:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn unreachable_goal_stops_with_the_level_that_gave_way() {
+    let chain = straight_chain(4, 0.5);
+    let tip = chain.joint_count() - 1;
+    let tasks = vec![Task::position(tip, DVec3::ZERO, DVec3::new(3.0, 0.5, 0.0))];
+    let mut p = Posture::rest(&chain);
+    let settings = SolverSettings {
+        max_iterations: 2000,
+        ..Default::default()
+    };
+    let report = Solver::new(settings)
+        .unwrap()
+        .solve(&chain, &tasks, &mut p)
+        .unwrap();
+    assert_ne!(report.status, SolveStatus::Converged);
+    assert_eq!(report.gave_way, Some(1));
+    // Reached as close as possible: the chain is stretched toward the goal (1.5 m long).
+    let residual = report.levels[0].residual_after;
+
+    let best = DVec3::new(3.0, 0.5, 0.0).length() - 1.5;
+    assert!((residual - best).abs() < 1e-2, "{residual} vs {best}");
+}
+
+#[test]
+fn reachable_goal_converges_and_reports() {
+    let chain = straight_chain(4, 0.5);
+    let tip = chain.joint_count() - 1;
+    let tasks = vec![Task::position(tip, DVec3::ZERO, DVec3::new(0.4, 0.9, 0.3))];
+    let mut p = Posture::rest(&chain);
+    let report = Solver::default().solve(&chain, &tasks, &mut p).unwrap();
+    assert_eq!(report.status, SolveStatus::Converged, "{report:?}");
+    assert!(report.levels[0].residual_after <= 1e-6);
+    assert!(report.levels[0].residual_before > 0.5);
+    assert_eq!(report.gave_way, None);
+    // Inactive tasks are ignored.
+    let inactive = vec![tasks[0].clone().with_active(false)];
+    let report = Solver::default()
+        .solve(&chain, &inactive, &mut Posture::rest(&chain))
+        .unwrap();
+    assert_eq!(
+        (report.status, report.iterations, report.levels.len()),
+        (SolveStatus::Converged, 0, 0)
+    );
+}
+
+#[test]
+fn budgets_stop_the_solver() {
+    let chain = straight_chain(4, 0.5);
+    let tip = chain.joint_count() - 1;
+    let tasks = vec![Task::position(tip, DVec3::ZERO, DVec3::new(0.4, 0.9, 0.3))];
+    let settings = SolverSettings {
+        max_iterations: 2,
+        ..Default::default()
+    };
+    let report = Solver::new(settings)
+        .unwrap()
+        .solve(&chain, &tasks, &mut Posture::rest(&chain))
+        .unwrap();
+    assert_eq!(
+        (report.status, report.iterations),
+        (SolveStatus::IterationBudget, 2)
+    );
+    // A fake clock advancing 1 ms per reading, budget 3.5 ms.
+    let ticks = Cell::new(0.0);
+    let clock = || {
+        ticks.set(ticks.get() + 1e-3);
+        ticks.get()
+    };
+    let settings = SolverSettings {
+        time_budget_secs: Some(3.5e-3),
+        ..Default::default()
+    };
+    let report = Solver::new(settings)
+        .unwrap()
+        .solve_with_clock(&chain, &tasks, &mut Posture::rest(&chain), Some(&clock))
+        .unwrap();
+    assert_eq!(report.status, SolveStatus::TimeBudget);
+    assert!(report.iterations <= 4, "{report:?}");
+}
+
+#[test]
+fn bad_inputs_are_errors_not_panics() {
+    let chain = straight_chain(3, 0.5);
+    let mut p = Posture::rest(&chain);
+    let mut solver = Solver::default();
+    let nan = Task::position(1, DVec3::ZERO, DVec3::new(f64::NAN, 0.0, 0.0));
+    assert!(solver.solve(&chain, &[nan], &mut p).is_err());
+    assert!(
+        solver
+            .solve(
+                &chain,
+                &[Task::position(99, DVec3::ZERO, DVec3::ZERO)],
+                &mut p
+            )
+            .is_err()
+    );
+    assert!(
+        solver
+            .solve(&chain, &[Task::gaze(1, DVec3::ZERO, DVec3::ONE)], &mut p)
+            .is_err()
+    );
+    assert!(
+        solver
+            .solve(
+                &chain,
+                &[Task::position(1, DVec3::ZERO, DVec3::ONE).at_level(0)],
+                &mut p
+            )
+            .is_err()
+    );
+    assert!(
+        solver
+            .solve(
+                &chain,
+                &[Task::center_of_mass(stance_ik::Axes::XZ, DVec3::ZERO)],
+                &mut p
+            )
+            .is_err()
+    );
+    assert!(
+        Solver::new(SolverSettings {
+            tolerance: f64::NAN,
+            ..Default::default()
+        })
+        .is_err()
+    );
+    assert!(Posture::from_values(&chain, vec![0.0]).is_err());
+}
+
+#[test]
+fn kernel_and_nalgebra_steps_agree() {
+    for seed in 4000..4100 {
+        let (s, p, tasks) = random_problem(seed, false);
+        let systems = Solver::default().linear_systems(&s, &tasks, &p).unwrap();
+        let n = s.dof_count();
+        let mut clamped = vec![false; n];
+        clamped[n / 2] = true;
+        let fixed = DVector::from_fn(n, |i, _| if i == n / 2 { 0.01 } else { 0.0 });
+        for params in [
+            StepParams::default(),
+            StepParams {
+                damping: Damping::Adaptive {
+                    lambda_max: 0.1,
+                    epsilon: 0.1,
+                },
+                ..StepParams::default()
+            },
+        ] {
+            let (mut pa, mut pb) = (Vec::new(), Vec::new());
+            let a = prioritized_step(
+                &systems,
+                n,
+                &params,
+                Some(&clamped),
+                Some(&fixed),
+                &mut StepWorkspace::default(),
+                Some(&mut pa),
+            );
+            let b = stance_ik::prioritized_step_nalgebra(
+                &systems,
+                n,
+                &params,
+                Some(&clamped),
+                Some(&fixed),
+                &mut StepWorkspace::default(),
+                Some(&mut pb),
+            );
+            assert!(
+                (&a - &b).amax() < 1e-9 * (1.0 + b.amax()),
+                "seed {seed}\n{a}\n{b}"
+            );
+            for (x, y) in pa.iter().zip(&pb) {
+                assert!((x - y).amax() < 1e-9);
+            }
+        }
+    }
+}

@@ -1,0 +1,83 @@
+// Shared helpers of the end-to-end tests: the two Chromium configurations of TOOLCHAIN.md,
+// the static server, PNG pixels.
+import { chromium } from "playwright-core";
+import { mkdtempSync, mkdirSync, writeFileSync } from "node:fs";
+import { tmpdir } from "node:os";
+import { join } from "node:path";
+import { PNG } from "pngjs";
+import { startServer } from "../scripts/serve.mjs";
+
+export const CHROMIUM = process.env.CHROMIUM_PATH ?? "/usr/bin/chromium";
+export const ARTIFACTS = new URL("../artifacts/", import.meta.url).pathname;
+
+const BASE_ARGS = [
+  "--no-sandbox", "--disable-background-networking", "--disable-component-update",
+  "--disable-sync", "--no-first-run", "--disable-quic", "--disable-dev-shm-usage",
+];
+
+/** The browser configurations: WebGL2 (ANGLE/SwiftShader) and WebGPU (SwiftShader Vulkan). */
+export const CONFIGURATIONS = {
+  webgl2: { backend: "WebGL2", args: [] },
+  webgpu: {
+    backend: "WebGPU",
+    args: ["--enable-unsafe-webgpu", "--use-angle=vulkan", "--enable-features=Vulkan",
+      "--use-vulkan=swiftshader"],
+  },
+};
+
+export async function launch(configuration) {
+  const userDataDir = mkdtempSync(join(tmpdir(), "stance-chromium-"));
+  return chromium.launchPersistentContext(userDataDir, {
+    executablePath: CHROMIUM,
+    headless: true,
+    args: [...BASE_ARGS, ...configuration.args],
+    viewport: { width: 1280, height: 720 },
+  });
+}
+
+export async function serve() {
+  const server = await startServer(0);
+  const { port } = server.address();
+  return { server, url: `http://localhost:${port}/` };
+}
+
+/** Opens the editor and waits for its first rendered frame; collects console errors. */
+export async function openEditor(context, url) {
+  const page = context.pages()[0] ?? (await context.newPage());
+  const errors = [];
+  page.on("console", (message) => {
+    if (message.type() === "error") errors.push(message.text());
+  });
+  page.on("pageerror", (error) => errors.push(String(error)));
+  await page.goto(url);
+  await page.waitForFunction(
+    () => document.body.dataset.firstFrameMs || document.body.dataset.error,
+    null, { timeout: 90_000 },
+  );
+  const error = await page.evaluate(() => document.body.dataset.error);
+  if (error) throw new Error(`the editor showed its error screen: ${error}`);
+  return { page, errors };
+}
+
+export function decodePng(buffer) {
+  const png = PNG.sync.read(buffer);
+  return {
+    width: png.width,
+    height: png.height,
+    at(x, y) {
+      const i = (Math.round(y) * png.width + Math.round(x)) * 4;
+      return [png.data[i], png.data[i + 1], png.data[i + 2]];
+    },
+    data: png.data,
+  };
+}
+
+/** The mannequin's clay colour as the renderer draws it (see stance_render's offscreen test). */
+export function isBodyColour([r, g, b]) {
+  return r > 90 && r > 1.35 * g && g > b;
+}
+
+export function saveArtifact(name, buffer) {
+  mkdirSync(ARTIFACTS, { recursive: true });
+  writeFileSync(join(ARTIFACTS, name), buffer);
+}

@@ -1,0 +1,78 @@
+// End to end: the built site in real headless Chromium, once per graphics configuration.
+import { after, before, describe, test } from "node:test";
+import assert from "node:assert/strict";
+import {
+  CONFIGURATIONS, decodePng, isBodyColour, launch, openEditor, saveArtifact, serve,
+} from "./browser.mjs";
+
+let site;
+before(async () => { site = await serve(); });
+after(() => site.server.close());
+
+function bodyPixelsIn(image, region) {
+  let count = 0;
+  for (let y = region.y; y < region.y + region.height; y += 2) {
+    for (let x = region.x; x < region.x + region.width; x += 2) {
+      if (isBodyColour(image.at(x, y))) count += 1;
+    }
+  }
+  return count;
+}
+
+for (const [name, configuration] of Object.entries(CONFIGURATIONS)) {
+  describe(`editor on ${configuration.backend}`, () => {
+    let context;
+    let editor;
+    before(async () => {
+      context = await launch(configuration);
+      editor = await openEditor(context, site.url);
+    });
+    after(async () => { await context?.close(); });
+
+    test("loads without console errors and reports its backend", async () => {
+      const { page, errors } = editor;
+      const backend = await page.evaluate(() => document.body.dataset.backend);
+      const adapter = await page.evaluate(() => document.body.dataset.adapter);
+      const firstFrameMs = Number(await page.evaluate(() => document.body.dataset.firstFrameMs));
+      console.log(`[${name}] backend ${backend}, adapter "${adapter}", first frame ${firstFrameMs} ms after navigation`);
+      assert.equal(backend, configuration.backend);
+      assert.ok(adapter.length > 0);
+      assert.ok(await page.locator("#loading").isHidden(), "the loading indicator is gone");
+      assert.deepEqual(errors, []);
+    });
+
+    test("the viewport shows the standing body, and an orbit drag turns the view", async () => {
+      const { page } = editor;
+      await page.waitForTimeout(300);
+      const before = await page.screenshot();
+      saveArtifact(`viewport-${name}.png`, before);
+      const image = decodePng(before);
+      // The viewport is right of the side panel and between the menu and status bars.
+      const viewport = { x: 300, y: 40, width: image.width - 320, height: image.height - 80 };
+      const bodyBefore = bodyPixelsIn(image, viewport);
+      assert.ok(bodyBefore > 800, `only ${bodyBefore} body-coloured pixels in the viewport`);
+      // The corners of the viewport are background or floor, not body.
+      assert.ok(!isBodyColour(image.at(viewport.x + 10, viewport.y + 10)));
+
+      const startX = viewport.x + viewport.width * 0.75;
+      const startY = viewport.y + viewport.height * 0.3;
+      await page.mouse.move(startX, startY);
+      await page.mouse.down();
+      for (let step = 1; step <= 10; step += 1) {
+        await page.mouse.move(startX - step * 25, startY + step * 4);
+      }
+      await page.mouse.up();
+      await page.waitForTimeout(500);
+      const turned = await page.screenshot();
+      saveArtifact(`viewport-${name}-orbited.png`, turned);
+      const after = decodePng(turned);
+      let differing = 0;
+      for (let i = 0; i < after.data.length; i += 4) {
+        if (Math.abs(after.data[i] - image.data[i]) > 8
+          || Math.abs(after.data[i + 1] - image.data[i + 1]) > 8) differing += 1;
+      }
+      assert.ok(differing > 5000, `only ${differing} pixels changed after the drag`);
+      assert.ok(bodyPixelsIn(after, viewport) > 500, "the body is still in view");
+    });
+  });
+}
