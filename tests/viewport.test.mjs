@@ -76,3 +76,33 @@ for (const [name, configuration] of Object.entries(CONFIGURATIONS)) {
     });
   });
 }
+
+describe("editor without any graphics backend", () => {
+  test("shows a readable error screen, not a blank page", async () => {
+    // WebGL off and WebGPU without an adapter: neither backend can start.
+    const context = await launch({
+      backend: "none",
+      args: ["--disable-3d-apis", "--disable-webgl", "--disable-features=WebGPU,Vulkan"],
+    });
+    try {
+      const page = context.pages()[0] ?? (await context.newPage());
+      await page.goto(site.url);
+      await page.waitForFunction(() => document.body.dataset.error, null, { timeout: 90_000 });
+      assert.ok(await page.locator("#error").isVisible(), "the error screen is shown");
+      assert.ok(await page.locator("#loading").isHidden(), "the spinner is gone");
+      const message = await page.locator("#error-message").textContent();
+      assert.match(message, /WebGPU|WebGL/i, `the message names the missing backends: ${message}`);
+      const screenshot = await page.screenshot();
+      saveArtifact("error-screen.png", screenshot);
+      // Readable: light text on the dark page, i.e. a real share of bright pixels.
+      const image = decodePng(screenshot);
+      let bright = 0;
+      for (let i = 0; i < image.data.length; i += 4) {
+        if (image.data[i] > 180 && image.data[i + 1] > 180 && image.data[i + 2] > 180) bright += 1;
+      }
+      assert.ok(bright > 500, `only ${bright} bright (text) pixels on the error screen`);
+    } finally {
+      await context.close();
+    }
+  });
+});

@@ -6,8 +6,14 @@ const loading = document.getElementById("loading");
 const errorScreen = document.getElementById("error");
 const errorMessage = document.getElementById("error-message");
 
+// Graphics failures come from wgpu in its own words; say first what they mean to a user.
+const GRAPHICS_FAILURE = /surface|adapter|webgl|webgpu|getContext|wgpu/i;
+
 function showError(message) {
   loading.hidden = true;
+  if (GRAPHICS_FAILURE.test(message)) {
+    message = `Neither WebGPU nor WebGL2 could start in this browser. (Details: ${message})`;
+  }
   errorMessage.textContent = message;
   errorScreen.hidden = false;
   document.body.dataset.error = message;

@@ -32,15 +32,21 @@ pub struct ViewportInput {
 impl ViewportInput {
     /// Reads the viewport's response and the frame's input.
     pub fn read(ui: &Ui, response: &Response) -> Self {
+        // Everything that asks the response goes first: `Response` methods lock the egui
+        // context themselves, and locking it again inside `ui.input` deadlocks (on the web,
+        // parking_lot panics with "Parking not supported on this platform").
         let delta = response.drag_delta();
         let hovered = response.hovered() || response.dragged();
+        let primary_dragged = response.dragged_by(PointerButton::Primary);
+        let secondary_or_middle_dragged = response.dragged_by(PointerButton::Secondary)
+            || response.dragged_by(PointerButton::Middle);
+        let double_clicked = response.double_clicked();
         ui.input(|input| {
             let multi_touch = input.multi_touch();
             Self {
                 drag_delta_px: Vec2::new(delta.x, delta.y),
-                primary_dragged: response.dragged_by(PointerButton::Primary),
-                secondary_or_middle_dragged: response.dragged_by(PointerButton::Secondary)
-                    || response.dragged_by(PointerButton::Middle),
+                primary_dragged,
+                secondary_or_middle_dragged,
                 shift_held: input.modifiers.shift,
                 scroll_px: if hovered {
                     input.smooth_scroll_delta.y
@@ -52,7 +58,7 @@ impl ViewportInput {
                 touch_translation_px: multi_touch.map_or(Vec2::ZERO, |touch| {
                     Vec2::new(touch.translation_delta.x, touch.translation_delta.y)
                 }),
-                double_clicked: response.double_clicked(),
+                double_clicked,
             }
         })
     }

@@ -1,6 +1,9 @@
 //! Renders the viewport scene offscreen on whatever adapter the machine has (lavapipe on
 //! CI) and checks its pixels: body colour where the body is, background elsewhere.
 
+// A test crate: fixture helpers fail loudly on purpose.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
 use glam::{Vec2, Vec3};
 use stance_hanim::LevelOfArticulation;
 use stance_render::{

@@ -1,5 +1,8 @@
 //! Every WGSL shader parses, validates, and translates to GLSL ES 3.00 (the WebGL2 path).
 
+// A test crate: fixture helpers fail loudly on purpose.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
 use naga::back::glsl;
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 
