@@ -1,5 +1,6 @@
 //! Criterion benches of the scenarios S1..S6: one full prioritized iteration, the step alone
-//! with the slice kernel and with nalgebra (the comparison behind the kernel), and S6's solve.
+//! with the slice kernel and with nalgebra (the comparison behind the kernel), S6's solve, and
+//! S7: one closed-form arm solve.
 
 use std::hint::black_box;
 
@@ -57,5 +58,21 @@ fn benches(c: &mut Criterion) {
     }
 }
 
-criterion_group!(solver, benches);
+fn limb_bench(c: &mut Criterion) {
+    let Ok(s) = scenarios::s7() else {
+        return;
+    };
+    let mut posture = s.start.clone();
+    c.bench_function("S7/analytic_arm_solve", |b| {
+        b.iter(|| {
+            let solution = s
+                .limb
+                .solve(s.base, black_box(&s.goal), black_box(s.swivel_angle));
+            s.limb.apply(&solution, &mut posture);
+            black_box(&posture);
+        })
+    });
+}
+
+criterion_group!(solver, benches, limb_bench);
 criterion_main!(solver);

@@ -1,4 +1,4 @@
-//! `stance bench`: time the solver on the scenarios S1..S6 (or on one problem file).
+//! `stance bench`: time the solver on the scenarios S1..S7 (or on one problem file).
 //!
 //! Per scenario: `us_per_iteration` is the median, over many runs, of the time of a solve forced
 //! to take exactly `--iterations` iterations from the start posture (tolerance and stall tests
@@ -6,6 +6,10 @@
 //! prioritized iteration, line search included) divided by that count; `us_per_solve` is the
 //! median time of a normal solve (default settings) from the start posture, which takes
 //! `iterations` iterations and ends with `status`.
+//!
+//! S7 is one closed-form limb solve (no iterations): `us_per_solve` (= `us_per_iteration`) is
+//! the median over many batches of the time of `Limb::solve` + `Limb::apply`, divided by the
+//! batch size; `status` is `converged` when the goal was reached.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -54,6 +58,7 @@ fn target_us(name: &str) -> Option<f64> {
         "S4" => Some(80.0),
         "S5" => Some(15.0),
         "S6" => Some(2000.0),
+        "S7" => Some(0.5),
         _ => None,
     }
 }
@@ -65,7 +70,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         let r = bench(
             &problem.skeleton,
             &problem.tasks,
-            &problem.start,
+            &crate::solve::start_posture(&problem).0,
             problem.settings,
             budget,
             args.iterations,
@@ -139,10 +144,82 @@ pub fn run(args: BenchArgs) -> Result<()> {
             );
         }
     }
+    let s7 = scenarios::s7()?;
+    if args.scenario.is_empty()
+        || args
+            .scenario
+            .iter()
+            .any(|n| n.eq_ignore_ascii_case(s7.name))
+    {
+        let r = bench_limb(&s7, budget);
+        if args.json {
+            results.insert(s7.name.to_owned(), serde_json::to_value(&r)?);
+        } else {
+            let target = target_us(s7.name)
+                .map(|t| {
+                    let verdict = if r.us_per_solve <= t {
+                        "ok <= "
+                    } else {
+                        "MISS "
+                    };
+                    format!("{verdict}{t}")
+                })
+                .unwrap_or_default();
+            println!(
+                "{:<4} {:>4} {:>5} {:>6} {:>12.3} {:>12.3} {:>6} {:>10}  {} ({:?})",
+                s7.name,
+                r.dof,
+                r.rows,
+                r.levels,
+                r.us_per_iteration,
+                r.us_per_solve,
+                r.iterations,
+                target,
+                s7.description,
+                r.status
+            );
+        }
+    }
     if args.json {
         println!("{}", serde_json::Value::Object(results));
     }
     Ok(())
+}
+
+/// Times S7 (see the module docs).
+pub fn bench_limb(s: &scenarios::LimbScenario, budget: std::time::Duration) -> BenchResult {
+    const BATCH: usize = 1000;
+    let mut posture = s.start.clone();
+    let mut per_solve = Vec::new();
+    let mut reached = true;
+    let t0 = Instant::now();
+    while t0.elapsed() < budget || per_solve.len() < 5 {
+        let t = Instant::now();
+        for _ in 0..BATCH {
+            let goal = std::hint::black_box(s.goal);
+            let solution = s
+                .limb
+                .solve(s.base, &goal, std::hint::black_box(s.swivel_angle));
+            s.limb.apply(&solution, &mut posture);
+            reached &= solution.reached;
+        }
+        per_solve.push(t.elapsed().as_secs_f64() * 1e6 / BATCH as f64);
+        std::hint::black_box(&posture);
+    }
+    let us = median(per_solve);
+    BenchResult {
+        us_per_iteration: us,
+        us_per_solve: us,
+        iterations: 1,
+        status: if reached {
+            SolveStatus::Converged
+        } else {
+            SolveStatus::Stalled
+        },
+        dof: s.skeleton.dof_count(),
+        rows: 3,
+        levels: 1,
+    }
 }
 
 fn median(mut v: Vec<f64>) -> f64 {

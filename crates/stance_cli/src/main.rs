@@ -2,8 +2,10 @@
 
 use clap::{Parser, Subcommand};
 
+mod avatar;
 mod bench;
 mod decode;
+mod link;
 mod simulate;
 mod solve;
 
@@ -28,6 +30,14 @@ enum Command {
     Decode(decode::DecodeArgs),
     /// Write a simulated sensor byte stream.
     SimulateSensors(simulate::SimulateArgs),
+    /// Print a JSON summary of an avatar file (joints, H-Anim mapping, meshes, extensions).
+    Inspect(avatar::InspectArgs),
+    /// Pose an avatar with a posture file and write it as GLB.
+    ExportPosed(avatar::ExportPosedArgs),
+    /// Write the generated default avatar (H-Anim LOA2, skinned) as GLB.
+    MakeAvatar(avatar::MakeAvatarArgs),
+    /// Encode a document into a posture link, or decode a link into a document.
+    Link(link::LinkArgs),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -37,5 +47,9 @@ fn main() -> anyhow::Result<()> {
         Command::Bench(args) => bench::run(args),
         Command::Decode(args) => decode::run(args),
         Command::SimulateSensors(args) => simulate::run(args),
+        Command::Inspect(args) => avatar::inspect(args),
+        Command::ExportPosed(args) => avatar::export_posed(args),
+        Command::MakeAvatar(args) => avatar::make_avatar(args),
+        Command::Link(args) => link::run(args),
     }
 }

@@ -7,8 +7,9 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, anyhow, bail};
 use glam::{DQuat, DVec3};
 use serde_json::{Map, Value, json};
+use stance_document::{PostureValues, TaskSpec};
 use stance_ik::{
-    Axes, Damping, Dof, Effector, Frames, JointDef, Posture, Skeleton, SolveReport, Solver,
+    Damping, Dof, Frames, JointDef, Limb, LimbGoal, Posture, Skeleton, SolveReport, Solver,
     SolverSettings, Task, TaskKind,
 };
 
@@ -28,12 +29,82 @@ pub struct Problem {
     pub tasks: Vec<Task>,
     pub settings: SolverSettings,
     pub start: Posture,
+    /// The `limb` tasks (each also a position task in `tasks`), in file order.
+    pub limb_tasks: Vec<LimbTask>,
+    /// Limbs for the solver's hybrid restart: those of the limb tasks, plus every H-Anim limb
+    /// of the skeleton with `settings.hybrid`.
+    pub hybrid_limbs: Vec<Limb>,
+}
+
+/// A `{"kind": "limb"}` task: closed-form start for the limb, then the variational solve.
+#[derive(Debug, Clone)]
+pub struct LimbTask {
+    pub limb: Limb,
+    pub joints: [String; 3],
+    pub goal: LimbGoal,
+    /// Requested swivel angle (radians); `None`: keep the start posture's.
+    pub swivel: Option<f64>,
+}
+
+/// H-Anim limb shorthands: (name, upper, middle, end candidates in order of preference).
+const HANIM_LIMBS: &[(&str, &str, &str, &[&str])] = &[
+    (
+        "l_arm",
+        "l_shoulder",
+        "l_elbow",
+        &["l_radiocarpal", "l_wrist"],
+    ),
+    (
+        "r_arm",
+        "r_shoulder",
+        "r_elbow",
+        &["r_radiocarpal", "r_wrist"],
+    ),
+    ("l_leg", "l_hip", "l_knee", &["l_talocrural", "l_ankle"]),
+    ("r_leg", "r_hip", "r_knee", &["r_talocrural", "r_ankle"]),
+];
+
+/// Joint names of an H-Anim limb shorthand present in the skeleton.
+fn hanim_limb(skeleton: &Skeleton, name: &str) -> Option<[String; 3]> {
+    let (_, upper, middle, ends) = HANIM_LIMBS.iter().find(|l| l.0 == name)?;
+    let end = ends.iter().find(|e| skeleton.joint_index(e).is_some())?;
+    Some([(*upper).to_owned(), (*middle).to_owned(), (*end).to_owned()])
+}
+
+/// What the closed form did for one limb task.
+#[derive(Debug, Clone)]
+pub struct LimbStart {
+    pub joints: [String; 3],
+    /// Swivel angle of the closed-form start posture.
+    pub swivel: f64,
+    pub reached: bool,
+    pub within_limits: bool,
 }
 
 pub fn run(args: SolveArgs) -> Result<()> {
     let problem = load_problem(&args.problem)?;
     let (posture, report) = solve(&problem)?;
-    let out = solution_json(&problem.skeleton, &posture, &report)?;
+    let mut out = solution_json(&problem.skeleton, &posture, &report)?;
+    if !problem.limb_tasks.is_empty()
+        && let Some(o) = out.as_object_mut()
+    {
+        let (_, starts) = start_posture(&problem);
+        let limbs: Vec<Value> = problem
+            .limb_tasks
+            .iter()
+            .zip(starts)
+            .map(|(t, s)| {
+                json!({
+                    "joints": s.joints,
+                    "swivel": t.limb.swivel_angle(&problem.skeleton, &posture),
+                    "start_swivel": s.swivel,
+                    "reached": s.reached,
+                    "within_limits": s.within_limits,
+                })
+            })
+            .collect();
+        o.insert("limbs".to_owned(), Value::Array(limbs));
+    }
     let text = if args.pretty {
         serde_json::to_string_pretty(&out)?
     } else {
@@ -43,12 +114,36 @@ pub fn run(args: SolveArgs) -> Result<()> {
     Ok(())
 }
 
-/// Solves from the problem's start posture.
+/// Solves from the problem's start posture (with the limb tasks' closed-form solutions
+/// applied, see [`start_posture`]).
 pub fn solve(problem: &Problem) -> Result<(Posture, SolveReport)> {
-    let mut posture = problem.start.clone();
-    let mut solver = Solver::new(problem.settings)?;
+    let (mut posture, _) = start_posture(problem);
+    let mut solver = Solver::new(problem.settings)?.with_limbs(problem.hybrid_limbs.clone());
     let report = solver.solve(&problem.skeleton, &problem.tasks, &mut posture)?;
     Ok((posture, report))
+}
+
+/// The start posture with every limb task's closed-form solution applied in file order (the
+/// swivel asked, or the start posture's, moved to the nearest one within the joint limits).
+pub fn start_posture(problem: &Problem) -> (Posture, Vec<LimbStart>) {
+    let mut posture = problem.start.clone();
+    let mut starts = Vec::with_capacity(problem.limb_tasks.len());
+    for t in &problem.limb_tasks {
+        let frames = Frames::new(&problem.skeleton, &posture);
+        let base = t.limb.base(&problem.skeleton, &frames);
+        let preferred = t
+            .swivel
+            .unwrap_or_else(|| t.limb.swivel_angle(&problem.skeleton, &posture));
+        let solution = t.limb.solve_within_limits(base, &t.goal, preferred);
+        t.limb.apply(&solution, &mut posture);
+        starts.push(LimbStart {
+            joints: t.joints.clone(),
+            swivel: solution.swivel_angle,
+            reached: solution.reached,
+            within_limits: solution.within_limits,
+        });
+    }
+    (posture, starts)
 }
 
 /// `{"joints": {name: [x,y,z]}, "posture": {joint: {dof: value}}, "report": {...}}`.
@@ -96,18 +191,44 @@ pub fn parse_problem(text: &str) -> Result<Problem> {
     let root: Value = serde_json::from_str(text).context("not valid JSON")?;
     let root = obj(&root, "the problem")?;
     let skeleton = parse_skeleton(field(root, "skeleton", "")?)?;
-    let tasks = match root.get("tasks") {
-        None | Some(Value::Null) => Vec::new(),
-        Some(v) => arr(v, "tasks")?
-            .iter()
-            .enumerate()
-            .map(|(i, t)| parse_task(&skeleton, t, &format!("tasks[{i}]")))
-            .collect::<Result<_>>()?,
-    };
-    let settings = match root.get("settings") {
-        None | Some(Value::Null) => SolverSettings::default(),
+    let mut tasks = Vec::new();
+    let mut limb_tasks = Vec::new();
+    if let Some(v) = root.get("tasks").filter(|v| !v.is_null()) {
+        for (i, t) in arr(v, "tasks")?.iter().enumerate() {
+            let at = format!("tasks[{i}]");
+            let task = parse_task(&skeleton, t, &at)?;
+            if t.get("kind").and_then(Value::as_str) == Some("limb") {
+                let limb = parse_limb_task(&skeleton, t, &at)?;
+                if let Some(orientation) = limb.goal.orientation {
+                    let end = limb.limb.joints()[2];
+                    tasks.push(Task {
+                        kind: TaskKind::Orientation {
+                            joint: end,
+                            target: orientation,
+                        },
+                        ..task.clone()
+                    });
+                }
+                limb_tasks.push(limb);
+            }
+            tasks.push(task);
+        }
+    }
+    let (settings, hybrid) = match root.get("settings") {
+        None | Some(Value::Null) => (SolverSettings::default(), false),
         Some(v) => parse_settings(v)?,
     };
+    let mut hybrid_limbs: Vec<Limb> = limb_tasks.iter().map(|t| t.limb.clone()).collect();
+    if hybrid {
+        for (name, ..) in HANIM_LIMBS {
+            if let Some(names) = hanim_limb(&skeleton, name)
+                && let Ok(limb) = Limb::from_names(&skeleton, [&names[0], &names[1], &names[2]])
+                && !hybrid_limbs.iter().any(|l| l.joints() == limb.joints())
+            {
+                hybrid_limbs.push(limb);
+            }
+        }
+    }
     let start = match root.get("posture") {
         None | Some(Value::Null) => Posture::rest(&skeleton),
         Some(v) => parse_posture(&skeleton, v, "posture")?,
@@ -121,7 +242,77 @@ pub fn parse_problem(text: &str) -> Result<Problem> {
         tasks,
         settings,
         start,
+        limb_tasks,
+        hybrid_limbs,
     })
+}
+
+/// The three joints of a limb task: `joints` (names) or the `limb` shorthand.
+fn limb_joints(skeleton: &Skeleton, o: &Map<String, Value>, at: &str) -> Result<[String; 3]> {
+    match (
+        o.get("joints").filter(|v| !v.is_null()),
+        o.get("limb").filter(|v| !v.is_null()),
+    ) {
+        (Some(list), None) => {
+            let here = format!("{at}.joints");
+            let list = arr(list, &here)?;
+            if list.len() != 3 {
+                bail!("{here}: expected 3 joint names (upper, middle, end)");
+            }
+            let mut names: [String; 3] = Default::default();
+            for (k, (v, name)) in list.iter().zip(names.iter_mut()).enumerate() {
+                let j = joint_index(skeleton, v, &format!("{here}[{k}]"))?;
+                *name = skeleton.joints()[j].name.clone();
+            }
+            Ok(names)
+        }
+        (None, Some(limb)) => {
+            let here = format!("{at}.limb");
+            let name = string(limb, &here)?;
+            if !HANIM_LIMBS.iter().any(|l| l.0 == name) {
+                bail!("{here}: unknown limb `{name}` (expected l_arm, r_arm, l_leg or r_leg)");
+            }
+            hanim_limb(skeleton, name)
+                .filter(|n| n.iter().all(|j| skeleton.joint_index(j).is_some()))
+                .ok_or_else(|| anyhow!("{here}: the skeleton lacks the H-Anim joints of `{name}`"))
+        }
+        (Some(_), Some(_)) => bail!("{at}: give either `joints` or `limb`, not both"),
+        (None, None) => bail!("{at}.joints: missing (or give `limb`)"),
+    }
+}
+
+fn parse_limb_task(skeleton: &Skeleton, v: &Value, at: &str) -> Result<LimbTask> {
+    let o = obj(v, at)?;
+    let joints = limb_joints(skeleton, o, at)?;
+    let limb = Limb::from_names(skeleton, [&joints[0], &joints[1], &joints[2]])
+        .map_err(|e| anyhow!("{at}: {e}"))?;
+    let target = vec3(field(o, "target", at)?, &format!("{at}.target"))?;
+    let orientation = match o.get("orientation") {
+        None | Some(Value::Null) => None,
+        Some(q) => Some(quaternion(q, &format!("{at}.orientation"))?),
+    };
+    let swivel = match o.get("swivel") {
+        None | Some(Value::Null) => None,
+        Some(s) => Some(number(s, &format!("{at}.swivel"))?),
+    };
+    Ok(LimbTask {
+        limb,
+        joints,
+        goal: LimbGoal {
+            position: target,
+            orientation,
+        },
+        swivel,
+    })
+}
+
+fn quaternion(v: &Value, at: &str) -> Result<DQuat> {
+    let q = numbers(v, at, 4)?;
+    let q = DQuat::from_xyzw(q[0], q[1], q[2], q[3]);
+    if q.length() < 1e-9 {
+        bail!("{at}: the quaternion has zero length");
+    }
+    Ok(q.normalize())
 }
 
 fn parse_skeleton(v: &Value) -> Result<Skeleton> {
@@ -181,134 +372,16 @@ fn joint_index(skeleton: &Skeleton, v: &Value, at: &str) -> Result<usize> {
         .ok_or_else(|| anyhow!("{at}: unknown joint `{name}`"))
 }
 
+/// One task; the fields and their errors are those of `stance_document::TaskSpec` (the
+/// editor's document shares the problem file's task format). A `limb` task gives its position
+/// task on the end joint here; [`parse_limb_task`] adds the closed-form start.
 fn parse_task(skeleton: &Skeleton, v: &Value, at: &str) -> Result<Task> {
-    let o = obj(v, at)?;
-    let kind_name = string(field(o, "kind", at)?, &format!("{at}.kind"))?;
-    let f = |name: &str| field(o, name, at);
-    let here = |name: &str| format!("{at}.{name}");
-    let point = match o.get("point") {
-        None | Some(Value::Null) => DVec3::ZERO,
-        Some(p) => vec3(p, &here("point"))?,
-    };
-    let axes = match o.get("axes") {
-        None | Some(Value::Null) => Axes::XYZ,
-        Some(a) => {
-            let s = string(a, &here("axes"))?;
-            Axes::parse(s).ok_or_else(|| {
-                anyhow!(
-                    "{}: `{s}` is not a non-empty subset of \"xyz\"",
-                    here("axes")
-                )
-            })?
-        }
-    };
-    let kind = match kind_name {
-        "position" => TaskKind::Position {
-            effector: Effector {
-                joint: joint_index(skeleton, f("joint")?, &here("joint"))?,
-                point,
-            },
-            axes,
-            target: vec3(f("target")?, &here("target"))?,
-        },
-        "orientation" => {
-            let q = numbers(f("target")?, &here("target"), 4)?;
-            let target = DQuat::from_xyzw(q[0], q[1], q[2], q[3]);
-            if target.length() < 1e-9 {
-                bail!("{}: the quaternion has zero length", here("target"));
-            }
-            TaskKind::Orientation {
-                joint: joint_index(skeleton, f("joint")?, &here("joint"))?,
-                target: target.normalize(),
-            }
-        }
-        "gaze" => {
-            let axis = match o.get("axis") {
-                None | Some(Value::Null) => DVec3::Z,
-                Some(a) => vec3(a, &here("axis"))?,
-            };
-            if axis.length() < 1e-9 {
-                bail!("{}: zero-length axis", here("axis"));
-            }
-            TaskKind::Gaze {
-                effector: Effector {
-                    joint: joint_index(skeleton, f("joint")?, &here("joint"))?,
-                    point,
-                },
-                axis: axis.normalize(),
-                target: vec3(f("target")?, &here("target"))?,
-            }
-        }
-        "com" => TaskKind::CenterOfMass {
-            axes,
-            target: vec3(f("target")?, &here("target"))?,
-        },
-        "posture" => {
-            let reference = match o.get("reference") {
-                None | Some(Value::Null) => Posture::rest(skeleton),
-                Some(r) => parse_posture(skeleton, r, &here("reference"))?,
-            };
-            let dofs = match o.get("joints") {
-                None | Some(Value::Null) => match Task::rest_posture(skeleton).kind {
-                    TaskKind::PostureAttraction { dofs, .. } => dofs,
-                    _ => Vec::new(),
-                },
-                Some(list) => {
-                    let mut dofs = Vec::new();
-                    for (k, j) in arr(list, &here("joints"))?.iter().enumerate() {
-                        let ji = joint_index(skeleton, j, &format!("{}[{k}]", here("joints")))?;
-                        dofs.extend(skeleton.joints()[ji].dof_range());
-                    }
-                    dofs
-                }
-            };
-            TaskKind::PostureAttraction {
-                reference: reference.values().to_vec(),
-                dofs,
-            }
-        }
-        other => bail!(
-            "{}: unknown kind `{other}` (expected position, orientation, gaze, com or posture)",
-            here("kind")
-        ),
-    };
-    let level = match o.get("level") {
-        None | Some(Value::Null) => 1,
-        Some(l) => {
-            let n = number(l, &here("level"))?;
-            if n < 1.0 || n.fract() != 0.0 || n > f64::from(u32::MAX) {
-                bail!(
-                    "{}: levels are integers from 1 (highest priority)",
-                    here("level")
-                );
-            }
-            n as u32
-        }
-    };
-    let weight = match o.get("weight") {
-        None | Some(Value::Null) => 1.0,
-        Some(w) => {
-            let w = number(w, &here("weight"))?;
-            if w < 0.0 {
-                bail!("{}: must be >= 0", here("weight"));
-            }
-            w
-        }
-    };
-    let active = match o.get("active") {
-        None | Some(Value::Null) => true,
-        Some(Value::Bool(b)) => *b,
-        Some(_) => bail!("{}: expected true or false", here("active")),
-    };
-    Ok(Task {
-        kind,
-        level,
-        weight,
-        active,
-    })
+    let spec = TaskSpec::from_json_value(v, at).map_err(|e| anyhow!("{e}"))?;
+    spec.to_task(skeleton)
+        .map_err(|e| anyhow!("{}", e.within(at)))
 }
 
-fn parse_settings(v: &Value) -> Result<SolverSettings> {
+fn parse_settings(v: &Value) -> Result<(SolverSettings, bool)> {
     let o = obj(v, "settings")?;
     let mut s = SolverSettings::default();
     let num = |k: &str| -> Result<Option<f64>> {
@@ -371,30 +444,19 @@ fn parse_settings(v: &Value) -> Result<SolverSettings> {
         Some(_) => bail!("settings.enforce_limits: expected true or false"),
     }
     s.validate().map_err(|e| anyhow!("settings: {e}"))?;
-    Ok(s)
+    let hybrid = match o.get("hybrid") {
+        None | Some(Value::Null) => false,
+        Some(Value::Bool(b)) => *b,
+        Some(_) => bail!("settings.hybrid: expected true or false"),
+    };
+    Ok((s, hybrid))
 }
 
-/// `{joint: {dof: value}}`; missing DOF are 0.
+/// `{joint: {dof: value}}`; missing DOF are 0 (`stance_document::PostureValues`).
 fn parse_posture(skeleton: &Skeleton, v: &Value, at: &str) -> Result<Posture> {
-    let mut p = Posture::rest(skeleton);
-    for (name, dofs) in obj(v, at)? {
-        let here = format!("{at}.{name}");
-        let j = skeleton
-            .joint_index(name)
-            .ok_or_else(|| anyhow!("{here}: unknown joint `{name}`"))?;
-        let joint = &skeleton.joints()[j];
-        for (dname, value) in obj(dofs, &here)? {
-            let there = format!("{here}.{dname}");
-            let d = Dof::from_name(dname).ok_or_else(|| anyhow!("{there}: unknown DOF"))?;
-            let k = joint
-                .dofs
-                .iter()
-                .position(|&x| x == d)
-                .ok_or_else(|| anyhow!("{there}: joint `{name}` has no DOF `{dname}`"))?;
-            p.values_mut()[joint.dof_start + k] = number(value, &there)?;
-        }
-    }
-    Ok(p)
+    PostureValues::from_json_value(v, at)
+        .and_then(|p| p.to_posture_at(skeleton, at))
+        .map_err(|e| anyhow!("{e}"))
 }
 
 fn obj<'a>(v: &'a Value, at: &str) -> Result<&'a Map<String, Value>> {

@@ -2,6 +2,7 @@
 //! viewport, and the eframe [`App`](eframe::App) that runs it natively and in the browser.
 
 mod app;
+pub mod posing;
 mod viewport;
 
 pub use app::{BackendSummary, HostHooks, NoHostHooks, StanceApp};

@@ -1,9 +1,21 @@
 //! The H-Anim 2.0 humanoid (ISO/IEC 19774-1:2019): the joint vocabulary, levels of
 //! articulation (LOA) 1 to 4 and default joint centres.
 //!
+//! Also: per-joint DOF and anatomical ranges of motion ([`anatomy`], AAOS / Kapandji), segment
+//! masses (de Leva 1996), bone-name mapping of avatars onto H-Anim ([`mapping`]) and the
+//! builder of `stance_ik` skeletons at a chosen LOA ([`builder`]).
+//!
 //! Frame: +Y up, +Z the front of the body, +X the body's left; metres.
 
+pub mod anatomy;
+pub mod builder;
 mod joint_table;
+pub mod mapping;
+
+pub use builder::{
+    BuildError, BuiltJoint, HumanoidSkeleton, SkeletonOptions, build_skeleton, default_skeleton,
+};
+pub use mapping::{JointMatch, Mapping, MappingError, MatchMethod, SourceJoint, vrm_bone_to_hanim};
 
 use glam::DVec3;
 
@@ -78,6 +90,27 @@ pub struct HumanoidJoint {
     pub rest_centre: DVec3,
 }
 
+/// The default centre of a joint; where X3DUOM gives none (2 joints up to LOA2:
+/// `l_carpal_distal_interphalangeal_4`, `r_carpometacarpal_2`), the mirror image of its
+/// other-side partner's default, else the Jin example's centre.
+pub fn default_centre(definition: &JointDefinition) -> DVec3 {
+    if let Some(c) = definition.default_centre {
+        return DVec3::from_array(c);
+    }
+    let partner = if let Some(rest) = definition.name.strip_prefix("l_") {
+        Some(format!("r_{rest}"))
+    } else {
+        definition
+            .name
+            .strip_prefix("r_")
+            .map(|rest| format!("l_{rest}"))
+    };
+    partner
+        .and_then(|p| joint_by_name(&p))
+        .and_then(|(_, d)| d.default_centre)
+        .map_or_else(|| definition.centre(), |c| DVec3::new(-c[0], c[1], c[2]))
+}
+
 /// The joints present at `loa`, parents first, with parents re-indexed into the returned list.
 pub fn humanoid_joints(loa: LevelOfArticulation) -> Vec<HumanoidJoint> {
     let level = usize::from(loa.number());
@@ -93,7 +126,7 @@ pub fn humanoid_joints(loa: LevelOfArticulation) -> Vec<HumanoidJoint> {
         joints.push(HumanoidJoint {
             definition,
             parent,
-            rest_centre: definition.centre(),
+            rest_centre: default_centre(definition),
         });
     }
     joints
@@ -146,6 +179,23 @@ mod tests {
             .find(|j| j.definition.name == "skullbase")
             .unwrap();
         assert_eq!(loa1[skullbase.parent.unwrap()].definition.name, "vl5");
+    }
+
+    #[test]
+    fn loa2_joints_without_a_default_take_their_partners_mirror_image() {
+        let joints = humanoid_joints(LevelOfArticulation::Loa2);
+        let at = |n: &str| {
+            joints
+                .iter()
+                .find(|j| j.definition.name == n)
+                .unwrap()
+                .rest_centre
+        };
+        let l = at("l_carpal_distal_interphalangeal_4");
+        let r = at("r_carpal_distal_interphalangeal_4");
+        assert!((l - DVec3::new(-r.x, r.y, r.z)).length() < 1e-12);
+        // Between its neighbours on the finger, not on another body's hand.
+        assert!(l.y < at("l_carpal_proximal_interphalangeal_4").y && l.y > 0.65);
     }
 
     #[test]

@@ -79,6 +79,9 @@ pub enum IkError {
         /// What is wrong.
         reason: String,
     },
+    /// Three joints that do not form a limb the closed form can solve.
+    #[error("not a solvable limb: {0}")]
+    BadLimb(String),
     /// A setting is out of range.
     #[error("setting `{0}` is out of range")]
     BadSetting(&'static str),

@@ -13,11 +13,15 @@
 //!   search, cascade) and returns a [`SolveReport`]; time budget through an injectable [`Clock`].
 //! - [`prioritized_step`]: one step of [BAE 98] on contiguous slices (the default);
 //!   [`prioritized_step_nalgebra`]: the same on nalgebra matrices (kept for the comparison).
+//! - [`Limb`]: closed-form IK of a shoulder-elbow-wrist / hip-knee-ankle limb with the swivel
+//!   angle [TOL 96], its feasible swivel intervals under joint limits, and the hybrid restart
+//!   of a stalled [`Solver`] from the analytic solution (`Solver::limbs`).
 //! - [`scenarios`]: the benchmark / test bodies built from the H-Anim default joint centres
 //!   (to move to `stance_hanim` once it exists).
 
 mod error;
 mod kernel;
+mod limb;
 mod posture;
 mod priority;
 pub mod scenarios;
@@ -27,10 +31,13 @@ mod task;
 
 pub use error::IkError;
 pub use kernel::prioritized_step;
+pub use limb::{Limb, LimbBase, LimbGoal, LimbSolution, SwivelInterval, nearest_swivel};
 pub use posture::{Frames, Posture};
 pub use priority::{Damping, LevelSystem, StepParams, StepWorkspace, prioritized_step_nalgebra};
 pub use skeleton::{Dof, Joint, JointDef, Skeleton};
 #[cfg(not(all(target_arch = "wasm32", target_os = "unknown")))]
 pub use solver::SystemClock;
-pub use solver::{Backend, Clock, LevelReport, SolveReport, SolveStatus, Solver, SolverSettings};
+pub use solver::{
+    AnalyticRestart, Backend, Clock, LevelReport, SolveReport, SolveStatus, Solver, SolverSettings,
+};
 pub use task::{Axes, Effector, Task, TaskFeature, TaskKind};

@@ -11,7 +11,9 @@
 
 use glam::{DQuat, DVec3};
 
-use crate::{Axes, Dof, IkError, JointDef, Posture, Skeleton, Task};
+use crate::{
+    Axes, Dof, Frames, IkError, JointDef, Limb, LimbBase, LimbGoal, Posture, Skeleton, Task,
+};
 
 /// (name, LOA2 parent, default centre x, y, z) — from `joints.csv`.
 const HANIM_LOA2_CENTRES: &[(&str, &str, [f64; 3])] = &[
@@ -585,4 +587,43 @@ pub fn s6() -> Result<Scenario, IkError> {
 /// All six, in order.
 pub fn all() -> Result<Vec<Scenario>, IkError> {
     Ok(vec![s1()?, s2()?, s3()?, s4()?, s5()?, s6()?])
+}
+
+/// S7: one closed-form solve of the left arm of [`arm7`] (goal position and swivel angle).
+#[derive(Debug, Clone)]
+pub struct LimbScenario {
+    /// `S7`.
+    pub name: &'static str,
+    /// What it is.
+    pub description: &'static str,
+    /// The body ([`arm7`]).
+    pub skeleton: Skeleton,
+    /// Shoulder, elbow, wrist.
+    pub limb: Limb,
+    /// The limb's base in the rest posture.
+    pub base: LimbBase,
+    /// The wrist goal (reachable).
+    pub goal: LimbGoal,
+    /// The swivel angle asked (radians).
+    pub swivel_angle: f64,
+    /// Where the solution is written.
+    pub start: Posture,
+}
+
+/// The S7 scenario.
+pub fn s7() -> Result<LimbScenario, IkError> {
+    let skeleton = arm7()?;
+    let limb = Limb::from_names(&skeleton, ["l_shoulder", "l_elbow", "l_radiocarpal"])?;
+    let start = Posture::rest(&skeleton);
+    let base = limb.base(&skeleton, &Frames::new(&skeleton, &start));
+    Ok(LimbScenario {
+        name: "S7",
+        description: "7-DOF arm, one closed-form solve (wrist position + swivel angle)",
+        skeleton,
+        limb,
+        base,
+        goal: LimbGoal::position(DVec3::new(0.35, 1.1, 0.25)),
+        swivel_angle: 0.3,
+        start,
+    })
 }

@@ -5,10 +5,11 @@ use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
 use crate::kernel::prioritized_step;
+use crate::limb::{Limb, LimbGoal};
 use crate::posture::clamp_and_wrap;
 use crate::priority::{Damping, LevelSystem, StepParams, StepWorkspace, prioritized_step_nalgebra};
 use crate::task::StepLimits;
-use crate::{Frames, IkError, Posture, Skeleton, Task};
+use crate::{Frames, IkError, Posture, Skeleton, Task, TaskKind};
 
 /// A source of time in seconds, for the wall-clock budget. The solver never reads a clock by
 /// itself on `wasm32-unknown-unknown` (where `std::time::Instant` panics): pass one built on
@@ -220,6 +221,23 @@ pub struct SolveReport {
     pub clamped_dofs: usize,
     /// Seconds spent, when a clock was available.
     pub elapsed_secs: Option<f64>,
+    /// Hybrid restarts: where the solver stalled and restarted a limb from its closed-form
+    /// solution (see `Solver::limbs`); empty when it never did.
+    pub analytic_restarts: Vec<AnalyticRestart>,
+}
+
+/// One hybrid restart: a stalled solve put a limb in its closed-form posture and went on.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AnalyticRestart {
+    /// The limb's joints (upper, middle, end).
+    pub joints: [String; 3],
+    /// Iterations taken before the restart.
+    pub iteration: usize,
+    /// The level whose unmet task on the limb's end joint set the goal.
+    pub level: u32,
+    /// Swivel angle of the restart posture (radians): the feasible one nearest to the stalled
+    /// posture's swivel.
+    pub swivel_angle: f64,
 }
 
 /// Cached per-solve task layout.
@@ -236,6 +254,11 @@ struct LevelLayout {
 pub struct Solver {
     /// Settings used by [`Solver::solve`].
     pub settings: SolverSettings,
+    /// Limbs for the hybrid (the paper's conclusion): when a solve stalls with an unmet
+    /// position task on a limb's end joint, the limb restarts once from its closed-form
+    /// solution (swivel kept as far as the limits allow) and the iterations go on. Empty by
+    /// default (pure variational solver).
+    pub limbs: Vec<Limb>,
     frames: Frames,
     layout: Vec<LevelLayout>,
     supports: Vec<Vec<usize>>,
@@ -255,6 +278,12 @@ impl Solver {
             settings,
             ..Self::default()
         })
+    }
+
+    /// The same solver with limbs for the hybrid restart (builder style; see `limbs`).
+    pub fn with_limbs(mut self, limbs: Vec<Limb>) -> Self {
+        self.limbs = limbs;
+        self
     }
 
     /// Solves from `posture`, which receives the result; reads the system clock for the time
@@ -295,6 +324,7 @@ impl Solver {
         let mut iterations = 0;
         let mut clamped_dofs = 0;
         let mut flat_iterations = 0;
+        let mut analytic_restarts = Vec::new();
         let tol = self.settings.tolerance;
         let status = loop {
             if self.all_met(tol) {
@@ -321,11 +351,17 @@ impl Solver {
                 best_residuals.clone_from(&self.residual_sq);
             }
             if moved <= self.settings.stall_step || flat_iterations >= STALL_WINDOW {
-                break if self.all_met(tol) {
-                    SolveStatus::Converged
-                } else {
-                    SolveStatus::Stalled
-                };
+                if self.all_met(tol) {
+                    break SolveStatus::Converged;
+                }
+                if let Some(restart) =
+                    self.analytic_restart(skeleton, tasks, values, iterations, &analytic_restarts)
+                {
+                    analytic_restarts.push(restart);
+                    flat_iterations = 0;
+                    continue;
+                }
+                break SolveStatus::Stalled;
             }
         };
         // Return the best posture met on the way (the last one unless a lower level's pull left
@@ -362,7 +398,84 @@ impl Solver {
                 (Some(c), Some(s)) => Some(c.now_secs() - s),
                 _ => None,
             },
+            analytic_restarts,
         })
+    }
+
+    /// The hybrid: for the first unmet level, a limb (not yet restarted in this solve) whose end
+    /// joint carries one of its position tasks is put in its closed-form posture for the goal
+    /// that task implies (the end joint moved by the task's error on its axes; an orientation
+    /// task on the end joint at that level or above sets the end rotation). Relinearises.
+    fn analytic_restart(
+        &mut self,
+        skeleton: &Skeleton,
+        tasks: &[Task],
+        values: &mut [f64],
+        iteration: usize,
+        done: &[AnalyticRestart],
+    ) -> Option<AnalyticRestart> {
+        if self.limbs.is_empty() {
+            return None;
+        }
+        let k = self.first_unmet_level()?;
+        let level = self.layout[k].level;
+        let name = |j: usize| skeleton.joints()[j].name.clone();
+        for limb in &self.limbs {
+            let [upper, middle, end] = limb.joints();
+            let joints = [name(upper), name(middle), name(end)];
+            if done.iter().any(|r| r.joints == joints) {
+                continue;
+            }
+            let goal = self.layout[k]
+                .tasks
+                .iter()
+                .find_map(|&ti| match &tasks[ti].kind {
+                    TaskKind::Position {
+                        effector,
+                        axes,
+                        target,
+                    } if effector.joint == end => {
+                        let now = self.frames.point(end, effector.point);
+                        let mut position = self.frames.joint_position[end];
+                        for axis in 0..3 {
+                            if axes.has(axis) {
+                                position[axis] += target[axis] - now[axis];
+                            }
+                        }
+                        Some(position)
+                    }
+                    _ => None,
+                });
+            let Some(position) = goal else {
+                continue;
+            };
+            let orientation = tasks.iter().find_map(|t| match &t.kind {
+                TaskKind::Orientation { joint, target }
+                    if t.active && t.level <= level && *joint == end =>
+                {
+                    Some(*target)
+                }
+                _ => None,
+            });
+            let base = limb.base(skeleton, &self.frames);
+            let current = Posture::from_values(skeleton, values.to_vec()).ok()?;
+            let preferred = limb.swivel_angle(skeleton, &current);
+            let goal = LimbGoal {
+                position,
+                orientation,
+            };
+            let solution = limb.solve_within_limits(base, &goal, preferred);
+            limb.apply_values(&solution, values);
+            clamp_and_wrap(skeleton, values);
+            self.linearize(skeleton, tasks, values);
+            return Some(AnalyticRestart {
+                joints,
+                iteration,
+                level,
+                swivel_angle: solution.swivel_angle,
+            });
+        }
+        None
     }
 
     /// One prioritized iteration from `posture` (for interactive use: a few per frame).

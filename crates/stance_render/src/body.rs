@@ -52,49 +52,95 @@ pub struct MannequinJoint<'a> {
     pub up_world: Vec3,
 }
 
+/// One capsule of the mannequin and the joint whose frame carries it (a bone from a joint to
+/// its child moves with the joint: the upper arm belongs to the shoulder).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MannequinBone {
+    pub capsule: Capsule,
+    /// Index into the joints the mannequin was built from.
+    pub owner: usize,
+}
+
 /// Capsules for a posed skeleton: one per bone, a head above `skullbase`, a chest bar
 /// between the collarbones.
 pub fn mannequin_capsules(joints: &[MannequinJoint<'_>]) -> Vec<Capsule> {
-    let mut capsules = Vec::with_capacity(joints.len() + 2);
-    let capsule = |start_world, end_world, radius_m| Capsule {
-        start_world,
-        end_world,
-        radius_m,
-        color_linear: BODY_COLOR_LINEAR,
+    mannequin_bones(joints)
+        .into_iter()
+        .map(|bone| bone.capsule)
+        .collect()
+}
+
+/// The mannequin's capsules with the joint that owns each (for picking and highlighting).
+pub fn mannequin_bones(joints: &[MannequinJoint<'_>]) -> Vec<MannequinBone> {
+    let mut bones = Vec::with_capacity(joints.len() + 2);
+    let bone = |start_world, end_world, radius_m, owner| MannequinBone {
+        capsule: Capsule {
+            start_world,
+            end_world,
+            radius_m,
+            color_linear: BODY_COLOR_LINEAR,
+        },
+        owner,
     };
-    for joint in joints {
-        let Some(parent) = joint.parent.and_then(|index| joints.get(index)) else {
+    for (index, joint) in joints.iter().enumerate() {
+        let Some((parent_index, parent)) = joint
+            .parent
+            .and_then(|parent_index| Some((parent_index, joints.get(parent_index)?)))
+        else {
             continue;
         };
-        capsules.push(capsule(
+        bones.push(bone(
             parent.position_world,
             joint.position_world,
             bone_radius_m(parent.name, joint.name),
+            parent_index,
         ));
         if joint.name == "skullbase" {
             let up = joint.up_world.normalize_or(Vec3::Y);
-            capsules.push(capsule(
+            bones.push(bone(
                 joint.position_world + up * 0.07,
                 joint.position_world + up * 0.15,
                 0.095,
+                index,
             ));
         }
     }
     let find = |name: &str| joints.iter().find(|joint| joint.name == name);
+    // The chest moves with the vertebra the collarbones hang from.
+    let Some(chest_owner) = find("l_sternoclavicular").and_then(|joint| joint.parent) else {
+        return bones;
+    };
     for (left, right) in [
         ("l_sternoclavicular", "r_sternoclavicular"),
         ("l_shoulder", "r_shoulder"),
     ] {
         if let (Some(left), Some(right)) = (find(left), find(right)) {
+            let owner = chest_owner;
             let inset = (right.position_world - left.position_world) * 0.15;
-            capsules.push(capsule(
+            bones.push(bone(
                 left.position_world + inset,
                 right.position_world - inset,
                 0.085,
+                owner,
             ));
         }
     }
-    capsules
+    bones
+}
+
+/// The mannequin of the H-Anim default humanoid standing in its rest pose at `loa`.
+pub fn rest_pose_capsules(loa: stance_hanim::LevelOfArticulation) -> Vec<Capsule> {
+    let joints = stance_hanim::humanoid_joints(loa);
+    let mannequin: Vec<MannequinJoint<'_>> = joints
+        .iter()
+        .map(|joint| MannequinJoint {
+            name: joint.definition.name,
+            parent: joint.parent,
+            position_world: joint.rest_centre.as_vec3(),
+            up_world: Vec3::Y,
+        })
+        .collect();
+    mannequin_capsules(&mannequin)
 }
 
 #[cfg(test)]
@@ -141,19 +187,4 @@ mod tests {
         let head = capsules[4];
         assert!(head.start_world.y > 1.6 && head.radius_m > 0.08);
     }
-}
-
-/// The mannequin of the H-Anim default humanoid standing in its rest pose at `loa`.
-pub fn rest_pose_capsules(loa: stance_hanim::LevelOfArticulation) -> Vec<Capsule> {
-    let joints = stance_hanim::humanoid_joints(loa);
-    let mannequin: Vec<MannequinJoint<'_>> = joints
-        .iter()
-        .map(|joint| MannequinJoint {
-            name: joint.definition.name,
-            parent: joint.parent,
-            position_world: joint.rest_centre.as_vec3(),
-            up_world: Vec3::Y,
-        })
-        .collect();
-    mannequin_capsules(&mannequin)
 }

@@ -100,11 +100,74 @@ impl OrbitCamera {
             (0.5 - ndc.y * 0.5) * size_px.y,
         ))
     }
+
+    /// The ray from the eye through pixel `point_px` (origin top left) of a viewport of
+    /// `size_px`: its origin and unit direction in world space.
+    pub fn ray_through(&self, point_px: Vec2, size_px: Vec2) -> (Vec3, Vec3) {
+        let size_px = size_px.max(Vec2::ONE);
+        let ndc = Vec2::new(
+            point_px.x / size_px.x * 2.0 - 1.0,
+            1.0 - point_px.y / size_px.y * 2.0,
+        );
+        let world_from_clip = self.clip_from_world(size_px.x / size_px.y).inverse();
+        let far = world_from_clip.project_point3(ndc.extend(1.0));
+        let eye = self.eye_world();
+        let direction = (far - eye).normalize_or(-Vec3::Z);
+        (eye, direction)
+    }
+
+    /// The world-space displacement, in the plane facing the camera at `depth_point_world`,
+    /// of a cursor move of `delta_px` in a viewport `viewport_height_px` tall.
+    pub fn view_plane_displacement(
+        &self,
+        delta_px: Vec2,
+        depth_point_world: Vec3,
+        viewport_height_px: f32,
+    ) -> Vec3 {
+        let world_from_view = self.view_from_world().inverse();
+        let forward = -world_from_view.z_axis.truncate();
+        let depth_m = (depth_point_world - self.eye_world())
+            .dot(forward)
+            .max(0.01);
+        let metres_per_px =
+            2.0 * depth_m * (self.vertical_fov * 0.5).tan() / viewport_height_px.max(1.0);
+        let right = world_from_view.x_axis.truncate();
+        let up = world_from_view.y_axis.truncate();
+        (right * delta_px.x - up * delta_px.y) * metres_per_px
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_ray_through_a_projected_point_passes_through_the_point() {
+        let camera = OrbitCamera::default();
+        let size = Vec2::new(800.0, 600.0);
+        for point in [Vec3::new(0.2, 1.5, 0.1), Vec3::new(-0.4, 0.1, 0.3)] {
+            let pixel = camera.project(point, size).unwrap_or_default();
+            let (origin, direction) = camera.ray_through(pixel, size);
+            let along = (point - origin).dot(direction);
+            let miss = (origin + direction * along - point).length();
+            assert!(miss < 1e-4, "ray misses by {miss} m");
+        }
+    }
+
+    #[test]
+    fn a_cursor_move_moves_a_point_by_the_same_pixels_on_screen() {
+        let camera = OrbitCamera::default();
+        let size = Vec2::new(800.0, 600.0);
+        let point = Vec3::new(0.1, 1.2, 0.0);
+        let moved = point + camera.view_plane_displacement(Vec2::new(30.0, -20.0), point, 600.0);
+        let before = camera.project(point, size).unwrap_or_default();
+        let after = camera.project(moved, size).unwrap_or_default();
+        let delta = after - before;
+        assert!(
+            (delta - Vec2::new(30.0, -20.0)).length() < 0.5,
+            "moved {delta}"
+        );
+    }
 
     #[test]
     fn the_target_projects_to_the_centre_of_the_viewport() {

@@ -8,7 +8,10 @@ mod camera;
 mod capture;
 mod renderer;
 
-pub use body::{BODY_COLOR_LINEAR, MannequinJoint, mannequin_capsules, rest_pose_capsules};
+pub use body::{
+    BODY_COLOR_LINEAR, MannequinBone, MannequinJoint, mannequin_bones, mannequin_capsules,
+    rest_pose_capsules,
+};
 pub use camera::OrbitCamera;
 #[cfg(not(target_arch = "wasm32"))]
 pub use capture::{CaptureError, Pixels, read_pixels};

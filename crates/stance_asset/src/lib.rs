@@ -1,0 +1,132 @@
+//! Avatar files for Stance: glTF 2.0 / GLB / VRM import into an in-memory [`Avatar`], GLB
+//! export of posed avatars, and the generated default avatar.
+//!
+//! # Import ([`load_avatar`])
+//! - `.glb`, `.gltf` with data URIs (external files through [`load_avatar_with`]), `.vrm`
+//!   (VRM 0.x and 1.0: humanoid bones from the extension, MToon drawn as a plain textured
+//!   material);
+//! - several skins and meshes, triangle lists/strips/fans, sparse accessors;
+//! - `KHR_mesh_quantization` (normalised and integer attributes are dequantised to `f32`),
+//!   `EXT_meshopt_compression` (pure-Rust decoder, all modes and filters),
+//!   `KHR_materials_unlit`, PNG/JPEG/WebP base-colour textures (`EXT_texture_webp`) decoded
+//!   to RGBA8;
+//! - any up axis, facing and unit normalised to the H-Anim frame through
+//!   [`Avatar::hanim_from_file`] (metres, +Y up, +Z front, +X the body's left, soles on y=0);
+//! - bone mapping onto H-Anim 2.0 in [`Avatar::mapping`] (see `stance_hanim::mapping`).
+//!
+//! Hostile files: every size and count is checked against [`Limits`] before memory is
+//! allocated; every index is checked; errors ([`AssetError`]) say what is wrong; nothing
+//! panics (fuzzed in the tests).
+//!
+//! # Posing and export
+//! [`Avatar::skeleton`] builds the solver skeleton at a chosen LOA;
+//! [`Avatar::posed_locals`] / [`Avatar::apply_posture`] turn a solved posture into node
+//! transforms; [`Avatar::skinning_matrices`] gives the renderer its joint matrices;
+//! [`export_glb`] writes the posed avatar; importing that file and calling
+//! [`Avatar::current_posture`] gives the posture back.
+
+mod error;
+mod export;
+mod generate;
+mod import;
+mod meshopt;
+mod model;
+mod normalize;
+
+pub use error::AssetError;
+pub use export::export_glb;
+pub use generate::make_default_avatar;
+pub use import::{Resolver, SUPPORTED_EXTENSIONS};
+pub use model::{
+    AlphaMode, Avatar, Material, Mesh, Node, Primitive, Skin, SourceFormat, Texture, Trs, Wrap,
+};
+
+/// Limits against hostile files. The defaults fit real avatars (tens of MB) with room.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Limits {
+    /// Whole input (default 256 MiB).
+    pub max_file_bytes: u64,
+    /// JSON part (default 32 MiB).
+    pub max_json_bytes: u64,
+    /// One buffer's declared byteLength (default 512 MiB).
+    pub max_buffer_bytes: u64,
+    /// Everything decoded: buffers, meshopt views, attributes, textures (default 1 GiB).
+    pub max_decoded_bytes: u64,
+    /// Nodes (default 10 000).
+    pub max_nodes: usize,
+    /// Meshes and skins (default 4 096).
+    pub max_meshes: usize,
+    /// Primitives over all meshes (default 16 384).
+    pub max_primitives: usize,
+    /// Accessors and buffer views (default 100 000).
+    pub max_accessors: usize,
+    /// Buffers (default 1 024).
+    pub max_buffers: usize,
+    /// Elements of one accessor (default 16 Mi).
+    pub max_accessor_count: usize,
+    /// Images (default 256).
+    pub max_images: usize,
+    /// Materials (default 4 096).
+    pub max_materials: usize,
+    /// Joints of one skin (default 1 024).
+    pub max_joints_per_skin: usize,
+    /// Width or height of one texture (default 8 192).
+    pub max_texture_side: u32,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Self {
+            max_file_bytes: 256 << 20,
+            max_json_bytes: 32 << 20,
+            max_buffer_bytes: 512 << 20,
+            max_decoded_bytes: 1 << 30,
+            max_nodes: 10_000,
+            max_meshes: 4_096,
+            max_primitives: 16_384,
+            max_accessors: 100_000,
+            max_buffers: 1_024,
+            max_accessor_count: 16 << 20,
+            max_images: 256,
+            max_materials: 4_096,
+            max_joints_per_skin: 1_024,
+            max_texture_side: 8_192,
+        }
+    }
+}
+
+/// Options of [`load_avatar`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LoadOptions {
+    /// Size and count limits.
+    pub limits: Limits,
+    /// Fail with [`AssetError::NotHumanoid`] when the 18 LOA1 joints cannot all be mapped
+    /// (default true; `false` loads any skinned or static model with a warning).
+    pub require_humanoid: bool,
+    /// Decode textures (default true; `false` gives 1x1 white placeholders, faster).
+    pub decode_textures: bool,
+}
+
+impl Default for LoadOptions {
+    fn default() -> Self {
+        Self {
+            limits: Limits::default(),
+            require_humanoid: true,
+            decode_textures: true,
+        }
+    }
+}
+
+/// Imports a `.glb`, `.vrm` or `.gltf` (data URIs only) from memory.
+pub fn load_avatar(bytes: &[u8], options: &LoadOptions) -> Result<Avatar, AssetError> {
+    import::import(bytes, options, &mut |_| None)
+}
+
+/// Imports with a resolver for external URIs (`.gltf` next to its `.bin` and images).
+pub fn load_avatar_with(
+    bytes: &[u8],
+    options: &LoadOptions,
+    resolve: &mut Resolver<'_>,
+) -> Result<Avatar, AssetError> {
+    import::import(bytes, options, resolve)
+}

@@ -1,0 +1,113 @@
+//! Materials, textures and frames: KHR_materials_unlit, PNG and JPEG base colours, and a
+//! Z-up centimetre model facing -X normalised to the H-Anim frame.
+
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+#[cfg(target_arch = "wasm32")]
+use wasm_bindgen_test::wasm_bindgen_test as test;
+#[cfg(target_arch = "wasm32")]
+wasm_bindgen_test::wasm_bindgen_test_configure!(run_in_browser);
+
+mod common;
+
+use glam::{DQuat, DVec3};
+use serde_json::json;
+use stance_asset::{LoadOptions, export_glb, load_avatar};
+
+fn encoded(format: image::ImageFormat) -> Vec<u8> {
+    let img = image::RgbaImage::from_fn(8, 4, |x, y| {
+        image::Rgba([x as u8 * 30, y as u8 * 60, 200, 255])
+    });
+    let mut out = std::io::Cursor::new(Vec::new());
+    image::DynamicImage::ImageRgba8(img)
+        .to_rgb8()
+        .write_to(&mut out, format)
+        .unwrap();
+    out.into_inner()
+}
+
+#[test]
+fn unlit_and_png_jpeg_textures() {
+    let (mut j, mut bin) = common::split(&common::default_glb());
+    let mut add_image = |bytes: Vec<u8>, mime: &str, j: &mut serde_json::Value| {
+        while bin.len() % 4 != 0 {
+            bin.push(0);
+        }
+        let views = j["bufferViews"].as_array_mut().unwrap();
+        views.push(json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len()}));
+        let view = views.len() - 1;
+        bin.extend_from_slice(&bytes);
+        let images = j
+            .as_object_mut()
+            .unwrap()
+            .entry("images")
+            .or_insert(json!([]));
+        images
+            .as_array_mut()
+            .unwrap()
+            .push(json!({"bufferView": view, "mimeType": mime}));
+        let image = images.as_array().unwrap().len() - 1;
+        let textures = j
+            .as_object_mut()
+            .unwrap()
+            .entry("textures")
+            .or_insert(json!([]));
+        textures
+            .as_array_mut()
+            .unwrap()
+            .push(json!({"source": image}));
+        textures.as_array().unwrap().len() - 1
+    };
+    let png = add_image(encoded(image::ImageFormat::Png), "image/png", &mut j);
+    let jpeg = add_image(encoded(image::ImageFormat::Jpeg), "image/jpeg", &mut j);
+    j["buffers"][0]["byteLength"] = json!(bin.len() + (4 - bin.len() % 4) % 4);
+    j["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": png});
+    j["materials"][0]["extensions"] = json!({"KHR_materials_unlit": {}});
+    j["materials"][1]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": jpeg});
+    j["extensionsUsed"] = json!(["KHR_materials_unlit"]);
+    let avatar = load_avatar(&common::join(&j, &bin), &LoadOptions::default()).unwrap();
+    assert!(avatar.materials[0].unlit);
+    assert!(!avatar.materials[1].unlit);
+    let t = &avatar.textures[avatar.materials[0].base_color_texture.unwrap()];
+    assert_eq!((t.width, t.height, t.rgba8.len()), (8, 4, 128));
+    assert_eq!(&t.rgba8[4..8], &[30, 0, 200, 255]);
+    let t = &avatar.textures[avatar.materials[1].base_color_texture.unwrap()];
+    assert_eq!((t.width, t.height), (8, 4));
+    assert!(
+        (t.rgba8[2] as i32 - 200).abs() < 20,
+        "JPEG blue {}",
+        t.rgba8[2]
+    );
+    // Written back: unlit kept, textures as PNG.
+    let again = load_avatar(&export_glb(&avatar).unwrap(), &LoadOptions::default()).unwrap();
+    assert!(again.materials[0].unlit);
+    assert_eq!(again.textures.len(), 2);
+    assert!(again.extensions.iter().any(|e| e == "KHR_materials_unlit"));
+}
+
+#[test]
+fn z_up_centimetres_facing_minus_x_is_normalised() {
+    let reference = load_avatar(&common::default_glb(), &LoadOptions::default()).unwrap();
+    let expected = reference.hanim_rest_positions();
+    let (mut j, bin) = common::split(&common::default_glb());
+    // A new root: Z up (Y -> Z), scaled to centimetres, turned to face -X.
+    let q = DQuat::from_rotation_z(-std::f64::consts::FRAC_PI_2)
+        * DQuat::from_rotation_x(std::f64::consts::FRAC_PI_2);
+    let old_roots = j["scenes"][0]["nodes"].clone();
+    let nodes = j["nodes"].as_array_mut().unwrap();
+    nodes.push(json!({"name": "Armature", "children": old_roots,
+        "rotation": [q.x, q.y, q.z, q.w], "scale": [100.0, 100.0, 100.0],
+        "translation": [12.0, -3.0, 40.0]}));
+    let armature = nodes.len() - 1;
+    j["scenes"][0]["nodes"] = json!([armature]);
+    let avatar = load_avatar(&common::join(&j, &bin), &LoadOptions::default()).unwrap();
+    let got = avatar.hanim_rest_positions();
+    for (h, e) in expected.iter().enumerate() {
+        assert!((got[h] - *e).length() < 1e-4, "node {h}: {} vs {e}", got[h]);
+    }
+    let head = got[avatar.mapping.source_of("skullbase").unwrap()];
+    assert!(
+        (head - DVec3::new(0.0044, 1.6209, 0.0236)).length() < 0.05,
+        "{head}"
+    );
+}

@@ -1,0 +1,172 @@
+//! Avatar subcommands: `inspect`, `export-posed`, `make-avatar`.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, anyhow, bail};
+use serde_json::{Map, Value, json};
+use stance_asset::{Avatar, LoadOptions, export_glb, load_avatar_with, make_default_avatar};
+use stance_hanim::{LevelOfArticulation, MatchMethod, SkeletonOptions, joint_by_name};
+use stance_ik::{Dof, Posture};
+
+/// `stance inspect FILE`.
+#[derive(clap::Args, Debug)]
+pub struct InspectArgs {
+    /// A .glb, .gltf or .vrm file.
+    pub file: PathBuf,
+}
+
+/// `stance export-posed AVATAR POSTURE.json OUT.glb`.
+#[derive(clap::Args, Debug)]
+pub struct ExportPosedArgs {
+    /// The avatar (.glb, .gltf, .vrm).
+    pub avatar: PathBuf,
+    /// `{"posture": {joint: {dof: value}}}` (the output of `stance solve`) or the bare
+    /// `{joint: {dof: value}}` object; optional `"loa": 1 | 2` (default 2).
+    pub posture: PathBuf,
+    /// Output GLB.
+    pub out: PathBuf,
+}
+
+/// `stance make-avatar OUT.glb`.
+#[derive(clap::Args, Debug)]
+pub struct MakeAvatarArgs {
+    /// Output GLB.
+    pub out: PathBuf,
+}
+
+fn load(path: &Path, options: &LoadOptions) -> Result<Avatar> {
+    let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mut resolve = |uri: &str| -> Option<Vec<u8>> {
+        // Relative paths next to the file only.
+        if uri.contains("://") || uri.starts_with('/') || uri.contains("..") {
+            return None;
+        }
+        std::fs::read(dir.join(uri)).ok()
+    };
+    load_avatar_with(&bytes, options, &mut resolve)
+        .with_context(|| format!("loading {}", path.display()))
+}
+
+/// The inspection summary of an avatar.
+pub fn inspect_json(avatar: &Avatar) -> Value {
+    let joint_nodes: BTreeSet<usize> = if avatar.skins.is_empty() {
+        (0..avatar.nodes.len())
+            .filter(|&i| avatar.nodes[i].mesh.is_none())
+            .collect()
+    } else {
+        avatar
+            .skins
+            .iter()
+            .flat_map(|s| s.joints.iter().copied())
+            .collect()
+    };
+    let mut mapping = Map::new();
+    for m in avatar.mapping.matches() {
+        if m.method == MatchMethod::Implied {
+            continue;
+        }
+        if let Some(n) = avatar.nodes.get(m.source) {
+            mapping.insert(n.name.clone(), json!(m.hanim));
+        }
+    }
+    let unmapped: Vec<&str> = joint_nodes
+        .iter()
+        .filter(|&&i| avatar.mapping.hanim_of(i).is_none())
+        .filter_map(|&i| avatar.nodes.get(i).map(|n| n.name.as_str()))
+        .collect();
+    json!({
+        "joints": joint_nodes.len(),
+        "mapping": mapping,
+        "unmapped": unmapped,
+        "meshes": avatar.meshes.len(),
+        "vertices": avatar.vertex_count(),
+        "extensions": avatar.extensions,
+        "warnings": avatar.warnings,
+    })
+}
+
+pub fn inspect(args: InspectArgs) -> Result<()> {
+    let avatar = load(
+        &args.file,
+        &LoadOptions {
+            require_humanoid: false,
+            ..LoadOptions::default()
+        },
+    )?;
+    println!("{}", serde_json::to_string(&inspect_json(&avatar))?);
+    Ok(())
+}
+
+fn parse_posture(skeleton: &stance_ik::Skeleton, v: &Value) -> Result<(Posture, Vec<String>)> {
+    let mut warnings = Vec::new();
+    let joints = v.get("posture").unwrap_or(v);
+    let obj = joints
+        .as_object()
+        .ok_or_else(|| anyhow!("posture: expected an object {{joint: {{dof: value}}}}"))?;
+    let mut posture = Posture::rest(skeleton);
+    for (name, dofs) in obj {
+        if name == "loa" {
+            continue;
+        }
+        let Some(j) = skeleton.joint_index(name) else {
+            if joint_by_name(name).is_none() {
+                bail!("posture: `{name}` is not an H-Anim joint");
+            }
+            warnings.push(format!(
+                "joint `{name}` is not in this avatar's skeleton; ignored"
+            ));
+            continue;
+        };
+        let dofs = dofs
+            .as_object()
+            .ok_or_else(|| anyhow!("posture.{name}: expected {{dof: value}}"))?;
+        let joint = &skeleton.joints()[j];
+        for (dof_name, value) in dofs {
+            let dof = Dof::from_name(dof_name)
+                .ok_or_else(|| anyhow!("posture.{name}: unknown DOF `{dof_name}`"))?;
+            let value = value
+                .as_f64()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| anyhow!("posture.{name}.{dof_name}: expected a finite number"))?;
+            match joint.dofs.iter().position(|&d| d == dof) {
+                Some(k) => posture.values_mut()[joint.dof_start + k] = value,
+                None => warnings.push(format!("{name} has no DOF {dof_name} here; ignored")),
+            }
+        }
+    }
+    Ok((posture, warnings))
+}
+
+pub fn export_posed(args: ExportPosedArgs) -> Result<()> {
+    let mut avatar = load(&args.avatar, &LoadOptions::default())?;
+    let text = std::fs::read_to_string(&args.posture)
+        .with_context(|| format!("reading {}", args.posture.display()))?;
+    let v: Value = serde_json::from_str(&text)
+        .with_context(|| format!("parsing {}", args.posture.display()))?;
+    let loa = match v.get("loa").and_then(Value::as_u64) {
+        None | Some(2) => LevelOfArticulation::Loa2,
+        Some(1) => LevelOfArticulation::Loa1,
+        Some(other) => bail!("loa {other} is not supported (1 or 2)"),
+    };
+    let body = avatar.skeleton(&SkeletonOptions {
+        loa,
+        ..SkeletonOptions::default()
+    })?;
+    let (posture, warnings) = parse_posture(&body.skeleton, &v)?;
+    for w in warnings {
+        eprintln!("warning: {w}");
+    }
+    avatar.apply_posture(&body, &posture)?;
+    let bytes = export_glb(&avatar)?;
+    std::fs::write(&args.out, bytes).with_context(|| format!("writing {}", args.out.display()))?;
+    Ok(())
+}
+
+pub fn make_avatar(args: MakeAvatarArgs) -> Result<()> {
+    let avatar = make_default_avatar()?;
+    let bytes = export_glb(&avatar)?;
+    std::fs::write(&args.out, bytes).with_context(|| format!("writing {}", args.out.display()))?;
+    Ok(())
+}

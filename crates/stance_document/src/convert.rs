@@ -1,0 +1,313 @@
+//! From document specs to solver types (`stance_ik::Task`, `stance_ik::Posture`) and back.
+
+use glam::{DQuat, DVec3};
+use stance_ik::{Axes, Effector, Limb, LimbGoal, Posture, Skeleton, Task, TaskKind};
+
+use crate::DocumentError;
+use crate::document::{Document, DofValues, PostureValues, TaskKindSpec, TaskSpec};
+
+/// Finds `name` in the skeleton: the exact name first, then through the H-Anim aliases
+/// (`l_ankle` finds `l_talocrural` and the other way round).
+pub fn resolve_joint(skeleton: &Skeleton, name: &str) -> Option<usize> {
+    if let Some(j) = skeleton.joint_index(name) {
+        return Some(j);
+    }
+    let (_, def) = stance_hanim::joint_by_name(name)?;
+    std::iter::once(def.name)
+        .chain(def.aliases.iter().copied())
+        .find_map(|n| skeleton.joint_index(n))
+}
+
+fn joint_at(skeleton: &Skeleton, name: &str, at: &str) -> Result<usize, DocumentError> {
+    resolve_joint(skeleton, name)
+        .ok_or_else(|| DocumentError::field(at, format!("unknown joint `{name}`")))
+}
+
+fn v3(a: [f64; 3]) -> DVec3 {
+    DVec3::from_array(a)
+}
+
+impl PostureValues {
+    /// The posture on `skeleton` (missing DOF are 0). Errors name the field
+    /// (`posture.l_knee.ry: joint `l_knee` has no DOF `ry``).
+    pub fn to_posture(&self, skeleton: &Skeleton) -> Result<Posture, DocumentError> {
+        self.to_posture_at(skeleton, "posture")
+    }
+
+    /// Like [`PostureValues::to_posture`], with `at` as the path of this posture in errors.
+    pub fn to_posture_at(&self, skeleton: &Skeleton, at: &str) -> Result<Posture, DocumentError> {
+        let mut p = Posture::rest(skeleton);
+        for (name, dofs) in &self.joints {
+            let here = format!("{at}.{name}");
+            let j = joint_at(skeleton, name, &here)?;
+            let joint = &skeleton.joints()[j];
+            for (d, value) in dofs.iter() {
+                let there = format!("{here}.{}", d.name());
+                let k = joint.dofs.iter().position(|&x| x == d).ok_or_else(|| {
+                    DocumentError::field(
+                        &there,
+                        format!("joint `{name}` has no DOF `{}`", d.name()),
+                    )
+                })?;
+                if !value.is_finite() {
+                    return Err(DocumentError::field(there, "not a finite number"));
+                }
+                p.values_mut()[joint.dof_start + k] = value;
+            }
+        }
+        Ok(p)
+    }
+
+    /// Every DOF of every joint that has DOF, by joint name (the shape `stance solve` prints).
+    pub fn from_posture(skeleton: &Skeleton, posture: &Posture) -> Self {
+        let mut out = PostureValues::default();
+        for joint in skeleton.joints() {
+            if joint.dofs.is_empty() {
+                continue;
+            }
+            let mut values = DofValues::default();
+            for (k, &d) in joint.dofs.iter().enumerate() {
+                let v = posture.values().get(joint.dof_start + k).copied();
+                values.set(d, v.unwrap_or(0.0));
+            }
+            out.joints.insert(joint.name.clone(), values);
+        }
+        out
+    }
+}
+
+/// A `limb` task resolved on a skeleton: the closed-form limb, its goal and the requested
+/// swivel, for the editor's closed-form start and swivel handle (as `stance solve` does).
+#[derive(Debug, Clone)]
+pub struct LimbStartSpec {
+    /// The limb (upper, middle, end joints of the skeleton).
+    pub limb: Limb,
+    /// World goal of the end joint (position, optional orientation).
+    pub goal: LimbGoal,
+    /// Requested swivel angle (rad); `None`: keep the current posture's.
+    pub swivel: Option<f64>,
+}
+
+impl TaskSpec {
+    /// The three joint indices of a `limb` task on `skeleton` (`None` for other kinds).
+    fn limb_joints(&self, skeleton: &Skeleton) -> Result<Option<[usize; 3]>, DocumentError> {
+        let TaskKindSpec::Limb { limb, joints, .. } = &self.kind else {
+            return Ok(None);
+        };
+        let mut out = [0usize; 3];
+        match (limb, joints) {
+            (Some(l), None) => {
+                for (k, name) in l.joints().iter().enumerate() {
+                    out[k] = resolve_joint(skeleton, name).ok_or_else(|| {
+                        DocumentError::field(
+                            "limb",
+                            format!("the skeleton lacks the H-Anim joints of `{}`", l.name()),
+                        )
+                    })?;
+                }
+            }
+            (None, Some(names)) => {
+                for (k, name) in names.iter().enumerate() {
+                    out[k] = joint_at(skeleton, name, &format!("joints[{k}]"))?;
+                }
+            }
+            _ => {
+                return Err(DocumentError::field(
+                    "joints",
+                    "give either `joints` or `limb`",
+                ));
+            }
+        }
+        Ok(Some(out))
+    }
+
+    /// For a `limb` task: the closed-form limb and its goal (`None` for other kinds).
+    pub fn to_limb(&self, skeleton: &Skeleton) -> Result<Option<LimbStartSpec>, DocumentError> {
+        self.validate()?;
+        let Some(j) = self.limb_joints(skeleton)? else {
+            return Ok(None);
+        };
+        let TaskKindSpec::Limb {
+            target,
+            swivel,
+            orientation,
+            ..
+        } = &self.kind
+        else {
+            return Ok(None);
+        };
+        let names = j.map(|i| skeleton.joints()[i].name.clone());
+        let limb = Limb::from_names(skeleton, [&names[0], &names[1], &names[2]])
+            .map_err(|e| DocumentError::field("", e.to_string()))?;
+        Ok(Some(LimbStartSpec {
+            limb,
+            goal: LimbGoal {
+                position: v3(*target),
+                orientation: orientation.map(|q| DQuat::from_array(q).normalize()),
+            },
+            swivel: *swivel,
+        }))
+    }
+
+    /// Every solver task this task stands for: one, except a `limb` task with an `orientation`
+    /// (a position task on the end joint and an orientation task, both at the task's level).
+    pub fn to_solver_tasks(&self, skeleton: &Skeleton) -> Result<Vec<Task>, DocumentError> {
+        let task = self.to_task(skeleton)?;
+        let mut out = vec![task.clone()];
+        if let TaskKindSpec::Limb {
+            orientation: Some(q),
+            ..
+        } = &self.kind
+            && let Some(j) = self.limb_joints(skeleton)?
+        {
+            out.insert(
+                0,
+                Task {
+                    kind: TaskKind::Orientation {
+                        joint: j[2],
+                        target: DQuat::from_array(*q).normalize(),
+                    },
+                    ..task
+                },
+            );
+        }
+        Ok(out)
+    }
+
+    /// The solver task on `skeleton`. Error paths are relative to the task (`joint`,
+    /// `target[0]`); [`Document::to_tasks`] prefixes them with `tasks[i]`.
+    ///
+    /// A `limb` task gives its variational part, the position task of the end joint (like
+    /// `stance solve`); its closed-form start is [`TaskSpec::to_limb`], its optional orientation
+    /// goal an extra task of [`TaskSpec::to_solver_tasks`].
+    pub fn to_task(&self, skeleton: &Skeleton) -> Result<Task, DocumentError> {
+        self.validate()?;
+        let kind = match &self.kind {
+            TaskKindSpec::Position {
+                joint,
+                point,
+                axes,
+                target,
+            } => TaskKind::Position {
+                effector: Effector {
+                    joint: joint_at(skeleton, joint, "joint")?,
+                    point: v3(*point),
+                },
+                axes: *axes,
+                target: v3(*target),
+            },
+            TaskKindSpec::Orientation { joint, target } => TaskKind::Orientation {
+                joint: joint_at(skeleton, joint, "joint")?,
+                target: DQuat::from_array(*target).normalize(),
+            },
+            TaskKindSpec::Gaze {
+                joint,
+                axis,
+                point,
+                target,
+            } => TaskKind::Gaze {
+                effector: Effector {
+                    joint: joint_at(skeleton, joint, "joint")?,
+                    point: v3(*point),
+                },
+                axis: v3(*axis).normalize(),
+                target: v3(*target),
+            },
+            TaskKindSpec::Com { axes, target } => TaskKind::CenterOfMass {
+                axes: *axes,
+                target: v3(*target),
+            },
+            TaskKindSpec::Posture { joints, reference } => {
+                let reference = match reference {
+                    None => Posture::rest(skeleton),
+                    Some(r) => r.to_posture_at(skeleton, "reference")?,
+                };
+                let dofs = match joints {
+                    None => match Task::rest_posture(skeleton).kind {
+                        TaskKind::PostureAttraction { dofs, .. } => dofs,
+                        _ => Vec::new(),
+                    },
+                    Some(list) => {
+                        let mut dofs = Vec::new();
+                        for (k, name) in list.iter().enumerate() {
+                            let j = joint_at(skeleton, name, &format!("joints[{k}]"))?;
+                            dofs.extend(skeleton.joints()[j].dof_range());
+                        }
+                        dofs
+                    }
+                };
+                TaskKind::PostureAttraction {
+                    reference: reference.values().to_vec(),
+                    dofs,
+                }
+            }
+            TaskKindSpec::Limb { target, .. } => {
+                let j = self
+                    .limb_joints(skeleton)?
+                    .ok_or_else(|| DocumentError::Unsupported {
+                        path: "kind".to_owned(),
+                        what: "this limb task".to_owned(),
+                    })?;
+                TaskKind::Position {
+                    effector: Effector {
+                        joint: j[2],
+                        point: DVec3::ZERO,
+                    },
+                    axes: Axes::XYZ,
+                    target: v3(*target),
+                }
+            }
+        };
+        let task = Task {
+            kind,
+            level: self.level,
+            weight: self.weight,
+            active: self.active,
+        };
+        task.validate(skeleton, 0).map_err(|e| {
+            let reason = match e {
+                stance_ik::IkError::BadTask { reason, .. } => reason,
+                other => other.to_string(),
+            };
+            DocumentError::field("", reason)
+        })?;
+        Ok(task)
+    }
+}
+
+impl Document {
+    /// The posture on `skeleton` (errors at `posture.<joint>.<dof>`).
+    pub fn to_posture(&self, skeleton: &Skeleton) -> Result<Posture, DocumentError> {
+        self.posture.to_posture(skeleton)
+    }
+
+    /// Every solver task on `skeleton`, in document order (errors at `tasks[i].<field>`); a
+    /// `limb` task with an `orientation` gives two (see [`TaskSpec::to_solver_tasks`]).
+    pub fn to_tasks(&self, skeleton: &Skeleton) -> Result<Vec<Task>, DocumentError> {
+        let mut out = Vec::with_capacity(self.tasks.len());
+        for (i, t) in self.tasks.iter().enumerate() {
+            out.extend(
+                t.to_solver_tasks(skeleton)
+                    .map_err(|e| e.within(&format!("tasks[{i}]")))?,
+            );
+        }
+        Ok(out)
+    }
+
+    /// The closed-form limbs of the `limb` tasks, with the index of their task.
+    pub fn to_limbs(
+        &self,
+        skeleton: &Skeleton,
+    ) -> Result<Vec<(usize, LimbStartSpec)>, DocumentError> {
+        let mut out = Vec::new();
+        for (i, t) in self.tasks.iter().enumerate() {
+            if let Some(l) = t
+                .to_limb(skeleton)
+                .map_err(|e| e.within(&format!("tasks[{i}]")))?
+            {
+                out.push((i, l));
+            }
+        }
+        Ok(out)
+    }
+}

@@ -1,0 +1,905 @@
+//! The editor's document: avatar reference, posture and task set, with its JSON form
+//! (`docs/document-format.md`). Field names follow the `stance solve` problem format
+//! (`docs/problem-format.md`), so a problem file's `tasks` array is a valid document `tasks`.
+
+use std::collections::BTreeMap;
+
+use serde::ser::{SerializeMap, SerializeStruct};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+use serde_json::{Map, Value};
+use stance_ik::{Axes, Dof};
+
+use crate::DocumentError;
+
+/// The version written in the `version` field of a document's JSON; newer versions are refused.
+pub const DOCUMENT_VERSION: u32 = 1;
+
+/// The whole editable state that a file or a link carries.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Document {
+    /// Which avatar the posture is for.
+    pub avatar: AvatarReference,
+    /// DOF values by joint name.
+    pub posture: PostureValues,
+    /// The task set, in the editor's order.
+    pub tasks: Vec<TaskSpec>,
+}
+
+/// The avatar a document is posed on.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub enum AvatarReference {
+    /// The built-in default humanoid.
+    #[default]
+    Default,
+    /// A glTF/GLB/VRM file at this URL.
+    Url(String),
+}
+
+/// The values of one joint's DOF (`tx ty tz` metres, `rx ry rz` rotation-vector radians); a
+/// DOF that is absent is 0 when the posture is applied.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct DofValues {
+    values: [Option<f64>; 6],
+}
+
+impl DofValues {
+    /// The value of `dof`, if present.
+    pub fn get(&self, dof: Dof) -> Option<f64> {
+        self.values[dof_slot(dof)]
+    }
+
+    /// Sets the value of `dof`.
+    pub fn set(&mut self, dof: Dof, value: f64) {
+        self.values[dof_slot(dof)] = Some(value);
+    }
+
+    /// Removes `dof`.
+    pub fn remove(&mut self, dof: Dof) {
+        self.values[dof_slot(dof)] = None;
+    }
+
+    /// The present DOF and their values, in the order `tx ty tz rx ry rz`.
+    pub fn iter(&self) -> impl Iterator<Item = (Dof, f64)> + '_ {
+        Dof::ALL
+            .into_iter()
+            .zip(self.values)
+            .filter_map(|(d, v)| v.map(|v| (d, v)))
+    }
+
+    /// Whether no DOF is present.
+    pub fn is_empty(&self) -> bool {
+        self.values.iter().all(Option::is_none)
+    }
+}
+
+/// Index of a DOF in `Dof::ALL` order.
+pub(crate) fn dof_slot(dof: Dof) -> usize {
+    match dof {
+        Dof::Tx => 0,
+        Dof::Ty => 1,
+        Dof::Tz => 2,
+        Dof::Rx => 3,
+        Dof::Ry => 4,
+        Dof::Rz => 5,
+    }
+}
+
+/// `{"joint": {"dof": value}}`, exactly the `posture` object of the problem format: root
+/// translation `tx ty tz` in metres, rotation-vector components `rx ry rz` in radians.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct PostureValues {
+    /// DOF values by joint name.
+    pub joints: BTreeMap<String, DofValues>,
+}
+
+impl PostureValues {
+    /// An empty posture (the rest posture once applied).
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Sets one value (builder-free helper for the editor and tests).
+    pub fn set(&mut self, joint: &str, dof: Dof, value: f64) {
+        self.joints
+            .entry(joint.to_owned())
+            .or_default()
+            .set(dof, value);
+    }
+
+    /// One value, if present.
+    pub fn get(&self, joint: &str, dof: Dof) -> Option<f64> {
+        self.joints.get(joint).and_then(|v| v.get(dof))
+    }
+
+    /// Checks that every value is finite; `at` is the path of this posture (e.g. `posture`).
+    pub fn validate_at(&self, at: &str) -> Result<(), DocumentError> {
+        for (joint, dofs) in &self.joints {
+            for (dof, v) in dofs.iter() {
+                if !v.is_finite() {
+                    return Err(DocumentError::field(
+                        format!("{at}.{joint}.{}", dof.name()),
+                        "not a finite number",
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Which limb an analytic limb task drives.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum LimbName {
+    /// `l_shoulder`, `l_elbow`, `l_radiocarpal`.
+    LeftArm,
+    /// `r_shoulder`, `r_elbow`, `r_radiocarpal`.
+    RightArm,
+    /// `l_hip`, `l_knee`, `l_talocrural`.
+    LeftLeg,
+    /// `r_hip`, `r_knee`, `r_talocrural`.
+    RightLeg,
+}
+
+impl LimbName {
+    /// All four, in link order.
+    pub const ALL: [LimbName; 4] = [
+        LimbName::LeftArm,
+        LimbName::RightArm,
+        LimbName::LeftLeg,
+        LimbName::RightLeg,
+    ];
+
+    /// `"l_arm"`, `"r_arm"`, `"l_leg"`, `"r_leg"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            LimbName::LeftArm => "l_arm",
+            LimbName::RightArm => "r_arm",
+            LimbName::LeftLeg => "l_leg",
+            LimbName::RightLeg => "r_leg",
+        }
+    }
+
+    /// Parses `"l_arm"`...
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|l| l.name() == name)
+    }
+
+    /// The H-Anim names of the root, middle and end joints of the limb.
+    pub fn joints(self) -> [&'static str; 3] {
+        match self {
+            LimbName::LeftArm => ["l_shoulder", "l_elbow", "l_radiocarpal"],
+            LimbName::RightArm => ["r_shoulder", "r_elbow", "r_radiocarpal"],
+            LimbName::LeftLeg => ["l_hip", "l_knee", "l_talocrural"],
+            LimbName::RightLeg => ["r_hip", "r_knee", "r_talocrural"],
+        }
+    }
+}
+
+/// One task of the document, as in the problem format's `tasks[]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TaskSpec {
+    /// Priority level, >= 1 (1 = highest).
+    pub level: u32,
+    /// Weight inside the level, >= 0.
+    pub weight: f64,
+    /// Inactive tasks are kept but not solved.
+    pub active: bool,
+    /// What the task controls.
+    pub kind: TaskKindSpec,
+}
+
+impl TaskSpec {
+    /// A task at level 1, weight 1, active.
+    pub fn new(kind: TaskKindSpec) -> Self {
+        Self {
+            level: 1,
+            weight: 1.0,
+            active: true,
+            kind,
+        }
+    }
+}
+
+/// The kinds of task, with the problem format's field names.
+#[derive(Debug, Clone, PartialEq)]
+pub enum TaskKindSpec {
+    /// `"position"`: a point of a segment toward a world target along the chosen axes.
+    Position {
+        /// Joint name.
+        joint: String,
+        /// Point in the joint frame (m).
+        point: [f64; 3],
+        /// Controlled world axes.
+        axes: Axes,
+        /// World target (m); `axes` selects the components used.
+        target: [f64; 3],
+    },
+    /// `"orientation"`: the segment's world orientation.
+    Orientation {
+        /// Joint name.
+        joint: String,
+        /// `world_from_joint` quaternion `[qx, qy, qz, qw]` (non-zero; normalised when used).
+        target: [f64; 4],
+    },
+    /// `"gaze"`: a segment axis aims at a world point.
+    Gaze {
+        /// Joint name.
+        joint: String,
+        /// Aiming axis in the joint frame (non-zero).
+        axis: [f64; 3],
+        /// Eye point in the joint frame (m).
+        point: [f64; 3],
+        /// World point to look at (m).
+        target: [f64; 3],
+    },
+    /// `"com"`: the whole-body centre of mass.
+    Com {
+        /// Controlled world axes (`xz`: the horizontal projection).
+        axes: Axes,
+        /// World target (m).
+        target: [f64; 3],
+    },
+    /// `"posture"`: attraction toward a reference posture.
+    Posture {
+        /// Attracted joints; `None` = every rotational DOF of every non-root joint.
+        joints: Option<Vec<String>>,
+        /// Reference posture; `None` = the rest posture.
+        reference: Option<PostureValues>,
+    },
+    /// `"limb"`: the analytic arm/leg task (wrist/ankle goal plus swivel angle).
+    Limb {
+        /// The limb by name (`"l_arm"`...); either this or `joints`.
+        limb: Option<LimbName>,
+        /// The three joints (root, middle, end), when named explicitly.
+        joints: Option<[String; 3]>,
+        /// World goal of the end joint (m).
+        target: [f64; 3],
+        /// Swivel angle of the elbow/knee around the upper-end axis (rad); `None` = keep the
+        /// current one.
+        swivel: Option<f64>,
+        /// Optional `world_from_end` quaternion `[qx, qy, qz, qw]` of the end joint.
+        orientation: Option<[f64; 4]>,
+    },
+}
+
+impl TaskKindSpec {
+    /// The `kind` string.
+    pub fn name(&self) -> &'static str {
+        match self {
+            TaskKindSpec::Position { .. } => "position",
+            TaskKindSpec::Orientation { .. } => "orientation",
+            TaskKindSpec::Gaze { .. } => "gaze",
+            TaskKindSpec::Com { .. } => "com",
+            TaskKindSpec::Posture { .. } => "posture",
+            TaskKindSpec::Limb { .. } => "limb",
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Validation
+
+fn finite_all(values: &[f64], at: &str) -> Result<(), DocumentError> {
+    match values.iter().position(|v| !v.is_finite()) {
+        Some(i) => Err(DocumentError::field(
+            format!("{at}[{i}]"),
+            "not a finite number",
+        )),
+        None => Ok(()),
+    }
+}
+
+fn nonzero(values: &[f64], at: &str, what: &str) -> Result<(), DocumentError> {
+    if values.iter().map(|v| v * v).sum::<f64>().sqrt() < 1e-9 {
+        return Err(DocumentError::field(at, format!("zero-length {what}")));
+    }
+    Ok(())
+}
+
+impl TaskSpec {
+    /// Checks the task on its own (finite numbers, level >= 1, weight >= 0, non-zero
+    /// quaternion and axis, a limb named once). Paths are relative (`target[0]`).
+    pub fn validate(&self) -> Result<(), DocumentError> {
+        if self.level < 1 {
+            return Err(DocumentError::field(
+                "level",
+                "levels are integers from 1 (highest priority)",
+            ));
+        }
+        if !self.weight.is_finite() || self.weight < 0.0 {
+            return Err(DocumentError::field(
+                "weight",
+                "must be a finite number >= 0",
+            ));
+        }
+        match &self.kind {
+            TaskKindSpec::Position { point, target, .. } => {
+                finite_all(point, "point")?;
+                finite_all(target, "target")?;
+            }
+            TaskKindSpec::Orientation { target, .. } => {
+                finite_all(target, "target")?;
+                if nonzero(target, "target", "").is_err() {
+                    return Err(DocumentError::field(
+                        "target",
+                        "the quaternion has zero length",
+                    ));
+                }
+            }
+            TaskKindSpec::Gaze {
+                axis,
+                point,
+                target,
+                ..
+            } => {
+                finite_all(axis, "axis")?;
+                nonzero(axis, "axis", "axis")?;
+                finite_all(point, "point")?;
+                finite_all(target, "target")?;
+            }
+            TaskKindSpec::Com { target, .. } => finite_all(target, "target")?,
+            TaskKindSpec::Posture { reference, .. } => {
+                if let Some(r) = reference {
+                    r.validate_at("reference")?;
+                }
+            }
+            TaskKindSpec::Limb {
+                limb,
+                joints,
+                target,
+                swivel,
+                orientation,
+            } => {
+                finite_all(target, "target")?;
+                if let Some(s) = swivel
+                    && !s.is_finite()
+                {
+                    return Err(DocumentError::field("swivel", "not a finite number"));
+                }
+                if let Some(q) = orientation {
+                    finite_all(q, "orientation")?;
+                    if nonzero(q, "orientation", "").is_err() {
+                        return Err(DocumentError::field(
+                            "orientation",
+                            "the quaternion has zero length",
+                        ));
+                    }
+                }
+                match (limb, joints) {
+                    (Some(_), Some(_)) => {
+                        return Err(DocumentError::field(
+                            "",
+                            "give either `joints` or `limb`, not both",
+                        ));
+                    }
+                    (None, None) => {
+                        return Err(DocumentError::field("joints", "missing (or give `limb`)"));
+                    }
+                    _ => {}
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Document {
+    /// Checks every field: finite numbers (a document never holds NaN or infinity), levels,
+    /// weights, quaternions, axes. Errors name the field (`tasks[2].target[0]`).
+    pub fn validate(&self) -> Result<(), DocumentError> {
+        if let AvatarReference::Url(u) = &self.avatar
+            && u.is_empty()
+        {
+            return Err(DocumentError::field("avatar.url", "empty URL"));
+        }
+        self.posture.validate_at("posture")?;
+        for (i, t) in self.tasks.iter().enumerate() {
+            t.validate().map_err(|e| e.within(&format!("tasks[{i}]")))?;
+        }
+        Ok(())
+    }
+
+    /// Parses and validates a document from its JSON text.
+    pub fn from_json(text: &str) -> Result<Self, DocumentError> {
+        let v: Value =
+            serde_json::from_str(text).map_err(|e| DocumentError::Json(e.to_string()))?;
+        Self::from_json_value(&v)
+    }
+
+    /// Parses and validates a document from a JSON value.
+    pub fn from_json_value(v: &Value) -> Result<Self, DocumentError> {
+        let o = obj(v, "the document")?;
+        if let Some(ver) = o.get("version").filter(|v| !v.is_null()) {
+            let n = number(ver, "version")?;
+            if n.fract() != 0.0 || n < 1.0 {
+                return Err(DocumentError::field("version", "expected an integer >= 1"));
+            }
+            if n > f64::from(DOCUMENT_VERSION) {
+                return Err(DocumentError::field(
+                    "version",
+                    format!(
+                        "this document was written by a newer version of Stance (format {n}); this version reads format {DOCUMENT_VERSION}"
+                    ),
+                ));
+            }
+        }
+        let avatar = match o.get("avatar") {
+            None | Some(Value::Null) => AvatarReference::Default,
+            Some(Value::String(s)) if s == "default" => AvatarReference::Default,
+            Some(Value::Object(a)) => {
+                let url = string(field(a, "url", "avatar")?, "avatar.url")?;
+                AvatarReference::Url(url.to_owned())
+            }
+            Some(_) => {
+                return Err(DocumentError::field(
+                    "avatar",
+                    "expected \"default\" or {\"url\": \"...\"}",
+                ));
+            }
+        };
+        let posture = match o.get("posture") {
+            None | Some(Value::Null) => PostureValues::default(),
+            Some(p) => PostureValues::from_json_value(p, "posture")?,
+        };
+        let tasks = match o.get("tasks") {
+            None | Some(Value::Null) => Vec::new(),
+            Some(t) => TaskSpec::list_from_json_value(t, "tasks")?,
+        };
+        let doc = Document {
+            avatar,
+            posture,
+            tasks,
+        };
+        doc.validate()?;
+        Ok(doc)
+    }
+
+    /// The JSON text (pretty or compact).
+    pub fn to_json(&self, pretty: bool) -> String {
+        let r = if pretty {
+            serde_json::to_string_pretty(self)
+        } else {
+            serde_json::to_string(self)
+        };
+        // Serialising plain maps, strings and numbers cannot fail.
+        r.unwrap_or_default()
+    }
+}
+
+impl PostureValues {
+    /// Parses `{"joint": {"dof": value}}`; `at` is the path used in errors (e.g. `posture`).
+    pub fn from_json_value(v: &Value, at: &str) -> Result<Self, DocumentError> {
+        let mut p = PostureValues::default();
+        for (name, dofs) in obj(v, at)? {
+            let here = format!("{at}.{name}");
+            let mut values = DofValues::default();
+            for (dname, value) in obj(dofs, &here)? {
+                let there = format!("{here}.{dname}");
+                let d = Dof::from_name(dname).ok_or_else(|| {
+                    DocumentError::field(&there, "unknown DOF (expected tx, ty, tz, rx, ry or rz)")
+                })?;
+                values.set(d, number(value, &there)?);
+            }
+            p.joints.insert(name.clone(), values);
+        }
+        Ok(p)
+    }
+}
+
+impl TaskSpec {
+    /// Parses a `tasks` array; `at` is its path (e.g. `tasks`).
+    pub fn list_from_json_value(v: &Value, at: &str) -> Result<Vec<Self>, DocumentError> {
+        arr(v, at)?
+            .iter()
+            .enumerate()
+            .map(|(i, t)| TaskSpec::from_json_value(t, &format!("{at}[{i}]")))
+            .collect()
+    }
+
+    /// Parses one task object; `at` is its path (e.g. `tasks[2]`). Unknown fields are ignored.
+    pub fn from_json_value(v: &Value, at: &str) -> Result<Self, DocumentError> {
+        let o = obj(v, at)?;
+        let here = |name: &str| format!("{at}.{name}");
+        let f = |name: &str| field(o, name, at);
+        let opt = |name: &str| o.get(name).filter(|v| !v.is_null());
+        let kind_name = string(f("kind")?, &here("kind"))?;
+        let point = match opt("point") {
+            None => [0.0; 3],
+            Some(p) => vec3(p, &here("point"))?,
+        };
+        let axes = match opt("axes") {
+            None => Axes::XYZ,
+            Some(a) => {
+                let s = string(a, &here("axes"))?;
+                Axes::parse(s).ok_or_else(|| {
+                    DocumentError::field(
+                        here("axes"),
+                        format!("`{s}` is not a non-empty subset of \"xyz\""),
+                    )
+                })?
+            }
+        };
+        let joint = |name: &str| -> Result<String, DocumentError> {
+            Ok(string(f(name)?, &here(name))?.to_owned())
+        };
+        let kind = match kind_name {
+            "position" => TaskKindSpec::Position {
+                joint: joint("joint")?,
+                point,
+                axes,
+                target: vec3(f("target")?, &here("target"))?,
+            },
+            "orientation" => {
+                let q = numbers(f("target")?, &here("target"), 4)?;
+                if q.iter().map(|x| x * x).sum::<f64>().sqrt() < 1e-9 {
+                    return Err(DocumentError::field(
+                        here("target"),
+                        "the quaternion has zero length",
+                    ));
+                }
+                TaskKindSpec::Orientation {
+                    joint: joint("joint")?,
+                    target: [q[0], q[1], q[2], q[3]],
+                }
+            }
+            "gaze" => {
+                let axis = match opt("axis") {
+                    None => [0.0, 0.0, 1.0],
+                    Some(a) => vec3(a, &here("axis"))?,
+                };
+                if axis.iter().map(|x| x * x).sum::<f64>().sqrt() < 1e-9 {
+                    return Err(DocumentError::field(here("axis"), "zero-length axis"));
+                }
+                TaskKindSpec::Gaze {
+                    joint: joint("joint")?,
+                    axis,
+                    point,
+                    target: vec3(f("target")?, &here("target"))?,
+                }
+            }
+            "com" => TaskKindSpec::Com {
+                axes,
+                target: vec3(f("target")?, &here("target"))?,
+            },
+            "posture" => {
+                let reference = match opt("reference") {
+                    None => None,
+                    Some(r) => Some(PostureValues::from_json_value(r, &here("reference"))?),
+                };
+                let joints = match opt("joints") {
+                    None => None,
+                    Some(list) => Some(
+                        arr(list, &here("joints"))?
+                            .iter()
+                            .enumerate()
+                            .map(|(k, j)| {
+                                string(j, &format!("{}[{k}]", here("joints"))).map(str::to_owned)
+                            })
+                            .collect::<Result<Vec<_>, _>>()?,
+                    ),
+                };
+                TaskKindSpec::Posture { joints, reference }
+            }
+            "limb" => {
+                let limb = match opt("limb") {
+                    None => None,
+                    Some(l) => {
+                        let s = string(l, &here("limb"))?;
+                        Some(LimbName::from_name(s).ok_or_else(|| {
+                            DocumentError::field(
+                                here("limb"),
+                                format!(
+                                    "unknown limb `{s}` (expected l_arm, r_arm, l_leg or r_leg)"
+                                ),
+                            )
+                        })?)
+                    }
+                };
+                let joints = match opt("joints") {
+                    None => None,
+                    Some(list) => {
+                        let a = arr(list, &here("joints"))?;
+                        if a.len() != 3 {
+                            return Err(DocumentError::field(
+                                here("joints"),
+                                format!(
+                                    "expected 3 joint names (root, middle, end), found {}",
+                                    a.len()
+                                ),
+                            ));
+                        }
+                        let name = |k: usize| -> Result<String, DocumentError> {
+                            Ok(string(&a[k], &format!("{}[{k}]", here("joints")))?.to_owned())
+                        };
+                        Some([name(0)?, name(1)?, name(2)?])
+                    }
+                };
+                match (&limb, &joints) {
+                    (Some(_), Some(_)) => {
+                        return Err(DocumentError::field(
+                            at,
+                            "give either `joints` or `limb`, not both",
+                        ));
+                    }
+                    (None, None) => {
+                        return Err(DocumentError::field(
+                            here("joints"),
+                            "missing (or give `limb`)",
+                        ));
+                    }
+                    _ => {}
+                }
+                let swivel = match opt("swivel") {
+                    None => None,
+                    Some(s) => Some(number(s, &here("swivel"))?),
+                };
+                let orientation = match opt("orientation") {
+                    None => None,
+                    Some(q) => {
+                        let q = numbers(q, &here("orientation"), 4)?;
+                        if q.iter().map(|x| x * x).sum::<f64>().sqrt() < 1e-9 {
+                            return Err(DocumentError::field(
+                                here("orientation"),
+                                "the quaternion has zero length",
+                            ));
+                        }
+                        Some([q[0], q[1], q[2], q[3]])
+                    }
+                };
+                TaskKindSpec::Limb {
+                    limb,
+                    joints,
+                    target: vec3(f("target")?, &here("target"))?,
+                    swivel,
+                    orientation,
+                }
+            }
+            other => {
+                return Err(DocumentError::field(
+                    here("kind"),
+                    format!(
+                        "unknown kind `{other}` (expected position, orientation, gaze, com, posture or limb)"
+                    ),
+                ));
+            }
+        };
+        let level = match opt("level") {
+            None => 1,
+            Some(l) => {
+                let n = number(l, &here("level"))?;
+                if n < 1.0 || n.fract() != 0.0 || n > f64::from(u32::MAX) {
+                    return Err(DocumentError::field(
+                        here("level"),
+                        "levels are integers from 1 (highest priority)",
+                    ));
+                }
+                n as u32
+            }
+        };
+        let weight = match opt("weight") {
+            None => 1.0,
+            Some(w) => {
+                let w = number(w, &here("weight"))?;
+                if w < 0.0 {
+                    return Err(DocumentError::field(here("weight"), "must be >= 0"));
+                }
+                w
+            }
+        };
+        let active = match opt("active") {
+            None => true,
+            Some(Value::Bool(b)) => *b,
+            Some(_) => {
+                return Err(DocumentError::field(
+                    here("active"),
+                    "expected true or false",
+                ));
+            }
+        };
+        Ok(TaskSpec {
+            level,
+            weight,
+            active,
+            kind,
+        })
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// JSON helpers (errors name the field, like the problem-file parser)
+
+fn obj<'a>(v: &'a Value, at: &str) -> Result<&'a Map<String, Value>, DocumentError> {
+    v.as_object()
+        .ok_or_else(|| DocumentError::field(at, "expected an object"))
+}
+
+fn arr<'a>(v: &'a Value, at: &str) -> Result<&'a Vec<Value>, DocumentError> {
+    v.as_array()
+        .ok_or_else(|| DocumentError::field(at, "expected an array"))
+}
+
+fn field<'a>(o: &'a Map<String, Value>, name: &str, at: &str) -> Result<&'a Value, DocumentError> {
+    let path = if at.is_empty() {
+        name.to_owned()
+    } else {
+        format!("{at}.{name}")
+    };
+    o.get(name)
+        .filter(|v| !v.is_null())
+        .ok_or_else(|| DocumentError::field(path, "missing"))
+}
+
+fn string<'a>(v: &'a Value, at: &str) -> Result<&'a str, DocumentError> {
+    v.as_str()
+        .ok_or_else(|| DocumentError::field(at, "expected a string"))
+}
+
+fn number(v: &Value, at: &str) -> Result<f64, DocumentError> {
+    let n = v
+        .as_f64()
+        .ok_or_else(|| DocumentError::field(at, "expected a number"))?;
+    if !n.is_finite() {
+        return Err(DocumentError::field(at, "not a finite number"));
+    }
+    Ok(n)
+}
+
+fn numbers(v: &Value, at: &str, len: usize) -> Result<Vec<f64>, DocumentError> {
+    let a = arr(v, at)?;
+    if a.len() != len {
+        return Err(DocumentError::field(
+            at,
+            format!("expected {len} numbers, found {}", a.len()),
+        ));
+    }
+    a.iter()
+        .enumerate()
+        .map(|(i, x)| number(x, &format!("{at}[{i}]")))
+        .collect()
+}
+
+fn vec3(v: &Value, at: &str) -> Result<[f64; 3], DocumentError> {
+    let n = numbers(v, at, 3)?;
+    Ok([n[0], n[1], n[2]])
+}
+
+// ---------------------------------------------------------------------------------------------
+// serde
+
+impl Serialize for DofValues {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(None)?;
+        for (d, v) in self.iter() {
+            m.serialize_entry(d.name(), &v)?;
+        }
+        m.end()
+    }
+}
+
+impl Serialize for PostureValues {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        self.joints.serialize(s)
+    }
+}
+
+impl Serialize for AvatarReference {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            AvatarReference::Default => s.serialize_str("default"),
+            AvatarReference::Url(u) => {
+                let mut m = s.serialize_map(Some(1))?;
+                m.serialize_entry("url", u)?;
+                m.end()
+            }
+        }
+    }
+}
+
+impl Serialize for Document {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut st = s.serialize_struct("Document", 4)?;
+        st.serialize_field("version", &DOCUMENT_VERSION)?;
+        st.serialize_field("avatar", &self.avatar)?;
+        st.serialize_field("posture", &self.posture)?;
+        st.serialize_field("tasks", &self.tasks)?;
+        st.end()
+    }
+}
+
+impl Serialize for TaskSpec {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(None)?;
+        m.serialize_entry("level", &self.level)?;
+        m.serialize_entry("kind", self.kind.name())?;
+        match &self.kind {
+            TaskKindSpec::Position {
+                joint,
+                point,
+                axes,
+                target,
+            } => {
+                m.serialize_entry("joint", joint)?;
+                m.serialize_entry("point", point)?;
+                m.serialize_entry("axes", &axes.to_letters())?;
+                m.serialize_entry("target", target)?;
+            }
+            TaskKindSpec::Orientation { joint, target } => {
+                m.serialize_entry("joint", joint)?;
+                m.serialize_entry("target", target)?;
+            }
+            TaskKindSpec::Gaze {
+                joint,
+                axis,
+                point,
+                target,
+            } => {
+                m.serialize_entry("joint", joint)?;
+                m.serialize_entry("axis", axis)?;
+                m.serialize_entry("point", point)?;
+                m.serialize_entry("target", target)?;
+            }
+            TaskKindSpec::Com { axes, target } => {
+                m.serialize_entry("axes", &axes.to_letters())?;
+                m.serialize_entry("target", target)?;
+            }
+            TaskKindSpec::Posture { joints, reference } => {
+                if let Some(j) = joints {
+                    m.serialize_entry("joints", j)?;
+                }
+                if let Some(r) = reference {
+                    m.serialize_entry("reference", r)?;
+                }
+            }
+            TaskKindSpec::Limb {
+                limb,
+                joints,
+                target,
+                swivel,
+                orientation,
+            } => {
+                if let Some(l) = limb {
+                    m.serialize_entry("limb", l.name())?;
+                }
+                if let Some(j) = joints {
+                    m.serialize_entry("joints", j)?;
+                }
+                m.serialize_entry("target", target)?;
+                if let Some(s) = swivel {
+                    m.serialize_entry("swivel", s)?;
+                }
+                if let Some(q) = orientation {
+                    m.serialize_entry("orientation", q)?;
+                }
+            }
+        }
+        m.serialize_entry("weight", &self.weight)?;
+        m.serialize_entry("active", &self.active)?;
+        m.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for Document {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = Value::deserialize(d)?;
+        Document::from_json_value(&v).map_err(serde::de::Error::custom)
+    }
+}
+
+impl<'de> Deserialize<'de> for PostureValues {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = Value::deserialize(d)?;
+        let p = PostureValues::from_json_value(&v, "posture").map_err(serde::de::Error::custom)?;
+        p.validate_at("posture").map_err(serde::de::Error::custom)?;
+        Ok(p)
+    }
+}
+
+impl<'de> Deserialize<'de> for TaskSpec {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = Value::deserialize(d)?;
+        let t = TaskSpec::from_json_value(&v, "task").map_err(serde::de::Error::custom)?;
+        t.validate()
+            .map_err(|e| serde::de::Error::custom(e.within("task")))?;
+        Ok(t)
+    }
+}

@@ -1,0 +1,23 @@
+//! The Stance editor's document and its share-link codec. Pure Rust, no I/O; builds for
+//! `wasm32-unknown-unknown`.
+//!
+//! - [`Document`]: the avatar reference, the posture ([`PostureValues`], `{"joint": {"dof":
+//!   value}}`) and the task set ([`TaskSpec`]); its JSON form is `docs/document-format.md`,
+//!   with the field names of the `stance solve` problem format.
+//! - [`TaskSpec::to_task`], [`PostureValues::to_posture`], [`PostureValues::from_posture`]:
+//!   to and from the solver's types; errors name the field (`tasks[2].joint: unknown joint ...`).
+//! - [`link`]: the compact, versioned, checksummed URL-fragment form of a document.
+
+mod convert;
+mod document;
+mod error;
+pub mod link;
+mod range_coder;
+
+pub use convert::{LimbStartSpec, resolve_joint};
+pub use document::{
+    AvatarReference, DOCUMENT_VERSION, Document, DofValues, LimbName, PostureValues, TaskKindSpec,
+    TaskSpec,
+};
+pub use error::DocumentError;
+pub use link::LinkError;

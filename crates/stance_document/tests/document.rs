@@ -1,0 +1,260 @@
+//! The document's JSON form and its conversion into solver tasks and postures.
+
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+#[cfg(target_arch = "wasm32")]
+use wasm_bindgen_test::wasm_bindgen_test as test;
+#[cfg(target_arch = "wasm32")]
+wasm_bindgen_test::wasm_bindgen_test_configure!(run_in_browser);
+
+mod common;
+
+use common::*;
+use stance_document::{
+    AvatarReference, Document, DocumentError, PostureValues, TaskKindSpec, TaskSpec,
+};
+use stance_ik::scenarios::loa2_body40;
+use stance_ik::{Dof, Posture, TaskKind};
+
+/// The `tasks` array of the example in docs/problem-format.md.
+const PROBLEM_TASKS: &str = r#"[
+    {"level": 1, "kind": "position", "joint": "l_radiocarpal", "point": [0, 0, 0], "axes": "xyz",
+     "target": [0.25, 1.1, 0.3], "weight": 1.0},
+    {"level": 1, "kind": "orientation", "joint": "skullbase", "target": [0, 0, 0, 1]},
+    {"level": 1, "kind": "gaze", "joint": "skullbase", "axis": [0, 0, 1], "target": [0, 1.6, 2]},
+    {"level": 2, "kind": "com", "axes": "xz", "target": [0.02, 0, 0.03]},
+    {"level": 4, "kind": "posture", "weight": 0.1}
+  ]"#;
+
+fn doc_with_tasks(tasks: &str) -> String {
+    format!(r#"{{"avatar": "default", "posture": {{"l_knee": {{"rx": 0.3}}}}, "tasks": {tasks}}}"#)
+}
+
+fn err(text: &str) -> String {
+    Document::from_json(text).unwrap_err().to_string()
+}
+
+#[test]
+fn a_problem_files_tasks_are_document_tasks() {
+    let d = Document::from_json(&doc_with_tasks(PROBLEM_TASKS)).unwrap();
+    assert_eq!(d.tasks.len(), 5);
+    assert_eq!(d.avatar, AvatarReference::Default);
+    assert_eq!(d.posture.get("l_knee", Dof::Rx), Some(0.3));
+    assert_eq!(d.tasks[4].weight, 0.1);
+    assert_eq!(d.tasks[4].level, 4);
+    let s = loa2_body40().unwrap();
+    let tasks = d.to_tasks(&s).unwrap();
+    assert!(matches!(tasks[0].kind, TaskKind::Position { .. }));
+    assert!(matches!(tasks[3].kind, TaskKind::CenterOfMass { .. }));
+    assert!(tasks[4].is_posture());
+    let p = d.to_posture(&s).unwrap();
+    let knee = s.joint_index("l_knee").unwrap();
+    assert_eq!(p.values()[s.joints()[knee].dof_start], 0.3);
+}
+
+#[test]
+fn json_round_trips_exactly() {
+    let mut r = rng(5);
+    for _ in 0..100 {
+        let d = random_document(&mut r);
+        let text = d.to_json(false);
+        assert_eq!(Document::from_json(&text).unwrap(), d, "{text}");
+        let v: Document = serde_json::from_str(&d.to_json(true)).unwrap();
+        assert_eq!(v, d);
+    }
+}
+
+#[test]
+fn errors_name_the_field() {
+    let e = err(&doc_with_tasks(
+        r#"[{"kind":"position","joint":"l_wrist","target":["NaN",1,2]}]"#,
+    ));
+    assert!(
+        e.starts_with("tasks[0].target[0]: expected a number"),
+        "{e}"
+    );
+    let e = err(&doc_with_tasks(
+        r#"[{"kind":"position","joint":"l_wrist","target":[1e999,1,2]}]"#,
+    ));
+    assert!(e.contains("not valid JSON"), "{e}");
+    let e = err(&doc_with_tasks(r#"[{"kind":"com","target":[1,2]}]"#));
+    assert!(
+        e.starts_with("tasks[0].target: expected 3 numbers, found 2"),
+        "{e}"
+    );
+    let e = err(&doc_with_tasks(
+        r#"[{"kind":"com"},{"kind":"stare","target":[1,2,3]}]"#,
+    ));
+    assert!(e.starts_with("tasks[0].target: missing"), "{e}");
+    let e = err(&doc_with_tasks(r#"[{"kind":"stare","target":[1,2,3]}]"#));
+    assert!(e.starts_with("tasks[0].kind: unknown kind `stare`"), "{e}");
+    let e = err(&doc_with_tasks(
+        r#"[{"kind":"com","axes":"xw","target":[1,2,3]}]"#,
+    ));
+    assert!(e.starts_with("tasks[0].axes"), "{e}");
+    let e = err(&doc_with_tasks(
+        r#"[{"kind":"com","level":0,"target":[1,2,3]}]"#,
+    ));
+    assert!(e.starts_with("tasks[0].level"), "{e}");
+    let e = err(&doc_with_tasks(
+        r#"[{"kind":"orientation","joint":"a","target":[0,0,0,0]}]"#,
+    ));
+    assert!(
+        e.contains("tasks[0].target: the quaternion has zero length"),
+        "{e}"
+    );
+    let e = err(&doc_with_tasks(r#"[{"kind":"limb","target":[0,0,0]}]"#));
+    assert!(
+        e.starts_with("tasks[0].joints: missing (or give `limb`)"),
+        "{e}"
+    );
+    let e = err(&doc_with_tasks(
+        r#"[{"kind":"limb","limb":"l_arm","joints":["a","b","c"],"target":[0,0,0]}]"#,
+    ));
+    assert!(
+        e.starts_with("tasks[0]: give either `joints` or `limb`"),
+        "{e}"
+    );
+    let e = err(&doc_with_tasks(
+        r#"[{"kind":"limb","limb":"l_arm","target":[0,0,0],"orientation":[0,0,0]}]"#,
+    ));
+    assert!(
+        e.starts_with("tasks[0].orientation: expected 4 numbers"),
+        "{e}"
+    );
+    let e = err(&doc_with_tasks(
+        r#"[{"kind":"limb","limb":"l_tail","target":[0,0,0]}]"#,
+    ));
+    assert!(e.contains("unknown limb `l_tail`"), "{e}");
+    let e = err(r#"{"posture": {"l_knee": {"rq": 1}}}"#);
+    assert!(e.starts_with("posture.l_knee.rq: unknown DOF"), "{e}");
+    let e = err(r#"{"avatar": 3}"#);
+    assert!(e.starts_with("avatar: "), "{e}");
+    let e = err(r#"{"version": 7}"#);
+    assert!(e.contains("newer version of Stance (format 7)"), "{e}");
+    assert!(err("{").contains("not valid JSON"));
+
+    // Against a skeleton.
+    let s = loa2_body40().unwrap();
+    let d = Document::from_json(&doc_with_tasks(
+        r#"[{"kind":"com","target":[0,0,0]},{"kind":"com","target":[0,0,0]},
+            {"kind":"position","joint":"l_wirst","target":[0,0,0]}]"#,
+    ))
+    .unwrap();
+    let e = d.to_tasks(&s).unwrap_err();
+    assert_eq!(e.to_string(), "tasks[2].joint: unknown joint `l_wirst`");
+    assert_eq!(e.path(), "tasks[2].joint");
+    let mut p = PostureValues::default();
+    p.set("l_knee", Dof::Ry, 0.1);
+    let e = p.to_posture(&s).unwrap_err().to_string();
+    assert_eq!(e, "posture.l_knee.ry: joint `l_knee` has no DOF `ry`");
+    let mut p = PostureValues::default();
+    p.set("l_knee", Dof::Rx, f64::NAN);
+    assert!(p.to_posture(&s).unwrap_err().to_string().contains("finite"));
+    let doc = Document {
+        posture: p,
+        ..Document::default()
+    };
+    assert!(
+        doc.validate()
+            .unwrap_err()
+            .to_string()
+            .starts_with("posture.l_knee.rx")
+    );
+}
+
+#[test]
+fn limb_tasks_give_a_closed_form_limb_and_an_end_joint_task() {
+    let s = loa2_body40().unwrap();
+    let d = Document::from_json(&doc_with_tasks(
+        r#"[{"kind":"limb","limb":"l_arm","target":[0.3,1.0,0.2],"swivel":0.3,"level":2},
+            {"kind":"limb","joints":["r_hip","r_knee","r_ankle"],"target":[-0.1,0.1,0.0],
+             "orientation":[0,0,0,1]}]"#,
+    ))
+    .unwrap();
+    let tasks = d.to_tasks(&s).unwrap();
+    // l_arm: a position task; r_leg with an orientation: orientation + position.
+    assert_eq!(tasks.len(), 3);
+    let wrist = s.joint_index("l_radiocarpal").unwrap();
+    let ankle = s.joint_index("r_talocrural").unwrap();
+    assert!(
+        matches!(tasks[0].kind, TaskKind::Position { effector, .. } if effector.joint == wrist)
+    );
+    assert_eq!(tasks[0].level, 2);
+    assert!(matches!(tasks[1].kind, TaskKind::Orientation { joint, .. } if joint == ankle));
+    assert!(
+        matches!(tasks[2].kind, TaskKind::Position { effector, .. } if effector.joint == ankle)
+    );
+    let limbs = d.to_limbs(&s).unwrap();
+    assert_eq!(limbs.len(), 2);
+    assert_eq!(limbs[0].0, 0);
+    assert_eq!(limbs[0].1.swivel, Some(0.3));
+    assert_eq!(limbs[0].1.limb.joints()[2], wrist);
+    assert!(limbs[1].1.goal.orientation.is_some());
+    // A limb the skeleton lacks.
+    let d = Document::from_json(&doc_with_tasks(
+        r#"[{"kind":"limb","joints":["l_hip","l_knee","l_toe"],"target":[0,0,0]}]"#,
+    ))
+    .unwrap();
+    let e = d.to_tasks(&s).unwrap_err();
+    assert_eq!(e.to_string(), "tasks[0].joints[2]: unknown joint `l_toe`");
+    assert!(matches!(e, DocumentError::Field { .. }));
+}
+
+#[test]
+fn postures_convert_both_ways_and_aliases_resolve() {
+    let s = loa2_body40().unwrap();
+    let mut r = rng(3);
+    let values: Vec<f64> = (0..s.dof_count())
+        .map(|_| uniform(&mut r, -1.0, 1.0))
+        .collect();
+    let p = Posture::from_values(&s, values).unwrap();
+    let pv = PostureValues::from_posture(&s, &p);
+    assert_eq!(pv.to_posture(&s).unwrap(), p);
+    // The root has 6 DOF, the knee 1.
+    assert!(pv.joints["humanoid_root"].iter().count() == 6);
+    assert!(pv.joints["l_knee"].iter().count() == 1);
+    // `l_ankle` is the H-Anim 1.1 name of `l_talocrural`.
+    let mut a = PostureValues::default();
+    a.set("l_ankle", Dof::Rx, 0.2);
+    let pa = a.to_posture(&s).unwrap();
+    let j = s.joint_index("l_talocrural").unwrap();
+    assert_eq!(pa.values()[s.joints()[j].dof_start], 0.2);
+    let t = TaskSpec::new(TaskKindSpec::Position {
+        joint: "l_wrist".into(),
+        point: [0.0; 3],
+        axes: stance_ik::Axes::XYZ,
+        target: [0.0, 1.0, 0.0],
+    });
+    let task = t.to_task(&s).unwrap();
+    let wrist = s.joint_index("l_radiocarpal").unwrap();
+    assert!(matches!(task.kind, TaskKind::Position { effector, .. } if effector.joint == wrist));
+}
+
+#[test]
+fn every_task_kind_converts() {
+    let s = loa2_body40().unwrap();
+    let d = Document::from_json(&doc_with_tasks(
+        r#"[{"kind":"orientation","joint":"skullbase","target":[0,0,0,2],"level":3,"weight":0.5,"active":false},
+            {"kind":"gaze","joint":"skullbase","axis":[0,0,2],"point":[0,0.1,0],"target":[0,1.6,2]},
+            {"kind":"posture","joints":["l_hip","l_knee"],"reference":{"l_knee":{"rx":0.4}}}]"#,
+    ))
+    .unwrap();
+    let t = d.to_tasks(&s).unwrap();
+    assert_eq!((t[0].level, t[0].weight, t[0].active), (3, 0.5, false));
+    match &t[0].kind {
+        TaskKind::Orientation { target, .. } => assert!((target.length() - 1.0).abs() < 1e-12),
+        k => panic!("{k:?}"),
+    }
+    match &t[1].kind {
+        TaskKind::Gaze { axis, .. } => assert!((axis.length() - 1.0).abs() < 1e-12),
+        k => panic!("{k:?}"),
+    }
+    match &t[2].kind {
+        TaskKind::PostureAttraction { dofs, reference } => {
+            assert_eq!(dofs.len(), 4);
+            assert!(reference.contains(&0.4));
+        }
+        k => panic!("{k:?}"),
+    }
+}

@@ -1,0 +1,443 @@
+//! The share-link codec: round trips, the LOA2 length target, and every way a link can be
+//! broken (never a panic, always a clear error or a valid document).
+
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+#[cfg(target_arch = "wasm32")]
+use wasm_bindgen_test::wasm_bindgen_test as test;
+#[cfg(target_arch = "wasm32")]
+wasm_bindgen_test::wasm_bindgen_test_configure!(run_in_browser);
+
+mod common;
+
+use base64::Engine as _;
+use base64::engine::general_purpose::URL_SAFE_NO_PAD;
+use common::*;
+use rand::RngExt;
+use stance_document::link::{self, LINK_FORMAT, LinkError, ROTATION_STEP_RAD};
+use stance_document::{AvatarReference, Document, LimbName, PostureValues, TaskKindSpec, TaskSpec};
+use stance_ik::{Axes, Dof};
+
+fn round_trip(d: &Document) -> Document {
+    let text = link::encode(d);
+    let back = link::decode(&text).unwrap_or_else(|e| panic!("decode failed: {e}\n{d:?}"));
+    if let Err(e) = document_close(d, &back) {
+        panic!("round trip differs: {e}");
+    }
+    // Encoding a decoded document again keeps it (the values are already on the grid).
+    let again = link::decode(&link::encode(&back)).unwrap();
+    if let Err(e) = document_close(&back, &again) {
+        panic!("second round trip differs: {e}");
+    }
+    assert_eq!(again.posture, back.posture);
+    back
+}
+
+fn all_kinds() -> Document {
+    let mut posture = PostureValues::default();
+    posture.set("humanoid_root", Dof::Ty, -0.05);
+    posture.set("l_knee", Dof::Rx, 0.3);
+    posture.set("l_ankle", Dof::Rz, -0.1);
+    let t = |level: u32, weight: f64, active: bool, kind| TaskSpec {
+        level,
+        weight,
+        active,
+        kind,
+    };
+    Document {
+        avatar: AvatarReference::Url("https://example.org/models/Jin.glb?x=1#frag".to_owned()),
+        posture: posture.clone(),
+        tasks: vec![
+            t(
+                1,
+                1.0,
+                true,
+                TaskKindSpec::Position {
+                    joint: "l_radiocarpal".into(),
+                    point: [0.01, -0.02, 0.0],
+                    axes: Axes::XZ,
+                    target: [0.25, 1.1, 0.3],
+                },
+            ),
+            t(
+                1,
+                0.5,
+                false,
+                TaskKindSpec::Orientation {
+                    joint: "skullbase".into(),
+                    target: [0.1, -0.2, 0.3, 0.9],
+                },
+            ),
+            t(
+                1,
+                2.0,
+                true,
+                TaskKindSpec::Gaze {
+                    joint: "skullbase".into(),
+                    axis: [0.0, 0.2, 1.0],
+                    point: [0.0, 0.08, 0.1],
+                    target: [0.0, 1.6, 2.0],
+                },
+            ),
+            t(
+                2,
+                1.0,
+                true,
+                TaskKindSpec::Com {
+                    axes: Axes::XZ,
+                    target: [0.02, 0.0, 0.03],
+                },
+            ),
+            t(
+                4,
+                0.1,
+                true,
+                TaskKindSpec::Posture {
+                    joints: Some(vec!["l_hip".into(), "my_custom_joint".into()]),
+                    reference: Some(posture),
+                },
+            ),
+            t(
+                4,
+                0.1,
+                true,
+                TaskKindSpec::Posture {
+                    joints: None,
+                    reference: None,
+                },
+            ),
+            t(
+                3,
+                1.0,
+                true,
+                TaskKindSpec::Limb {
+                    limb: Some(LimbName::RightArm),
+                    joints: None,
+                    target: [-0.3, 1.2, 0.3],
+                    swivel: Some(0.7),
+                    orientation: Some([0.0, 0.0, 0.0, 1.0]),
+                },
+            ),
+            t(
+                3,
+                1.0,
+                true,
+                TaskKindSpec::Limb {
+                    limb: None,
+                    joints: Some(["l_hip".into(), "l_knee".into(), "l_talocrural".into()]),
+                    target: [0.1, 0.1, 0.1],
+                    swivel: None,
+                    orientation: None,
+                },
+            ),
+        ],
+    }
+}
+
+#[test]
+fn every_task_kind_and_the_avatar_url_round_trip() {
+    let d = all_kinds();
+    d.validate().unwrap();
+    let back = round_trip(&d);
+    assert_eq!(back.avatar, d.avatar);
+    assert_eq!(back.tasks.len(), 8);
+    for (a, b) in d.tasks.iter().zip(&back.tasks) {
+        assert_eq!(a.kind.name(), b.kind.name());
+    }
+    // The default avatar and an empty document too.
+    round_trip(&Document::default());
+    let empty = link::encode(&Document::default());
+    assert!(empty.len() < 16, "{empty}");
+}
+
+#[test]
+fn random_documents_round_trip_within_the_quantisation() {
+    let mut r = rng(7);
+    for _ in 0..300 {
+        let d = random_document(&mut r);
+        d.validate().unwrap();
+        round_trip(&d);
+    }
+}
+
+#[test]
+fn a_whole_url_or_a_hash_is_accepted() {
+    let d = all_kinds();
+    let f = link::encode(&d);
+    for text in [
+        format!("https://stance.example/editor/?a=b#{f}"),
+        format!("#{f}"),
+        format!("  {f}\n"),
+    ] {
+        assert!(document_close(&d, &link::decode(&text).unwrap()).is_ok());
+    }
+}
+
+#[test]
+fn a_full_loa2_posture_with_six_tasks_fits_in_600_characters() {
+    let mut r = rng(2026);
+    let mut longest = 0;
+    let mut total = 0;
+    let n = 50;
+    for _ in 0..n {
+        let d = Document {
+            avatar: AvatarReference::Default,
+            posture: loa2_posture(&mut r, 0.6),
+            tasks: table1_tasks(&mut r),
+        };
+        assert_eq!(d.posture.joints.len(), 71);
+        let text = link::encode(&d);
+        longest = longest.max(text.len());
+        total += text.len();
+        round_trip(&d);
+    }
+    let d0 = Document {
+        avatar: AvatarReference::Default,
+        posture: loa2_posture(&mut r, 0.6),
+        tasks: vec![],
+    };
+    let d1 = Document {
+        tasks: table1_tasks(&mut r),
+        ..Document::default()
+    };
+    println!(
+        "posture only {} chars, tasks only {} chars",
+        link::encode(&d0).len(),
+        link::encode(&d1).len()
+    );
+    println!(
+        "LOA2 (71 joints, 216 DOF, |r| <= 0.6 rad) + 6 tasks: mean {} chars, longest {longest}",
+        total / n
+    );
+    assert!(longest < 600, "longest link {longest} characters");
+}
+
+#[test]
+fn report_link_lengths_and_the_general_compressors() {
+    // Not a target: lengths for other value spreads, and what deflate would give.
+    let mut r = rng(11);
+    // The paper's Table 1 body (~40 DOF) in a relaxed standing posture, with its 6 tasks.
+    let body = stance_ik::scenarios::loa2_body40().unwrap();
+    let standing = stance_ik::scenarios::standing_posture(&body);
+    let table1 = Document {
+        avatar: AvatarReference::Default,
+        posture: PostureValues::from_posture(&body, &standing),
+        tasks: table1_tasks(&mut r),
+    };
+    let text = link::encode(&table1);
+    round_trip(&table1);
+    println!(
+        "Table 1 document ({} joints with DOF, standing posture, 6 tasks): {} chars",
+        table1.posture.joints.len(),
+        text.len()
+    );
+    for spread in [0.2, 0.6, 1.0, std::f64::consts::PI] {
+        let d = Document {
+            avatar: AvatarReference::Default,
+            posture: loa2_posture(&mut r, spread),
+            tasks: table1_tasks(&mut r),
+        };
+        let text = link::encode(&d);
+        // The same values as 16-bit little-endian integers (the usual fixed-width packing),
+        // deflated.
+        let mut raw = Vec::new();
+        for v in d.posture.joints.values() {
+            for (dof, x) in v.iter() {
+                let step = if dof.is_rotation() {
+                    ROTATION_STEP_RAD
+                } else {
+                    1e-4
+                };
+                raw.extend_from_slice(&(((x / step).round()) as i32).to_le_bytes()[..3]);
+            }
+        }
+        let deflated = miniz_oxide::deflate::compress_to_vec(&raw, 10);
+        let json = miniz_oxide::deflate::compress_to_vec(d.to_json(false).as_bytes(), 10);
+        println!(
+            "spread {spread:.2} rad: link {} chars; posture alone as 24-bit ints {} B, deflated {} B \
+             (would be >= {} chars); document JSON deflated {} B",
+            text.len(),
+            raw.len(),
+            deflated.len(),
+            (deflated.len() * 4).div_ceil(3),
+            json.len()
+        );
+    }
+}
+
+fn frame_of(d: &Document) -> Vec<u8> {
+    URL_SAFE_NO_PAD.decode(link::encode(d)).unwrap()
+}
+
+fn reframe(mut body: Vec<u8>) -> String {
+    let crc = crc32fast::hash(&body);
+    body.extend_from_slice(&crc.to_le_bytes());
+    URL_SAFE_NO_PAD.encode(body)
+}
+
+#[test]
+fn broken_links_give_distinct_clear_errors() {
+    let d = all_kinds();
+    let good = link::encode(&d);
+    assert_eq!(link::decode(""), Err(LinkError::Empty));
+    assert_eq!(link::decode("https://x.org/#"), Err(LinkError::Empty));
+    assert!(matches!(
+        link::decode(&format!("{}!{}", &good[..5], &good[5..])),
+        Err(LinkError::BadCharacter {
+            character: '!',
+            position: 5
+        })
+    ));
+    let cut = &good[..good.len() / 2];
+    let e = link::decode(cut).unwrap_err();
+    assert!(matches!(e, LinkError::Truncated { .. }), "{e}");
+    assert!(e.to_string().contains("incomplete"), "{e}");
+    // One character changed.
+    let mut chars: Vec<char> = good.chars().collect();
+    let k = chars.len() / 2;
+    chars[k] = if chars[k] == 'A' { 'B' } else { 'A' };
+    let e = link::decode(&chars.into_iter().collect::<String>()).unwrap_err();
+    assert_eq!(e, LinkError::Checksum);
+    assert!(e.to_string().contains("damaged"));
+    // A link from the future, with a valid checksum.
+    let mut body = frame_of(&d);
+    body.truncate(body.len() - 4);
+    body[0] = 3;
+    let e = link::decode(&reframe(body)).unwrap_err();
+    assert_eq!(
+        e,
+        LinkError::FutureVersion {
+            found: 3,
+            supported: LINK_FORMAT
+        }
+    );
+    assert_eq!(
+        e.to_string(),
+        "this link was made by a newer version of Stance (format 3); this version reads format 1"
+    );
+    // Valid checksum, nonsense inside.
+    let e = link::decode(&reframe(vec![1, 3, 0xFF, 0xFF, 0xFF])).unwrap_err();
+    assert!(matches!(e, LinkError::Malformed(_)), "{e}");
+    let e = link::decode(&reframe(vec![0, 0])).unwrap_err();
+    assert!(matches!(e, LinkError::Malformed(_)), "{e}");
+    let too_long = "A".repeat(link::MAX_LINK_CHARS + 1);
+    assert!(matches!(
+        link::decode(&too_long),
+        Err(LinkError::TooLong(_))
+    ));
+}
+
+fn decodes_to_valid_or_errs(text: &str) {
+    if let Ok(d) = link::decode(text) {
+        d.validate().unwrap();
+    }
+}
+
+#[test]
+fn every_truncation_and_every_bit_flip_is_rejected_or_valid() {
+    let mut r = rng(99);
+    for round in 0..4 {
+        let d = if round == 0 {
+            all_kinds()
+        } else {
+            random_document(&mut r)
+        };
+        let good = link::encode(&d);
+        for n in 0..good.len() {
+            let e = link::decode(&good[..n]);
+            assert!(e.is_err(), "prefix of {n} characters accepted");
+        }
+        let frame = frame_of(&d);
+        for i in 0..frame.len() {
+            for bit in 0..8 {
+                let mut f = frame.clone();
+                f[i] ^= 1 << bit;
+                let text = URL_SAFE_NO_PAD.encode(&f);
+                // CRC-32 detects every single-bit error.
+                assert!(
+                    link::decode(&text).is_err(),
+                    "flip at byte {i} bit {bit} accepted"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn random_and_mutated_strings_never_panic() {
+    let mut r = rng(1234);
+    let alphabet: Vec<char> =
+        "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789-_+/=#!é "
+            .chars()
+            .collect();
+    // STANCE_FUZZ_ROUNDS=100000 for a longer run.
+    let rounds: usize = std::env::var("STANCE_FUZZ_ROUNDS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(3000);
+    let base = link::encode(&all_kinds());
+    for i in 0..rounds {
+        let text: String = if i % 2 == 0 {
+            let n = r.random_range(0..300);
+            (0..n)
+                .map(|_| alphabet[r.random_range(0..alphabet.len())])
+                .collect()
+        } else {
+            let mut c: Vec<char> = base.chars().collect();
+            for _ in 0..r.random_range(1..5) {
+                let k = r.random_range(0..c.len());
+                match r.random_range(0..3) {
+                    0 => c[k] = alphabet[r.random_range(0..alphabet.len())],
+                    1 => {
+                        c.remove(k);
+                    }
+                    _ => c.insert(k, alphabet[r.random_range(0..alphabet.len())]),
+                }
+            }
+            c.into_iter().collect()
+        };
+        decodes_to_valid_or_errs(&text);
+    }
+    // Damaged payloads behind a recomputed, valid checksum reach deep into the payload decoder.
+    for _ in 0..rounds / 10 {
+        let d = random_document(&mut r);
+        let mut body = frame_of(&d);
+        body.truncate(body.len() - 4);
+        for _ in 0..r.random_range(1..4) {
+            let k = r.random_range(1..body.len().max(2));
+            if k < body.len() {
+                body[k] ^= 1 << r.random_range(0..8);
+            }
+        }
+        decodes_to_valid_or_errs(&reframe(body));
+    }
+    // Random payloads behind a valid frame and checksum exercise the payload decoder itself.
+    for _ in 0..rounds {
+        let n = r.random_range(0..200);
+        let payload: Vec<u8> = (0..n).map(|_| r.random::<u8>()).collect();
+        let mut body = vec![1u8];
+        let mut len = payload.len();
+        loop {
+            let b = (len & 0x7F) as u8;
+            len >>= 7;
+            if len == 0 {
+                body.push(b);
+                break;
+            }
+            body.push(b | 0x80);
+        }
+        body.extend_from_slice(&payload);
+        decodes_to_valid_or_errs(&reframe(body));
+    }
+}
+
+#[test]
+fn quantisation_steps_are_well_under_a_hundredth_of_a_degree() {
+    assert!(ROTATION_STEP_RAD.to_degrees() <= 0.005 + 1e-12);
+    let mut d = Document::default();
+    let x = 0.123_456_789;
+    d.posture.set("l_shoulder", Dof::Rx, x);
+    let back = link::decode(&link::encode(&d)).unwrap();
+    let y = back.posture.get("l_shoulder", Dof::Rx).unwrap();
+    assert!((x - y).abs().to_degrees() <= 0.0025 + 1e-12);
+}

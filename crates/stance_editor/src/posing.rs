@@ -1,0 +1,657 @@
+//! The posing session: the humanoid's skeleton and posture, the user's tasks with their
+//! priorities, the temporary grab-and-pull task, and the solver that runs a few iterations
+//! every frame within a time budget. No egui here: everything is tested natively.
+
+use glam::{DQuat, DVec3};
+use stance_document::{Document, PostureValues, TaskKindSpec, TaskSpec};
+use stance_hanim::{HumanoidSkeleton, LevelOfArticulation, SkeletonOptions, default_skeleton};
+use stance_ik::{
+    Axes, Clock, Frames, Posture, Skeleton, SolveReport, SolveStatus, Solver, SolverSettings, Task,
+};
+
+/// The temporary lowest-priority task of grab-and-pull: a point of a segment, pulled along.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Grab {
+    /// The joint whose segment was grabbed.
+    pub joint: usize,
+    /// The grabbed point in that joint's frame (m).
+    pub point_local: DVec3,
+    /// Where the cursor wants the point (m, world).
+    pub target_world: DVec3,
+}
+
+/// How one task of the document fares in the current posture.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TaskStatus {
+    /// Norm of the task's error (m or rad); `None` when the task cannot be evaluated.
+    pub residual: Option<f64>,
+    /// Why the task is not met, in words; `None` when it is met or inactive.
+    pub gave_way: Option<String>,
+    /// The document task cannot be turned into a solver task (e.g. unknown joint).
+    pub problem: Option<String>,
+}
+
+/// Residual below which a task counts as met in the panels (m or rad).
+pub const MET_TOLERANCE: f64 = 1e-3;
+
+/// Iterations per frame and the time they may take: the page stays interactive.
+const ITERATIONS_PER_FRAME: usize = 20;
+const FRAME_BUDGET_SECS: f64 = 0.008;
+
+/// A humanoid being posed.
+pub struct PosingSession {
+    humanoid: HumanoidSkeleton,
+    posture: Posture,
+    tasks: Vec<TaskSpec>,
+    grab: Option<Grab>,
+    solver: Solver,
+    report: Option<SolveReport>,
+    frames: Frames,
+    statuses: Vec<TaskStatus>,
+    settled: bool,
+}
+
+impl std::fmt::Debug for PosingSession {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PosingSession")
+            .field("joints", &self.skeleton().joint_count())
+            .field("tasks", &self.tasks.len())
+            .field("grab", &self.grab)
+            .field("settled", &self.settled)
+            .finish()
+    }
+}
+
+/// Why a session could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum PosingError {
+    #[error("the humanoid could not be built: {0}")]
+    Build(#[from] stance_hanim::BuildError),
+    #[error("the solver settings were rejected: {0}")]
+    Solver(#[from] stance_ik::IkError),
+    #[error("{0}")]
+    Document(#[from] stance_document::DocumentError),
+}
+
+impl PosingSession {
+    /// The H-Anim default body at `loa`, standing in its rest posture, with the default tasks:
+    /// both feet pinned (level 1), balance over the feet (level 2), a light pull toward the
+    /// rest posture (level 10).
+    pub fn new(loa: LevelOfArticulation) -> Result<Self, PosingError> {
+        let humanoid = default_skeleton(&SkeletonOptions {
+            loa,
+            ..SkeletonOptions::default()
+        })?;
+        let settings = SolverSettings {
+            max_iterations: ITERATIONS_PER_FRAME,
+            time_budget_secs: Some(FRAME_BUDGET_SECS),
+            ..SolverSettings::default()
+        };
+        let posture = Posture::rest(&humanoid.skeleton);
+        let frames = Frames::new(&humanoid.skeleton, &posture);
+        let mut session = Self {
+            humanoid,
+            posture,
+            tasks: Vec::new(),
+            grab: None,
+            solver: Solver::new(settings)?,
+            report: None,
+            frames,
+            statuses: Vec::new(),
+            settled: false,
+        };
+        session.tasks = session.default_tasks();
+        session.refresh();
+        Ok(session)
+    }
+
+    /// Feet on the floor before balance, balance before comfort.
+    pub fn default_tasks(&self) -> Vec<TaskSpec> {
+        let mut tasks = Vec::new();
+        for foot in ["l_talocrural", "r_talocrural"] {
+            if let Some(position) = self.joint_position(foot) {
+                tasks.push(pin_task(foot, position.to_array()));
+            }
+        }
+        let feet_centre = tasks
+            .iter()
+            .filter_map(|task| match &task.kind {
+                TaskKindSpec::Position { target, .. } => Some(DVec3::from_array(*target)),
+                _ => None,
+            })
+            .fold(DVec3::ZERO, |sum, p| sum + p)
+            / tasks.len().max(1) as f64;
+        let mut balance = TaskSpec::new(TaskKindSpec::Com {
+            axes: Axes::new(true, false, true),
+            target: [feet_centre.x, 0.0, self.frames.center_of_mass().z],
+        });
+        balance.level = 2;
+        tasks.push(balance);
+        let mut comfort = TaskSpec::new(TaskKindSpec::Posture {
+            joints: None,
+            reference: None,
+        });
+        comfort.level = 10;
+        comfort.weight = 0.05;
+        tasks.push(comfort);
+        tasks
+    }
+
+    pub fn skeleton(&self) -> &Skeleton {
+        &self.humanoid.skeleton
+    }
+
+    pub fn humanoid(&self) -> &HumanoidSkeleton {
+        &self.humanoid
+    }
+
+    pub fn level_of_articulation(&self) -> LevelOfArticulation {
+        self.humanoid.loa
+    }
+
+    pub fn posture(&self) -> &Posture {
+        &self.posture
+    }
+
+    pub fn frames(&self) -> &Frames {
+        &self.frames
+    }
+
+    pub fn tasks(&self) -> &[TaskSpec] {
+        &self.tasks
+    }
+
+    pub fn statuses(&self) -> &[TaskStatus] {
+        &self.statuses
+    }
+
+    pub fn report(&self) -> Option<&SolveReport> {
+        self.report.as_ref()
+    }
+
+    pub fn grab(&self) -> Option<&Grab> {
+        self.grab.as_ref()
+    }
+
+    /// Whether the solver has nothing left to do until something changes.
+    pub fn is_settled(&self) -> bool {
+        self.settled
+    }
+
+    /// World position of a joint centre by name.
+    pub fn joint_position(&self, name: &str) -> Option<DVec3> {
+        let index = self.skeleton().joint_index(name)?;
+        self.frames.joint_position.get(index).copied()
+    }
+
+    /// Replaces the task list (an edit from the panels); the solver runs again.
+    pub fn set_tasks(&mut self, tasks: Vec<TaskSpec>) {
+        self.tasks = tasks;
+        self.wake();
+    }
+
+    /// Replaces the posture (undo, reset, mirror, sensors); the solver runs again.
+    pub fn set_posture(&mut self, posture: Posture) {
+        self.posture = posture;
+        self.wake();
+    }
+
+    /// The document: avatar, posture and tasks (the grab is not part of it).
+    pub fn document(&self) -> Document {
+        Document {
+            posture: PostureValues::from_posture(self.skeleton(), &self.posture),
+            tasks: self.tasks.clone(),
+            ..Document::default()
+        }
+    }
+
+    /// Loads a document; on error the session stays as it was.
+    pub fn load_document(&mut self, document: &Document) -> Result<(), PosingError> {
+        let posture = document.posture.to_posture(self.skeleton())?;
+        self.posture = posture;
+        self.tasks = document.tasks.clone();
+        self.grab = None;
+        self.wake();
+        Ok(())
+    }
+
+    /// Starts pulling the point `point_world` of the segment of `joint`.
+    pub fn begin_grab(&mut self, joint: usize, point_world: DVec3) {
+        let (Some(&position), Some(rotation)) = (
+            self.frames.joint_position.get(joint),
+            self.frames.world_from_joint_rotation.get(joint),
+        ) else {
+            return;
+        };
+        let point_local = rotation.transpose() * (point_world - position);
+        self.grab = Some(Grab {
+            joint,
+            point_local,
+            target_world: point_world,
+        });
+        self.wake();
+    }
+
+    /// Moves the pulled point's goal.
+    pub fn move_grab(&mut self, target_world: DVec3) {
+        if let Some(grab) = &mut self.grab
+            && target_world.is_finite()
+        {
+            grab.target_world = target_world;
+            self.wake();
+        }
+    }
+
+    /// Releases the pulled point: the body keeps the posture it reached.
+    pub fn end_grab(&mut self) {
+        self.grab = None;
+        self.wake();
+    }
+
+    /// The world position of the grabbed point in the current posture.
+    pub fn grabbed_point_world(&self) -> Option<DVec3> {
+        let grab = self.grab?;
+        Some(self.frames.point(grab.joint, grab.point_local))
+    }
+
+    /// A level-1 position task that holds the joint where it is now.
+    pub fn pin(&mut self, joint: usize) {
+        let Some(joint_def) = self.skeleton().joints().get(joint) else {
+            return;
+        };
+        let name = joint_def.name.clone();
+        let Some(position) = self.frames.joint_position.get(joint).copied() else {
+            return;
+        };
+        self.tasks.push(pin_task(&name, position.to_array()));
+        self.wake();
+    }
+
+    /// Back to the rest posture (tasks kept).
+    pub fn reset_to_rest(&mut self) {
+        let rest = Posture::rest(self.skeleton());
+        self.set_posture(rest);
+    }
+
+    /// The posture mirrored left/right: each side takes the other's rotations, reflected
+    /// in the body's sagittal plane.
+    pub fn mirrored_posture(&self) -> Posture {
+        let skeleton = self.skeleton();
+        let mut values = vec![0.0; skeleton.dof_count()];
+        for (index, joint) in skeleton.joints().iter().enumerate() {
+            let mirror_name = mirror_joint_name(&joint.name);
+            let source = skeleton.joint_index(&mirror_name).unwrap_or(index);
+            let source_joint = &skeleton.joints()[source];
+            for (dof_position, dof) in joint.dofs.iter().enumerate() {
+                let Some(source_position) = source_joint.dofs.iter().position(|d| d == dof) else {
+                    continue;
+                };
+                let Some(value) = self
+                    .posture
+                    .values()
+                    .get(source_joint.dof_range().start + source_position)
+                else {
+                    continue;
+                };
+                // Reflection x -> -x: positions flip x; rotation vectors (axial) keep x and
+                // flip y and z.
+                let sign = match dof.name() {
+                    "tx" | "ry" | "rz" => -1.0,
+                    _ => 1.0,
+                };
+                if let Some(slot) = values.get_mut(joint.dof_range().start + dof_position) {
+                    *slot = sign * value;
+                }
+            }
+        }
+        Posture::from_values(skeleton, values).unwrap_or_else(|_| self.posture.clone())
+    }
+
+    /// Runs the solver for this frame (a few iterations within the frame budget) when there
+    /// is something to do. Returns whether the posture changed.
+    pub fn solve_frame(&mut self, clock: Option<&dyn Clock>) -> bool {
+        if self.settled {
+            return false;
+        }
+        let mut tasks = Vec::with_capacity(self.tasks.len() + 1);
+        for spec in &self.tasks {
+            if let Ok(task) = spec.to_task(self.skeleton()) {
+                tasks.push(task);
+            }
+        }
+        if let Some(grab) = self.grab {
+            let level = self
+                .tasks
+                .iter()
+                .filter(|task| !matches!(task.kind, TaskKindSpec::Posture { .. }))
+                .map(|task| task.level)
+                .max()
+                .unwrap_or(0)
+                + 1;
+            tasks.push(
+                Task::position(grab.joint, grab.point_local, grab.target_world).at_level(level),
+            );
+        }
+        let before = self.posture.values().to_vec();
+        match self.solver.solve_with_clock(
+            &self.humanoid.skeleton,
+            &tasks,
+            &mut self.posture,
+            clock,
+        ) {
+            Ok(report) => {
+                self.settled =
+                    matches!(report.status, SolveStatus::Converged | SolveStatus::Stalled);
+                self.report = Some(report);
+            }
+            Err(error) => {
+                log::warn!("solver: {error}");
+                self.settled = true;
+            }
+        }
+        self.refresh();
+        before != self.posture.values()
+    }
+
+    fn wake(&mut self) {
+        self.settled = false;
+        self.refresh();
+    }
+
+    /// Forward kinematics and the per-task statuses of the current posture.
+    fn refresh(&mut self) {
+        self.frames = Frames::new(&self.humanoid.skeleton, &self.posture);
+        let skeleton = &self.humanoid.skeleton;
+        let values = self.posture.values();
+        let evaluated: Vec<(Option<f64>, Option<String>)> = self
+            .tasks
+            .iter()
+            .map(|spec| match spec.to_task(skeleton) {
+                Ok(task) => (Some(task.residual(skeleton, &self.frames, values)), None),
+                Err(error) => (None, Some(error.to_string())),
+            })
+            .collect();
+        let statuses = self
+            .tasks
+            .iter()
+            .zip(&evaluated)
+            .map(|(spec, (residual, problem))| {
+                let unmet = spec.active
+                    && !matches!(spec.kind, TaskKindSpec::Posture { .. })
+                    && residual.is_some_and(|r| r > MET_TOLERANCE);
+                let gave_way = unmet.then(|| self.why_unmet(spec, &evaluated));
+                TaskStatus {
+                    residual: *residual,
+                    gave_way,
+                    problem: problem.clone(),
+                }
+            })
+            .collect();
+        self.statuses = statuses;
+    }
+
+    /// Names the higher-priority tasks a task gave way to, or says the goal is out of reach.
+    fn why_unmet(&self, spec: &TaskSpec, evaluated: &[(Option<f64>, Option<String>)]) -> String {
+        if !self.settled {
+            return "still moving".to_owned();
+        }
+        let higher: Vec<String> = self
+            .tasks
+            .iter()
+            .zip(evaluated)
+            .filter(|(other, (residual, _))| {
+                other.active
+                    && other.level < spec.level
+                    && !matches!(other.kind, TaskKindSpec::Posture { .. })
+                    && residual.is_some()
+            })
+            .map(|(other, _)| format!("level {}: {}", other.level, describe_task(other)))
+            .collect();
+        if higher.is_empty() {
+            "out of reach".to_owned()
+        } else {
+            format!("conflicts with {}", higher.join(", "))
+        }
+    }
+}
+
+/// A level-1 position task holding `joint` at `position`.
+pub fn pin_task(joint: &str, position: [f64; 3]) -> TaskSpec {
+    TaskSpec::new(TaskKindSpec::Position {
+        joint: joint.to_owned(),
+        point: [0.0; 3],
+        axes: Axes::new(true, true, true),
+        target: position,
+    })
+}
+
+/// The other side's joint name (`l_` <-> `r_`); central joints keep theirs.
+pub fn mirror_joint_name(name: &str) -> String {
+    if let Some(rest) = name.strip_prefix("l_") {
+        format!("r_{rest}")
+    } else if let Some(rest) = name.strip_prefix("r_") {
+        format!("l_{rest}")
+    } else {
+        name.to_owned()
+    }
+}
+
+/// A joint name for people: `l_talocrural` -> "left talocrural (ankle)".
+pub fn describe_joint(name: &str) -> String {
+    let (side, rest) = if let Some(rest) = name.strip_prefix("l_") {
+        ("left ", rest)
+    } else if let Some(rest) = name.strip_prefix("r_") {
+        ("right ", rest)
+    } else {
+        ("", name)
+    };
+    let common = match rest {
+        "talocrural" => Some("ankle"),
+        "radiocarpal" => Some("wrist"),
+        "sternoclavicular" => Some("collarbone"),
+        "acromioclavicular" => Some("shoulder blade"),
+        "skullbase" => Some("head"),
+        "sacroiliac" => Some("pelvis"),
+        "humanoid_root" => Some("body root"),
+        "metatarsophalangeal_2" => Some("toes"),
+        "tarsometatarsal_2" => Some("midfoot"),
+        _ => None,
+    };
+    let words = rest.replace('_', " ");
+    match common {
+        Some(common) => format!("{side}{common}"),
+        None => format!("{side}{words}"),
+    }
+}
+
+/// A task in words, as the panels and messages name it.
+pub fn describe_task(task: &TaskSpec) -> String {
+    match &task.kind {
+        TaskKindSpec::Position { joint, axes, .. } => {
+            let axes = axes.to_letters();
+            if axes == "xyz" {
+                format!("{} position", describe_joint(joint))
+            } else {
+                format!("{} position ({axes})", describe_joint(joint))
+            }
+        }
+        TaskKindSpec::Orientation { joint, .. } => format!("{} orientation", describe_joint(joint)),
+        TaskKindSpec::Gaze { joint, .. } => format!("{} gaze", describe_joint(joint)),
+        TaskKindSpec::Com { axes, .. } => {
+            if axes.to_letters() == "xz" {
+                "balance (centre of mass over the floor)".to_owned()
+            } else {
+                format!("centre of mass ({})", axes.to_letters())
+            }
+        }
+        TaskKindSpec::Posture { .. } => "comfort (toward the rest posture)".to_owned(),
+        TaskKindSpec::Limb { limb, joints, .. } => match (limb, joints) {
+            (Some(limb), _) => format!("{} reach", limb.name().replace('_', " ")),
+            (None, Some(joints)) => format!("{} limb", describe_joint(&joints[2])),
+            (None, None) => "limb".to_owned(),
+        },
+    }
+}
+
+/// The world rotation of a joint as a quaternion (for orientation tasks made from the pose).
+pub fn joint_rotation(frames: &Frames, joint: usize) -> DQuat {
+    if joint < frames.world_from_joint_rotation.len() {
+        frames.rotation(joint)
+    } else {
+        DQuat::IDENTITY
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn session() -> PosingSession {
+        PosingSession::new(LevelOfArticulation::Loa2).unwrap()
+    }
+
+    fn settle(session: &mut PosingSession) -> usize {
+        let mut frames = 0;
+        while !session.is_settled() && frames < 200 {
+            session.solve_frame(None);
+            frames += 1;
+        }
+        frames
+    }
+
+    #[test]
+    fn the_default_body_stands_with_its_tasks_met() {
+        let mut session = session();
+        assert_eq!(session.tasks().len(), 4);
+        settle(&mut session);
+        for (task, status) in session.tasks().iter().zip(session.statuses()) {
+            assert!(
+                status.problem.is_none(),
+                "{}: {:?}",
+                describe_task(task),
+                status.problem
+            );
+            assert!(
+                status.gave_way.is_none(),
+                "{}: {:?}",
+                describe_task(task),
+                status.gave_way
+            );
+        }
+    }
+
+    #[test]
+    fn pulling_a_hand_moves_it_while_the_feet_stay_pinned() {
+        let mut session = session();
+        let wrist = session.skeleton().joint_index("l_radiocarpal").unwrap();
+        let feet_before = (
+            session.joint_position("l_talocrural").unwrap(),
+            session.joint_position("r_talocrural").unwrap(),
+        );
+        let start = session.frames().joint_position[wrist];
+        session.begin_grab(wrist, start);
+        let goal = start + DVec3::new(0.2, 0.35, 0.25);
+        for step in 1..=30 {
+            session.move_grab(start + (goal - start) * (f64::from(step) / 30.0));
+            session.solve_frame(None);
+        }
+        settle(&mut session);
+        let reached = session.grabbed_point_world().unwrap();
+        assert!(
+            (reached - goal).length() < 0.02,
+            "the hand is {} m from the cursor",
+            (reached - goal).length()
+        );
+        let feet_after = (
+            session.joint_position("l_talocrural").unwrap(),
+            session.joint_position("r_talocrural").unwrap(),
+        );
+        assert!((feet_after.0 - feet_before.0).length() < 1e-4);
+        assert!((feet_after.1 - feet_before.1).length() < 1e-4);
+        session.end_grab();
+        assert!(session.grab().is_none());
+    }
+
+    #[test]
+    fn an_unreachable_pull_gives_way_and_says_to_what() {
+        let mut session = session();
+        let wrist = session.skeleton().joint_index("l_radiocarpal").unwrap();
+        let start = session.frames().joint_position[wrist];
+        session.begin_grab(wrist, start);
+        session.move_grab(start + DVec3::new(3.0, 0.0, 0.0));
+        settle(&mut session);
+        // The feet hold; the grab is the level that gave way.
+        let report = session.report().unwrap();
+        assert_eq!(report.gave_way, Some(3));
+        for status in &session.statuses()[..2] {
+            assert!(status.gave_way.is_none());
+        }
+    }
+
+    #[test]
+    fn a_level_one_task_in_conflict_names_it() {
+        let mut session = session();
+        let mut tasks = session.tasks().to_vec();
+        // Ask the head at level 3 to go to the floor: it cannot, the feet and balance win.
+        let mut head = pin_task("skullbase", [0.0, 0.2, 0.0]);
+        head.level = 3;
+        tasks.push(head);
+        session.set_tasks(tasks);
+        settle(&mut session);
+        let status = &session.statuses()[4];
+        let reason = status.gave_way.clone().unwrap_or_default();
+        assert!(reason.contains("level 1"), "reason: {reason}");
+        assert!(reason.contains("ankle"), "reason: {reason}");
+    }
+
+    #[test]
+    fn mirroring_twice_gives_the_posture_back_and_swaps_the_arms() {
+        let mut session = session();
+        let mut values = session.posture().values().to_vec();
+        let shoulder = session.skeleton().joint_index("l_shoulder").unwrap();
+        let range = session.skeleton().joints()[shoulder].dof_range();
+        for (offset, slot) in values[range.clone()].iter_mut().enumerate() {
+            *slot = 0.3 + 0.1 * offset as f64;
+        }
+        let posture = Posture::from_values(session.skeleton(), values).unwrap();
+        session.set_posture(posture.clone());
+        let mirrored = session.mirrored_posture();
+        let right = session.skeleton().joint_index("r_shoulder").unwrap();
+        let right_range = session.skeleton().joints()[right].dof_range();
+        assert!(mirrored.values()[right_range].iter().any(|v| v.abs() > 0.1));
+        session.set_posture(mirrored);
+        let back = session.mirrored_posture();
+        for (a, b) in back.values().iter().zip(posture.values()) {
+            assert!((a - b).abs() < 1e-12);
+        }
+        // The mirrored left hand is where the right hand is, reflected.
+        let frames = Frames::new(session.skeleton(), &posture);
+        let left = frames.joint_position[session.skeleton().joint_index("l_radiocarpal").unwrap()];
+        let right_hand = session.joint_position("r_radiocarpal").unwrap();
+        assert!((right_hand - DVec3::new(-left.x, left.y, left.z)).length() < 0.02);
+    }
+
+    #[test]
+    fn documents_round_trip_and_a_bad_one_changes_nothing() {
+        let mut session = session();
+        let wrist = session.skeleton().joint_index("l_radiocarpal").unwrap();
+        session.pin(wrist);
+        let document = session.document();
+        let mut other = self::session();
+        other.load_document(&document).unwrap();
+        assert_eq!(other.tasks(), session.tasks());
+        let mut broken = document.clone();
+        broken.tasks.push(pin_task("l_wirst", [0.0; 3]));
+        // An unknown joint is reported on the task, not a crash.
+        other.load_document(&broken).unwrap();
+        assert!(other.statuses().last().unwrap().problem.is_some());
+    }
+
+    #[test]
+    fn joints_are_described_in_words() {
+        assert_eq!(describe_joint("l_talocrural"), "left ankle");
+        assert_eq!(describe_joint("r_elbow"), "right elbow");
+        assert_eq!(mirror_joint_name("l_hip"), "r_hip");
+        assert_eq!(mirror_joint_name("vl5"), "vl5");
+    }
+}

@@ -1,0 +1,354 @@
+//! Degrees of freedom, anatomical ranges of motion and segment masses of the H-Anim joints.
+//!
+//! # Ranges of motion
+//! Source: American Academy of Orthopaedic Surgeons, *Joint Motion: Method of Measuring and
+//! Recording* (AAOS, 1965; the "normal" adult values reprinted by Greene & Heckman, *The
+//! Clinical Measurement of Joint Motion*, AAOS 1994), completed for the shoulder girdle, the
+//! pelvis and the fingers by I. A. Kapandji, *The Physiology of the Joints* (vol. 1-3).
+//! Values are in degrees in the tables below and converted to radians.
+//!
+//! # Sign conventions
+//! Stance joint frames are parallel to the H-Anim body frame at rest (+X the body's left,
+//! +Y up, +Z front) and the rotational DOF are the components of a rotation vector in that
+//! frame ([`stance_ik::Posture`]). For a segment hanging down (thigh, arm at rest):
+//! `+rx` moves it backward (hip extension), `-rx` forward (hip flexion, shoulder flexion);
+//! `+rz` moves it toward +X (abduction of a left limb, adduction of a right one);
+//! `+ry` turns its front toward +X (external rotation of a left limb). Right-side limits are
+//! the mirror images of the left ones (`ry` and `rz` swap sign).
+//!
+//! # Segment masses
+//! de Leva P. (1996), *Adjustments to Zatsiorsky-Seluyanov's segment inertia parameters*,
+//! J. Biomechanics 29(9):1223-1230, Table 4: mass fractions and longitudinal centre-of-mass
+//! positions (percent of segment length from the proximal end), averaged over the female and
+//! male columns.
+
+use stance_ik::Dof::{self, Rx, Ry, Rz, Tx, Ty, Tz};
+
+/// Which side of the body a joint is on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Side {
+    /// Name starts with `l_`: the body's left, +X.
+    Left,
+    /// Name starts with `r_`: the body's right, -X.
+    Right,
+    /// On the mid-sagittal plane.
+    Centre,
+}
+
+impl Side {
+    /// The side of an H-Anim joint name.
+    pub fn of(name: &str) -> Side {
+        if name.starts_with("l_") {
+            Side::Left
+        } else if name.starts_with("r_") {
+            Side::Right
+        } else {
+            Side::Centre
+        }
+    }
+}
+
+/// Functional class of an H-Anim joint; decides its DOF, ranges and mass share.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum JointClass {
+    /// `humanoid_root`: 3 translations + 3 rotations, free.
+    Root,
+    /// `sacroiliac`: pelvis on the root.
+    Pelvis,
+    /// Lumbar and thoracic vertebrae (`vl*`, `vt*`).
+    Spine,
+    /// Cervical vertebrae and `skullbase`.
+    Neck,
+    /// `*_sternoclavicular`.
+    Clavicle,
+    /// `*_acromioclavicular`.
+    Acromion,
+    /// `*_shoulder` (glenohumeral).
+    Shoulder,
+    /// `*_elbow` (with forearm pronation/supination).
+    Elbow,
+    /// `*_radiocarpal`.
+    Wrist,
+    /// `*_carpometacarpal_1`.
+    ThumbBase,
+    /// `*_carpometacarpal_2..5`.
+    Metacarpal,
+    /// `*_metacarpophalangeal_*`.
+    Knuckle,
+    /// `*_carpal_*interphalangeal_*`.
+    FingerHinge,
+    /// `*_hip`.
+    Hip,
+    /// `*_knee`.
+    Knee,
+    /// `*_talocrural` (with subtalar inversion/eversion at low LOA).
+    Ankle,
+    /// Mid-foot joints (`*_tarsometatarsal_*`, `*_talocalcaneonavicular`...).
+    MidFoot,
+    /// `*_metatarsophalangeal_*`.
+    Toe,
+    /// `*_tarsal_*interphalangeal_*`.
+    ToeHinge,
+    /// Eyes, eyelids, eyebrows, jaw: rotational, small.
+    Face,
+}
+
+impl JointClass {
+    /// The class of an H-Anim joint name (any LOA).
+    pub fn of(name: &str) -> JointClass {
+        let bare = name
+            .strip_prefix("l_")
+            .or_else(|| name.strip_prefix("r_"))
+            .unwrap_or(name);
+        match bare {
+            "humanoid_root" => JointClass::Root,
+            "sacroiliac" => JointClass::Pelvis,
+            "skullbase" => JointClass::Neck,
+            "sternoclavicular" => JointClass::Clavicle,
+            "acromioclavicular" => JointClass::Acromion,
+            "shoulder" => JointClass::Shoulder,
+            "elbow" => JointClass::Elbow,
+            "radiocarpal" | "midcarpal" => JointClass::Wrist,
+            "hip" => JointClass::Hip,
+            "knee" => JointClass::Knee,
+            "talocrural" => JointClass::Ankle,
+            "carpometacarpal_1" => JointClass::ThumbBase,
+            _ if bare.starts_with("vc") => JointClass::Neck,
+            _ if bare.starts_with("vl") || bare.starts_with("vt") => JointClass::Spine,
+            _ if bare.starts_with("carpometacarpal") => JointClass::Metacarpal,
+            _ if bare.starts_with("metacarpophalangeal") => JointClass::Knuckle,
+            _ if bare.starts_with("carpal_") => JointClass::FingerHinge,
+            _ if bare.starts_with("metatarsophalangeal") => JointClass::Toe,
+            _ if bare.starts_with("tarsal_") => JointClass::ToeHinge,
+            _ if bare.starts_with("tarso")
+                || bare.starts_with("talo")
+                || bare.starts_with("cuneo")
+                || bare.starts_with("calcaneo")
+                || bare.starts_with("transverse") =>
+            {
+                JointClass::MidFoot
+            }
+            _ => JointClass::Face,
+        }
+    }
+}
+
+/// Range of one rotational DOF of a left or centre joint, degrees `(dof, lower, upper)`.
+type Range = (Dof, f64, f64);
+
+/// AAOS / Kapandji ranges, left side (see the module documentation for signs).
+fn left_ranges(class: JointClass) -> &'static [Range] {
+    match class {
+        JointClass::Root => &[],
+        // Pelvic tilt / obliquity / rotation on the hips (Kapandji vol. 3).
+        JointClass::Pelvis => &[(Rx, -30.0, 30.0), (Ry, -30.0, 30.0), (Rz, -20.0, 20.0)],
+        // Thoracolumbar spine, whole: flexion 80, extension 25, lateral 35, rotation 45
+        // (AAOS). Shared among the spine joints present (see `ranges`).
+        JointClass::Spine => &[(Rx, -25.0, 80.0), (Ry, -45.0, 45.0), (Rz, -35.0, 35.0)],
+        // Cervical spine, whole: flexion 45, extension 45, lateral 45, rotation 60 (AAOS).
+        JointClass::Neck => &[(Rx, -45.0, 45.0), (Ry, -60.0, 60.0), (Rz, -45.0, 45.0)],
+        // Sternoclavicular: elevation 45, depression 5, protraction/retraction 15 (Kapandji 1).
+        JointClass::Clavicle => &[(Ry, -15.0, 15.0), (Rz, -5.0, 45.0)],
+        // Acromioclavicular: about 10 degrees each way (Kapandji 1).
+        JointClass::Acromion => &[(Rx, -10.0, 10.0), (Ry, -10.0, 10.0), (Rz, -10.0, 10.0)],
+        // Shoulder: flexion 180, extension 60, abduction 180, adduction 30 (cross-body),
+        // internal rotation 70, external rotation 90 (AAOS). Capped at 170 to stay away from
+        // the rotation-vector wrap at 180.
+        JointClass::Shoulder => &[(Rx, -170.0, 60.0), (Ry, -70.0, 90.0), (Rz, -30.0, 170.0)],
+        // Elbow flexion 150, extension 0; forearm pronation 80 / supination 80 (AAOS).
+        JointClass::Elbow => &[(Rx, -150.0, 0.0), (Ry, -80.0, 80.0)],
+        // Wrist: flexion 80, extension 70 (about z, palm facing the thigh); radial deviation
+        // 20, ulnar deviation 30 (about x) (AAOS).
+        JointClass::Wrist => &[(Rx, -20.0, 30.0), (Rz, -80.0, 70.0)],
+        // Thumb carpometacarpal: flexion 15, extension 20, abduction 70 (AAOS).
+        JointClass::ThumbBase => &[(Rx, -70.0, 0.0), (Ry, -15.0, 20.0), (Rz, -15.0, 20.0)],
+        // Metacarpals 2-5: a few degrees of cupping (Kapandji 1).
+        JointClass::Metacarpal => &[(Rz, -10.0, 5.0)],
+        // Metacarpophalangeal: flexion 90, hyperextension 45, abduction 20 (AAOS).
+        JointClass::Knuckle => &[(Rx, -20.0, 20.0), (Rz, -90.0, 45.0)],
+        // Interphalangeal: PIP flexion 100, DIP flexion 90 / extension 10 (AAOS).
+        JointClass::FingerHinge => &[(Rz, -100.0, 10.0)],
+        // Hip: flexion 120, extension 30, abduction 45, adduction 30, internal and external
+        // rotation 45 (AAOS).
+        JointClass::Hip => &[(Rx, -120.0, 30.0), (Ry, -45.0, 45.0), (Rz, -30.0, 45.0)],
+        // Knee: flexion 135, extension 0 (AAOS); a few degrees of hyperextension allowed.
+        JointClass::Knee => &[(Rx, -5.0, 135.0)],
+        // Ankle: dorsiflexion 20, plantar flexion 50; subtalar inversion 35, eversion 15 (AAOS).
+        JointClass::Ankle => &[(Rx, -20.0, 50.0), (Rz, -35.0, 15.0)],
+        // Mid-foot: small gliding, about 10 degrees (Kapandji 2).
+        JointClass::MidFoot => &[(Rx, -10.0, 10.0), (Rz, -10.0, 10.0)],
+        // First metatarsophalangeal: flexion 45, extension 70 (AAOS).
+        JointClass::Toe => &[(Rx, -70.0, 45.0)],
+        // Toe interphalangeal: flexion 90, extension 0 (AAOS).
+        JointClass::ToeHinge => &[(Rx, 0.0, 90.0)],
+        // Eyes: about 45 degrees each way; jaw opening about 30 degrees (Kapandji 3).
+        JointClass::Face => &[(Rx, -30.0, 30.0), (Ry, -45.0, 45.0)],
+    }
+}
+
+/// The DOF of a joint of this class: the axes of its ranges (the root has all six).
+pub fn dofs(class: JointClass) -> Vec<Dof> {
+    match class {
+        JointClass::Root => vec![Tx, Ty, Tz, Rx, Ry, Rz],
+        _ => left_ranges(class).iter().map(|&(d, _, _)| d).collect(),
+    }
+}
+
+/// Limits in radians `(dof, lower, upper)` of the H-Anim joint `name`, mirrored for the right
+/// side. `share` divides the range of a joint that shares a motion with others of its class
+/// (the spine and the neck: the range of the whole region split over the joints present).
+pub fn limits(name: &str, share: usize) -> Vec<(Dof, f64, f64)> {
+    let class = JointClass::of(name);
+    let side = Side::of(name);
+    let divide = match class {
+        JointClass::Spine | JointClass::Neck => share.max(1) as f64,
+        _ => 1.0,
+    };
+    left_ranges(class)
+        .iter()
+        .map(|&(dof, lo, hi)| {
+            let (lo, hi) = (lo / divide, hi / divide);
+            let (lo, hi) = if side == Side::Right && matches!(dof, Ry | Rz) {
+                (-hi, -lo)
+            } else {
+                (lo, hi)
+            };
+            (dof, lo.to_radians(), hi.to_radians())
+        })
+        .collect()
+}
+
+/// A body segment of de Leva (1996).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Segment {
+    /// Segment name in de Leva's table.
+    pub name: &'static str,
+    /// Fraction of the whole-body mass (mean of the female and male columns).
+    pub mass_fraction: f64,
+    /// Centre of mass along the segment, fraction of its length from the proximal joint.
+    pub com_fraction: f64,
+}
+
+/// de Leva (1996) Table 4, female/male means. Fractions sum to 1 over the body (two of each
+/// limb segment).
+pub const SEGMENTS: &[Segment] = &[
+    Segment {
+        name: "head",
+        mass_fraction: 0.0681,
+        com_fraction: 0.4005,
+    },
+    Segment {
+        name: "upper trunk",
+        mass_fraction: 0.1571,
+        com_fraction: 0.4997,
+    },
+    Segment {
+        name: "middle trunk",
+        mass_fraction: 0.1549,
+        com_fraction: 0.4504,
+    },
+    Segment {
+        name: "lower trunk",
+        mass_fraction: 0.1182,
+        com_fraction: 0.4270,
+    },
+    Segment {
+        name: "upper arm",
+        mass_fraction: 0.0263,
+        com_fraction: 0.5762,
+    },
+    Segment {
+        name: "forearm",
+        mass_fraction: 0.0150,
+        com_fraction: 0.4589,
+    },
+    Segment {
+        name: "hand",
+        mass_fraction: 0.0059,
+        com_fraction: 0.7687,
+    },
+    Segment {
+        name: "thigh",
+        mass_fraction: 0.1447,
+        com_fraction: 0.3900,
+    },
+    Segment {
+        name: "shank",
+        mass_fraction: 0.0457,
+        com_fraction: 0.4406,
+    },
+    Segment {
+        name: "foot",
+        mass_fraction: 0.0133,
+        com_fraction: 0.4255,
+    },
+];
+
+/// The de Leva segment carried by a joint class (the segment between it and the next joint
+/// down the chain), if any. Trunk segments are shared among the joints of the region.
+pub fn segment_of(class: JointClass) -> Option<&'static Segment> {
+    let name = match class {
+        JointClass::Pelvis => "lower trunk",
+        JointClass::Spine => "middle trunk",
+        JointClass::Neck => "head",
+        JointClass::Shoulder => "upper arm",
+        JointClass::Elbow => "forearm",
+        JointClass::Wrist => "hand",
+        JointClass::Hip => "thigh",
+        JointClass::Knee => "shank",
+        JointClass::Ankle => "foot",
+        _ => return None,
+    };
+    SEGMENTS.iter().find(|s| s.name == name)
+}
+
+#[cfg(test)]
+mod tests {
+    #[cfg(target_arch = "wasm32")]
+    use wasm_bindgen_test::wasm_bindgen_test as test;
+
+    use super::*;
+
+    #[test]
+    fn de_leva_fractions_sum_to_one() {
+        let mut total = 0.0;
+        for s in SEGMENTS {
+            let count = if s.name.contains("trunk") || s.name == "head" {
+                1.0
+            } else {
+                2.0
+            };
+            total += count * s.mass_fraction;
+        }
+        assert!((total - 1.0).abs() < 0.01, "{total}");
+    }
+
+    #[test]
+    fn right_side_ranges_mirror_the_left() {
+        let l = limits("l_shoulder", 1);
+        let r = limits("r_shoulder", 1);
+        for (a, b) in l.iter().zip(&r) {
+            assert_eq!(a.0, b.0);
+            if a.0 == Rx {
+                assert_eq!((a.1, a.2), (b.1, b.2));
+            } else {
+                assert!((a.1 + b.2).abs() < 1e-12 && (a.2 + b.1).abs() < 1e-12);
+            }
+        }
+        // Knee flexes backward (+rx), elbow forward (-rx).
+        assert!(limits("l_knee", 1)[0].2 > 2.0);
+        assert!(limits("l_elbow", 1)[0].1 < -2.0);
+    }
+
+    #[test]
+    fn classes_cover_the_vocabulary() {
+        assert_eq!(JointClass::of("vt6"), JointClass::Spine);
+        assert_eq!(JointClass::of("vc4"), JointClass::Neck);
+        assert_eq!(
+            JointClass::of("r_carpal_distal_interphalangeal_3"),
+            JointClass::FingerHinge
+        );
+        assert_eq!(JointClass::of("l_tarsometatarsal_2"), JointClass::MidFoot);
+        assert_eq!(dofs(JointClass::Root).len(), 6);
+    }
+}

@@ -1,0 +1,540 @@
+//! Builds a [`stance_ik::Skeleton`] at a chosen level of articulation from a mapped avatar
+//! (levels of mobility: the same avatar can be solved at LOA1 or LOA2), or from the H-Anim
+//! default joint centres.
+//!
+//! Joint frames are parallel to the body frame at rest (the `stance_ik` convention), so the
+//! anatomical ranges of [`crate::anatomy`] are re-expressed for the avatar's rest pose: the
+//! rotation that takes each H-Anim default segment direction onto the avatar's (e.g. arms
+//! horizontal in a T-pose) shifts the ranges of that joint, and the frame of the segment
+//! above it permutes the DOF axes of the joints below (the elbow of a T-pose flexes about
+//! world y). Where that frame is within 45 degrees of axis-aligned, the nearest world axes
+//! are used (with a note); beyond (rare: no frame is further than about 63 degrees from
+//! one), the joint gets all three rotational DOF with the envelope of its ranges.
+
+use glam::{DMat3, DQuat, DVec3};
+use stance_ik::{Dof, IkError, JointDef, Skeleton};
+
+use crate::anatomy::{self, JointClass};
+use crate::mapping::{Mapping, MatchMethod};
+use crate::{LevelOfArticulation, humanoid_joints};
+
+/// Options of [`build_skeleton`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SkeletonOptions {
+    /// Level of articulation (default LOA2).
+    pub loa: LevelOfArticulation,
+    /// Whole-body mass for the segment masses (kg, default 70).
+    pub body_mass_kg: f64,
+}
+
+impl Default for SkeletonOptions {
+    fn default() -> Self {
+        Self {
+            loa: LevelOfArticulation::Loa2,
+            body_mass_kg: 70.0,
+        }
+    }
+}
+
+/// One joint of a built skeleton (same index as in [`HumanoidSkeleton::skeleton`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BuiltJoint {
+    /// H-Anim 2.0 name (also the `stance_ik` joint name).
+    pub hanim: &'static str,
+    /// Source joint (avatar node) index; `None` for the default body.
+    pub source: Option<usize>,
+    /// False for implied joints (no DOF of their own).
+    pub has_dofs: bool,
+}
+
+/// A built skeleton and how its joints relate to the avatar.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HumanoidSkeleton {
+    /// The solver's skeleton (H-Anim joint names).
+    pub skeleton: Skeleton,
+    /// Per skeleton joint, in skeleton order.
+    pub joints: Vec<BuiltJoint>,
+    /// The level it was built at.
+    pub loa: LevelOfArticulation,
+    /// Remarks (joints given envelope ranges...).
+    pub notes: Vec<String>,
+}
+
+/// Errors of the builder.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BuildError {
+    /// The avatar lacks joints every humanoid has.
+    #[error("not a humanoid: no joint found for {}", .missing.join(", "))]
+    NotHumanoid {
+        /// The missing H-Anim LOA1 joints.
+        missing: Vec<String>,
+    },
+    /// A source joint position is missing or not finite.
+    #[error("rest position of source joint {0} is missing or not finite")]
+    BadPosition(usize),
+    /// The solver rejected the skeleton.
+    #[error("skeleton: {0}")]
+    Ik(#[from] IkError),
+}
+
+struct Input {
+    hanim: &'static str,
+    class: JointClass,
+    position: DVec3,
+    default: DVec3,
+    source: Option<usize>,
+    implied: bool,
+    parent: Option<usize>,
+}
+
+/// Builds the skeleton of a mapped avatar. `rest_positions[i]`: world rest position of source
+/// joint `i` in the H-Anim frame (+Y up, +Z front, +X left, metres).
+pub fn build_skeleton(
+    mapping: &Mapping,
+    rest_positions: &[DVec3],
+    options: &SkeletonOptions,
+) -> Result<HumanoidSkeleton, BuildError> {
+    let missing: Vec<String> = mapping
+        .missing(LevelOfArticulation::Loa1)
+        .into_iter()
+        .map(str::to_owned)
+        .collect();
+    if !missing.is_empty() {
+        return Err(BuildError::NotHumanoid { missing });
+    }
+    let mut lookup = Vec::new();
+    for m in mapping.matches() {
+        let p = rest_positions
+            .get(m.source)
+            .copied()
+            .filter(|p| p.is_finite())
+            .ok_or(BuildError::BadPosition(m.source))?;
+        lookup.push((m.hanim, p, m.source, m.method == MatchMethod::Implied));
+    }
+    build(options, |name| {
+        lookup
+            .iter()
+            .find(|(h, ..)| *h == name)
+            .map(|&(_, p, s, implied)| (p, Some(s), implied))
+    })
+}
+
+/// The skeleton of the H-Anim default body (default joint centres) at `options.loa`.
+pub fn default_skeleton(options: &SkeletonOptions) -> Result<HumanoidSkeleton, BuildError> {
+    let joints = humanoid_joints(options.loa);
+    build(options, |name| {
+        joints
+            .iter()
+            .find(|j| j.definition.name == name)
+            .map(|j| (j.rest_centre, None, false))
+    })
+}
+
+fn build(
+    options: &SkeletonOptions,
+    lookup: impl Fn(&str) -> Option<(DVec3, Option<usize>, bool)>,
+) -> Result<HumanoidSkeleton, BuildError> {
+    let table = humanoid_joints(options.loa);
+    // Included joints and the nearest included ancestor of each.
+    let mut included: Vec<Option<usize>> = vec![None; table.len()];
+    let mut inputs: Vec<Input> = Vec::new();
+    for (k, j) in table.iter().enumerate() {
+        let Some((position, source, implied)) = lookup(j.definition.name) else {
+            continue;
+        };
+        let mut parent = j.parent;
+        while let Some(p) = parent {
+            if included[p].is_some() {
+                break;
+            }
+            parent = table[p].parent;
+        }
+        included[k] = Some(inputs.len());
+        inputs.push(Input {
+            hanim: j.definition.name,
+            class: JointClass::of(j.definition.name),
+            position,
+            default: j.rest_centre,
+            source,
+            implied,
+            parent: parent.and_then(|p| included[p]),
+        });
+    }
+    if inputs.first().map(|i| i.class) != Some(JointClass::Root) {
+        return Err(BuildError::NotHumanoid {
+            missing: vec!["humanoid_root".into()],
+        });
+    }
+    let children = |i: usize| -> Vec<usize> {
+        (0..inputs.len())
+            .filter(|&c| inputs[c].parent == Some(i))
+            .collect()
+    };
+    // Distal joint of each (for segment direction and centre of mass).
+    let distal: Vec<Option<usize>> = (0..inputs.len())
+        .map(|i| {
+            let kids = children(i);
+            match inputs[i].class {
+                JointClass::Wrist => kids
+                    .iter()
+                    .copied()
+                    .find(|&c| inputs[c].hanim.ends_with("_3"))
+                    .or_else(|| kids.first().copied()),
+                JointClass::Root | JointClass::Pelvis => None,
+                _ => kids.first().copied(),
+            }
+        })
+        .collect();
+    let aligned = |c: JointClass| {
+        matches!(
+            c,
+            JointClass::Clavicle
+                | JointClass::Acromion
+                | JointClass::Shoulder
+                | JointClass::Elbow
+                | JointClass::Wrist
+                | JointClass::Hip
+                | JointClass::Knee
+                | JointClass::ThumbBase
+                | JointClass::Metacarpal
+                | JointClass::Knuckle
+                | JointClass::FingerHinge
+        )
+    };
+    // Rotation from the H-Anim default direction of each segment to the avatar's. Joints
+    // with no distal joint (a hand at LOA1) follow the segment above them.
+    let mut alignment: Vec<DQuat> = Vec::with_capacity(inputs.len());
+    for i in 0..inputs.len() {
+        let inherited = inputs[i]
+            .parent
+            .filter(|&p| aligned(inputs[p].class))
+            .map_or(DQuat::IDENTITY, |p| alignment[p]);
+        let own = distal[i]
+            .filter(|_| aligned(inputs[i].class))
+            .and_then(|d| {
+                let d0 = inputs[d].default - inputs[i].default;
+                let d1 = inputs[d].position - inputs[i].position;
+                (d0.length() > 1e-6 && d1.length() > 1e-9)
+                    .then(|| DQuat::from_rotation_arc(d0.normalize(), d1.normalize()))
+            });
+        let a = match own {
+            Some(a) => a,
+            None if aligned(inputs[i].class) => inherited,
+            None => DQuat::IDENTITY,
+        };
+        alignment.push(a);
+    }
+    let count = |pred: &dyn Fn(&Input) -> bool| inputs.iter().filter(|i| pred(i)).count();
+    let spine_share = count(&|i| i.class == JointClass::Spine && !i.implied);
+    let neck_share = count(&|i| i.class == JointClass::Neck && !i.implied);
+    let lumbar = count(&|i| i.hanim.starts_with("vl"));
+    let thoracic = count(&|i| i.hanim.starts_with("vt"));
+    let default_height = 1.6209 - 0.824;
+    let scale = {
+        let root = inputs[0].position;
+        inputs
+            .iter()
+            .find(|i| i.hanim == "skullbase")
+            .map_or(1.0, |s| {
+                ((s.position - root).length() / default_height).max(1e-3)
+            })
+    };
+    let mass = options.body_mass_kg.max(0.0);
+    let fraction = |name: &str| {
+        anatomy::SEGMENTS
+            .iter()
+            .find(|s| s.name == name)
+            .map_or(0.0, |s| s.mass_fraction)
+    };
+    let mut notes = Vec::new();
+    let mut defs = Vec::with_capacity(inputs.len());
+    for (i, input) in inputs.iter().enumerate() {
+        let parent_pos = input.parent.map(|p| inputs[p].position);
+        let offset = input.position - parent_pos.unwrap_or(DVec3::ZERO);
+        let parent_name = input.parent.map(|p| inputs[p].hanim);
+        // DOF and limits.
+        let (dofs, limits) = if input.class == JointClass::Root {
+            (anatomy::dofs(JointClass::Root), Vec::new())
+        } else if input.implied {
+            (Vec::new(), Vec::new())
+        } else {
+            let share = match input.class {
+                JointClass::Spine => spine_share,
+                JointClass::Neck => neck_share,
+                _ => 1,
+            };
+            let anatomical = anatomy::limits(input.hanim, share);
+            let frame_alignment = input
+                .parent
+                .filter(|&p| aligned(inputs[p].class))
+                .map_or(DQuat::IDENTITY, |p| alignment[p]);
+            let snapped = snap(frame_alignment, 25.0).or_else(|| {
+                let loose = snap(frame_alignment, 45.0);
+                if loose.is_some() {
+                    notes.push(format!(
+                        "{}: segment above far from the default direction, nearest axes used",
+                        input.hanim
+                    ));
+                }
+                loose
+            });
+            match snapped {
+                Some(frame) => {
+                    let relative = (DQuat::from_mat3(&frame).inverse() * alignment[i]).normalize();
+                    // The shortest rotation (w >= 0), so the shift stays within +-pi.
+                    let relative = if relative.w < 0.0 {
+                        -relative
+                    } else {
+                        relative
+                    };
+                    let shift = relative.to_scaled_axis();
+                    let mut dofs = Vec::new();
+                    let mut limits = Vec::new();
+                    for (dof, lo, hi) in anatomical {
+                        let k = dof.axis_index();
+                        let (lo, hi) = ((lo - shift[k]).min(0.0), (hi - shift[k]).max(0.0));
+                        let v = frame.col(k);
+                        let m = v.abs().max_position();
+                        let (lo, hi) = if v[m] > 0.0 { (lo, hi) } else { (-hi, -lo) };
+                        let world = [Dof::Rx, Dof::Ry, Dof::Rz][m];
+                        dofs.push(world);
+                        limits.push((world, lo, hi));
+                    }
+                    (dofs, limits)
+                }
+                None => {
+                    notes.push(format!(
+                        "{}: segment above far from any axis-aligned frame, 3 DOF with envelope ranges",
+                        input.hanim
+                    ));
+                    let reach = anatomical
+                        .iter()
+                        .map(|&(_, lo, hi)| lo.abs().max(hi.abs()))
+                        .fold(0.0, f64::max);
+                    let dofs = vec![Dof::Rx, Dof::Ry, Dof::Rz];
+                    let limits = dofs.iter().map(|&d| (d, -reach, reach)).collect();
+                    (dofs, limits)
+                }
+            }
+        };
+        // Mass and centre of mass.
+        let towards = |frac: f64| -> DVec3 {
+            distal[i].map_or(DVec3::ZERO, |d| {
+                (inputs[d].position - input.position) * frac
+            })
+        };
+        let (m, com) = match input.class {
+            JointClass::Pelvis => (fraction("lower trunk") * mass, DVec3::ZERO),
+            JointClass::Spine => {
+                let upper = fraction("upper trunk");
+                let middle = fraction("middle trunk");
+                let share = if input.hanim.starts_with("vl") {
+                    if thoracic == 0 {
+                        (upper + middle) / lumbar.max(1) as f64
+                    } else {
+                        middle / lumbar.max(1) as f64
+                    }
+                } else if lumbar == 0 {
+                    (upper + middle) / thoracic.max(1) as f64
+                } else {
+                    upper / thoracic.max(1) as f64
+                };
+                (share * mass, towards(0.5))
+            }
+            JointClass::Neck if input.hanim == "skullbase" => (
+                fraction("head") * mass,
+                DVec3::new(0.0, 0.1 * scale, 0.02 * scale),
+            ),
+            JointClass::Ankle => {
+                let seg = fraction("foot");
+                let com = if distal[i].is_some() {
+                    towards(0.5)
+                } else {
+                    DVec3::new(0.0, -0.03, 0.06) * scale
+                };
+                (seg * mass, com)
+            }
+            JointClass::Wrist => {
+                let com = match distal[i] {
+                    Some(_) => towards(0.77),
+                    None => input.parent.map_or(DVec3::ZERO, |p| {
+                        (input.position - inputs[p].position).normalize_or_zero() * 0.07 * scale
+                    }),
+                };
+                (fraction("hand") * mass, com)
+            }
+            c => match anatomy::segment_of(c) {
+                Some(seg) if c != JointClass::Neck => {
+                    (seg.mass_fraction * mass, towards(seg.com_fraction))
+                }
+                _ => (0.0, DVec3::ZERO),
+            },
+        };
+        let mut def = JointDef::new(input.hanim, parent_name, offset, &dofs).with_mass(m, com);
+        def.limits = limits;
+        defs.push(def);
+    }
+    let skeleton = Skeleton::new(defs)?;
+    // Skeleton::new keeps the given parents-first order; map back by name to be safe.
+    let joints = skeleton
+        .joints()
+        .iter()
+        .map(|j| {
+            let input = inputs.iter().find(|i| i.hanim == j.name);
+            BuiltJoint {
+                hanim: input.map_or("", |i| i.hanim),
+                source: input.and_then(|i| i.source),
+                has_dofs: !j.dofs.is_empty(),
+            }
+        })
+        .collect();
+    Ok(HumanoidSkeleton {
+        skeleton,
+        joints,
+        loa: options.loa,
+        notes,
+    })
+}
+
+/// The signed permutation matrix nearest to `q`, when `q` is within `max_degrees` of it.
+fn snap(q: DQuat, max_degrees: f64) -> Option<DMat3> {
+    let m = DMat3::from_quat(q);
+    let mut cols = [DVec3::ZERO; 3];
+    let mut used = [false; 3];
+    for (k, col) in cols.iter_mut().enumerate() {
+        let v = m.col(k);
+        let a = v.abs().max_position();
+        if used[a] {
+            return None;
+        }
+        used[a] = true;
+        let mut e = DVec3::ZERO;
+        e[a] = v[a].signum();
+        *col = e;
+    }
+    let p = DMat3::from_cols(cols[0], cols[1], cols[2]);
+    if p.determinant() < 0.0 {
+        return None;
+    }
+    let angle = DQuat::from_mat3(&p).angle_between(q);
+    (angle < max_degrees.to_radians()).then_some(p)
+}
+
+#[cfg(test)]
+mod tests {
+    #[cfg(target_arch = "wasm32")]
+    use wasm_bindgen_test::wasm_bindgen_test as test;
+
+    use super::*;
+    use crate::mapping::SourceJoint;
+
+    #[test]
+    fn default_body_at_each_level() {
+        for (loa, joints) in [
+            (LevelOfArticulation::Loa1, 18),
+            (LevelOfArticulation::Loa2, 71),
+        ] {
+            let body = default_skeleton(&SkeletonOptions {
+                loa,
+                ..Default::default()
+            })
+            .unwrap();
+            assert_eq!(body.skeleton.joint_count(), joints);
+            assert!(
+                (body.skeleton.total_mass() - 70.0).abs() < 1.5,
+                "{}",
+                body.skeleton.total_mass()
+            );
+            let elbow = body.skeleton.joint_index("l_elbow").unwrap();
+            assert_eq!(body.skeleton.joints()[elbow].dofs, vec![Dof::Rx, Dof::Ry]);
+        }
+    }
+
+    /// A T-pose body: the left elbow flexes about world y, the shoulder's abduction range is
+    /// shifted by the 90 degrees of the rest pose.
+    #[test]
+    fn t_pose_permutes_the_elbow_axes() {
+        let loa1 = humanoid_joints(LevelOfArticulation::Loa1);
+        let mut joints = Vec::new();
+        for j in &loa1 {
+            let mut p = j.rest_centre;
+            let name = j.definition.name;
+            let sh = |s: &str| {
+                loa1.iter()
+                    .find(|x| x.definition.name == s)
+                    .map(|x| x.rest_centre)
+                    .unwrap()
+            };
+            for side in ["l_", "r_"] {
+                let shoulder = sh(&format!("{side}shoulder"));
+                if name == format!("{side}elbow") || name == format!("{side}radiocarpal") {
+                    let d = (shoulder - p).length();
+                    let sign = if side == "l_" { 1.0 } else { -1.0 };
+                    p = shoulder + DVec3::new(sign * d, 0.0, 0.0);
+                }
+            }
+            joints.push(SourceJoint {
+                name: name.into(),
+                parent: j.parent,
+                position: p,
+            });
+        }
+        let mapping = Mapping::auto(&joints, &[], false);
+        let positions: Vec<DVec3> = joints.iter().map(|j| j.position).collect();
+        let body = build_skeleton(
+            &mapping,
+            &positions,
+            &SkeletonOptions {
+                loa: LevelOfArticulation::Loa1,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let s = &body.skeleton;
+        let elbow = s.joint_index("l_elbow").unwrap();
+        assert!(
+            s.joints()[elbow].dofs.contains(&Dof::Ry),
+            "{:?}",
+            s.joints()[elbow].dofs
+        );
+        let shoulder = s.joint_index("l_shoulder").unwrap();
+        let rz = s.joints()[shoulder].rotation_dof[2].unwrap();
+        // No range wraps around (the shortest rotation is used for the rest-pose shift).
+        for d in 0..s.dof_count() {
+            if s.dof_kinds()[d].is_rotation() && s.lower_limits()[d].is_finite() {
+                let (lo, hi) = (s.lower_limits()[d], s.upper_limits()[d]);
+                assert!(
+                    lo >= -3.2 && hi <= 3.2 && lo <= 0.0 && hi >= 0.0,
+                    "{}",
+                    s.dof_name(d)
+                );
+            }
+        }
+        let r_elbow = s.joint_index("r_elbow").unwrap();
+        let ry = s.joints()[r_elbow].rotation_dof[1].unwrap();
+        assert!(
+            s.upper_limits()[ry] > 2.4,
+            "right elbow flexes forward: +ry"
+        );
+        // Abduction up to 170 degrees from arm-down: 80 more from the T-pose.
+        assert!(
+            (s.upper_limits()[rz] - 80f64.to_radians()).abs() < 0.05,
+            "{}",
+            s.upper_limits()[rz]
+        );
+    }
+
+    #[test]
+    fn non_humanoid_is_refused() {
+        let joints = vec![SourceJoint {
+            name: "Bone".into(),
+            parent: None,
+            position: DVec3::ZERO,
+        }];
+        let mapping = Mapping::auto(&joints, &[], false);
+        let err =
+            build_skeleton(&mapping, &[DVec3::ZERO], &SkeletonOptions::default()).unwrap_err();
+        assert!(matches!(err, BuildError::NotHumanoid { .. }));
+        assert!(err.to_string().contains("l_hip"));
+    }
+}

@@ -1,0 +1,518 @@
+//! The closed-form limb (shoulder-elbow-wrist, hip-knee-ankle) with the swivel angle: goals
+//! and swivel reproduced, round trips, joint-limit intervals against dense sampling,
+//! continuity through straight configurations, and the hybrid restart of a stalled solve.
+
+// A test crate: on wasm32 `#[test]` becomes `wasm_bindgen_test`, which clippy does not treat
+// as a test, and fixture helpers panic on broken fixtures on purpose.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+#[cfg(target_arch = "wasm32")]
+use wasm_bindgen_test::wasm_bindgen_test as test;
+#[cfg(target_arch = "wasm32")]
+wasm_bindgen_test::wasm_bindgen_test_configure!(run_in_browser);
+
+mod common;
+
+use std::f64::consts::{PI, TAU};
+
+use common::*;
+use glam::{DQuat, DVec3};
+use rand::RngExt;
+use rand::rngs::StdRng;
+use stance_ik::scenarios;
+use stance_ik::{
+    Dof, Frames, IkError, JointDef, Limb, LimbBase, LimbGoal, Posture, Skeleton, SolveStatus,
+    Solver, Task,
+};
+
+fn angle_diff(a: f64, b: f64) -> f64 {
+    ((a - b + PI).rem_euclid(TAU) - PI).abs()
+}
+
+/// The H-Anim limbs of the 50-DOF humanoid (with their anatomical limits).
+fn hanim_limbs(skeleton: &Skeleton) -> Vec<Limb> {
+    [
+        ["l_shoulder", "l_elbow", "l_radiocarpal"],
+        ["r_shoulder", "r_elbow", "r_radiocarpal"],
+        ["l_hip", "l_knee", "l_talocrural"],
+        ["r_hip", "r_knee", "r_talocrural"],
+    ]
+    .into_iter()
+    .map(|names| Limb::from_names(skeleton, names).expect("H-Anim limb"))
+    .collect()
+}
+
+/// A random limb: base joint with a random offset and 3 DOF, middle with a random hinge axis
+/// (sometimes with a second rotational DOF), end with 1..3 DOF; segments neither straight nor
+/// perpendicular to the hinge. No limits.
+fn random_limb_skeleton(rng: &mut StdRng) -> Skeleton {
+    let axes = [Dof::Rx, Dof::Ry, Dof::Rz];
+    let hinge = rng.random_range(0..3);
+    let mut middle = vec![axes[hinge]];
+    if rng.random::<f64>() < 0.3 {
+        middle.push(axes[(hinge + 1 + rng.random_range(0..2)) % 3]);
+    }
+    let end: Vec<Dof> = axes
+        .iter()
+        .copied()
+        .filter(|_| rng.random::<f64>() < 0.7)
+        .collect();
+    let seg = |rng: &mut StdRng| {
+        let d = vec3(rng, 1.0).normalize_or(DVec3::Y);
+        d * uniform(rng, 0.15, 0.5)
+    };
+    Skeleton::new(vec![
+        JointDef::new("torso", None, vec3(rng, 1.0), &[Dof::Rx, Dof::Ry, Dof::Rz]),
+        JointDef::new("upper", Some("torso"), vec3(rng, 0.3), &axes),
+        JointDef::new("middle", Some("upper"), seg(rng), &middle),
+        JointDef::new("end", Some("middle"), seg(rng), &end),
+    ])
+    .expect("valid")
+}
+
+/// A goal reachable by the hinge: random direction, random distance inside the reach.
+fn reachable_goal(rng: &mut StdRng, limb: &Limb, base: LimbBase) -> DVec3 {
+    let (lo, hi) = limb.reach();
+    let d = lo + (hi - lo) * uniform(rng, 0.02, 0.98);
+    let dir = vec3(rng, 1.0).normalize_or(DVec3::X);
+    base.upper_position + dir * d
+}
+
+/// A random posture strictly inside the limits (clamping would put many DOF exactly on a
+/// limit, where the feasible swivel set may be a single point).
+fn interior_posture(rng: &mut StdRng, skeleton: &Skeleton, amplitude: f64) -> Posture {
+    let (lo, hi) = (skeleton.lower_limits(), skeleton.upper_limits());
+    let values = (0..skeleton.dof_count())
+        .map(|i| {
+            let (l, h) = (lo[i].max(-amplitude), hi[i].min(amplitude));
+            l + (h - l) * uniform(rng, 0.02, 0.98)
+        })
+        .collect();
+    Posture::from_values(skeleton, values).unwrap()
+}
+
+fn end_position(skeleton: &Skeleton, posture: &Posture, limb: &Limb) -> DVec3 {
+    Frames::new(skeleton, posture).joint_position[limb.joints()[2]]
+}
+
+/// Every DOF of the limb within its limits (up to `slack`).
+fn limb_within_limits(skeleton: &Skeleton, posture: &Posture, limb: &Limb, slack: f64) -> bool {
+    let (lo, hi) = (skeleton.lower_limits(), skeleton.upper_limits());
+    limb.joints().iter().all(|&j| {
+        skeleton.joints()[j]
+            .dof_range()
+            .all(|d| posture.values()[d] >= lo[d] - slack && posture.values()[d] <= hi[d] + slack)
+    })
+}
+
+#[test]
+fn closed_form_meets_the_goal_and_the_swivel() {
+    let mut rng = rng(41);
+    let mut cases = 0;
+    // The H-Anim limbs in random body postures (so the base is rotated), and random limbs.
+    let body = scenarios::humanoid50().unwrap();
+    for trial in 0..120 {
+        let (skeleton, limb, start) = if trial % 2 == 0 {
+            let limbs = hanim_limbs(&body);
+            let limb = limbs[trial / 2 % 4].clone();
+            let start = random_posture(&mut rng, &body, 0.6);
+            (body.clone(), limb, start)
+        } else {
+            let s = random_limb_skeleton(&mut rng);
+            let limb = Limb::from_names(&s, ["upper", "middle", "end"]).unwrap();
+            let start = random_posture(&mut rng, &s, 1.0);
+            (s, limb, start)
+        };
+        let frames = Frames::new(&skeleton, &start);
+        let base = limb.base(&skeleton, &frames);
+        for _ in 0..10 {
+            let goal = reachable_goal(&mut rng, &limb, base);
+            let swivel = uniform(&mut rng, -PI, PI);
+            let sol = limb.solve(base, &LimbGoal::position(goal), swivel);
+            assert!(sol.reached);
+            let mut p = start.clone();
+            limb.apply(&sol, &mut p);
+            let reached = end_position(&skeleton, &p, &limb);
+            assert!(
+                (reached - goal).length() < 1e-9,
+                "trial {trial}: {reached} vs {goal}"
+            );
+            assert!((sol.end_position - goal).length() < 1e-9);
+            let back = limb.swivel_angle(&skeleton, &p);
+            assert!(
+                angle_diff(back, swivel) < 1e-9,
+                "trial {trial}: swivel {swivel} read back as {back}"
+            );
+            cases += 1;
+        }
+    }
+    assert_eq!(cases, 1200);
+}
+
+#[test]
+fn goal_orientation_sets_the_end_joint() {
+    let mut rng = rng(42);
+    for _ in 0..200 {
+        let s = random_limb_skeleton(&mut rng);
+        let limb = Limb::from_names(&s, ["upper", "middle", "end"]).unwrap();
+        let end = limb.joints()[2];
+        let full = s.joints()[end].rotation_dof.iter().all(Option::is_some);
+        let start = random_posture(&mut rng, &s, 1.0);
+        let base = limb.base(&s, &Frames::new(&s, &start));
+        let goal = reachable_goal(&mut rng, &limb, base);
+        let orientation = DQuat::from_scaled_axis(vec3(&mut rng, 1.5));
+        let sol = limb.solve(
+            base,
+            &LimbGoal {
+                position: goal,
+                orientation: Some(orientation),
+            },
+            uniform(&mut rng, -PI, PI),
+        );
+        let mut p = start.clone();
+        limb.apply(&sol, &mut p);
+        let frames = Frames::new(&s, &p);
+        assert!((frames.joint_position[end] - goal).length() < 1e-9);
+        if full {
+            let got = frames.rotation(end);
+            let diff = got.inverse() * orientation;
+            let angle = 2.0 * diff.xyz().length().atan2(diff.w.abs());
+            assert!(angle < 1e-9, "{got} vs {orientation}");
+        }
+    }
+}
+
+#[test]
+fn posture_to_swivel_to_posture_round_trip() {
+    let mut rng = rng(43);
+    let body = scenarios::humanoid50().unwrap();
+    let limbs = hanim_limbs(&body);
+    let mut checked = 0;
+    for trial in 0..400 {
+        let (skeleton, limb) = if trial % 2 == 0 {
+            (body.clone(), limbs[trial / 2 % 4].clone())
+        } else {
+            let s = random_limb_skeleton(&mut rng);
+            let limb = Limb::from_names(&s, ["upper", "middle", "end"]).unwrap();
+            (s, limb)
+        };
+        let mut p = random_posture(&mut rng, &skeleton, 0.5);
+        let [upper, middle, end] = limb.joints();
+        // A posture the closed form can produce: upper rotation below pi, the hinge on the
+        // limb's flexion side (strictly bent), the middle joint's other DOF at 0.
+        let r = vec3(&mut rng, 1.0).normalize_or(DVec3::X) * uniform(&mut rng, 0.0, 0.95 * PI);
+        for (axis, d) in skeleton.joints()[upper].rotation_dof.iter().enumerate() {
+            p.values_mut()[d.unwrap()] = r[axis];
+        }
+        for d in skeleton.joints()[middle].dof_range() {
+            p.values_mut()[d] = 0.0;
+        }
+        let (theta_ext, side) = limb.flexion();
+        let (lo, hi) = (skeleton.lower_limits(), skeleton.upper_limits());
+        let h = limb.hinge_dof();
+        let (a_lo, a_hi) = if side > 0.0 {
+            ((lo[h] - theta_ext).max(0.0), (hi[h] - theta_ext).min(PI))
+        } else {
+            ((theta_ext - hi[h]).max(0.0), (theta_ext - lo[h]).min(PI))
+        };
+        let alpha = a_lo + (a_hi - a_lo) * uniform(&mut rng, 0.05, 0.95);
+        p.values_mut()[h] = theta_ext + side * alpha;
+        let frames = Frames::new(&skeleton, &p);
+        let base = limb.base(&skeleton, &frames);
+        let swivel = limb.swivel_angle(&skeleton, &p);
+        let goal = LimbGoal {
+            position: frames.joint_position[end],
+            orientation: Some(frames.rotation(end)),
+        };
+        let sol = limb.solve(base, &goal, swivel);
+        let mut q = p.clone();
+        for d in skeleton.joints()[end].dof_range() {
+            q.values_mut()[d] = 0.0;
+        }
+        limb.apply(&sol, &mut q);
+        for j in [upper, middle, end] {
+            for d in skeleton.joints()[j].dof_range() {
+                assert!(
+                    (q.values()[d] - p.values()[d]).abs() < 1e-9,
+                    "trial {trial}: {} {} vs {}",
+                    skeleton.dof_name(d),
+                    q.values()[d],
+                    p.values()[d]
+                );
+            }
+        }
+        checked += 1;
+    }
+    assert_eq!(checked, 400);
+}
+
+#[test]
+fn limits_hold_for_every_returned_swivel() {
+    let mut rng = rng(44);
+    let body = scenarios::humanoid50().unwrap();
+    let limbs = hanim_limbs(&body);
+    let mut feasible = 0;
+    for trial in 0..400 {
+        let limb = &limbs[trial % 4];
+        // Goals reached by postures inside the limits: at least one feasible swivel exists.
+        let p = interior_posture(&mut rng, &body, 1.5);
+        let frames = Frames::new(&body, &p);
+        let base = limb.base(&body, &frames);
+        let goal = LimbGoal::position(frames.joint_position[limb.joints()[2]]);
+        let preferred = uniform(&mut rng, -PI, PI);
+        let intervals = limb.swivel_intervals(base, &goal);
+        let sol = limb.solve_within_limits(base, &goal, preferred);
+        let mut q = p.clone();
+        limb.apply(&sol, &mut q);
+        assert!((end_position(&body, &q, limb) - goal.position).length() < 1e-9);
+        if intervals.is_empty() {
+            assert!(!sol.within_limits);
+            continue;
+        }
+        feasible += 1;
+        assert!(sol.within_limits, "trial {trial}");
+        assert!(
+            limb_within_limits(&body, &q, limb, 0.0),
+            "trial {trial}: swivel {} outside the limits",
+            sol.swivel_angle
+        );
+        assert!(intervals.iter().any(|iv| iv.contains(sol.swivel_angle)));
+        // Nearest: the preferred swivel itself when feasible, otherwise an interval end no
+        // farther than any other.
+        if intervals.iter().any(|iv| iv.contains(preferred)) {
+            assert!(angle_diff(sol.swivel_angle, preferred) < 1e-12);
+        } else {
+            let best = intervals
+                .iter()
+                .flat_map(|iv| [iv.start, iv.end])
+                .map(|x| angle_diff(x, preferred))
+                .fold(f64::INFINITY, f64::min);
+            assert!((angle_diff(sol.swivel_angle, preferred) - best).abs() < 1e-12);
+        }
+    }
+    // The limb joints are inside their limits in `p`, whose swivel is feasible.
+    assert_eq!(feasible, 400);
+}
+
+#[test]
+fn feasible_intervals_agree_with_dense_sampling() {
+    let mut rng = rng(45);
+    let body = scenarios::humanoid50().unwrap();
+    let limbs = hanim_limbs(&body);
+    let samples = 4000;
+    let mut mismatches = Vec::new();
+    let mut partial = 0;
+    for trial in 0..48 {
+        let limb = &limbs[trial % 4];
+        let p = interior_posture(&mut rng, &body, 1.5);
+        let frames = Frames::new(&body, &p);
+        let base = limb.base(&body, &frames);
+        let end = limb.joints()[2];
+        // Half of the goals with an orientation (the end joint's limits then count too).
+        let goal = LimbGoal {
+            position: frames.joint_position[end],
+            orientation: (trial % 3 == 0).then(|| frames.rotation(end)),
+        };
+        let intervals = limb.swivel_intervals(base, &goal);
+        let total: f64 = intervals.iter().map(|iv| iv.length()).sum();
+        if total > 0.0 && total < TAU {
+            partial += 1;
+        }
+        for i in 0..samples {
+            let phi = -PI + TAU * (i as f64 + 0.5) / samples as f64;
+            let near_end = intervals
+                .iter()
+                .any(|iv| angle_diff(phi, iv.start) < 1e-6 || angle_diff(phi, iv.end) < 1e-6);
+            if near_end {
+                continue;
+            }
+            let sol = limb.solve(base, &goal, phi);
+            let mut q = p.clone();
+            limb.apply(&sol, &mut q);
+            let direct = limb_within_limits(&body, &q, limb, 0.0);
+            let listed = intervals.iter().any(|iv| iv.contains(phi));
+            if direct != listed {
+                mismatches.push((trial, phi, direct));
+            }
+        }
+    }
+    assert!(
+        mismatches.is_empty(),
+        "{:?}",
+        &mismatches[..mismatches.len().min(10)]
+    );
+    // The check is not vacuous: many goals have a proper subset of feasible swivels.
+    assert!(partial >= 10, "{partial}");
+}
+
+#[test]
+fn no_flip_along_a_path_through_straight_configurations() {
+    let humanoid = scenarios::humanoid50().unwrap();
+    let arm = straight_arm();
+    let mut cases: Vec<(Skeleton, Limb)> = hanim_limbs(&humanoid)
+        .into_iter()
+        .map(|l| (humanoid.clone(), l))
+        .collect();
+    // The ideal arm goes exactly straight (the H-Anim limbs stop a little before).
+    cases.push((
+        arm.clone(),
+        Limb::from_names(&arm, ["shoulder", "elbow", "wrist"]).unwrap(),
+    ));
+    for (body, limb) in cases {
+        let base_posture = Posture::rest(&body);
+        let frames = Frames::new(&body, &base_posture);
+        let base = limb.base(&body, &frames);
+        let (_, reach_max) = limb.reach();
+        let (theta_ext, side) = limb.flexion();
+        let steps = 4000;
+        let mut last: Option<(f64, DVec3)> = None;
+        for i in 0..=steps {
+            let t = i as f64 / steps as f64;
+            // The goal sweeps across the limb's rest direction and out to 1.02 x its reach and
+            // back: nearly straight, straight, and beyond.
+            let dir = DVec3::new((t - 0.5) * 0.8, -1.0, (t - 0.5) * 0.3).normalize();
+            let d = reach_max * (0.93 + 0.09 * (PI * t).sin());
+            let goal = base.upper_position + dir * d;
+            let sol = limb.solve(base, &LimbGoal::position(goal), 0.4);
+            let mut p = base_posture.clone();
+            limb.apply(&sol, &mut p);
+            let f = Frames::new(&body, &p);
+            let elbow = f.joint_position[limb.joints()[1]];
+            let hinge = sol.hinge_angle;
+            assert!(hinge.is_finite() && elbow.is_finite());
+            assert!(side * (hinge - theta_ext) >= -1e-12, "flipped at t = {t}");
+            if let Some((h0, e0)) = last {
+                assert!(
+                    (hinge - h0).abs() < 0.05,
+                    "hinge jumps at t = {t}: {h0} -> {hinge}"
+                );
+                assert!((elbow - e0).length() < 0.01, "elbow jumps at t = {t}");
+            }
+            if d > reach_max {
+                assert!(!sol.reached);
+                // Nearest reachable point: on the ray, fully extended.
+                let got = f.joint_position[limb.joints()[2]];
+                assert!(((got - base.upper_position).length() - reach_max).abs() < 1e-9);
+                assert!((got - base.upper_position).normalize().dot(dir) > 1.0 - 1e-12);
+            }
+            last = Some((hinge, elbow));
+        }
+    }
+}
+
+#[test]
+fn degenerate_goals_give_defined_answers() {
+    let body = scenarios::humanoid50().unwrap();
+    let rest = Posture::rest(&body);
+    let frames = Frames::new(&body, &rest);
+    for limb in hanim_limbs(&body) {
+        let base = limb.base(&body, &frames);
+        let (reach_min, _) = limb.reach();
+        let goals = [
+            base.upper_position,
+            base.upper_position + DVec3::new(1e-15, 0.0, 0.0),
+            base.upper_position + DVec3::new(0.0, 0.0, 5.0),
+            DVec3::new(f64::NAN, 0.0, 0.0),
+            DVec3::splat(f64::INFINITY),
+        ];
+        for goal in goals {
+            for swivel in [0.0, 2.0, f64::NAN] {
+                let sol = limb.solve(base, &LimbGoal::position(goal), swivel);
+                let again = limb.solve(base, &LimbGoal::position(goal), swivel);
+                assert_eq!(sol, again, "deterministic");
+                assert!(sol.upper_rotation.is_finite() && sol.hinge_angle.is_finite());
+                assert!(sol.swivel_angle.is_finite() && sol.end_position.is_finite());
+                let lim = limb.solve_within_limits(base, &LimbGoal::position(goal), swivel);
+                assert!(lim.upper_rotation.is_finite() && lim.hinge_angle.is_finite());
+            }
+        }
+        // At the upper joint: the folded limb, at the shortest reachable distance.
+        let sol = limb.solve(base, &LimbGoal::position(base.upper_position), 0.0);
+        assert!(!sol.reached || reach_min == 0.0);
+        assert!(((sol.end_position - base.upper_position).length() - reach_min).abs() < 1e-9);
+    }
+}
+
+#[test]
+fn bad_limbs_are_rejected() {
+    let body = scenarios::humanoid50().unwrap();
+    assert!(matches!(
+        Limb::from_names(&body, ["l_shoulder", "r_elbow", "r_radiocarpal"]),
+        Err(IkError::BadLimb(_))
+    ));
+    // The elbow as upper joint: one DOF only.
+    assert!(matches!(
+        Limb::from_names(&body, ["l_elbow", "l_radiocarpal", "l_shoulder"]),
+        Err(IkError::BadLimb(_))
+    ));
+    assert!(matches!(
+        Limb::from_names(&body, ["l_shoulder", "l_elbow", "l_wirst"]),
+        Err(IkError::UnknownJoint(_))
+    ));
+}
+
+/// A straight arm hanging from a fixed shoulder, elbow limited to flexion.
+fn straight_arm() -> Skeleton {
+    Skeleton::new(vec![
+        JointDef::new(
+            "shoulder",
+            None,
+            DVec3::new(0.2, 1.4, 0.0),
+            &[Dof::Rx, Dof::Ry, Dof::Rz],
+        ),
+        JointDef::new(
+            "elbow",
+            Some("shoulder"),
+            DVec3::new(0.0, -0.3, 0.0),
+            &[Dof::Rx],
+        )
+        .with_limit(Dof::Rx, -2.5, 0.0),
+        JointDef::new(
+            "wrist",
+            Some("elbow"),
+            DVec3::new(0.0, -0.27, 0.0),
+            &[Dof::Rx, Dof::Rz],
+        ),
+    ])
+    .unwrap()
+}
+
+#[test]
+fn hybrid_restarts_a_stalled_solve_from_the_closed_form() {
+    let s = straight_arm();
+    let wrist = s.require_joint("wrist").unwrap();
+    // The target lies on the straight arm, closer to the shoulder: every joint moves the wrist
+    // across the arm, none along it. The variational solver sits at this stationary point.
+    let target = DVec3::new(0.2, 1.4 - 0.4, 0.0);
+    let tasks = vec![Task::position(wrist, DVec3::ZERO, target)];
+    let mut alone = Solver::default();
+    let mut p = Posture::rest(&s);
+    let report = alone.solve(&s, &tasks, &mut p).unwrap();
+    assert_eq!(report.status, SolveStatus::Stalled);
+    assert!(report.levels[0].residual_after > 0.1);
+    assert!(report.analytic_restarts.is_empty());
+
+    let mut hybrid = Solver::default().with_limbs(vec![
+        Limb::from_names(&s, ["shoulder", "elbow", "wrist"]).unwrap(),
+    ]);
+    let mut p = Posture::rest(&s);
+    let report = hybrid.solve(&s, &tasks, &mut p).unwrap();
+    assert_eq!(report.status, SolveStatus::Converged, "{report:?}");
+    assert_eq!(report.analytic_restarts.len(), 1);
+    assert_eq!(report.analytic_restarts[0].joints[1], "elbow");
+    let got = Frames::new(&s, &p).joint_position[wrist];
+    assert!((got - target).length() < 1e-6);
+    assert!(limb_within_limits(&s, &p, &hybrid.limbs[0], 0.0));
+
+    // A solve that converges by itself never restarts.
+    let easy = vec![Task::position(
+        wrist,
+        DVec3::ZERO,
+        DVec3::new(0.3, 0.9, 0.2),
+    )];
+    let mut p = Posture::rest(&s);
+    p.values_mut()[s.joints()[1].dof_start] = -0.4;
+    let report = hybrid.solve(&s, &easy, &mut p).unwrap();
+    assert_eq!(report.status, SolveStatus::Converged);
+    assert!(report.analytic_restarts.is_empty());
+}
