@@ -42,7 +42,7 @@ step "native tests"
 cargo test --workspace --quiet
 
 step "pure crates in headless Chromium (wasm-bindgen-test)"
-cargo test --target wasm32-unknown-unknown "${pure_args[@]}" --quiet
+cargo test --target wasm32-unknown-unknown "${pure_args[@]}"
 
 step "site build"
 bash scripts/build-web.sh
