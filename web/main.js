@@ -20,6 +20,74 @@ function showError(message) {
   console.warn("Stance could not start:", message);
 }
 
+// The browser services the editor asks for (see crates/stance_web/src/web.rs).
+const fileInput = document.createElement("input");
+fileInput.type = "file";
+fileInput.accept = ".json,application/json,.glb,.gltf,.vrm";
+fileInput.hidden = true;
+document.body.append(fileInput);
+
+window.stanceHost = {
+  loadText(key) {
+    try {
+      return window.localStorage.getItem(key);
+    } catch {
+      return null;
+    }
+  },
+  saveText(key, text) {
+    window.localStorage.setItem(key, text);
+  },
+  // Puts the posture link in the address bar without reloading; returns the whole link.
+  shareLink(fragment) {
+    const url = new URL(window.location.href);
+    url.hash = fragment;
+    ignoreNextHashChange = url.hash;
+    window.history.replaceState(null, "", url);
+    return url.href;
+  },
+  download(fileName, text) {
+    const blob = new Blob([text], { type: "application/json" });
+    const anchor = document.createElement("a");
+    anchor.href = URL.createObjectURL(blob);
+    anchor.download = fileName;
+    document.body.append(anchor);
+    anchor.click();
+    anchor.remove();
+    setTimeout(() => URL.revokeObjectURL(anchor.href), 10000);
+  },
+  pickFile() {
+    fileInput.value = "";
+    fileInput.click();
+  },
+};
+let ignoreNextHashChange = null;
+
+async function openFiles(handle, files) {
+  for (const file of files) {
+    try {
+      const bytes = new Uint8Array(await file.arrayBuffer());
+      handle.open_file(file.name, bytes);
+    } catch (error) {
+      handle.report_failure(`${file.name} could not be read: ${describe(error)}`);
+    }
+  }
+}
+
+function connectPage(handle) {
+  fileInput.addEventListener("change", () => openFiles(handle, fileInput.files));
+  window.addEventListener("dragover", (event) => event.preventDefault());
+  window.addEventListener("drop", (event) => {
+    event.preventDefault();
+    if (event.dataTransfer?.files?.length) openFiles(handle, event.dataTransfer.files);
+  });
+  // A posture link pasted into the address bar of an open editor.
+  window.addEventListener("hashchange", () => {
+    if (window.location.hash === ignoreNextHashChange) return;
+    handle.open_link(window.location.hash.slice(1));
+  });
+}
+
 function describe(error) {
   if (error === undefined || error === null) return "unknown error";
   if (typeof error === "string") return error;
@@ -40,11 +108,15 @@ async function main() {
   const handle = new WebHandle();
   window.stance = handle;
   try {
-    await handle.start(document.getElementById("stance-canvas"));
+    await handle.start(
+      document.getElementById("stance-canvas"),
+      window.location.hash.slice(1),
+    );
   } catch (error) {
     showError(describe(error));
     return;
   }
+  connectPage(handle);
   // A crash after start: show it rather than a frozen canvas.
   const watchdog = setInterval(() => {
     const panic = handle.panic_message();

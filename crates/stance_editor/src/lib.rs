@@ -1,9 +1,14 @@
-//! The Stance application: the editor shell (menu bar, side panel, status bar) around the 3D
-//! viewport, and the eframe [`App`](eframe::App) that runs it natively and in the browser.
+//! The Stance application: the posture editor (tasks with priorities, grab-and-pull, undo,
+//! posture links, pose library) around the 3D viewport, and the eframe [`App`](eframe::App)
+//! that runs it natively and in the browser.
 
 mod app;
+pub mod history;
+mod host;
+pub mod library;
 pub mod posing;
 mod viewport;
 
-pub use app::{BackendSummary, HostHooks, NoHostHooks, StanceApp};
+pub use app::{Notice, StanceApp};
+pub use host::{BackendSummary, HostHooks, HostMessage, MemoryHost, MemoryHostState, NoHostHooks};
 pub use viewport::{CameraGesture, ViewportInput};

@@ -12,10 +12,10 @@ fn main() -> eframe::Result {
         "Stance",
         options,
         Box::new(|creation| {
-            Ok(Box::new(stance_editor::StanceApp::new(
-                creation,
-                Box::new(stance_editor::NoHostHooks),
-            )))
+            let mut app =
+                stance_editor::StanceApp::new(creation, Box::new(stance_editor::NoHostHooks))?;
+            app.open_startup(None);
+            Ok(Box::new(app))
         }),
     )
 }

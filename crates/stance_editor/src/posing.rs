@@ -3,10 +3,11 @@
 //! every frame within a time budget. No egui here: everything is tested natively.
 
 use glam::{DQuat, DVec3};
-use stance_document::{Document, PostureValues, TaskKindSpec, TaskSpec};
+use stance_document::{Document, LimbName, PostureValues, TaskKindSpec, TaskSpec};
 use stance_hanim::{HumanoidSkeleton, LevelOfArticulation, SkeletonOptions, default_skeleton};
 use stance_ik::{
-    Axes, Clock, Frames, Posture, Skeleton, SolveReport, SolveStatus, Solver, SolverSettings, Task,
+    Axes, Clock, Frames, Limb, LimbGoal, Posture, Skeleton, SolveReport, SolveStatus, Solver,
+    SolverSettings, SwivelInterval, Task,
 };
 
 /// The temporary lowest-priority task of grab-and-pull: a point of a segment, pulled along.
@@ -49,6 +50,7 @@ pub struct PosingSession {
     frames: Frames,
     statuses: Vec<TaskStatus>,
     settled: bool,
+    revision: u64,
 }
 
 impl std::fmt::Debug for PosingSession {
@@ -89,16 +91,31 @@ impl PosingSession {
         };
         let posture = Posture::rest(&humanoid.skeleton);
         let frames = Frames::new(&humanoid.skeleton, &posture);
+        // The hybrid of the paper's conclusion: a pull stuck in a local minimum restarts the
+        // limb from its closed-form solution.
+        let limbs = [
+            LimbName::LeftArm,
+            LimbName::RightArm,
+            LimbName::LeftLeg,
+            LimbName::RightLeg,
+        ]
+        .iter()
+        .filter_map(|limb| {
+            let [upper, middle, end] = limb.joints();
+            Limb::from_names(&humanoid.skeleton, [upper, middle, end]).ok()
+        })
+        .collect();
         let mut session = Self {
             humanoid,
             posture,
             tasks: Vec::new(),
             grab: None,
-            solver: Solver::new(settings)?,
+            solver: Solver::new(settings)?.with_limbs(limbs),
             report: None,
             frames,
             statuses: Vec::new(),
             settled: false,
+            revision: 0,
         };
         session.tasks = session.default_tasks();
         session.refresh();
@@ -203,6 +220,83 @@ impl PosingSession {
             tasks: self.tasks.clone(),
             ..Document::default()
         }
+    }
+
+    /// Changes whenever the posture, the tasks or their statuses change.
+    pub fn revision(&self) -> u64 {
+        self.revision
+    }
+
+    /// Restores a document exactly as it was saved, without solving: undo, redo, opening a
+    /// link or a saved pose show that very posture. On error the session stays as it was.
+    pub fn restore_document(&mut self, document: &Document) -> Result<(), PosingError> {
+        let posture = document.posture.to_posture(self.skeleton())?;
+        self.posture = posture;
+        self.tasks = document.tasks.clone();
+        self.grab = None;
+        self.report = None;
+        self.settled = true;
+        self.refresh();
+        Ok(())
+    }
+
+    /// Sets one DOF (joint mode), clamped to its limits; the solver runs again so that the
+    /// tasks above still hold.
+    pub fn set_dof(&mut self, dof: usize, value: f64) {
+        if !value.is_finite() {
+            return;
+        }
+        let skeleton = &self.humanoid.skeleton;
+        let (Some(&lower), Some(&upper)) = (
+            skeleton.lower_limits().get(dof),
+            skeleton.upper_limits().get(dof),
+        ) else {
+            return;
+        };
+        let clamped = if lower <= upper {
+            value.clamp(lower, upper)
+        } else {
+            value
+        };
+        if let Some(slot) = self.posture.values_mut().get_mut(dof) {
+            *slot = clamped;
+            self.wake();
+        }
+    }
+
+    /// The swivel angle of a limb in the current posture and the swivel intervals that keep
+    /// the limb within its limits for the current end position.
+    pub fn limb_swivel(&self, limb: LimbName) -> Option<(f64, Vec<SwivelInterval>)> {
+        let [upper, middle, end] = limb.joints();
+        let skeleton = self.skeleton();
+        let limb = Limb::from_names(skeleton, [upper, middle, end]).ok()?;
+        let swivel = limb.swivel_angle(skeleton, &self.posture);
+        let base = limb.base(skeleton, &self.frames);
+        let goal = LimbGoal::position(self.joint_position(end)?);
+        Some((swivel, limb.swivel_intervals(base, &goal)))
+    }
+
+    /// Turns the elbow/knee around the limb's axis, the hand/foot staying where it is (the
+    /// feasible swivel nearest to the one asked). Returns whether the posture changed.
+    pub fn set_limb_swivel(&mut self, limb: LimbName, swivel_angle: f64) -> bool {
+        let [upper, middle, end] = limb.joints();
+        let Some(end_position) = self.joint_position(end) else {
+            return false;
+        };
+        let skeleton = &self.humanoid.skeleton;
+        let Ok(limb) = Limb::from_names(skeleton, [upper, middle, end]) else {
+            return false;
+        };
+        let base = limb.base(skeleton, &self.frames);
+        let solution =
+            limb.solve_within_limits(base, &LimbGoal::position(end_position), swivel_angle);
+        let mut posture = self.posture.clone();
+        limb.apply(&solution, &mut posture);
+        if posture.values().iter().any(|value| !value.is_finite()) {
+            return false;
+        }
+        self.set_posture(posture);
+        true
     }
 
     /// Loads a document; on error the session stays as it was.
@@ -360,6 +454,7 @@ impl PosingSession {
 
     /// Forward kinematics and the per-task statuses of the current posture.
     fn refresh(&mut self) {
+        self.revision = self.revision.wrapping_add(1);
         self.frames = Frames::new(&self.humanoid.skeleton, &self.posture);
         let skeleton = &self.humanoid.skeleton;
         let values = self.posture.values();

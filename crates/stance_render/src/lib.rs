@@ -6,6 +6,7 @@ mod body;
 mod camera;
 #[cfg(not(target_arch = "wasm32"))]
 mod capture;
+mod pick;
 mod renderer;
 
 pub use body::{
@@ -15,6 +16,7 @@ pub use body::{
 pub use camera::OrbitCamera;
 #[cfg(not(target_arch = "wasm32"))]
 pub use capture::{CaptureError, Pixels, read_pixels};
+pub use pick::{CapsuleHit, pick_capsule};
 pub use renderer::{BACKGROUND_SRGB, COLOR_FORMAT, DEPTH_FORMAT, RenderTarget, SceneRenderer};
 
 use glam::Vec3;

@@ -1,11 +1,46 @@
-//! Browser glue (wasm32 only).
+//! Browser glue (wasm32 only). The browser APIs the editor needs (storage, address bar,
+//! downloads, file picker) are small functions of `window.stanceHost`, defined by
+//! `web/main.js`; this module adapts them to the editor's [`HostHooks`] and feeds what the
+//! page receives (links, files) to the editor's inbox.
+
+use std::cell::RefCell;
+use std::rc::Rc;
+use std::sync::mpsc::Sender;
 
 use eframe::wasm_bindgen::{self, prelude::*};
-use stance_editor::{BackendSummary, HostHooks, StanceApp};
+use stance_editor::{BackendSummary, HostHooks, HostMessage, StanceApp};
 
-/// Tells the page about the editor's progress through attributes on `<body>` and by hiding
-/// the loading indicator: `data-backend`, `data-adapter`, `data-first-frame-ms`.
-struct PageHooks;
+#[wasm_bindgen]
+extern "C" {
+    #[wasm_bindgen(js_namespace = stanceHost, js_name = loadText, catch)]
+    fn host_load_text(key: &str) -> Result<Option<String>, JsValue>;
+    #[wasm_bindgen(js_namespace = stanceHost, js_name = saveText, catch)]
+    fn host_save_text(key: &str, text: &str) -> Result<(), JsValue>;
+    #[wasm_bindgen(js_namespace = stanceHost, js_name = shareLink, catch)]
+    fn host_share_link(fragment: &str) -> Result<String, JsValue>;
+    #[wasm_bindgen(js_namespace = stanceHost, js_name = download, catch)]
+    fn host_download(file_name: &str, text: &str) -> Result<(), JsValue>;
+    #[wasm_bindgen(js_namespace = stanceHost, js_name = pickFile, catch)]
+    fn host_pick_file() -> Result<(), JsValue>;
+}
+
+fn describe(error: &JsValue) -> String {
+    error
+        .as_string()
+        .or_else(|| {
+            js_sys::Reflect::get(error, &JsValue::from_str("message"))
+                .ok()
+                .and_then(|message| message.as_string())
+        })
+        .unwrap_or_else(|| "the browser refused".to_owned())
+}
+
+/// Tells the page about the editor: attributes on `<body>` when the first frame is up
+/// (`data-backend`, `data-adapter`, `data-first-frame-ms`), the state JSON for scripts and
+/// tests, and the browser services behind `window.stanceHost`.
+struct PageHooks {
+    state: Rc<RefCell<String>>,
+}
 
 impl HostHooks for PageHooks {
     fn first_frame_rendered(&self, backend: &BackendSummary) {
@@ -33,12 +68,39 @@ impl HostHooks for PageHooks {
             backend.adapter
         );
     }
+
+    fn load_text(&self, key: &str) -> Option<String> {
+        host_load_text(key).ok().flatten()
+    }
+
+    fn save_text(&self, key: &str, text: &str) -> Result<(), String> {
+        host_save_text(key, text).map_err(|error| describe(&error))
+    }
+
+    fn share_link(&self, fragment: &str) -> String {
+        host_share_link(fragment).unwrap_or_else(|_| format!("#{fragment}"))
+    }
+
+    fn download(&self, file_name: &str, text: &str) -> Result<(), String> {
+        host_download(file_name, text).map_err(|error| describe(&error))
+    }
+
+    fn pick_file(&self) -> Result<(), String> {
+        host_pick_file().map_err(|error| describe(&error))
+    }
+
+    fn publish_state(&self, state_json: &str) {
+        state_json.clone_into(&mut self.state.borrow_mut());
+    }
 }
 
 /// The running editor, held by the page.
 #[wasm_bindgen]
 pub struct WebHandle {
     runner: eframe::WebRunner,
+    state: Rc<RefCell<String>>,
+    inbox: RefCell<Option<Sender<HostMessage>>>,
+    context: Rc<RefCell<Option<egui::Context>>>,
 }
 
 #[wasm_bindgen]
@@ -51,25 +113,75 @@ impl WebHandle {
         eframe::WebLogger::init(log::LevelFilter::Info).ok();
         Self {
             runner: eframe::WebRunner::new(),
+            state: Rc::new(RefCell::new(String::from("{}"))),
+            inbox: RefCell::new(None),
+            context: Rc::new(RefCell::new(None)),
         }
     }
 
-    /// Starts the editor on `canvas`; rejects with a readable reason when no graphics
-    /// backend can start.
+    /// Starts the editor on `canvas` with the posture link `link_fragment` (the address's
+    /// fragment, may be empty); rejects with a readable reason when no graphics backend can
+    /// start.
     #[wasm_bindgen]
-    pub async fn start(&self, canvas: web_sys::HtmlCanvasElement) -> Result<(), JsValue> {
+    pub async fn start(
+        &self,
+        canvas: web_sys::HtmlCanvasElement,
+        link_fragment: String,
+    ) -> Result<(), JsValue> {
+        let (sender, receiver) = std::sync::mpsc::channel();
+        *self.inbox.borrow_mut() = Some(sender);
+        let state = Rc::clone(&self.state);
+        let context = Rc::clone(&self.context);
         self.runner
             .start(
                 canvas,
                 eframe::WebOptions::default(),
-                Box::new(|creation| {
+                Box::new(move |creation| {
                     if creation.wgpu_render_state.is_none() {
                         return Err("neither WebGPU nor WebGL2 could start".into());
                     }
-                    Ok(Box::new(StanceApp::new(creation, Box::new(PageHooks))))
+                    *context.borrow_mut() = Some(creation.egui_ctx.clone());
+                    let mut app = StanceApp::new(creation, Box::new(PageHooks { state }))?
+                        .with_inbox(receiver);
+                    app.open_startup(Some(&link_fragment));
+                    Ok(Box::new(app))
                 }),
             )
             .await
+    }
+
+    fn send(&self, message: HostMessage) {
+        if let Some(sender) = self.inbox.borrow().as_ref() {
+            let _ = sender.send(message);
+        }
+        if let Some(context) = self.context.borrow().as_ref() {
+            context.request_repaint();
+        }
+    }
+
+    /// Opens a posture link (the address's fragment changed).
+    #[wasm_bindgen]
+    pub fn open_link(&self, fragment: String) {
+        self.send(HostMessage::OpenLink(fragment));
+    }
+
+    /// Opens a file the user picked or dropped.
+    #[wasm_bindgen]
+    pub fn open_file(&self, name: String, bytes: Vec<u8>) {
+        self.send(HostMessage::OpenFile { name, bytes });
+    }
+
+    /// Tells the editor that something the page did for it failed.
+    #[wasm_bindgen]
+    pub fn report_failure(&self, reason: String) {
+        self.send(HostMessage::Failed(reason));
+    }
+
+    /// The editor's state as JSON: document, joint positions (world and screen), task
+    /// statuses, notice, button rectangles (see `StanceApp::state_json`).
+    #[wasm_bindgen]
+    pub fn state_json(&self) -> String {
+        self.state.borrow().clone()
     }
 
     /// Stops the editor and frees its resources.

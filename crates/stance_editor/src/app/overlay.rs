@@ -1,0 +1,239 @@
+//! What the viewport draws over the 3D picture: task goals (met, gave way, inactive), the
+//! pulled point and the cursor's goal, the centre of mass over its support polygon, and the
+//! trace of the pulled effector (the paper's figure 9).
+
+use egui::{Color32, Pos2, Stroke};
+use glam::{DVec3, Vec2};
+use stance_document::TaskKindSpec;
+
+use super::StanceApp;
+
+const GOAL_MET: Color32 = Color32::from_rgb(90, 210, 120);
+const GOAL_UNMET: Color32 = Color32::from_rgb(240, 150, 50);
+const GOAL_INACTIVE: Color32 = Color32::from_gray(140);
+const PULL_COLOR: Color32 = Color32::from_rgb(250, 230, 80);
+const COM_COLOR: Color32 = Color32::from_rgb(120, 200, 255);
+const TRACE_COLOR: Color32 = Color32::from_rgba_premultiplied(200, 120, 250, 200);
+
+impl StanceApp {
+    fn to_screen(&self, rect: egui::Rect, point_world: DVec3) -> Option<Pos2> {
+        let pixel = self.camera.project(
+            point_world.as_vec3(),
+            Vec2::new(rect.width(), rect.height()),
+        )?;
+        let position = rect.min + egui::vec2(pixel.x, pixel.y);
+        position.x.is_finite().then_some(position)
+    }
+
+    pub(super) fn draw_overlay(&self, painter: &egui::Painter, rect: egui::Rect) {
+        let painter = painter.with_clip_rect(rect);
+        let skeleton = self.session.skeleton();
+        let frames = self.session.frames();
+
+        // Trace of the pulled point.
+        if self.show_trace && self.trace.len() > 1 {
+            let points: Vec<Pos2> = self
+                .trace
+                .iter()
+                .filter_map(|point| self.to_screen(rect, *point))
+                .collect();
+            painter.add(egui::Shape::line(points, Stroke::new(2.0, TRACE_COLOR)));
+        }
+
+        // Task goals.
+        let mut has_balance = false;
+        for (task, status) in self.session.tasks().iter().zip(self.session.statuses()) {
+            let color = if !task.active {
+                GOAL_INACTIVE
+            } else if status.gave_way.is_some() || status.problem.is_some() {
+                GOAL_UNMET
+            } else {
+                GOAL_MET
+            };
+            match &task.kind {
+                TaskKindSpec::Position {
+                    joint,
+                    point,
+                    target,
+                    ..
+                } => {
+                    let Some(index) = skeleton.joint_index(joint) else {
+                        continue;
+                    };
+                    let effector = frames.point(index, DVec3::from_array(*point));
+                    let goal = DVec3::from_array(*target);
+                    self.goal_marker(&painter, rect, effector, goal, color, task.level == 1);
+                }
+                TaskKindSpec::Limb { target, limb, .. } => {
+                    let end = limb.map(|limb| limb.joints()[2]);
+                    if let Some(effector) = end.and_then(|end| self.session.joint_position(end)) {
+                        self.goal_marker(
+                            &painter,
+                            rect,
+                            effector,
+                            DVec3::from_array(*target),
+                            color,
+                            false,
+                        );
+                    }
+                }
+                TaskKindSpec::Gaze { target, .. } => {
+                    if let Some(goal) = self.to_screen(rect, DVec3::from_array(*target)) {
+                        painter.circle_stroke(goal, 7.0, Stroke::new(2.0, color));
+                        painter.circle_filled(goal, 2.5, color);
+                    }
+                }
+                TaskKindSpec::Com { .. } => has_balance = task.active,
+                _ => {}
+            }
+        }
+
+        if has_balance {
+            self.draw_balance(&painter, rect);
+        }
+
+        // The pulled point and where the cursor wants it.
+        if let (Some(grab), Some(point)) = (self.session.grab(), self.session.grabbed_point_world())
+            && let (Some(from), Some(to)) = (
+                self.to_screen(rect, point),
+                self.to_screen(rect, grab.target_world),
+            )
+        {
+            painter.line_segment([from, to], Stroke::new(1.5, PULL_COLOR));
+            painter.circle_filled(from, 4.0, PULL_COLOR);
+            painter.circle_stroke(to, 6.0, Stroke::new(2.0, PULL_COLOR));
+        }
+    }
+
+    fn goal_marker(
+        &self,
+        painter: &egui::Painter,
+        rect: egui::Rect,
+        effector: DVec3,
+        goal: DVec3,
+        color: Color32,
+        pinned: bool,
+    ) {
+        let Some(goal_px) = self.to_screen(rect, goal) else {
+            return;
+        };
+        if (effector - goal).length() > 1e-3
+            && let Some(effector_px) = self.to_screen(rect, effector)
+        {
+            painter.line_segment([effector_px, goal_px], Stroke::new(1.5, color));
+        }
+        if pinned {
+            let half = egui::vec2(4.5, 4.5);
+            painter.rect_filled(
+                egui::Rect::from_min_max(goal_px - half, goal_px + half),
+                1.0,
+                color,
+            );
+        } else {
+            painter.circle_stroke(goal_px, 5.0, Stroke::new(2.0, color));
+        }
+    }
+
+    /// The centre of mass, its projection on the floor, and the support polygon of the feet.
+    fn draw_balance(&self, painter: &egui::Painter, rect: egui::Rect) {
+        let com = self.session.frames().center_of_mass();
+        let floor_com = DVec3::new(com.x, 0.0, com.z);
+        let mut contact: Vec<(f64, f64)> = Vec::new();
+        for name in [
+            "l_talocrural",
+            "r_talocrural",
+            "l_tarsometatarsal_2",
+            "r_tarsometatarsal_2",
+            "l_metatarsophalangeal_2",
+            "r_metatarsophalangeal_2",
+        ] {
+            if let Some(position) = self.session.joint_position(name)
+                && position.y < 0.15
+            {
+                contact.push((position.x, position.z));
+                // The heel is behind the ankle.
+                if name.ends_with("talocrural") {
+                    contact.push((position.x, position.z - 0.06));
+                }
+            }
+        }
+        let hull = convex_hull(&contact);
+        if hull.len() >= 2 {
+            let mut points: Vec<Pos2> = hull
+                .iter()
+                .filter_map(|(x, z)| self.to_screen(rect, DVec3::new(*x, 0.0, *z)))
+                .collect();
+            if let Some(first) = points.first().copied() {
+                points.push(first);
+            }
+            painter.add(egui::Shape::line(points, Stroke::new(1.5, COM_COLOR)));
+        }
+        if let (Some(com_px), Some(floor_px)) =
+            (self.to_screen(rect, com), self.to_screen(rect, floor_com))
+        {
+            painter.line_segment(
+                [com_px, floor_px],
+                Stroke::new(1.0, COM_COLOR.gamma_multiply(0.6)),
+            );
+            painter.circle_stroke(com_px, 6.0, Stroke::new(2.0, COM_COLOR));
+            painter.line_segment(
+                [com_px - egui::vec2(6.0, 0.0), com_px + egui::vec2(6.0, 0.0)],
+                Stroke::new(1.5, COM_COLOR),
+            );
+            painter.line_segment(
+                [com_px - egui::vec2(0.0, 6.0), com_px + egui::vec2(0.0, 6.0)],
+                Stroke::new(1.5, COM_COLOR),
+            );
+            painter.circle_filled(floor_px, 3.5, COM_COLOR);
+        }
+    }
+}
+
+/// Convex hull of points in the floor plane (Andrew's monotone chain), counter-clockwise.
+pub(crate) fn convex_hull(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    let mut sorted: Vec<(f64, f64)> = points
+        .iter()
+        .copied()
+        .filter(|(x, z)| x.is_finite() && z.is_finite())
+        .collect();
+    sorted.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    sorted.dedup();
+    if sorted.len() < 3 {
+        return sorted;
+    }
+    let cross = |o: (f64, f64), a: (f64, f64), b: (f64, f64)| {
+        (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0)
+    };
+    let mut hull: Vec<(f64, f64)> = Vec::with_capacity(sorted.len() * 2);
+    for pass in 0..2 {
+        let start = hull.len();
+        let iter: Box<dyn Iterator<Item = &(f64, f64)>> = if pass == 0 {
+            Box::new(sorted.iter())
+        } else {
+            Box::new(sorted.iter().rev())
+        };
+        for &point in iter {
+            while hull.len() >= start + 2
+                && cross(hull[hull.len() - 2], hull[hull.len() - 1], point) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(point);
+        }
+        hull.pop();
+    }
+    hull
+}
+
+#[cfg(test)]
+mod tests {
+    use super::convex_hull;
+
+    #[test]
+    fn the_hull_of_a_square_with_an_inside_point_is_the_square() {
+        let hull = convex_hull(&[(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0), (0.5, 0.5)]);
+        assert_eq!(hull.len(), 4);
+        assert!(!hull.contains(&(0.5, 0.5)));
+        assert!(convex_hull(&[(f64::NAN, 0.0), (1.0, 1.0)]).len() == 1);
+    }
+}

@@ -1,0 +1,797 @@
+//! The side panel (body, selection, joint angles, swivel, pose library) and the tasks panel
+//! (tasks by priority level: status, reasons, editing, reordering).
+
+use egui::{Color32, RichText};
+use glam::{DQuat, DVec3};
+use stance_document::{LimbName, TaskKindSpec, TaskSpec};
+use stance_ik::Axes;
+
+use super::StanceApp;
+use crate::history::EditKind;
+use crate::posing::{MET_TOLERANCE, describe_joint, describe_task, joint_rotation};
+
+/// Colours of task states.
+const MET_COLOR: Color32 = Color32::from_rgb(90, 200, 120);
+const GAVE_WAY_COLOR: Color32 = Color32::from_rgb(235, 150, 60);
+const PROBLEM_COLOR: Color32 = Color32::from_rgb(240, 90, 90);
+const INACTIVE_COLOR: Color32 = Color32::GRAY;
+
+/// The payload of a task dragged onto another level.
+#[derive(Debug, Clone, Copy)]
+struct DraggedTask(usize);
+
+impl StanceApp {
+    pub(super) fn side_panel(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Humanoid");
+        ui.label("H-Anim 2.0 default body");
+        let current = self.session.level_of_articulation();
+        let mut chosen = current;
+        egui::ComboBox::from_label("Articulation")
+            .selected_text(format!("LOA {}", current.number()))
+            .show_ui(ui, |ui| {
+                for loa in stance_hanim::LevelOfArticulation::ALL {
+                    ui.selectable_value(&mut chosen, loa, format!("LOA {}", loa.number()));
+                }
+            });
+        if chosen != current {
+            self.set_level_of_articulation(chosen);
+        }
+        ui.label(format!(
+            "{} joints, {} DOF",
+            self.session.skeleton().joint_count(),
+            self.session.skeleton().dof_count()
+        ));
+        ui.horizontal(|ui| {
+            if ui
+                .add_enabled(self.history.can_undo(), egui::Button::new("Undo"))
+                .on_hover_text("Ctrl+Z")
+                .clicked()
+            {
+                self.undo();
+            }
+            if ui
+                .add_enabled(self.history.can_redo(), egui::Button::new("Redo"))
+                .on_hover_text("Ctrl+Shift+Z or Ctrl+Y")
+                .clicked()
+            {
+                self.redo();
+            }
+        });
+        ui.horizontal(|ui| {
+            if ui.button("Mirror").on_hover_text("M").clicked() {
+                self.mirror();
+            }
+            if ui.button("Rest pose").on_hover_text("R").clicked() {
+                self.reset_to_rest();
+            }
+        });
+        let copy = ui.button("Copy posture link").on_hover_text("L");
+        self.button_rects.push(("copy_link", copy.rect));
+        if copy.clicked() {
+            self.copy_link(ui.ctx());
+        }
+        ui.separator();
+        self.selection_section(ui);
+        ui.separator();
+        self.library_section(ui);
+    }
+
+    fn selection_section(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Selection");
+        let Some(joint_index) = self.selected_joint else {
+            ui.label("Click a body part to select it; drag it to pull it.");
+            return;
+        };
+        let skeleton = self.session.skeleton();
+        let Some(joint) = skeleton.joints().get(joint_index).cloned() else {
+            self.selected_joint = None;
+            return;
+        };
+        let lower = skeleton.lower_limits().to_vec();
+        let upper = skeleton.upper_limits().to_vec();
+        ui.label(RichText::new(describe_joint(&joint.name)).strong());
+        ui.label(RichText::new(&joint.name).small().weak());
+        ui.horizontal(|ui| {
+            if ui.button("Pin").on_hover_text("P").clicked() {
+                self.pin(joint_index);
+            }
+            if ui
+                .button("Hold orientation")
+                .on_hover_text("add an orientation task with the current orientation")
+                .clicked()
+            {
+                self.add_orientation_task(joint_index);
+            }
+        });
+        // Joint mode: each DOF within its anatomical limits.
+        let values = self.session.posture().values().to_vec();
+        let mut edit: Option<(usize, f64)> = None;
+        egui::Grid::new("joint_dofs").num_columns(2).show(ui, |ui| {
+            for (offset, dof) in joint.dofs.iter().enumerate() {
+                let index = joint.dof_start + offset;
+                let (Some(&value), Some(&low), Some(&high)) =
+                    (values.get(index), lower.get(index), upper.get(index))
+                else {
+                    continue;
+                };
+                ui.label(dof.name());
+                if dof.is_rotation() {
+                    let mut degrees = value.to_degrees();
+                    let range = low.to_degrees().max(-360.0)..=high.to_degrees().min(360.0);
+                    let response = ui.add(
+                        egui::DragValue::new(&mut degrees)
+                            .range(range)
+                            .speed(0.5)
+                            .suffix("°")
+                            .max_decimals(1),
+                    );
+                    if response.changed() {
+                        edit = Some((index, degrees.to_radians()));
+                    }
+                } else {
+                    let mut metres = value;
+                    if ui
+                        .add(
+                            egui::DragValue::new(&mut metres)
+                                .speed(0.005)
+                                .suffix(" m")
+                                .max_decimals(3),
+                        )
+                        .changed()
+                    {
+                        edit = Some((index, metres));
+                    }
+                }
+                ui.end_row();
+            }
+        });
+        if let Some((dof, value)) = edit {
+            self.record(EditKind::Joint(dof));
+            self.session.set_dof(dof, value);
+        }
+        if let Some(limb) = limb_of(&joint.name) {
+            self.swivel_section(ui, limb);
+        }
+    }
+
+    fn swivel_section(&mut self, ui: &mut egui::Ui, limb: LimbName) {
+        let Some((swivel, intervals)) = self.session.limb_swivel(limb) else {
+            return;
+        };
+        ui.separator();
+        ui.label(RichText::new(format!("{} swivel", limb.name().replace('_', " "))).strong());
+        let mut degrees = swivel.to_degrees();
+        let response = ui.add(
+            egui::Slider::new(&mut degrees, -180.0..=180.0)
+                .suffix("°")
+                .text("elbow/knee around the limb axis"),
+        );
+        let feasible: Vec<String> = intervals
+            .iter()
+            .map(|interval| {
+                format!(
+                    "{:.0}° to {:.0}°",
+                    interval.start.to_degrees(),
+                    interval.end.to_degrees()
+                )
+            })
+            .collect();
+        ui.label(
+            RichText::new(if feasible.is_empty() {
+                "no swivel keeps every joint within its limits".to_owned()
+            } else {
+                format!("within limits: {}", feasible.join(", "))
+            })
+            .small(),
+        );
+        if response.changed() {
+            self.record(EditKind::Swivel(limb as usize));
+            self.session.set_limb_swivel(limb, degrees.to_radians());
+        }
+    }
+
+    fn library_section(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Pose library");
+        ui.horizontal(|ui| {
+            let label = ui.label("Name");
+            ui.add(
+                egui::TextEdit::singleline(&mut self.library_name)
+                    .hint_text("pose name")
+                    .desired_width(120.0),
+            )
+            .labelled_by(label.id);
+            if ui.button("Save").clicked() {
+                let name = self.library_name.clone();
+                self.save_to_library(&name);
+            }
+        });
+        let mut load = None;
+        let mut delete = None;
+        for (index, entry) in self.library.entries().iter().enumerate() {
+            ui.horizontal(|ui| {
+                if ui.button("Load").clicked() {
+                    load = Some(index);
+                }
+                if ui.small_button("x").on_hover_text("delete").clicked() {
+                    delete = Some(index);
+                }
+                ui.label(&entry.name);
+            });
+        }
+        if let Some(index) = load {
+            self.load_from_library(index);
+        }
+        if let Some(index) = delete {
+            self.library.remove(index);
+            self.store_library();
+        }
+        ui.horizontal(|ui| {
+            if ui.button("Import…").clicked() {
+                self.import_file();
+            }
+            if ui.button("Export…").clicked() {
+                self.export_library();
+            }
+        });
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // Tasks
+
+    pub(super) fn tasks_panel(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Tasks");
+        ui.label(
+            RichText::new("Level 1 is obeyed first; a lower level only uses what is left.").small(),
+        );
+        ui.horizontal(|ui| {
+            ui.menu_button("Add task", |ui| self.add_task_menu(ui));
+            let table1 = ui
+                .button("Table 1 example")
+                .on_hover_text("the paper's example: foot, gaze and hand at level 1, balance at 2, other hand at 3");
+            self.button_rects.push(("table1", table1.rect));
+            if table1.clicked() {
+                self.load_table1_example();
+            }
+        });
+        ui.separator();
+
+        let mut tasks = self.session.tasks().to_vec();
+        let statuses = self.session.statuses().to_vec();
+        let mut levels: Vec<u32> = tasks.iter().map(|task| task.level).collect();
+        levels.sort_unstable();
+        levels.dedup();
+        let mut edit: Option<EditKind> = None;
+        let mut remove: Option<usize> = None;
+        let mut move_to_level: Option<(usize, u32)> = None;
+        let mut swap_levels: Option<(u32, u32)> = None;
+
+        for (position, &level) in levels.iter().enumerate() {
+            let members: Vec<usize> = (0..tasks.len())
+                .filter(|&index| tasks[index].level == level)
+                .collect();
+            let level_met = members.iter().all(|&index| {
+                !tasks[index].active
+                    || matches!(tasks[index].kind, TaskKindSpec::Posture { .. })
+                    || statuses
+                        .get(index)
+                        .is_some_and(|status| status.gave_way.is_none() && status.problem.is_none())
+            });
+            let frame = egui::Frame::new().inner_margin(4.0).corner_radius(4.0);
+            let (_, dropped) = ui.dnd_drop_zone::<DraggedTask, ()>(frame, |ui| {
+                ui.horizontal(|ui| {
+                    let (mark, color) = if level_met {
+                        ("all met", MET_COLOR)
+                    } else {
+                        ("not all met", GAVE_WAY_COLOR)
+                    };
+                    ui.label(RichText::new(format!("Level {level}")).strong());
+                    ui.colored_label(color, mark).on_hover_text(if level_met {
+                        "every task of this level is met"
+                    } else {
+                        "a task of this level is not met"
+                    });
+                    if position > 0
+                        && ui
+                            .small_button("up")
+                            .on_hover_text(
+                                "raise this level's priority (swap with the level above)",
+                            )
+                            .clicked()
+                    {
+                        swap_levels = Some((level, levels[position - 1]));
+                    }
+                    if position + 1 < levels.len()
+                        && ui
+                            .small_button("down")
+                            .on_hover_text(
+                                "lower this level's priority (swap with the level below)",
+                            )
+                            .clicked()
+                    {
+                        swap_levels = Some((level, levels[position + 1]));
+                    }
+                });
+                for &index in &members {
+                    let status = statuses.get(index).cloned();
+                    let id = egui::Id::NULL.with(("stance_task_drag", index));
+                    ui.dnd_drag_source(id, DraggedTask(index), |ui| {
+                        if let Some(kind) =
+                            task_editor(ui, index, &mut tasks[index], status.as_ref(), &mut remove)
+                        {
+                            edit = Some(kind);
+                        }
+                    });
+                }
+            });
+            if let Some(dragged) = dropped {
+                move_to_level = Some((dragged.0, level));
+            }
+        }
+        // Dropping below the last level makes a new lowest level.
+        let lowest = levels.last().copied().unwrap_or(0) + 1;
+        let (_, dropped) =
+            ui.dnd_drop_zone::<DraggedTask, ()>(egui::Frame::new().inner_margin(4.0), |ui| {
+                ui.label(
+                    RichText::new("drop a task here for a new lowest level")
+                        .small()
+                        .weak(),
+                );
+            });
+        if let Some(dragged) = dropped {
+            move_to_level = Some((dragged.0, lowest));
+        }
+
+        if let Some(index) = remove
+            && index < tasks.len()
+        {
+            tasks.remove(index);
+            self.commit_tasks(EditKind::Command, tasks);
+        } else if let Some((index, level)) = move_to_level {
+            if let Some(task) = tasks.get_mut(index) {
+                task.level = level;
+            }
+            self.commit_tasks(EditKind::Command, tasks);
+        } else if let Some((a, b)) = swap_levels {
+            for task in &mut tasks {
+                if task.level == a {
+                    task.level = b;
+                } else if task.level == b {
+                    task.level = a;
+                }
+            }
+            self.commit_tasks(EditKind::Command, tasks);
+        } else if let Some(kind) = edit {
+            self.commit_tasks(kind, tasks);
+        }
+    }
+
+    fn add_task_menu(&mut self, ui: &mut egui::Ui) {
+        let selected = self.selected_joint;
+        let selected_name = selected
+            .and_then(|joint| self.session.skeleton().joints().get(joint))
+            .map(|joint| describe_joint(&joint.name));
+        let label = |what: &str| match &selected_name {
+            Some(name) => format!("{what} of the {name}"),
+            None => format!("{what} (select a body part first)"),
+        };
+        if ui
+            .add_enabled(selected.is_some(), egui::Button::new(label("Position")))
+            .clicked()
+            && let Some(joint) = selected
+        {
+            self.add_position_task(joint);
+            ui.close();
+        }
+        if ui
+            .add_enabled(selected.is_some(), egui::Button::new(label("Orientation")))
+            .clicked()
+            && let Some(joint) = selected
+        {
+            self.add_orientation_task(joint);
+            ui.close();
+        }
+        if ui.button("Gaze (head looks at a point)").clicked() {
+            self.add_gaze_task();
+            ui.close();
+        }
+        if ui.button("Centre of mass (balance)").clicked() {
+            let com = self.session.frames().center_of_mass();
+            let mut task = TaskSpec::new(TaskKindSpec::Com {
+                axes: Axes::XZ,
+                target: [com.x, 0.0, com.z],
+            });
+            task.level = 2;
+            self.push_task(task);
+            ui.close();
+        }
+        if ui.button("Posture attraction (comfort)").clicked() {
+            let mut task = TaskSpec::new(TaskKindSpec::Posture {
+                joints: None,
+                reference: None,
+            });
+            task.level = 10;
+            task.weight = 0.05;
+            self.push_task(task);
+            ui.close();
+        }
+        ui.separator();
+        ui.label("Limb (closed form, with swivel)");
+        for limb in [
+            LimbName::LeftArm,
+            LimbName::RightArm,
+            LimbName::LeftLeg,
+            LimbName::RightLeg,
+        ] {
+            if ui.button(limb.name().replace('_', " ")).clicked() {
+                self.add_limb_task(limb);
+                ui.close();
+            }
+        }
+    }
+
+    /// The level for a new task: below every task but the posture attraction.
+    fn next_level(&self) -> u32 {
+        self.session
+            .tasks()
+            .iter()
+            .filter(|task| !matches!(task.kind, TaskKindSpec::Posture { .. }))
+            .map(|task| task.level)
+            .max()
+            .unwrap_or(0)
+            + 1
+    }
+
+    fn push_task(&mut self, task: TaskSpec) {
+        let mut tasks = self.session.tasks().to_vec();
+        tasks.push(task);
+        self.commit_tasks(EditKind::Command, tasks);
+    }
+
+    fn joint_name(&self, joint: usize) -> Option<String> {
+        self.session
+            .skeleton()
+            .joints()
+            .get(joint)
+            .map(|joint| joint.name.clone())
+    }
+
+    fn add_position_task(&mut self, joint: usize) {
+        let (Some(name), Some(position)) = (
+            self.joint_name(joint),
+            self.session.frames().joint_position.get(joint).copied(),
+        ) else {
+            return;
+        };
+        let mut task = TaskSpec::new(TaskKindSpec::Position {
+            joint: name,
+            point: [0.0; 3],
+            axes: Axes::XYZ,
+            target: position.to_array(),
+        });
+        task.level = self.next_level();
+        self.push_task(task);
+    }
+
+    fn add_orientation_task(&mut self, joint: usize) {
+        let Some(name) = self.joint_name(joint) else {
+            return;
+        };
+        let rotation = joint_rotation(self.session.frames(), joint);
+        let mut task = TaskSpec::new(TaskKindSpec::Orientation {
+            joint: name,
+            target: rotation.to_array(),
+        });
+        task.level = self.next_level();
+        self.push_task(task);
+    }
+
+    fn add_gaze_task(&mut self) {
+        let Some(head) = self.session.skeleton().joint_index("skullbase") else {
+            self.warn("This body has no head joint (skullbase) to aim.");
+            return;
+        };
+        let frames = self.session.frames();
+        let position = frames.joint_position.get(head).copied().unwrap_or_default();
+        let forward = joint_rotation(frames, head) * DVec3::Z;
+        let mut task = TaskSpec::new(TaskKindSpec::Gaze {
+            joint: "skullbase".to_owned(),
+            axis: [0.0, 0.0, 1.0],
+            point: [0.0; 3],
+            target: (position + forward * 1.5).to_array(),
+        });
+        task.level = self.next_level();
+        self.push_task(task);
+    }
+
+    fn add_limb_task(&mut self, limb: LimbName) {
+        let end = limb.joints()[2];
+        let Some(position) = self.session.joint_position(end) else {
+            self.warn(format!("This body has no {end} joint."));
+            return;
+        };
+        let swivel = self.session.limb_swivel(limb).map(|(swivel, _)| swivel);
+        let mut task = TaskSpec::new(TaskKindSpec::Limb {
+            limb: Some(limb),
+            joints: None,
+            target: position.to_array(),
+            swivel,
+            orientation: None,
+        });
+        task.level = self.next_level();
+        self.push_task(task);
+    }
+
+    /// The paper's Table 1: left foot on the floor, gaze and right hand on a sphere (level 1);
+    /// balance between the feet (level 2); left hand on a vertical bar (level 3); comfort.
+    pub fn load_table1_example(&mut self) {
+        let position = |name: &str| self.session.joint_position(name).unwrap_or_default();
+        let ankle = position("l_talocrural");
+        let sphere = [-0.3, 1.15, 0.4];
+        let bar = [0.35, 1.0, 0.2];
+        let mut tasks = Vec::new();
+        let mut foot = TaskSpec::new(TaskKindSpec::Position {
+            joint: "l_talocrural".to_owned(),
+            point: [0.0; 3],
+            axes: Axes::XYZ,
+            target: ankle.to_array(),
+        });
+        foot.level = 1;
+        tasks.push(foot);
+        tasks.push(TaskSpec::new(TaskKindSpec::Orientation {
+            joint: "l_talocrural".to_owned(),
+            target: DQuat::IDENTITY.to_array(),
+        }));
+        tasks.push(TaskSpec::new(TaskKindSpec::Gaze {
+            joint: "skullbase".to_owned(),
+            axis: [0.0, 0.0, 1.0],
+            point: [0.0; 3],
+            target: sphere,
+        }));
+        tasks.push(TaskSpec::new(TaskKindSpec::Position {
+            joint: "r_radiocarpal".to_owned(),
+            point: [0.0; 3],
+            axes: Axes::XYZ,
+            target: sphere,
+        }));
+        let left = position("l_talocrural");
+        let right = position("r_talocrural");
+        let between = (left + right) * 0.5;
+        let com_goal = between + (left - between) * 0.3;
+        let mut balance = TaskSpec::new(TaskKindSpec::Com {
+            axes: Axes::XZ,
+            target: [com_goal.x, 0.0, com_goal.z],
+        });
+        balance.level = 2;
+        tasks.push(balance);
+        let mut bar_task = TaskSpec::new(TaskKindSpec::Position {
+            joint: "l_radiocarpal".to_owned(),
+            point: [0.0; 3],
+            axes: Axes::XZ,
+            target: bar,
+        });
+        bar_task.level = 3;
+        tasks.push(bar_task);
+        let mut comfort = TaskSpec::new(TaskKindSpec::Posture {
+            joints: None,
+            reference: None,
+        });
+        comfort.level = 10;
+        comfort.weight = 0.05;
+        tasks.push(comfort);
+        self.commit_tasks(EditKind::Command, tasks);
+        self.inform("Table 1 of the paper: level 1 holds the left foot, the gaze and the right hand; balance is level 2; the left hand on the bar level 3.");
+    }
+}
+
+/// The limb a joint belongs to (H-Anim names), for the swivel handle.
+fn limb_of(joint: &str) -> Option<LimbName> {
+    let (side_left, rest) = if let Some(rest) = joint.strip_prefix("l_") {
+        (true, rest)
+    } else if let Some(rest) = joint.strip_prefix("r_") {
+        (false, rest)
+    } else {
+        return None;
+    };
+    let arm = matches!(rest, "shoulder" | "elbow" | "radiocarpal");
+    let leg = matches!(rest, "hip" | "knee" | "talocrural");
+    match (side_left, arm, leg) {
+        (true, true, _) => Some(LimbName::LeftArm),
+        (false, true, _) => Some(LimbName::RightArm),
+        (true, _, true) => Some(LimbName::LeftLeg),
+        (false, _, true) => Some(LimbName::RightLeg),
+        _ => None,
+    }
+}
+
+/// One task's row: a collapsing header with its status, and its fields. Returns the kind of
+/// edit when a field changed; sets `remove` when the task is to go.
+fn task_editor(
+    ui: &mut egui::Ui,
+    index: usize,
+    task: &mut TaskSpec,
+    status: Option<&crate::posing::TaskStatus>,
+    remove: &mut Option<usize>,
+) -> Option<EditKind> {
+    let mut edit = None;
+    let residual = status.and_then(|status| status.residual);
+    let is_posture = matches!(task.kind, TaskKindSpec::Posture { .. });
+    let (mark, color) = match status {
+        _ if !task.active => ("off", INACTIVE_COLOR),
+        Some(status) if status.problem.is_some() => ("error", PROBLEM_COLOR),
+        Some(status) if status.gave_way.is_some() => ("not all met", GAVE_WAY_COLOR),
+        _ => ("", MET_COLOR),
+    };
+    let residual_text = match residual {
+        Some(_) if is_posture => String::new(),
+        Some(value) if value < MET_TOLERANCE => "met".to_owned(),
+        Some(value) if task_is_angular(task) => format!("{:.1}° off", value.to_degrees()),
+        Some(value) => format!("{:.1} mm off", value * 1000.0),
+        None => String::new(),
+    };
+    let header =
+        RichText::new(format!("{}  {residual_text} {mark}", describe_task(task)).trim_end())
+            .color(color);
+    egui::CollapsingHeader::new(header)
+        .id_salt(("task", index))
+        .show(ui, |ui| {
+            if let Some(status) = status {
+                if let Some(problem) = &status.problem {
+                    ui.colored_label(PROBLEM_COLOR, problem);
+                }
+                if let Some(reason) = &status.gave_way {
+                    ui.colored_label(GAVE_WAY_COLOR, format!("gave way: {reason}"));
+                }
+            }
+            egui::Grid::new(("task_fields", index))
+                .num_columns(2)
+                .show(ui, |ui| {
+                    ui.label("active");
+                    if ui.checkbox(&mut task.active, "").changed() {
+                        edit = Some(EditKind::TaskField(index, "active"));
+                    }
+                    ui.end_row();
+                    ui.label("level");
+                    if ui
+                        .add(
+                            egui::DragValue::new(&mut task.level)
+                                .range(1..=99)
+                                .speed(0.05),
+                        )
+                        .changed()
+                    {
+                        edit = Some(EditKind::TaskField(index, "level"));
+                    }
+                    ui.end_row();
+                    ui.label("weight");
+                    if ui
+                        .add(
+                            egui::DragValue::new(&mut task.weight)
+                                .range(0.0..=100.0)
+                                .speed(0.01)
+                                .max_decimals(3),
+                        )
+                        .changed()
+                    {
+                        edit = Some(EditKind::TaskField(index, "weight"));
+                    }
+                    ui.end_row();
+                    if let Some(kind) = kind_fields(ui, index, &mut task.kind) {
+                        edit = Some(kind);
+                    }
+                });
+            if ui.button("Remove").clicked() {
+                *remove = Some(index);
+            }
+        });
+    edit
+}
+
+fn task_is_angular(task: &TaskSpec) -> bool {
+    matches!(
+        task.kind,
+        TaskKindSpec::Orientation { .. } | TaskKindSpec::Gaze { .. }
+    )
+}
+
+fn kind_fields(ui: &mut egui::Ui, index: usize, kind: &mut TaskKindSpec) -> Option<EditKind> {
+    let mut edit = None;
+    match kind {
+        TaskKindSpec::Position { axes, target, .. } | TaskKindSpec::Com { axes, target } => {
+            ui.label("axes");
+            if axes_editor(ui, axes) {
+                edit = Some(EditKind::TaskField(index, "axes"));
+            }
+            ui.end_row();
+            ui.label("goal");
+            if vector_editor(ui, target, *axes) {
+                edit = Some(EditKind::TaskField(index, "target"));
+            }
+            ui.end_row();
+        }
+        TaskKindSpec::Gaze { target, .. } => {
+            ui.label("look at");
+            if vector_editor(ui, target, Axes::XYZ) {
+                edit = Some(EditKind::TaskField(index, "target"));
+            }
+            ui.end_row();
+        }
+        TaskKindSpec::Limb { target, swivel, .. } => {
+            ui.label("goal");
+            if vector_editor(ui, target, Axes::XYZ) {
+                edit = Some(EditKind::TaskField(index, "target"));
+            }
+            ui.end_row();
+            ui.label("swivel");
+            let mut keep = swivel.is_none();
+            ui.horizontal(|ui| {
+                if ui.checkbox(&mut keep, "keep").changed() {
+                    *swivel = if keep { None } else { Some(0.0) };
+                    edit = Some(EditKind::TaskField(index, "swivel"));
+                }
+                if let Some(angle) = swivel {
+                    let mut degrees = angle.to_degrees();
+                    if ui
+                        .add(
+                            egui::DragValue::new(&mut degrees)
+                                .range(-180.0..=180.0)
+                                .suffix("°"),
+                        )
+                        .changed()
+                    {
+                        *angle = degrees.to_radians();
+                        edit = Some(EditKind::TaskField(index, "swivel"));
+                    }
+                }
+            });
+            ui.end_row();
+        }
+        TaskKindSpec::Orientation { target, .. } => {
+            let (axis, angle) = DQuat::from_array(*target).normalize().to_axis_angle();
+            ui.label("goal");
+            ui.label(format!(
+                "{:.0}° about ({:.2}, {:.2}, {:.2})",
+                angle.to_degrees(),
+                axis.x,
+                axis.y,
+                axis.z
+            ));
+            ui.end_row();
+        }
+        TaskKindSpec::Posture { .. } => {}
+    }
+    edit
+}
+
+fn axes_editor(ui: &mut egui::Ui, axes: &mut Axes) -> bool {
+    let mut flags = [axes.has(0), axes.has(1), axes.has(2)];
+    let mut changed = false;
+    ui.horizontal(|ui| {
+        for (flag, name) in flags.iter_mut().zip(["x", "y", "z"]) {
+            changed |= ui.toggle_value(flag, name).changed();
+        }
+    });
+    if changed && flags.iter().any(|flag| *flag) {
+        *axes = Axes::new(flags[0], flags[1], flags[2]);
+        return true;
+    }
+    false
+}
+
+fn vector_editor(ui: &mut egui::Ui, vector: &mut [f64; 3], axes: Axes) -> bool {
+    let mut changed = false;
+    ui.horizontal(|ui| {
+        for (component, value) in vector.iter_mut().enumerate() {
+            ui.add_enabled_ui(axes.has(component), |ui| {
+                changed |= ui
+                    .add(
+                        egui::DragValue::new(value)
+                            .speed(0.005)
+                            .max_decimals(3)
+                            .suffix(" m"),
+                    )
+                    .changed();
+            });
+        }
+    });
+    changed
+}

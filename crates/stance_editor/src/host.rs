@@ -1,0 +1,152 @@
+//! What the editor needs from the page (or the native shell) and what the page tells it.
+//! The browser implements [`HostHooks`] in `stance_web` with `localStorage`, the address bar,
+//! downloads and a file picker; native shells and tests use [`MemoryHost`].
+
+use std::cell::RefCell;
+use std::collections::BTreeMap;
+use std::rc::Rc;
+
+/// The graphics backend and adapter the viewport runs on, as the status bar names them.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct BackendSummary {
+    /// "WebGPU", "WebGL2", "Vulkan", ...
+    pub backend: String,
+    /// The adapter's name as the driver reports it.
+    pub adapter: String,
+}
+
+impl BackendSummary {
+    pub(crate) fn from_adapter(info: &wgpu::AdapterInfo) -> Self {
+        let backend = match info.backend {
+            wgpu::Backend::BrowserWebGpu => "WebGPU",
+            wgpu::Backend::Gl if cfg!(target_arch = "wasm32") => "WebGL2",
+            wgpu::Backend::Gl => "OpenGL",
+            wgpu::Backend::Vulkan => "Vulkan",
+            wgpu::Backend::Metal => "Metal",
+            wgpu::Backend::Dx12 => "DirectX 12",
+            wgpu::Backend::Noop => "no GPU",
+        };
+        let adapter = if info.name.is_empty() {
+            "unnamed adapter".to_owned()
+        } else {
+            info.name.clone()
+        };
+        Self {
+            backend: backend.to_owned(),
+            adapter,
+        }
+    }
+}
+
+/// What the editor asks of its host. Every method but the first has a do-nothing default.
+pub trait HostHooks {
+    /// Called once, after the first frame with the 3D scene has been rendered.
+    fn first_frame_rendered(&self, backend: &BackendSummary);
+
+    /// Durable text by key (the browser's `localStorage`); `None` when absent or unavailable.
+    fn load_text(&self, _key: &str) -> Option<String> {
+        None
+    }
+
+    /// Stores durable text; an error says why it could not (quota, private mode...).
+    fn save_text(&self, _key: &str, _text: &str) -> Result<(), String> {
+        Err("this shell has no storage".to_owned())
+    }
+
+    /// Puts the posture link's fragment in the address bar (without reloading) and returns
+    /// the whole link to share.
+    fn share_link(&self, fragment: &str) -> String {
+        format!("#{fragment}")
+    }
+
+    /// Offers `text` as a file download named `file_name`.
+    fn download(&self, _file_name: &str, _text: &str) -> Result<(), String> {
+        Err("this shell cannot download files".to_owned())
+    }
+
+    /// Opens the file picker; the chosen file arrives as [`HostMessage::OpenFile`].
+    fn pick_file(&self) -> Result<(), String> {
+        Err("this shell has no file picker".to_owned())
+    }
+
+    /// The editor's observable state changed (JSON, see `StanceApp::state_json`): the page
+    /// keeps it for its test hook and for other scripts.
+    fn publish_state(&self, _state_json: &str) {}
+}
+
+/// What the host tells the editor, through the sender given to `StanceApp::with_inbox`.
+#[derive(Debug, Clone, PartialEq)]
+pub enum HostMessage {
+    /// A posture link was opened (the address bar's fragment changed).
+    OpenLink(String),
+    /// The user picked or dropped a file.
+    OpenFile { name: String, bytes: Vec<u8> },
+    /// The host failed to do what the editor asked (reading a file...).
+    Failed(String),
+}
+
+/// Hooks that do nothing: the native shell.
+#[derive(Debug, Default)]
+pub struct NoHostHooks;
+
+impl HostHooks for NoHostHooks {
+    fn first_frame_rendered(&self, _backend: &BackendSummary) {}
+}
+
+/// A host that keeps everything in memory, shared through `Rc` so that a test can look at
+/// what the editor stored, downloaded and published.
+#[derive(Debug, Default, Clone)]
+pub struct MemoryHost {
+    pub inner: Rc<RefCell<MemoryHostState>>,
+}
+
+/// The contents of a [`MemoryHost`].
+#[derive(Debug, Default)]
+pub struct MemoryHostState {
+    pub storage: BTreeMap<String, String>,
+    pub downloads: Vec<(String, String)>,
+    pub address_fragment: Option<String>,
+    pub state_json: String,
+    pub file_requests: usize,
+    pub first_frame: Option<BackendSummary>,
+}
+
+impl HostHooks for MemoryHost {
+    fn first_frame_rendered(&self, backend: &BackendSummary) {
+        self.inner.borrow_mut().first_frame = Some(backend.clone());
+    }
+
+    fn load_text(&self, key: &str) -> Option<String> {
+        self.inner.borrow().storage.get(key).cloned()
+    }
+
+    fn save_text(&self, key: &str, text: &str) -> Result<(), String> {
+        self.inner
+            .borrow_mut()
+            .storage
+            .insert(key.to_owned(), text.to_owned());
+        Ok(())
+    }
+
+    fn share_link(&self, fragment: &str) -> String {
+        self.inner.borrow_mut().address_fragment = Some(fragment.to_owned());
+        format!("http://localhost/#{fragment}")
+    }
+
+    fn download(&self, file_name: &str, text: &str) -> Result<(), String> {
+        self.inner
+            .borrow_mut()
+            .downloads
+            .push((file_name.to_owned(), text.to_owned()));
+        Ok(())
+    }
+
+    fn pick_file(&self) -> Result<(), String> {
+        self.inner.borrow_mut().file_requests += 1;
+        Ok(())
+    }
+
+    fn publish_state(&self, state_json: &str) {
+        state_json.clone_into(&mut self.inner.borrow_mut().state_json);
+    }
+}

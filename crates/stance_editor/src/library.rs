@@ -1,0 +1,137 @@
+//! The pose library: named documents (posture and task set) kept in the browser's storage,
+//! and the autosave of the work in progress.
+
+use serde_json::{Value, json};
+use stance_document::Document;
+
+/// Storage key of the pose library.
+pub const LIBRARY_KEY: &str = "stance.library.v1";
+/// Storage key of the autosaved document.
+pub const AUTOSAVE_KEY: &str = "stance.autosave.v1";
+/// Most entries a library keeps (storage is small).
+pub const MAX_LIBRARY_ENTRIES: usize = 500;
+
+/// One saved pose.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LibraryEntry {
+    pub name: String,
+    pub document: Document,
+}
+
+/// Named documents, in the order they were saved.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PoseLibrary {
+    entries: Vec<LibraryEntry>,
+}
+
+impl PoseLibrary {
+    /// Reads a library; entries that cannot be read are skipped and named in the warnings.
+    pub fn from_json(text: &str) -> Result<(Self, Vec<String>), String> {
+        let value: Value = serde_json::from_str(text)
+            .map_err(|error| format!("the pose library is not valid JSON: {error}"))?;
+        let Some(entries) = value.get("entries").and_then(Value::as_array) else {
+            return Err("the pose library has no `entries` list".to_owned());
+        };
+        let mut library = Self::default();
+        let mut warnings = Vec::new();
+        for (index, entry) in entries.iter().enumerate() {
+            let name = entry
+                .get("name")
+                .and_then(Value::as_str)
+                .unwrap_or("unnamed")
+                .to_owned();
+            match entry.get("document").map(Document::from_json_value) {
+                Some(Ok(document)) => library.entries.push(LibraryEntry { name, document }),
+                Some(Err(error)) => warnings.push(format!("pose {index} ({name}): {error}")),
+                None => warnings.push(format!("pose {index} ({name}): no document")),
+            }
+        }
+        Ok((library, warnings))
+    }
+
+    /// The library as JSON: `{"version": 1, "entries": [{"name": ..., "document": {...}}]}`.
+    pub fn to_json(&self) -> String {
+        let entries: Vec<Value> = self
+            .entries
+            .iter()
+            .map(|entry| {
+                let document = serde_json::from_str::<Value>(&entry.document.to_json(false))
+                    .unwrap_or(Value::Null);
+                json!({"name": entry.name, "document": document})
+            })
+            .collect();
+        json!({"version": 1, "entries": entries}).to_string()
+    }
+
+    pub fn entries(&self) -> &[LibraryEntry] {
+        &self.entries
+    }
+
+    /// Saves `document` under `name` (trimmed; replaces a pose of the same name).
+    pub fn save(&mut self, name: &str, document: Document) -> Result<(), String> {
+        let name = name.trim();
+        if name.is_empty() {
+            return Err("give the pose a name".to_owned());
+        }
+        if let Some(entry) = self.entries.iter_mut().find(|entry| entry.name == name) {
+            entry.document = document;
+            return Ok(());
+        }
+        if self.entries.len() >= MAX_LIBRARY_ENTRIES {
+            return Err(format!(
+                "the library is full ({MAX_LIBRARY_ENTRIES} poses): delete some first"
+            ));
+        }
+        self.entries.push(LibraryEntry {
+            name: name.to_owned(),
+            document,
+        });
+        Ok(())
+    }
+
+    pub fn remove(&mut self, index: usize) -> Option<LibraryEntry> {
+        (index < self.entries.len()).then(|| self.entries.remove(index))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use stance_document::{TaskKindSpec, TaskSpec};
+
+    fn document(level: u32) -> Document {
+        let mut task = TaskSpec::new(TaskKindSpec::Com {
+            axes: stance_ik::Axes::XZ,
+            target: [0.01, 0.0, 0.02],
+        });
+        task.level = level;
+        Document {
+            tasks: vec![task],
+            ..Document::default()
+        }
+    }
+
+    #[test]
+    fn saved_poses_survive_a_round_trip_and_a_name_is_replaced() {
+        let mut library = PoseLibrary::default();
+        library.save("crouch", document(1)).unwrap();
+        library.save("reach", document(2)).unwrap();
+        library.save(" crouch ", document(3)).unwrap();
+        assert_eq!(library.entries().len(), 2);
+        let (back, warnings) = PoseLibrary::from_json(&library.to_json()).unwrap();
+        assert!(warnings.is_empty());
+        assert_eq!(back, library);
+        assert_eq!(back.entries()[0].document.tasks[0].level, 3);
+        assert!(library.save("  ", document(1)).is_err());
+    }
+
+    #[test]
+    fn a_damaged_library_keeps_what_it_can_and_says_what_it_dropped() {
+        let text = r#"{"entries":[{"name":"good","document":{}},{"name":"bad","document":{"tasks":[{"kind":"nope"}]}}]}"#;
+        let (library, warnings) = PoseLibrary::from_json(text).unwrap();
+        assert_eq!(library.entries().len(), 1);
+        assert_eq!(warnings.len(), 1);
+        assert!(warnings[0].contains("bad"), "{}", warnings[0]);
+        assert!(PoseLibrary::from_json("{not json").is_err());
+    }
+}

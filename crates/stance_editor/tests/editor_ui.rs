@@ -1,0 +1,308 @@
+//! The editor's panels and viewport driven like a user would, natively (egui_kittest): clicks
+//! on buttons found by their labels, keyboard shortcuts, pointer drags in the viewport.
+
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use egui::{Key, Modifiers, PointerButton, Pos2};
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
+use serde_json::Value;
+use stance_document::{Document, TaskKindSpec};
+use stance_editor::{MemoryHost, StanceApp};
+
+fn harness(host: &MemoryHost) -> Harness<'static, StanceApp> {
+    let app = StanceApp::without_gpu(Box::new(host.clone())).unwrap();
+    harness_for(app)
+}
+
+fn harness_for(app: StanceApp) -> Harness<'static, StanceApp> {
+    let frame = eframe::Frame::_new_kittest();
+    let mut harness = Harness::builder()
+        .with_size(egui::vec2(1280.0, 720.0))
+        .build_ui_state(move |ui, app: &mut StanceApp| app.show(ui, &frame), app);
+    settle(&mut harness);
+    harness
+}
+
+/// Runs frames until the solver has settled (or a generous bound).
+fn settle(harness: &mut Harness<'static, StanceApp>) {
+    for _ in 0..400 {
+        harness.step();
+        if harness.state().session().is_settled() {
+            break;
+        }
+    }
+    harness.run_steps(2);
+}
+
+fn state(harness: &Harness<'static, StanceApp>) -> Value {
+    serde_json::from_str(&harness.state().state_json()).unwrap()
+}
+
+fn document(harness: &Harness<'static, StanceApp>) -> Document {
+    harness.state().session().document()
+}
+
+fn screen_position(harness: &Harness<'static, StanceApp>, joint: &str) -> Pos2 {
+    let state = state(harness);
+    let xy = &state["screen"][joint];
+    Pos2::new(
+        xy[0].as_f64().unwrap() as f32,
+        xy[1].as_f64().unwrap() as f32,
+    )
+}
+
+fn joint_world(harness: &Harness<'static, StanceApp>, joint: &str) -> [f64; 3] {
+    let state = state(harness);
+    let xyz = &state["joints"][joint];
+    [0, 1, 2].map(|i| xyz[i].as_f64().unwrap())
+}
+
+fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+#[test]
+fn the_table1_example_is_added_by_a_click_and_undo_redo_restore_it_exactly() {
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    let before = document(&harness);
+    assert_eq!(
+        before.tasks.len(),
+        4,
+        "feet, balance and comfort by default"
+    );
+
+    harness.get_by_label("Table 1 example").click();
+    settle(&mut harness);
+    let after = document(&harness);
+    assert_eq!(after.tasks.len(), 7);
+    // Level 1 (left foot, gaze, right hand) is met once the solver has settled.
+    let statuses = state(&harness)["tasks"].as_array().unwrap().clone();
+    for task in statuses.iter().filter(|task| task["level"] == 1) {
+        let residual = task["residual"].as_f64().unwrap();
+        assert!(residual < 1e-3, "{task}");
+    }
+
+    harness.key_press_modifiers(Modifiers::COMMAND, Key::Z);
+    harness.run_steps(2);
+    assert_eq!(
+        document(&harness),
+        before,
+        "undo gives the document back exactly"
+    );
+    harness.key_press_modifiers(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z);
+    harness.run_steps(2);
+    assert_eq!(
+        document(&harness),
+        after,
+        "redo gives the edit back exactly"
+    );
+    harness.key_press_modifiers(Modifiers::COMMAND, Key::Z);
+    harness.key_press_modifiers(Modifiers::COMMAND, Key::Y);
+    harness.run_steps(2);
+    assert_eq!(document(&harness), after, "Ctrl+Y redoes too");
+}
+
+#[test]
+fn a_task_is_added_from_the_menu_and_levels_are_reordered_by_the_arrows() {
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    harness.get_by_label("Add task").click();
+    harness.run_steps(2);
+    harness.get_by_label("Gaze (head looks at a point)").click();
+    settle(&mut harness);
+    let tasks = document(&harness).tasks;
+    assert_eq!(tasks.len(), 5);
+    let gaze = tasks.last().unwrap();
+    assert!(matches!(gaze.kind, TaskKindSpec::Gaze { .. }));
+    assert_eq!(gaze.level, 3, "below the feet (1) and the balance (2)");
+
+    // Lower level 1 below level 2: the feet now give way to the balance.
+    harness.get_all_by_label("down").next().unwrap().click();
+    harness.run_steps(2);
+    let levels: Vec<u32> = document(&harness).tasks.iter().map(|t| t.level).collect();
+    assert_eq!(levels, vec![2, 2, 1, 10, 3]);
+    harness.key_press_modifiers(Modifiers::COMMAND, Key::Z);
+    harness.run_steps(2);
+    let levels: Vec<u32> = document(&harness).tasks.iter().map(|t| t.level).collect();
+    assert_eq!(levels, vec![1, 1, 2, 10, 3]);
+}
+
+#[test]
+fn dragging_the_right_hand_pulls_it_while_the_pinned_feet_hold() {
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    let foot_before = joint_world(&harness, "l_talocrural");
+    let hand_before = joint_world(&harness, "r_radiocarpal");
+    // Press on the forearm below the elbow, on the side away from the body.
+    let wrist = screen_position(&harness, "r_radiocarpal");
+    let elbow = screen_position(&harness, "r_elbow");
+    let pelvis = screen_position(&harness, "sacroiliac");
+    let outward = egui::vec2((wrist.x - pelvis.x).signum() * 3.0, 0.0);
+    let start = elbow + (wrist - elbow) * 0.6 + outward;
+    let end = start + egui::vec2(-60.0, -120.0);
+
+    harness.event(egui::Event::PointerMoved(start));
+    harness.step();
+    harness.event(egui::Event::PointerButton {
+        pos: start,
+        button: PointerButton::Primary,
+        pressed: true,
+        modifiers: Modifiers::NONE,
+    });
+    harness.step();
+    for step in 1..=20 {
+        let t = step as f32 / 20.0;
+        harness.event(egui::Event::PointerMoved(start + (end - start) * t));
+        harness.step();
+    }
+    assert_eq!(
+        state(&harness)["pulling"],
+        true,
+        "the drag started on the body"
+    );
+    assert_eq!(
+        state(&harness)["selected"],
+        "r_elbow",
+        "the forearm was grabbed"
+    );
+    for _ in 0..40 {
+        harness.step();
+    }
+    let hand_during = screen_position(&harness, "r_radiocarpal");
+    harness.event(egui::Event::PointerButton {
+        pos: end,
+        button: PointerButton::Primary,
+        pressed: false,
+        modifiers: Modifiers::NONE,
+    });
+    settle(&mut harness);
+    assert_eq!(state(&harness)["pulling"], false);
+
+    let hand_after = joint_world(&harness, "r_radiocarpal");
+    assert!(
+        hand_after[1] > hand_before[1] + 0.1,
+        "the hand rose toward the pointer: {hand_before:?} -> {hand_after:?}"
+    );
+    assert!(
+        hand_during.distance(end) < start.distance(end) * 0.5,
+        "on screen the hand followed the pointer: {start:?} -> {hand_during:?}, pointer at {end:?}"
+    );
+    let foot_after = joint_world(&harness, "l_talocrural");
+    assert!(
+        distance(foot_before, foot_after) < 1e-3,
+        "the pinned foot moved {} m",
+        distance(foot_before, foot_after)
+    );
+    // One undo step puts the hand back.
+    harness.key_press_modifiers(Modifiers::COMMAND, Key::Z);
+    harness.run_steps(2);
+    assert!(distance(joint_world(&harness, "r_radiocarpal"), hand_before) < 1e-9);
+}
+
+#[test]
+fn a_copied_link_opens_the_same_posture_and_tasks_and_a_tampered_one_says_so() {
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    harness.get_by_label("Table 1 example").click();
+    settle(&mut harness);
+    harness.get_by_label("Copy posture link").click();
+    harness.run_steps(2);
+    let fragment = host.inner.borrow().address_fragment.clone().unwrap();
+    assert!(fragment.len() < 600, "{} characters", fragment.len());
+    let original = document(&harness);
+
+    let mut opened = StanceApp::without_gpu(Box::new(MemoryHost::default())).unwrap();
+    opened.open_startup(Some(&format!("#{fragment}")));
+    let reopened = opened.session().document();
+    assert_eq!(reopened.tasks.len(), original.tasks.len());
+    for (joint, dofs) in original.posture.joints.iter() {
+        for (dof, value) in dofs.iter() {
+            let other = reopened.posture.get(joint, dof).unwrap_or(0.0);
+            assert!(
+                (other - value).abs() < 1e-4,
+                "{joint}.{}: {value} vs {other}",
+                dof.name()
+            );
+        }
+    }
+    assert!(opened.notice().is_some_and(|notice| !notice.is_error));
+
+    let mut tampered_fragment = fragment.clone().into_bytes();
+    let middle = tampered_fragment.len() / 2;
+    tampered_fragment[middle] = if tampered_fragment[middle] == b'A' {
+        b'B'
+    } else {
+        b'A'
+    };
+    let tampered = String::from_utf8(tampered_fragment).unwrap();
+    let mut damaged = StanceApp::without_gpu(Box::new(MemoryHost::default())).unwrap();
+    let default_document = damaged.session().document();
+    damaged.open_startup(Some(&tampered));
+    let notice = damaged.notice().unwrap();
+    assert!(
+        notice.is_error && notice.text.contains("could not be opened"),
+        "{}",
+        notice.text
+    );
+    assert_eq!(
+        damaged.session().document(),
+        default_document,
+        "the editor opens normally"
+    );
+}
+
+#[test]
+fn work_survives_a_reload_and_the_library_keeps_named_poses() {
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    harness.get_by_label("Table 1 example").click();
+    settle(&mut harness);
+    // Save it in the library under a name typed in the panel.
+    let name_field = harness.get_by_role(egui::accesskit::Role::TextInput);
+    name_field.focus();
+    name_field.type_text("reach for the ball");
+    harness.run_steps(2);
+    harness.get_by_label("Save").click();
+    harness.run_steps(2);
+    let edited = document(&harness);
+    // Let the autosave interval pass.
+    std::thread::sleep(std::time::Duration::from_millis(1100));
+    harness.run_steps(2);
+    drop(harness);
+
+    let mut reloaded = StanceApp::without_gpu(Box::new(host.clone())).unwrap();
+    reloaded.open_startup(None);
+    assert_eq!(
+        reloaded.session().document(),
+        edited,
+        "autosave restored the work"
+    );
+    let names: Vec<&str> = reloaded
+        .library()
+        .entries()
+        .iter()
+        .map(|entry| entry.name.as_str())
+        .collect();
+    assert_eq!(names, vec!["reach for the ball"]);
+}
+
+#[test]
+fn a_bad_file_says_what_is_wrong_and_changes_nothing() {
+    let mut app = StanceApp::without_gpu(Box::new(MemoryHost::default())).unwrap();
+    let before = app.session().document();
+    app.open_file(
+        "pose.json",
+        br#"{"tasks":[{"kind":"position","joint":"l_wirst","target":[0,1]}]}"#,
+    );
+    let notice = app.notice().unwrap();
+    assert!(notice.is_error, "{}", notice.text);
+    assert!(notice.text.contains("target"), "{}", notice.text);
+    assert_eq!(app.session().document(), before);
+    app.open_file("avatar.glb", b"glTF");
+    assert!(app.notice().unwrap().is_error);
+    app.open_file("binary.json", &[0xff, 0xfe, 0x00]);
+    assert!(app.notice().unwrap().text.contains("not a text"));
+    assert_eq!(app.session().document(), before);
+}
