@@ -42,8 +42,8 @@ export async function serve() {
 }
 
 /** Opens the editor and waits for its first rendered frame; collects console errors. */
-export async function openEditor(context, url) {
-  const page = context.pages()[0] ?? (await context.newPage());
+export async function openEditor(context, url, existingPage = undefined) {
+  const page = existingPage ?? context.pages()[0] ?? (await context.newPage());
   const errors = [];
   page.on("console", (message) => {
     if (message.type() === "error") errors.push(message.text());

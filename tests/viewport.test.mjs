@@ -47,19 +47,22 @@ for (const [name, configuration] of Object.entries(CONFIGURATIONS)) {
       const before = await page.screenshot();
       saveArtifact(`viewport-${name}.png`, before);
       const image = decodePng(before);
-      // The viewport is right of the side panel and between the menu and status bars.
-      const viewport = { x: 300, y: 40, width: image.width - 320, height: image.height - 80 };
+      // The viewport's rectangle, as the editor reports it (between the panels and bars).
+      const state = JSON.parse(await page.evaluate(() => window.stance.state_json()));
+      const [vx, vy, vw, vh] = state.viewport;
+      const viewport = { x: Math.ceil(vx), y: Math.ceil(vy), width: Math.floor(vw), height: Math.floor(vh) };
       const bodyBefore = bodyPixelsIn(image, viewport);
       assert.ok(bodyBefore > 800, `only ${bodyBefore} body-coloured pixels in the viewport`);
       // The corners of the viewport are background or floor, not body.
       assert.ok(!isBodyColour(image.at(viewport.x + 10, viewport.y + 10)));
 
-      const startX = viewport.x + viewport.width * 0.75;
-      const startY = viewport.y + viewport.height * 0.3;
+      // Start the drag on the background (not on the body, which would pull it).
+      const startX = viewport.x + viewport.width * 0.9;
+      const startY = viewport.y + viewport.height * 0.15;
       await page.mouse.move(startX, startY);
       await page.mouse.down();
       for (let step = 1; step <= 10; step += 1) {
-        await page.mouse.move(startX - step * 25, startY + step * 4);
+        await page.mouse.move(startX - step * 15, startY + step * 4);
       }
       await page.mouse.up();
       await page.waitForTimeout(500);

@@ -161,11 +161,9 @@ impl StanceApp {
         ui.separator();
         ui.label(RichText::new(format!("{} swivel", limb.name().replace('_', " "))).strong());
         let mut degrees = swivel.to_degrees();
-        let response = ui.add(
-            egui::Slider::new(&mut degrees, -180.0..=180.0)
-                .suffix("°")
-                .text("elbow/knee around the limb axis"),
-        );
+        let response = ui
+            .add(egui::Slider::new(&mut degrees, -180.0..=180.0).suffix("°"))
+            .on_hover_text("turns the elbow or knee around the shoulder-wrist (hip-ankle) axis; the hand or foot stays");
         let feasible: Vec<String> = intervals
             .iter()
             .map(|interval| {

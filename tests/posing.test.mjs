@@ -1,0 +1,181 @@
+// End to end: posing in the built site, as a user does it with the mouse (WebGL2).
+// The page's test hook `window.stance.state_json()` exposes the document, the joint positions
+// (world and screen) and the rectangles of the main buttons.
+import { after, before, describe, test } from "node:test";
+import assert from "node:assert/strict";
+import { CONFIGURATIONS, launch, openEditor, saveArtifact, serve } from "./browser.mjs";
+
+let site;
+let context;
+before(async () => {
+  site = await serve();
+  context = await launch(CONFIGURATIONS.webgl2);
+  // Each new tab starts from empty storage (no autosave of another test); a reload in the
+  // same tab keeps it.
+  await context.addInitScript(() => {
+    if (!window.sessionStorage.getItem("stance-test-tab")) {
+      window.localStorage.clear();
+      window.sessionStorage.setItem("stance-test-tab", "1");
+    }
+  });
+});
+after(async () => {
+  await context?.close();
+  site.server.close();
+});
+
+async function state(page) {
+  return JSON.parse(await page.evaluate(() => window.stance.state_json()));
+}
+
+async function settled(page, timeout = 20_000) {
+  await page.waitForFunction(
+    () => JSON.parse(window.stance.state_json()).settled, null, { timeout },
+  );
+  return state(page);
+}
+
+async function clickButton(page, name) {
+  const { buttons } = await state(page);
+  assert.ok(buttons[name], `the ${name} button is on screen`);
+  const [x, y, width, height] = buttons[name];
+  await page.mouse.click(x + width / 2, y + height / 2);
+}
+
+const distance = (a, b) => Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+const percentile = (values, p) => {
+  const sorted = [...values].sort((a, b) => a - b);
+  return sorted[Math.min(sorted.length - 1, Math.floor(p * sorted.length))];
+};
+
+async function freshEditor(url = site.url) {
+  const page = await context.newPage();
+  const opened = await openEditor(context, url, page);
+  await settled(page);
+  return opened;
+}
+
+describe("posing in the browser", () => {
+  test("dragging the right forearm pulls the hand toward the pointer while the pinned feet hold", async () => {
+    const { page, errors } = await freshEditor();
+    const start = await state(page);
+    const footBefore = start.joints.l_talocrural;
+    const otherFootBefore = start.joints.r_talocrural;
+    const handBefore = start.joints.r_radiocarpal;
+    const [wx, wy] = start.screen.r_radiocarpal;
+    const [ex, ey] = start.screen.r_elbow;
+    const [px] = start.screen.sacroiliac;
+    const grabX = ex + (wx - ex) * 0.6 + Math.sign(wx - px) * 3;
+    const grabY = ey + (wy - ey) * 0.6;
+    const goalX = grabX - 60;
+    const goalY = grabY - 140;
+
+    const frameMs = [];
+    const solverMs = [];
+    await page.mouse.move(grabX, grabY);
+    await page.mouse.down();
+    for (let step = 1; step <= 30; step += 1) {
+      await page.mouse.move(grabX + (goalX - grabX) * step / 30, grabY + (goalY - grabY) * step / 30);
+      const sample = await state(page);
+      frameMs.push(sample.frame_ms);
+      solverMs.push(sample.solver_ms);
+    }
+    const during = await state(page);
+    assert.equal(during.pulling, true, "the drag grabbed the body");
+    assert.equal(during.selected, "r_elbow", "the forearm was grabbed");
+    // Hold still while the solver catches up, then let go.
+    for (let i = 0; i < 20; i += 1) {
+      await page.waitForTimeout(50);
+      const sample = await state(page);
+      frameMs.push(sample.frame_ms);
+      solverMs.push(sample.solver_ms);
+    }
+    const held = await state(page);
+    await page.mouse.up();
+    const end = await settled(page);
+    saveArtifact("pull-webgl2.png", await page.screenshot());
+
+    const [hx, hy] = held.screen.r_radiocarpal;
+    const before = Math.hypot(wx - goalX, wy - goalY);
+    const afterPull = Math.hypot(hx - goalX, hy - goalY);
+    assert.ok(afterPull < before * 0.5,
+      `the hand moved toward the pointer on screen: ${before.toFixed(0)} px -> ${afterPull.toFixed(0)} px`);
+    assert.ok(end.joints.r_radiocarpal[1] > handBefore[1] + 0.1, "the hand rose");
+    assert.ok(distance(end.joints.l_talocrural, footBefore) < 1e-3,
+      `the pinned left foot moved ${distance(end.joints.l_talocrural, footBefore)} m`);
+    assert.ok(distance(end.joints.r_talocrural, otherFootBefore) < 1e-3, "the right foot held");
+    console.log(`[pull] frame time while dragging (egui CPU): median ${percentile(frameMs, 0.5).toFixed(1)} ms, `
+      + `p95 ${percentile(frameMs, 0.95).toFixed(1)} ms; solver median ${percentile(solverMs, 0.5).toFixed(2)} ms, `
+      + `p95 ${percentile(solverMs, 0.95).toFixed(2)} ms`);
+    assert.deepEqual(errors, [], `console errors: ${errors.join(" / ")}`);
+    await page.close();
+  });
+
+  test("the Table 1 example set up from the tasks panel reaches its level-1 goals", async () => {
+    const { page, errors } = await freshEditor();
+    await clickButton(page, "table1");
+    const result = await settled(page);
+    const levelOne = result.tasks.filter((task) => task.level === 1);
+    assert.equal(levelOne.length, 4, "left foot position and orientation, gaze, right hand");
+    for (const task of levelOne) {
+      assert.ok(task.residual < 1e-4, `${task.description}: residual ${task.residual}`);
+      assert.equal(task.gave_way, null);
+    }
+    saveArtifact("table1-webgl2.png", await page.screenshot());
+    assert.deepEqual(errors, [], `console errors: ${errors.join(" / ")}`);
+    await page.close();
+  });
+
+  test("a copied posture link opens the same posture and tasks; a tampered link says so", async () => {
+    const { page } = await freshEditor();
+    await clickButton(page, "table1");
+    const original = await settled(page);
+    await clickButton(page, "copy_link");
+    await page.waitForFunction(() => window.location.hash.length > 1);
+    const link = page.url();
+    const fragment = link.slice(link.indexOf("#") + 1);
+    console.log(`[link] Table 1 document: ${fragment.length} characters after '#', ${link.length} in all`);
+    assert.ok(fragment.length < 600, `${fragment.length} characters`);
+    await page.close();
+
+    const { page: opened, errors } = await freshEditor(link);
+    const restored = await state(opened);
+    assert.equal(restored.tasks.length, original.tasks.length);
+    assert.deepEqual(restored.tasks.map((t) => [t.level, t.description]),
+      original.tasks.map((t) => [t.level, t.description]));
+    let worst = 0;
+    for (const [joint, position] of Object.entries(original.joints)) {
+      worst = Math.max(worst, distance(position, restored.joints[joint]));
+    }
+    // 0.005-degree steps over a chain of ~10 joints of ~1.7 m: well under a millimetre.
+    assert.ok(worst < 5e-4, `a joint is ${worst} m from where the link's author had it`);
+    assert.deepEqual(errors, [], `console errors: ${errors.join(" / ")}`);
+    await opened.close();
+
+    const middle = Math.floor(fragment.length / 2);
+    const swapped = fragment[middle] === "A" ? "B" : "A";
+    const tampered = `${site.url}#${fragment.slice(0, middle)}${swapped}${fragment.slice(middle + 1)}`;
+    const { page: damaged } = await freshEditor(tampered);
+    const shown = await state(damaged);
+    assert.ok(shown.notice?.error, "a message says the link is damaged");
+    assert.match(shown.notice.text, /could not be opened/);
+    assert.equal(shown.tasks.length, 4, "the editor opened normally with its default tasks");
+    // Still usable: the Table 1 button works.
+    await clickButton(damaged, "table1");
+    assert.equal((await settled(damaged)).tasks.length, 7);
+    saveArtifact("tampered-link-webgl2.png", await damaged.screenshot());
+    await damaged.close();
+  });
+
+  test("work survives a page reload (autosave)", async () => {
+    const { page } = await freshEditor();
+    await clickButton(page, "table1");
+    const edited = await settled(page);
+    await page.waitForTimeout(1500);
+    await page.reload();
+    await page.waitForFunction(() => document.body.dataset.firstFrameMs);
+    const reloaded = await settled(page);
+    assert.deepEqual(reloaded.document, edited.document);
+    await page.close();
+  });
+});
