@@ -2,6 +2,7 @@
 //! middle, where the body is pulled, pinned and selected. Every edit goes through the undo
 //! history; the document autosaves; posture links open and copy.
 
+mod handles;
 mod overlay;
 mod panels;
 
@@ -17,6 +18,7 @@ use stance_render::{
     pick_capsule,
 };
 
+use self::handles::HandleDrag;
 use crate::history::{EditKind, History};
 use crate::host::{BackendSummary, HostHooks, HostMessage};
 use crate::library::{AUTOSAVE_KEY, LIBRARY_KEY, PoseLibrary};
@@ -68,6 +70,7 @@ pub struct StanceApp {
     selected_joint: Option<usize>,
     hovered_joint: Option<usize>,
     pull: Option<PullGesture>,
+    handle_drag: Option<HandleDrag>,
     trace: Vec<DVec3>,
     notice: Option<Notice>,
     library: PoseLibrary,
@@ -125,6 +128,7 @@ impl StanceApp {
             selected_joint: None,
             hovered_joint: None,
             pull: None,
+            handle_drag: None,
             trace: Vec::new(),
             notice: None,
             library: PoseLibrary::default(),
@@ -880,17 +884,28 @@ impl StanceApp {
         let press_origin = ui.input(|input| input.pointer.press_origin());
         let interact_pos = response.interact_pointer_pos();
 
-        // Start a pull when a drag with the primary button (no Shift, one finger) starts on
-        // the body; otherwise the drag moves the camera.
+        // A drag with the primary button (no Shift, one finger) that starts on a handle (a
+        // task's goal, a ring of the selected joint) moves it; on the body it pulls that
+        // point; elsewhere it moves the camera.
         if response.drag_started_by(egui::PointerButton::Primary)
             && !input.shift_held
             && input.touch_count < 2
             && let Some(origin) = press_origin
-            && let Some((joint, point_world)) = self.pick(&bones, origin)
         {
-            self.begin_pull(joint, point_world);
+            if let Some(drag) = self.pick_handle(origin) {
+                self.begin_handle_drag(drag);
+            } else if let Some((joint, point_world)) = self.pick(&bones, origin) {
+                self.begin_pull(joint, point_world);
+            }
         }
-        if let Some(pull) = &self.pull {
+        if self.handle_drag.is_some() {
+            match interact_pos {
+                Some(pointer) if response.dragged() && input.touch_count < 2 => {
+                    self.drag_handle(pointer);
+                }
+                _ => self.end_handle_drag(),
+            }
+        } else if let Some(pull) = &self.pull {
             if response.dragged() && input.touch_count < 2 {
                 if let Some(pointer) = interact_pos
                     && let Some(target) =
@@ -905,7 +920,7 @@ impl StanceApp {
             ui.ctx().request_repaint();
         }
 
-        self.hovered_joint = if self.pull.is_some() {
+        self.hovered_joint = if self.pull.is_some() || self.handle_drag.is_some() {
             None
         } else {
             pointer.and_then(|pointer| self.pick(&bones, pointer).map(|(joint, _)| joint))
@@ -955,7 +970,7 @@ impl StanceApp {
                 self.trace.push(point);
             }
         }
-        if !self.session.is_settled() || self.pull.is_some() {
+        if !self.session.is_settled() || self.pull.is_some() || self.handle_drag.is_some() {
             ui.ctx().request_repaint();
         }
 
@@ -989,10 +1004,14 @@ impl StanceApp {
             }
         }
         self.draw_overlay(ui.painter(), rect);
-        if self.hovered_joint.is_some() && self.pull.is_none() {
-            ui.ctx().set_cursor_icon(egui::CursorIcon::Grab);
-        } else if self.pull.is_some() {
+        self.draw_rings(&ui.painter().with_clip_rect(rect), rect);
+        let over_handle = self.pull.is_none()
+            && self.handle_drag.is_none()
+            && pointer.is_some_and(|pointer| self.pick_handle(pointer).is_some());
+        if self.pull.is_some() || self.handle_drag.is_some() {
             ui.ctx().set_cursor_icon(egui::CursorIcon::Grabbing);
+        } else if over_handle || self.hovered_joint.is_some() {
+            ui.ctx().set_cursor_icon(egui::CursorIcon::Grab);
         }
     }
 
@@ -1093,6 +1112,29 @@ impl StanceApp {
             .collect();
         let document = serde_json::from_str::<Value>(&self.session.document().to_json(false))
             .unwrap_or(Value::Null);
+        let goals: Vec<Value> = self
+            .goal_handles()
+            .into_iter()
+            .filter_map(|(task, goal)| {
+                let pixel = self.to_screen(rect, goal)?;
+                Some(json!({"task": task, "screen": [pixel.x, pixel.y]}))
+            })
+            .collect();
+        let rings: Vec<Value> = self
+            .rings()
+            .iter()
+            .filter_map(|ring| {
+                let point = self.ring_points(rect, ring).first().copied()?;
+                let centre = self.to_screen(rect, ring.centre_world)?;
+                Some(json!({
+                    "dof": skeleton.dof_name(ring.dof),
+                    "index": ring.dof,
+                    "value": self.session.posture().values().get(ring.dof),
+                    "screen": [point.x, point.y],
+                    "centre": [centre.x, centre.y],
+                }))
+            })
+            .collect();
         json!({
             "revision": self.session.revision(),
             "settled": self.session.is_settled(),
@@ -1105,6 +1147,7 @@ impl StanceApp {
             "notice": self.notice.as_ref().map(|notice| json!({"text": notice.text, "error": notice.is_error})),
             "selected": self.selected_joint.and_then(|joint| skeleton.joints().get(joint)).map(|joint| joint.name.clone()),
             "pulling": self.pull.is_some(),
+            "dragging_handle": self.handle_drag.is_some(),
             "undo_steps": self.history.undo_steps(),
             "can_redo": self.history.can_redo(),
             "library": self.library.entries().iter().map(|entry| entry.name.clone()).collect::<Vec<_>>(),
@@ -1112,6 +1155,8 @@ impl StanceApp {
             "frame_ms": self.frame_ms,
             "viewport": [rect.min.x, rect.min.y, rect.width(), rect.height()],
             "buttons": buttons,
+            "goals": goals,
+            "rings": rings,
         })
         .to_string()
     }
@@ -1163,6 +1208,14 @@ const HELP_ROWS: &[(&str, &str)] = &[
         "grab and pull that point (higher priorities hold)",
     ),
     ("Escape while pulling", "cancel the pull"),
+    (
+        "Left drag on a goal marker",
+        "move that task's goal (in the plane facing you)",
+    ),
+    (
+        "Left drag on a ring of the selected joint",
+        "turn that joint about the ring's axis (within its limits)",
+    ),
     (
         "Click a body part",
         "select it (joint angles, swivel, tasks)",

@@ -306,3 +306,137 @@ fn a_bad_file_says_what_is_wrong_and_changes_nothing() {
     assert!(app.notice().unwrap().text.contains("not a text"));
     assert_eq!(app.session().document(), before);
 }
+
+fn drag(harness: &mut Harness<'static, StanceApp>, path: &[Pos2]) {
+    let (Some(&first), Some(&last)) = (path.first(), path.last()) else {
+        return;
+    };
+    harness.event(egui::Event::PointerMoved(first));
+    harness.step();
+    harness.event(egui::Event::PointerButton {
+        pos: first,
+        button: PointerButton::Primary,
+        pressed: true,
+        modifiers: Modifiers::NONE,
+    });
+    harness.step();
+    for &point in &path[1..] {
+        harness.event(egui::Event::PointerMoved(point));
+        harness.step();
+    }
+    harness.event(egui::Event::PointerButton {
+        pos: last,
+        button: PointerButton::Primary,
+        pressed: false,
+        modifiers: Modifiers::NONE,
+    });
+    harness.step();
+}
+
+#[test]
+fn dragging_a_goal_marker_moves_the_goal_and_the_hand_follows() {
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    harness.get_by_label("Table 1 example").click();
+    settle(&mut harness);
+    let before = document(&harness);
+    let hand_task = before
+        .tasks
+        .iter()
+        .position(|task| matches!(&task.kind, TaskKindSpec::Position { joint, .. } if joint == "r_radiocarpal"))
+        .unwrap();
+    let goal = state(&harness)["goals"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|goal| goal["task"] == hand_task)
+        .unwrap()["screen"]
+        .clone();
+    let start = Pos2::new(
+        goal[0].as_f64().unwrap() as f32,
+        goal[1].as_f64().unwrap() as f32,
+    );
+    let path: Vec<Pos2> = (0..=10)
+        .map(|step| start + egui::vec2(0.0, -4.0 * step as f32))
+        .collect();
+    drag(&mut harness, &path);
+    settle(&mut harness);
+    let after = document(&harness);
+    let target = |document: &Document| match &document.tasks[hand_task].kind {
+        TaskKindSpec::Position { target, .. } => *target,
+        _ => unreachable!(),
+    };
+    assert!(
+        target(&after)[1] > target(&before)[1] + 0.05,
+        "the goal rose: {:?} -> {:?}",
+        target(&before),
+        target(&after)
+    );
+    let hand = joint_world(&harness, "r_radiocarpal");
+    assert!(
+        distance(hand, target(&after)) < 1e-3,
+        "the hand (level 1) is on its new goal"
+    );
+    harness.key_press_modifiers(Modifiers::COMMAND, Key::Z);
+    harness.run_steps(2);
+    assert_eq!(
+        target(&document(&harness)),
+        target(&before),
+        "one undo puts the goal back"
+    );
+}
+
+#[test]
+fn the_ring_gizmo_turns_the_selected_joint_within_its_limits() {
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    // Select the right forearm (the elbow joint carries it) by clicking it.
+    let wrist = screen_position(&harness, "r_radiocarpal");
+    let elbow = screen_position(&harness, "r_elbow");
+    let pelvis = screen_position(&harness, "sacroiliac");
+    let outward = egui::vec2((wrist.x - pelvis.x).signum() * 3.0, 0.0);
+    let on_forearm = elbow + (wrist - elbow) * 0.6 + outward;
+    harness.event(egui::Event::PointerMoved(on_forearm));
+    harness.step();
+    for pressed in [true, false] {
+        harness.event(egui::Event::PointerButton {
+            pos: on_forearm,
+            button: PointerButton::Primary,
+            pressed,
+            modifiers: Modifiers::NONE,
+        });
+        harness.step();
+    }
+    harness.run_steps(2);
+    let selected = state(&harness);
+    assert_eq!(selected["selected"], "r_elbow");
+    let ring = selected["rings"].as_array().unwrap()[0].clone();
+    let index = ring["index"].as_u64().unwrap() as usize;
+    let before = ring["value"].as_f64().unwrap();
+    let at = |key: &str| {
+        Pos2::new(
+            ring[key][0].as_f64().unwrap() as f32,
+            ring[key][1].as_f64().unwrap() as f32,
+        )
+    };
+    let (start, centre) = (at("screen"), at("centre"));
+    // A quarter turn around the ring's centre on screen.
+    let radius = start.distance(centre);
+    let start_angle = (start.y - centre.y).atan2(start.x - centre.x);
+    let path: Vec<Pos2> = (0..=12)
+        .map(|step| {
+            let angle = start_angle + std::f32::consts::FRAC_PI_2 * step as f32 / 12.0;
+            centre + egui::vec2(angle.cos(), angle.sin()) * radius
+        })
+        .collect();
+    drag(&mut harness, &path);
+    settle(&mut harness);
+    let skeleton = harness.state().session().skeleton().clone();
+    let after = harness.state().session().posture().values()[index];
+    assert!(
+        (after - before).abs() > 0.2,
+        "the joint turned: {before} -> {after}"
+    );
+    assert!(after >= skeleton.lower_limits()[index] - 1e-12);
+    assert!(after <= skeleton.upper_limits()[index] + 1e-12);
+}

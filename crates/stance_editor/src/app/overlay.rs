@@ -16,7 +16,7 @@ const COM_COLOR: Color32 = Color32::from_rgb(120, 200, 255);
 const TRACE_COLOR: Color32 = Color32::from_rgba_premultiplied(200, 120, 250, 200);
 
 impl StanceApp {
-    fn to_screen(&self, rect: egui::Rect, point_world: DVec3) -> Option<Pos2> {
+    pub(super) fn to_screen(&self, rect: egui::Rect, point_world: DVec3) -> Option<Pos2> {
         let pixel = self.camera.project(
             point_world.as_vec3(),
             Vec2::new(rect.width(), rect.height()),

@@ -1,0 +1,302 @@
+//! Handles in the viewport: the goals of tasks, dragged in the plane facing the camera, and
+//! the ring gizmo of the selected joint, one ring per rotational DOF, dragged around it.
+
+use egui::{Color32, Pos2, Stroke};
+use glam::DVec3;
+use stance_document::TaskKindSpec;
+
+use super::StanceApp;
+use crate::history::EditKind;
+
+/// How close (points) the pointer must be to a handle to take it.
+const HANDLE_REACH_PT: f32 = 9.0;
+/// Radius of the rings of the joint gizmo (m).
+const RING_RADIUS_M: f64 = 0.11;
+/// Points per drawn ring.
+const RING_SEGMENTS: usize = 48;
+/// Ring colours by DOF axis (x, y, z).
+const RING_COLORS: [Color32; 3] = [
+    Color32::from_rgb(235, 80, 80),
+    Color32::from_rgb(90, 200, 90),
+    Color32::from_rgb(80, 130, 240),
+];
+
+/// A handle being dragged.
+#[derive(Debug, Clone)]
+pub(super) enum HandleDrag {
+    /// The goal of `tasks` (several when their goals coincide, like the gaze and the hand on
+    /// the same sphere), moved in the plane facing the camera through its start.
+    Goal {
+        tasks: Vec<usize>,
+        plane_point_world: DVec3,
+    },
+    /// A ring of the joint gizmo: DOF `dof` turns with the pointer around `centre_px`.
+    Ring {
+        dof: usize,
+        centre_px: Pos2,
+        last_angle: f32,
+        accumulated: f64,
+        start_value: f64,
+        /// +1 when the DOF axis points toward the camera (a counter-clockwise drag on screen
+        /// is then a positive rotation), -1 otherwise.
+        sign: f64,
+    },
+}
+
+/// One ring of the gizmo.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Ring {
+    pub dof: usize,
+    pub axis_index: usize,
+    pub centre_world: DVec3,
+    pub axis_world: DVec3,
+}
+
+impl StanceApp {
+    /// Tasks whose goal can be dragged, with the goal's world position.
+    pub(super) fn goal_handles(&self) -> Vec<(usize, DVec3)> {
+        self.session
+            .tasks()
+            .iter()
+            .enumerate()
+            .filter_map(|(index, task)| match &task.kind {
+                TaskKindSpec::Position { target, .. }
+                | TaskKindSpec::Gaze { target, .. }
+                | TaskKindSpec::Limb { target, .. } => Some((index, DVec3::from_array(*target))),
+                TaskKindSpec::Com { target, .. } => {
+                    Some((index, DVec3::new(target[0], 0.0, target[2])))
+                }
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// The rings of the selected joint's rotational DOF.
+    pub(super) fn rings(&self) -> Vec<Ring> {
+        let Some(joint_index) = self.selected_joint else {
+            return Vec::new();
+        };
+        let skeleton = self.session.skeleton();
+        let frames = self.session.frames();
+        let Some(joint) = skeleton.joints().get(joint_index) else {
+            return Vec::new();
+        };
+        let Some(centre_world) = frames.joint_position.get(joint_index).copied() else {
+            return Vec::new();
+        };
+        joint
+            .dofs
+            .iter()
+            .enumerate()
+            .filter(|(_, dof)| dof.is_rotation())
+            .filter_map(|(offset, dof)| {
+                let index = joint.dof_start + offset;
+                let axis_world = frames.dof_axis.get(index)?.normalize_or_zero();
+                (axis_world != DVec3::ZERO).then_some(Ring {
+                    dof: index,
+                    axis_index: dof.axis_index(),
+                    centre_world,
+                    axis_world,
+                })
+            })
+            .collect()
+    }
+
+    pub(super) fn ring_points(&self, rect: egui::Rect, ring: &Ring) -> Vec<Pos2> {
+        let helper = if ring.axis_world.x.abs() < 0.9 {
+            DVec3::X
+        } else {
+            DVec3::Y
+        };
+        let u = ring.axis_world.cross(helper).normalize_or_zero();
+        let v = ring.axis_world.cross(u);
+        (0..=RING_SEGMENTS)
+            .filter_map(|segment| {
+                let angle = segment as f64 / RING_SEGMENTS as f64 * std::f64::consts::TAU;
+                let point = ring.centre_world + (u * angle.cos() + v * angle.sin()) * RING_RADIUS_M;
+                self.to_screen(rect, point)
+            })
+            .collect()
+    }
+
+    /// The handle under `pointer`, if any: goals first, then rings.
+    pub(super) fn pick_handle(&self, pointer: Pos2) -> Option<HandleDrag> {
+        let rect = self.viewport_rect;
+        let nearest_goal = self
+            .goal_handles()
+            .into_iter()
+            .filter_map(|(task, goal)| {
+                let distance = self.to_screen(rect, goal)?.distance(pointer);
+                (distance <= HANDLE_REACH_PT).then_some((distance, task, goal))
+            })
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        if let Some((_, _, goal)) = nearest_goal {
+            let tasks = self
+                .goal_handles()
+                .into_iter()
+                .filter(|(_, other)| (*other - goal).length() < 1e-3)
+                .map(|(task, _)| task)
+                .collect();
+            return Some(HandleDrag::Goal {
+                tasks,
+                plane_point_world: goal,
+            });
+        }
+        let eye = self.camera.eye_world().as_dvec3();
+        for ring in self.rings() {
+            let near = self.ring_points(rect, &ring).windows(2).any(|pair| {
+                distance_to_segment(pointer, pair[0], pair[1]) <= HANDLE_REACH_PT * 0.7
+            });
+            if !near {
+                continue;
+            }
+            let centre_px = self.to_screen(rect, ring.centre_world)?;
+            let start_value = self.session.posture().values().get(ring.dof).copied()?;
+            let sign = if ring.axis_world.dot(eye - ring.centre_world) >= 0.0 {
+                1.0
+            } else {
+                -1.0
+            };
+            return Some(HandleDrag::Ring {
+                dof: ring.dof,
+                centre_px,
+                last_angle: screen_angle(centre_px, pointer),
+                accumulated: 0.0,
+                start_value,
+                sign,
+            });
+        }
+        None
+    }
+
+    /// Starts dragging a handle: one undo step for the whole drag.
+    pub(super) fn begin_handle_drag(&mut self, drag: HandleDrag) {
+        self.record(EditKind::Command);
+        self.history.break_coalescing();
+        self.handle_drag = Some(drag);
+    }
+
+    /// Moves the dragged handle to follow `pointer`.
+    pub(super) fn drag_handle(&mut self, pointer: Pos2) {
+        let Some(drag) = self.handle_drag.clone() else {
+            return;
+        };
+        match drag {
+            HandleDrag::Goal {
+                tasks: moved,
+                plane_point_world,
+            } => {
+                let Some(goal) = self.pointer_on_view_plane(pointer, plane_point_world) else {
+                    return;
+                };
+                let on_floor = self.pointer_on_floor(pointer);
+                let mut tasks = self.session.tasks().to_vec();
+                for task in moved {
+                    let Some(spec) = tasks.get_mut(task) else {
+                        continue;
+                    };
+                    match &mut spec.kind {
+                        TaskKindSpec::Position { target, .. }
+                        | TaskKindSpec::Gaze { target, .. }
+                        | TaskKindSpec::Limb { target, .. } => *target = goal.to_array(),
+                        TaskKindSpec::Com { target, .. } => {
+                            // The balance goal slides on the floor under the pointer.
+                            if let Some(on_floor) = on_floor {
+                                target[0] = on_floor.x;
+                                target[2] = on_floor.z;
+                            }
+                        }
+                        _ => {}
+                    }
+                }
+                self.session.set_tasks(tasks);
+            }
+            HandleDrag::Ring {
+                dof,
+                centre_px,
+                last_angle,
+                accumulated,
+                start_value,
+                sign,
+            } => {
+                let angle = screen_angle(centre_px, pointer);
+                let mut delta = angle - last_angle;
+                if delta > std::f32::consts::PI {
+                    delta -= std::f32::consts::TAU;
+                } else if delta < -std::f32::consts::PI {
+                    delta += std::f32::consts::TAU;
+                }
+                let accumulated = accumulated + f64::from(delta);
+                // Screen y points down: a counter-clockwise drag has a negative screen angle.
+                self.session.set_dof(dof, start_value - sign * accumulated);
+                self.handle_drag = Some(HandleDrag::Ring {
+                    dof,
+                    centre_px,
+                    last_angle: angle,
+                    accumulated,
+                    start_value,
+                    sign,
+                });
+            }
+        }
+    }
+
+    pub(super) fn end_handle_drag(&mut self) {
+        if self.handle_drag.take().is_some() {
+            self.history.break_coalescing();
+        }
+    }
+
+    /// Where the pointer's ray meets the floor (y = 0).
+    fn pointer_on_floor(&self, pointer: Pos2) -> Option<DVec3> {
+        let rect = self.viewport_rect;
+        let local = pointer - rect.min;
+        let (origin, direction) = self.camera.ray_through(
+            glam::Vec2::new(local.x, local.y),
+            glam::Vec2::new(rect.width(), rect.height()),
+        );
+        let (origin, direction) = (origin.as_dvec3(), direction.as_dvec3());
+        if direction.y.abs() < 1e-6 {
+            return None;
+        }
+        let distance = -origin.y / direction.y;
+        (distance > 0.0).then(|| origin + direction * distance)
+    }
+
+    /// Draws the rings of the selected joint (the dragged one thicker).
+    pub(super) fn draw_rings(&self, painter: &egui::Painter, rect: egui::Rect) {
+        let active_dof = match &self.handle_drag {
+            Some(HandleDrag::Ring { dof, .. }) => Some(*dof),
+            _ => None,
+        };
+        for ring in self.rings() {
+            let color = RING_COLORS
+                .get(ring.axis_index)
+                .copied()
+                .unwrap_or(Color32::WHITE);
+            let width = if active_dof == Some(ring.dof) {
+                3.5
+            } else {
+                2.0
+            };
+            painter.add(egui::Shape::line(
+                self.ring_points(rect, &ring),
+                Stroke::new(width, color.gamma_multiply(0.9)),
+            ));
+        }
+    }
+}
+
+fn screen_angle(centre: Pos2, pointer: Pos2) -> f32 {
+    (pointer.y - centre.y).atan2(pointer.x - centre.x)
+}
+
+fn distance_to_segment(point: Pos2, a: Pos2, b: Pos2) -> f32 {
+    let ab = b - a;
+    let length_squared = ab.length_sq();
+    if length_squared <= f32::EPSILON {
+        return point.distance(a);
+    }
+    let t = ((point - a).dot(ab) / length_squared).clamp(0.0, 1.0);
+    point.distance(a + ab * t)
+}
