@@ -72,6 +72,11 @@ export function decodePng(buffer) {
   };
 }
 
+/** The viewport's background (BACKGROUND_SRGB of stance_render), with a little tolerance. */
+export function BACKGROUND(r, g, b) {
+  return Math.abs(r - 33) <= 6 && Math.abs(g - 37) <= 6 && Math.abs(b - 43) <= 6;
+}
+
 /** The mannequin's clay colour as the renderer draws it (see stance_render's offscreen test). */
 export function isBodyColour([r, g, b]) {
   return r > 90 && r > 1.35 * g && g > b;

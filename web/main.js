@@ -60,7 +60,46 @@ window.stanceHost = {
     fileInput.value = "";
     fileInput.click();
   },
+  // Fetches an avatar with progress on the loading screen; the bytes go to the editor.
+  fetchFile(url) {
+    fetchWithProgress(url).then(
+      (bytes) => window.stance?.open_file(url, bytes),
+      (error) => window.stance?.report_failure(`The avatar at ${url} could not be loaded: ${describe(error)}`),
+    );
+  },
 };
+
+async function fetchWithProgress(url) {
+  const status = loading.querySelector("p");
+  loading.hidden = false;
+  status.textContent = "Loading avatar…";
+  try {
+    const response = await fetch(url);
+    if (!response.ok) throw new Error(`the server answered ${response.status} ${response.statusText}`);
+    const total = Number(response.headers.get("content-length")) || 0;
+    const reader = response.body.getReader();
+    const chunks = [];
+    let received = 0;
+    for (;;) {
+      const { done, value } = await reader.read();
+      if (done) break;
+      chunks.push(value);
+      received += value.length;
+      status.textContent = total
+        ? `Loading avatar… ${Math.round((100 * received) / total)} %`
+        : `Loading avatar… ${(received / 1048576).toFixed(1)} MB`;
+    }
+    const bytes = new Uint8Array(received);
+    let offset = 0;
+    for (const chunk of chunks) {
+      bytes.set(chunk, offset);
+      offset += chunk.length;
+    }
+    return bytes;
+  } finally {
+    loading.hidden = true;
+  }
+}
 let ignoreNextHashChange = null;
 
 async function openFiles(handle, files) {
@@ -117,6 +156,9 @@ async function main() {
     return;
   }
   connectPage(handle);
+  // ?avatar=URL opens that avatar.
+  const avatarUrl = new URLSearchParams(window.location.search).get("avatar");
+  if (avatarUrl) window.stanceHost.fetchFile(avatarUrl);
   // A crash after start: show it rather than a frozen canvas.
   const watchdog = setInterval(() => {
     const panic = handle.panic_message();

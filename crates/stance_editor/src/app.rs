@@ -19,6 +19,7 @@ use stance_render::{
 };
 
 use self::handles::HandleDrag;
+use crate::avatar::LoadedAvatar;
 use crate::history::{EditKind, History};
 use crate::host::{BackendSummary, HostHooks, HostMessage};
 use crate::library::{AUTOSAVE_KEY, LIBRARY_KEY, PoseLibrary};
@@ -71,6 +72,13 @@ pub struct StanceApp {
     hovered_joint: Option<usize>,
     pull: Option<PullGesture>,
     handle_drag: Option<HandleDrag>,
+    avatar: Option<LoadedAvatar>,
+    /// The URL the avatar came from (links and autosave name it); `None` for local files.
+    avatar_url: Option<String>,
+    /// A document waiting for its avatar to arrive (a link or autosave naming a URL).
+    pending_document: Option<Document>,
+    show_skeleton: bool,
+    avatar_uploaded: bool,
     trace: Vec<DVec3>,
     notice: Option<Notice>,
     library: PoseLibrary,
@@ -129,6 +137,11 @@ impl StanceApp {
             hovered_joint: None,
             pull: None,
             handle_drag: None,
+            avatar: None,
+            avatar_url: None,
+            pending_document: None,
+            show_skeleton: false,
+            avatar_uploaded: false,
             trace: Vec::new(),
             notice: None,
             library: PoseLibrary::default(),
@@ -165,6 +178,11 @@ impl StanceApp {
         if let Some(text) = self.hooks.load_text(AUTOSAVE_KEY) {
             match Document::from_json(&text) {
                 Ok(document) => {
+                    if let AvatarReference::Url(url) = &document.avatar {
+                        self.pending_document = Some(document.clone());
+                        let url = url.clone();
+                        self.fetch_avatar(&url);
+                    }
                     if let Err(error) = self.session.restore_document(&document) {
                         self.warn(format!("The autosaved work could not be restored: {error}"));
                     } else {
@@ -200,6 +218,90 @@ impl StanceApp {
 
     pub fn library(&self) -> &PoseLibrary {
         &self.library
+    }
+
+    /// The document: the session's posture and tasks, and the avatar they are for.
+    pub fn document(&self) -> Document {
+        let mut document = self.session.document();
+        if let Some(url) = &self.avatar_url {
+            document.avatar = AvatarReference::Url(url.clone());
+        }
+        document
+    }
+
+    pub fn avatar(&self) -> Option<&LoadedAvatar> {
+        self.avatar.as_ref()
+    }
+
+    /// Loads an avatar file; on failure says why and keeps the current one.
+    pub fn load_avatar(&mut self, name: &str, bytes: &[u8]) {
+        let loa = self.session.level_of_articulation();
+        match LoadedAvatar::load(name, bytes, loa).and_then(|(avatar, humanoid)| {
+            let session =
+                PosingSession::with_humanoid(humanoid).map_err(|error| error.to_string())?;
+            Ok((avatar, session))
+        }) {
+            Ok((avatar, session)) => {
+                let (mapped, unmapped) = avatar.mapping_summary();
+                let mut text = format!(
+                    "Loaded {name}: {} vertices, {mapped} joints mapped onto H-Anim ({unmapped} left unmapped); posed at LOA {}.",
+                    avatar.vertex_count,
+                    loa.number()
+                );
+                if !avatar.warnings.is_empty() {
+                    text.push_str(&format!(" Notes: {}", avatar.warnings.join("; ")));
+                }
+                self.session = session;
+                self.history = History::default();
+                self.avatar = Some(avatar);
+                self.avatar_url = is_url(name).then(|| name.to_owned());
+                self.selected_joint = None;
+                self.hovered_joint = None;
+                self.pull = None;
+                self.handle_drag = None;
+                self.trace.clear();
+                self.camera = OrbitCamera::default();
+                self.inform(text);
+                if let Some(document) = self.pending_document.take()
+                    && let Err(error) = self.session.restore_document(&document)
+                {
+                    self.warn(format!("The posture does not fit this avatar: {error}"));
+                }
+            }
+            Err(error) => {
+                self.pending_document = None;
+                self.warn(format!(
+                    "{name} could not be opened as an avatar: {error}. The previous avatar stays."
+                ));
+            }
+        }
+    }
+
+    /// Back to the built-in mannequin (the posture carries over by joint name).
+    pub fn use_mannequin(&mut self) {
+        let document = self.session.document();
+        match PosingSession::new(self.session.level_of_articulation()) {
+            Ok(mut session) => {
+                if session.restore_document(&document).is_err() {
+                    self.inform("The posture did not fit the mannequin; it stands at rest.");
+                }
+                self.session = session;
+                self.history = History::default();
+                self.avatar = None;
+                self.avatar_url = None;
+                self.avatar_uploaded = false;
+                self.selected_joint = None;
+            }
+            Err(error) => self.warn(format!("The mannequin could not be built: {error}")),
+        }
+    }
+
+    /// Asks the page to fetch an avatar by URL (it arrives as a file).
+    fn fetch_avatar(&mut self, url: &str) {
+        if let Err(error) = self.hooks.fetch(url) {
+            self.pending_document = None;
+            self.warn(format!("The avatar at {url} could not be fetched: {error}"));
+        }
     }
 
     fn now_secs(&self) -> f64 {
@@ -302,8 +404,16 @@ impl StanceApp {
             return;
         }
         let document = self.session.document();
-        match PosingSession::new(loa).and_then(|mut session| {
-            session.restore_document(&document)?;
+        let built = match &self.avatar {
+            Some(avatar) => avatar.skeleton(loa).and_then(|humanoid| {
+                PosingSession::with_humanoid(humanoid).map_err(|e| e.to_string())
+            }),
+            None => PosingSession::new(loa).map_err(|error| error.to_string()),
+        };
+        match built.and_then(|mut session| {
+            session
+                .restore_document(&document)
+                .map_err(|error| error.to_string())?;
             Ok(session)
         }) {
             Ok(session) => {
@@ -330,12 +440,15 @@ impl StanceApp {
                         self.selected_joint = None;
                         self.trace.clear();
                         match &document.avatar {
-                            AvatarReference::Default => {
-                                self.inform("Opened the posture link.");
+                            AvatarReference::Url(url) if self.avatar_url.as_ref() != Some(url) => {
+                                self.inform(format!(
+                                    "Opened the posture link; loading its avatar {url}…"
+                                ));
+                                self.pending_document = Some(document.clone());
+                                let url = url.clone();
+                                self.fetch_avatar(&url);
                             }
-                            AvatarReference::Url(url) => self.warn(format!(
-                                "The link poses the avatar at {url}; this version shows its posture on the default humanoid."
-                            )),
+                            _ => self.inform("Opened the posture link."),
                         }
                         true
                     }
@@ -358,7 +471,7 @@ impl StanceApp {
 
     /// Encodes the document into the address bar and the clipboard.
     pub fn copy_link(&mut self, ctx: &egui::Context) {
-        let fragment = link::encode(&self.session.document());
+        let fragment = link::encode(&self.document());
         let url = self.hooks.share_link(&fragment);
         ctx.copy_text(url);
         self.inform(format!(
@@ -370,13 +483,15 @@ impl StanceApp {
     /// Opens a JSON file: a document (posture and tasks) or a pose library.
     pub fn open_file(&mut self, name: &str, bytes: &[u8]) {
         let lower = name.to_ascii_lowercase();
-        if [".glb", ".gltf", ".vrm"]
-            .iter()
-            .any(|extension| lower.ends_with(extension))
-        {
-            self.warn(format!(
-                "{name}: loading avatars into the page is not available yet; this version poses the H-Anim default humanoid."
-            ));
+        let is_avatar = [".glb", ".gltf", ".vrm"].iter().any(|extension| {
+            lower
+                .split(['?', '#'])
+                .next()
+                .unwrap_or("")
+                .ends_with(extension)
+        }) || bytes.starts_with(b"glTF");
+        if is_avatar {
+            self.load_avatar(name, bytes);
             return;
         }
         let Ok(text) = std::str::from_utf8(bytes) else {
@@ -430,7 +545,7 @@ impl StanceApp {
     }
 
     fn export_document(&mut self) {
-        let text = self.session.document().to_json(true);
+        let text = self.document().to_json(true);
         if let Err(error) = self.hooks.download("stance-pose.json", &text) {
             self.warn(format!("Could not export the pose: {error}"));
         }
@@ -506,7 +621,7 @@ impl StanceApp {
         if self.pull.is_some() || now - self.last_autosave_secs < AUTOSAVE_INTERVAL_SECS {
             return;
         }
-        let document = self.session.document();
+        let document = self.document();
         if self.autosaved.as_ref() == Some(&document) {
             return;
         }
@@ -615,6 +730,27 @@ impl StanceApp {
                     self.export_library();
                     ui.close();
                 }
+            });
+            ui.menu_button("Avatar", |ui| {
+                if ui.button("Open avatar file (glTF, GLB, VRM)…").clicked() {
+                    self.import_file();
+                    ui.close();
+                }
+                if ui.button("Bundled skinned humanoid").clicked() {
+                    self.fetch_avatar("default-avatar.glb");
+                    ui.close();
+                }
+                if ui
+                    .add_enabled(
+                        self.avatar.is_some(),
+                        egui::Button::new("Back to the mannequin"),
+                    )
+                    .clicked()
+                {
+                    self.use_mannequin();
+                    ui.close();
+                }
+                ui.checkbox(&mut self.show_skeleton, "Show the skeleton");
             });
             ui.menu_button("Edit", |ui| {
                 if ui
@@ -980,6 +1116,16 @@ impl StanceApp {
             (rect.height() * pixels_per_point).round().max(1.0) as u32,
         ];
         self.viewport_size_px = size_px;
+        if let (Some(renderer), Some(render_state)) =
+            (&mut self.renderer, frame.wgpu_render_state())
+            && let Some(model) = self.avatar.as_mut().and_then(|avatar| avatar.model.take())
+        {
+            renderer.set_avatar(render_state, Some(&model));
+            self.avatar_uploaded = true;
+        }
+        if self.avatar.is_none() && self.avatar_uploaded {
+            self.avatar_uploaded = false;
+        }
         let scene = self.scene();
         match (&mut self.renderer, frame.wgpu_render_state()) {
             (Some(renderer), Some(render_state)) => {
@@ -1004,6 +1150,9 @@ impl StanceApp {
             }
         }
         self.draw_overlay(ui.painter(), rect);
+        if self.show_skeleton || (self.avatar.is_some() && self.selected_joint.is_some()) {
+            self.draw_skeleton(&ui.painter().with_clip_rect(rect), rect);
+        }
         self.draw_rings(&ui.painter().with_clip_rect(rect), rect);
         let over_handle = self.pull.is_none()
             && self.handle_drag.is_none()
@@ -1031,9 +1180,18 @@ impl StanceApp {
                 capsule
             })
             .collect();
+        let avatar_palettes = self
+            .avatar
+            .as_ref()
+            .and_then(|avatar| avatar.palettes(self.session.humanoid(), self.session.posture()))
+            .unwrap_or_default();
+        let show_avatar = self.avatar.is_some() && self.avatar_uploaded;
         Scene {
-            capsules,
+            // With an avatar the mannequin is hidden; the skeleton overlay shows the bones.
+            capsules: if show_avatar { Vec::new() } else { capsules },
             show_floor: self.show_floor,
+            show_avatar,
+            avatar_palettes,
         }
     }
 
@@ -1145,6 +1303,13 @@ impl StanceApp {
             "tasks": tasks,
             "gave_way": self.session.report().and_then(|report| report.gave_way),
             "notice": self.notice.as_ref().map(|notice| json!({"text": notice.text, "error": notice.is_error})),
+            "avatar": self.avatar.as_ref().map(|avatar| json!({
+                "name": avatar.name,
+                "vertices": avatar.vertex_count,
+                "triangles": avatar.triangle_count,
+                "uploaded": self.avatar_uploaded,
+                "mapped": avatar.mapping_summary().0,
+            })),
             "selected": self.selected_joint.and_then(|joint| skeleton.joints().get(joint)).map(|joint| joint.name.clone()),
             "pulling": self.pull.is_some(),
             "dragging_handle": self.handle_drag.is_some(),
@@ -1201,6 +1366,13 @@ impl StanceApp {
     }
 }
 
+fn is_url(name: &str) -> bool {
+    name.starts_with("http://")
+        || name.starts_with("https://")
+        || (!name.contains(['\\', ':']) && name.contains('/'))
+        || name == "default-avatar.glb"
+}
+
 /// The help window's rows: gesture or key, and what it does.
 const HELP_ROWS: &[(&str, &str)] = &[
     (
@@ -1236,6 +1408,10 @@ const HELP_ROWS: &[(&str, &str)] = &[
     ("L", "copy the posture link"),
     ("T", "show or hide the effector trace"),
     ("Escape", "deselect"),
+    (
+        "Drop a .glb/.gltf/.vrm file",
+        "pose your own avatar (or Avatar > Open)",
+    ),
     ("H, F1", "this help"),
 ];
 

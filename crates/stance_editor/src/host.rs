@@ -69,6 +69,12 @@ pub trait HostHooks {
         Err("this shell has no file picker".to_owned())
     }
 
+    /// Fetches `url` (an avatar); the bytes arrive as [`HostMessage::OpenFile`] named by the
+    /// URL, a failure as [`HostMessage::Failed`].
+    fn fetch(&self, _url: &str) -> Result<(), String> {
+        Err("this shell cannot fetch files".to_owned())
+    }
+
     /// The editor's observable state changed (JSON, see `StanceApp::state_json`): the page
     /// keeps it for its test hook and for other scripts.
     fn publish_state(&self, _state_json: &str) {}
@@ -108,6 +114,7 @@ pub struct MemoryHostState {
     pub address_fragment: Option<String>,
     pub state_json: String,
     pub file_requests: usize,
+    pub fetches: Vec<String>,
     pub first_frame: Option<BackendSummary>,
 }
 
@@ -143,6 +150,11 @@ impl HostHooks for MemoryHost {
 
     fn pick_file(&self) -> Result<(), String> {
         self.inner.borrow_mut().file_requests += 1;
+        Ok(())
+    }
+
+    fn fetch(&self, url: &str) -> Result<(), String> {
+        self.inner.borrow_mut().fetches.push(url.to_owned());
         Ok(())
     }
 

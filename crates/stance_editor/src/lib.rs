@@ -3,6 +3,7 @@
 //! that runs it natively and in the browser.
 
 mod app;
+pub mod avatar;
 pub mod history;
 mod host;
 pub mod library;

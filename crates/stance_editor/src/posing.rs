@@ -84,6 +84,12 @@ impl PosingSession {
             loa,
             ..SkeletonOptions::default()
         })?;
+        Self::with_humanoid(humanoid)
+    }
+
+    /// A session on any humanoid skeleton (an avatar's), standing in its rest posture with
+    /// the default tasks.
+    pub fn with_humanoid(humanoid: HumanoidSkeleton) -> Result<Self, PosingError> {
         let settings = SolverSettings {
             max_iterations: ITERATIONS_PER_FRAME,
             time_budget_secs: Some(FRAME_BUDGET_SECS),

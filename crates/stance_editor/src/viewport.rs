@@ -129,6 +129,16 @@ impl ViewportRenderer {
         }
     }
 
+    /// Uploads (or drops) the avatar's GPU model.
+    pub(crate) fn set_avatar(
+        &mut self,
+        render_state: &egui_wgpu::RenderState,
+        model: Option<&stance_render::SkinnedModel>,
+    ) {
+        self.scene_renderer
+            .set_avatar(&render_state.device, &render_state.queue, model);
+    }
+
     /// Renders the scene at `size_px` and returns the egui texture that shows it.
     pub(crate) fn render(
         &mut self,

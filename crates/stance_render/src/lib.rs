@@ -8,6 +8,7 @@ mod camera;
 mod capture;
 mod pick;
 mod renderer;
+mod skinned;
 
 pub use body::{
     BODY_COLOR_LINEAR, MannequinBone, MannequinJoint, mannequin_bones, mannequin_capsules,
@@ -18,6 +19,10 @@ pub use camera::OrbitCamera;
 pub use capture::{CaptureError, Pixels, read_pixels};
 pub use pick::{CapsuleHit, pick_capsule};
 pub use renderer::{BACKGROUND_SRGB, COLOR_FORMAT, DEPTH_FORMAT, RenderTarget, SceneRenderer};
+pub use skinned::{
+    AvatarGpu, MAX_PALETTE_MATRICES, SkinnedMaterial, SkinnedModel, SkinnedPrimitive,
+    SkinnedTexture, SkinnedVertex,
+};
 
 use glam::Vec3;
 
@@ -25,6 +30,7 @@ use glam::Vec3;
 pub const SHADERS: &[(&str, &str)] = &[
     ("capsule.wgsl", include_str!("shaders/capsule.wgsl")),
     ("floor.wgsl", include_str!("shaders/floor.wgsl")),
+    ("skinned.wgsl", include_str!("shaders/skinned.wgsl")),
 ];
 
 /// A capsule: the segment from `start_world` to `end_world` swept by a sphere of `radius_m`.
@@ -42,4 +48,8 @@ pub struct Capsule {
 pub struct Scene {
     pub capsules: Vec<Capsule>,
     pub show_floor: bool,
+    /// Draw the uploaded avatar (see `SceneRenderer::set_avatar`).
+    pub show_avatar: bool,
+    /// This frame's matrix palettes of the avatar (mesh space -> H-Anim world), one per palette.
+    pub avatar_palettes: Vec<Vec<glam::Mat4>>,
 }

@@ -4,6 +4,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec2;
 use wgpu::util::DeviceExt;
 
+use crate::skinned::{AvatarGpu, SkinnedModel, SkinnedPipeline};
 use crate::{OrbitCamera, SHADERS, Scene};
 
 /// Colour format of the render target: what egui can show as a native texture. The shaders
@@ -112,6 +113,8 @@ impl RenderTarget {
 #[derive(Debug)]
 pub struct SceneRenderer {
     capsule_pipeline: wgpu::RenderPipeline,
+    skinned_pipeline: SkinnedPipeline,
+    avatar: Option<AvatarGpu>,
     floor_pipeline: wgpu::RenderPipeline,
     frame_uniforms: wgpu::Buffer,
     frame_bind_group: wgpu::BindGroup,
@@ -208,6 +211,7 @@ impl SceneRenderer {
         };
         let capsule_shader = shader("capsule.wgsl");
         let floor_shader = shader("floor.wgsl");
+        let skinned_shader = shader("skinned.wgsl");
         let depth_stencil = Some(wgpu::DepthStencilState {
             format: DEPTH_FORMAT,
             depth_write_enabled: Some(true),
@@ -215,6 +219,7 @@ impl SceneRenderer {
             stencil: wgpu::StencilState::default(),
             bias: wgpu::DepthBiasState::default(),
         });
+        let depth_stencil_for_skinned = depth_stencil.clone();
         let multisample = wgpu::MultisampleState {
             count: SAMPLE_COUNT,
             ..Default::default()
@@ -280,6 +285,14 @@ impl SceneRenderer {
             multiview_mask: None,
             cache: None,
         });
+        let skinned_pipeline = SkinnedPipeline::new(
+            device,
+            &frame_layout,
+            &skinned_shader,
+            depth_stencil_for_skinned,
+            multisample,
+            &color_targets,
+        );
         let (template, indices) = capsule_template();
         let template_vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("stance capsule template vertices"),
@@ -294,6 +307,8 @@ impl SceneRenderer {
         let instance_capacity = 128;
         Self {
             capsule_pipeline,
+            skinned_pipeline,
+            avatar: None,
             floor_pipeline,
             frame_uniforms,
             frame_bind_group,
@@ -312,6 +327,22 @@ impl SceneRenderer {
             usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         })
+    }
+
+    /// Uploads an avatar (replacing the previous one), or drops it with `None`.
+    pub fn set_avatar(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        model: Option<&SkinnedModel>,
+    ) {
+        self.avatar =
+            model.map(|model| AvatarGpu::new(device, queue, &self.skinned_pipeline, model));
+    }
+
+    /// The uploaded avatar, if any.
+    pub fn avatar(&self) -> Option<&AvatarGpu> {
+        self.avatar.as_ref()
     }
 
     /// Renders `scene` seen by `camera` into `target` and submits the work.
@@ -334,6 +365,10 @@ impl SceneRenderer {
             background: BACKGROUND_SRGB,
         };
         queue.write_buffer(&self.frame_uniforms, 0, bytemuck::bytes_of(&uniforms));
+        let draw_avatar = scene.show_avatar && self.avatar.is_some();
+        if draw_avatar && let Some(avatar) = &self.avatar {
+            avatar.write_palettes(queue, &scene.avatar_palettes);
+        }
 
         let instances: Vec<CapsuleInstance> = scene
             .capsules
@@ -386,6 +421,10 @@ impl SceneRenderer {
                 multiview_mask: None,
             });
             pass.set_bind_group(0, &self.frame_bind_group, &[]);
+            if draw_avatar && let Some(avatar) = &self.avatar {
+                avatar.draw(&mut pass, &self.skinned_pipeline);
+                pass.set_bind_group(0, &self.frame_bind_group, &[]);
+            }
             if !instances.is_empty() {
                 pass.set_pipeline(&self.capsule_pipeline);
                 pass.set_vertex_buffer(0, self.template_vertices.slice(..));

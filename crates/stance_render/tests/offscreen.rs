@@ -39,6 +39,7 @@ fn render(camera: &OrbitCamera, size: [u32; 2]) -> Pixels {
     let scene = Scene {
         capsules: rest_pose_capsules(LevelOfArticulation::Loa2),
         show_floor: true,
+        ..Scene::default()
     };
     renderer.render(&device, &queue, &target, camera, &scene);
     read_pixels(&device, &queue, &target).expect("read back")

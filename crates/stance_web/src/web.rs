@@ -22,6 +22,8 @@ extern "C" {
     fn host_download(file_name: &str, text: &str) -> Result<(), JsValue>;
     #[wasm_bindgen(js_namespace = stanceHost, js_name = pickFile, catch)]
     fn host_pick_file() -> Result<(), JsValue>;
+    #[wasm_bindgen(js_namespace = stanceHost, js_name = fetchFile, catch)]
+    fn host_fetch_file(url: &str) -> Result<(), JsValue>;
 }
 
 fn describe(error: &JsValue) -> String {
@@ -87,6 +89,10 @@ impl HostHooks for PageHooks {
 
     fn pick_file(&self) -> Result<(), String> {
         host_pick_file().map_err(|error| describe(&error))
+    }
+
+    fn fetch(&self, url: &str) -> Result<(), String> {
+        host_fetch_file(url).map_err(|error| describe(&error))
     }
 
     fn publish_state(&self, state_json: &str) {

@@ -189,6 +189,35 @@ impl StanceApp {
     }
 }
 
+impl StanceApp {
+    /// The skeleton over the avatar: a line per bone, a dot per joint.
+    pub(super) fn draw_skeleton(&self, painter: &egui::Painter, rect: egui::Rect) {
+        let skeleton = self.session.skeleton();
+        let frames = self.session.frames();
+        let stroke = Stroke::new(1.5, Color32::from_rgba_unmultiplied(255, 255, 255, 170));
+        for (index, joint) in skeleton.joints().iter().enumerate() {
+            let Some(position) = frames.joint_position.get(index).copied() else {
+                continue;
+            };
+            let Some(here) = self.to_screen(rect, position) else {
+                continue;
+            };
+            if let Some(parent) = joint.parent
+                && let Some(parent_position) = frames.joint_position.get(parent).copied()
+                && let Some(there) = self.to_screen(rect, parent_position)
+            {
+                painter.line_segment([there, here], stroke);
+            }
+            let color = if Some(index) == self.selected_joint {
+                Color32::from_rgb(80, 160, 255)
+            } else {
+                Color32::WHITE
+            };
+            painter.circle_filled(here, 2.5, color);
+        }
+    }
+}
+
 /// Convex hull of points in the floor plane (Andrew's monotone chain), counter-clockwise.
 pub(crate) fn convex_hull(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
     let mut sorted: Vec<(f64, f64)> = points

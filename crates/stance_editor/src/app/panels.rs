@@ -23,7 +23,19 @@ struct DraggedTask(usize);
 impl StanceApp {
     pub(super) fn side_panel(&mut self, ui: &mut egui::Ui) {
         ui.heading("Humanoid");
-        ui.label("H-Anim 2.0 default body");
+        match &self.avatar {
+            Some(avatar) => {
+                ui.label(RichText::new(&avatar.name).strong());
+                ui.label(format!(
+                    "{} vertices, {} joints mapped onto H-Anim",
+                    avatar.vertex_count,
+                    avatar.mapping_summary().0
+                ));
+            }
+            None => {
+                ui.label("H-Anim 2.0 mannequin (Avatar menu or drop a file to pose yours)");
+            }
+        }
         let current = self.session.level_of_articulation();
         let mut chosen = current;
         egui::ComboBox::from_label("Articulation")

@@ -1,0 +1,470 @@
+//! Skinned, textured avatars on the GPU: the model's vertices, indices, materials and
+//! textures are uploaded once ([`AvatarGpu::new`]); each frame only the matrix palettes move.
+
+use bytemuck::{Pod, Zeroable};
+use glam::Mat4;
+use wgpu::util::DeviceExt;
+
+/// Most matrices one palette (one skin) may hold: a 16 KiB uniform buffer, the WebGL2 limit.
+pub const MAX_PALETTE_MATRICES: usize = 256;
+
+/// One vertex of a skinned mesh, in the mesh's own space.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct SkinnedVertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    pub uv: [f32; 2],
+    /// Indices into the primitive's palette.
+    pub joints: [u32; 4],
+    /// Blend weights (sum 1).
+    pub weights: [f32; 4],
+}
+
+/// A triangle list drawn with one material and one palette.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SkinnedPrimitive {
+    pub vertices: Vec<SkinnedVertex>,
+    pub indices: Vec<u32>,
+    /// Index into [`SkinnedModel::materials`] (out of range: a plain grey material).
+    pub material: usize,
+    /// Index of the palette (matrices set each frame) that moves this primitive.
+    pub palette: usize,
+}
+
+/// A material: base colour factor and optional texture.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SkinnedMaterial {
+    /// Linear RGBA.
+    pub base_color_factor: [f32; 4],
+    /// Index into [`SkinnedModel::textures`].
+    pub texture: Option<usize>,
+    pub unlit: bool,
+    /// Alpha below this is discarded (`None`: opaque).
+    pub alpha_cutoff: Option<f32>,
+}
+
+/// An RGBA8 texture (sRGB), rows top to bottom.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SkinnedTexture {
+    pub width: u32,
+    pub height: u32,
+    pub rgba8: Vec<u8>,
+    pub repeat: bool,
+}
+
+/// Everything the GPU needs of an avatar.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SkinnedModel {
+    pub primitives: Vec<SkinnedPrimitive>,
+    pub materials: Vec<SkinnedMaterial>,
+    pub textures: Vec<SkinnedTexture>,
+    /// Matrices per palette.
+    pub palette_sizes: Vec<usize>,
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct MaterialUniforms {
+    base_color: [f32; 4],
+    params: [f32; 4],
+}
+
+struct PrimitiveGpu {
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    index_count: u32,
+    material: usize,
+    palette: usize,
+}
+
+/// The bind group layouts and pipeline of skinned meshes (made once with the renderer).
+#[derive(Debug)]
+pub(crate) struct SkinnedPipeline {
+    pub(crate) pipeline: wgpu::RenderPipeline,
+    palette_layout: wgpu::BindGroupLayout,
+    material_layout: wgpu::BindGroupLayout,
+}
+
+impl SkinnedPipeline {
+    pub(crate) fn new(
+        device: &wgpu::Device,
+        frame_layout: &wgpu::BindGroupLayout,
+        shader: &wgpu::ShaderModule,
+        depth_stencil: Option<wgpu::DepthStencilState>,
+        multisample: wgpu::MultisampleState,
+        color_targets: &[Option<wgpu::ColorTargetState>],
+    ) -> Self {
+        let uniform_entry = |binding, visibility| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let palette_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("stance palette layout"),
+            entries: &[uniform_entry(0, wgpu::ShaderStages::VERTEX)],
+        });
+        let material_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("stance material layout"),
+            entries: &[
+                uniform_entry(0, wgpu::ShaderStages::FRAGMENT),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 2,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("stance skinned layout"),
+            bind_group_layouts: &[
+                Some(frame_layout),
+                Some(&palette_layout),
+                Some(&material_layout),
+            ],
+            immediate_size: 0,
+        });
+        let vertex_layout = wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<SkinnedVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &wgpu::vertex_attr_array![
+                0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Uint32x4, 4 => Float32x4
+            ],
+        };
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("stance skinned meshes"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: shader,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(vertex_layout)],
+            },
+            // Avatars are often double-sided (hair, clothes): no culling.
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil,
+            multisample,
+            fragment: Some(wgpu::FragmentState {
+                module: shader,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: color_targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        Self {
+            pipeline,
+            palette_layout,
+            material_layout,
+        }
+    }
+}
+
+/// An avatar uploaded to the GPU.
+pub struct AvatarGpu {
+    primitives: Vec<PrimitiveGpu>,
+    palettes: Vec<(wgpu::Buffer, wgpu::BindGroup)>,
+    materials: Vec<wgpu::BindGroup>,
+    fallback_material: wgpu::BindGroup,
+    triangle_count: usize,
+}
+
+impl std::fmt::Debug for AvatarGpu {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("AvatarGpu")
+            .field("primitives", &self.primitives.len())
+            .field("palettes", &self.palettes.len())
+            .field("triangles", &self.triangle_count)
+            .finish()
+    }
+}
+
+fn texture_gpu(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &SkinnedTexture,
+) -> Option<wgpu::Texture> {
+    let expected = (texture.width as usize)
+        .checked_mul(texture.height as usize)?
+        .checked_mul(4)?;
+    if texture.width == 0 || texture.height == 0 || texture.rgba8.len() != expected {
+        return None;
+    }
+    let limit = device.limits().max_texture_dimension_2d;
+    if texture.width > limit || texture.height > limit {
+        return None;
+    }
+    let size = wgpu::Extent3d {
+        width: texture.width,
+        height: texture.height,
+        depth_or_array_layers: 1,
+    };
+    let gpu = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("stance avatar texture"),
+        size,
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8UnormSrgb,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    queue.write_texture(
+        wgpu::TexelCopyTextureInfo {
+            texture: &gpu,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
+        &texture.rgba8,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(texture.width * 4),
+            rows_per_image: Some(texture.height),
+        },
+        size,
+    );
+    Some(gpu)
+}
+
+/// A 1x1 white texture: what untextured materials sample.
+fn white_texture(device: &wgpu::Device, queue: &wgpu::Queue) -> wgpu::Texture {
+    let size = wgpu::Extent3d {
+        width: 1,
+        height: 1,
+        depth_or_array_layers: 1,
+    };
+    let texture = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("stance white texture"),
+        size,
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8UnormSrgb,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    queue.write_texture(
+        wgpu::TexelCopyTextureInfo {
+            texture: &texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
+        &[255; 4],
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(4),
+            rows_per_image: Some(1),
+        },
+        size,
+    );
+    texture
+}
+
+impl AvatarGpu {
+    /// Uploads `model`. Textures that are malformed or too large for the device are replaced by
+    /// white; palettes are clamped to [`MAX_PALETTE_MATRICES`].
+    pub(crate) fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        pipeline: &SkinnedPipeline,
+        model: &SkinnedModel,
+    ) -> Self {
+        let white = white_texture(device, queue);
+        let textures: Vec<Option<(wgpu::TextureView, bool)>> = model
+            .textures
+            .iter()
+            .map(|texture| {
+                texture_gpu(device, queue, texture).map(|gpu| {
+                    (
+                        gpu.create_view(&wgpu::TextureViewDescriptor::default()),
+                        texture.repeat,
+                    )
+                })
+            })
+            .collect();
+        let white_view = white.create_view(&wgpu::TextureViewDescriptor::default());
+        let sampler = |repeat: bool| {
+            let address_mode = if repeat {
+                wgpu::AddressMode::Repeat
+            } else {
+                wgpu::AddressMode::ClampToEdge
+            };
+            device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("stance avatar sampler"),
+                address_mode_u: address_mode,
+                address_mode_v: address_mode,
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                ..Default::default()
+            })
+        };
+        let repeat_sampler = sampler(true);
+        let clamp_sampler = sampler(false);
+        let material_group = |material: &SkinnedMaterial| -> wgpu::BindGroup {
+            let (view, repeat) = match material
+                .texture
+                .and_then(|index| textures.get(index))
+                .and_then(Option::as_ref)
+            {
+                Some((view, repeat)) => (view, *repeat),
+                None => (&white_view, true),
+            };
+            let uniforms = MaterialUniforms {
+                base_color: material.base_color_factor,
+                params: [
+                    if material.unlit { 1.0 } else { 0.0 },
+                    material.alpha_cutoff.unwrap_or(0.0),
+                    0.0,
+                    0.0,
+                ],
+            };
+            let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("stance material"),
+                contents: bytemuck::bytes_of(&uniforms),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("stance material bind group"),
+                layout: &pipeline.material_layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: buffer.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(view),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: wgpu::BindingResource::Sampler(if repeat {
+                            &repeat_sampler
+                        } else {
+                            &clamp_sampler
+                        }),
+                    },
+                ],
+            })
+        };
+        let grey = SkinnedMaterial {
+            base_color_factor: [0.6, 0.6, 0.6, 1.0],
+            texture: None,
+            unlit: false,
+            alpha_cutoff: None,
+        };
+        let materials: Vec<wgpu::BindGroup> = model.materials.iter().map(&material_group).collect();
+        let fallback_material = material_group(&grey);
+        let palettes = model
+            .palette_sizes
+            .iter()
+            .map(|_| {
+                let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("stance palette"),
+                    size: (MAX_PALETTE_MATRICES * std::mem::size_of::<[f32; 16]>()) as u64,
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                });
+                let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("stance palette bind group"),
+                    layout: &pipeline.palette_layout,
+                    entries: &[wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: buffer.as_entire_binding(),
+                    }],
+                });
+                (buffer, group)
+            })
+            .collect();
+        let mut triangle_count = 0;
+        let primitives = model
+            .primitives
+            .iter()
+            .filter(|primitive| !primitive.indices.is_empty() && !primitive.vertices.is_empty())
+            .map(|primitive| {
+                triangle_count += primitive.indices.len() / 3;
+                PrimitiveGpu {
+                    vertices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some("stance avatar vertices"),
+                        contents: bytemuck::cast_slice(&primitive.vertices),
+                        usage: wgpu::BufferUsages::VERTEX,
+                    }),
+                    indices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some("stance avatar indices"),
+                        contents: bytemuck::cast_slice(&primitive.indices),
+                        usage: wgpu::BufferUsages::INDEX,
+                    }),
+                    index_count: u32::try_from(primitive.indices.len()).unwrap_or(0),
+                    material: primitive.material,
+                    palette: primitive.palette,
+                }
+            })
+            .collect();
+        Self {
+            primitives,
+            palettes,
+            materials,
+            fallback_material,
+            triangle_count,
+        }
+    }
+
+    /// Triangles uploaded.
+    pub fn triangle_count(&self) -> usize {
+        self.triangle_count
+    }
+
+    /// Writes this frame's palettes (extra matrices are ignored, missing ones keep their value).
+    pub(crate) fn write_palettes(&self, queue: &wgpu::Queue, palettes: &[Vec<Mat4>]) {
+        for ((buffer, _), matrices) in self.palettes.iter().zip(palettes) {
+            let count = matrices.len().min(MAX_PALETTE_MATRICES);
+            let Some(matrices) = matrices.get(..count) else {
+                continue;
+            };
+            if matrices.iter().all(|matrix| matrix.is_finite()) && !matrices.is_empty() {
+                let columns: Vec<[f32; 16]> = matrices
+                    .iter()
+                    .map(|matrix| matrix.to_cols_array())
+                    .collect();
+                queue.write_buffer(buffer, 0, bytemuck::cast_slice(&columns));
+            }
+        }
+    }
+
+    /// Draws every primitive (the frame bind group is already set at group 0).
+    pub(crate) fn draw(&self, pass: &mut wgpu::RenderPass<'_>, pipeline: &SkinnedPipeline) {
+        pass.set_pipeline(&pipeline.pipeline);
+        for primitive in &self.primitives {
+            let Some((_, palette)) = self.palettes.get(primitive.palette) else {
+                continue;
+            };
+            let material = self
+                .materials
+                .get(primitive.material)
+                .unwrap_or(&self.fallback_material);
+            pass.set_bind_group(1, palette, &[]);
+            pass.set_bind_group(2, material, &[]);
+            pass.set_vertex_buffer(0, primitive.vertices.slice(..));
+            pass.set_index_buffer(primitive.indices.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..primitive.index_count, 0, 0..1);
+        }
+    }
+}

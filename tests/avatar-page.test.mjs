@@ -1,0 +1,121 @@
+// End to end: users' avatars in the page (WebGL2): the shared third-party avatar opened with
+// the file picker, drawn skinned (pixels checked), posed by pulling its arm; ?avatar=URL;
+// a broken file leaves the current avatar in place.
+import { after, before, describe, test } from "node:test";
+import assert from "node:assert/strict";
+import { fileURLToPath } from "node:url";
+import { writeFileSync, mkdtempSync } from "node:fs";
+import { tmpdir } from "node:os";
+import { join } from "node:path";
+import { BACKGROUND, CONFIGURATIONS, decodePng, launch, openEditor, saveArtifact, serve } from "./browser.mjs";
+
+const SHARED_AVATAR = fileURLToPath(new URL("../../shared/avatars/Black_F_2_Casual.glb", import.meta.url));
+
+let site;
+let context;
+before(async () => {
+  site = await serve();
+  context = await launch(CONFIGURATIONS.webgl2);
+  await context.addInitScript(() => {
+    if (!window.sessionStorage.getItem("stance-test-tab")) {
+      window.localStorage.clear();
+      window.sessionStorage.setItem("stance-test-tab", "1");
+    }
+  });
+});
+after(async () => {
+  await context?.close();
+  site.server.close();
+});
+
+const state = async (page) => JSON.parse(await page.evaluate(() => window.stance.state_json()));
+
+async function avatarShown(page, timeout = 60_000) {
+  await page.waitForFunction(() => {
+    const s = JSON.parse(window.stance.state_json());
+    return s.avatar?.uploaded && s.settled;
+  }, null, { timeout });
+  await page.waitForTimeout(200);
+  return state(page);
+}
+
+function avatarPixels(image, [vx, vy, vw, vh]) {
+  let count = 0;
+  for (let y = Math.ceil(vy) + 40; y < vy + vh - 4; y += 2) {
+    for (let x = Math.ceil(vx) + 4; x < vx + vw - 4; x += 2) {
+      const [r, g, b] = image.at(x, y);
+      // Neither the dark background nor the grey floor grid: skin, hair, clothes.
+      const grey = Math.abs(r - g) < 12 && Math.abs(g - b) < 12;
+      if (!grey && !BACKGROUND(r, g, b)) count += 1;
+    }
+  }
+  return count;
+}
+
+describe("avatars in the page", () => {
+  test("the shared avatar opens from the file picker, is drawn skinned and follows a pull", async () => {
+    const page = await context.newPage();
+    const { errors } = await openEditor(context, site.url, page);
+    const started = Date.now();
+    await page.setInputFiles("input[type=file]", SHARED_AVATAR);
+    const shown = await avatarShown(page);
+    console.log(`[avatar] Black_F_2_Casual.glb: ${shown.avatar.vertices} vertices, ${shown.avatar.triangles} triangles, `
+      + `${shown.avatar.mapped} joints mapped; picked to first posed frame ${Date.now() - started} ms`);
+    assert.ok(shown.avatar.mapped >= 18, `${shown.avatar.mapped} joints mapped`);
+    assert.equal(shown.notice?.error, false, shown.notice?.text);
+    const image = decodePng(await page.screenshot());
+    saveArtifact("avatar-webgl2.png", await page.screenshot());
+    const pixels = avatarPixels(image, shown.viewport);
+    assert.ok(pixels > 1500, `only ${pixels} avatar-coloured pixels in the viewport`);
+
+    // Pull the right forearm toward the upper left; the feet hold.
+    const [wx, wy] = shown.screen.r_radiocarpal;
+    const [ex, ey] = shown.screen.r_elbow;
+    const grabX = ex + (wx - ex) * 0.5;
+    const grabY = ey + (wy - ey) * 0.5;
+    const handBefore = shown.joints.r_radiocarpal;
+    const footBefore = shown.joints.l_talocrural;
+    await page.mouse.move(grabX, grabY);
+    await page.mouse.down();
+    for (let step = 1; step <= 20; step += 1) {
+      await page.mouse.move(grabX + step * 2, grabY - step * 5);
+    }
+    await page.waitForTimeout(800);
+    await page.mouse.up();
+    await page.waitForFunction(() => JSON.parse(window.stance.state_json()).settled);
+    const pulled = await state(page);
+    saveArtifact("avatar-pulled-webgl2.png", await page.screenshot());
+    assert.ok(pulled.joints.r_radiocarpal[1] > handBefore[1] + 0.1,
+      `the hand rose: ${handBefore[1].toFixed(3)} -> ${pulled.joints.r_radiocarpal[1].toFixed(3)}`);
+    const footMoved = Math.hypot(...pulled.joints.l_talocrural.map((v, i) => v - footBefore[i]));
+    assert.ok(footMoved < 1e-3, `the pinned foot moved ${footMoved} m`);
+    const after = decodePng(await page.screenshot());
+    let changed = 0;
+    for (let i = 0; i < after.data.length; i += 4) {
+      if (Math.abs(after.data[i] - image.data[i]) > 10) changed += 1;
+    }
+    assert.ok(changed > 500, `the drawn avatar moved (${changed} pixels changed)`);
+
+    // A broken file: a message, and the avatar stays.
+    const broken = join(mkdtempSync(join(tmpdir(), "stance-")), "broken.glb");
+    writeFileSync(broken, Buffer.from("glTF\u0002\u0000\u0000\u0000truncated"));
+    await page.setInputFiles("input[type=file]", broken);
+    await page.waitForFunction(() => JSON.parse(window.stance.state_json()).notice?.error);
+    const kept = await state(page);
+    assert.match(kept.notice.text, /broken\.glb could not be opened/);
+    assert.equal(kept.avatar.name, "Black_F_2_Casual.glb", "the previous avatar stays");
+    assert.deepEqual(errors, [], `console errors: ${errors.join(" / ")}`);
+    await page.close();
+  });
+
+  test("?avatar=URL opens that avatar", async () => {
+    const page = await context.newPage();
+    await openEditor(context, `${site.url}?avatar=default-avatar.glb`, page);
+    const shown = await avatarShown(page);
+    assert.equal(shown.avatar.name, "default-avatar.glb");
+    const image = decodePng(await page.screenshot());
+    saveArtifact("avatar-default-webgl2.png", await page.screenshot());
+    assert.ok(avatarPixels(image, shown.viewport) > 800);
+    await page.close();
+  });
+});
