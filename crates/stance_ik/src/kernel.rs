@@ -1,26 +1,43 @@
 //! The prioritized step on plain contiguous slices: the solver's hot path.
 //!
 //! Same mathematics as [`crate::prioritized_step_nalgebra`] (see `priority.rs` for the
-//! derivation): `P_k = I - W_k W_k^T` with `W` an orthonormal basis grown by pivoted
-//! Gram-Schmidt, per-level damped least squares through `G = J P J^T` and a Cholesky solve,
-//! sparsity of the Jacobian rows exploited. The matrices here are small (N <= ~100,
-//! m_k <= ~60) and reused every iteration; column-major slices with unrolled dot products avoid
-//! the per-call allocations and bounds checks of the dynamic-matrix version, which the benchmark
-//! shows to matter at these sizes (figures in the closing notes / `stance bench`).
+//! derivation): `P_k = I - W_k W_k^T` with `W` an orthonormal basis of the row space of the
+//! augmented Jacobian, grown level by level by a column-pivoted, rank-revealing QR of
+//! `Jh_k^T`; per-level damped least squares through `G = J P J^T` and a Cholesky solve;
+//! sparsity of the Jacobian rows exploited. Here `W` is kept implicitly as Householder
+//! reflectors on the free (unclamped) DOF instead of the explicit Gram-Schmidt basis of the
+//! nalgebra version: orthogonal to machine precision without re-orthogonalisation, and about
+//! half the work per level (`Q^T J^T` gives `P J^T` and `G` at once). The matrices are small
+//! (N <= ~100, m_k <= ~60) and reused every iteration; column-major slices with unrolled dot
+//! products avoid the per-call allocations and bounds checks of the dynamic-matrix version.
 
 use nalgebra::{DMatrix, DVector};
 
 use crate::priority::{Damping, LevelSystem, StepParams, StepWorkspace, damped_solve};
 
+/// Marks a clamped DOF in `Kernel::pos`.
+const NONE: usize = usize::MAX;
+
 /// Buffers of the kernel (all column-major).
+///
+/// The projector is kept as Householder reflectors: `P_k = Q diag(0_r, I) Q^T` with
+/// `Q = H_0 H_1 ... H_{r-1}`, `H_j = I - beta_j v_j v_j^T`, `v_j` zero above entry `j`, in the
+/// coordinates of the free (unclamped) DOF. `W_k = Q[:, ..r]` is the orthonormal basis of the
+/// row space of the augmented Jacobian of `priority.rs`; it is never formed.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Kernel {
-    w: Vec<f64>,
+    /// Householder vectors, `nf x nf`: column `j` holds `v_j` in rows `j..nf`.
+    v: Vec<f64>,
+    beta: Vec<f64>,
     rank: usize,
+    /// Free DOF (reduced coordinate -> DOF) and its inverse (`NONE` for clamped DOF).
+    free: Vec<usize>,
+    pos: Vec<usize>,
+    /// The level's support rows of free DOF, and `J^T` on them (`s x m`).
+    sup: Vec<usize>,
     jts: Vec<f64>,
-    wg: Vec<f64>,
-    coeffs: Vec<f64>,
-    jht: Vec<f64>,
+    /// `Q^T J^T` in reduced coordinates (`nf x m`).
+    z: Vec<f64>,
     g: Vec<f64>,
     l: Vec<f64>,
     e: Vec<f64>,
@@ -30,7 +47,7 @@ pub(crate) struct Kernel {
     used: Vec<bool>,
     theta: Vec<f64>,
     step: Vec<f64>,
-    all_rows: Vec<usize>,
+    red: Vec<f64>,
     budget: f64,
 }
 
@@ -61,46 +78,128 @@ fn axpy(alpha: f64, x: &[f64], y: &mut [f64]) {
     }
 }
 
-/// In-place Cholesky of the `m x m` column-major `a` (lower triangle used). False when not
-/// positive definite.
+/// In-place Cholesky `A = U^T U` of the symmetric `m x m` column-major `a` (upper triangle
+/// used; `U` overwrites it, so that every inner product reads contiguous columns). False when
+/// not positive definite.
 fn cholesky(a: &mut [f64], m: usize) -> bool {
     for j in 0..m {
-        let mut d = a[j * m + j];
-        for k in 0..j {
-            let l = a[k * m + j];
-            d -= l * l;
+        let (done, rest) = a.split_at_mut(j * m);
+        let colj = &mut rest[..m];
+        for i in 0..j {
+            let coli = &done[i * m..i * m + i + 1];
+            let v = colj[i] - dot(&coli[..i], &colj[..i]);
+            colj[i] = v / coli[i];
         }
+        let d = colj[j] - dot(&colj[..j], &colj[..j]);
         if d.is_nan() || d <= 0.0 || !d.is_finite() {
             return false;
         }
-        let d = d.sqrt();
-        a[j * m + j] = d;
-        for i in j + 1..m {
-            let mut v = a[j * m + i];
-            for k in 0..j {
-                v -= a[k * m + i] * a[k * m + j];
-            }
-            a[j * m + i] = v / d;
-        }
+        colj[j] = d.sqrt();
     }
     true
 }
 
-/// Solves `L L^T y = b` in place in `b`.
-fn cholesky_solve(l: &[f64], m: usize, b: &mut [f64]) {
+/// Solves `U^T U y = b` in place in `b` (`u` from [`cholesky`]).
+fn cholesky_solve(u: &[f64], m: usize, b: &mut [f64]) {
     for i in 0..m {
-        let mut v = b[i];
-        for k in 0..i {
-            v -= l[k * m + i] * b[k];
-        }
-        b[i] = v / l[i * m + i];
+        let col = &u[i * m..i * m + i + 1];
+        b[i] = (b[i] - dot(&col[..i], &b[..i])) / col[i];
     }
     for i in (0..m).rev() {
-        let mut v = b[i];
-        for k in i + 1..m {
-            v -= l[i * m + k] * b[k];
+        let col = &u[i * m..i * m + i + 1];
+        let yi = b[i] / col[i];
+        b[i] = yi;
+        if yi != 0.0 {
+            axpy(-yi, &col[..i], &mut b[..i]);
         }
-        b[i] = v / l[i * m + i];
+    }
+}
+
+/// Applies `H = I - beta v v^T` to `x` (same length as `v`).
+#[inline]
+fn reflect(v: &[f64], beta: f64, x: &mut [f64]) {
+    let t = beta * dot(v, x);
+    if t != 0.0 {
+        axpy(-t, v, x);
+    }
+}
+
+/// Applies `H = I - beta v v^T` to `x` and returns the squared norm of the result without
+/// its first entry (the remaining norm of a column in a pivoted QR step).
+#[inline]
+fn reflect_norm(v: &[f64], beta: f64, x: &mut [f64]) -> f64 {
+    let t = beta * dot(v, x);
+    let mut acc = [0.0f64; 2];
+    let mut tail = 0.0;
+    if let Some((first, rest)) = x.split_first_mut() {
+        *first -= t * v[0];
+        let vr = &v[1..];
+        let mut cx = rest.chunks_exact_mut(2);
+        let mut cv = vr.chunks_exact(2);
+        for (xs, vs) in (&mut cx).zip(&mut cv) {
+            xs[0] -= t * vs[0];
+            xs[1] -= t * vs[1];
+            acc[0] += xs[0] * xs[0];
+            acc[1] += xs[1] * xs[1];
+        }
+        for (xi, vi) in cx.into_remainder().iter_mut().zip(cv.remainder()) {
+            *xi -= t * vi;
+            tail += *xi * *xi;
+        }
+    }
+    acc[0] + acc[1] + tail
+}
+
+/// Applies `H = I - beta v v^T` to four vectors at once (one pass over `v` per phase).
+#[inline]
+fn reflect4(v: &[f64], beta: f64, x: [&mut [f64]; 4]) {
+    let [x0, x1, x2, x3] = x;
+    let n = v
+        .len()
+        .min(x0.len())
+        .min(x1.len())
+        .min(x2.len())
+        .min(x3.len());
+    let (v, x0, x1, x2, x3) = (
+        &v[..n],
+        &mut x0[..n],
+        &mut x1[..n],
+        &mut x2[..n],
+        &mut x3[..n],
+    );
+    let mut a = [0.0f64; 8];
+    let mut i = 0;
+    while i + 2 <= n {
+        let (v0, v1) = (v[i], v[i + 1]);
+        a[0] += v0 * x0[i];
+        a[1] += v1 * x0[i + 1];
+        a[2] += v0 * x1[i];
+        a[3] += v1 * x1[i + 1];
+        a[4] += v0 * x2[i];
+        a[5] += v1 * x2[i + 1];
+        a[6] += v0 * x3[i];
+        a[7] += v1 * x3[i + 1];
+        i += 2;
+    }
+    if i < n {
+        let vi = v[i];
+        a[0] += vi * x0[i];
+        a[2] += vi * x1[i];
+        a[4] += vi * x2[i];
+        a[6] += vi * x3[i];
+    }
+    let t = [
+        beta * (a[0] + a[1]),
+        beta * (a[2] + a[3]),
+        beta * (a[4] + a[5]),
+        beta * (a[6] + a[7]),
+    ];
+    for i in 0..n {
+        let vi = v[i];
+        x0[i] -= t[0] * vi;
+        x1[i] -= t[1] * vi;
+        x2[i] -= t[2] * vi;
+        x3[i] -= t[3] * vi;
     }
 }
 
@@ -112,10 +211,15 @@ fn cholesky_solve(l: &[f64], m: usize, b: &mut [f64]) {
 /// every level's `dx`. When `projectors` is given, `P_k` after each level is pushed into it
 /// (for tests). `ws.partial_steps()` then holds `dtheta_k` after each level.
 ///
+/// The projector is kept as Householder reflectors on the free DOF (see [`Kernel`]): the
+/// recursive update `P_k = P_{k-1} - Jh_k^+ Jh_k` appends the reflectors of a pivoted,
+/// rank-revealing Householder QR of `Jh_k^T` written in the rotated coordinates
+/// (`Q^T P_{k-1} J_k^T = [0; Z]`), which keeps `W` orthonormal to machine precision without
+/// re-orthogonalisation. `G = Jh Jh^T = Z^T Z`.
+///
 /// Sparsity: only the rows of `J_k^T` listed in `LevelSystem::support` are read (a Jacobian
-/// column is zero for DOF that are not ancestors of the effector), so `W^T J_k^T` costs
-/// `O(r |S| m)` and `J_k P J_k^T` `O(m^2 |S|)`; `G` is symmetric and only half is computed.
-/// Once the projector has rank `N`, the remaining levels are skipped.
+/// column is zero for DOF that are not ancestors of the effector); `G` is symmetric and only
+/// half is computed. Once the projector has full rank, the remaining levels are skipped.
 pub fn prioritized_step(
     levels: &[LevelSystem],
     n: usize,
@@ -134,26 +238,36 @@ pub fn prioritized_step(
     }
     let mut partial = std::mem::take(ws.partial_mut());
     let kn = &mut ws.kernel;
-    kn.w.resize(n * n, 0.0);
-    kn.rank = 0;
-    if kn.all_rows.len() != n {
-        kn.all_rows = (0..n).collect();
+    kn.free.clear();
+    kn.pos.clear();
+    for d in 0..n {
+        let off = clamped.is_some_and(|mask| mask.get(d).copied().unwrap_or(false));
+        if off {
+            kn.pos.push(NONE);
+        } else {
+            kn.pos.push(kn.free.len());
+            kn.free.push(d);
+        }
     }
+    let nf = kn.free.len();
+    kn.v.clear();
+    kn.v.resize(nf * nf, 0.0);
+    kn.beta.clear();
+    kn.beta.resize(nf, 0.0);
+    kn.rank = 0;
     kn.theta.clear();
     kn.theta.resize(n, 0.0);
     kn.budget = params.max_dof_step;
     let last_with_rows = levels.iter().rposition(|l| !l.dx.is_empty());
     for (k, level) in levels.iter().enumerate() {
         let m = level.dx.len();
-        let r = kn.rank;
-        let usable = m > 0 && level.jacobian_t.shape() == (n, m) && r < n;
+        let usable = m > 0 && level.jacobian_t.shape() == (n, m) && kn.rank < nf;
         if usable {
             level_step(
                 kn,
                 level,
                 n,
                 params,
-                clamped,
                 fixed,
                 Some(k) != last_with_rows || projectors.is_some(),
             );
@@ -172,38 +286,36 @@ fn level_step(
     level: &LevelSystem,
     n: usize,
     params: &StepParams,
-    clamped: Option<&[bool]>,
     fixed: Option<&DVector<f64>>,
     extend: bool,
 ) {
     let m = level.dx.len();
     let r = kn.rank;
-    let all = std::mem::take(&mut kn.all_rows);
-    let support: &[usize] = if level.support.is_empty() {
-        &all
-    } else {
-        &level.support
-    };
-    let s = support.len();
+    let nf = kn.free.len();
     let jt = level.jacobian_t.as_slice();
-    // J^T on the support rows, clamped DOF zeroed: jts (s x m).
+    // Support rows of the free DOF.
+    kn.sup.clear();
+    if level.support.is_empty() {
+        kn.sup.extend_from_slice(&kn.free);
+    } else {
+        kn.sup
+            .extend(level.support.iter().copied().filter(|&d| kn.pos[d] != NONE));
+    }
+    let s = kn.sup.len();
+    // J^T on the support rows: jts (s x m).
     kn.jts.clear();
     kn.jts.resize(s * m, 0.0);
     for c in 0..m {
         let src = &jt[c * n..(c + 1) * n];
         let dst = &mut kn.jts[c * s..(c + 1) * s];
-        for (i, &d) in support.iter().enumerate() {
-            let off = clamped.is_some_and(|mask| mask.get(d).copied().unwrap_or(false));
-            dst[i] = if off { 0.0 } else { src[d] };
+        for (x, &d) in dst.iter_mut().zip(&kn.sup) {
+            *x = src[d];
         }
     }
-    // theta + fixed on the support, then e = dx - J (theta + fixed).
+    // e = dx - J (theta + fixed): theta lives on the free DOF, `fixed` (the moves of clamped
+    // DOF onto their limits) on the clamped ones, whose columns are read from the full J^T.
     kn.y.clear();
-    kn.y.extend(
-        support
-            .iter()
-            .map(|&d| kn.theta[d] + fixed.map_or(0.0, |f| f[d])),
-    );
+    kn.y.extend(kn.sup.iter().map(|&d| kn.theta[d]));
     kn.e.clear();
     kn.e.extend_from_slice(level.dx.as_slice());
     kn.col_norms.clear();
@@ -212,73 +324,78 @@ fn level_step(
         kn.e[c] -= dot(col, &kn.y);
         kn.col_norms.push(dot(col, col).sqrt());
     }
+    if let Some(fixed) = fixed {
+        let clamped_rows = |d: &usize| kn.pos[*d] == NONE && fixed[*d] != 0.0;
+        let support: &[usize] = if level.support.is_empty() {
+            &[]
+        } else {
+            &level.support
+        };
+        for c in 0..m {
+            let full = &jt[c * n..(c + 1) * n];
+            let moved: f64 = if level.support.is_empty() {
+                (0..n)
+                    .filter(clamped_rows)
+                    .map(|d| full[d] * fixed[d])
+                    .sum()
+            } else {
+                support
+                    .iter()
+                    .filter(|d| clamped_rows(d))
+                    .map(|&d| full[d] * fixed[d])
+                    .sum()
+            };
+            kn.e[c] -= moved;
+        }
+    }
     let row_scale = kn.col_norms.iter().copied().fold(0.0, f64::max);
     if row_scale.is_nan() || row_scale <= 0.0 || !row_scale.is_finite() {
-        kn.all_rows = all;
         return;
     }
     let tol = params.rank_tolerance * row_scale;
     kn.g.clear();
     kn.g.resize(m * m, 0.0);
-    // G = J J^T on the support (then minus C^T C below).
+    let need_z = r > 0 || extend;
+    if need_z {
+        // Z = Q^T J^T in reduced coordinates; its rows r.. are the coordinates of Jh^T = P J^T.
+        kn.z.clear();
+        kn.z.resize(nf * m, 0.0);
+        for c in 0..m {
+            let dst = &mut kn.z[c * nf..(c + 1) * nf];
+            for (i, &d) in kn.sup.iter().enumerate() {
+                dst[kn.pos[d]] = kn.jts[c * s + i];
+            }
+        }
+        for j in 0..r {
+            let vj = &kn.v[j * nf + j..(j + 1) * nf];
+            let bj = kn.beta[j];
+            let mut blocks = kn.z.chunks_exact_mut(4 * nf);
+            for block in &mut blocks {
+                let (a, rest) = block.split_at_mut(nf);
+                let (b, rest) = rest.split_at_mut(nf);
+                let (c, d) = rest.split_at_mut(nf);
+                reflect4(vj, bj, [&mut a[j..], &mut b[j..], &mut c[j..], &mut d[j..]]);
+            }
+            for col in blocks.into_remainder().chunks_exact_mut(nf) {
+                reflect(vj, bj, &mut col[j..]);
+            }
+        }
+    }
+    // G = Jh Jh^T = Z[r.., :]^T Z[r.., :] (= J J^T on the support when r = 0).
     for a in 0..m {
         for b in a..m {
-            let v = dot(&kn.jts[a * s..(a + 1) * s], &kn.jts[b * s..(b + 1) * s]);
+            let v = if r == 0 {
+                dot(&kn.jts[a * s..(a + 1) * s], &kn.jts[b * s..(b + 1) * s])
+            } else {
+                dot(
+                    &kn.z[a * nf + r..(a + 1) * nf],
+                    &kn.z[b * nf + r..(b + 1) * nf],
+                )
+            };
             kn.g[b * m + a] = v;
             kn.g[a * m + b] = v;
         }
     }
-    kn.coeffs.clear();
-    if r > 0 {
-        // C = W^T J^T, read on the support rows: coeffs (r x m).
-        kn.wg.clear();
-        kn.wg.resize(s * r, 0.0);
-        for j in 0..r {
-            let wj = &kn.w[j * n..(j + 1) * n];
-            let dst = &mut kn.wg[j * s..(j + 1) * s];
-            for (i, &d) in support.iter().enumerate() {
-                dst[i] = wj[d];
-            }
-        }
-        kn.coeffs.resize(r * m, 0.0);
-        for c in 0..m {
-            let col = &kn.jts[c * s..(c + 1) * s];
-            for j in 0..r {
-                kn.coeffs[c * r + j] = dot(&kn.wg[j * s..(j + 1) * s], col);
-            }
-        }
-        // G = J P J^T = J J^T - C^T C.
-        for a in 0..m {
-            for b in a..m {
-                let v = dot(
-                    &kn.coeffs[a * r..(a + 1) * r],
-                    &kn.coeffs[b * r..(b + 1) * r],
-                );
-                kn.g[b * m + a] -= v;
-                if a != b {
-                    kn.g[a * m + b] -= v;
-                }
-            }
-        }
-    }
-    if extend {
-        // Jh^T = J^T - W C, needed (full length) to extend the basis.
-        kn.jht.clear();
-        kn.jht.resize(n * m, 0.0);
-        for c in 0..m {
-            let dst = &mut kn.jht[c * n..(c + 1) * n];
-            for (i, &d) in support.iter().enumerate() {
-                dst[d] = kn.jts[c * s + i];
-            }
-            for j in 0..r {
-                let a = kn.coeffs[c * r + j];
-                if a != 0.0 {
-                    axpy(-a, &kn.w[j * n..(j + 1) * n], dst);
-                }
-            }
-        }
-    }
-    kn.all_rows = all;
     // y = (G + lambda^2 I)^-1 e, or the filtered eigen-solution.
     kn.y.clear();
     let mut solved = false;
@@ -303,29 +420,38 @@ fn level_step(
         kn.y.clear();
         kn.y.extend_from_slice(y.as_slice());
     }
-    // step = Jh^T y = J^T y - W (C y), scaled into what is left of the step budget.
+    // step = Jh^T y = Q [0; Z[r.., :] y] (= J^T y when r = 0), scaled into what is left of the
+    // step budget.
     kn.step.clear();
     kn.step.resize(n, 0.0);
-    let all = std::mem::take(&mut kn.all_rows);
-    let support: &[usize] = if level.support.is_empty() {
-        &all
-    } else {
-        &level.support
-    };
-    for c in 0..m {
-        let yc = kn.y[c];
-        if yc != 0.0 {
-            let col = &kn.jts[c * s..(c + 1) * s];
-            for (i, &d) in support.iter().enumerate() {
-                kn.step[d] += yc * col[i];
+    if r == 0 {
+        for c in 0..m {
+            let yc = kn.y[c];
+            if yc != 0.0 {
+                let col = &kn.jts[c * s..(c + 1) * s];
+                for (x, &d) in col.iter().zip(&kn.sup) {
+                    kn.step[d] += yc * x;
+                }
             }
         }
-    }
-    kn.all_rows = all;
-    for j in 0..r {
-        let cy: f64 = (0..m).map(|c| kn.coeffs[c * r + j] * kn.y[c]).sum();
-        if cy != 0.0 {
-            axpy(-cy, &kn.w[j * n..(j + 1) * n], &mut kn.step);
+    } else {
+        kn.red.clear();
+        kn.red.resize(nf, 0.0);
+        for c in 0..m {
+            let yc = kn.y[c];
+            if yc != 0.0 {
+                axpy(yc, &kn.z[c * nf + r..(c + 1) * nf], &mut kn.red[r..]);
+            }
+        }
+        for j in (0..r).rev() {
+            reflect(
+                &kn.v[j * nf + j..(j + 1) * nf],
+                kn.beta[j],
+                &mut kn.red[j..],
+            );
+        }
+        for (x, &d) in kn.red.iter().zip(&kn.free) {
+            kn.step[d] = *x;
         }
     }
     let max = kn.step.iter().fold(0.0f64, |a, v| a.max(v.abs()));
@@ -339,39 +465,44 @@ fn level_step(
         kn.budget -= scale * max;
     }
     if extend {
-        kn.extend_basis(n, m, tol);
+        kn.extend_basis(m, tol);
     }
 }
 
 impl Kernel {
+    /// `P = I - W W^T` in full DOF coordinates (`W = Q[:, ..r]`, clamped rows zero).
     fn projector(&self, n: usize) -> DMatrix<f64> {
+        let nf = self.free.len();
         let mut p = DMatrix::identity(n, n);
-        for j in 0..self.rank {
-            let wj = &self.w[j * n..(j + 1) * n];
-            for a in 0..n {
-                for b in 0..n {
-                    p[(a, b)] -= wj[a] * wj[b];
+        let mut w = vec![0.0; nf];
+        for i in 0..self.rank {
+            // Q e_i = H_0 ... H_i e_i.
+            w.fill(0.0);
+            w[i] = 1.0;
+            for j in (0..=i).rev() {
+                reflect(&self.v[j * nf + j..(j + 1) * nf], self.beta[j], &mut w[j..]);
+            }
+            for (a, &da) in self.free.iter().enumerate() {
+                for (b, &db) in self.free.iter().enumerate() {
+                    p[(da, db)] -= w[a] * w[b];
                 }
             }
         }
         p
     }
 
-    /// Appends to `W` an orthonormal basis of the numerical column space of `Jh^T` (pivoted
-    /// Gram-Schmidt). A column is projected on `W` once more when the projections so far
-    /// removed more than `1 - 1/sqrt(2)` of its norm (the classical "twice is enough"
-    /// criterion); a looser criterion (1e-3) saved ~15% of S2/S4 but broke the 1e-9 strict
-    /// priority test on random trees.
-    fn extend_basis(&mut self, n: usize, m: usize, tol: f64) {
+    /// Appends to the reflectors a pivoted, rank-revealing Householder QR of the `m` columns
+    /// of `Z[rank.., :]` (the coordinates of `Jh^T`): the column with the largest remaining
+    /// norm first, stopping when it is at most `tol`. Same rank decision as pivoted
+    /// Gram-Schmidt on `Jh^T`, orthogonal to machine precision.
+    fn extend_basis(&mut self, m: usize, tol: f64) {
+        let nf = self.free.len();
         self.norms.clear();
-        self.norms.extend((0..m).map(|c| {
-            let col = &self.jht[c * n..(c + 1) * n];
-            dot(col, col)
-        }));
+        self.norms.extend((0..m).map(|c| self.g[c * m + c]));
         self.used.clear();
         self.used.resize(m, false);
         let tol2 = tol * tol;
-        while self.rank < n {
+        while self.rank < nf {
             let mut best = None;
             let mut best_norm = tol2;
             for c in 0..m {
@@ -382,32 +513,26 @@ impl Kernel {
             }
             let Some(c) = best else { break };
             self.used[c] = true;
-            let r = self.rank;
-            let original = self.col_norms.get(c).copied().unwrap_or(0.0);
-            let (w_done, rest) = self.w.split_at_mut(r * n);
-            let col = &mut self.jht[c * n..(c + 1) * n];
-            if best_norm < 0.5 * original * original {
-                for j in 0..r {
-                    let wj = &w_done[j * n..(j + 1) * n];
-                    let a = dot(wj, col);
-                    axpy(-a, wj, col);
-                }
-            }
-            let norm = dot(col, col).sqrt();
-            if norm.is_nan() || norm <= tol {
+            let i = self.rank;
+            let x = &self.z[c * nf + i..(c + 1) * nf];
+            let sigma = dot(x, x).sqrt();
+            if sigma.is_nan() || sigma <= tol || !sigma.is_finite() {
                 continue;
             }
-            let new = &mut rest[..n];
-            for (dst, v) in new.iter_mut().zip(col.iter()) {
-                *dst = v / norm;
-            }
+            let x0 = x[0];
+            let alpha = if x0 >= 0.0 { -sigma } else { sigma };
+            let v0 = x0 - alpha;
+            let beta = -1.0 / (alpha * v0);
+            let dst = &mut self.v[i * nf + i..(i + 1) * nf];
+            dst.copy_from_slice(x);
+            dst[0] = v0;
+            self.beta[i] = beta;
             self.rank += 1;
+            let vi = &self.v[i * nf + i..(i + 1) * nf];
             for c2 in 0..m {
                 if !self.used[c2] {
-                    let other = &mut self.jht[c2 * n..(c2 + 1) * n];
-                    let a = dot(new, other);
-                    axpy(-a, new, other);
-                    self.norms[c2] = dot(other, other);
+                    let other = &mut self.z[c2 * nf + i..(c2 + 1) * nf];
+                    self.norms[c2] = reflect_norm(vi, beta, other);
                 }
             }
         }

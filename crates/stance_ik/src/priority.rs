@@ -165,14 +165,16 @@ pub fn prioritized_step_nalgebra(
                 dst[i] = if off { 0.0 } else { src[d] };
             }
         }
-        // e = dx - J (dtheta_{k-1} + fixed)
+        // e = dx - J (dtheta_{k-1} + fixed); `fixed` lives on clamped DOF, whose columns
+        // are zeroed in `jts`, so it is applied with the unmasked Jacobian.
         let mut e = level.dx.clone();
         for c in 0..m {
             let col = ws.jts.column(c);
+            let full = level.jacobian_t.column(c);
             let mut acc = 0.0;
             for (i, &d) in support.iter().enumerate() {
                 let f = fixed.map_or(0.0, |f| f[d]);
-                acc += col[i] * (dtheta[d] + f);
+                acc += col[i] * dtheta[d] + full[d] * f;
             }
             e[c] -= acc;
         }

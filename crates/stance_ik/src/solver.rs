@@ -259,6 +259,9 @@ pub struct Solver {
     /// solution (swivel kept as far as the limits allow) and the iterations go on. Empty by
     /// default (pure variational solver).
     pub limbs: Vec<Limb>,
+    /// DOF held where they are (driven from outside, e.g. by motion-capture sensors): they
+    /// leave every step like clamped DOF, and no hybrid restart moves them. Empty: none.
+    locked: Vec<bool>,
     frames: Frames,
     layout: Vec<LevelLayout>,
     supports: Vec<Vec<usize>>,
@@ -284,6 +287,23 @@ impl Solver {
     pub fn with_limbs(mut self, limbs: Vec<Limb>) -> Self {
         self.limbs = limbs;
         self
+    }
+
+    /// Holds these DOF (posture indices) where they are in the following solves; an empty
+    /// slice frees them all. Indices past the skeleton's DOF are ignored.
+    pub fn set_locked_dofs(&mut self, dofs: &[usize]) {
+        self.locked.clear();
+        if let Some(&last) = dofs.iter().max() {
+            self.locked.resize(last + 1, false);
+            for &dof in dofs {
+                self.locked[dof] = true;
+            }
+        }
+    }
+
+    /// True when `dof` is held by [`Solver::set_locked_dofs`].
+    pub fn is_locked(&self, dof: usize) -> bool {
+        self.locked.get(dof).copied().unwrap_or(false)
     }
 
     /// Solves from `posture`, which receives the result; reads the system clock for the time
@@ -424,6 +444,12 @@ impl Solver {
             let [upper, middle, end] = limb.joints();
             let joints = [name(upper), name(middle), name(end)];
             if done.iter().any(|r| r.joints == joints) {
+                continue;
+            }
+            let held = [upper, middle, end]
+                .iter()
+                .any(|&j| skeleton.joints()[j].dof_range().any(|d| self.is_locked(d)));
+            if held {
                 continue;
             }
             let goal = self.layout[k]
@@ -588,6 +614,16 @@ impl Solver {
     /// Forward kinematics + all level systems; returns the squared residual per level.
     fn linearize(&mut self, skeleton: &Skeleton, tasks: &[Task], values: &[f64]) -> Vec<f64> {
         self.frames.update(skeleton, values);
+        self.linearize_at_frames(skeleton, tasks, values)
+    }
+
+    /// All level systems at `values`, whose forward kinematics `self.frames` already holds.
+    fn linearize_at_frames(
+        &mut self,
+        skeleton: &Skeleton,
+        tasks: &[Task],
+        values: &[f64],
+    ) -> Vec<f64> {
         let n = skeleton.dof_count();
         let limits = StepLimits {
             linear: self.settings.max_linear_step,
@@ -600,7 +636,7 @@ impl Solver {
             .zip(self.residual_sq.iter_mut())
             .zip(self.weighted_sq.iter_mut())
         {
-            sys.jacobian_t.fill(0.0);
+            sys.jacobian_t.as_mut_slice().fill(0.0);
             let mut row = 0;
             *res = 0.0;
             *wres = 0.0;
@@ -712,7 +748,8 @@ impl Solver {
             }
             break;
         }
-        self.linearize(skeleton, tasks, values);
+        // The last candidate evaluated is `values`: `self.frames` holds its kinematics.
+        self.linearize_at_frames(skeleton, tasks, values);
         (moved, clamped)
     }
 
@@ -811,11 +848,11 @@ impl Solver {
                 .iter()
                 .zip(hi)
                 .any(|(l, h)| l.is_finite() || h.is_finite());
-        let mut clamped = vec![false; n];
+        let mut clamped: Vec<bool> = (0..n).map(|d| self.is_locked(d)).collect();
         let mut fixed = std::mem::take(&mut self.fixed);
         fixed.resize_vertically_mut(n, 0.0);
         fixed.fill(0.0);
-        let mut any_clamped = false;
+        let mut any_clamped = clamped.iter().any(|&c| c);
         let mut total;
         let mut passes = 0;
         loop {
@@ -865,6 +902,11 @@ impl Solver {
             }
         }
         self.fixed = fixed;
-        (total, clamped.iter().filter(|&&c| c).count())
+        let clamped_by_limits = clamped
+            .iter()
+            .enumerate()
+            .filter(|&(d, &c)| c && !self.is_locked(d))
+            .count();
+        (total, clamped_by_limits)
     }
 }

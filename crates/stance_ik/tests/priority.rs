@@ -477,3 +477,55 @@ fn kernel_and_nalgebra_steps_agree() {
         }
     }
 }
+
+/// A DOF clamped onto its limit moves by `fixed`; every level must see that move and
+/// compensate it with the free DOF. A feasible, exactly solvable level 1 (one 3-D position
+/// task on a long chain) therefore still reaches its linearized target, in both backends.
+#[test]
+fn clamped_moves_are_compensated_by_the_free_dof() {
+    let mut checked = 0;
+    for seed in 7000..7060 {
+        let mut r = rng(seed);
+        let s = straight_chain(8, 0.2);
+        let p = random_posture(&mut r, &s, 0.6);
+        let tip = s.joint_count() - 1;
+        let frames = stance_ik::Frames::new(&s, &p);
+        let target = frames.point(tip, DVec3::ZERO) + vec3(&mut r, 0.05);
+        let tasks = vec![
+            Task::position(tip, DVec3::ZERO, target).at_level(1),
+            Task::position(tip / 2, DVec3::ZERO, vec3(&mut r, 0.5)).at_level(2),
+        ];
+        let systems = Solver::default().linear_systems(&s, &tasks, &p).unwrap();
+        let n = s.dof_count();
+        let clamped_dof = r.random_range(0..n);
+        let mut clamped = vec![false; n];
+        clamped[clamped_dof] = true;
+        let fixed = DVector::from_fn(n, |i, _| if i == clamped_dof { 0.05 } else { 0.0 });
+        let params = exact_params(0.0);
+        for nalgebra in [false, true] {
+            let step = if nalgebra {
+                stance_ik::prioritized_step_nalgebra
+            } else {
+                prioritized_step
+            };
+            let free_step = step(
+                &systems,
+                n,
+                &params,
+                Some(&clamped),
+                Some(&fixed),
+                &mut StepWorkspace::default(),
+                None,
+            );
+            assert_eq!(free_step[clamped_dof], 0.0, "seed {seed}");
+            let total = &free_step + &fixed;
+            let residual = linearized_residual(&systems[0], &total);
+            assert!(
+                residual < 1e-9,
+                "seed {seed} nalgebra {nalgebra}: level 1 off by {residual}"
+            );
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 120);
+}
