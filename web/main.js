@@ -1,6 +1,7 @@
 // Starts the Stance editor (Rust compiled to WebAssembly) on the page's canvas, and shows a
 // readable error screen instead of a blank page when it cannot start.
 import init, { WebHandle } from "./pkg/stance_web.js";
+import { connectSensor, disconnectSensor } from "./sensors.js";
 
 const loading = document.getElementById("loading");
 const errorScreen = document.getElementById("error");
@@ -23,7 +24,7 @@ function showError(message) {
 // The browser services the editor asks for (see crates/stance_web/src/web.rs).
 const fileInput = document.createElement("input");
 fileInput.type = "file";
-fileInput.accept = ".json,application/json,.glb,.gltf,.vrm";
+fileInput.accept = ".json,application/json,.glb,.gltf,.vrm,.bin,.fob,.txt,.log";
 fileInput.hidden = true;
 document.body.append(fileInput);
 
@@ -55,6 +56,25 @@ window.stanceHost = {
     anchor.click();
     anchor.remove();
     setTimeout(() => URL.revokeObjectURL(anchor.href), 10000);
+  },
+  // Binary files (sensor recordings, posed avatars).
+  downloadBytes(fileName, bytes) {
+    const blob = new Blob([bytes], { type: "application/octet-stream" });
+    const anchor = document.createElement("a");
+    anchor.href = URL.createObjectURL(blob);
+    anchor.download = fileName;
+    document.body.append(anchor);
+    anchor.click();
+    anchor.remove();
+    setTimeout(() => URL.revokeObjectURL(anchor.href), 10000);
+  },
+  // Motion-capture sensors over WebSerial / WebHID (web/sensors.js).
+  connectSensor(requestJson) {
+    if (!window.stance) throw new Error("the editor is not running");
+    connectSensor(window.stance, requestJson);
+  },
+  disconnectSensor() {
+    disconnectSensor();
   },
   pickFile() {
     fileInput.value = "";

@@ -52,6 +52,10 @@ pub struct SimulateArgs {
     /// Output file (standard output when absent).
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Also write the simulated samples (what a perfect decoder gives back, in stream order)
+    /// as a JSON array to this file: ground truth for replay tests.
+    #[arg(long)]
+    pub truth: Option<PathBuf>,
 }
 
 pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
@@ -66,6 +70,10 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<()> {
         ..SimulationOptions::default()
     };
     let stream = simulate(&device, &options)?;
+    if let Some(path) = &args.truth {
+        let text = serde_json::to_string(&stream.truth).context("serialising the truth")?;
+        std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))?;
+    }
     match &args.out {
         Some(path) => std::fs::write(path, &stream.bytes)
             .with_context(|| format!("writing {}", path.display()))?,

@@ -5,6 +5,7 @@
 mod handles;
 mod overlay;
 mod panels;
+mod sensors_panel;
 
 use std::sync::mpsc::Receiver;
 
@@ -24,6 +25,7 @@ use crate::history::{EditKind, History};
 use crate::host::{BackendSummary, HostHooks, HostMessage};
 use crate::library::{AUTOSAVE_KEY, LIBRARY_KEY, PoseLibrary};
 use crate::posing::{PosingError, PosingSession, describe_joint};
+use crate::sensors::SensorHub;
 use crate::viewport::{ViewportInput, ViewportRenderer, apply_gestures};
 
 /// Colour of the selected body part (linear RGB).
@@ -91,6 +93,10 @@ pub struct StanceApp {
     clock_origin: web_time::Instant,
     /// Screen rectangles (points) of named buttons, published for the page's test hook.
     button_rects: Vec<(&'static str, egui::Rect)>,
+    sensors: SensorHub,
+    show_sensors: bool,
+    /// The next picked file is a sensor recording to replay.
+    replay_pick_pending: bool,
 }
 
 impl std::fmt::Debug for StanceApp {
@@ -153,8 +159,12 @@ impl StanceApp {
             frame_ms: 0.0,
             clock_origin: web_time::Instant::now(),
             button_rects: Vec::new(),
+            sensors: SensorHub::default(),
+            show_sensors: false,
+            replay_pick_pending: false,
         };
         app.load_library();
+        app.load_sensor_settings();
         Ok(app)
     }
 
@@ -252,6 +262,7 @@ impl StanceApp {
                     text.push_str(&format!(" Notes: {}", avatar.warnings.join("; ")));
                 }
                 self.session = session;
+                self.sensors.release();
                 self.history = History::default();
                 self.avatar = Some(avatar);
                 self.avatar_url = is_url(name).then(|| name.to_owned());
@@ -286,6 +297,7 @@ impl StanceApp {
                     self.inform("The posture did not fit the mannequin; it stands at rest.");
                 }
                 self.session = session;
+                self.sensors.release();
                 self.history = History::default();
                 self.avatar = None;
                 self.avatar_url = None;
@@ -419,6 +431,7 @@ impl StanceApp {
             Ok(session) => {
                 self.record(EditKind::Command);
                 self.session = session;
+                self.sensors.release();
                 self.selected_joint = None;
                 self.hovered_joint = None;
                 self.pull = None;
@@ -482,6 +495,10 @@ impl StanceApp {
 
     /// Opens a JSON file: a document (posture and tasks) or a pose library.
     pub fn open_file(&mut self, name: &str, bytes: &[u8]) {
+        if std::mem::take(&mut self.replay_pick_pending) {
+            self.replay_sensor_recording(name, bytes.to_vec());
+            return;
+        }
         let lower = name.to_ascii_lowercase();
         let is_avatar = [".glb", ".gltf", ".vrm"].iter().any(|extension| {
             lower
@@ -650,7 +667,32 @@ impl StanceApp {
                     self.open_link(&fragment, now);
                 }
                 HostMessage::OpenFile { name, bytes } => self.open_file(&name, &bytes),
-                HostMessage::Failed(reason) => self.warn(reason),
+                HostMessage::Failed(reason) => {
+                    self.replay_pick_pending = false;
+                    self.warn(reason);
+                }
+                HostMessage::SensorConnected { device } => {
+                    self.inform(format!("Sensors: {device} connected."));
+                    self.sensors.connected(device);
+                }
+                HostMessage::SensorBytes { bytes, arrived } => {
+                    let now = self.now_secs();
+                    self.sensors.receive_bytes(&bytes, now, arrived);
+                }
+                HostMessage::SensorReport {
+                    report_id,
+                    data,
+                    arrived,
+                } => {
+                    let now = self.now_secs();
+                    self.sensors.receive_report(report_id, &data, now, arrived);
+                }
+                HostMessage::SensorLost { reason } => {
+                    self.warn(format!(
+                        "Sensors: {reason} The posture stays as the last reading left it."
+                    ));
+                    self.sensors.lost(reason);
+                }
             }
         }
     }
@@ -690,6 +732,9 @@ impl StanceApp {
         }
         if ctx.input_mut(|input| input.consume_shortcut(&plain(Key::T))) {
             self.show_trace = !self.show_trace;
+        }
+        if ctx.input_mut(|input| input.consume_shortcut(&plain(Key::S))) {
+            self.show_sensors = !self.show_sensors;
         }
         if ctx.input_mut(|input| {
             input.consume_shortcut(&plain(Key::F1)) || input.consume_shortcut(&plain(Key::H))
@@ -813,6 +858,12 @@ impl StanceApp {
                     {
                         self.set_level_of_articulation(loa);
                     }
+                }
+            });
+            ui.menu_button("Sensors", |ui| {
+                if ui.button("Motion-capture sensors… (S)").clicked() {
+                    self.show_sensors = true;
+                    ui.close();
                 }
             });
             ui.menu_button("Help", |ui| {
@@ -1091,6 +1142,8 @@ impl StanceApp {
             }
         });
 
+        // Sensor readings drive their joints; the solver then moves the rest of the body.
+        let sensors_drove = self.apply_sensors();
         // Solve this frame's iterations before drawing, so the picture shows this frame's pose.
         let started = web_time::Instant::now();
         let origin = self.clock_origin;
@@ -1106,7 +1159,11 @@ impl StanceApp {
                 self.trace.push(point);
             }
         }
-        if !self.session.is_settled() || self.pull.is_some() || self.handle_drag.is_some() {
+        if !self.session.is_settled()
+            || self.pull.is_some()
+            || self.handle_drag.is_some()
+            || self.sensors.replay_progress().is_some()
+        {
             ui.ctx().request_repaint();
         }
 
@@ -1148,6 +1205,9 @@ impl StanceApp {
                     Color32::LIGHT_RED,
                 );
             }
+        }
+        if sensors_drove {
+            self.sensors.shown();
         }
         self.draw_overlay(ui.painter(), rect);
         if self.show_skeleton || (self.avatar.is_some() && self.selected_joint.is_some()) {
@@ -1322,6 +1382,7 @@ impl StanceApp {
             "buttons": buttons,
             "goals": goals,
             "rings": rings,
+            "sensors": self.sensors_state_json(),
         })
         .to_string()
     }
@@ -1358,6 +1419,7 @@ impl StanceApp {
             .frame(egui::Frame::NONE)
             .show(ui, |ui| self.viewport(ui, frame));
         self.help_window(&ctx);
+        self.sensors_window(&ctx);
         self.autosave();
         if let Some(cpu_seconds) = frame.info().cpu_usage {
             self.frame_ms = f64::from(cpu_seconds) * 1000.0;
@@ -1407,6 +1469,10 @@ const HELP_ROWS: &[(&str, &str)] = &[
     ("R", "reset to the rest pose (tasks kept)"),
     ("L", "copy the posture link"),
     ("T", "show or hide the effector trace"),
+    (
+        "S",
+        "motion-capture sensors: connect, assign, calibrate, record, replay",
+    ),
     ("Escape", "deselect"),
     (
         "Drop a .glb/.gltf/.vrm file",

@@ -6,6 +6,8 @@ use std::cell::RefCell;
 use std::collections::BTreeMap;
 use std::rc::Rc;
 
+use crate::sensors::SensorConnection;
+
 /// The graphics backend and adapter the viewport runs on, as the status bar names them.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct BackendSummary {
@@ -75,6 +77,21 @@ pub trait HostHooks {
         Err("this shell cannot fetch files".to_owned())
     }
 
+    /// Opens a sensor device: a serial port or a HID device (the browser asks the user which).
+    /// What follows arrives as [`HostMessage::SensorConnected`], [`HostMessage::SensorBytes`],
+    /// [`HostMessage::SensorReport`] and [`HostMessage::SensorLost`].
+    fn connect_sensor(&self, _request: &SensorConnection) -> Result<(), String> {
+        Err("this shell has no serial or HID access; replay a recording instead".to_owned())
+    }
+
+    /// Closes the sensor device, if one is open.
+    fn disconnect_sensor(&self) {}
+
+    /// Offers `bytes` as a file download named `file_name` (sensor recordings, posed GLB).
+    fn download_bytes(&self, _file_name: &str, _bytes: &[u8]) -> Result<(), String> {
+        Err("this shell cannot download files".to_owned())
+    }
+
     /// The editor's observable state changed (JSON, see `StanceApp::state_json`): the page
     /// keeps it for its test hook and for other scripts.
     fn publish_state(&self, _state_json: &str) {}
@@ -89,6 +106,21 @@ pub enum HostMessage {
     OpenFile { name: String, bytes: Vec<u8> },
     /// The host failed to do what the editor asked (reading a file...).
     Failed(String),
+    /// The sensor device is open (its name as the browser gives it).
+    SensorConnected { device: String },
+    /// Bytes from the serial sensor device; `arrived` is when the page received them.
+    SensorBytes {
+        bytes: Vec<u8>,
+        arrived: web_time::Instant,
+    },
+    /// One input report from the HID sensor device.
+    SensorReport {
+        report_id: u8,
+        data: Vec<u8>,
+        arrived: web_time::Instant,
+    },
+    /// The sensor device went away or failed (unplugged, permission refused, read error).
+    SensorLost { reason: String },
 }
 
 /// Hooks that do nothing: the native shell.
@@ -116,6 +148,9 @@ pub struct MemoryHostState {
     pub file_requests: usize,
     pub fetches: Vec<String>,
     pub first_frame: Option<BackendSummary>,
+    pub sensor_requests: Vec<SensorConnection>,
+    pub sensor_disconnects: usize,
+    pub binary_downloads: Vec<(String, Vec<u8>)>,
 }
 
 impl HostHooks for MemoryHost {
@@ -160,5 +195,25 @@ impl HostHooks for MemoryHost {
 
     fn publish_state(&self, state_json: &str) {
         state_json.clone_into(&mut self.inner.borrow_mut().state_json);
+    }
+
+    fn connect_sensor(&self, request: &SensorConnection) -> Result<(), String> {
+        self.inner
+            .borrow_mut()
+            .sensor_requests
+            .push(request.clone());
+        Ok(())
+    }
+
+    fn disconnect_sensor(&self) {
+        self.inner.borrow_mut().sensor_disconnects += 1;
+    }
+
+    fn download_bytes(&self, file_name: &str, bytes: &[u8]) -> Result<(), String> {
+        self.inner
+            .borrow_mut()
+            .binary_downloads
+            .push((file_name.to_owned(), bytes.to_vec()));
+        Ok(())
     }
 }

@@ -8,6 +8,7 @@ pub mod history;
 mod host;
 pub mod library;
 pub mod posing;
+pub mod sensors;
 mod viewport;
 
 pub use app::{Notice, StanceApp};

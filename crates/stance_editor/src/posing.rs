@@ -219,6 +219,75 @@ impl PosingSession {
         self.wake();
     }
 
+    /// Holds these joints where they are in the following solves (driven from outside: the
+    /// motion-capture sensors); an empty slice frees them all. The other joints keep solving
+    /// the tasks around them.
+    pub fn hold_joints(&mut self, joints: &[usize]) {
+        let skeleton = &self.humanoid.skeleton;
+        let dofs: Vec<usize> = joints
+            .iter()
+            .filter_map(|&joint| skeleton.joints().get(joint))
+            .flat_map(|joint| joint.rotation_dof.iter().flatten().copied())
+            .collect();
+        let unchanged =
+            (0..skeleton.dof_count()).all(|d| self.solver.is_locked(d) == dofs.contains(&d));
+        if !unchanged {
+            self.solver.set_locked_dofs(&dofs);
+            self.wake();
+        }
+    }
+
+    /// Joints held by [`PosingSession::hold_joints`].
+    pub fn held_joints(&self) -> Vec<usize> {
+        let skeleton = &self.humanoid.skeleton;
+        (0..skeleton.joint_count())
+            .filter(|&joint| {
+                skeleton.joints()[joint]
+                    .rotation_dof
+                    .iter()
+                    .flatten()
+                    .any(|&d| self.solver.is_locked(d))
+            })
+            .collect()
+    }
+
+    /// Sets the local rotations of these joints (projected onto each joint's DOF; the
+    /// measurement is kept even where it leaves the anatomical range) and solves the rest of
+    /// the body again around them.
+    pub fn drive_joints(&mut self, rotations: &[(usize, DQuat)]) {
+        let skeleton = &self.humanoid.skeleton;
+        let values = self.posture.values_mut();
+        let mut changed = false;
+        for &(joint, rotation) in rotations {
+            let Some(definition) = skeleton.joints().get(joint) else {
+                continue;
+            };
+            if !rotation.is_finite() {
+                continue;
+            }
+            let rotation = if rotation.w < 0.0 {
+                -rotation
+            } else {
+                rotation
+            };
+            let vector = rotation.normalize().to_scaled_axis();
+            if !vector.is_finite() {
+                continue;
+            }
+            for axis in 0..3 {
+                if let Some(slot) = definition.rotation_dof[axis].and_then(|d| values.get_mut(d))
+                    && (*slot - vector[axis]).abs() > 1e-9
+                {
+                    *slot = vector[axis];
+                    changed = true;
+                }
+            }
+        }
+        if changed {
+            self.wake();
+        }
+    }
+
     /// The document: avatar, posture and tasks (the grab is not part of it).
     pub fn document(&self) -> Document {
         Document {

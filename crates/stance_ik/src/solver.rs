@@ -301,6 +301,21 @@ impl Solver {
         }
     }
 
+    /// Clamps into the limits and re-wraps, except the held DOF, which stay as they were set.
+    fn clamp_free(&self, skeleton: &Skeleton, values: &mut [f64]) {
+        let held: Vec<(usize, f64)> = self
+            .locked
+            .iter()
+            .enumerate()
+            .filter(|&(_, &locked)| locked)
+            .filter_map(|(d, _)| values.get(d).map(|&v| (d, v)))
+            .collect();
+        clamp_and_wrap(skeleton, values);
+        for (d, v) in held {
+            values[d] = v;
+        }
+    }
+
     /// True when `dof` is held by [`Solver::set_locked_dofs`].
     pub fn is_locked(&self, dof: usize) -> bool {
         self.locked.get(dof).copied().unwrap_or(false)
@@ -337,7 +352,7 @@ impl Solver {
         self.prepare(skeleton, tasks, posture)?;
         let start = clock.map(|c| c.now_secs());
         let values = posture.values_mut();
-        clamp_and_wrap(skeleton, values);
+        self.clamp_free(skeleton, values);
         let before = self.linearize(skeleton, tasks, values);
         let mut best_values = values.to_vec();
         let mut best_residuals = before.clone();
@@ -492,7 +507,7 @@ impl Solver {
             };
             let solution = limb.solve_within_limits(base, &goal, preferred);
             limb.apply_values(&solution, values);
-            clamp_and_wrap(skeleton, values);
+            self.clamp_free(skeleton, values);
             self.linearize(skeleton, tasks, values);
             return Some(AnalyticRestart {
                 joints,
@@ -515,7 +530,7 @@ impl Solver {
         self.settings.validate()?;
         self.prepare(skeleton, tasks, posture)?;
         let values = posture.values_mut();
-        clamp_and_wrap(skeleton, values);
+        self.clamp_free(skeleton, values);
         self.linearize(skeleton, tasks, values);
         Ok(self.iteration(skeleton, tasks, values).0)
     }
@@ -727,7 +742,7 @@ impl Solver {
                 values[i] = start[i] + step[i];
                 moved = moved.max(step[i].abs());
             }
-            clamp_and_wrap(skeleton, values);
+            self.clamp_free(skeleton, values);
             self.evaluate_residuals(skeleton, tasks, values);
             let Some(worse) = self.rejecting_level(&old) else {
                 break;

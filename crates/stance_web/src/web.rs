@@ -8,6 +8,7 @@ use std::rc::Rc;
 use std::sync::mpsc::Sender;
 
 use eframe::wasm_bindgen::{self, prelude::*};
+use stance_editor::sensors::SensorConnection;
 use stance_editor::{BackendSummary, HostHooks, HostMessage, StanceApp};
 
 #[wasm_bindgen]
@@ -24,6 +25,12 @@ extern "C" {
     fn host_pick_file() -> Result<(), JsValue>;
     #[wasm_bindgen(js_namespace = stanceHost, js_name = fetchFile, catch)]
     fn host_fetch_file(url: &str) -> Result<(), JsValue>;
+    #[wasm_bindgen(js_namespace = stanceHost, js_name = downloadBytes, catch)]
+    fn host_download_bytes(file_name: &str, bytes: &[u8]) -> Result<(), JsValue>;
+    #[wasm_bindgen(js_namespace = stanceHost, js_name = connectSensor, catch)]
+    fn host_connect_sensor(request_json: &str) -> Result<(), JsValue>;
+    #[wasm_bindgen(js_namespace = stanceHost, js_name = disconnectSensor, catch)]
+    fn host_disconnect_sensor() -> Result<(), JsValue>;
 }
 
 fn describe(error: &JsValue) -> String {
@@ -97,6 +104,20 @@ impl HostHooks for PageHooks {
 
     fn publish_state(&self, state_json: &str) {
         state_json.clone_into(&mut self.state.borrow_mut());
+    }
+
+    fn connect_sensor(&self, request: &SensorConnection) -> Result<(), String> {
+        host_connect_sensor(&request.to_json()).map_err(|error| describe(&error))
+    }
+
+    fn disconnect_sensor(&self) {
+        if let Err(error) = host_disconnect_sensor() {
+            log::warn!("closing the sensor device: {}", describe(&error));
+        }
+    }
+
+    fn download_bytes(&self, file_name: &str, bytes: &[u8]) -> Result<(), String> {
+        host_download_bytes(file_name, bytes).map_err(|error| describe(&error))
     }
 }
 
@@ -181,6 +202,37 @@ impl WebHandle {
     #[wasm_bindgen]
     pub fn report_failure(&self, reason: String) {
         self.send(HostMessage::Failed(reason));
+    }
+
+    /// The sensor device is open (`web/sensors.js`).
+    #[wasm_bindgen]
+    pub fn sensor_connected(&self, device: String) {
+        self.send(HostMessage::SensorConnected { device });
+    }
+
+    /// Bytes from the serial sensor device.
+    #[wasm_bindgen]
+    pub fn sensor_bytes(&self, bytes: Vec<u8>) {
+        self.send(HostMessage::SensorBytes {
+            bytes,
+            arrived: web_time::Instant::now(),
+        });
+    }
+
+    /// One input report from the HID sensor device.
+    #[wasm_bindgen]
+    pub fn sensor_report(&self, report_id: u8, data: Vec<u8>) {
+        self.send(HostMessage::SensorReport {
+            report_id,
+            data,
+            arrived: web_time::Instant::now(),
+        });
+    }
+
+    /// The sensor device went away or could not be opened.
+    #[wasm_bindgen]
+    pub fn sensor_lost(&self, reason: String) {
+        self.send(HostMessage::SensorLost { reason });
     }
 
     /// The editor's state as JSON: document, joint positions (world and screen), task

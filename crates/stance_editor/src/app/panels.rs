@@ -82,6 +82,13 @@ impl StanceApp {
         if copy.clicked() {
             self.copy_link(ui.ctx());
         }
+        let sensors = ui
+            .button("Motion-capture sensors…")
+            .on_hover_text("S: connect serial or HID sensors, calibrate, record, replay");
+        self.button_rects.push(("sensors_open", sensors.rect));
+        if sensors.clicked() {
+            self.show_sensors = !self.show_sensors;
+        }
         ui.separator();
         self.selection_section(ui);
         ui.separator();

@@ -1,0 +1,507 @@
+//! The sensors window: device, connection, per-sensor figures, assignment to segments,
+//! calibration, heading reset, recording and replay; and the per-frame step that lets the
+//! calibrated sensors drive their joints.
+
+use egui::RichText;
+use serde_json::{Map, Value, json};
+use stance_mocap::SensorId;
+use stance_mocap::ascii::ComponentOrder;
+use stance_mocap::fob::FobMode;
+
+use super::StanceApp;
+use crate::posing::describe_joint;
+use crate::sensors::{
+    AssignmentPreset, DeviceFrame, DeviceKind, SENSOR_SETTINGS_KEY, SensorAssignment, SensorHub,
+    SensorLink, SensorSettings,
+};
+
+/// Baud rates offered first (any other can be typed).
+const BAUD_RATES: [u32; 6] = [9_600, 19_200, 38_400, 57_600, 115_200, 230_400];
+
+impl StanceApp {
+    pub(super) fn load_sensor_settings(&mut self) {
+        let Some(text) = self.hooks.load_text(SENSOR_SETTINGS_KEY) else {
+            return;
+        };
+        match serde_json::from_str::<SensorSettings>(&text) {
+            Ok(settings) => self.sensors = SensorHub::new(settings),
+            Err(error) => log::warn!("the saved sensor settings could not be read: {error}"),
+        }
+    }
+
+    fn store_sensor_settings(&mut self) {
+        let Ok(text) = serde_json::to_string(self.sensors.settings()) else {
+            return;
+        };
+        if let Err(error) = self.hooks.save_text(SENSOR_SETTINGS_KEY, &text) {
+            log::warn!("the sensor settings could not be saved: {error}");
+        }
+    }
+
+    /// The sensors of the page (tests and scripts use it too).
+    pub fn sensors(&self) -> &SensorHub {
+        &self.sensors
+    }
+
+    /// Asks the page to open the device chosen in the settings.
+    pub fn connect_sensors(&mut self) {
+        let request = match self.sensors.settings().connection() {
+            Ok(request) => request,
+            Err(error) => {
+                self.warn(format!("Sensors: {error}."));
+                return;
+            }
+        };
+        self.store_sensor_settings();
+        self.sensors.begin_connect();
+        if let Err(error) = self.hooks.connect_sensor(&request) {
+            self.sensors.lost(error.clone());
+            self.warn(format!("Sensors: {error}"));
+        }
+    }
+
+    pub fn disconnect_sensors(&mut self) {
+        self.hooks.disconnect_sensor();
+        self.sensors.disconnected();
+        self.inform("Sensors disconnected; the posture stays as it is.");
+    }
+
+    /// Plays a recorded byte stream through the same decoder and calibration as a device.
+    pub fn replay_sensor_recording(&mut self, name: &str, bytes: Vec<u8>) {
+        if bytes.is_empty() {
+            self.warn(format!("Sensors: {name} is empty."));
+            return;
+        }
+        let now = self.now_secs();
+        self.sensors.start_replay(name, bytes, now);
+        self.inform(format!("Replaying {name}."));
+    }
+
+    /// Calibrates the assigned sensors in the current posture.
+    pub fn calibrate_sensors(&mut self) {
+        let result = self
+            .sensors
+            .calibrate(self.session.skeleton(), self.session.frames());
+        match result {
+            Ok(()) => {
+                let joints = self.sensors.driven_joints(self.session.skeleton());
+                self.session.hold_joints(&joints);
+                self.inform(format!(
+                    "Sensors calibrated: they now drive {} joints; the other joints keep the \
+                     tasks.",
+                    joints.len()
+                ));
+            }
+            Err(error) => self.warn(format!("Calibration failed: {error}.")),
+        }
+    }
+
+    /// Releases the joints the sensors held.
+    pub fn release_sensor_joints(&mut self) {
+        self.sensors.release();
+        self.session.hold_joints(&[]);
+    }
+
+    /// One frame of sensors: advances a replay, then the calibrated sensors set their joints.
+    /// Returns whether new readings were put in the posture.
+    pub(super) fn apply_sensors(&mut self) -> bool {
+        let now = self.now_secs();
+        if let Some(message) = self.sensors.tick(now) {
+            self.inform(message);
+        }
+        self.sensors.drive(&mut self.session)
+    }
+
+    pub(super) fn sensors_state_json(&self) -> Value {
+        let mut state = self.sensors.state_json();
+        let skeleton = self.session.skeleton();
+        let posture = self.session.posture();
+        let frames = self.session.frames();
+        let driven: Map<String, Value> = self
+            .session
+            .held_joints()
+            .into_iter()
+            .filter_map(|joint| {
+                let name = skeleton.joints().get(joint)?.name.clone();
+                let local = posture.local_rotation(skeleton, joint);
+                let world = frames.rotation(joint);
+                Some((
+                    name,
+                    json!({
+                        "local": [local.x, local.y, local.z, local.w],
+                        "world": [world.x, world.y, world.z, world.w],
+                    }),
+                ))
+            })
+            .collect();
+        if let Value::Object(map) = &mut state {
+            map.insert("driven".to_owned(), Value::Object(driven));
+        }
+        state
+    }
+
+    pub(super) fn sensors_window(&mut self, ctx: &egui::Context) {
+        if !self.show_sensors {
+            return;
+        }
+        let mut open = true;
+        // Sized to its contents (which grow as sensors appear), scrolling past the viewport.
+        egui::Window::new("Sensors")
+            .open(&mut open)
+            .default_pos(self.viewport_rect.left_top() + egui::vec2(12.0, 40.0))
+            .resizable(false)
+            .vscroll(true)
+            .max_height((self.viewport_rect.height() - 60.0).max(200.0))
+            .show(ctx, |ui| {
+                ui.set_width(360.0);
+                self.sensors_contents(ui);
+            });
+        if !open {
+            self.show_sensors = false;
+        }
+    }
+
+    fn sensors_contents(&mut self, ui: &mut egui::Ui) {
+        let mut settings = self.sensors.settings().clone();
+        let busy = self.sensors.link().is_live() || self.sensors.replay_progress().is_some();
+        ui.add_enabled_ui(!busy, |ui| device_settings(ui, &mut settings));
+        if settings != *self.sensors.settings() {
+            self.sensors.set_settings(settings);
+            self.store_sensor_settings();
+        }
+
+        ui.horizontal(|ui| {
+            if self.sensors.link().is_live() {
+                let button = ui.button("Disconnect");
+                self.button_rects.push(("sensors_disconnect", button.rect));
+                if button.clicked() {
+                    self.disconnect_sensors();
+                }
+            } else {
+                let button = ui
+                    .add_enabled(
+                        self.sensors.replay_progress().is_none(),
+                        egui::Button::new("Connect…"),
+                    )
+                    .on_hover_text("The browser asks which serial port or HID device to use");
+                self.button_rects.push(("sensors_connect", button.rect));
+                if button.clicked() {
+                    self.connect_sensors();
+                }
+            }
+            if self.sensors.replay_progress().is_some() {
+                if ui.button("Stop replay").clicked() {
+                    self.sensors.stop_replay();
+                }
+            } else {
+                let button = ui
+                    .add_enabled(
+                        !self.sensors.link().is_live(),
+                        egui::Button::new("Replay file…"),
+                    )
+                    .on_hover_text("Play a recording (or `stance simulate-sensors` output)");
+                self.button_rects.push(("sensors_replay", button.rect));
+                if button.clicked() {
+                    match self.hooks.pick_file() {
+                        Ok(()) => self.replay_pick_pending = true,
+                        Err(error) => self.warn(format!("Sensors: {error}")),
+                    }
+                }
+            }
+            let recording = self.sensors.is_recording();
+            let button = ui.button(if recording { "Stop and save" } else { "Record" });
+            self.button_rects.push(("sensors_record", button.rect));
+            if button.clicked() {
+                if recording {
+                    self.save_sensor_recording();
+                } else {
+                    self.sensors.start_recording();
+                }
+            }
+        });
+        self.link_line(ui);
+
+        ui.separator();
+        ui.label(
+            "Calibrate while the person holds the posture the avatar shows (rest pose or \
+             T-pose). Then each sensor drives its segment; the other joints keep the tasks.",
+        );
+        ui.horizontal(|ui| {
+            let button = ui.add_enabled(
+                !self.sensors.assignments().is_empty(),
+                egui::Button::new("Calibrate"),
+            );
+            self.button_rects.push(("sensors_calibrate", button.rect));
+
+            if button.clicked() {
+                self.calibrate_sensors();
+            }
+            let calibrated = self.sensors.is_calibrated();
+            let button = ui
+                .add_enabled(calibrated, egui::Button::new("Reset heading"))
+                .on_hover_text("Face the front, then press: turns every sensor about the vertical");
+            self.button_rects
+                .push(("sensors_reset_heading", button.rect));
+            if button.clicked() && self.sensors.reset_heading() {
+                self.inform("Heading reset: the body faces the front again.");
+            }
+            if ui
+                .add_enabled(calibrated, egui::Button::new("Release joints"))
+                .on_hover_text("Stop driving the joints (the solver takes them back)")
+                .clicked()
+            {
+                self.release_sensor_joints();
+            }
+        });
+        if self.sensors.is_calibrated() {
+            ui.label(format!(
+                "Driving {} joints.",
+                self.sensors.driven_joints(self.session.skeleton()).len()
+            ));
+        }
+        ui.separator();
+        ui.label(RichText::new("Sensors and segments").strong());
+        ui.horizontal_wrapped(|ui| {
+            for preset in AssignmentPreset::ALL {
+                let button = ui.small_button(preset.label());
+                self.button_rects.push((preset.button_name(), button.rect));
+                if button.clicked() {
+                    self.sensors.apply_preset(preset, self.session.skeleton());
+                    self.release_sensor_joints();
+                }
+            }
+        });
+        self.sensor_table(ui);
+    }
+
+    fn link_line(&self, ui: &mut egui::Ui) {
+        let stats = self.sensors.stats();
+        let (text, colour) = match self.sensors.link() {
+            SensorLink::Idle => ("Not connected".to_owned(), ui.visuals().weak_text_color()),
+            SensorLink::Connecting => (
+                "Waiting for the device…".to_owned(),
+                ui.visuals().text_color(),
+            ),
+            SensorLink::Connected { device } => (
+                format!("Connected: {device}"),
+                egui::Color32::from_rgb(60, 160, 80),
+            ),
+            SensorLink::Replaying { name } => {
+                let (done, total) = self.sensors.replay_progress().unwrap_or_default();
+                (
+                    format!(
+                        "Replaying {name}: {}%",
+                        (done * 100).checked_div(total).unwrap_or(100)
+                    ),
+                    ui.visuals().text_color(),
+                )
+            }
+            SensorLink::Lost { reason } => (format!("Lost: {reason}"), ui.visuals().error_fg_color),
+        };
+        ui.colored_label(colour, text);
+        ui.label(format!(
+            "{} samples, {} bad frames, {} bytes skipped",
+            self.sensors.sample_count(),
+            stats.bad_frames,
+            stats.skipped_bytes
+        ));
+        if let Some(bytes) = self
+            .sensors
+            .is_recording()
+            .then(|| self.sensors.stats().bytes_received)
+        {
+            ui.label(format!("Recording ({} KiB received)", bytes / 1024));
+        }
+        if let Some((median, max)) = self.sensors.latency_ms() {
+            ui.label(format!(
+                "Bytes to posture: {median:.1} ms median, {max:.1} ms max"
+            ));
+        }
+    }
+
+    fn sensor_table(&mut self, ui: &mut egui::Ui) {
+        let tracks: Vec<(SensorId, f64, Option<[f64; 3]>)> = self
+            .sensors
+            .tracks()
+            .iter()
+            .map(|(sensor, track)| {
+                let angles = track.last.orientation.map(|q| {
+                    let (yaw, pitch, roll) = q.to_euler(glam::EulerRot::ZYX);
+                    [yaw.to_degrees(), pitch.to_degrees(), roll.to_degrees()]
+                });
+                (*sensor, track.rate_hz(), angles)
+            })
+            .collect();
+        if tracks.is_empty() {
+            ui.label("No sensor has sent anything yet.");
+            return;
+        }
+        let mut segments: Vec<SensorAssignment> = vec![SensorAssignment::Spine];
+        segments.extend(
+            self.session
+                .skeleton()
+                .joints()
+                .iter()
+                .filter(|joint| joint.has_rotation() && joint.parent.is_some())
+                .map(|joint| SensorAssignment::Joint(joint.name.clone())),
+        );
+        let mut change: Option<(SensorId, Option<SensorAssignment>)> = None;
+        egui::Grid::new("sensor_grid")
+            .striped(true)
+            .num_columns(4)
+            .show(ui, |ui| {
+                ui.label("Sensor");
+                ui.label("Rate");
+                ui.label("Yaw, pitch, roll");
+                ui.label("Drives");
+                ui.end_row();
+                for (sensor, rate, angles) in tracks {
+                    ui.label(format!("{}", sensor.0));
+                    ui.label(format!("{rate:.0} Hz"));
+                    match angles {
+                        Some([yaw, pitch, roll]) => {
+                            ui.label(format!("{yaw:.0}°, {pitch:.0}°, {roll:.0}°"))
+                        }
+                        None => ui.label("no orientation"),
+                    };
+                    let current = self.sensors.assignments().get(&sensor).cloned();
+                    let text = current
+                        .as_ref()
+                        .map_or_else(|| "nothing".to_owned(), SensorAssignment::label);
+                    egui::ComboBox::from_id_salt(("sensor_segment", sensor.0))
+                        .selected_text(text)
+                        .height(300.0)
+                        .show_ui(ui, |ui| {
+                            if ui.selectable_label(current.is_none(), "nothing").clicked() {
+                                change = Some((sensor, None));
+                            }
+                            for segment in &segments {
+                                let label = match segment {
+                                    SensorAssignment::Joint(name) => describe_joint(name),
+                                    SensorAssignment::Spine => segment.label(),
+                                };
+                                if ui
+                                    .selectable_label(current.as_ref() == Some(segment), label)
+                                    .clicked()
+                                {
+                                    change = Some((sensor, Some(segment.clone())));
+                                }
+                            }
+                        });
+                    ui.end_row();
+                }
+            });
+        if let Some((sensor, assignment)) = change {
+            self.sensors.assign(sensor, assignment);
+            self.release_sensor_joints();
+        }
+    }
+
+    fn save_sensor_recording(&mut self) {
+        let Some(bytes) = self.sensors.stop_recording() else {
+            return;
+        };
+        let name = self.sensors.recording_name();
+        match self.hooks.download_bytes(&name, &bytes) {
+            Ok(()) => self.inform(format!("Saved {} bytes as {name}.", bytes.len())),
+            Err(error) => self.warn(format!("The recording could not be saved: {error}")),
+        }
+    }
+}
+
+/// The device, its serial settings and its reference frame.
+fn device_settings(ui: &mut egui::Ui, settings: &mut SensorSettings) {
+    egui::ComboBox::from_label("Device")
+        .selected_text(settings.device.label())
+        .show_ui(ui, |ui| {
+            for device in DeviceKind::ALL {
+                if ui
+                    .selectable_label(settings.device == device, device.label())
+                    .clicked()
+                    && settings.device != device
+                {
+                    settings.device = device;
+                    settings.frame = device.usual_frame();
+                    if let Some(baud) = device.protocol().default_baud_rate() {
+                        settings.baud_rate = baud;
+                    }
+                }
+            }
+        });
+    if !settings.device.protocol().is_hid() {
+        ui.horizontal(|ui| {
+            egui::ComboBox::from_id_salt("baud_rate")
+                .selected_text(format!("{} baud", settings.baud_rate))
+                .show_ui(ui, |ui| {
+                    for baud in BAUD_RATES {
+                        ui.selectable_value(&mut settings.baud_rate, baud, format!("{baud}"));
+                    }
+                });
+            ui.add(
+                egui::DragValue::new(&mut settings.baud_rate)
+                    .range(300..=4_000_000)
+                    .suffix(" baud"),
+            );
+        });
+    }
+    match settings.device {
+        DeviceKind::FlockOfBirds => {
+            egui::ComboBox::from_label("Record")
+                .selected_text(fob_mode_label(settings.fob_mode))
+                .show_ui(ui, |ui| {
+                    for mode in [
+                        FobMode::PositionQuaternion,
+                        FobMode::Quaternion,
+                        FobMode::PositionAngles,
+                        FobMode::Angles,
+                        FobMode::PositionMatrix,
+                        FobMode::Matrix,
+                        FobMode::Position,
+                    ] {
+                        ui.selectable_value(&mut settings.fob_mode, mode, fob_mode_label(mode));
+                    }
+                });
+            ui.horizontal(|ui| {
+                ui.checkbox(&mut settings.fob_group, "Group mode");
+                ui.add(
+                    egui::DragValue::new(&mut settings.fob_birds)
+                        .range(1..=30)
+                        .suffix(" birds"),
+                );
+            });
+        }
+        DeviceKind::AsciiImu => {
+            ui.horizontal(|ui| {
+                ui.label("Components");
+                ui.selectable_value(&mut settings.ascii_order, ComponentOrder::Wxyz, "w x y z");
+                ui.selectable_value(&mut settings.ascii_order, ComponentOrder::Xyzw, "x y z w");
+            });
+        }
+        _ => {}
+    }
+    egui::ComboBox::from_label("Frame")
+        .selected_text(settings.frame.label())
+        .show_ui(ui, |ui| {
+            for frame in DeviceFrame::ALL {
+                ui.selectable_value(&mut settings.frame, frame, frame.label());
+            }
+        });
+    ui.add(
+        egui::DragValue::new(&mut settings.replay_rate_hz)
+            .range(1.0..=1000.0)
+            .prefix("replay at ")
+            .suffix(" Hz"),
+    );
+}
+
+fn fob_mode_label(mode: FobMode) -> &'static str {
+    match mode {
+        FobMode::Position => "position",
+        FobMode::Angles => "angles",
+        FobMode::Matrix => "matrix",
+        FobMode::PositionAngles => "position + angles",
+        FobMode::PositionMatrix => "position + matrix",
+        FobMode::Quaternion => "quaternion",
+        FobMode::PositionQuaternion => "position + quaternion",
+    }
+}

@@ -1,0 +1,1051 @@
+//! Motion-capture sensors in the editor: the device link, decoding, per-sensor statistics,
+//! assignment of sensors to body segments, calibration after Molet et al., recording and
+//! replay.
+//!
+//! Bytes reach a [`SensorHub`] from three sources that take the same path: the page's WebSerial
+//! or WebHID bridge (through [`crate::HostMessage`]), a recorded file replayed at the device's
+//! pace ([`SensorHub::start_replay`]), and native tests. The hub decodes them with
+//! `stance_mocap`, keeps the latest orientation of each sensor and, once calibrated, gives the
+//! local rotations of the joints the sensors drive. Joints without a sensor keep the solver's
+//! posture and tasks, so feet stay pinned by IK while the torso and arms follow the sensors.
+
+use std::collections::{BTreeMap, VecDeque};
+
+use glam::{DMat3, DQuat, DVec3};
+use serde::{Deserialize, Serialize};
+use serde_json::{Value, json};
+use stance_ik::{Frames, Skeleton};
+
+use crate::posing::PosingSession;
+use stance_mocap::ascii::{AsciiConfig, ComponentOrder};
+use stance_mocap::calibration::{Calibration, CalibrationSetup, SensorTarget};
+use stance_mocap::fob::{FobConfig, FobMode, command};
+use stance_mocap::hid::{GamepadConfig, GamepadModel, encode_report_record};
+use stance_mocap::polhemus::{FastrakConfig, LibertyConfig};
+use stance_mocap::{Decoder, DecoderConfig, DecoderStats, Protocol, Sample, SensorId, new_decoder};
+
+/// Storage key of the sensor settings (protocol, baud rate... remembered across visits).
+pub const SENSOR_SETTINGS_KEY: &str = "stance.sensors.settings";
+/// Samples per sensor per second while replaying a recording, unless the user says otherwise.
+pub const DEFAULT_REPLAY_RATE_HZ: f64 = 100.0;
+/// Bytes fed to the decoder at a time while replaying (small enough to stop on time).
+const REPLAY_CHUNK_BYTES: usize = 32;
+/// Seconds of arrivals kept to measure each sensor's rate.
+const RATE_WINDOW_SECS: f64 = 1.0;
+/// Latency samples kept for the median and maximum.
+const LATENCY_WINDOW: usize = 240;
+/// Largest recording kept in memory (bytes); recording stops there with a message.
+pub const MAX_RECORDING_BYTES: usize = 64 * 1024 * 1024;
+
+/// The devices the page can talk to.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum DeviceKind {
+    /// Ascension Flock of Birds (RS-232 binary records).
+    #[default]
+    FlockOfBirds,
+    /// Polhemus FASTRAK (ASCII records).
+    Fastrak,
+    /// Polhemus Liberty or Patriot (binary frames).
+    Liberty,
+    /// Xsens MTi (MTData2).
+    Xsens,
+    /// Hobby IMU boards printing quaternion lines (BNO055, BNO080...).
+    AsciiImu,
+    /// SlimeVR receiver (WebHID).
+    SlimeVr,
+    /// Sony DualSense (WebHID, gyro and accelerometer fused here).
+    DualSense,
+    /// Sony DualShock 4 (WebHID, gyro and accelerometer fused here).
+    DualShock4,
+}
+
+impl DeviceKind {
+    pub const ALL: [DeviceKind; 8] = [
+        DeviceKind::FlockOfBirds,
+        DeviceKind::Fastrak,
+        DeviceKind::Liberty,
+        DeviceKind::Xsens,
+        DeviceKind::AsciiImu,
+        DeviceKind::SlimeVr,
+        DeviceKind::DualSense,
+        DeviceKind::DualShock4,
+    ];
+
+    pub fn label(self) -> &'static str {
+        match self {
+            DeviceKind::FlockOfBirds => "Ascension Flock of Birds (serial)",
+            DeviceKind::Fastrak => "Polhemus FASTRAK (serial)",
+            DeviceKind::Liberty => "Polhemus Liberty / Patriot (serial)",
+            DeviceKind::Xsens => "Xsens MTi (serial)",
+            DeviceKind::AsciiImu => "IMU board, quaternion lines (serial)",
+            DeviceKind::SlimeVr => "SlimeVR receiver (HID)",
+            DeviceKind::DualSense => "DualSense controller (HID)",
+            DeviceKind::DualShock4 => "DualShock 4 controller (HID)",
+        }
+    }
+
+    pub fn protocol(self) -> Protocol {
+        match self {
+            DeviceKind::FlockOfBirds => Protocol::FlockOfBirds,
+            DeviceKind::Fastrak => Protocol::Fastrak,
+            DeviceKind::Liberty => Protocol::Liberty,
+            DeviceKind::Xsens => Protocol::Xsens,
+            DeviceKind::AsciiImu => Protocol::AsciiQuaternion,
+            DeviceKind::SlimeVr => Protocol::SlimeVrHid,
+            DeviceKind::DualSense | DeviceKind::DualShock4 => Protocol::Gamepad,
+        }
+    }
+
+    /// The reference frame such a device usually reports in.
+    pub fn usual_frame(self) -> DeviceFrame {
+        match self {
+            DeviceKind::FlockOfBirds | DeviceKind::Fastrak | DeviceKind::Liberty => {
+                DeviceFrame::TransmitterZDown
+            }
+            _ => DeviceFrame::EarthZUp,
+        }
+    }
+}
+
+/// The reference frame of the device's orientations, as the user sets it up.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum DeviceFrame {
+    /// A magnetic transmitter placed as its manual shows: X toward the front of the body,
+    /// Y to the body's right, Z down.
+    #[default]
+    TransmitterZDown,
+    /// An IMU earth frame: X toward the front of the body, Y to the body's left, Z up
+    /// (use *Reset heading* once the person faces the front).
+    EarthZUp,
+    /// Already the editor's world: +Y up, +Z front, +X the body's left.
+    EditorWorld,
+}
+
+impl DeviceFrame {
+    pub const ALL: [DeviceFrame; 3] = [
+        DeviceFrame::TransmitterZDown,
+        DeviceFrame::EarthZUp,
+        DeviceFrame::EditorWorld,
+    ];
+
+    pub fn label(self) -> &'static str {
+        match self {
+            DeviceFrame::TransmitterZDown => "Transmitter: X front, Y right, Z down",
+            DeviceFrame::EarthZUp => "Earth: X front, Y left, Z up",
+            DeviceFrame::EditorWorld => "Editor world: Y up, Z front",
+        }
+    }
+
+    /// `A`: the rotation from the device frame to the editor's world (H-Anim: +Y up, +Z front,
+    /// +X the body's left).
+    pub fn world_from_device(self) -> DQuat {
+        // Columns: the device's X, Y and Z axes in world coordinates.
+        let columns = match self {
+            DeviceFrame::TransmitterZDown => [DVec3::Z, DVec3::NEG_X, DVec3::NEG_Y],
+            DeviceFrame::EarthZUp => [DVec3::Z, DVec3::X, DVec3::Y],
+            DeviceFrame::EditorWorld => [DVec3::X, DVec3::Y, DVec3::Z],
+        };
+        DQuat::from_mat3(&DMat3::from_cols(columns[0], columns[1], columns[2])).normalize()
+    }
+}
+
+/// What the user chose for the device; remembered in browser storage.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct SensorSettings {
+    pub device: DeviceKind,
+    /// Serial baud rate (ignored for HID devices).
+    pub baud_rate: u32,
+    /// Flock of Birds record layout.
+    pub fob_mode: FobMode,
+    /// Flock of Birds group mode (records carry the bird address; needed for several birds).
+    pub fob_group: bool,
+    /// Number of birds the bridge configures (Flock of Birds).
+    pub fob_birds: u8,
+    /// Component order of quaternion lines.
+    pub ascii_order: ComponentOrder,
+    pub frame: DeviceFrame,
+    /// Samples per sensor per second when replaying a recording.
+    pub replay_rate_hz: f64,
+}
+
+impl Default for SensorSettings {
+    fn default() -> Self {
+        Self {
+            device: DeviceKind::FlockOfBirds,
+            baud_rate: 115_200,
+            fob_mode: FobMode::PositionQuaternion,
+            fob_group: true,
+            fob_birds: 4,
+            ascii_order: ComponentOrder::Wxyz,
+            frame: DeviceFrame::TransmitterZDown,
+            replay_rate_hz: DEFAULT_REPLAY_RATE_HZ,
+        }
+    }
+}
+
+impl SensorSettings {
+    /// The decoder configuration for these settings.
+    pub fn decoder_config(&self) -> DecoderConfig {
+        match self.device {
+            DeviceKind::FlockOfBirds => DecoderConfig::FlockOfBirds(self.fob_config()),
+            DeviceKind::Fastrak => DecoderConfig::Fastrak(FastrakConfig::default()),
+            DeviceKind::Liberty => DecoderConfig::Liberty(LibertyConfig::default()),
+            DeviceKind::Xsens => DecoderConfig::Xsens,
+            DeviceKind::AsciiImu => DecoderConfig::AsciiQuaternion(AsciiConfig {
+                order: self.ascii_order,
+                ..AsciiConfig::default()
+            }),
+            DeviceKind::SlimeVr => DecoderConfig::SlimeVrHid,
+            DeviceKind::DualSense => DecoderConfig::Gamepad(GamepadConfig::default()),
+            DeviceKind::DualShock4 => DecoderConfig::Gamepad(GamepadConfig {
+                model: GamepadModel::DualShock4,
+                ..GamepadConfig::default()
+            }),
+        }
+    }
+
+    fn fob_config(&self) -> FobConfig {
+        FobConfig {
+            mode: self.fob_mode,
+            group_mode: self.fob_group,
+            ..FobConfig::default()
+        }
+    }
+
+    /// What the page must open: a serial port (with the bytes that set the device up and
+    /// start it streaming) or a HID device among these filters.
+    pub fn connection(&self) -> Result<SensorConnection, String> {
+        let protocol = self.device.protocol();
+        if protocol.is_hid() {
+            return Ok(SensorConnection::Hid {
+                filters: protocol
+                    .hid_filters()
+                    .iter()
+                    .map(|filter| (filter.vendor_id, filter.product_id))
+                    .collect(),
+            });
+        }
+        if self.baud_rate == 0 {
+            return Err("the baud rate must be positive".to_owned());
+        }
+        let setup = match self.device {
+            DeviceKind::FlockOfBirds => {
+                command::start_streaming(&self.fob_config(), self.fob_birds.max(1))
+                    .map_err(|error| format!("the Flock of Birds setup failed: {error}"))?
+            }
+            // Continuous output: 'C' (FASTRAK), "C\r" (Liberty / Patriot).
+            DeviceKind::Fastrak => b"C".to_vec(),
+            DeviceKind::Liberty => b"C\r".to_vec(),
+            _ => Vec::new(),
+        };
+        Ok(SensorConnection::Serial {
+            baud_rate: self.baud_rate,
+            setup,
+        })
+    }
+}
+
+/// What the page opens for the editor.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum SensorConnection {
+    /// `navigator.serial`: open at this rate, write `setup`, then stream bytes.
+    Serial { baud_rate: u32, setup: Vec<u8> },
+    /// `navigator.hid`: request a device matching one of `(vendor id, product id)`.
+    Hid { filters: Vec<(u16, u16)> },
+}
+
+impl SensorConnection {
+    /// The request as the page's bridge reads it.
+    pub fn to_json(&self) -> String {
+        match self {
+            SensorConnection::Serial { baud_rate, setup } => {
+                json!({"kind": "serial", "baud_rate": baud_rate, "setup": setup}).to_string()
+            }
+            SensorConnection::Hid { filters } => json!({
+                "kind": "hid",
+                "filters": filters
+                    .iter()
+                    .map(|(vendor, product)| json!({"vendorId": vendor, "productId": product}))
+                    .collect::<Vec<_>>(),
+            })
+            .to_string(),
+        }
+    }
+}
+
+/// The state of the device link.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SensorLink {
+    Idle,
+    /// The page is asking the user for a device and opening it.
+    Connecting,
+    Connected {
+        device: String,
+    },
+    Replaying {
+        name: String,
+    },
+    /// The device went away or failed; the posture stays as the last sample left it.
+    Lost {
+        reason: String,
+    },
+}
+
+impl SensorLink {
+    fn word(&self) -> &'static str {
+        match self {
+            SensorLink::Idle => "idle",
+            SensorLink::Connecting => "connecting",
+            SensorLink::Connected { .. } => "connected",
+            SensorLink::Replaying { .. } => "replaying",
+            SensorLink::Lost { .. } => "lost",
+        }
+    }
+
+    /// Bytes from a device are expected.
+    pub fn is_live(&self) -> bool {
+        matches!(self, SensorLink::Connecting | SensorLink::Connected { .. })
+    }
+}
+
+/// What one sensor drives.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+pub enum SensorAssignment {
+    /// The segment of this joint.
+    Joint(String),
+    /// The upper back: the spine joints present share the sensor's rotation (Molet et al.:
+    /// lumbar joints half of it, thoracic joints the other half, evenly within each).
+    Spine,
+}
+
+impl SensorAssignment {
+    pub fn label(&self) -> String {
+        match self {
+            SensorAssignment::Joint(name) => crate::posing::describe_joint(name),
+            SensorAssignment::Spine => "spine (upper back)".to_owned(),
+        }
+    }
+}
+
+/// Ready-made assignments: sensors in increasing id order go to these segments.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AssignmentPreset {
+    /// Upper back, right upper arm, forearm, hand.
+    TorsoRightArm,
+    /// Upper back, left upper arm, forearm, hand.
+    TorsoLeftArm,
+    /// Upper back, head, both upper arms and forearms, both thighs and shanks.
+    FullBody,
+}
+
+impl AssignmentPreset {
+    pub const ALL: [AssignmentPreset; 3] = [
+        AssignmentPreset::TorsoRightArm,
+        AssignmentPreset::TorsoLeftArm,
+        AssignmentPreset::FullBody,
+    ];
+
+    pub fn label(self) -> &'static str {
+        match self {
+            AssignmentPreset::TorsoRightArm => "Torso + right arm (4)",
+            AssignmentPreset::TorsoLeftArm => "Torso + left arm (4)",
+            AssignmentPreset::FullBody => "Full body (10)",
+        }
+    }
+
+    /// The name of its button in the page's state (tests click it).
+    pub fn button_name(self) -> &'static str {
+        match self {
+            AssignmentPreset::TorsoRightArm => "sensors_preset_right_arm",
+            AssignmentPreset::TorsoLeftArm => "sensors_preset_left_arm",
+            AssignmentPreset::FullBody => "sensors_preset_full_body",
+        }
+    }
+
+    fn segments(self) -> Vec<SensorAssignment> {
+        let joint = |name: &str| SensorAssignment::Joint(name.to_owned());
+        match self {
+            AssignmentPreset::TorsoRightArm => vec![
+                SensorAssignment::Spine,
+                joint("r_shoulder"),
+                joint("r_elbow"),
+                joint("r_radiocarpal"),
+            ],
+            AssignmentPreset::TorsoLeftArm => vec![
+                SensorAssignment::Spine,
+                joint("l_shoulder"),
+                joint("l_elbow"),
+                joint("l_radiocarpal"),
+            ],
+            AssignmentPreset::FullBody => vec![
+                SensorAssignment::Spine,
+                joint("skullbase"),
+                joint("l_shoulder"),
+                joint("l_elbow"),
+                joint("r_shoulder"),
+                joint("r_elbow"),
+                joint("l_hip"),
+                joint("l_knee"),
+                joint("r_hip"),
+                joint("r_knee"),
+            ],
+        }
+    }
+}
+
+/// Running figures of one sensor.
+#[derive(Clone, Debug, Default)]
+pub struct SensorTrack {
+    pub last: Sample,
+    pub samples: u64,
+    arrivals_secs: VecDeque<f64>,
+}
+
+impl SensorTrack {
+    /// Samples per second over the last second.
+    pub fn rate_hz(&self) -> f64 {
+        match (self.arrivals_secs.front(), self.arrivals_secs.back()) {
+            (Some(first), Some(last)) if last > first => {
+                (self.arrivals_secs.len() - 1) as f64 / (last - first)
+            }
+            _ => 0.0,
+        }
+    }
+}
+
+/// A recording being played back as if it came from the device.
+#[derive(Debug, Clone)]
+struct Replay {
+    name: String,
+    bytes: Vec<u8>,
+    offset: usize,
+    started_secs: f64,
+}
+
+/// Why calibrating failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SensorError {
+    #[error("no sensor is assigned to a body segment")]
+    NothingAssigned,
+    #[error("sensor {0} has sent no orientation yet")]
+    NoReading(u16),
+    #[error("this body has no joint {0}")]
+    UnknownJoint(String),
+    #[error("this body has no spine joints for the upper-back sensor")]
+    NoSpine,
+    #[error("{0}")]
+    Calibration(#[from] stance_mocap::calibration::CalibrationError),
+}
+
+/// The editor's sensors: link, decoder, tracks, assignments, calibration, recording, replay.
+pub struct SensorHub {
+    settings: SensorSettings,
+    decoder: Box<dyn Decoder + Send>,
+    link: SensorLink,
+    tracks: BTreeMap<SensorId, SensorTrack>,
+    assignments: BTreeMap<SensorId, SensorAssignment>,
+    calibration: Option<Calibration<String>>,
+    recording: Option<Vec<u8>>,
+    replay: Option<Replay>,
+    samples: u64,
+    scratch: Vec<Sample>,
+    /// New orientations since the posture was last driven.
+    fresh: bool,
+    /// When the oldest bytes not yet shown in a posture arrived.
+    oldest_unshown: Option<web_time::Instant>,
+    latencies_ms: VecDeque<f64>,
+}
+
+impl std::fmt::Debug for SensorHub {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SensorHub")
+            .field("settings", &self.settings)
+            .field("link", &self.link)
+            .field("sensors", &self.tracks.len())
+            .field("calibrated", &self.calibration.is_some())
+            .finish_non_exhaustive()
+    }
+}
+
+impl Default for SensorHub {
+    fn default() -> Self {
+        Self::new(SensorSettings::default())
+    }
+}
+
+impl SensorHub {
+    pub fn new(settings: SensorSettings) -> Self {
+        let decoder = new_decoder(&settings.decoder_config());
+        Self {
+            settings,
+            decoder,
+            link: SensorLink::Idle,
+            tracks: BTreeMap::new(),
+            assignments: BTreeMap::new(),
+            calibration: None,
+            recording: None,
+            replay: None,
+            samples: 0,
+            scratch: Vec::new(),
+            fresh: false,
+            oldest_unshown: None,
+            latencies_ms: VecDeque::new(),
+        }
+    }
+
+    pub fn settings(&self) -> &SensorSettings {
+        &self.settings
+    }
+
+    /// Changes the device settings: a new decoder, sensors and calibration forgotten.
+    pub fn set_settings(&mut self, settings: SensorSettings) {
+        if settings == self.settings {
+            return;
+        }
+        let device_changed = settings.device != self.settings.device
+            || settings.decoder_config() != self.settings.decoder_config();
+        self.settings = settings;
+        if device_changed {
+            self.decoder = new_decoder(&self.settings.decoder_config());
+            self.forget_sensors();
+        }
+    }
+
+    fn forget_sensors(&mut self) {
+        self.decoder.reset();
+        self.tracks.clear();
+        self.calibration = None;
+        self.samples = 0;
+        self.fresh = false;
+        self.oldest_unshown = None;
+    }
+
+    pub fn link(&self) -> &SensorLink {
+        &self.link
+    }
+
+    pub fn tracks(&self) -> &BTreeMap<SensorId, SensorTrack> {
+        &self.tracks
+    }
+
+    pub fn assignments(&self) -> &BTreeMap<SensorId, SensorAssignment> {
+        &self.assignments
+    }
+
+    pub fn is_calibrated(&self) -> bool {
+        self.calibration.is_some()
+    }
+
+    pub fn is_recording(&self) -> bool {
+        self.recording.is_some()
+    }
+
+    pub fn stats(&self) -> DecoderStats {
+        self.decoder.stats()
+    }
+
+    /// Samples decoded since the device was connected or the replay started.
+    pub fn sample_count(&self) -> u64 {
+        self.samples
+    }
+
+    /// The page is opening a device: counts start again.
+    pub fn begin_connect(&mut self) {
+        self.replay = None;
+        self.decoder.reset();
+        self.samples = 0;
+        self.tracks.clear();
+        self.link = SensorLink::Connecting;
+    }
+
+    pub fn connected(&mut self, device: String) {
+        self.link = SensorLink::Connected { device };
+    }
+
+    /// The device went away or failed (the posture stays as it is).
+    pub fn lost(&mut self, reason: String) {
+        self.replay = None;
+        self.link = SensorLink::Lost { reason };
+    }
+
+    /// The user closed the link.
+    pub fn disconnected(&mut self) {
+        self.replay = None;
+        self.link = SensorLink::Idle;
+    }
+
+    /// Bytes from a serial device (or a replay).
+    pub fn receive_bytes(&mut self, bytes: &[u8], now_secs: f64, arrived: web_time::Instant) {
+        if bytes.is_empty() {
+            return;
+        }
+        self.record(bytes);
+        let mut samples = std::mem::take(&mut self.scratch);
+        samples.clear();
+        self.decoder.push(bytes, &mut samples);
+        self.ingest(&samples, now_secs, arrived);
+        self.scratch = samples;
+    }
+
+    /// One input report from a HID device.
+    pub fn receive_report(
+        &mut self,
+        report_id: u8,
+        data: &[u8],
+        now_secs: f64,
+        arrived: web_time::Instant,
+    ) {
+        if self.recording.is_some()
+            && let Some(record) = encode_report_record(report_id, data)
+        {
+            self.record(&record);
+        }
+        let mut samples = std::mem::take(&mut self.scratch);
+        samples.clear();
+        self.decoder.push_report(report_id, data, &mut samples);
+        self.ingest(&samples, now_secs, arrived);
+        self.scratch = samples;
+    }
+
+    fn record(&mut self, bytes: &[u8]) {
+        if let Some(recording) = &mut self.recording {
+            if recording.len() + bytes.len() > MAX_RECORDING_BYTES {
+                return;
+            }
+            recording.extend_from_slice(bytes);
+        }
+    }
+
+    fn ingest(&mut self, samples: &[Sample], now_secs: f64, arrived: web_time::Instant) {
+        for sample in samples {
+            let track = self.tracks.entry(sample.sensor).or_default();
+            track.last = *sample;
+            track.samples += 1;
+            track.arrivals_secs.push_back(now_secs);
+            while track
+                .arrivals_secs
+                .front()
+                .is_some_and(|&first| now_secs - first > RATE_WINDOW_SECS)
+            {
+                track.arrivals_secs.pop_front();
+            }
+            self.samples += 1;
+        }
+        if samples.iter().any(|sample| sample.orientation.is_some()) {
+            self.fresh = true;
+            self.oldest_unshown.get_or_insert(arrived);
+        }
+    }
+
+    /// Starts recording what the device sends (serial bytes, or HID reports as a report log
+    /// that `stance decode` and the replay read).
+    pub fn start_recording(&mut self) {
+        self.recording = Some(Vec::new());
+    }
+
+    /// Stops recording and gives the bytes (a file named by [`SensorHub::recording_name`]).
+    pub fn stop_recording(&mut self) -> Option<Vec<u8>> {
+        self.recording.take()
+    }
+
+    /// A file name for a recording of this device.
+    pub fn recording_name(&self) -> String {
+        let stem = match self.settings.device {
+            DeviceKind::FlockOfBirds => "fob",
+            DeviceKind::Fastrak => "fastrak",
+            DeviceKind::Liberty => "liberty",
+            DeviceKind::Xsens => "xsens",
+            DeviceKind::AsciiImu => "imu-lines",
+            DeviceKind::SlimeVr => "slimevr-hid",
+            DeviceKind::DualSense => "dualsense-hid",
+            DeviceKind::DualShock4 => "ds4-hid",
+        };
+        format!("stance-sensors-{stem}.bin")
+    }
+
+    /// Plays `bytes` back through the decoder at the replay rate, as if the device sent them.
+    pub fn start_replay(&mut self, name: &str, bytes: Vec<u8>, now_secs: f64) {
+        self.forget_sensors_keep_calibration();
+        self.link = SensorLink::Replaying {
+            name: name.to_owned(),
+        };
+        self.replay = Some(Replay {
+            name: name.to_owned(),
+            bytes,
+            offset: 0,
+            started_secs: now_secs,
+        });
+    }
+
+    fn forget_sensors_keep_calibration(&mut self) {
+        self.decoder.reset();
+        self.tracks.clear();
+        self.samples = 0;
+    }
+
+    /// Replay progress: bytes played and total.
+    pub fn replay_progress(&self) -> Option<(usize, usize)> {
+        self.replay
+            .as_ref()
+            .map(|replay| (replay.offset, replay.bytes.len()))
+    }
+
+    /// Advances a replay to `now_secs`. Returns a message when the replay ended.
+    pub fn tick(&mut self, now_secs: f64) -> Option<String> {
+        let mut replay = self.replay.take()?;
+        let rate = if self.settings.replay_rate_hz.is_finite() && self.settings.replay_rate_hz > 0.0
+        {
+            self.settings.replay_rate_hz
+        } else {
+            DEFAULT_REPLAY_RATE_HZ
+        };
+        // Samples per sensor due by now; the busiest sensor sets the pace.
+        let wanted = ((now_secs - replay.started_secs).max(0.0) * rate).ceil() as u64;
+        let arrived = web_time::Instant::now();
+        while self.busiest_track_samples() < wanted && replay.offset < replay.bytes.len() {
+            let end = (replay.offset + REPLAY_CHUNK_BYTES).min(replay.bytes.len());
+            let chunk = replay
+                .bytes
+                .get(replay.offset..end)
+                .unwrap_or_default()
+                .to_vec();
+            replay.offset = end;
+            self.receive_bytes(&chunk, now_secs, arrived);
+        }
+        if replay.offset >= replay.bytes.len() {
+            let mut tail = Vec::new();
+            self.decoder.finish(&mut tail);
+            self.ingest(&tail, now_secs, arrived);
+            self.link = SensorLink::Idle;
+            let stats = self.decoder.stats();
+            return Some(format!(
+                "Replay of {} finished: {} samples, {} bad frames, {} bytes skipped.",
+                replay.name, stats.samples, stats.bad_frames, stats.skipped_bytes
+            ));
+        }
+        self.replay = Some(replay);
+        None
+    }
+
+    fn busiest_track_samples(&self) -> u64 {
+        self.tracks
+            .values()
+            .map(|track| track.samples)
+            .max()
+            .unwrap_or(0)
+    }
+
+    /// Stops a replay where it is.
+    pub fn stop_replay(&mut self) {
+        if self.replay.take().is_some() {
+            self.link = SensorLink::Idle;
+        }
+    }
+
+    /// Assigns a sensor to a segment (`None` frees it). A segment driven by another sensor is
+    /// taken from it. The calibration is dropped: calibrate again.
+    pub fn assign(&mut self, sensor: SensorId, assignment: Option<SensorAssignment>) {
+        match assignment {
+            Some(assignment) => {
+                self.assignments.retain(|_, other| *other != assignment);
+                self.assignments.insert(sensor, assignment);
+            }
+            None => {
+                self.assignments.remove(&sensor);
+            }
+        }
+        self.calibration = None;
+    }
+
+    /// Assigns the sensors seen so far (or ids 1, 2, ... when none was seen) in increasing id
+    /// order to the preset's segments; segments this body lacks are skipped.
+    pub fn apply_preset(&mut self, preset: AssignmentPreset, skeleton: &Skeleton) {
+        let segments: Vec<SensorAssignment> = preset
+            .segments()
+            .into_iter()
+            .filter(|segment| match segment {
+                SensorAssignment::Joint(name) => skeleton.joint_index(name).is_some(),
+                SensorAssignment::Spine => !spine_chain(skeleton).is_empty(),
+            })
+            .collect();
+        let mut sensors: Vec<SensorId> = self.tracks.keys().copied().collect();
+        if sensors.is_empty() {
+            sensors = (1..=segments.len())
+                .filter_map(|id| u16::try_from(id).ok().map(SensorId))
+                .collect();
+        }
+        self.assignments.clear();
+        for (sensor, segment) in sensors.into_iter().zip(segments) {
+            self.assignments.insert(sensor, segment);
+        }
+        self.calibration = None;
+    }
+
+    /// The latest orientation of each sensor.
+    pub fn latest_orientations(&self) -> BTreeMap<SensorId, DQuat> {
+        self.tracks
+            .iter()
+            .filter_map(|(sensor, track)| track.last.orientation.map(|q| (*sensor, q)))
+            .collect()
+    }
+
+    /// Calibrates in the current posture (`frames`): the person holds the posture the avatar
+    /// shows, and each sensor's sensor-to-joint rotation is computed (Molet et al.).
+    pub fn calibrate(&mut self, skeleton: &Skeleton, frames: &Frames) -> Result<(), SensorError> {
+        if self.assignments.is_empty() {
+            return Err(SensorError::NothingAssigned);
+        }
+        let latest = self.latest_orientations();
+        let mut setup =
+            CalibrationSetup::new(self.settings.frame.world_from_device(), parents(skeleton));
+        for (sensor, assignment) in &self.assignments {
+            if !latest.contains_key(sensor) {
+                return Err(SensorError::NoReading(sensor.0));
+            }
+            let target = match assignment {
+                SensorAssignment::Joint(name) => {
+                    if skeleton.joint_index(name).is_none() {
+                        return Err(SensorError::UnknownJoint(name.clone()));
+                    }
+                    SensorTarget::Joint(name.clone())
+                }
+                SensorAssignment::Spine => {
+                    let chain = spine_chain(skeleton);
+                    if chain.is_empty() {
+                        return Err(SensorError::NoSpine);
+                    }
+                    SensorTarget::Chain(chain)
+                }
+            };
+            setup = setup.bind(*sensor, target);
+        }
+        let calibration =
+            Calibration::calibrate(&setup, &world_rotations(skeleton, frames), &latest)?;
+        self.calibration = Some(calibration);
+        self.fresh = true;
+        Ok(())
+    }
+
+    /// Turns every sensor's heading so that the body faces where it faced at calibration
+    /// (pitch and roll kept).
+    pub fn reset_heading(&mut self) -> bool {
+        let latest = self.latest_orientations();
+        match &mut self.calibration {
+            Some(calibration) => {
+                calibration.reset_heading(&latest);
+                self.fresh = true;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Forgets the calibration: the sensors stop driving the body.
+    pub fn release(&mut self) {
+        self.calibration = None;
+        self.fresh = false;
+    }
+
+    /// The joints the calibrated sensors drive now, with their local rotations, when new
+    /// readings arrived since the last call or when `again` (the rest of the body moved, so
+    /// the local rotations that keep the measured world rotations changed).
+    pub fn take_driven_rotations(
+        &mut self,
+        skeleton: &Skeleton,
+        frames: &Frames,
+        again: bool,
+    ) -> Option<Vec<(usize, DQuat)>> {
+        if !self.fresh && !again {
+            return None;
+        }
+        let calibration = self.calibration.as_ref()?;
+        self.fresh = false;
+        let locals = calibration.local_rotations(
+            &self.latest_orientations(),
+            &world_rotations(skeleton, frames),
+        );
+        Some(
+            locals
+                .into_iter()
+                .filter_map(|(name, rotation)| {
+                    skeleton.joint_index(&name).map(|joint| (joint, rotation))
+                })
+                .collect(),
+        )
+    }
+
+    /// One frame of sensors on a posing session: the calibrated sensors hold their joints
+    /// and set their rotations. The solver moves the rest of the body (balance...), so the
+    /// driven joints are set again every frame to keep their world rotations the measured
+    /// ones; unchanged rotations do not wake the solver. Returns whether readings were used.
+    pub fn drive(&mut self, session: &mut PosingSession) -> bool {
+        let held = self.driven_joints(session.skeleton());
+        if held != session.held_joints() {
+            session.hold_joints(&held);
+        }
+        let fresh = self.fresh;
+        match self.take_driven_rotations(session.skeleton(), session.frames(), !held.is_empty()) {
+            Some(rotations) => {
+                session.drive_joints(&rotations);
+                fresh
+            }
+            None => false,
+        }
+    }
+
+    /// Joints held by the calibrated sensors (whether or not a reading arrived yet).
+    pub fn driven_joints(&self, skeleton: &Skeleton) -> Vec<usize> {
+        if self.calibration.is_none() {
+            return Vec::new();
+        }
+        let mut joints = Vec::new();
+        for assignment in self.assignments.values() {
+            match assignment {
+                SensorAssignment::Joint(name) => joints.extend(skeleton.joint_index(name)),
+                SensorAssignment::Spine => joints.extend(
+                    spine_chain(skeleton)
+                        .iter()
+                        .filter_map(|(name, _)| skeleton.joint_index(name)),
+                ),
+            }
+        }
+        joints.sort_unstable();
+        joints.dedup();
+        joints
+    }
+
+    /// The posture now shows every reading that arrived: the latency of the oldest one.
+    pub fn shown(&mut self) {
+        if let Some(arrived) = self.oldest_unshown.take() {
+            self.latencies_ms
+                .push_back(arrived.elapsed().as_secs_f64() * 1000.0);
+            while self.latencies_ms.len() > LATENCY_WINDOW {
+                self.latencies_ms.pop_front();
+            }
+        }
+    }
+
+    /// Median and largest latency from bytes to posture over the last readings (ms).
+    pub fn latency_ms(&self) -> Option<(f64, f64)> {
+        if self.latencies_ms.is_empty() {
+            return None;
+        }
+        let mut sorted: Vec<f64> = self.latencies_ms.iter().copied().collect();
+        sorted.sort_by(f64::total_cmp);
+        let median = sorted.get(sorted.len() / 2).copied().unwrap_or_default();
+        let max = sorted.last().copied().unwrap_or_default();
+        Some((median, max))
+    }
+
+    /// The hub's observable state (for the page's test hook and scripts).
+    pub fn state_json(&self) -> Value {
+        let stats = self.decoder.stats();
+        let sensors: Vec<Value> = self
+            .tracks
+            .iter()
+            .map(|(sensor, track)| {
+                json!({
+                    "id": sensor.0,
+                    "samples": track.samples,
+                    "rate_hz": track.rate_hz(),
+                    "orientation": track.last.orientation.map(|q| [q.x, q.y, q.z, q.w]),
+                    "position_m": track.last.position_m.map(|p| [p.x, p.y, p.z]),
+                    "assignment": self.assignments.get(sensor).map(SensorAssignment::label),
+                })
+            })
+            .collect();
+        let (latency_median_ms, latency_max_ms) = self.latency_ms().unzip();
+        json!({
+            "link": self.link.word(),
+            "device": self.settings.device.label(),
+            "reason": match &self.link { SensorLink::Lost { reason } => Some(reason.clone()), _ => None },
+            "samples": self.samples,
+            "bytes": stats.bytes_received,
+            "bad_frames": stats.bad_frames,
+            "skipped_bytes": stats.skipped_bytes,
+            "sensors": sensors,
+            "assigned": self.assignments.len(),
+            "calibrated": self.calibration.is_some(),
+            "recording": self.recording.as_ref().map(Vec::len),
+            "replay": self.replay_progress().map(|(done, total)| json!([done, total])),
+            "latency_median_ms": latency_median_ms,
+            "latency_max_ms": latency_max_ms,
+        })
+    }
+}
+
+/// Child -> parent joint names.
+fn parents(skeleton: &Skeleton) -> BTreeMap<String, String> {
+    let joints = skeleton.joints();
+    joints
+        .iter()
+        .filter_map(|joint| {
+            let parent = joints.get(joint.parent?)?;
+            Some((joint.name.clone(), parent.name.clone()))
+        })
+        .collect()
+}
+
+/// World rotation of every joint.
+fn world_rotations(skeleton: &Skeleton, frames: &Frames) -> BTreeMap<String, DQuat> {
+    skeleton
+        .joints()
+        .iter()
+        .enumerate()
+        .map(|(index, joint)| (joint.name.clone(), frames.rotation(index)))
+        .collect()
+}
+
+/// The spine joints an upper-back sensor drives, root to tip, with their weights: the
+/// contiguous lumbar (`vl*`) and thoracic (`vt*`) joints ending at the highest thoracic joint
+/// present; lumbar joints share half of the rotation and thoracic joints the other half
+/// (evenly within each group; one group takes all when the other is absent).
+pub fn spine_chain(skeleton: &Skeleton) -> Vec<(String, f64)> {
+    let joints = skeleton.joints();
+    let is_spine = |name: &str| name.starts_with("vl") || name.starts_with("vt");
+    // The tip: the spine joint none of whose children is a spine joint, nearest the neck.
+    let tip = joints.iter().enumerate().rev().find(|(index, joint)| {
+        is_spine(&joint.name)
+            && joint.has_rotation()
+            && !joints
+                .iter()
+                .any(|child| child.parent == Some(*index) && is_spine(&child.name))
+    });
+    let Some((mut index, _)) = tip else {
+        return Vec::new();
+    };
+    let mut chain = Vec::new();
+    while let Some(joint) = joints.get(index) {
+        if !is_spine(&joint.name) {
+            break;
+        }
+        if joint.has_rotation() {
+            chain.push(joint.name.clone());
+        }
+        match joint.parent {
+            Some(parent) => index = parent,
+            None => break,
+        }
+    }
+    chain.reverse();
+    let lumbar = chain.iter().filter(|name| name.starts_with("vl")).count();
+    let thoracic = chain.len() - lumbar;
+    let (lumbar_share, thoracic_share) = match (lumbar, thoracic) {
+        (0, _) => (0.0, 1.0),
+        (_, 0) => (1.0, 0.0),
+        _ => (0.5, 0.5),
+    };
+    chain
+        .into_iter()
+        .map(|name| {
+            let weight = if name.starts_with("vl") {
+                lumbar_share / lumbar.max(1) as f64
+            } else {
+                thoracic_share / thoracic.max(1) as f64
+            };
+            (name, weight)
+        })
+        .collect()
+}
