@@ -22,7 +22,7 @@ use rand::rngs::StdRng;
 use stance_ik::scenarios;
 use stance_ik::{
     Dof, Frames, IkError, JointDef, Limb, LimbBase, LimbGoal, Posture, Skeleton, SolveStatus,
-    Solver, Task,
+    Solver, Task, rotation_angle,
 };
 
 fn angle_diff(a: f64, b: f64) -> f64 {
@@ -180,6 +180,108 @@ fn goal_orientation_sets_the_end_joint() {
             assert!(angle < 1e-9, "{got} vs {orientation}");
         }
     }
+}
+
+/// The goal's rotation vector with the components off the DOF zeroed (the old projection).
+fn zeroed_rotation_vector(q: DQuat, dofs: [bool; 3]) -> DVec3 {
+    let q = if q.w < 0.0 { -q } else { q };
+    let v = DVec3::new(q.x, q.y, q.z);
+    let s = v.length();
+    let mut r = if s < 1e-300 {
+        DVec3::ZERO
+    } else {
+        v * (2.0 * s.atan2(q.w) / s)
+    };
+    for a in 0..3 {
+        if !dofs[a] {
+            r[a] = 0.0;
+        }
+    }
+    r
+}
+
+#[test]
+fn goal_orientation_gives_the_nearest_end_rotation() {
+    // 1- and 2-DOF end joints (a hinge, a 2-DOF wrist or ankle) cannot take every
+    // orientation: the end rotation is the one of their DOF nearest to the goal.
+    let mut rng = rng(46);
+    let mut cases = [0usize; 2];
+    let mut clearly_better = [0usize; 2];
+    while cases.iter().any(|&c| c < 40) {
+        let s = random_limb_skeleton(&mut rng);
+        let limb = Limb::from_names(&s, ["upper", "middle", "end"]).unwrap();
+        let [_, middle, end] = limb.joints();
+        let dofs = s.joints()[end].rotation_dof.map(|d| d.is_some());
+        let count = dofs.iter().filter(|&&d| d).count();
+        if !(1..=2).contains(&count) || cases[count - 1] >= 40 {
+            continue;
+        }
+        cases[count - 1] += 1;
+        let start = random_posture(&mut rng, &s, 1.0);
+        let base = limb.base(&s, &Frames::new(&s, &start));
+        let position = reachable_goal(&mut rng, &limb, base);
+        let swivel = uniform(&mut rng, -PI, PI);
+        let axis = vec3(&mut rng, 1.0).normalize_or(DVec3::X);
+        let orientation = DQuat::from_axis_angle(axis, uniform(&mut rng, 0.0, PI));
+        let goal = LimbGoal {
+            position,
+            orientation: Some(orientation),
+        };
+        let sol = limb.solve(base, &goal, swivel);
+        let mut p = start.clone();
+        limb.apply(&sol, &mut p);
+        let frames = Frames::new(&s, &p);
+        assert!((frames.joint_position[end] - position).length() < 1e-9);
+        let angle = rotation_angle(frames.rotation(end), orientation);
+        // The end joint's parent frame, and the goal in it.
+        let world_from_middle = frames.rotation(middle);
+        let local = world_from_middle.inverse() * orientation;
+        let zeroed = DQuat::from_scaled_axis(zeroed_rotation_vector(local, dofs));
+        let zeroing = rotation_angle(zeroed, local);
+        assert!(angle <= zeroing + 1e-9, "{angle} vs zeroing {zeroing}");
+        if angle < zeroing - 1e-3 {
+            clearly_better[count - 1] += 1;
+        }
+        // Dense sampling of the DOF space (|r| <= pi covers every rotation of the DOF).
+        let axes: Vec<usize> = (0..3).filter(|&a| dofs[a]).collect();
+        let per_axis: usize = if count == 1 { 20001 } else { 301 };
+        let mut sampled = f64::INFINITY;
+        for index in 0..per_axis.pow(count as u32) {
+            let mut rest = index;
+            let mut r = DVec3::ZERO;
+            for &a in &axes {
+                r[a] = -PI + TAU * (rest % per_axis) as f64 / (per_axis - 1) as f64;
+                rest /= per_axis;
+            }
+            sampled = sampled.min(rotation_angle(DQuat::from_scaled_axis(r), local));
+        }
+        assert!(angle <= sampled + 1e-6, "{angle} vs sampled {sampled}");
+
+        // An orientation the end joint can take at this swivel is met exactly.
+        let mut r = DVec3::ZERO;
+        for &a in &axes {
+            r[a] = uniform(&mut rng, -0.9 * PI, 0.9 * PI) / count as f64;
+        }
+        let reachable = world_from_middle * DQuat::from_scaled_axis(r);
+        let sol = limb.solve(
+            base,
+            &LimbGoal {
+                position,
+                orientation: Some(reachable),
+            },
+            swivel,
+        );
+        let mut p = start.clone();
+        limb.apply(&sol, &mut p);
+        let got = Frames::new(&s, &p).rotation(end);
+        assert!(rotation_angle(got, reachable) < 1e-9);
+        assert!((sol.end_rotation.unwrap() - r).length() < 1e-9);
+    }
+    // Not vacuous: zeroing the rotation vector is clearly worse for most random goals.
+    assert!(
+        clearly_better.iter().all(|&c| c >= 20),
+        "{clearly_better:?}"
+    );
 }
 
 #[test]
