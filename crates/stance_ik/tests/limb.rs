@@ -353,25 +353,74 @@ fn limits_hold_for_every_returned_swivel() {
     let mut rng = rng(44);
     let body = scenarios::humanoid50().unwrap();
     let limbs = hanim_limbs(&body);
-    let mut feasible = 0;
-    for trial in 0..400 {
+    let (mut feasible, mut end_kept_within) = ([0usize; 3], 0);
+    for trial in 0..600 {
         let limb = &limbs[trial % 4];
-        // Goals reached by postures inside the limits: at least one feasible swivel exists.
+        let [_, middle, end] = limb.joints();
+        // Goals reached by postures inside the limits: at least one feasible swivel exists,
+        // with the posture's own end orientation too (the 2-DOF wrist or ankle, limited, then
+        // counts). A random end orientation may be out of the end joint's reach.
         let p = interior_posture(&mut rng, &body, 1.5);
         let frames = Frames::new(&body, &p);
         let base = limb.base(&body, &frames);
-        let goal = LimbGoal::position(frames.joint_position[limb.joints()[2]]);
+        let kind = trial / 4 % 3;
+        let goal = LimbGoal {
+            position: frames.joint_position[end],
+            orientation: match kind {
+                0 => None,
+                1 => Some(frames.rotation(end)),
+                _ => Some(DQuat::from_scaled_axis(vec3(&mut rng, 1.2))),
+            },
+        };
         let preferred = uniform(&mut rng, -PI, PI);
         let intervals = limb.swivel_intervals(base, &goal);
         let sol = limb.solve_within_limits(base, &goal, preferred);
         let mut q = p.clone();
         limb.apply(&sol, &mut q);
         assert!((end_position(&body, &q, limb) - goal.position).length() < 1e-9);
+        // The flag tells the truth, and the end joint never leaves its limits.
+        assert_eq!(
+            sol.within_limits,
+            limb_within_limits(&body, &q, limb, 0.0),
+            "trial {trial}"
+        );
+        let (lo, hi) = (body.lower_limits(), body.upper_limits());
+        let end_ok = body.joints()[end]
+            .dof_range()
+            .all(|d| q.values()[d] >= lo[d] && q.values()[d] <= hi[d]);
+        assert!(
+            kind == 0 || end_ok,
+            "trial {trial}: end joint outside its limits"
+        );
         if intervals.is_empty() {
-            assert!(!sol.within_limits);
+            assert_eq!(kind, 2, "trial {trial}: no feasible swivel");
+            if sol.within_limits {
+                // Only the end joint's limits ruled every swivel out: it took the rotation
+                // within them nearest to the goal (no farther than the old projection,
+                // clamped).
+                end_kept_within += 1;
+                let world_from_middle = Frames::new(&body, &q).rotation(middle);
+                let local = world_from_middle.inverse() * goal.orientation.unwrap();
+                let dofs = body.joints()[end].rotation_dof;
+                let mut clamped = zeroed_rotation_vector(local, dofs.map(|d| d.is_some()));
+                for (a, d) in dofs.iter().enumerate() {
+                    if let Some(d) = *d {
+                        clamped[a] = clamped[a].clamp(lo[d], hi[d]);
+                    }
+                }
+                let got = rotation_angle(
+                    Frames::new(&body, &q).rotation(end),
+                    goal.orientation.unwrap(),
+                );
+                let old = rotation_angle(
+                    world_from_middle * DQuat::from_scaled_axis(clamped),
+                    goal.orientation.unwrap(),
+                );
+                assert!(got <= old + 1e-9, "trial {trial}: {got} vs {old}");
+            }
             continue;
         }
-        feasible += 1;
+        feasible[kind] += 1;
         assert!(sol.within_limits, "trial {trial}");
         assert!(
             limb_within_limits(&body, &q, limb, 0.0),
@@ -392,8 +441,14 @@ fn limits_hold_for_every_returned_swivel() {
             assert!((angle_diff(sol.swivel_angle, preferred) - best).abs() < 1e-12);
         }
     }
-    // The limb joints are inside their limits in `p`, whose swivel is feasible.
-    assert_eq!(feasible, 400);
+    // The limb joints are inside their limits in `p`, whose swivel is feasible for its own
+    // end position and orientation.
+    assert_eq!(feasible[..2], [200, 200]);
+    // Not vacuous: random orientations give both outcomes.
+    assert!(
+        feasible[2] >= 20 && end_kept_within >= 20,
+        "{feasible:?} {end_kept_within}"
+    );
 }
 
 #[test]
