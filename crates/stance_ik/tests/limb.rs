@@ -634,41 +634,121 @@ fn straight_arm() -> Skeleton {
     .unwrap()
 }
 
-#[test]
-fn hybrid_restarts_a_stalled_solve_from_the_closed_form() {
-    let s = straight_arm();
-    let wrist = s.require_joint("wrist").unwrap();
-    // The target lies on the straight arm, closer to the shoulder: every joint moves the wrist
-    // across the arm, none along it. The variational solver sits at this stationary point.
-    let target = DVec3::new(0.2, 1.4 - 0.4, 0.0);
-    let tasks = vec![Task::position(wrist, DVec3::ZERO, target)];
-    let mut alone = Solver::default();
-    let mut p = Posture::rest(&s);
-    let report = alone.solve(&s, &tasks, &mut p).unwrap();
-    assert_eq!(report.status, SolveStatus::Stalled);
-    assert!(report.levels[0].residual_after > 0.1);
-    assert!(report.analytic_restarts.is_empty());
+/// An arm whose shoulder swings in the x-y plane within +-2.5 rad of its rest direction (+x),
+/// tilting out of that plane by at most 0.2 rad, and whose elbow flexes one way only
+/// (counter-clockwise about z): the upper arm cannot point into the gap of 1.28 rad around
+/// -x, behind the shoulder. A wrist 2-DOF as on the humanoid.
+fn gap_arm() -> Skeleton {
+    Skeleton::new(vec![
+        JointDef::new(
+            "shoulder",
+            None,
+            DVec3::new(0.0, 1.4, 0.0),
+            &[Dof::Rx, Dof::Ry, Dof::Rz],
+        )
+        .with_limit(Dof::Rx, -0.2, 0.2)
+        .with_limit(Dof::Ry, -0.2, 0.2)
+        .with_limit(Dof::Rz, -2.5, 2.5),
+        JointDef::new(
+            "elbow",
+            Some("shoulder"),
+            DVec3::new(0.3, 0.0, 0.0),
+            &[Dof::Rz],
+        )
+        .with_limit(Dof::Rz, 0.0, 2.5),
+        JointDef::new(
+            "wrist",
+            Some("elbow"),
+            DVec3::new(0.27, 0.0, 0.0),
+            &[Dof::Rx, Dof::Rz],
+        ),
+    ])
+    .unwrap()
+}
 
-    let mut hybrid = Solver::default().with_limbs(vec![
-        Limb::from_names(&s, ["shoulder", "elbow", "wrist"]).unwrap(),
-    ]);
-    let mut p = Posture::rest(&s);
-    let report = hybrid.solve(&s, &tasks, &mut p).unwrap();
-    assert_eq!(report.status, SolveStatus::Converged, "{report:?}");
-    assert_eq!(report.analytic_restarts.len(), 1);
-    assert_eq!(report.analytic_restarts[0].joints[1], "elbow");
-    let got = Frames::new(&s, &p).joint_position[wrist];
-    assert!((got - target).length() < 1e-6);
-    assert!(limb_within_limits(&s, &p, &hybrid.limbs[0], 0.0));
+#[test]
+fn hybrid_restarts_a_solve_stuck_in_a_joint_limit_local_minimum() {
+    // The target lies behind and below the shoulder (polar angle about -2.1 rad in the x-y
+    // plane, 93-97 % of the reach); the arm starts raised behind it (upper arm at about
+    // +2.2 rad), across the gap. Pulling the wrist straight at the target swings the arm
+    // counter-clockwise into the shoulder limit (2.5 rad), the out-of-plane tilt into its
+    // limits, and the elbow flexes to the nearest point of the curve it can still sweep: a
+    // constrained local minimum about 0.35 m from the target. The target is reachable the
+    // other way round (upper arm near -2.35 rad, elbow slightly bent), which the closed form
+    // finds. Starts and targets are perturbed: the trap is no measure-zero configuration.
+    let s = gap_arm();
+    let wrist = s.require_joint("wrist").unwrap();
+    let limb = Limb::from_names(&s, ["shoulder", "elbow", "wrist"]).unwrap();
+    let shoulder = DVec3::new(0.0, 1.4, 0.0);
+    let (lo, hi) = (s.lower_limits().to_vec(), s.upper_limits().to_vec());
+    let mut rng = rng(47);
+    for trial in 0..12 {
+        let angle: f64 = -2.1 + uniform(&mut rng, -0.03, 0.03);
+        let distance = 0.57 * uniform(&mut rng, 0.93, 0.97);
+        let target = shoulder + distance * DVec3::new(angle.cos(), angle.sin(), 0.0);
+        let tasks = vec![Task::position(wrist, DVec3::ZERO, target)];
+        let start = Posture::from_values(
+            &s,
+            vec![
+                uniform(&mut rng, -0.15, 0.15),
+                uniform(&mut rng, -0.15, 0.15),
+                2.2 + uniform(&mut rng, -0.1, 0.1),
+                0.3 + uniform(&mut rng, -0.1, 0.1),
+                uniform(&mut rng, -0.5, 0.5),
+                uniform(&mut rng, -0.5, 0.5),
+            ],
+        )
+        .unwrap();
+        let distance_at =
+            |p: &Posture| (Frames::new(&s, p).joint_position[wrist] - target).length();
+
+        let mut alone = Solver::default();
+        let mut p = start.clone();
+        let report = alone.solve(&s, &tasks, &mut p).unwrap();
+        assert_eq!(report.status, SolveStatus::Stalled, "trial {trial}");
+        let stuck = report.levels[0].residual_after;
+        assert!(stuck > 1e-3, "trial {trial}: {stuck}");
+        assert!(report.analytic_restarts.is_empty());
+        // A genuine local minimum, not a saddle or singular point: no move of up to 1e-2 rad
+        // per DOF within the limits brings the wrist closer by more than the stall tolerance
+        // leaves (from a saddle some would, at least at second order).
+        for _ in 0..200 {
+            let mut q = p.clone();
+            for (d, v) in q.values_mut().iter_mut().enumerate() {
+                *v = (*v + uniform(&mut rng, -1e-2, 1e-2)).clamp(lo[d], hi[d]);
+            }
+            assert!(
+                distance_at(&q) >= stuck - 1e-6,
+                "trial {trial}: {} < {stuck} near the stalled posture",
+                distance_at(&q)
+            );
+        }
+
+        let mut hybrid = Solver::default().with_limbs(vec![limb.clone()]);
+        let mut p = start.clone();
+        let report = hybrid.solve(&s, &tasks, &mut p).unwrap();
+        assert_eq!(
+            report.status,
+            SolveStatus::Converged,
+            "trial {trial}: {report:?}"
+        );
+        assert_eq!(report.analytic_restarts.len(), 1);
+        assert_eq!(report.analytic_restarts[0].joints[1], "elbow");
+        assert!(distance_at(&p) < 1e-4, "trial {trial}: {}", distance_at(&p));
+        assert!(limb_within_limits(&s, &p, &limb, 0.0));
+        // The other way round: the upper arm swung clockwise past -2 rad.
+        assert!(p.values()[2] < -2.0, "trial {trial}: {:?}", p.values());
+    }
 
     // A solve that converges by itself never restarts.
     let easy = vec![Task::position(
         wrist,
         DVec3::ZERO,
-        DVec3::new(0.3, 0.9, 0.2),
+        shoulder + DVec3::new(0.2, 0.35, 0.05),
     )];
+    let mut hybrid = Solver::default().with_limbs(vec![limb]);
     let mut p = Posture::rest(&s);
-    p.values_mut()[s.joints()[1].dof_start] = -0.4;
+    p.values_mut()[3] = 0.4;
     let report = hybrid.solve(&s, &easy, &mut p).unwrap();
     assert_eq!(report.status, SolveStatus::Converged);
     assert!(report.analytic_restarts.is_empty());
