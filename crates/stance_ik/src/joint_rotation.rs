@@ -111,7 +111,7 @@ pub fn nearest_rotation_vector(
     }
     let norm = (q.w * q.w + v.length_squared()).sqrt();
     if norm < 1e-12 {
-        // Every rotation of the DOF is (within 1e-12 rad) equally far, a half turn: the one
+        // Every rotation of the DOF is equally far (a half turn, to 1e-11 rad): the one
         // nearest to zero.
         return DVec3::ZERO.clamp(lo, hi);
     }
