@@ -15,11 +15,14 @@
 //!   [`prioritized_step_nalgebra`]: the same on nalgebra matrices (kept for the comparison).
 //! - [`Limb`]: closed-form IK of a shoulder-elbow-wrist / hip-knee-ankle limb with the swivel
 //!   angle [TOL 96], its feasible swivel intervals under joint limits, and the hybrid restart
-//!   of a stalled [`Solver`] from the analytic solution (`Solver::limbs`).
+//!   of a stalled [`Solver`] from the analytic solution (`Solver::limbs`);
+//!   [`nearest_rotation_vector`]: the rotation of a joint's DOF (within its limits) nearest
+//!   to a wanted rotation.
 //! - [`scenarios`]: the benchmark / test bodies built from the H-Anim default joint centres
 //!   (to move to `stance_hanim` once it exists).
 
 mod error;
+mod joint_rotation;
 mod kernel;
 mod limb;
 mod posture;
@@ -30,6 +33,7 @@ mod solver;
 mod task;
 
 pub use error::IkError;
+pub use joint_rotation::{UNLIMITED_RANGE, nearest_rotation_vector, rotation_angle};
 pub use kernel::prioritized_step;
 pub use limb::{Limb, LimbBase, LimbGoal, LimbSolution, SwivelInterval, nearest_swivel};
 pub use posture::{Frames, Posture};

@@ -34,11 +34,17 @@
 //! refined by golden-section search (so intervals narrower than the sampling step are found
 //! too: the margin changes at most about pi/2 per radian of swivel, except across the
 //! rotation-vector branch cut at angle pi).
+//!
+//! With a goal orientation the end joint counts with the rotation of its DOF nearest to the
+//! goal. When that leaves the end joint's limits at every swivel angle,
+//! [`Limb::solve_within_limits`] gives the end joint the nearest rotation *within* its limits
+//! and picks the swivel angle for the other joints' limits alone.
 
 use std::f64::consts::{PI, TAU};
 
 use glam::{DMat3, DQuat, DVec3};
 
+use crate::joint_rotation::{nearest_rotation_vector, rotation_vector};
 use crate::{Frames, IkError, Posture, Skeleton};
 
 /// Samples of the swivel circle scanned by [`Limb::swivel_intervals`].
@@ -93,8 +99,8 @@ pub struct LimbSolution {
     pub upper_rotation: DVec3,
     /// Value of the middle joint's hinge DOF (its other rotational DOF are set to 0), radians.
     pub hinge_angle: f64,
-    /// Rotation vector of the end joint, projected onto its rotational DOF (when an
-    /// orientation was asked), radians.
+    /// Rotation vector of the end joint (when an orientation was asked), radians: the rotation
+    /// of its rotational DOF nearest to the goal orientation ([`nearest_rotation_vector`]).
     pub end_rotation: Option<DVec3>,
     /// The swivel angle of the solution, radians in (-pi, pi].
     pub swivel_angle: f64,
@@ -176,18 +182,6 @@ fn bad(reason: impl Into<String>) -> IkError {
     IkError::BadLimb(reason.into())
 }
 
-/// Rotation vector (log map, angle in [0, pi]) of a unit quaternion, accurate for small angles.
-pub(crate) fn rotation_vector(q: DQuat) -> DVec3 {
-    let q = if q.w < 0.0 { -q } else { q };
-    let xyz = DVec3::new(q.x, q.y, q.z);
-    let s = xyz.length();
-    if s < 1e-300 {
-        return DVec3::ZERO;
-    }
-    let angle = 2.0 * s.atan2(q.w);
-    xyz * (angle / s)
-}
-
 /// `x` wrapped into (-pi, pi].
 fn wrap_angle(x: f64) -> f64 {
     let y = (x + PI).rem_euclid(TAU) - PI;
@@ -219,6 +213,14 @@ struct Prepared {
     /// Upper-to-end distance actually reached.
     reach: f64,
     reached: bool,
+}
+
+/// Which rotations the end joint may take: the nearest to the goal orientation among all of
+/// its DOF's rotations, or among those within its limits.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum End {
+    Free,
+    WithinLimits,
 }
 
 impl Limb {
@@ -552,36 +554,43 @@ impl Limb {
         DQuat::from_axis_angle(self.hinge_axis, prep.hinge_angle)
     }
 
-    /// End joint rotation vector (projected onto its DOF) for an upper rotation.
-    fn end_rotation(&self, prep: &Prepared, upper: DQuat) -> Option<DVec3> {
+    /// End joint rotation vector for an upper rotation: the rotation of the end joint's DOF
+    /// nearest to the goal orientation (see [`nearest_rotation_vector`]), among all of them
+    /// (`End::Free`) or those within the end joint's limits (`End::WithinLimits`).
+    fn end_rotation(&self, prep: &Prepared, upper: DQuat, end: End) -> Option<DVec3> {
         prep.orientation.map(|target| {
             let world_from_middle = prep.base.world_from_parent * upper * self.hinge_rotation(prep);
             let local = world_from_middle.inverse() * target.normalize();
-            let mut r = rotation_vector(local);
-            for axis in 0..3 {
-                if self.end_dofs[axis].is_none() {
-                    r[axis] = 0.0;
+            let dofs = self.end_dofs.map(|d| d.is_some());
+            match end {
+                End::Free => {
+                    nearest_rotation_vector(local, dofs, DVec3::NEG_INFINITY, DVec3::INFINITY)
+                }
+                End::WithinLimits => {
+                    nearest_rotation_vector(local, dofs, self.end_lower, self.end_upper)
                 }
             }
-            r
         })
     }
 
-    /// Limit margin (radians; >= 0 inside every limit) of the limb for a swivel angle.
-    fn limit_margin(&self, prep: &Prepared, swivel_angle: f64) -> f64 {
+    /// Limit margin (radians; >= 0 inside every limit) of the limb for a swivel angle; with
+    /// `End::WithinLimits` the end joint (kept within its limits) does not count.
+    fn limit_margin(&self, prep: &Prepared, swivel_angle: f64, end: End) -> f64 {
         let q = self.upper_rotation(prep, swivel_angle);
         let mut m = rotation_margin(rotation_vector(q), self.upper_lower, self.upper_upper)
             .min(self.middle_other_margin);
-        if let Some(r) = self.end_rotation(prep, q) {
+        if end == End::Free
+            && let Some(r) = self.end_rotation(prep, q, End::Free)
+        {
             m = m.min(rotation_margin(r, self.end_lower, self.end_upper));
         }
         m
     }
 
-    fn finish(&self, prep: &Prepared, swivel_angle: f64) -> LimbSolution {
+    fn finish(&self, prep: &Prepared, swivel_angle: f64, end: End) -> LimbSolution {
         let q = self.upper_rotation(prep, swivel_angle);
         let upper_rotation = rotation_vector(q);
-        let end_rotation = self.end_rotation(prep, q);
+        let end_rotation = self.end_rotation(prep, q, end);
         let mut m = rotation_margin(upper_rotation, self.upper_lower, self.upper_upper)
             .min(self.middle_other_margin);
         if let Some(r) = end_rotation {
@@ -611,12 +620,15 @@ impl Limb {
             0.0
         };
         let prep = self.prepare(base, goal);
-        self.finish(&prep, swivel_angle)
+        self.finish(&prep, swivel_angle, End::Free)
     }
 
-    /// Like [`Limb::solve`] with the feasible swivel angle nearest to `preferred_swivel`;
-    /// when no swivel angle satisfies every limit, the one that violates them least
-    /// (`within_limits` is then false).
+    /// Like [`Limb::solve`] with the feasible swivel angle nearest to `preferred_swivel`.
+    /// With a goal orientation whose nearest end-joint rotation leaves the end joint's limits
+    /// at every swivel angle, the end joint takes the rotation within its limits nearest to
+    /// the goal and the swivel angle is the one nearest to `preferred_swivel` that keeps the
+    /// other joints within theirs. When no swivel angle satisfies the limits, the one that
+    /// violates them least (`within_limits` is then false).
     pub fn solve_within_limits(
         &self,
         base: LimbBase,
@@ -629,10 +641,21 @@ impl Limb {
             0.0
         };
         let prep = self.prepare(base, goal);
-        let (intervals, least_violating) = self.scan(&prep);
-        let swivel = nearest_swivel(&intervals, preferred).unwrap_or(least_violating);
-        let mut sol = self.finish(&prep, swivel);
-        if !intervals.is_empty() {
+        let (intervals, least_violating) = self.scan(&prep, End::Free);
+        let (swivel, end, feasible) = match nearest_swivel(&intervals, preferred) {
+            Some(swivel) => (swivel, End::Free, true),
+            None if prep.orientation.is_some() => {
+                // The end joint's limits alone may rule out every swivel: keep it within them.
+                let (intervals, least_violating) = self.scan(&prep, End::WithinLimits);
+                match nearest_swivel(&intervals, preferred) {
+                    Some(swivel) => (swivel, End::WithinLimits, true),
+                    None => (least_violating, End::WithinLimits, false),
+                }
+            }
+            None => (least_violating, End::Free, false),
+        };
+        let mut sol = self.finish(&prep, swivel, end);
+        if feasible {
             // The interval ends are feasible up to rounding; snap the last 1e-16 rad in.
             let snap = |v: &mut DVec3, lo: DVec3, hi: DVec3| {
                 for axis in 0..3 {
@@ -657,15 +680,15 @@ impl Limb {
     /// (sorted by `start`; empty when none; one interval of length 2 pi when all are).
     pub fn swivel_intervals(&self, base: LimbBase, goal: &LimbGoal) -> Vec<SwivelInterval> {
         let prep = self.prepare(base, goal);
-        self.scan(&prep).0
+        self.scan(&prep, End::Free).0
     }
 
     /// Scan + refinement; also returns the least-violating sample.
-    fn scan(&self, prep: &Prepared) -> (Vec<SwivelInterval>, f64) {
+    fn scan(&self, prep: &Prepared, end: End) -> (Vec<SwivelInterval>, f64) {
         let h = TAU / SWIVEL_SAMPLES as f64;
         let angle = |i: usize| -PI + i as f64 * h;
         let m: Vec<f64> = (0..SWIVEL_SAMPLES)
-            .map(|i| self.limit_margin(prep, angle(i)))
+            .map(|i| self.limit_margin(prep, angle(i), end))
             .collect();
         let mut best = 0;
         for i in 1..SWIVEL_SAMPLES {
@@ -677,7 +700,7 @@ impl Limb {
         if self.middle_other_margin < 0.0 {
             return (Vec::new(), least_violating);
         }
-        let feasible = |phi: f64| self.limit_margin(prep, phi) >= 0.0;
+        let feasible = |phi: f64| self.limit_margin(prep, phi, end) >= 0.0;
         // Transition between `a` (feasibility `fa`) and `b`: the feasible end of the bracket.
         let bisect = |mut a: f64, mut b: f64, fa: bool| {
             for _ in 0..60 {
@@ -698,8 +721,8 @@ impl Limb {
             let g = 0.5 * (5f64.sqrt() - 1.0);
             let mut x1 = b - g * (b - a);
             let mut x2 = a + g * (b - a);
-            let mut f1 = sign * self.limit_margin(prep, x1);
-            let mut f2 = sign * self.limit_margin(prep, x2);
+            let mut f1 = sign * self.limit_margin(prep, x1, end);
+            let mut f2 = sign * self.limit_margin(prep, x2, end);
             for _ in 0..80 {
                 if b - a < 1e-13 {
                     break;
@@ -709,17 +732,17 @@ impl Limb {
                     x2 = x1;
                     f2 = f1;
                     x1 = b - g * (b - a);
-                    f1 = sign * self.limit_margin(prep, x1);
+                    f1 = sign * self.limit_margin(prep, x1, end);
                 } else {
                     a = x1;
                     x1 = x2;
                     f1 = f2;
                     x2 = a + g * (b - a);
-                    f2 = sign * self.limit_margin(prep, x2);
+                    f2 = sign * self.limit_margin(prep, x2, end);
                 }
             }
             let x = 0.5 * (a + b);
-            (x, self.limit_margin(prep, x))
+            (x, self.limit_margin(prep, x, end))
         };
         // (angle, entering the feasible set)
         let mut transitions: Vec<(f64, bool)> = Vec::new();

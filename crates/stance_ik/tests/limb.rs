@@ -22,7 +22,7 @@ use rand::rngs::StdRng;
 use stance_ik::scenarios;
 use stance_ik::{
     Dof, Frames, IkError, JointDef, Limb, LimbBase, LimbGoal, Posture, Skeleton, SolveStatus,
-    Solver, Task,
+    Solver, Task, rotation_angle,
 };
 
 fn angle_diff(a: f64, b: f64) -> f64 {
@@ -182,6 +182,108 @@ fn goal_orientation_sets_the_end_joint() {
     }
 }
 
+/// The goal's rotation vector with the components off the DOF zeroed (the old projection).
+fn zeroed_rotation_vector(q: DQuat, dofs: [bool; 3]) -> DVec3 {
+    let q = if q.w < 0.0 { -q } else { q };
+    let v = DVec3::new(q.x, q.y, q.z);
+    let s = v.length();
+    let mut r = if s < 1e-300 {
+        DVec3::ZERO
+    } else {
+        v * (2.0 * s.atan2(q.w) / s)
+    };
+    for a in 0..3 {
+        if !dofs[a] {
+            r[a] = 0.0;
+        }
+    }
+    r
+}
+
+#[test]
+fn goal_orientation_gives_the_nearest_end_rotation() {
+    // 1- and 2-DOF end joints (a hinge, a 2-DOF wrist or ankle) cannot take every
+    // orientation: the end rotation is the one of their DOF nearest to the goal.
+    let mut rng = rng(46);
+    let mut cases = [0usize; 2];
+    let mut clearly_better = [0usize; 2];
+    while cases.iter().any(|&c| c < 40) {
+        let s = random_limb_skeleton(&mut rng);
+        let limb = Limb::from_names(&s, ["upper", "middle", "end"]).unwrap();
+        let [_, middle, end] = limb.joints();
+        let dofs = s.joints()[end].rotation_dof.map(|d| d.is_some());
+        let count = dofs.iter().filter(|&&d| d).count();
+        if !(1..=2).contains(&count) || cases[count - 1] >= 40 {
+            continue;
+        }
+        cases[count - 1] += 1;
+        let start = random_posture(&mut rng, &s, 1.0);
+        let base = limb.base(&s, &Frames::new(&s, &start));
+        let position = reachable_goal(&mut rng, &limb, base);
+        let swivel = uniform(&mut rng, -PI, PI);
+        let axis = vec3(&mut rng, 1.0).normalize_or(DVec3::X);
+        let orientation = DQuat::from_axis_angle(axis, uniform(&mut rng, 0.0, PI));
+        let goal = LimbGoal {
+            position,
+            orientation: Some(orientation),
+        };
+        let sol = limb.solve(base, &goal, swivel);
+        let mut p = start.clone();
+        limb.apply(&sol, &mut p);
+        let frames = Frames::new(&s, &p);
+        assert!((frames.joint_position[end] - position).length() < 1e-9);
+        let angle = rotation_angle(frames.rotation(end), orientation);
+        // The end joint's parent frame, and the goal in it.
+        let world_from_middle = frames.rotation(middle);
+        let local = world_from_middle.inverse() * orientation;
+        let zeroed = DQuat::from_scaled_axis(zeroed_rotation_vector(local, dofs));
+        let zeroing = rotation_angle(zeroed, local);
+        assert!(angle <= zeroing + 1e-9, "{angle} vs zeroing {zeroing}");
+        if angle < zeroing - 1e-3 {
+            clearly_better[count - 1] += 1;
+        }
+        // Dense sampling of the DOF space (|r| <= pi covers every rotation of the DOF).
+        let axes: Vec<usize> = (0..3).filter(|&a| dofs[a]).collect();
+        let per_axis: usize = if count == 1 { 20001 } else { 301 };
+        let mut sampled = f64::INFINITY;
+        for index in 0..per_axis.pow(count as u32) {
+            let mut rest = index;
+            let mut r = DVec3::ZERO;
+            for &a in &axes {
+                r[a] = -PI + TAU * (rest % per_axis) as f64 / (per_axis - 1) as f64;
+                rest /= per_axis;
+            }
+            sampled = sampled.min(rotation_angle(DQuat::from_scaled_axis(r), local));
+        }
+        assert!(angle <= sampled + 1e-6, "{angle} vs sampled {sampled}");
+
+        // An orientation the end joint can take at this swivel is met exactly.
+        let mut r = DVec3::ZERO;
+        for &a in &axes {
+            r[a] = uniform(&mut rng, -0.9 * PI, 0.9 * PI) / count as f64;
+        }
+        let reachable = world_from_middle * DQuat::from_scaled_axis(r);
+        let sol = limb.solve(
+            base,
+            &LimbGoal {
+                position,
+                orientation: Some(reachable),
+            },
+            swivel,
+        );
+        let mut p = start.clone();
+        limb.apply(&sol, &mut p);
+        let got = Frames::new(&s, &p).rotation(end);
+        assert!(rotation_angle(got, reachable) < 1e-9);
+        assert!((sol.end_rotation.unwrap() - r).length() < 1e-9);
+    }
+    // Not vacuous: zeroing the rotation vector is clearly worse for most random goals.
+    assert!(
+        clearly_better.iter().all(|&c| c >= 20),
+        "{clearly_better:?}"
+    );
+}
+
 #[test]
 fn posture_to_swivel_to_posture_round_trip() {
     let mut rng = rng(43);
@@ -251,25 +353,74 @@ fn limits_hold_for_every_returned_swivel() {
     let mut rng = rng(44);
     let body = scenarios::humanoid50().unwrap();
     let limbs = hanim_limbs(&body);
-    let mut feasible = 0;
-    for trial in 0..400 {
+    let (mut feasible, mut end_kept_within) = ([0usize; 3], 0);
+    for trial in 0..600 {
         let limb = &limbs[trial % 4];
-        // Goals reached by postures inside the limits: at least one feasible swivel exists.
+        let [_, middle, end] = limb.joints();
+        // Goals reached by postures inside the limits: at least one feasible swivel exists,
+        // with the posture's own end orientation too (the 2-DOF wrist or ankle, limited, then
+        // counts). A random end orientation may be out of the end joint's reach.
         let p = interior_posture(&mut rng, &body, 1.5);
         let frames = Frames::new(&body, &p);
         let base = limb.base(&body, &frames);
-        let goal = LimbGoal::position(frames.joint_position[limb.joints()[2]]);
+        let kind = trial / 4 % 3;
+        let goal = LimbGoal {
+            position: frames.joint_position[end],
+            orientation: match kind {
+                0 => None,
+                1 => Some(frames.rotation(end)),
+                _ => Some(DQuat::from_scaled_axis(vec3(&mut rng, 1.2))),
+            },
+        };
         let preferred = uniform(&mut rng, -PI, PI);
         let intervals = limb.swivel_intervals(base, &goal);
         let sol = limb.solve_within_limits(base, &goal, preferred);
         let mut q = p.clone();
         limb.apply(&sol, &mut q);
         assert!((end_position(&body, &q, limb) - goal.position).length() < 1e-9);
+        // The flag tells the truth, and the end joint never leaves its limits.
+        assert_eq!(
+            sol.within_limits,
+            limb_within_limits(&body, &q, limb, 0.0),
+            "trial {trial}"
+        );
+        let (lo, hi) = (body.lower_limits(), body.upper_limits());
+        let end_ok = body.joints()[end]
+            .dof_range()
+            .all(|d| q.values()[d] >= lo[d] && q.values()[d] <= hi[d]);
+        assert!(
+            kind == 0 || end_ok,
+            "trial {trial}: end joint outside its limits"
+        );
         if intervals.is_empty() {
-            assert!(!sol.within_limits);
+            assert_eq!(kind, 2, "trial {trial}: no feasible swivel");
+            if sol.within_limits {
+                // Only the end joint's limits ruled every swivel out: it took the rotation
+                // within them nearest to the goal (no farther than the old projection,
+                // clamped).
+                end_kept_within += 1;
+                let world_from_middle = Frames::new(&body, &q).rotation(middle);
+                let local = world_from_middle.inverse() * goal.orientation.unwrap();
+                let dofs = body.joints()[end].rotation_dof;
+                let mut clamped = zeroed_rotation_vector(local, dofs.map(|d| d.is_some()));
+                for (a, d) in dofs.iter().enumerate() {
+                    if let Some(d) = *d {
+                        clamped[a] = clamped[a].clamp(lo[d], hi[d]);
+                    }
+                }
+                let got = rotation_angle(
+                    Frames::new(&body, &q).rotation(end),
+                    goal.orientation.unwrap(),
+                );
+                let old = rotation_angle(
+                    world_from_middle * DQuat::from_scaled_axis(clamped),
+                    goal.orientation.unwrap(),
+                );
+                assert!(got <= old + 1e-9, "trial {trial}: {got} vs {old}");
+            }
             continue;
         }
-        feasible += 1;
+        feasible[kind] += 1;
         assert!(sol.within_limits, "trial {trial}");
         assert!(
             limb_within_limits(&body, &q, limb, 0.0),
@@ -290,8 +441,14 @@ fn limits_hold_for_every_returned_swivel() {
             assert!((angle_diff(sol.swivel_angle, preferred) - best).abs() < 1e-12);
         }
     }
-    // The limb joints are inside their limits in `p`, whose swivel is feasible.
-    assert_eq!(feasible, 400);
+    // The limb joints are inside their limits in `p`, whose swivel is feasible for its own
+    // end position and orientation.
+    assert_eq!(feasible[..2], [200, 200]);
+    // Not vacuous: random orientations give both outcomes.
+    assert!(
+        feasible[2] >= 20 && end_kept_within >= 20,
+        "{feasible:?} {end_kept_within}"
+    );
 }
 
 #[test]
@@ -477,41 +634,121 @@ fn straight_arm() -> Skeleton {
     .unwrap()
 }
 
-#[test]
-fn hybrid_restarts_a_stalled_solve_from_the_closed_form() {
-    let s = straight_arm();
-    let wrist = s.require_joint("wrist").unwrap();
-    // The target lies on the straight arm, closer to the shoulder: every joint moves the wrist
-    // across the arm, none along it. The variational solver sits at this stationary point.
-    let target = DVec3::new(0.2, 1.4 - 0.4, 0.0);
-    let tasks = vec![Task::position(wrist, DVec3::ZERO, target)];
-    let mut alone = Solver::default();
-    let mut p = Posture::rest(&s);
-    let report = alone.solve(&s, &tasks, &mut p).unwrap();
-    assert_eq!(report.status, SolveStatus::Stalled);
-    assert!(report.levels[0].residual_after > 0.1);
-    assert!(report.analytic_restarts.is_empty());
+/// An arm whose shoulder swings in the x-y plane within +-2.5 rad of its rest direction (+x),
+/// tilting out of that plane by at most 0.2 rad, and whose elbow flexes one way only
+/// (counter-clockwise about z): the upper arm cannot point into the gap of 1.28 rad around
+/// -x, behind the shoulder. A wrist 2-DOF as on the humanoid.
+fn gap_arm() -> Skeleton {
+    Skeleton::new(vec![
+        JointDef::new(
+            "shoulder",
+            None,
+            DVec3::new(0.0, 1.4, 0.0),
+            &[Dof::Rx, Dof::Ry, Dof::Rz],
+        )
+        .with_limit(Dof::Rx, -0.2, 0.2)
+        .with_limit(Dof::Ry, -0.2, 0.2)
+        .with_limit(Dof::Rz, -2.5, 2.5),
+        JointDef::new(
+            "elbow",
+            Some("shoulder"),
+            DVec3::new(0.3, 0.0, 0.0),
+            &[Dof::Rz],
+        )
+        .with_limit(Dof::Rz, 0.0, 2.5),
+        JointDef::new(
+            "wrist",
+            Some("elbow"),
+            DVec3::new(0.27, 0.0, 0.0),
+            &[Dof::Rx, Dof::Rz],
+        ),
+    ])
+    .unwrap()
+}
 
-    let mut hybrid = Solver::default().with_limbs(vec![
-        Limb::from_names(&s, ["shoulder", "elbow", "wrist"]).unwrap(),
-    ]);
-    let mut p = Posture::rest(&s);
-    let report = hybrid.solve(&s, &tasks, &mut p).unwrap();
-    assert_eq!(report.status, SolveStatus::Converged, "{report:?}");
-    assert_eq!(report.analytic_restarts.len(), 1);
-    assert_eq!(report.analytic_restarts[0].joints[1], "elbow");
-    let got = Frames::new(&s, &p).joint_position[wrist];
-    assert!((got - target).length() < 1e-6);
-    assert!(limb_within_limits(&s, &p, &hybrid.limbs[0], 0.0));
+#[test]
+fn hybrid_restarts_a_solve_stuck_in_a_joint_limit_local_minimum() {
+    // The target lies behind and below the shoulder (polar angle about -2.1 rad in the x-y
+    // plane, 93-97 % of the reach); the arm starts raised behind it (upper arm at about
+    // +2.2 rad), across the gap. Pulling the wrist straight at the target swings the arm
+    // counter-clockwise into the shoulder limit (2.5 rad), the out-of-plane tilt into its
+    // limits, and the elbow flexes to the nearest point of the curve it can still sweep: a
+    // constrained local minimum about 0.35 m from the target. The target is reachable the
+    // other way round (upper arm near -2.35 rad, elbow slightly bent), which the closed form
+    // finds. Starts and targets are perturbed: the trap is no measure-zero configuration.
+    let s = gap_arm();
+    let wrist = s.require_joint("wrist").unwrap();
+    let limb = Limb::from_names(&s, ["shoulder", "elbow", "wrist"]).unwrap();
+    let shoulder = DVec3::new(0.0, 1.4, 0.0);
+    let (lo, hi) = (s.lower_limits().to_vec(), s.upper_limits().to_vec());
+    let mut rng = rng(47);
+    for trial in 0..12 {
+        let angle: f64 = -2.1 + uniform(&mut rng, -0.03, 0.03);
+        let distance = 0.57 * uniform(&mut rng, 0.93, 0.97);
+        let target = shoulder + distance * DVec3::new(angle.cos(), angle.sin(), 0.0);
+        let tasks = vec![Task::position(wrist, DVec3::ZERO, target)];
+        let start = Posture::from_values(
+            &s,
+            vec![
+                uniform(&mut rng, -0.15, 0.15),
+                uniform(&mut rng, -0.15, 0.15),
+                2.2 + uniform(&mut rng, -0.1, 0.1),
+                0.3 + uniform(&mut rng, -0.1, 0.1),
+                uniform(&mut rng, -0.5, 0.5),
+                uniform(&mut rng, -0.5, 0.5),
+            ],
+        )
+        .unwrap();
+        let distance_at =
+            |p: &Posture| (Frames::new(&s, p).joint_position[wrist] - target).length();
+
+        let mut alone = Solver::default();
+        let mut p = start.clone();
+        let report = alone.solve(&s, &tasks, &mut p).unwrap();
+        assert_eq!(report.status, SolveStatus::Stalled, "trial {trial}");
+        let stuck = report.levels[0].residual_after;
+        assert!(stuck > 1e-3, "trial {trial}: {stuck}");
+        assert!(report.analytic_restarts.is_empty());
+        // A genuine local minimum, not a saddle or singular point: no move of up to 1e-2 rad
+        // per DOF within the limits brings the wrist closer by more than the stall tolerance
+        // leaves (from a saddle some would, at least at second order).
+        for _ in 0..200 {
+            let mut q = p.clone();
+            for (d, v) in q.values_mut().iter_mut().enumerate() {
+                *v = (*v + uniform(&mut rng, -1e-2, 1e-2)).clamp(lo[d], hi[d]);
+            }
+            assert!(
+                distance_at(&q) >= stuck - 1e-6,
+                "trial {trial}: {} < {stuck} near the stalled posture",
+                distance_at(&q)
+            );
+        }
+
+        let mut hybrid = Solver::default().with_limbs(vec![limb.clone()]);
+        let mut p = start.clone();
+        let report = hybrid.solve(&s, &tasks, &mut p).unwrap();
+        assert_eq!(
+            report.status,
+            SolveStatus::Converged,
+            "trial {trial}: {report:?}"
+        );
+        assert_eq!(report.analytic_restarts.len(), 1);
+        assert_eq!(report.analytic_restarts[0].joints[1], "elbow");
+        assert!(distance_at(&p) < 1e-4, "trial {trial}: {}", distance_at(&p));
+        assert!(limb_within_limits(&s, &p, &limb, 0.0));
+        // The other way round: the upper arm swung clockwise past -2 rad.
+        assert!(p.values()[2] < -2.0, "trial {trial}: {:?}", p.values());
+    }
 
     // A solve that converges by itself never restarts.
     let easy = vec![Task::position(
         wrist,
         DVec3::ZERO,
-        DVec3::new(0.3, 0.9, 0.2),
+        shoulder + DVec3::new(0.2, 0.35, 0.05),
     )];
+    let mut hybrid = Solver::default().with_limbs(vec![limb]);
     let mut p = Posture::rest(&s);
-    p.values_mut()[s.joints()[1].dof_start] = -0.4;
+    p.values_mut()[3] = 0.4;
     let report = hybrid.solve(&s, &easy, &mut p).unwrap();
     assert_eq!(report.status, SolveStatus::Converged);
     assert!(report.analytic_restarts.is_empty());
