@@ -96,9 +96,17 @@ fn snap(m: DMat3) -> Option<DMat3> {
     (angle < 30f64.to_radians()).then_some(p)
 }
 
-/// Lowest y of the rest-pose mesh after `linear`.
+/// Vertices [`lowest_point`] transforms at most: a file instancing one large mesh from
+/// thousands of nodes must not cost thousands of passes over it.
+const LOWEST_POINT_BUDGET: usize = 32 << 20;
+
+/// Lowest y of the rest-pose mesh after `linear`. A skinned mesh is placed by its skin
+/// alone, so each (mesh, skin) pair is visited once; after [`LOWEST_POINT_BUDGET`] vertices
+/// the remaining instances are skipped.
 fn lowest_point(avatar: &Avatar, world: &[DMat4], linear: &DMat4) -> Option<f64> {
     let mut min: Option<f64> = None;
+    let mut seen_skinned = std::collections::HashSet::new();
+    let mut budget = LOWEST_POINT_BUDGET;
     for node in avatar
         .nodes
         .iter()
@@ -109,6 +117,16 @@ fn lowest_point(avatar: &Avatar, world: &[DMat4], linear: &DMat4) -> Option<f64>
         let Some(mesh) = avatar.meshes.get(m) else {
             continue;
         };
+        if let Some(s) = n.skin
+            && !seen_skinned.insert((m, s))
+        {
+            continue;
+        }
+        let vertices: usize = mesh.primitives.iter().map(|p| p.positions.len()).sum();
+        let Some(left) = budget.checked_sub(vertices) else {
+            break;
+        };
+        budget = left;
         let skin_mats: Option<Vec<DMat4>> = n.skin.and_then(|s| avatar.skins.get(s)).map(|skin| {
             skin.joints
                 .iter()
