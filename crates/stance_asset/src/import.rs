@@ -801,7 +801,9 @@ pub fn import(
     };
     let vrm0 = format == SourceFormat::Vrm0;
     avatar.mapping = Mapping::auto(&avatar.source_joints(), &vrm_bones, vrm0);
-    avatar.hanim_from_file = crate::normalize::hanim_from_file(&avatar);
+    let (hanim_from_file, scale_warning) = crate::normalize::hanim_from_file(&avatar);
+    avatar.hanim_from_file = hanim_from_file;
+    avatar.warnings.extend(scale_warning);
     let missing = avatar.mapping.missing(LevelOfArticulation::Loa1);
     if !missing.is_empty() {
         if options.require_humanoid {
