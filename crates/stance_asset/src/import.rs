@@ -1,5 +1,6 @@
 //! glTF 2.0 / GLB / VRM import into an [`Avatar`].
 
+use std::borrow::Cow;
 use std::collections::HashMap;
 
 use base64::Engine as _;
@@ -121,9 +122,13 @@ pub type Resolver<'a> = dyn FnMut(&str) -> Option<Vec<u8>> + 'a;
 
 struct Ctx<'a> {
     root: json::Root,
-    buffers: Vec<Option<Vec<u8>>>,
+    /// Buffer data: the GLB binary chunk is borrowed, data URIs and external files owned.
+    buffers: Vec<Option<Cow<'a, [u8]>>>,
     bin: Option<&'a [u8]>,
-    views: HashMap<usize, Vec<u8>>,
+    /// Decoded EXT_meshopt_compression views (charged once each). Plain views are never
+    /// copied: they are borrowed from their buffer, so a file cannot multiply its memory by
+    /// pointing many views or accessors at the same bytes.
+    decoded_views: HashMap<usize, Vec<u8>>,
     limits: &'a Limits,
     decoded_bytes: u64,
     warnings: Vec<String>,
@@ -152,6 +157,13 @@ fn check_count(what: &str, size: usize, limit: usize) -> Result<(), AssetError> 
         });
     }
     Ok(())
+}
+
+/// The EXT_meshopt_compression object of a buffer view, if any.
+fn meshopt_ext(view: &json::buffer::View) -> Option<&Value> {
+    view.extensions
+        .as_ref()
+        .and_then(|e| e.others.get("EXT_meshopt_compression"))
 }
 
 fn decode_data_uri(uri: &str) -> Option<Result<Vec<u8>, String>> {
@@ -204,7 +216,7 @@ impl<'a> Ctx<'a> {
                 });
             }
             let data = match uri {
-                None if i == 0 && self.bin.is_some() => self.bin.map(<[u8]>::to_vec),
+                None if i == 0 && self.bin.is_some() => self.bin.map(Cow::Borrowed),
                 None if fallback => None,
                 None => {
                     return Err(AssetError::Buffer {
@@ -213,13 +225,15 @@ impl<'a> Ctx<'a> {
                     });
                 }
                 Some(uri) => match decode_data_uri(&uri) {
-                    Some(Ok(d)) => Some(d),
+                    Some(Ok(d)) => Some(Cow::Owned(d)),
                     Some(Err(reason)) => return Err(AssetError::Buffer { index: i, reason }),
                     None if fallback => None,
-                    None => Some(resolve(&uri).ok_or_else(|| AssetError::Buffer {
-                        index: i,
-                        reason: format!("external file `{uri}` is not available"),
-                    })?),
+                    None => Some(Cow::Owned(resolve(&uri).ok_or_else(|| {
+                        AssetError::Buffer {
+                            index: i,
+                            reason: format!("external file `{uri}` is not available"),
+                        }
+                    })?)),
                 },
             };
             if let Some(d) = &data {
@@ -232,112 +246,47 @@ impl<'a> Ctx<'a> {
                         ),
                     });
                 }
-                self.charge(d.len(), "buffers")?;
+                if let Cow::Owned(d) = d {
+                    self.charge(d.len(), &format!("buffer {i}"))?;
+                }
             }
             self.buffers.push(data);
         }
         Ok(())
     }
 
-    /// The bytes of a buffer view (decoded when meshopt-compressed).
-    fn view(&mut self, index: usize, what: &str) -> Result<&[u8], AssetError> {
+    /// Decodes a buffer view when it is meshopt-compressed (once; later calls are free), so
+    /// that [`Ctx::view_data`] can hand out its bytes.
+    fn prepare_view(&mut self, index: usize, what: &str) -> Result<(), AssetError> {
         let count = self.root.buffer_views.len();
-        if index >= count {
+        let Some(v) = self.root.buffer_views.get(index) else {
             return Err(bad_index(what, "bufferView", index, count));
+        };
+        if self.decoded_views.contains_key(&index) || meshopt_ext(v).is_none() {
+            return Ok(());
         }
-        if !self.views.contains_key(&index) {
-            let data = self.materialize_view(index)?;
-            self.views.insert(index, data);
-        }
-        self.views
-            .get(&index)
-            .map(Vec::as_slice)
-            .ok_or_else(|| AssetError::OutOfBounds(format!("bufferView {index} unavailable")))
+        let data = self.decode_meshopt_view(index)?;
+        self.decoded_views.insert(index, data);
+        Ok(())
     }
 
-    fn materialize_view(&mut self, index: usize) -> Result<Vec<u8>, AssetError> {
-        let v = &self.root.buffer_views[index];
-        let length = sz(v.byte_length.0);
-        if let Some(ext) = v
-            .extensions
-            .as_ref()
-            .and_then(|e| e.others.get("EXT_meshopt_compression"))
-        {
-            let get = |k: &str| ext.get(k).and_then(Value::as_u64);
-            let buffer = sz(get("buffer").unwrap_or(u64::MAX));
-            let offset = sz(get("byteOffset").unwrap_or(0));
-            let src_len = sz(get("byteLength").unwrap_or(0));
-            let stride = sz(get("byteStride").unwrap_or(0));
-            let count = sz(get("count").unwrap_or(0));
-            let mode = match ext.get("mode").and_then(Value::as_str) {
-                Some("ATTRIBUTES") => Mode::Attributes,
-                Some("TRIANGLES") => Mode::Triangles,
-                Some("INDICES") => Mode::Indices,
-                other => {
-                    return Err(AssetError::Meshopt {
-                        view: index,
-                        reason: format!("unknown mode {other:?}"),
-                    });
-                }
-            };
-            let filter = match ext.get("filter").and_then(Value::as_str) {
-                None | Some("NONE") => Filter::None,
-                Some("OCTAHEDRAL") => Filter::Octahedral,
-                Some("QUATERNION") => Filter::Quaternion,
-                Some("EXPONENTIAL") => Filter::Exponential,
-                Some(other) => {
-                    return Err(AssetError::Meshopt {
-                        view: index,
-                        reason: format!("unknown filter `{other}`"),
-                    });
-                }
-            };
-            let nbuf = self.buffers.len();
-            let src = self
-                .buffers
-                .get(buffer)
+    /// The bytes of a buffer view: the decoded data of a meshopt view (after
+    /// [`Ctx::prepare_view`]), otherwise a slice of its buffer (never a copy).
+    fn view_data(&self, index: usize, what: &str) -> Result<&[u8], AssetError> {
+        let count = self.root.buffer_views.len();
+        let Some(v) = self.root.buffer_views.get(index) else {
+            return Err(bad_index(what, "bufferView", index, count));
+        };
+        if meshopt_ext(v).is_some() {
+            return self
+                .decoded_views
+                .get(&index)
+                .map(Vec::as_slice)
                 .ok_or_else(|| {
-                    bad_index(
-                        format!("bufferView {index} meshopt"),
-                        "buffer",
-                        buffer,
-                        nbuf,
-                    )
-                })?
-                .as_deref()
-                .ok_or_else(|| AssetError::Meshopt {
-                    view: index,
-                    reason: format!("source buffer {buffer} has no data"),
-                })?;
-            let src = offset
-                .checked_add(src_len)
-                .and_then(|end| src.get(offset..end))
-                .ok_or_else(|| AssetError::Meshopt {
-                    view: index,
-                    reason: format!(
-                        "compressed range {offset}+{src_len} is outside buffer {buffer} ({} bytes)",
-                        src.len()
-                    ),
-                })?;
-            let max = sz(self
-                .limits
-                .max_decoded_bytes
-                .saturating_sub(self.decoded_bytes));
-            let out = meshopt::decode(src, count, stride, mode, filter, max).map_err(|reason| {
-                AssetError::Meshopt {
-                    view: index,
-                    reason,
-                }
-            })?;
-            if out.len() < length {
-                return Err(AssetError::Meshopt {
-                    view: index,
-                    reason: format!("decoded {} bytes, view declares {length}", out.len()),
+                    AssetError::OutOfBounds(format!("bufferView {index} was not decoded"))
                 });
-            }
-            self.charge(out.len(), &format!("bufferView {index}"))?;
-            return Ok(out);
         }
+        let length = sz(v.byte_length.0);
         let buffer = v.buffer.value();
         let offset = sz(v.byte_offset.map_or(0, |o| o.0));
         let nbuf = self.buffers.len();
@@ -355,13 +304,105 @@ impl<'a> Ctx<'a> {
         offset
             .checked_add(length)
             .and_then(|end| data.get(offset..end))
-            .map(<[u8]>::to_vec)
             .ok_or_else(|| {
                 AssetError::OutOfBounds(format!(
                     "bufferView {index} (offset {offset}, length {length}) is outside buffer {buffer} ({} bytes)",
                     data.len()
                 ))
             })
+    }
+
+    /// Decodes an EXT_meshopt_compression view, charging its size.
+    fn decode_meshopt_view(&mut self, index: usize) -> Result<Vec<u8>, AssetError> {
+        let Some(v) = self.root.buffer_views.get(index) else {
+            return Err(bad_index(
+                "meshopt",
+                "bufferView",
+                index,
+                self.root.buffer_views.len(),
+            ));
+        };
+        let length = sz(v.byte_length.0);
+        let Some(ext) = meshopt_ext(v) else {
+            return Err(AssetError::Meshopt {
+                view: index,
+                reason: "not compressed".into(),
+            });
+        };
+        let get = |k: &str| ext.get(k).and_then(Value::as_u64);
+        let buffer = sz(get("buffer").unwrap_or(u64::MAX));
+        let offset = sz(get("byteOffset").unwrap_or(0));
+        let src_len = sz(get("byteLength").unwrap_or(0));
+        let stride = sz(get("byteStride").unwrap_or(0));
+        let count = sz(get("count").unwrap_or(0));
+        let mode = match ext.get("mode").and_then(Value::as_str) {
+            Some("ATTRIBUTES") => Mode::Attributes,
+            Some("TRIANGLES") => Mode::Triangles,
+            Some("INDICES") => Mode::Indices,
+            other => {
+                return Err(AssetError::Meshopt {
+                    view: index,
+                    reason: format!("unknown mode {other:?}"),
+                });
+            }
+        };
+        let filter = match ext.get("filter").and_then(Value::as_str) {
+            None | Some("NONE") => Filter::None,
+            Some("OCTAHEDRAL") => Filter::Octahedral,
+            Some("QUATERNION") => Filter::Quaternion,
+            Some("EXPONENTIAL") => Filter::Exponential,
+            Some(other) => {
+                return Err(AssetError::Meshopt {
+                    view: index,
+                    reason: format!("unknown filter `{other}`"),
+                });
+            }
+        };
+        let nbuf = self.buffers.len();
+        let src = self
+            .buffers
+            .get(buffer)
+            .ok_or_else(|| {
+                bad_index(
+                    format!("bufferView {index} meshopt"),
+                    "buffer",
+                    buffer,
+                    nbuf,
+                )
+            })?
+            .as_deref()
+            .ok_or_else(|| AssetError::Meshopt {
+                view: index,
+                reason: format!("source buffer {buffer} has no data"),
+            })?;
+        let src = offset
+            .checked_add(src_len)
+            .and_then(|end| src.get(offset..end))
+            .ok_or_else(|| AssetError::Meshopt {
+                view: index,
+                reason: format!(
+                    "compressed range {offset}+{src_len} is outside buffer {buffer} ({} bytes)",
+                    src.len()
+                ),
+            })?;
+        let max = sz(self
+            .limits
+            .max_decoded_bytes
+            .saturating_sub(self.decoded_bytes));
+        let out = meshopt::decode(src, count, stride, mode, filter, max).map_err(|reason| {
+            AssetError::Meshopt {
+                view: index,
+                reason,
+            }
+        })?;
+        if out.len() < length {
+            return Err(AssetError::Meshopt {
+                view: index,
+                reason: format!("decoded {} bytes, view declares {length}", out.len()),
+            });
+        }
+        self.charge(out.len(), &format!("bufferView {index}"))?;
+        Ok(out)
     }
 
     /// Reads an accessor as `count x components` floats (normalised integers mapped to
@@ -411,7 +452,8 @@ impl<'a> Ctx<'a> {
             }
             let offset = sz(acc.byte_offset.map_or(0, |o| o.0));
             let normalized = acc.normalized;
-            let data = self.view(view_index, what)?;
+            self.prepare_view(view_index, what)?;
+            let data = self.view_data(view_index, what)?;
             if count > 0 {
                 let needed = (count - 1)
                     .checked_mul(stride)
@@ -446,11 +488,15 @@ impl<'a> Ctx<'a> {
             };
             let ict = ict.0;
             let ioff = sz(sparse.indices.byte_offset.0);
-            let idata = self
-                .view(sparse.indices.buffer_view.value(), what)?
-                .to_vec();
+            let (iview, vview) = (
+                sparse.indices.buffer_view.value(),
+                sparse.values.buffer_view.value(),
+            );
+            self.prepare_view(iview, what)?;
+            self.prepare_view(vview, what)?;
+            let idata = self.view_data(iview, what)?;
             let voff = sz(sparse.values.byte_offset.0);
-            let vdata = self.view(sparse.values.buffer_view.value(), what)?.to_vec();
+            let vdata = self.view_data(vview, what)?;
             for s in 0..n {
                 let ia = s
                     .checked_mul(ict.size())
@@ -461,7 +507,7 @@ impl<'a> Ctx<'a> {
                         "accessor {index}: sparse indices outside their view"
                     )));
                 }
-                let target = read_component(&idata, ia, ict, false) as usize;
+                let target = read_component(idata, ia, ict, false) as usize;
                 if target >= count {
                     return Err(AssetError::OutOfBounds(format!(
                         "accessor {index}: sparse index {target} >= count {count}"
@@ -479,7 +525,7 @@ impl<'a> Ctx<'a> {
                             "accessor {index}: sparse values outside their view"
                         )));
                     }
-                    out[target * comps + c] = read_component(&vdata, va, ct, acc.normalized);
+                    out[target * comps + c] = read_component(vdata, va, ct, acc.normalized);
                 }
             }
         }
@@ -623,7 +669,7 @@ pub fn import(
         root,
         buffers: Vec::new(),
         bin,
-        views: HashMap::new(),
+        decoded_views: HashMap::new(),
         limits,
         decoded_bytes: 0,
         warnings: Vec::new(),
@@ -755,7 +801,9 @@ pub fn import(
     };
     let vrm0 = format == SourceFormat::Vrm0;
     avatar.mapping = Mapping::auto(&avatar.source_joints(), &vrm_bones, vrm0);
-    avatar.hanim_from_file = crate::normalize::hanim_from_file(&avatar);
+    let (hanim_from_file, scale_warning) = crate::normalize::hanim_from_file(&avatar);
+    avatar.hanim_from_file = hanim_from_file;
+    avatar.warnings.extend(scale_warning);
     let missing = avatar.mapping.missing(LevelOfArticulation::Loa1);
     if !missing.is_empty() {
         if options.require_humanoid {
@@ -927,6 +975,10 @@ fn import_textures(
                 }
             }
         }
+        // Each texture holds its own copy of the pixels: charge every copy, so that many
+        // textures sharing one large image cannot multiply memory past the limit.
+        let bytes = images[source].as_ref().map_or(4, |i| i.2.len());
+        ctx.charge(bytes, &format!("texture {t}"))?;
         let (width, height, rgba8) = images[source].clone().unwrap_or((1, 1, vec![255; 4]));
         textures.push(Texture {
             name,
@@ -960,12 +1012,21 @@ fn wrap_of(w: Checked<json::texture::WrappingMode>) -> Wrap {
 }
 
 fn decode_image(ctx: &mut Ctx<'_>, index: usize) -> Result<(u32, u32, Vec<u8>), AssetError> {
-    let img = ctx.root.images[index].clone();
-    let bytes: Vec<u8> = if let Some(view) = img.buffer_view {
-        ctx.view(view.value(), &format!("image {index}"))?.to_vec()
-    } else if let Some(uri) = &img.uri {
+    let what = format!("image {index}");
+    let (view, uri) = {
+        let img = &ctx.root.images[index];
+        (img.buffer_view.map(|v| v.value()), img.uri.clone())
+    };
+    let owned;
+    let bytes: &[u8] = if let Some(view) = view {
+        ctx.prepare_view(view, &what)?;
+        ctx.view_data(view, &what)?
+    } else if let Some(uri) = &uri {
         match decode_data_uri(uri) {
-            Some(Ok(d)) => d,
+            Some(Ok(d)) => {
+                owned = d;
+                &owned
+            }
             Some(Err(reason)) => return Err(AssetError::Image { index, reason }),
             None => {
                 return Err(AssetError::Image {
@@ -980,17 +1041,30 @@ fn decode_image(ctx: &mut Ctx<'_>, index: usize) -> Result<(u32, u32, Vec<u8>), 
             reason: "neither bufferView nor uri".into(),
         });
     };
-    let format = image::guess_format(&bytes).map_err(|e| AssetError::Image {
+    let image = decode_image_bytes(bytes, index, ctx.limits, ctx.decoded_bytes)?;
+    ctx.charge(image.2.len(), &what)?;
+    Ok(image)
+}
+
+/// Decodes an encoded image to RGBA8 after checking its declared size against the side
+/// limit and against what is left of the decoded-bytes budget (`already` spent).
+fn decode_image_bytes(
+    bytes: &[u8],
+    index: usize,
+    limits: &Limits,
+    already: u64,
+) -> Result<(u32, u32, Vec<u8>), AssetError> {
+    let format = image::guess_format(bytes).map_err(|e| AssetError::Image {
         index,
         reason: e.to_string(),
     })?;
-    let mut reader = image::ImageReader::with_format(std::io::Cursor::new(&bytes), format);
+    let mut reader = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
     let mut lim = image::Limits::default();
-    lim.max_image_width = Some(ctx.limits.max_texture_side);
-    lim.max_image_height = Some(ctx.limits.max_texture_side);
+    lim.max_image_width = Some(limits.max_texture_side);
+    lim.max_image_height = Some(limits.max_texture_side);
     lim.max_alloc = Some(
-        (ctx.limits.max_texture_side as u64)
-            .saturating_mul(ctx.limits.max_texture_side as u64)
+        (limits.max_texture_side as u64)
+            .saturating_mul(limits.max_texture_side as u64)
             .saturating_mul(8),
     );
     reader.limits(lim.clone());
@@ -998,15 +1072,22 @@ fn decode_image(ctx: &mut Ctx<'_>, index: usize) -> Result<(u32, u32, Vec<u8>), 
         index,
         reason: e.to_string(),
     })?;
-    if w > ctx.limits.max_texture_side || h > ctx.limits.max_texture_side {
+    if w > limits.max_texture_side || h > limits.max_texture_side {
         return Err(AssetError::TooLarge {
             what: format!("image {index} side"),
             size: w.max(h) as u64,
-            limit: ctx.limits.max_texture_side as u64,
+            limit: limits.max_texture_side as u64,
         });
     }
-    ctx.charge(w as usize * h as usize * 4, &format!("image {index}"))?;
-    let mut reader = image::ImageReader::with_format(std::io::Cursor::new(&bytes), format);
+    let total = already.saturating_add(u64::from(w) * u64::from(h) * 4);
+    if total > limits.max_decoded_bytes {
+        return Err(AssetError::TooLarge {
+            what: format!("decoded data (at image {index})"),
+            size: total,
+            limit: limits.max_decoded_bytes,
+        });
+    }
+    let mut reader = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
     reader.limits(lim);
     let decoded = reader.decode().map_err(|e| AssetError::Image {
         index,
@@ -1197,6 +1278,17 @@ fn import_meshes(
                     indices
                 }
             };
+            // The primitive as stored (positions, normals, uvs, joints and weights per vertex,
+            // u32 indices), counted before the attributes the file lacks are synthesised.
+            let skinned = joints.is_some() && weights.is_some();
+            let stored = count
+                .saturating_mul(if skinned {
+                    12 + 12 + 8 + 8 + 16
+                } else {
+                    12 + 12 + 8
+                })
+                .saturating_add(indices.len().saturating_mul(4));
+            ctx.charge(stored, &what)?;
             let mut normals: Vec<[f32; 3]> = match normals {
                 Some(n) => n
                     .chunks_exact(3)

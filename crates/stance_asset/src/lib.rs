@@ -50,7 +50,11 @@ pub struct Limits {
     pub max_json_bytes: u64,
     /// One buffer's declared byteLength (default 512 MiB).
     pub max_buffer_bytes: u64,
-    /// Everything decoded: buffers, meshopt views, attributes, textures (default 1 GiB).
+    /// Everything decoded or built, counted as it is made (default 1 GiB): data-URI and
+    /// external buffers, meshopt views, every accessor read, every stored primitive, every
+    /// decoded image and every texture's copy of its pixels. Plain buffer views are borrowed
+    /// from their buffer, never copied, so a file cannot multiply its size by pointing many
+    /// views, accessors or primitives at the same bytes.
     pub max_decoded_bytes: u64,
     /// Nodes (default 10 000).
     pub max_nodes: usize,

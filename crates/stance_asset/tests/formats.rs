@@ -111,3 +111,84 @@ fn z_up_centimetres_facing_minus_x_is_normalised() {
         "{head}"
     );
 }
+
+/// A humanoid exported at 2.5 times human size (no standard unit makes it a person) is
+/// scaled to the H-Anim default height, with a warning; the standard units load silently.
+#[test]
+fn arbitrary_scale_is_brought_to_human_height() {
+    let reference = load_avatar(&common::default_glb(), &LoadOptions::default()).unwrap();
+    assert!(
+        !reference
+            .warnings
+            .iter()
+            .any(|w| w.starts_with("model scale")),
+        "{:?}",
+        reference.warnings
+    );
+    let expected = reference.hanim_rest_positions();
+    for (factor, warned) in [(2.5, true), (0.3, true), (100.0, false), (0.6, false)] {
+        let (mut j, bin) = common::split(&common::default_glb());
+        let old_roots = j["scenes"][0]["nodes"].clone();
+        let nodes = j["nodes"].as_array_mut().unwrap();
+        nodes.push(json!({"name": "Scaled", "children": old_roots,
+            "scale": [factor, factor, factor]}));
+        let root = nodes.len() - 1;
+        j["scenes"][0]["nodes"] = json!([root]);
+        let avatar = load_avatar(&common::join(&j, &bin), &LoadOptions::default()).unwrap();
+        let warning = avatar
+            .warnings
+            .iter()
+            .find(|w| w.starts_with("model scale"));
+        assert_eq!(
+            warning.is_some(),
+            warned,
+            "x{factor}: {:?}",
+            avatar.warnings
+        );
+        let got = avatar.hanim_rest_positions();
+        let head = got[avatar.mapping.source_of("skullbase").unwrap()].y;
+        if warned {
+            // Scaled to the H-Anim default body: skull base 1.5529 m from the ankles, the
+            // same shape as the unscaled file (a uniform scale about the floor origin).
+            let rise = |p: &[DVec3], a: &stance_asset::Avatar| {
+                let at = |h: &str| p[a.mapping.source_of(h).unwrap()];
+                (at("skullbase") - (at("l_talocrural") + at("r_talocrural")) / 2.0).length()
+            };
+            let got_rise = rise(&got, &avatar);
+            assert!(
+                (got_rise - (1.6209 - 0.068)).abs() < 1e-6,
+                "x{factor}: {got_rise}"
+            );
+            let k = got_rise / rise(&expected, &reference);
+            for (h, e) in expected.iter().enumerate() {
+                assert!(
+                    (got[h] - *e * k).length() < 1e-4,
+                    "x{factor} node {h}: {} vs {}",
+                    got[h],
+                    *e * k
+                );
+            }
+            // The warning gives the scale applied to the file's units.
+            let said: f64 = warning
+                .unwrap()
+                .split("scaled by ")
+                .nth(1)
+                .and_then(|r| r.split_whitespace().next())
+                .unwrap()
+                .parse()
+                .unwrap();
+            assert!(
+                (said - k / factor).abs() < 1e-5,
+                "x{factor}: {said} vs {}",
+                k / factor
+            );
+        } else {
+            // A standard unit (cm) or a small person (0.6 x a 1.7 m body) keeps its size.
+            let want = 1.6209 * if factor == 100.0 { 1.0 } else { factor };
+            assert!(
+                (head - want).abs() < 0.05,
+                "x{factor}: skull base at {head}"
+            );
+        }
+    }
+}

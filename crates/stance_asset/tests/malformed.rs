@@ -220,3 +220,267 @@ mod fuzz {
         }
     }
 }
+
+/// Structure-aware fuzzing: edits of the JSON fields of a valid file (accessor counts,
+/// offsets, component types and views, view ranges and strides, buffer lengths, primitive
+/// indices and attributes, node children (cycles, two parents), node meshes and skins, skin
+/// joints and inverse bind matrices, sparse accessors) with the binary chunk kept intact.
+/// Every result is an avatar or an error with a message; nothing panics.
+#[cfg(not(target_arch = "wasm32"))]
+mod structure {
+    use proptest::prelude::*;
+    use serde_json::Value;
+
+    use super::*;
+
+    /// A position in an array, taken modulo its length.
+    type Index = u32;
+
+    fn at(i: &Index, len: usize) -> usize {
+        *i as usize % len.max(1)
+    }
+
+    /// One edit of the glTF JSON. Indices into arrays are [`Index`]es resolved against the
+    /// array's length (plus a few past its end, to produce dangling references).
+    #[derive(Debug, Clone)]
+    enum Edit {
+        Accessor(Index, &'static str, Value),
+        View(Index, &'static str, Value),
+        BufferLength(Value),
+        PrimitiveIndices(Index, Index),
+        PrimitiveAttribute(Index, &'static str, Index),
+        AddChild(Index, Index),
+        Node(Index, &'static str, Index),
+        SkinJoint(Index, Index),
+        SkinMatrices(Index),
+        Sparse(Index, Value, Index, Index, Value),
+        Remove(&'static str, Index, &'static str),
+    }
+
+    /// Numbers that hit edge cases: zero, one, small, just past 32 bits, huge, negative,
+    /// fractional, and values of the wrong JSON type.
+    fn number() -> impl Strategy<Value = Value> {
+        prop_oneof![
+            4 => (0u64..4).prop_map(Value::from),
+            4 => (0u64..200_000).prop_map(Value::from),
+            1 => Just(Value::from(u32::MAX)),
+            1 => Just(Value::from(1u64 << 40)),
+            1 => Just(Value::from(u64::MAX)),
+            1 => Just(Value::from(-1)),
+            1 => Just(Value::from(2.5)),
+            1 => Just(Value::from("7")),
+            1 => Just(Value::Null),
+        ]
+    }
+
+    fn component_type() -> impl Strategy<Value = Value> {
+        prop_oneof![
+            6 => prop::sample::select(vec![5120u64, 5121, 5122, 5123, 5125, 5126]).prop_map(Value::from),
+            1 => prop::sample::select(vec![0u64, 5124, 5127, 5130]).prop_map(Value::from),
+        ]
+    }
+
+    fn accessor_type() -> impl Strategy<Value = Value> {
+        prop::sample::select(vec![
+            "SCALAR", "VEC2", "VEC3", "VEC4", "MAT2", "MAT3", "MAT4", "BOGUS",
+        ])
+        .prop_map(Value::from)
+    }
+
+    fn edit() -> impl Strategy<Value = Edit> {
+        let idx = any::<Index>;
+        prop_oneof![
+            (
+                idx(),
+                prop::sample::select(vec!["count", "byteOffset", "bufferView"]),
+                number()
+            )
+                .prop_map(|(i, k, v)| Edit::Accessor(i, k, v)),
+            (idx(), component_type()).prop_map(|(i, v)| Edit::Accessor(i, "componentType", v)),
+            (idx(), accessor_type()).prop_map(|(i, v)| Edit::Accessor(i, "type", v)),
+            (idx(), any::<bool>()).prop_map(|(i, v)| Edit::Accessor(i, "normalized", v.into())),
+            (
+                idx(),
+                prop::sample::select(vec!["byteOffset", "byteLength", "byteStride", "buffer"]),
+                number()
+            )
+                .prop_map(|(i, k, v)| Edit::View(i, k, v)),
+            number().prop_map(Edit::BufferLength),
+            (idx(), idx()).prop_map(|(p, a)| Edit::PrimitiveIndices(p, a)),
+            (
+                idx(),
+                prop::sample::select(vec![
+                    "POSITION",
+                    "NORMAL",
+                    "TEXCOORD_0",
+                    "JOINTS_0",
+                    "WEIGHTS_0"
+                ]),
+                idx()
+            )
+                .prop_map(|(p, k, a)| Edit::PrimitiveAttribute(p, k, a)),
+            (idx(), idx()).prop_map(|(n, c)| Edit::AddChild(n, c)),
+            (idx(), prop::sample::select(vec!["mesh", "skin"]), idx())
+                .prop_map(|(n, k, v)| Edit::Node(n, k, v)),
+            (idx(), idx()).prop_map(|(k, n)| Edit::SkinJoint(k, n)),
+            idx().prop_map(Edit::SkinMatrices),
+            (idx(), number(), idx(), idx(), component_type())
+                .prop_map(|(a, n, iv, vv, ct)| Edit::Sparse(a, n, iv, vv, ct)),
+            (
+                prop::sample::select(vec!["accessors", "bufferViews", "nodes", "skins"]),
+                idx(),
+                prop::sample::select(vec![
+                    "bufferView",
+                    "byteOffset",
+                    "children",
+                    "joints",
+                    "inverseBindMatrices",
+                    "count"
+                ]),
+            )
+                .prop_map(|(a, i, k)| Edit::Remove(a, i, k)),
+        ]
+    }
+
+    fn len(j: &Value, key: &str) -> usize {
+        j[key].as_array().map_or(0, Vec::len)
+    }
+
+    /// An index into `key` (0..len + 3: the last three dangle).
+    fn dangling(j: &Value, key: &str, i: &Index) -> usize {
+        at(i, len(j, key) + 3)
+    }
+
+    fn apply(j: &mut Value, edit: &Edit) {
+        let prims: Vec<(usize, usize)> = (0..len(j, "meshes"))
+            .flat_map(|m| {
+                let n = j["meshes"][m]["primitives"].as_array().map_or(0, Vec::len);
+                (0..n).map(move |p| (m, p))
+            })
+            .collect();
+        match edit {
+            Edit::Accessor(i, k, v) if len(j, "accessors") > 0 => {
+                let a = at(i, len(j, "accessors"));
+                j["accessors"][a][*k] = v.clone();
+            }
+            Edit::View(i, k, v) if len(j, "bufferViews") > 0 => {
+                let a = at(i, len(j, "bufferViews"));
+                j["bufferViews"][a][*k] = v.clone();
+            }
+            Edit::BufferLength(v) if len(j, "buffers") > 0 => {
+                j["buffers"][0]["byteLength"] = v.clone();
+            }
+            Edit::PrimitiveIndices(p, a) if !prims.is_empty() => {
+                let (m, p) = prims[at(p, prims.len())];
+                let a = dangling(j, "accessors", a);
+                j["meshes"][m]["primitives"][p]["indices"] = a.into();
+            }
+            Edit::PrimitiveAttribute(p, k, a) if !prims.is_empty() => {
+                let (m, p) = prims[at(p, prims.len())];
+                let a = dangling(j, "accessors", a);
+                j["meshes"][m]["primitives"][p]["attributes"][*k] = a.into();
+            }
+            Edit::AddChild(n, c) if len(j, "nodes") > 0 => {
+                let n = at(n, len(j, "nodes"));
+                let c = dangling(j, "nodes", c);
+                let children = &mut j["nodes"][n]["children"];
+                match children.as_array_mut() {
+                    Some(list) => list.push(c.into()),
+                    None => *children = serde_json::json!([c]),
+                }
+            }
+            Edit::Node(n, k, v) if len(j, "nodes") > 0 => {
+                let n = at(n, len(j, "nodes"));
+                let count = if *k == "mesh" {
+                    len(j, "meshes")
+                } else {
+                    len(j, "skins")
+                };
+                j["nodes"][n][*k] = at(v, count + 3).into();
+            }
+            Edit::SkinJoint(k, n) if len(j, "skins") > 0 => {
+                let node = dangling(j, "nodes", n);
+                if let Some(joints) = j["skins"][0]["joints"].as_array_mut()
+                    && !joints.is_empty()
+                {
+                    let slot = at(k, joints.len());
+                    joints[slot] = node.into();
+                }
+            }
+            Edit::SkinMatrices(a) if len(j, "skins") > 0 => {
+                let a = dangling(j, "accessors", a);
+                j["skins"][0]["inverseBindMatrices"] = a.into();
+            }
+            Edit::Sparse(a, n, iv, vv, ct) if len(j, "accessors") > 0 => {
+                let a = at(a, len(j, "accessors"));
+                let iv = dangling(j, "bufferViews", iv);
+                let vv = dangling(j, "bufferViews", vv);
+                j["accessors"][a]["sparse"] = serde_json::json!({
+                    "count": n,
+                    "indices": {"bufferView": iv, "componentType": ct},
+                    "values": {"bufferView": vv},
+                });
+            }
+            Edit::Remove(array, i, k) if len(j, array) > 0 => {
+                let row = at(i, len(j, array));
+                if let Some(o) = j[*array][row].as_object_mut() {
+                    o.remove(*k);
+                }
+            }
+            _ => {}
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 128, ..ProptestConfig::default() })]
+
+        #[test]
+        fn mutated_json_fields_give_an_avatar_or_an_error(edits in prop::collection::vec(edit(), 1..6)) {
+            let (mut j, bin) = common::split(&common::default_glb());
+            for e in &edits {
+                apply(&mut j, e);
+            }
+            let glb = common::join(&j, &bin);
+            for options in [
+                LoadOptions::default(),
+                LoadOptions { require_humanoid: false, decode_textures: false, ..LoadOptions::default() },
+            ] {
+                match load_avatar(&glb, &options) {
+                    Ok(avatar) => {
+                        // What loads is usable: its rest pose is finite.
+                        prop_assert!(avatar.hanim_from_file.is_finite());
+                    }
+                    Err(e) => {
+                        let msg = e.to_string();
+                        prop_assert!(msg.len() > 8, "{edits:?}: terse error `{msg}`");
+                    }
+                }
+            }
+        }
+    }
+
+    /// The edits above do reach the checks they aim at (guards against a generator that
+    /// only ever produces files that fail at the first JSON check).
+    #[test]
+    fn targeted_json_edits_are_reported() {
+        let cases: Vec<(Edit, &str)> = vec![
+            (Edit::AddChild(0, 0), "own child"),
+            (
+                Edit::Accessor(0, "componentType", Value::from(5127)),
+                "componentType",
+            ),
+            (Edit::View(0, "byteStride", Value::from(4)), "byteStride"),
+            (Edit::BufferLength(Value::from(1u64 << 40)), "too large"),
+            (
+                Edit::Accessor(0, "byteOffset", Value::from(1u64 << 40)),
+                "do not fit",
+            ),
+        ];
+        for (edit, expected) in cases {
+            let (mut j, bin) = common::split(&common::default_glb());
+            apply(&mut j, &edit);
+            let e = err(&common::join(&j, &bin));
+            assert!(e.contains(expected), "{edit:?}: {e}");
+        }
+    }
+}

@@ -8,6 +8,8 @@ use wasm_bindgen_test::wasm_bindgen_test as test;
 #[cfg(target_arch = "wasm32")]
 wasm_bindgen_test::wasm_bindgen_test_configure!(run_in_browser);
 
+mod common;
+
 use glam::DVec3;
 use stance_asset::{LoadOptions, export_glb, load_avatar};
 use stance_hanim::{LevelOfArticulation, SkeletonOptions};
@@ -211,8 +213,56 @@ fn load_time_and_memory_report() {
     );
 }
 
-/// The EXT_meshopt_compression streams of the real avatar, mutated: errors or garbage
-/// geometry, never a panic.
+/// The EXT_meshopt_compression views of the real avatar: (bufferView index, compressed
+/// byteLength).
+#[cfg(not(target_arch = "wasm32"))]
+fn meshopt_views(json: &serde_json::Value) -> Vec<(usize, u64)> {
+    json["bufferViews"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .enumerate()
+        .filter_map(|(i, v)| {
+            let ext = v.get("extensions")?.get("EXT_meshopt_compression")?;
+            Some((i, ext["byteLength"].as_u64().unwrap()))
+        })
+        .collect()
+}
+
+/// Each compressed stream cut short (the GLB container and the JSON stay valid, only the
+/// compressed range shrinks): the decoder itself runs out of data and the error names the
+/// view.
+#[cfg(not(target_arch = "wasm32"))]
+#[test]
+fn truncated_meshopt_streams_fail_in_the_decoder() {
+    let (json, bin) = common::split(AVATAR);
+    let views = meshopt_views(&json);
+    assert_eq!(views.len(), 5);
+    for &(view, len) in &views {
+        for cut in [0, 1, len / 2, len - 1] {
+            let mut j = json.clone();
+            j["bufferViews"][view]["extensions"]["EXT_meshopt_compression"]["byteLength"] =
+                cut.into();
+            let e = load_avatar(
+                &common::join(&j, &bin),
+                &LoadOptions {
+                    decode_textures: false,
+                    ..Default::default()
+                },
+            )
+            .err()
+            .unwrap_or_else(|| panic!("view {view} cut to {cut} of {len} bytes loaded"))
+            .to_string();
+            assert!(
+                e.starts_with(&format!("buffer view {view}: meshopt decoding failed")),
+                "view {view} cut to {cut}: {e}"
+            );
+        }
+    }
+}
+
+/// The EXT_meshopt_compression streams of the real avatar, mutated and/or cut short inside
+/// a valid container: errors or garbage geometry, never a panic.
 #[cfg(not(target_arch = "wasm32"))]
 mod meshopt_fuzz {
     use proptest::prelude::*;
@@ -225,23 +275,39 @@ mod meshopt_fuzz {
         #[test]
         fn mutated_meshopt_streams_never_panic(
             edits in prop::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 1..16),
+            which in any::<prop::sample::Index>(),
             cut in any::<prop::sample::Index>(),
             truncate in any::<bool>(),
         ) {
-            let mut glb = AVATAR.to_vec();
-            let json_len = u32::from_le_bytes([glb[12], glb[13], glb[14], glb[15]]) as usize;
-            let bin = 20 + json_len + 8;
-            // Compressed streams used by the meshes: indices, normals, joints/weights, IBMs
-            // (offsets from the file's EXT_meshopt_compression views).
-            let (start, end) = (bin + 734_760, bin + 1_516_844);
+            let (mut json, mut bin) = common::split(AVATAR);
+            let views = meshopt_views(&json);
+            // Byte edits anywhere in the compressed streams (they lie contiguously in buffer 0).
+            let start = views
+                .iter()
+                .map(|&(v, _)| json["bufferViews"][v]["extensions"]["EXT_meshopt_compression"]["byteOffset"].as_u64().unwrap())
+                .min()
+                .unwrap() as usize;
+            let end = views
+                .iter()
+                .map(|&(v, len)| json["bufferViews"][v]["extensions"]["EXT_meshopt_compression"]["byteOffset"].as_u64().unwrap() + len)
+                .max()
+                .unwrap() as usize;
             for (at, byte) in &edits {
-                glb[start + at.index(end - start)] = *byte;
+                bin[start + at.index(end - start)] = *byte;
             }
+            // Truncation of one stream, inside a valid container: reaches the decoder.
             if truncate {
-                let c = start + cut.index(end - start);
-                glb.truncate(c);
+                let (view, len) = views[which.index(views.len())];
+                json["bufferViews"][view]["extensions"]["EXT_meshopt_compression"]["byteLength"] =
+                    (cut.index(len as usize) as u64).into();
             }
-            let _ = load_avatar(&glb, &LoadOptions { decode_textures: false, ..Default::default() });
+            let result = load_avatar(
+                &common::join(&json, &bin),
+                &LoadOptions { decode_textures: false, ..Default::default() },
+            );
+            if truncate {
+                prop_assert!(result.is_err(), "a truncated stream loaded");
+            }
         }
     }
 }

@@ -63,12 +63,22 @@ pub fn inspect_json(avatar: &Avatar) -> Value {
             .collect()
     };
     let mut mapping = Map::new();
+    let mut confidence = Map::new();
     for m in avatar.mapping.matches() {
         if m.method == MatchMethod::Implied {
             continue;
         }
         if let Some(n) = avatar.nodes.get(m.source) {
             mapping.insert(n.name.clone(), json!(m.hanim));
+            confidence.insert(
+                n.name.clone(),
+                json!({
+                    "hanim": m.hanim,
+                    "method": method_name(m.method, &n.name),
+                    // f32 -> f64 without the binary tail (0.95, not 0.949999988).
+                    "confidence": (f64::from(m.confidence) * 1000.0).round() / 1000.0,
+                }),
+            );
         }
     }
     let unmapped: Vec<&str> = joint_nodes
@@ -84,7 +94,29 @@ pub fn inspect_json(avatar: &Avatar) -> Value {
         "vertices": avatar.vertex_count(),
         "extensions": avatar.extensions,
         "warnings": avatar.warnings,
+        "confidence": confidence,
     })
+}
+
+/// How a joint was matched, as `stance inspect` prints it. Known rig names whose source
+/// name carries Mixamo's `mixamorig` prefix are reported as `mixamo`.
+pub fn method_name(method: MatchMethod, source_name: &str) -> &'static str {
+    match method {
+        MatchMethod::Vrm => "vrm_extension",
+        MatchMethod::HAnimName => "hanim_name",
+        MatchMethod::KnownName
+            if source_name
+                .get(..9)
+                .is_some_and(|p| p.eq_ignore_ascii_case("mixamorig")) =>
+        {
+            "mixamo"
+        }
+        MatchMethod::KnownName => "known_rig_name",
+        MatchMethod::NamePattern => "name_pattern",
+        MatchMethod::Geometry => "geometry",
+        MatchMethod::Implied => "implied",
+        MatchMethod::User => "user",
+    }
 }
 
 pub fn inspect(args: InspectArgs) -> Result<()> {

@@ -30,7 +30,8 @@ enum Command {
     Decode(decode::DecodeArgs),
     /// Write a simulated sensor byte stream.
     SimulateSensors(simulate::SimulateArgs),
-    /// Print a JSON summary of an avatar file (joints, H-Anim mapping, meshes, extensions).
+    /// Print a JSON summary of an avatar file (joints, H-Anim mapping with match method and
+    /// confidence, meshes, extensions).
     Inspect(avatar::InspectArgs),
     /// Pose an avatar with a posture file and write it as GLB.
     ExportPosed(avatar::ExportPosedArgs),
