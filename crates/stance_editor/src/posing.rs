@@ -10,6 +10,8 @@ use stance_ik::{
     SolverSettings, SwivelInterval, Task,
 };
 
+mod conflict;
+
 /// The temporary lowest-priority task of grab-and-pull: a point of a segment, pulled along.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Grab {
@@ -491,12 +493,18 @@ impl PosingSession {
         self.statuses = statuses;
     }
 
-    /// Names the higher-priority tasks a task gave way to, or says the goal is out of reach.
+    /// Names the higher-priority tasks a task really gave way to (those that, held, take away
+    /// its progress; see `conflict`), or says the goal is out of reach or stopped by the joint
+    /// limits.
     fn why_unmet(&self, spec: &TaskSpec, evaluated: &[(Option<f64>, Option<String>)]) -> String {
         if !self.settled {
             return "still moving".to_owned();
         }
-        let higher: Vec<String> = self
+        let skeleton = self.skeleton();
+        let Ok(task) = spec.to_task(skeleton) else {
+            return "out of reach".to_owned();
+        };
+        let higher: Vec<(&TaskSpec, Task)> = self
             .tasks
             .iter()
             .zip(evaluated)
@@ -506,12 +514,20 @@ impl PosingSession {
                     && !matches!(other.kind, TaskKindSpec::Posture { .. })
                     && residual.is_some()
             })
-            .map(|(other, _)| format!("level {}: {}", other.level, describe_task(other)))
+            .filter_map(|(other, _)| Some((other, other.to_task(skeleton).ok()?)))
             .collect();
-        if higher.is_empty() {
-            "out of reach".to_owned()
-        } else {
-            format!("conflicts with {}", higher.join(", "))
+        let solver_tasks: Vec<Task> = higher.iter().map(|(_, task)| task.clone()).collect();
+        match conflict::diagnose(skeleton, &self.posture, &task, &solver_tasks) {
+            conflict::Unmet::Conflicts(indices) => {
+                let names: Vec<String> = indices
+                    .iter()
+                    .filter_map(|&index| higher.get(index))
+                    .map(|(other, _)| format!("level {}: {}", other.level, describe_task(other)))
+                    .collect();
+                format!("conflicts with {}", names.join(", "))
+            }
+            conflict::Unmet::JointLimits => "limited by joint limits".to_owned(),
+            conflict::Unmet::OutOfReach => "out of reach".to_owned(),
         }
     }
 }
@@ -689,20 +705,59 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_level_one_task_in_conflict_names_it() {
-        let mut session = session();
+    /// The default body with one more task, `offset` from where `joint` is, at `level`;
+    /// settled. Returns the reason the new task gives.
+    fn reason_for_pull(
+        session: &mut PosingSession,
+        joint: &str,
+        offset: DVec3,
+        level: u32,
+    ) -> String {
+        let start = session.joint_position(joint).unwrap();
         let mut tasks = session.tasks().to_vec();
-        // Ask the head at level 3 to go to the floor: it cannot, the feet and balance win.
-        let mut head = pin_task("skullbase", [0.0, 0.2, 0.0]);
-        head.level = 3;
-        tasks.push(head);
+        let mut task = pin_task(joint, (start + offset).to_array());
+        task.level = level;
+        tasks.push(task);
         session.set_tasks(tasks);
-        settle(&mut session);
-        let status = &session.statuses()[4];
-        let reason = status.gave_way.clone().unwrap_or_default();
-        assert!(reason.contains("level 1"), "reason: {reason}");
-        assert!(reason.contains("ankle"), "reason: {reason}");
+        settle(session);
+        let status = session.statuses().last().unwrap();
+        assert!(status.residual.unwrap() > 0.05, "the goal is not met");
+        status.gave_way.clone().unwrap_or_default()
+    }
+
+    #[test]
+    fn a_hand_reaching_beyond_the_arm_is_out_of_reach_not_held_by_the_feet() {
+        for offset in [DVec3::new(0.0, 2.0, 0.0), DVec3::new(0.0, 0.5, 1.5)] {
+            let mut session = session();
+            let reason = reason_for_pull(&mut session, "r_radiocarpal", offset, 3);
+            assert_eq!(reason, "out of reach", "hand pulled by {offset}");
+            // The feet held meanwhile.
+            for status in &session.statuses()[..3] {
+                assert!(status.gave_way.is_none(), "{status:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_pull_fighting_a_pinned_foot_names_that_foot_only() {
+        for joint in ["l_talocrural", "l_knee"] {
+            let mut session = session();
+            let reason = reason_for_pull(&mut session, joint, DVec3::new(0.0, 0.3, 0.25), 3);
+            assert!(
+                reason.starts_with("conflicts with") && reason.contains("left ankle"),
+                "{joint}: {reason}"
+            );
+            assert!(!reason.contains("right ankle"), "{joint}: {reason}");
+        }
+    }
+
+    #[test]
+    fn lifting_the_pelvis_names_both_feet_that_hold_it_together() {
+        let mut session = session();
+        let reason = reason_for_pull(&mut session, "sacroiliac", DVec3::new(0.0, 0.5, 0.0), 3);
+        assert!(reason.contains("left ankle"), "{reason}");
+        assert!(reason.contains("right ankle"), "{reason}");
+        assert!(!reason.contains("balance"), "{reason}");
     }
 
     #[test]
