@@ -375,8 +375,7 @@ impl StanceApp {
 
     pub fn mirror(&mut self) {
         self.record(EditKind::Command);
-        let mirrored = self.session.mirrored_posture();
-        self.session.set_posture(mirrored);
+        self.session.mirror();
     }
 
     pub fn pin_selected(&mut self) {

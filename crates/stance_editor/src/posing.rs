@@ -307,6 +307,15 @@ impl PosingSession {
         true
     }
 
+    /// Mirrors left and right: the posture, and the tasks with it (left and right joints
+    /// swap, goals are reflected in the sagittal plane), so that the solver keeps the mirror.
+    pub fn mirror(&mut self) {
+        let posture = self.mirrored_posture();
+        self.tasks = self.tasks.iter().map(mirror_task).collect();
+        self.grab = None;
+        self.set_posture(posture);
+    }
+
     /// Loads a document; on error the session stays as it was.
     pub fn load_document(&mut self, document: &Document) -> Result<(), PosingError> {
         let posture = document.posture.to_posture(self.skeleton())?;
@@ -542,6 +551,106 @@ pub fn pin_task(joint: &str, position: [f64; 3]) -> TaskSpec {
     })
 }
 
+/// A point or direction reflected in the sagittal plane (x -> -x).
+fn reflect(v: [f64; 3]) -> [f64; 3] {
+    // `0.0 - x` keeps a zero positive (no "-0" in the saved document).
+    [0.0 - v[0], v[1], v[2]]
+}
+
+/// A rotation `[qx, qy, qz, qw]` reflected in the sagittal plane (`M R M`, M = diag(-1, 1, 1)).
+fn reflect_rotation(q: [f64; 4]) -> [f64; 4] {
+    [q[0], 0.0 - q[1], 0.0 - q[2], q[3]]
+}
+
+/// The other side's limb.
+pub fn mirror_limb(limb: LimbName) -> LimbName {
+    match limb {
+        LimbName::LeftArm => LimbName::RightArm,
+        LimbName::RightArm => LimbName::LeftArm,
+        LimbName::LeftLeg => LimbName::RightLeg,
+        LimbName::RightLeg => LimbName::LeftLeg,
+    }
+}
+
+/// A task mirrored left/right: joints swap sides, goals and local points are reflected in the
+/// sagittal plane (x -> -x), orientations accordingly; level, weight and active flag stay.
+pub fn mirror_task(task: &TaskSpec) -> TaskSpec {
+    let mut mirrored = task.clone();
+    mirrored.kind = match &task.kind {
+        TaskKindSpec::Position {
+            joint,
+            point,
+            axes,
+            target,
+        } => TaskKindSpec::Position {
+            joint: mirror_joint_name(joint),
+            point: reflect(*point),
+            axes: *axes,
+            target: reflect(*target),
+        },
+        TaskKindSpec::Orientation { joint, target } => TaskKindSpec::Orientation {
+            joint: mirror_joint_name(joint),
+            target: reflect_rotation(*target),
+        },
+        TaskKindSpec::Gaze {
+            joint,
+            axis,
+            point,
+            target,
+        } => TaskKindSpec::Gaze {
+            joint: mirror_joint_name(joint),
+            axis: reflect(*axis),
+            point: reflect(*point),
+            target: reflect(*target),
+        },
+        TaskKindSpec::Com { axes, target } => TaskKindSpec::Com {
+            axes: *axes,
+            target: reflect(*target),
+        },
+        TaskKindSpec::Posture { joints, reference } => TaskKindSpec::Posture {
+            joints: joints.as_ref().map(|joints| {
+                joints
+                    .iter()
+                    .map(|joint| mirror_joint_name(joint))
+                    .collect()
+            }),
+            reference: reference.as_ref().map(mirror_posture_values),
+        },
+        TaskKindSpec::Limb {
+            limb,
+            joints,
+            target,
+            swivel,
+            orientation,
+        } => TaskKindSpec::Limb {
+            limb: limb.map(mirror_limb),
+            joints: joints
+                .as_ref()
+                .map(|joints| joints.clone().map(|joint| mirror_joint_name(&joint))),
+            target: reflect(*target),
+            swivel: swivel.map(|angle| -angle),
+            orientation: orientation.map(reflect_rotation),
+        },
+    };
+    mirrored
+}
+
+/// Posture values mirrored left/right, like [`PosingSession::mirrored_posture`].
+fn mirror_posture_values(values: &PostureValues) -> PostureValues {
+    let mut mirrored = PostureValues::new();
+    for (joint, dofs) in &values.joints {
+        let name = mirror_joint_name(joint);
+        for (dof, value) in dofs.iter() {
+            let sign = match dof.name() {
+                "tx" | "ry" | "rz" => -1.0,
+                _ => 1.0,
+            };
+            mirrored.set(&name, dof, sign * value);
+        }
+    }
+    mirrored
+}
+
 /// The other side's joint name (`l_` <-> `r_`); central joints keep theirs.
 pub fn mirror_joint_name(name: &str) -> String {
     if let Some(rest) = name.strip_prefix("l_") {
@@ -758,6 +867,45 @@ mod tests {
         assert!(reason.contains("left ankle"), "{reason}");
         assert!(reason.contains("right ankle"), "{reason}");
         assert!(!reason.contains("balance"), "{reason}");
+    }
+
+    #[test]
+    fn a_mirrored_limb_task_keeps_its_swivel_mirrored() {
+        let mut session = session();
+        let mut values = session.posture().values().to_vec();
+        let elbow = session.skeleton().joint_index("l_elbow").unwrap();
+        values[session.skeleton().joints()[elbow].dof_start] = -1.0;
+        session.set_posture(Posture::from_values(session.skeleton(), values).unwrap());
+        session.set_limb_swivel(LimbName::LeftArm, 0.7);
+        let (left, _) = session.limb_swivel(LimbName::LeftArm).unwrap();
+        let task = TaskSpec::new(TaskKindSpec::Limb {
+            limb: Some(LimbName::LeftArm),
+            joints: None,
+            target: [0.2, 1.0, 0.3],
+            swivel: Some(left),
+            orientation: None,
+        });
+        let mirrored_task = mirror_task(&task);
+        let mirrored = session.mirrored_posture();
+        session.set_posture(mirrored);
+        let (right, _) = session.limb_swivel(LimbName::RightArm).unwrap();
+        let TaskKindSpec::Limb {
+            limb,
+            target,
+            swivel,
+            ..
+        } = mirrored_task.kind
+        else {
+            panic!("{mirrored_task:?}");
+        };
+        assert_eq!(limb, Some(LimbName::RightArm));
+        assert_eq!(target, [-0.2, 1.0, 0.3]);
+        // The mirrored posture's right arm has the swivel the mirrored task asks for.
+        assert!(
+            (swivel.unwrap() - right).abs() < 0.02,
+            "{swivel:?} vs {right}"
+        );
+        assert_eq!(mirror_task(&mirror_task(&task)), task);
     }
 
     #[test]

@@ -660,3 +660,51 @@ fn a_removed_task_comes_back_with_undo() {
     undo(&mut harness);
     assert_eq!(document(&harness), before);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Mirror and the swivel handle
+
+#[test]
+fn mirror_takes_the_tasks_along_and_the_mirrored_right_hand_task_holds() {
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    harness.get_by_label("Table 1 example").click();
+    settle(&mut harness);
+    let before = document(&harness);
+    let hand_before = joint_world(&harness, "r_radiocarpal");
+    harness.get_by_label("Mirror").click();
+    settle(&mut harness);
+    let after = document(&harness);
+    assert!(
+        !after.tasks.iter().any(|task| task.level == 1
+            && matches!(
+                &task.kind,
+                TaskKindSpec::Position { joint, .. } if joint == "r_radiocarpal"
+            )),
+        "the right-hand task became a left-hand task"
+    );
+    let hand_task = after
+        .tasks
+        .iter()
+        .position(|task| {
+            task.level == 1
+                && matches!(&task.kind, TaskKindSpec::Position { joint, .. } if joint == "l_radiocarpal")
+        })
+        .expect("a level-1 left-hand task");
+    let TaskKindSpec::Position { target, .. } = &after.tasks[hand_task].kind else {
+        unreachable!()
+    };
+    assert_eq!(*target, [0.3, 1.15, 0.4], "the sphere reflected: x -> -x");
+    let status = &state(&harness)["tasks"][hand_task];
+    assert!(status["residual"].as_f64().unwrap() < 1e-3, "{status}");
+    let hand_after = joint_world(&harness, "l_radiocarpal");
+    assert!(
+        distance(
+            hand_after,
+            [-hand_before[0], hand_before[1], hand_before[2]]
+        ) < 1e-3,
+        "the left hand is where the right one was, reflected: {hand_before:?} -> {hand_after:?}"
+    );
+    undo(&mut harness);
+    assert_eq!(document(&harness), before, "one undo takes the mirror back");
+}
