@@ -1321,6 +1321,7 @@ impl StanceApp {
             "buttons": buttons,
             "goals": goals,
             "rings": rings,
+            "swivel": self.swivel_state(rect),
         })
         .to_string()
     }

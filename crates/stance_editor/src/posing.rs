@@ -47,6 +47,8 @@ pub struct PosingSession {
     posture: Posture,
     tasks: Vec<TaskSpec>,
     grab: Option<Grab>,
+    /// A joint held where it is (level 1) while the swivel handle turns its limb.
+    held: Option<(usize, DVec3)>,
     solver: Solver,
     report: Option<SolveReport>,
     frames: Frames,
@@ -118,6 +120,7 @@ impl PosingSession {
             posture,
             tasks: Vec::new(),
             grab: None,
+            held: None,
             solver: Solver::new(settings)?.with_limbs(limbs),
             report: None,
             frames,
@@ -307,6 +310,25 @@ impl PosingSession {
         true
     }
 
+    /// Holds the end joint of `limb` where it is now (level 1) until [`Self::release_hold`]:
+    /// while the swivel handle turns the elbow or knee, the balance that follows does not
+    /// move the hand or foot.
+    pub fn hold_limb_end(&mut self, limb: LimbName) {
+        let end = limb.joints()[2];
+        if let (Some(joint), Some(position)) =
+            (self.skeleton().joint_index(end), self.joint_position(end))
+        {
+            self.held = Some((joint, position));
+        }
+    }
+
+    /// Ends [`Self::hold_limb_end`].
+    pub fn release_hold(&mut self) {
+        if self.held.take().is_some() {
+            self.wake();
+        }
+    }
+
     /// Mirrors left and right: the posture, and the tasks with it (left and right joints
     /// swap, goals are reflected in the sagittal plane), so that the solver keeps the mirror.
     pub fn mirror(&mut self) {
@@ -429,6 +451,9 @@ impl PosingSession {
             if let Ok(task) = spec.to_task(self.skeleton()) {
                 tasks.push(task);
             }
+        }
+        if let Some((joint, position)) = self.held {
+            tasks.push(Task::position(joint, DVec3::ZERO, position).at_level(1));
         }
         if let Some(grab) = self.grab {
             let level = self

@@ -708,3 +708,87 @@ fn mirror_takes_the_tasks_along_and_the_mirrored_right_hand_task_holds() {
     undo(&mut harness);
     assert_eq!(document(&harness), before, "one undo takes the mirror back");
 }
+
+#[test]
+fn dragging_the_swivel_handle_turns_the_elbow_and_the_hand_stays() {
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    // A pose with the right elbow bent, opened from a file.
+    let mut pose = document(&harness);
+    pose.posture.set("r_elbow", stance_ik::Dof::Rx, -1.2);
+    harness
+        .state_mut()
+        .open_file("bent.json", pose.to_json(false).as_bytes());
+    settle(&mut harness);
+    // Select the right upper arm by clicking it.
+    let shoulder = screen_position(&harness, "r_shoulder");
+    let elbow = screen_position(&harness, "r_elbow");
+    let pelvis = screen_position(&harness, "sacroiliac");
+    let outward = egui::vec2((elbow.x - pelvis.x).signum() * 3.0, 0.0);
+    let on_arm = shoulder + (elbow - shoulder) * 0.5 + outward;
+    harness.event(egui::Event::PointerMoved(on_arm));
+    harness.step();
+    for pressed in [true, false] {
+        harness.event(egui::Event::PointerButton {
+            pos: on_arm,
+            button: PointerButton::Primary,
+            pressed,
+            modifiers: Modifiers::NONE,
+        });
+        harness.step();
+    }
+    harness.run_steps(2);
+    let selected = state(&harness);
+    assert_eq!(selected["selected"], "r_shoulder");
+    let swivel = selected["swivel"].clone();
+    assert_eq!(swivel["limb"], "r_arm", "{swivel}");
+    let angle_before = swivel["angle"].as_f64().unwrap();
+    let wrist_before = joint_world(&harness, "r_radiocarpal");
+    let elbow_before = joint_world(&harness, "r_elbow");
+    let document_before = document(&harness);
+    let circle: Vec<Pos2> = swivel["circle"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| Pos2::new(p[0].as_f64().unwrap() as f32, p[1].as_f64().unwrap() as f32))
+        .collect();
+    let handle = Pos2::new(
+        swivel["screen"][0].as_f64().unwrap() as f32,
+        swivel["screen"][1].as_f64().unwrap() as f32,
+    );
+    assert!(
+        handle.distance(circle[0]) < 1.0,
+        "the handle is on its circle"
+    );
+    // An eighth of a turn along the drawn circle.
+    drag(&mut harness, &circle[..=6]);
+    settle(&mut harness);
+    let angle_after = state(&harness)["swivel"]["angle"].as_f64().unwrap();
+    assert!(
+        (angle_after - angle_before).abs() > 0.3,
+        "the swivel turned: {angle_before} -> {angle_after}"
+    );
+    let elbow_on_screen = screen_position(&harness, "r_elbow");
+    assert!(
+        elbow_on_screen.distance(circle[6]) < 0.25 * circle[0].distance(circle[6]),
+        "the elbow followed the pointer: at {elbow_on_screen:?}, released at {:?}",
+        circle[6]
+    );
+    let elbow_after = joint_world(&harness, "r_elbow");
+    assert!(
+        distance(elbow_after, elbow_before) > 0.05,
+        "the elbow moved: {elbow_before:?} -> {elbow_after:?}"
+    );
+    let wrist_after = joint_world(&harness, "r_radiocarpal");
+    assert!(
+        distance(wrist_after, wrist_before) < 1e-6,
+        "the wrist stayed: moved {} m",
+        distance(wrist_after, wrist_before)
+    );
+    undo(&mut harness);
+    assert_eq!(
+        document(&harness),
+        document_before,
+        "one undo turns it back"
+    );
+}
