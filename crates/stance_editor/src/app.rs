@@ -387,8 +387,7 @@ impl StanceApp {
 
     pub fn mirror(&mut self) {
         self.record(EditKind::Command);
-        let mirrored = self.session.mirrored_posture();
-        self.session.set_posture(mirrored);
+        self.session.mirror();
     }
 
     pub fn pin_selected(&mut self) {
@@ -1383,6 +1382,7 @@ impl StanceApp {
             "goals": goals,
             "rings": rings,
             "sensors": self.sensors_state_json(),
+            "swivel": self.swivel_state(rect),
         })
         .to_string()
     }

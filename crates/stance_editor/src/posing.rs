@@ -10,6 +10,8 @@ use stance_ik::{
     SolverSettings, SwivelInterval, Task,
 };
 
+mod conflict;
+
 /// The temporary lowest-priority task of grab-and-pull: a point of a segment, pulled along.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Grab {
@@ -45,6 +47,8 @@ pub struct PosingSession {
     posture: Posture,
     tasks: Vec<TaskSpec>,
     grab: Option<Grab>,
+    /// A joint held where it is (level 1) while the swivel handle turns its limb.
+    held: Option<(usize, DVec3)>,
     solver: Solver,
     report: Option<SolveReport>,
     frames: Frames,
@@ -116,6 +120,7 @@ impl PosingSession {
             posture,
             tasks: Vec::new(),
             grab: None,
+            held: None,
             solver: Solver::new(settings)?.with_limbs(limbs),
             report: None,
             frames,
@@ -374,6 +379,34 @@ impl PosingSession {
         true
     }
 
+    /// Holds the end joint of `limb` where it is now (level 1) until [`Self::release_hold`]:
+    /// while the swivel handle turns the elbow or knee, the balance that follows does not
+    /// move the hand or foot.
+    pub fn hold_limb_end(&mut self, limb: LimbName) {
+        let end = limb.joints()[2];
+        if let (Some(joint), Some(position)) =
+            (self.skeleton().joint_index(end), self.joint_position(end))
+        {
+            self.held = Some((joint, position));
+        }
+    }
+
+    /// Ends [`Self::hold_limb_end`].
+    pub fn release_hold(&mut self) {
+        if self.held.take().is_some() {
+            self.wake();
+        }
+    }
+
+    /// Mirrors left and right: the posture, and the tasks with it (left and right joints
+    /// swap, goals are reflected in the sagittal plane), so that the solver keeps the mirror.
+    pub fn mirror(&mut self) {
+        let posture = self.mirrored_posture();
+        self.tasks = self.tasks.iter().map(mirror_task).collect();
+        self.grab = None;
+        self.set_posture(posture);
+    }
+
     /// Loads a document; on error the session stays as it was.
     pub fn load_document(&mut self, document: &Document) -> Result<(), PosingError> {
         let posture = document.posture.to_posture(self.skeleton())?;
@@ -488,6 +521,9 @@ impl PosingSession {
                 tasks.push(task);
             }
         }
+        if let Some((joint, position)) = self.held {
+            tasks.push(Task::position(joint, DVec3::ZERO, position).at_level(1));
+        }
         if let Some(grab) = self.grab {
             let level = self
                 .tasks
@@ -560,12 +596,18 @@ impl PosingSession {
         self.statuses = statuses;
     }
 
-    /// Names the higher-priority tasks a task gave way to, or says the goal is out of reach.
+    /// Names the higher-priority tasks a task really gave way to (those that, held, take away
+    /// its progress; see `conflict`), or says the goal is out of reach or stopped by the joint
+    /// limits.
     fn why_unmet(&self, spec: &TaskSpec, evaluated: &[(Option<f64>, Option<String>)]) -> String {
         if !self.settled {
             return "still moving".to_owned();
         }
-        let higher: Vec<String> = self
+        let skeleton = self.skeleton();
+        let Ok(task) = spec.to_task(skeleton) else {
+            return "out of reach".to_owned();
+        };
+        let higher: Vec<(&TaskSpec, Task)> = self
             .tasks
             .iter()
             .zip(evaluated)
@@ -575,12 +617,20 @@ impl PosingSession {
                     && !matches!(other.kind, TaskKindSpec::Posture { .. })
                     && residual.is_some()
             })
-            .map(|(other, _)| format!("level {}: {}", other.level, describe_task(other)))
+            .filter_map(|(other, _)| Some((other, other.to_task(skeleton).ok()?)))
             .collect();
-        if higher.is_empty() {
-            "out of reach".to_owned()
-        } else {
-            format!("conflicts with {}", higher.join(", "))
+        let solver_tasks: Vec<Task> = higher.iter().map(|(_, task)| task.clone()).collect();
+        match conflict::diagnose(skeleton, &self.posture, &task, &solver_tasks) {
+            conflict::Unmet::Conflicts(indices) => {
+                let names: Vec<String> = indices
+                    .iter()
+                    .filter_map(|&index| higher.get(index))
+                    .map(|(other, _)| format!("level {}: {}", other.level, describe_task(other)))
+                    .collect();
+                format!("conflicts with {}", names.join(", "))
+            }
+            conflict::Unmet::JointLimits => "limited by joint limits".to_owned(),
+            conflict::Unmet::OutOfReach => "out of reach".to_owned(),
         }
     }
 }
@@ -593,6 +643,106 @@ pub fn pin_task(joint: &str, position: [f64; 3]) -> TaskSpec {
         axes: Axes::new(true, true, true),
         target: position,
     })
+}
+
+/// A point or direction reflected in the sagittal plane (x -> -x).
+fn reflect(v: [f64; 3]) -> [f64; 3] {
+    // `0.0 - x` keeps a zero positive (no "-0" in the saved document).
+    [0.0 - v[0], v[1], v[2]]
+}
+
+/// A rotation `[qx, qy, qz, qw]` reflected in the sagittal plane (`M R M`, M = diag(-1, 1, 1)).
+fn reflect_rotation(q: [f64; 4]) -> [f64; 4] {
+    [q[0], 0.0 - q[1], 0.0 - q[2], q[3]]
+}
+
+/// The other side's limb.
+pub fn mirror_limb(limb: LimbName) -> LimbName {
+    match limb {
+        LimbName::LeftArm => LimbName::RightArm,
+        LimbName::RightArm => LimbName::LeftArm,
+        LimbName::LeftLeg => LimbName::RightLeg,
+        LimbName::RightLeg => LimbName::LeftLeg,
+    }
+}
+
+/// A task mirrored left/right: joints swap sides, goals and local points are reflected in the
+/// sagittal plane (x -> -x), orientations accordingly; level, weight and active flag stay.
+pub fn mirror_task(task: &TaskSpec) -> TaskSpec {
+    let mut mirrored = task.clone();
+    mirrored.kind = match &task.kind {
+        TaskKindSpec::Position {
+            joint,
+            point,
+            axes,
+            target,
+        } => TaskKindSpec::Position {
+            joint: mirror_joint_name(joint),
+            point: reflect(*point),
+            axes: *axes,
+            target: reflect(*target),
+        },
+        TaskKindSpec::Orientation { joint, target } => TaskKindSpec::Orientation {
+            joint: mirror_joint_name(joint),
+            target: reflect_rotation(*target),
+        },
+        TaskKindSpec::Gaze {
+            joint,
+            axis,
+            point,
+            target,
+        } => TaskKindSpec::Gaze {
+            joint: mirror_joint_name(joint),
+            axis: reflect(*axis),
+            point: reflect(*point),
+            target: reflect(*target),
+        },
+        TaskKindSpec::Com { axes, target } => TaskKindSpec::Com {
+            axes: *axes,
+            target: reflect(*target),
+        },
+        TaskKindSpec::Posture { joints, reference } => TaskKindSpec::Posture {
+            joints: joints.as_ref().map(|joints| {
+                joints
+                    .iter()
+                    .map(|joint| mirror_joint_name(joint))
+                    .collect()
+            }),
+            reference: reference.as_ref().map(mirror_posture_values),
+        },
+        TaskKindSpec::Limb {
+            limb,
+            joints,
+            target,
+            swivel,
+            orientation,
+        } => TaskKindSpec::Limb {
+            limb: limb.map(mirror_limb),
+            joints: joints
+                .as_ref()
+                .map(|joints| joints.clone().map(|joint| mirror_joint_name(&joint))),
+            target: reflect(*target),
+            swivel: swivel.map(|angle| -angle),
+            orientation: orientation.map(reflect_rotation),
+        },
+    };
+    mirrored
+}
+
+/// Posture values mirrored left/right, like [`PosingSession::mirrored_posture`].
+fn mirror_posture_values(values: &PostureValues) -> PostureValues {
+    let mut mirrored = PostureValues::new();
+    for (joint, dofs) in &values.joints {
+        let name = mirror_joint_name(joint);
+        for (dof, value) in dofs.iter() {
+            let sign = match dof.name() {
+                "tx" | "ry" | "rz" => -1.0,
+                _ => 1.0,
+            };
+            mirrored.set(&name, dof, sign * value);
+        }
+    }
+    mirrored
 }
 
 /// The other side's joint name (`l_` <-> `r_`); central joints keep theirs.
@@ -758,20 +908,98 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_level_one_task_in_conflict_names_it() {
-        let mut session = session();
+    /// The default body with one more task, `offset` from where `joint` is, at `level`;
+    /// settled. Returns the reason the new task gives.
+    fn reason_for_pull(
+        session: &mut PosingSession,
+        joint: &str,
+        offset: DVec3,
+        level: u32,
+    ) -> String {
+        let start = session.joint_position(joint).unwrap();
         let mut tasks = session.tasks().to_vec();
-        // Ask the head at level 3 to go to the floor: it cannot, the feet and balance win.
-        let mut head = pin_task("skullbase", [0.0, 0.2, 0.0]);
-        head.level = 3;
-        tasks.push(head);
+        let mut task = pin_task(joint, (start + offset).to_array());
+        task.level = level;
+        tasks.push(task);
         session.set_tasks(tasks);
-        settle(&mut session);
-        let status = &session.statuses()[4];
-        let reason = status.gave_way.clone().unwrap_or_default();
-        assert!(reason.contains("level 1"), "reason: {reason}");
-        assert!(reason.contains("ankle"), "reason: {reason}");
+        settle(session);
+        let status = session.statuses().last().unwrap();
+        assert!(status.residual.unwrap() > 0.05, "the goal is not met");
+        status.gave_way.clone().unwrap_or_default()
+    }
+
+    #[test]
+    fn a_hand_reaching_beyond_the_arm_is_out_of_reach_not_held_by_the_feet() {
+        for offset in [DVec3::new(0.0, 2.0, 0.0), DVec3::new(0.0, 0.5, 1.5)] {
+            let mut session = session();
+            let reason = reason_for_pull(&mut session, "r_radiocarpal", offset, 3);
+            assert_eq!(reason, "out of reach", "hand pulled by {offset}");
+            // The feet held meanwhile.
+            for status in &session.statuses()[..3] {
+                assert!(status.gave_way.is_none(), "{status:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_pull_fighting_a_pinned_foot_names_that_foot_only() {
+        for joint in ["l_talocrural", "l_knee"] {
+            let mut session = session();
+            let reason = reason_for_pull(&mut session, joint, DVec3::new(0.0, 0.3, 0.25), 3);
+            assert!(
+                reason.starts_with("conflicts with") && reason.contains("left ankle"),
+                "{joint}: {reason}"
+            );
+            assert!(!reason.contains("right ankle"), "{joint}: {reason}");
+        }
+    }
+
+    #[test]
+    fn lifting_the_pelvis_names_both_feet_that_hold_it_together() {
+        let mut session = session();
+        let reason = reason_for_pull(&mut session, "sacroiliac", DVec3::new(0.0, 0.5, 0.0), 3);
+        assert!(reason.contains("left ankle"), "{reason}");
+        assert!(reason.contains("right ankle"), "{reason}");
+        assert!(!reason.contains("balance"), "{reason}");
+    }
+
+    #[test]
+    fn a_mirrored_limb_task_keeps_its_swivel_mirrored() {
+        let mut session = session();
+        let mut values = session.posture().values().to_vec();
+        let elbow = session.skeleton().joint_index("l_elbow").unwrap();
+        values[session.skeleton().joints()[elbow].dof_start] = -1.0;
+        session.set_posture(Posture::from_values(session.skeleton(), values).unwrap());
+        session.set_limb_swivel(LimbName::LeftArm, 0.7);
+        let (left, _) = session.limb_swivel(LimbName::LeftArm).unwrap();
+        let task = TaskSpec::new(TaskKindSpec::Limb {
+            limb: Some(LimbName::LeftArm),
+            joints: None,
+            target: [0.2, 1.0, 0.3],
+            swivel: Some(left),
+            orientation: None,
+        });
+        let mirrored_task = mirror_task(&task);
+        let mirrored = session.mirrored_posture();
+        session.set_posture(mirrored);
+        let (right, _) = session.limb_swivel(LimbName::RightArm).unwrap();
+        let TaskKindSpec::Limb {
+            limb,
+            target,
+            swivel,
+            ..
+        } = mirrored_task.kind
+        else {
+            panic!("{mirrored_task:?}");
+        };
+        assert_eq!(limb, Some(LimbName::RightArm));
+        assert_eq!(target, [-0.2, 1.0, 0.3]);
+        // The mirrored posture's right arm has the swivel the mirrored task asks for.
+        assert!(
+            (swivel.unwrap() - right).abs() < 0.02,
+            "{swivel:?} vs {right}"
+        );
+        assert_eq!(mirror_task(&mirror_task(&task)), task);
     }
 
     #[test]

@@ -5,7 +5,7 @@
 
 use egui::{Key, Modifiers, PointerButton, Pos2};
 use egui_kittest::Harness;
-use egui_kittest::kittest::Queryable;
+use egui_kittest::kittest::{NodeT, Queryable};
 use serde_json::Value;
 use stance_document::{Document, TaskKindSpec};
 use stance_editor::{MemoryHost, StanceApp};
@@ -439,4 +439,356 @@ fn the_ring_gizmo_turns_the_selected_joint_within_its_limits() {
     );
     assert!(after >= skeleton.lower_limits()[index] - 1e-12);
     assert!(after <= skeleton.upper_limits()[index] + 1e-12);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Editing tasks in the tasks panel: every edit shows in the document and one undo takes it
+// back exactly.
+
+/// A click like a hand makes it: the pointer comes, presses, and releases a frame later.
+fn click_at(harness: &mut Harness<'static, StanceApp>, pos: Pos2) {
+    harness.event(egui::Event::PointerMoved(pos));
+    harness.step();
+    for pressed in [true, false] {
+        harness.event(egui::Event::PointerButton {
+            pos,
+            button: PointerButton::Primary,
+            pressed,
+            modifiers: Modifiers::NONE,
+        });
+        harness.step();
+    }
+    harness.run_steps(2);
+}
+
+/// Clicks the widget labelled `label` (the only one).
+fn click_label(harness: &mut Harness<'static, StanceApp>, label: &str) {
+    let centre = harness.get_by_label(label).rect().center();
+    click_at(harness, centre);
+}
+
+/// Opens the task whose row starts with `description` (its fields show).
+fn open_task(harness: &mut Harness<'static, StanceApp>, description: &str) {
+    let header = harness.get_by_label_contains(description);
+    let centre = header.rect().center();
+    if header.accesskit_node().data().is_expanded() != Some(true) {
+        click_at(harness, centre);
+    }
+    harness.run_steps(2);
+}
+
+fn undo(harness: &mut Harness<'static, StanceApp>) {
+    harness.key_press_modifiers(Modifiers::COMMAND, Key::Z);
+    harness.run_steps(2);
+}
+
+fn left_foot_task(document: &Document) -> &stance_document::TaskSpec {
+    &document.tasks[0]
+}
+
+#[test]
+fn weight_level_and_active_flag_are_edited_and_undone_exactly() {
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    open_task(&mut harness, "left ankle position");
+    let before = document(&harness);
+    assert_eq!(left_foot_task(&before).weight, 1.0);
+
+    harness.get_by_label("weight").set_value_accesskit(0.25);
+    settle(&mut harness);
+    assert_eq!(left_foot_task(&document(&harness)).weight, 0.25);
+    undo(&mut harness);
+    assert_eq!(document(&harness), before, "undo gives the weight back");
+
+    harness.get_by_label("level").set_value_accesskit(4.0);
+    settle(&mut harness);
+    assert_eq!(left_foot_task(&document(&harness)).level, 4);
+    let levels = state(&harness)["tasks"].as_array().unwrap().clone();
+    assert_eq!(levels[0]["level"], 4, "the task moved to level 4");
+    undo(&mut harness);
+    assert_eq!(document(&harness), before, "undo gives the level back");
+
+    open_task(&mut harness, "left ankle position");
+    click_label(&mut harness, "active");
+    settle(&mut harness);
+    assert!(!left_foot_task(&document(&harness)).active);
+    assert_eq!(state(&harness)["tasks"][0]["active"], false);
+    undo(&mut harness);
+    assert_eq!(document(&harness), before, "undo switches the task back on");
+}
+
+#[test]
+fn axes_and_goal_are_edited_and_undone_exactly() {
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    open_task(&mut harness, "left ankle position");
+    let before = document(&harness);
+
+    // Drop the vertical axis: the task now reads "(xz)".
+    click_label(&mut harness, "y");
+    settle(&mut harness);
+    let after = document(&harness);
+    match &left_foot_task(&after).kind {
+        TaskKindSpec::Position { axes, .. } => assert_eq!(axes.to_letters(), "xz"),
+        other => panic!("{other:?}"),
+    }
+    assert!(
+        state(&harness)["tasks"][0]["description"]
+            .as_str()
+            .unwrap()
+            .contains("(xz)")
+    );
+    undo(&mut harness);
+    assert_eq!(document(&harness), before, "undo gives the axes back");
+
+    // The goal's x, typed in: the foot follows it (level 1).
+    open_task(&mut harness, "left ankle position");
+    let goal_x = harness.get_all_by_label("x m").nth(1).unwrap();
+    goal_x.set_value_accesskit(0.2);
+    settle(&mut harness);
+    match &left_foot_task(&document(&harness)).kind {
+        TaskKindSpec::Position { target, .. } => assert_eq!(target[0], 0.2),
+        other => panic!("{other:?}"),
+    }
+    let foot = joint_world(&harness, "l_talocrural");
+    assert!(
+        (foot[0] - 0.2).abs() < 1e-3,
+        "the foot went to x = 0.2: {foot:?}"
+    );
+    undo(&mut harness);
+    assert_eq!(document(&harness), before, "undo gives the goal back");
+}
+
+#[test]
+fn the_effector_joint_and_point_are_edited_and_undone_exactly() {
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    open_task(&mut harness, "left ankle position");
+    let before = document(&harness);
+
+    click_label(&mut harness, "joint");
+    harness.get_by_label("left knee").click_accesskit();
+    harness.run_steps(2);
+    settle(&mut harness);
+    let after = document(&harness);
+    match &left_foot_task(&after).kind {
+        TaskKindSpec::Position { joint, .. } => assert_eq!(joint, "l_knee"),
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(
+        state(&harness)["tasks"][0]["description"],
+        "left knee position"
+    );
+    // The knee is pulled to where the ankle was held (level 1).
+    let knee = joint_world(&harness, "l_knee");
+    let TaskKindSpec::Position { target, .. } = &left_foot_task(&after).kind else {
+        unreachable!()
+    };
+    assert!(distance(knee, *target) < 1e-3, "knee at {knee:?}");
+    undo(&mut harness);
+    assert_eq!(document(&harness), before, "undo gives the ankle back");
+
+    // The point on the segment, 10 cm along the joint's z.
+    open_task(&mut harness, "left ankle position");
+    harness
+        .get_all_by_label("z m")
+        .next()
+        .unwrap()
+        .set_value_accesskit(0.1);
+    harness.run_steps(2);
+    match &left_foot_task(&document(&harness)).kind {
+        TaskKindSpec::Position { point, .. } => assert_eq!(*point, [0.0, 0.0, 0.1]),
+        other => panic!("{other:?}"),
+    }
+    undo(&mut harness);
+    assert_eq!(document(&harness), before, "undo gives the point back");
+}
+
+#[test]
+fn an_orientation_goal_is_typed_in_degrees_and_a_gaze_axis_is_edited() {
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    harness.get_by_label("Table 1 example").click();
+    settle(&mut harness);
+    let before = document(&harness);
+    open_task(&mut harness, "left ankle orientation");
+    harness.get_by_label("y °").set_value_accesskit(30.0);
+    settle(&mut harness);
+    let after = document(&harness);
+    let TaskKindSpec::Orientation { target, .. } = &after.tasks[1].kind else {
+        panic!("{:?}", after.tasks[1]);
+    };
+    let expected = glam::DQuat::from_rotation_y(30f64.to_radians());
+    assert!(
+        glam::DQuat::from_array(*target).dot(expected).abs() > 1.0 - 1e-9,
+        "{target:?}"
+    );
+    assert!(
+        state(&harness)["tasks"][1]["residual"].as_f64().unwrap() < 1e-3,
+        "the foot turned to the typed orientation"
+    );
+    undo(&mut harness);
+    assert_eq!(document(&harness), before);
+
+    open_task(&mut harness, "head gaze");
+    harness
+        .get_by_role_and_label(egui::accesskit::Role::SpinButton, "x")
+        .set_value_accesskit(1.0);
+    harness.run_steps(2);
+    let TaskKindSpec::Gaze { axis, .. } = &document(&harness).tasks[2].kind else {
+        panic!();
+    };
+    assert_eq!(*axis, [1.0, 0.0, 1.0]);
+    undo(&mut harness);
+    assert_eq!(document(&harness), before);
+}
+
+#[test]
+fn a_removed_task_comes_back_with_undo() {
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    let before = document(&harness);
+    open_task(&mut harness, "right ankle position");
+    click_label(&mut harness, "Remove");
+    settle(&mut harness);
+    let after = document(&harness);
+    assert_eq!(after.tasks.len(), before.tasks.len() - 1);
+    assert!(!after.tasks.iter().any(|task| matches!(
+        &task.kind,
+        TaskKindSpec::Position { joint, .. } if joint == "r_talocrural"
+    )));
+    undo(&mut harness);
+    assert_eq!(document(&harness), before);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Mirror and the swivel handle
+
+#[test]
+fn mirror_takes_the_tasks_along_and_the_mirrored_right_hand_task_holds() {
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    harness.get_by_label("Table 1 example").click();
+    settle(&mut harness);
+    let before = document(&harness);
+    let hand_before = joint_world(&harness, "r_radiocarpal");
+    harness.get_by_label("Mirror").click();
+    settle(&mut harness);
+    let after = document(&harness);
+    assert!(
+        !after.tasks.iter().any(|task| task.level == 1
+            && matches!(
+                &task.kind,
+                TaskKindSpec::Position { joint, .. } if joint == "r_radiocarpal"
+            )),
+        "the right-hand task became a left-hand task"
+    );
+    let hand_task = after
+        .tasks
+        .iter()
+        .position(|task| {
+            task.level == 1
+                && matches!(&task.kind, TaskKindSpec::Position { joint, .. } if joint == "l_radiocarpal")
+        })
+        .expect("a level-1 left-hand task");
+    let TaskKindSpec::Position { target, .. } = &after.tasks[hand_task].kind else {
+        unreachable!()
+    };
+    assert_eq!(*target, [0.3, 1.15, 0.4], "the sphere reflected: x -> -x");
+    let status = &state(&harness)["tasks"][hand_task];
+    assert!(status["residual"].as_f64().unwrap() < 1e-3, "{status}");
+    let hand_after = joint_world(&harness, "l_radiocarpal");
+    assert!(
+        distance(
+            hand_after,
+            [-hand_before[0], hand_before[1], hand_before[2]]
+        ) < 1e-3,
+        "the left hand is where the right one was, reflected: {hand_before:?} -> {hand_after:?}"
+    );
+    undo(&mut harness);
+    assert_eq!(document(&harness), before, "one undo takes the mirror back");
+}
+
+#[test]
+fn dragging_the_swivel_handle_turns_the_elbow_and_the_hand_stays() {
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    // A pose with the right elbow bent, opened from a file.
+    let mut pose = document(&harness);
+    pose.posture.set("r_elbow", stance_ik::Dof::Rx, -1.2);
+    harness
+        .state_mut()
+        .open_file("bent.json", pose.to_json(false).as_bytes());
+    settle(&mut harness);
+    // Select the right upper arm by clicking it.
+    let shoulder = screen_position(&harness, "r_shoulder");
+    let elbow = screen_position(&harness, "r_elbow");
+    let pelvis = screen_position(&harness, "sacroiliac");
+    let outward = egui::vec2((elbow.x - pelvis.x).signum() * 3.0, 0.0);
+    let on_arm = shoulder + (elbow - shoulder) * 0.5 + outward;
+    harness.event(egui::Event::PointerMoved(on_arm));
+    harness.step();
+    for pressed in [true, false] {
+        harness.event(egui::Event::PointerButton {
+            pos: on_arm,
+            button: PointerButton::Primary,
+            pressed,
+            modifiers: Modifiers::NONE,
+        });
+        harness.step();
+    }
+    harness.run_steps(2);
+    let selected = state(&harness);
+    assert_eq!(selected["selected"], "r_shoulder");
+    let swivel = selected["swivel"].clone();
+    assert_eq!(swivel["limb"], "r_arm", "{swivel}");
+    let angle_before = swivel["angle"].as_f64().unwrap();
+    let wrist_before = joint_world(&harness, "r_radiocarpal");
+    let elbow_before = joint_world(&harness, "r_elbow");
+    let document_before = document(&harness);
+    let circle: Vec<Pos2> = swivel["circle"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| Pos2::new(p[0].as_f64().unwrap() as f32, p[1].as_f64().unwrap() as f32))
+        .collect();
+    let handle = Pos2::new(
+        swivel["screen"][0].as_f64().unwrap() as f32,
+        swivel["screen"][1].as_f64().unwrap() as f32,
+    );
+    assert!(
+        handle.distance(circle[0]) < 1.0,
+        "the handle is on its circle"
+    );
+    // An eighth of a turn along the drawn circle.
+    drag(&mut harness, &circle[..=6]);
+    settle(&mut harness);
+    let angle_after = state(&harness)["swivel"]["angle"].as_f64().unwrap();
+    assert!(
+        (angle_after - angle_before).abs() > 0.3,
+        "the swivel turned: {angle_before} -> {angle_after}"
+    );
+    let elbow_on_screen = screen_position(&harness, "r_elbow");
+    assert!(
+        elbow_on_screen.distance(circle[6]) < 0.25 * circle[0].distance(circle[6]),
+        "the elbow followed the pointer: at {elbow_on_screen:?}, released at {:?}",
+        circle[6]
+    );
+    let elbow_after = joint_world(&harness, "r_elbow");
+    assert!(
+        distance(elbow_after, elbow_before) > 0.05,
+        "the elbow moved: {elbow_before:?} -> {elbow_after:?}"
+    );
+    let wrist_after = joint_world(&harness, "r_radiocarpal");
+    assert!(
+        distance(wrist_after, wrist_before) < 1e-6,
+        "the wrist stayed: moved {} m",
+        distance(wrist_after, wrist_before)
+    );
+    undo(&mut harness);
+    assert_eq!(
+        document(&harness),
+        document_before,
+        "one undo turns it back"
+    );
 }

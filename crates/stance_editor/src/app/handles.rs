@@ -1,11 +1,15 @@
-//! Handles in the viewport: the goals of tasks, dragged in the plane facing the camera, and
-//! the ring gizmo of the selected joint, one ring per rotational DOF, dragged around it.
+//! Handles in the viewport: the goals of tasks, dragged in the plane facing the camera, the
+//! ring gizmo of the selected joint, one ring per rotational DOF, dragged around it, and the
+//! swivel handle of the selected arm or leg, at the elbow or knee, dragged around the
+//! shoulder-wrist (hip-ankle) axis.
 
 use egui::{Color32, Pos2, Stroke};
 use glam::DVec3;
-use stance_document::TaskKindSpec;
+use stance_document::{LimbName, TaskKindSpec};
+use stance_ik::SwivelInterval;
 
 use super::StanceApp;
+use super::panels::limb_of;
 use crate::history::EditKind;
 
 /// How close (points) the pointer must be to a handle to take it.
@@ -20,6 +24,16 @@ const RING_COLORS: [Color32; 3] = [
     Color32::from_rgb(90, 200, 90),
     Color32::from_rgb(80, 130, 240),
 ];
+
+/// Colour of the swivel handle and its circle.
+const SWIVEL_COLOR: Color32 = Color32::from_rgb(240, 200, 60);
+/// Colour of the swivel angles that keep the limb within its limits.
+const SWIVEL_FEASIBLE_COLOR: Color32 = Color32::from_rgb(90, 200, 120);
+/// Radius of the swivel handle's disc (points).
+const SWIVEL_HANDLE_PT: f32 = 6.0;
+/// Below this distance from the shoulder-wrist axis (m) the limb is straight: turning it
+/// around the axis moves nothing, and there is no handle.
+const SWIVEL_MIN_RADIUS_M: f64 = 0.01;
 
 /// A handle being dragged.
 #[derive(Debug, Clone)]
@@ -41,6 +55,44 @@ pub(super) enum HandleDrag {
         /// is then a positive rotation), -1 otherwise.
         sign: f64,
     },
+    /// The swivel handle: the elbow or knee turns around the limb's axis with the pointer.
+    Swivel {
+        limb: LimbName,
+        start_swivel: f64,
+        /// Unit direction from the axis to the middle joint when the drag started.
+        start_direction: DVec3,
+        centre_world: DVec3,
+        axis_world: DVec3,
+    },
+}
+
+/// The swivel handle of the selected arm or leg.
+#[derive(Debug, Clone)]
+pub(super) struct SwivelHandle {
+    pub limb: LimbName,
+    /// The elbow or knee, where the handle is.
+    pub middle_world: DVec3,
+    /// The centre of the circle the middle joint turns on (on the shoulder-wrist axis).
+    pub centre_world: DVec3,
+    /// Unit shoulder-to-wrist (hip-to-ankle) direction.
+    pub axis_world: DVec3,
+    /// Distance of the middle joint from the axis (m).
+    pub radius: f64,
+    /// The swivel angle now (rad).
+    pub swivel: f64,
+    /// Swivel angles that keep the limb within its limits.
+    pub intervals: Vec<SwivelInterval>,
+}
+
+impl SwivelHandle {
+    /// The point of the circle at swivel angle `angle` (the handle at the current angle;
+    /// the swivel turns right-handed about the axis).
+    pub fn point_at(&self, angle: f64) -> DVec3 {
+        let u = (self.middle_world - self.centre_world) / self.radius;
+        let v = self.axis_world.cross(u);
+        let turn = angle - self.swivel;
+        self.centre_world + (u * turn.cos() + v * turn.sin()) * self.radius
+    }
 }
 
 /// One ring of the gizmo.
@@ -102,6 +154,72 @@ impl StanceApp {
             .collect()
     }
 
+    /// The swivel handle of the selected joint's arm or leg (none for a straight limb).
+    pub(super) fn swivel_handle(&self) -> Option<SwivelHandle> {
+        let joint = self.session.skeleton().joints().get(self.selected_joint?)?;
+        let limb = limb_of(&joint.name)?;
+        let [upper, middle, end] = limb.joints().map(|name| self.session.joint_position(name));
+        let (upper, middle_world, end) = (upper?, middle?, end?);
+        let axis_world = (end - upper).normalize_or_zero();
+        if axis_world == DVec3::ZERO {
+            return None;
+        }
+        let centre_world = upper + axis_world * (middle_world - upper).dot(axis_world);
+        let radius = (middle_world - centre_world).length();
+        // A straight limb (or NaN) has no circle to turn on.
+        if radius.is_nan() || radius < SWIVEL_MIN_RADIUS_M {
+            return None;
+        }
+        let (swivel, intervals) = self.session.limb_swivel(limb)?;
+        Some(SwivelHandle {
+            limb,
+            middle_world,
+            centre_world,
+            axis_world,
+            radius,
+            swivel,
+            intervals,
+        })
+    }
+
+    /// The swivel handle for the page's state: the limb, its swivel angle (rad), the handle
+    /// and the circle's centre on screen, the circle from the handle once around, and the
+    /// feasible swivel intervals; `null` when no arm or leg is selected.
+    pub(super) fn swivel_state(&self, rect: egui::Rect) -> serde_json::Value {
+        let Some(handle) = self.swivel_handle() else {
+            return serde_json::Value::Null;
+        };
+        let screen = |point| self.to_screen(rect, point).map(|p| [p.x, p.y]);
+        let circle: Vec<[f32; 2]> = self
+            .swivel_points(rect, &handle)
+            .iter()
+            .map(|p| [p.x, p.y])
+            .collect();
+        let feasible: Vec<[f64; 2]> = handle
+            .intervals
+            .iter()
+            .map(|interval| [interval.start, interval.end])
+            .collect();
+        serde_json::json!({
+            "limb": handle.limb.name(),
+            "angle": handle.swivel,
+            "screen": screen(handle.middle_world),
+            "centre": screen(handle.centre_world),
+            "circle": circle,
+            "feasible": feasible,
+        })
+    }
+
+    /// The swivel circle on screen from the handle, once around.
+    pub(super) fn swivel_points(&self, rect: egui::Rect, handle: &SwivelHandle) -> Vec<Pos2> {
+        (0..=RING_SEGMENTS)
+            .filter_map(|segment| {
+                let turn = segment as f64 / RING_SEGMENTS as f64 * std::f64::consts::TAU;
+                self.to_screen(rect, handle.point_at(handle.swivel + turn))
+            })
+            .collect()
+    }
+
     pub(super) fn ring_points(&self, rect: egui::Rect, ring: &Ring) -> Vec<Pos2> {
         let helper = if ring.axis_world.x.abs() < 0.9 {
             DVec3::X
@@ -142,6 +260,19 @@ impl StanceApp {
                 plane_point_world: goal,
             });
         }
+        if let Some(handle) = self.swivel_handle()
+            && self
+                .to_screen(rect, handle.middle_world)
+                .is_some_and(|at| at.distance(pointer) <= HANDLE_REACH_PT)
+        {
+            return Some(HandleDrag::Swivel {
+                limb: handle.limb,
+                start_swivel: handle.swivel,
+                start_direction: (handle.middle_world - handle.centre_world) / handle.radius,
+                centre_world: handle.centre_world,
+                axis_world: handle.axis_world,
+            });
+        }
         let eye = self.camera.eye_world().as_dvec3();
         for ring in self.rings() {
             let near = self.ring_points(rect, &ring).windows(2).any(|pair| {
@@ -173,6 +304,9 @@ impl StanceApp {
     pub(super) fn begin_handle_drag(&mut self, drag: HandleDrag) {
         self.record(EditKind::Command);
         self.history.break_coalescing();
+        if let HandleDrag::Swivel { limb, .. } = &drag {
+            self.session.hold_limb_end(*limb);
+        }
         self.handle_drag = Some(drag);
     }
 
@@ -238,13 +372,57 @@ impl StanceApp {
                     sign,
                 });
             }
+            HandleDrag::Swivel {
+                limb,
+                start_swivel,
+                start_direction,
+                centre_world,
+                axis_world,
+            } => {
+                let Some(point) = self.pointer_around_axis(pointer, centre_world, axis_world)
+                else {
+                    return;
+                };
+                let direction = point - centre_world;
+                let direction = direction - axis_world * direction.dot(axis_world);
+                if direction.length() < 1e-9 {
+                    return;
+                }
+                // The angle from where the drag started, right-handed about the axis (the
+                // swivel's own sense).
+                let turn = axis_world
+                    .dot(start_direction.cross(direction))
+                    .atan2(start_direction.dot(direction));
+                self.session.set_limb_swivel(limb, start_swivel + turn);
+            }
         }
     }
 
     pub(super) fn end_handle_drag(&mut self) {
-        if self.handle_drag.take().is_some() {
+        if let Some(drag) = self.handle_drag.take() {
+            if matches!(drag, HandleDrag::Swivel { .. }) {
+                self.session.release_hold();
+            }
             self.history.break_coalescing();
         }
+    }
+
+    /// Where the pointer's ray meets the plane through `centre` across `axis` (the swivel
+    /// circle's plane); seen edge-on, the plane facing the camera is used instead.
+    fn pointer_around_axis(&self, pointer: Pos2, centre: DVec3, axis: DVec3) -> Option<DVec3> {
+        let rect = self.viewport_rect;
+        let local = pointer - rect.min;
+        let (origin, direction) = self.camera.ray_through(
+            glam::Vec2::new(local.x, local.y),
+            glam::Vec2::new(rect.width(), rect.height()),
+        );
+        let (origin, direction) = (origin.as_dvec3(), direction.as_dvec3());
+        let denominator = direction.dot(axis);
+        if denominator.abs() < 0.1 {
+            return self.pointer_on_view_plane(pointer, centre);
+        }
+        let distance = (centre - origin).dot(axis) / denominator;
+        (distance > 0.0 && distance.is_finite()).then(|| origin + direction * distance)
     }
 
     /// Where the pointer's ray meets the floor (y = 0).
@@ -283,6 +461,51 @@ impl StanceApp {
                 self.ring_points(rect, &ring),
                 Stroke::new(width, color.gamma_multiply(0.9)),
             ));
+        }
+        self.draw_swivel(painter, rect);
+    }
+
+    /// Draws the swivel handle of the selected limb: the circle the elbow or knee turns on,
+    /// its feasible arcs (within the joint limits) and the handle.
+    fn draw_swivel(&self, painter: &egui::Painter, rect: egui::Rect) {
+        let Some(handle) = self.swivel_handle() else {
+            return;
+        };
+        let dragging = matches!(self.handle_drag, Some(HandleDrag::Swivel { .. }));
+        painter.add(egui::Shape::dashed_line(
+            &self.swivel_points(rect, &handle),
+            Stroke::new(1.5, SWIVEL_COLOR.gamma_multiply(0.8)),
+            6.0,
+            4.0,
+        ));
+        for interval in &handle.intervals {
+            let steps = ((interval.length() / std::f64::consts::TAU * RING_SEGMENTS as f64).ceil()
+                as usize)
+                .max(2);
+            let arc: Vec<Pos2> = (0..=steps)
+                .filter_map(|step| {
+                    let angle = interval.start
+                        + (interval.end - interval.start) * step as f64 / steps as f64;
+                    self.to_screen(rect, handle.point_at(angle))
+                })
+                .collect();
+            painter.add(egui::Shape::line(
+                arc,
+                Stroke::new(3.0, SWIVEL_FEASIBLE_COLOR.gamma_multiply(0.8)),
+            ));
+        }
+        if let Some(at) = self.to_screen(rect, handle.middle_world) {
+            let radius = if dragging {
+                SWIVEL_HANDLE_PT + 2.0
+            } else {
+                SWIVEL_HANDLE_PT
+            };
+            painter.circle(
+                at,
+                radius,
+                SWIVEL_COLOR,
+                Stroke::new(1.5, Color32::from_black_alpha(200)),
+            );
         }
     }
 }

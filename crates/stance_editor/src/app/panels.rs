@@ -274,6 +274,13 @@ impl StanceApp {
 
         let mut tasks = self.session.tasks().to_vec();
         let statuses = self.session.statuses().to_vec();
+        let joint_names: Vec<String> = self
+            .session
+            .skeleton()
+            .joints()
+            .iter()
+            .map(|joint| joint.name.clone())
+            .collect();
         let mut levels: Vec<u32> = tasks.iter().map(|task| task.level).collect();
         levels.sort_unstable();
         levels.dedup();
@@ -331,12 +338,26 @@ impl StanceApp {
                 for &index in &members {
                     let status = statuses.get(index).cloned();
                     let id = egui::Id::NULL.with(("stance_task_drag", index));
-                    ui.dnd_drag_source(id, DraggedTask(index), |ui| {
-                        if let Some(kind) =
-                            task_editor(ui, index, &mut tasks[index], status.as_ref(), &mut remove)
-                        {
-                            edit = Some(kind);
-                        }
+                    // Only the handle drags the task: a drag source senses the press at once,
+                    // which would take the clicks of the header and the fields under it.
+                    ui.horizontal_top(|ui| {
+                        ui.dnd_drag_source(id, DraggedTask(index), |ui| {
+                            ui.label(RichText::new("::").strong());
+                        })
+                        .response
+                        .on_hover_text("drag onto another level");
+                        ui.vertical(|ui| {
+                            if let Some(kind) = task_editor(
+                                ui,
+                                index,
+                                &mut tasks[index],
+                                status.as_ref(),
+                                &joint_names,
+                                &mut remove,
+                            ) {
+                                edit = Some(kind);
+                            }
+                        });
                     });
                 }
             });
@@ -601,7 +622,7 @@ impl StanceApp {
 }
 
 /// The limb a joint belongs to (H-Anim names), for the swivel handle.
-fn limb_of(joint: &str) -> Option<LimbName> {
+pub(super) fn limb_of(joint: &str) -> Option<LimbName> {
     let (side_left, rest) = if let Some(rest) = joint.strip_prefix("l_") {
         (true, rest)
     } else if let Some(rest) = joint.strip_prefix("r_") {
@@ -627,6 +648,7 @@ fn task_editor(
     index: usize,
     task: &mut TaskSpec,
     status: Option<&crate::posing::TaskStatus>,
+    joint_names: &[String],
     remove: &mut Option<usize>,
 ) -> Option<EditKind> {
     let mut edit = None;
@@ -662,24 +684,29 @@ fn task_editor(
             egui::Grid::new(("task_fields", index))
                 .num_columns(2)
                 .show(ui, |ui| {
-                    ui.label("active");
-                    if ui.checkbox(&mut task.active, "").changed() {
+                    let label = ui.label("active");
+                    if ui
+                        .checkbox(&mut task.active, "")
+                        .labelled_by(label.id)
+                        .changed()
+                    {
                         edit = Some(EditKind::TaskField(index, "active"));
                     }
                     ui.end_row();
-                    ui.label("level");
+                    let label = ui.label("level");
                     if ui
                         .add(
                             egui::DragValue::new(&mut task.level)
                                 .range(1..=99)
                                 .speed(0.05),
                         )
+                        .labelled_by(label.id)
                         .changed()
                     {
                         edit = Some(EditKind::TaskField(index, "level"));
                     }
                     ui.end_row();
-                    ui.label("weight");
+                    let label = ui.label("weight");
                     if ui
                         .add(
                             egui::DragValue::new(&mut task.weight)
@@ -687,12 +714,13 @@ fn task_editor(
                                 .speed(0.01)
                                 .max_decimals(3),
                         )
+                        .labelled_by(label.id)
                         .changed()
                     {
                         edit = Some(EditKind::TaskField(index, "weight"));
                     }
                     ui.end_row();
-                    if let Some(kind) = kind_fields(ui, index, &mut task.kind) {
+                    if let Some(kind) = kind_fields(ui, index, &mut task.kind, joint_names) {
                         edit = Some(kind);
                     }
                 });
@@ -710,10 +738,29 @@ fn task_is_angular(task: &TaskSpec) -> bool {
     )
 }
 
-fn kind_fields(ui: &mut egui::Ui, index: usize, kind: &mut TaskKindSpec) -> Option<EditKind> {
+fn kind_fields(
+    ui: &mut egui::Ui,
+    index: usize,
+    kind: &mut TaskKindSpec,
+    joint_names: &[String],
+) -> Option<EditKind> {
     let mut edit = None;
     match kind {
-        TaskKindSpec::Position { axes, target, .. } | TaskKindSpec::Com { axes, target } => {
+        TaskKindSpec::Position {
+            joint,
+            point,
+            axes,
+            target,
+        } => {
+            if joint_row(ui, index, joint, joint_names) {
+                edit = Some(EditKind::TaskField(index, "joint"));
+            }
+            ui.label("point")
+                .on_hover_text("the point of the segment that is placed, in the joint's frame (m)");
+            if vector_editor(ui, point, Axes::XYZ) {
+                edit = Some(EditKind::TaskField(index, "point"));
+            }
+            ui.end_row();
             ui.label("axes");
             if axes_editor(ui, axes) {
                 edit = Some(EditKind::TaskField(index, "axes"));
@@ -725,14 +772,57 @@ fn kind_fields(ui: &mut egui::Ui, index: usize, kind: &mut TaskKindSpec) -> Opti
             }
             ui.end_row();
         }
-        TaskKindSpec::Gaze { target, .. } => {
+        TaskKindSpec::Com { axes, target } => {
+            ui.label("axes");
+            if axes_editor(ui, axes) {
+                edit = Some(EditKind::TaskField(index, "axes"));
+            }
+            ui.end_row();
+            ui.label("goal");
+            if vector_editor(ui, target, *axes) {
+                edit = Some(EditKind::TaskField(index, "target"));
+            }
+            ui.end_row();
+        }
+        TaskKindSpec::Gaze {
+            joint,
+            axis,
+            point,
+            target,
+        } => {
+            if joint_row(ui, index, joint, joint_names) {
+                edit = Some(EditKind::TaskField(index, "joint"));
+            }
+            ui.label("axis")
+                .on_hover_text("the direction that aims, in the joint's frame");
+            if axis_editor(ui, axis) {
+                edit = Some(EditKind::TaskField(index, "axis"));
+            }
+            ui.end_row();
+            ui.label("eye")
+                .on_hover_text("the point the aiming axis starts from, in the joint's frame (m)");
+            if vector_editor(ui, point, Axes::XYZ) {
+                edit = Some(EditKind::TaskField(index, "point"));
+            }
+            ui.end_row();
             ui.label("look at");
             if vector_editor(ui, target, Axes::XYZ) {
                 edit = Some(EditKind::TaskField(index, "target"));
             }
             ui.end_row();
         }
-        TaskKindSpec::Limb { target, swivel, .. } => {
+        TaskKindSpec::Limb {
+            limb,
+            joints,
+            target,
+            swivel,
+            ..
+        } => {
+            ui.label("limb");
+            if limb_picker(ui, index, limb, joints) {
+                edit = Some(EditKind::TaskField(index, "limb"));
+            }
+            ui.end_row();
             ui.label("goal");
             if vector_editor(ui, target, Axes::XYZ) {
                 edit = Some(EditKind::TaskField(index, "target"));
@@ -762,21 +852,145 @@ fn kind_fields(ui: &mut egui::Ui, index: usize, kind: &mut TaskKindSpec) -> Opti
             });
             ui.end_row();
         }
-        TaskKindSpec::Orientation { target, .. } => {
-            let (axis, angle) = DQuat::from_array(*target).normalize().to_axis_angle();
-            ui.label("goal");
-            ui.label(format!(
-                "{:.0}° about ({:.2}, {:.2}, {:.2})",
-                angle.to_degrees(),
-                axis.x,
-                axis.y,
-                axis.z
-            ));
+        TaskKindSpec::Orientation { joint, target } => {
+            if joint_row(ui, index, joint, joint_names) {
+                edit = Some(EditKind::TaskField(index, "joint"));
+            }
+            ui.label("goal").on_hover_text(
+                "the segment's orientation in the world: turns about x, then y, then z (degrees)",
+            );
+            if orientation_editor(ui, target) {
+                edit = Some(EditKind::TaskField(index, "target"));
+            }
             ui.end_row();
         }
         TaskKindSpec::Posture { .. } => {}
     }
     edit
+}
+
+/// The "joint" row: which joint's segment the task moves, by its readable name.
+fn joint_row(ui: &mut egui::Ui, index: usize, joint: &mut String, joint_names: &[String]) -> bool {
+    let label = ui.label("joint");
+    let mut changed = false;
+    let response = egui::ComboBox::from_id_salt(("task_joint", index))
+        .selected_text(describe_joint(joint))
+        .height(320.0)
+        .show_ui(ui, |ui| {
+            for name in joint_names {
+                let selected = name == joint;
+                if ui
+                    .selectable_label(selected, describe_joint(name))
+                    .on_hover_text(name)
+                    .clicked()
+                    && !selected
+                {
+                    joint.clone_from(name);
+                    changed = true;
+                }
+            }
+        });
+    response.response.labelled_by(label.id);
+    ui.end_row();
+    changed
+}
+
+/// The limb of a limb task (left/right arm/leg).
+fn limb_picker(
+    ui: &mut egui::Ui,
+    index: usize,
+    limb: &mut Option<LimbName>,
+    joints: &mut Option<[String; 3]>,
+) -> bool {
+    let current = match (limb.as_ref(), joints.as_ref()) {
+        (Some(limb), _) => limb.name().replace('_', " "),
+        (None, Some(joints)) => describe_joint(&joints[2]),
+        (None, None) => "limb".to_owned(),
+    };
+    let mut changed = false;
+    egui::ComboBox::from_id_salt(("task_limb", index))
+        .selected_text(current)
+        .show_ui(ui, |ui| {
+            for choice in [
+                LimbName::LeftArm,
+                LimbName::RightArm,
+                LimbName::LeftLeg,
+                LimbName::RightLeg,
+            ] {
+                let selected = *limb == Some(choice);
+                if ui
+                    .selectable_label(selected, choice.name().replace('_', " "))
+                    .clicked()
+                    && !selected
+                {
+                    *limb = Some(choice);
+                    *joints = None;
+                    changed = true;
+                }
+            }
+        });
+    changed
+}
+
+/// An aiming axis (unitless; any non-zero direction, normalised when used).
+fn axis_editor(ui: &mut egui::Ui, axis: &mut [f64; 3]) -> bool {
+    let mut edited = *axis;
+    let mut changed = false;
+    ui.horizontal(|ui| {
+        for (value, name) in edited.iter_mut().zip(["x ", "y ", "z "]) {
+            changed |= ui
+                .add(
+                    egui::DragValue::new(value)
+                        .range(-1.0..=1.0)
+                        .speed(0.01)
+                        .max_decimals(3)
+                        .prefix(name),
+                )
+                .changed();
+        }
+    });
+    // A zero axis aims nowhere: that edit is refused.
+    if changed && edited.iter().any(|value| value.abs() > 1e-6) {
+        *axis = edited;
+        return true;
+    }
+    false
+}
+
+/// A world orientation as three angles in degrees (turns about x, then y, then z, each about
+/// the turned frame's axis), stored as the quaternion `[qx, qy, qz, qw]`.
+fn orientation_editor(ui: &mut egui::Ui, quaternion: &mut [f64; 4]) -> bool {
+    let rotation = DQuat::from_array(*quaternion).normalize();
+    let (x, y, z) = rotation.to_euler(glam::EulerRot::XYZ);
+    let mut degrees = [x.to_degrees(), y.to_degrees(), z.to_degrees()];
+    let mut changed = false;
+    ui.horizontal(|ui| {
+        for (value, name) in degrees.iter_mut().zip(["x ", "y ", "z "]) {
+            changed |= ui
+                .add(
+                    egui::DragValue::new(value)
+                        .range(-180.0..=180.0)
+                        .speed(0.5)
+                        .max_decimals(1)
+                        .prefix(name)
+                        .suffix("°"),
+                )
+                .changed();
+        }
+    });
+    if changed {
+        let edited = DQuat::from_euler(
+            glam::EulerRot::XYZ,
+            degrees[0].to_radians(),
+            degrees[1].to_radians(),
+            degrees[2].to_radians(),
+        );
+        if edited.is_finite() {
+            *quaternion = edited.to_array();
+            return true;
+        }
+    }
+    false
 }
 
 fn axes_editor(ui: &mut egui::Ui, axes: &mut Axes) -> bool {
@@ -804,6 +1018,7 @@ fn vector_editor(ui: &mut egui::Ui, vector: &mut [f64; 3], axes: Axes) -> bool {
                         egui::DragValue::new(value)
                             .speed(0.005)
                             .max_decimals(3)
+                            .prefix(["x ", "y ", "z "][component])
                             .suffix(" m"),
                     )
                     .changed();
