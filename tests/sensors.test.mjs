@@ -259,6 +259,21 @@ async function followsTheArm(page, sendFrames, frameCount, truth, worldFromDevic
   return final;
 }
 
+/** The largest difference between the numbers of two documents of the same shape. */
+function largestDifference(a, b) {
+  if (typeof a === "number" && typeof b === "number") return Math.abs(a - b);
+  if (a && b && typeof a === "object" && typeof b === "object") {
+    const keys = new Set([...Object.keys(a), ...Object.keys(b)]);
+    let largest = 0;
+    for (const key of keys) {
+      if (!(key in a) || !(key in b)) return Infinity;
+      largest = Math.max(largest, largestDifference(a[key], b[key]));
+    }
+    return largest;
+  }
+  return a === b ? 0 : Infinity;
+}
+
 const jointDistance = (a, b) => Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
 
 describe("motion-capture sensors in the browser", () => {
@@ -291,7 +306,8 @@ describe("motion-capture sensors in the browser", () => {
     assert.equal(lost.notice.error, true);
     await page.waitForTimeout(300);
     const after = await state(page);
-    assert.deepEqual(after.document.posture, held.document.posture, "the posture stays");
+    const drift = largestDifference(after.document.posture, held.document.posture);
+    assert.ok(drift < 1e-4, `the posture stays (moved by ${drift})`);
     assert.deepEqual(errors, []);
     await page.close();
   });

@@ -635,7 +635,10 @@ impl SensorHub {
         }
         if samples.iter().any(|sample| sample.orientation.is_some()) {
             self.fresh = true;
-            self.oldest_unshown.get_or_insert(arrived);
+            // Latency counts readings that will move the body (not those before calibration).
+            if self.calibration.is_some() {
+                self.oldest_unshown.get_or_insert(arrived);
+            }
         }
     }
 
