@@ -56,6 +56,7 @@ describe("avatars in the page", () => {
   test("the shared avatar opens from the file picker, is drawn skinned and follows a pull", async () => {
     const page = await context.newPage();
     const { errors } = await openEditor(context, site.url, page);
+    const memoryEmpty = JSON.parse(await page.evaluate(() => window.stance.state_json())).wasm_memory_bytes;
     const started = Date.now();
     await page.setInputFiles("input[type=file]", SHARED_AVATAR);
     const shown = await avatarShown(page);
@@ -75,12 +76,24 @@ describe("avatars in the page", () => {
     const grabY = ey + (wy - ey) * 0.5;
     const handBefore = shown.joints.r_radiocarpal;
     const footBefore = shown.joints.l_talocrural;
+    const memoryBefore = (await state(page)).wasm_memory_bytes;
     await page.mouse.move(grabX, grabY);
     await page.mouse.down();
+    const sceneMs = [];
+    const renderMs = [];
     for (let step = 1; step <= 20; step += 1) {
       await page.mouse.move(grabX + step * 2, grabY - step * 5);
+      const sample = await state(page);
+      sceneMs.push(sample.scene_ms);
+      renderMs.push(sample.render_ms);
     }
     await page.waitForTimeout(800);
+    sceneMs.sort((a, b) => a - b);
+    renderMs.sort((a, b) => a - b);
+    console.log(`[avatar] per frame while pulling: skinning palettes (CPU) median ${sceneMs[10].toFixed(2)} ms, `
+      + `draw recording and uploads median ${renderMs[10].toFixed(2)} ms; wasm memory `
+      + `${(memoryEmpty / 1048576).toFixed(0)} MiB with the mannequin, ${(memoryBefore / 1048576).toFixed(0)} MiB `
+      + `with the avatar (peak of loading included: wasm memory does not shrink)`);
     await page.mouse.up();
     await page.waitForFunction(() => JSON.parse(window.stance.state_json()).settled);
     const pulled = await state(page);

@@ -126,6 +126,57 @@ describe("posing in the browser", () => {
     await page.close();
   });
 
+  test("frame time while pulling the body with the Table 1 tasks active (measured, not asserted)", async () => {
+    const { page, errors } = await freshEditor();
+    await clickButton(page, "table1");
+    const start = await settled(page);
+    // Grab the left knee (a level-4 drag in the paper's example) and pull it forward and up.
+    const [kx, ky] = start.screen.l_knee;
+    const [ax, ay] = start.screen.l_talocrural;
+    const grabX = kx + (ax - kx) * 0.3;
+    const grabY = ky + (ay - ky) * 0.3;
+    await page.evaluate(() => {
+      window.__frameTimes = [];
+      window.__sampling = true;
+      const tick = (time) => {
+        window.__frameTimes.push(time);
+        if (window.__sampling) requestAnimationFrame(tick);
+      };
+      requestAnimationFrame(tick);
+    });
+    const cpuMs = [];
+    const solverMs = [];
+    await page.mouse.move(grabX, grabY);
+    await page.mouse.down();
+    for (let step = 1; step <= 60; step += 1) {
+      await page.mouse.move(grabX + 40 * Math.sin(step / 10), grabY - step);
+      const sample = await state(page);
+      cpuMs.push(sample.frame_ms);
+      solverMs.push(sample.solver_ms);
+    }
+    const during = await state(page);
+    await page.mouse.up();
+    const intervals = await page.evaluate(() => {
+      window.__sampling = false;
+      const t = window.__frameTimes;
+      return t.slice(1).map((time, i) => time - t[i]);
+    });
+    assert.equal(during.pulling, true, "the drag grabbed the body");
+    assert.ok(intervals.length > 20, `frames were drawn while dragging: ${intervals.length}`);
+    const levelOne = during.tasks.filter((task) => task.level === 1);
+    for (const task of levelOne) {
+      assert.ok(task.residual < 1e-3, `level 1 holds while pulling: ${task.description} ${task.residual}`);
+    }
+    const median = (values) => percentile(values, 0.5);
+    console.log(`[frame] Table 1 + pull, headless Chromium WebGL2 (software GL): frame interval `
+      + `median ${median(intervals).toFixed(1)} ms, p95 ${percentile(intervals, 0.95).toFixed(1)} ms `
+      + `over ${intervals.length} frames; editor CPU per frame median ${median(cpuMs).toFixed(1)} ms, `
+      + `p95 ${percentile(cpuMs, 0.95).toFixed(1)} ms; solver median ${median(solverMs).toFixed(2)} ms, `
+      + `p95 ${percentile(solverMs, 0.95).toFixed(2)} ms (${(100 * median(solverMs) / median(intervals)).toFixed(0)}% of the frame interval)`);
+    assert.deepEqual(errors, [], `console errors: ${errors.join(" / ")}`);
+    await page.close();
+  });
+
   test("a copied posture link opens the same posture and tasks; a tampered link says so", async () => {
     const { page } = await freshEditor();
     await clickButton(page, "table1");

@@ -90,6 +90,10 @@ pub struct StanceApp {
     published: Option<String>,
     solver_ms: f64,
     frame_ms: f64,
+    /// CPU time of this frame's scene (mannequin capsules, or the avatar's skinning palettes).
+    scene_ms: f64,
+    /// CPU time of recording and submitting this frame's 3D draw (uploads included).
+    render_ms: f64,
     clock_origin: web_time::Instant,
     /// Screen rectangles (points) of named buttons, published for the page's test hook.
     button_rects: Vec<(&'static str, egui::Rect)>,
@@ -157,6 +161,8 @@ impl StanceApp {
             published: None,
             solver_ms: 0.0,
             frame_ms: 0.0,
+            scene_ms: 0.0,
+            render_ms: 0.0,
             clock_origin: web_time::Instant::now(),
             button_rects: Vec::new(),
             sensors: SensorHub::default(),
@@ -1182,10 +1188,14 @@ impl StanceApp {
         if self.avatar.is_none() && self.avatar_uploaded {
             self.avatar_uploaded = false;
         }
+        let scene_started = web_time::Instant::now();
         let scene = self.scene();
+        self.scene_ms = scene_started.elapsed().as_secs_f64() * 1000.0;
         match (&mut self.renderer, frame.wgpu_render_state()) {
             (Some(renderer), Some(render_state)) => {
+                let render_started = web_time::Instant::now();
                 let texture_id = renderer.render(render_state, size_px, &self.camera, &scene);
+                self.render_ms = render_started.elapsed().as_secs_f64() * 1000.0;
                 let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
                 ui.painter().image(texture_id, rect, uv, Color32::WHITE);
                 if !self.first_frame_reported {
@@ -1377,6 +1387,9 @@ impl StanceApp {
             "library": self.library.entries().iter().map(|entry| entry.name.clone()).collect::<Vec<_>>(),
             "solver_ms": self.solver_ms,
             "frame_ms": self.frame_ms,
+            "scene_ms": self.scene_ms,
+            "render_ms": self.render_ms,
+            "wasm_memory_bytes": wasm_memory_bytes(),
             "viewport": [rect.min.x, rect.min.y, rect.width(), rect.height()],
             "buttons": buttons,
             "goals": goals,
@@ -1425,6 +1438,18 @@ impl StanceApp {
             self.frame_ms = f64::from(cpu_seconds) * 1000.0;
         }
         self.publish_state();
+    }
+}
+
+/// The WebAssembly memory the editor holds (bytes); `None` natively.
+fn wasm_memory_bytes() -> Option<u64> {
+    #[cfg(target_arch = "wasm32")]
+    {
+        Some(core::arch::wasm32::memory_size::<0>() as u64 * 65_536)
+    }
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        None
     }
 }
 

@@ -43,3 +43,22 @@ fn every_shader_validates_and_translates_for_webgl2() {
         }
     }
 }
+
+/// A shader file added to `src/shaders/` but not to `SHADERS` would escape validation: the
+/// list and the directory must name the same files.
+#[test]
+fn the_validated_list_names_every_shader_file() {
+    let directory = concat!(env!("CARGO_MANIFEST_DIR"), "/src/shaders");
+    let mut on_disk: Vec<String> = std::fs::read_dir(directory)
+        .unwrap()
+        .map(|entry| entry.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|name| name.ends_with(".wgsl"))
+        .collect();
+    on_disk.sort();
+    let mut listed: Vec<String> = stance_render::SHADERS
+        .iter()
+        .map(|(name, _)| (*name).to_owned())
+        .collect();
+    listed.sort();
+    assert_eq!(on_disk, listed);
+}
