@@ -99,6 +99,8 @@ pub struct StanceApp {
     button_rects: Vec<(&'static str, egui::Rect)>,
     sensors: SensorHub,
     show_sensors: bool,
+    /// A left click on the body pins it (touch-friendly one-click pin).
+    pin_tool: bool,
     /// The next picked file is a sensor recording to replay.
     replay_pick_pending: bool,
 }
@@ -167,6 +169,7 @@ impl StanceApp {
             button_rects: Vec::new(),
             sensors: SensorHub::default(),
             show_sensors: false,
+            pin_tool: false,
             replay_pick_pending: false,
         };
         app.load_library();
@@ -1118,8 +1121,16 @@ impl StanceApp {
             pointer.and_then(|pointer| self.pick(&bones, pointer).map(|(joint, _)| joint))
         };
         if response.clicked_by(egui::PointerButton::Primary) {
-            self.selected_joint =
+            let clicked =
                 interact_pos.and_then(|pointer| self.pick(&bones, pointer).map(|(joint, _)| joint));
+            self.selected_joint = clicked;
+            // The pin tool (or Alt + click): one click pins the part where it is.
+            let alt = ui.input(|input| input.modifiers.alt);
+            if let Some(joint) = clicked
+                && (self.pin_tool || alt)
+            {
+                self.pin(joint);
+            }
         }
         let context_joint = self.hovered_joint.or(self.selected_joint);
         response.context_menu(|ui| match context_joint {
@@ -1139,6 +1150,29 @@ impl StanceApp {
                 }
                 if ui.button("Select").clicked() {
                     self.selected_joint = Some(joint);
+                    ui.close();
+                }
+                ui.separator();
+                if ui.button("Add position task").clicked() {
+                    self.selected_joint = Some(joint);
+                    self.add_position_task(joint);
+                    ui.close();
+                }
+                if ui.button("Add orientation task").clicked() {
+                    self.selected_joint = Some(joint);
+                    self.add_orientation_task(joint);
+                    ui.close();
+                }
+                if let Some(limb) = self
+                    .session
+                    .skeleton()
+                    .joints()
+                    .get(joint)
+                    .and_then(|definition| panels::limb_of(&definition.name))
+                    && ui.button("Add limb task (with swivel)").clicked()
+                {
+                    self.selected_joint = Some(joint);
+                    self.add_limb_task(limb);
                     ui.close();
                 }
             }
@@ -1479,7 +1513,11 @@ const HELP_ROWS: &[(&str, &str)] = &[
         "Click a body part",
         "select it (joint angles, swivel, tasks)",
     ),
-    ("Right-click a body part", "pin it where it is (level 1)"),
+    (
+        "Right-click a body part",
+        "pin it, or add a position, orientation or limb task on it",
+    ),
+    ("Alt + click a body part, or the pin tool", "pin it in one click"),
     ("Left drag elsewhere / one finger", "turn around the body"),
     (
         "Right or middle drag, Shift + left drag, two fingers",

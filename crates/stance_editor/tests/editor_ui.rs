@@ -792,3 +792,28 @@ fn dragging_the_swivel_handle_turns_the_elbow_and_the_hand_stays() {
         "one undo turns it back"
     );
 }
+
+#[test]
+fn the_pin_tool_pins_a_body_part_in_one_click_and_undo_removes_the_pin() {
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    let before = document(&harness);
+    harness.get_by_label("Pin tool").click();
+    harness.run_steps(2);
+    // The middle of the left forearm.
+    let elbow = screen_position(&harness, "l_elbow");
+    let wrist = screen_position(&harness, "l_radiocarpal");
+    click_at(&mut harness, elbow.lerp(wrist, 0.5));
+    settle(&mut harness);
+    let after = document(&harness);
+    assert_eq!(after.tasks.len(), before.tasks.len() + 1, "one pin added");
+    let pin = after.tasks.last().unwrap();
+    assert_eq!(pin.level, 1);
+    match &pin.kind {
+        TaskKindSpec::Position { joint, .. } => assert_eq!(joint, "l_elbow"),
+        other => panic!("a position pin, got {other:?}"),
+    }
+    harness.key_press_modifiers(Modifiers::COMMAND, Key::Z);
+    settle(&mut harness);
+    assert_eq!(document(&harness).tasks, before.tasks);
+}

@@ -82,6 +82,10 @@ impl StanceApp {
         if copy.clicked() {
             self.copy_link(ui.ctx());
         }
+        let pin_tool = ui
+            .toggle_value(&mut self.pin_tool, "Pin tool")
+            .on_hover_text("While on, a click on the body pins that part (also Alt + click)");
+        self.button_rects.push(("pin_tool", pin_tool.rect));
         let sensors = ui
             .button("Motion-capture sensors…")
             .on_hover_text("S: connect serial or HID sensors, calibrate, record, replay");
@@ -493,7 +497,7 @@ impl StanceApp {
             .map(|joint| joint.name.clone())
     }
 
-    fn add_position_task(&mut self, joint: usize) {
+    pub(super) fn add_position_task(&mut self, joint: usize) {
         let (Some(name), Some(position)) = (
             self.joint_name(joint),
             self.session.frames().joint_position.get(joint).copied(),
@@ -510,7 +514,7 @@ impl StanceApp {
         self.push_task(task);
     }
 
-    fn add_orientation_task(&mut self, joint: usize) {
+    pub(super) fn add_orientation_task(&mut self, joint: usize) {
         let Some(name) = self.joint_name(joint) else {
             return;
         };
@@ -541,7 +545,7 @@ impl StanceApp {
         self.push_task(task);
     }
 
-    fn add_limb_task(&mut self, limb: LimbName) {
+    pub(super) fn add_limb_task(&mut self, limb: LimbName) {
         let end = limb.joints()[2];
         let Some(position) = self.session.joint_position(end) else {
             self.warn(format!("This body has no {end} joint."));
