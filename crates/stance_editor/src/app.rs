@@ -2,6 +2,7 @@
 //! middle, where the body is pulled, pinned and selected. Every edit goes through the undo
 //! history; the document autosaves; posture links open and copy.
 
+mod avatar_panel;
 mod handles;
 mod overlay;
 mod panels;
@@ -103,6 +104,7 @@ pub struct StanceApp {
     pin_tool: bool,
     /// The next picked file is a sensor recording to replay.
     replay_pick_pending: bool,
+    mapping_editor: avatar_panel::MappingEditor,
 }
 
 impl std::fmt::Debug for StanceApp {
@@ -171,6 +173,7 @@ impl StanceApp {
             show_sensors: false,
             pin_tool: false,
             replay_pick_pending: false,
+            mapping_editor: avatar_panel::MappingEditor::default(),
         };
         app.load_library();
         app.load_sensor_settings();
@@ -255,7 +258,9 @@ impl StanceApp {
     /// Loads an avatar file; on failure says why and keeps the current one.
     pub fn load_avatar(&mut self, name: &str, bytes: &[u8]) {
         let loa = self.session.level_of_articulation();
-        match LoadedAvatar::load(name, bytes, loa).and_then(|(avatar, humanoid)| {
+        let mut mapping_note = None;
+        match LoadedAvatar::load(name, bytes, loa).and_then(|(mut avatar, mut humanoid)| {
+            mapping_note = self.mapping_editor.reapply(&mut avatar, loa, &mut humanoid);
             let session =
                 PosingSession::with_humanoid(humanoid).map_err(|error| error.to_string())?;
             Ok((avatar, session))
@@ -269,6 +274,9 @@ impl StanceApp {
                 );
                 if !avatar.warnings.is_empty() {
                     text.push_str(&format!(" Notes: {}", avatar.warnings.join("; ")));
+                }
+                if let Some(note) = mapping_note {
+                    text.push_str(&format!(" {note}"));
                 }
                 self.session = session;
                 self.sensors.release();
@@ -783,6 +791,8 @@ impl StanceApp {
                     self.export_library();
                     ui.close();
                 }
+                ui.separator();
+                self.export_posed_menu_item(ui);
             });
             ui.menu_button("Avatar", |ui| {
                 if ui.button("Open avatar file (glTF, GLB, VRM)…").clicked() {
@@ -1467,6 +1477,7 @@ impl StanceApp {
             .show(ui, |ui| self.viewport(ui, frame));
         self.help_window(&ctx);
         self.sensors_window(&ctx);
+        self.mapping_window(&ctx);
         self.autosave();
         if let Some(cpu_seconds) = frame.info().cpu_usage {
             self.frame_ms = f64::from(cpu_seconds) * 1000.0;

@@ -2,8 +2,10 @@
 //! GPU model (vertices, materials, textures) with the palettes that pose it every frame.
 
 use glam::{Mat4, Vec3};
-use stance_asset::{AlphaMode, Avatar, LoadOptions, Wrap, load_avatar};
-use stance_hanim::{HumanoidSkeleton, LevelOfArticulation, SkeletonOptions};
+use stance_asset::{AlphaMode, Avatar, LoadOptions, Wrap, export_glb, load_avatar};
+use stance_hanim::{
+    HumanoidSkeleton, LevelOfArticulation, Mapping, SkeletonOptions, build_skeleton,
+};
 use stance_ik::Posture;
 use stance_render::{
     MAX_PALETTE_MATRICES, SkinnedMaterial, SkinnedModel, SkinnedPrimitive, SkinnedTexture,
@@ -110,6 +112,67 @@ impl LoadedAvatar {
                 })
                 .collect(),
         )
+    }
+
+    /// The skeleton that `mapping` (a corrected mapping of this avatar's nodes) gives at
+    /// `loa`; the avatar's own mapping is left as it is.
+    pub fn skeleton_with_mapping(
+        &self,
+        mapping: &Mapping,
+        loa: LevelOfArticulation,
+    ) -> Result<HumanoidSkeleton, String> {
+        build_skeleton(
+            mapping,
+            &self.avatar.hanim_rest_positions(),
+            &SkeletonOptions {
+                loa,
+                ..SkeletonOptions::default()
+            },
+        )
+        .map_err(|error| error.to_string())
+    }
+
+    /// The nodes that are joints, in file order: the skins' joints (every node without a mesh
+    /// when the file has no skin), and any other node the mapping uses.
+    pub fn joint_nodes(&self) -> Vec<usize> {
+        let nodes = &self.avatar.nodes;
+        let mut joint = vec![false; nodes.len()];
+        if self.avatar.skins.is_empty() {
+            for (index, node) in nodes.iter().enumerate() {
+                joint[index] = node.mesh.is_none();
+            }
+        } else {
+            for &index in self.avatar.skins.iter().flat_map(|skin| &skin.joints) {
+                if let Some(flag) = joint.get_mut(index) {
+                    *flag = true;
+                }
+            }
+        }
+        for found in self.avatar.mapping.matches() {
+            if let Some(flag) = joint.get_mut(found.source) {
+                *flag = true;
+            }
+        }
+        (0..nodes.len()).filter(|&index| joint[index]).collect()
+    }
+
+    /// The file posed like `posture` (of `humanoid`, built from this avatar) as GLB bytes,
+    /// written like `stance export-posed` writes it. The avatar itself is left as it was.
+    pub fn posed_glb(
+        &mut self,
+        humanoid: &HumanoidSkeleton,
+        posture: &Posture,
+    ) -> Result<Vec<u8>, String> {
+        let kept = self.avatar.pose_locals();
+        let exported = self
+            .avatar
+            .apply_posture(humanoid, posture)
+            .and_then(|()| export_glb(&self.avatar))
+            .map_err(|error| error.to_string());
+        for (node, pose) in self.avatar.nodes.iter_mut().zip(kept) {
+            node.pose = pose;
+        }
+        exported
     }
 
     /// The H-Anim joints found in the file and the source joints left unmapped.

@@ -31,6 +31,7 @@ impl StanceApp {
                     avatar.vertex_count,
                     avatar.mapping_summary().0
                 ));
+                self.avatar_mapping_button(ui);
             }
             None => {
                 ui.label("H-Anim 2.0 mannequin (Avatar menu or drop a file to pose yours)");
