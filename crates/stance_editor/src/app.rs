@@ -1528,7 +1528,10 @@ const HELP_ROWS: &[(&str, &str)] = &[
         "Right-click a body part",
         "pin it, or add a position, orientation or limb task on it",
     ),
-    ("Alt + click a body part, or the pin tool", "pin it in one click"),
+    (
+        "Alt + click a body part, or the pin tool",
+        "pin it in one click",
+    ),
     ("Left drag elsewhere / one finger", "turn around the body"),
     (
         "Right or middle drag, Shift + left drag, two fingers",
