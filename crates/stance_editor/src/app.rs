@@ -1082,7 +1082,14 @@ impl StanceApp {
         self.notice_strip(ui);
         let rect = ui.available_rect_before_wrap();
         self.viewport_rect = rect;
-        let response = ui.allocate_rect(rect, Sense::click_and_drag());
+        // A stable id: the notice strip above comes and goes (with its own widgets), and an
+        // automatic id would change with it and end a drag in progress.
+        ui.allocate_rect(rect, Sense::hover());
+        let response = ui.interact(
+            rect,
+            egui::Id::new("stance_viewport"),
+            Sense::click_and_drag(),
+        );
         let input = ViewportInput::read(ui, &response);
         let bones = self.mannequin();
         let pointer = response.hover_pos();
