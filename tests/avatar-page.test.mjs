@@ -7,7 +7,7 @@ import { fileURLToPath } from "node:url";
 import { writeFileSync, mkdtempSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { join } from "node:path";
-import { BACKGROUND, CONFIGURATIONS, decodePng, launch, openEditor, saveArtifact, serve } from "./browser.mjs";
+import { BACKGROUND, CONFIGURATIONS, decodePng, launch, openEditor, saveArtifact, freshStoragePerTab, serve } from "./browser.mjs";
 
 const SHARED_AVATAR = fileURLToPath(new URL("../../shared/avatars/Black_F_2_Casual.glb", import.meta.url));
 
@@ -16,12 +16,7 @@ let context;
 before(async () => {
   site = await serve();
   context = await launch(CONFIGURATIONS.webgl2);
-  await context.addInitScript(() => {
-    if (!window.sessionStorage.getItem("stance-test-tab")) {
-      window.localStorage.clear();
-      window.sessionStorage.setItem("stance-test-tab", "1");
-    }
-  });
+  await freshStoragePerTab(context);
 });
 after(async () => {
   await context?.close();

@@ -35,6 +35,17 @@ export async function launch(configuration) {
   });
 }
 
+/** Each new tab starts from empty storage (no autosave of another test); a reload in the same
+ * tab keeps it. */
+export async function freshStoragePerTab(context) {
+  await context.addInitScript(() => {
+    if (!window.sessionStorage.getItem("stance-test-tab")) {
+      window.localStorage.clear();
+      window.sessionStorage.setItem("stance-test-tab", "1");
+    }
+  });
+}
+
 export async function serve() {
   const server = await startServer(0);
   const { port } = server.address();

@@ -3,21 +3,14 @@
 // (world and screen) and the rectangles of the main buttons.
 import { after, before, describe, test } from "node:test";
 import assert from "node:assert/strict";
-import { CONFIGURATIONS, launch, openEditor, saveArtifact, serve } from "./browser.mjs";
+import { CONFIGURATIONS, launch, openEditor, saveArtifact, freshStoragePerTab, serve } from "./browser.mjs";
 
 let site;
 let context;
 before(async () => {
   site = await serve();
   context = await launch(CONFIGURATIONS.webgl2);
-  // Each new tab starts from empty storage (no autosave of another test); a reload in the
-  // same tab keeps it.
-  await context.addInitScript(() => {
-    if (!window.sessionStorage.getItem("stance-test-tab")) {
-      window.localStorage.clear();
-      window.sessionStorage.setItem("stance-test-tab", "1");
-    }
-  });
+  await freshStoragePerTab(context);
 });
 after(async () => {
   await context?.close();

@@ -9,7 +9,7 @@ import { mkdtempSync, readFileSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { dirname, join } from "node:path";
 import { fileURLToPath } from "node:url";
-import { CONFIGURATIONS, launch, openEditor, serve } from "./browser.mjs";
+import { CONFIGURATIONS, freshStoragePerTab, launch, openEditor, serve } from "./browser.mjs";
 
 const root = join(dirname(fileURLToPath(import.meta.url)), "..");
 const RATE_HZ = 50;
@@ -106,11 +106,8 @@ before(async () => {
 
   site = await serve();
   context = await launch(CONFIGURATIONS.webgl2);
+  await freshStoragePerTab(context);
   await context.addInitScript(() => {
-    if (!window.sessionStorage.getItem("stance-test-tab")) {
-      window.localStorage.clear();
-      window.sessionStorage.setItem("stance-test-tab", "1");
-    }
     // A serial port whose bytes the test pushes, and which records what the page writes.
     const serialListeners = {};
     const fakeSerial = { opened: null, written: [], controller: null };

@@ -48,25 +48,11 @@ window.stanceHost = {
     return url.href;
   },
   download(fileName, text) {
-    const blob = new Blob([text], { type: "application/json" });
-    const anchor = document.createElement("a");
-    anchor.href = URL.createObjectURL(blob);
-    anchor.download = fileName;
-    document.body.append(anchor);
-    anchor.click();
-    anchor.remove();
-    setTimeout(() => URL.revokeObjectURL(anchor.href), 10000);
+    offerDownload(fileName, new Blob([text], { type: "application/json" }));
   },
   // Binary files (sensor recordings, posed avatars).
   downloadBytes(fileName, bytes) {
-    const blob = new Blob([bytes], { type: "application/octet-stream" });
-    const anchor = document.createElement("a");
-    anchor.href = URL.createObjectURL(blob);
-    anchor.download = fileName;
-    document.body.append(anchor);
-    anchor.click();
-    anchor.remove();
-    setTimeout(() => URL.revokeObjectURL(anchor.href), 10000);
+    offerDownload(fileName, new Blob([bytes], { type: "application/octet-stream" }));
   },
   // Motion-capture sensors over WebSerial / WebHID (web/sensors.js).
   connectSensor(requestJson) {
@@ -88,6 +74,16 @@ window.stanceHost = {
     );
   },
 };
+
+function offerDownload(fileName, blob) {
+  const anchor = document.createElement("a");
+  anchor.href = URL.createObjectURL(blob);
+  anchor.download = fileName;
+  document.body.append(anchor);
+  anchor.click();
+  anchor.remove();
+  setTimeout(() => URL.revokeObjectURL(anchor.href), 10000);
+}
 
 async function fetchWithProgress(url) {
   const status = loading.querySelector("p");

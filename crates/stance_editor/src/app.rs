@@ -1087,7 +1087,7 @@ impl StanceApp {
         ui.allocate_rect(rect, Sense::hover());
         let response = ui.interact(
             rect,
-            egui::Id::new("stance_viewport"),
+            egui::Id::unique("stance_viewport"),
             Sense::click_and_drag(),
         );
         let input = ViewportInput::read(ui, &response);

@@ -9,12 +9,14 @@ use egui::{Modifiers, PointerButton, Pos2};
 use egui_kittest::Harness;
 use egui_kittest::kittest::{NodeT, Queryable};
 use glam::DVec3;
-use serde_json::Value;
 use stance_asset::{LoadOptions, export_glb, load_avatar, make_default_avatar};
 use stance_editor::posing::pin_task;
 use stance_editor::{MemoryHost, NoHostHooks, StanceApp};
 use stance_hanim::{LevelOfArticulation, SkeletonOptions};
 use stance_ik::Frames;
+
+mod common;
+use common::{harness_sized, settle, state};
 
 /// A small skinned humanoid with H-Anim joint names (the generated default avatar), as GLB.
 fn avatar_bytes() -> Vec<u8> {
@@ -25,26 +27,7 @@ fn harness_with_avatar(host: &MemoryHost) -> Harness<'static, StanceApp> {
     let mut app = StanceApp::without_gpu(Box::new(host.clone())).unwrap();
     app.load_avatar("figure.glb", &avatar_bytes());
     assert!(app.avatar().is_some(), "{:?}", app.notice());
-    let frame = eframe::Frame::_new_kittest();
-    let mut harness = Harness::builder()
-        .with_size(egui::vec2(1280.0, 800.0))
-        .build_ui_state(move |ui, app: &mut StanceApp| app.show(ui, &frame), app);
-    settle(&mut harness);
-    harness
-}
-
-fn settle(harness: &mut Harness<'static, StanceApp>) {
-    for _ in 0..400 {
-        harness.step();
-        if harness.state().session().is_settled() {
-            break;
-        }
-    }
-    harness.run_steps(2);
-}
-
-fn state(harness: &Harness<'static, StanceApp>) -> Value {
-    serde_json::from_str(&harness.state().state_json()).unwrap()
+    harness_sized(app, egui::vec2(1280.0, 800.0))
 }
 
 fn notice(harness: &Harness<'static, StanceApp>) -> String {

@@ -6,50 +6,19 @@
 use egui::{Key, Modifiers, PointerButton, Pos2};
 use egui_kittest::Harness;
 use egui_kittest::kittest::{NodeT, Queryable};
-use serde_json::Value;
 use stance_document::{Document, TaskKindSpec};
 use stance_editor::{MemoryHost, StanceApp};
+
+mod common;
+use common::{click_at, harness_for, screen_position, settle, state};
 
 fn harness(host: &MemoryHost) -> Harness<'static, StanceApp> {
     let app = StanceApp::without_gpu(Box::new(host.clone())).unwrap();
     harness_for(app)
 }
 
-fn harness_for(app: StanceApp) -> Harness<'static, StanceApp> {
-    let frame = eframe::Frame::_new_kittest();
-    let mut harness = Harness::builder()
-        .with_size(egui::vec2(1280.0, 720.0))
-        .build_ui_state(move |ui, app: &mut StanceApp| app.show(ui, &frame), app);
-    settle(&mut harness);
-    harness
-}
-
-/// Runs frames until the solver has settled (or a generous bound).
-fn settle(harness: &mut Harness<'static, StanceApp>) {
-    for _ in 0..400 {
-        harness.step();
-        if harness.state().session().is_settled() {
-            break;
-        }
-    }
-    harness.run_steps(2);
-}
-
-fn state(harness: &Harness<'static, StanceApp>) -> Value {
-    serde_json::from_str(&harness.state().state_json()).unwrap()
-}
-
 fn document(harness: &Harness<'static, StanceApp>) -> Document {
     harness.state().session().document()
-}
-
-fn screen_position(harness: &Harness<'static, StanceApp>, joint: &str) -> Pos2 {
-    let state = state(harness);
-    let xy = &state["screen"][joint];
-    Pos2::new(
-        xy[0].as_f64().unwrap() as f32,
-        xy[1].as_f64().unwrap() as f32,
-    )
 }
 
 fn joint_world(harness: &Harness<'static, StanceApp>, joint: &str) -> [f64; 3] {
@@ -396,18 +365,7 @@ fn the_ring_gizmo_turns_the_selected_joint_within_its_limits() {
     let pelvis = screen_position(&harness, "sacroiliac");
     let outward = egui::vec2((wrist.x - pelvis.x).signum() * 3.0, 0.0);
     let on_forearm = elbow + (wrist - elbow) * 0.6 + outward;
-    harness.event(egui::Event::PointerMoved(on_forearm));
-    harness.step();
-    for pressed in [true, false] {
-        harness.event(egui::Event::PointerButton {
-            pos: on_forearm,
-            button: PointerButton::Primary,
-            pressed,
-            modifiers: Modifiers::NONE,
-        });
-        harness.step();
-    }
-    harness.run_steps(2);
+    click_at(&mut harness, on_forearm);
     let selected = state(&harness);
     assert_eq!(selected["selected"], "r_elbow");
     let ring = selected["rings"].as_array().unwrap()[0].clone();
@@ -444,22 +402,6 @@ fn the_ring_gizmo_turns_the_selected_joint_within_its_limits() {
 // ---------------------------------------------------------------------------------------------
 // Editing tasks in the tasks panel: every edit shows in the document and one undo takes it
 // back exactly.
-
-/// A click like a hand makes it: the pointer comes, presses, and releases a frame later.
-fn click_at(harness: &mut Harness<'static, StanceApp>, pos: Pos2) {
-    harness.event(egui::Event::PointerMoved(pos));
-    harness.step();
-    for pressed in [true, false] {
-        harness.event(egui::Event::PointerButton {
-            pos,
-            button: PointerButton::Primary,
-            pressed,
-            modifiers: Modifiers::NONE,
-        });
-        harness.step();
-    }
-    harness.run_steps(2);
-}
 
 /// Clicks the widget labelled `label` (the only one).
 fn click_label(harness: &mut Harness<'static, StanceApp>, label: &str) {
@@ -726,18 +668,7 @@ fn dragging_the_swivel_handle_turns_the_elbow_and_the_hand_stays() {
     let pelvis = screen_position(&harness, "sacroiliac");
     let outward = egui::vec2((elbow.x - pelvis.x).signum() * 3.0, 0.0);
     let on_arm = shoulder + (elbow - shoulder) * 0.5 + outward;
-    harness.event(egui::Event::PointerMoved(on_arm));
-    harness.step();
-    for pressed in [true, false] {
-        harness.event(egui::Event::PointerButton {
-            pos: on_arm,
-            button: PointerButton::Primary,
-            pressed,
-            modifiers: Modifiers::NONE,
-        });
-        harness.step();
-    }
-    harness.run_steps(2);
+    click_at(&mut harness, on_arm);
     let selected = state(&harness);
     assert_eq!(selected["selected"], "r_shoulder");
     let swivel = selected["swivel"].clone();

@@ -21,6 +21,9 @@ use stance_mocap::fob::{FobConfig, FobMode, encode_record};
 use stance_mocap::simulate::{SimulatedDevice, SimulationOptions, simulate};
 use stance_mocap::{Sample, SensorId};
 
+mod common;
+use common::{click_button, harness_for, state};
+
 const RATE_HZ: f64 = 50.0;
 
 fn fob_group_config() -> FobConfig {
@@ -87,44 +90,7 @@ fn harness(host: &MemoryHost) -> (Harness<'static, StanceApp>, Sender<HostMessag
     let app = StanceApp::without_gpu(Box::new(host.clone()))
         .unwrap()
         .with_inbox(receiver);
-    let frame = eframe::Frame::_new_kittest();
-    let mut harness = Harness::builder()
-        .with_size(egui::vec2(1280.0, 720.0))
-        .build_ui_state(move |ui, app: &mut StanceApp| app.show(ui, &frame), app);
-    harness.run_steps(3);
-    (harness, sender)
-}
-
-fn state(harness: &Harness<'static, StanceApp>) -> Value {
-    serde_json::from_str(&harness.state().state_json()).unwrap()
-}
-
-fn click_button(harness: &mut Harness<'static, StanceApp>, name: &str) {
-    let state = state(harness);
-    let rect = &state["buttons"][name];
-    assert!(rect.is_array(), "no button {name} in {}", state["buttons"]);
-    let [x, y, w, h] = [0, 1, 2, 3].map(|i| rect[i].as_f64().unwrap() as f32);
-    let centre = egui::pos2(x + w / 2.0, y + h / 2.0);
-    harness.hover_at(centre);
-    harness.run_steps(1);
-    eprintln!(
-        "{name} at {centre:?}: layer {:?}",
-        harness.ctx.layer_id_at(centre)
-    );
-    harness.event(egui::Event::PointerButton {
-        pos: centre,
-        button: egui::PointerButton::Primary,
-        pressed: true,
-        modifiers: egui::Modifiers::NONE,
-    });
-    harness.run_steps(1);
-    harness.event(egui::Event::PointerButton {
-        pos: centre,
-        button: egui::PointerButton::Primary,
-        pressed: false,
-        modifiers: egui::Modifiers::NONE,
-    });
-    harness.run_steps(2);
+    (harness_for(app), sender)
 }
 
 fn send_bytes(sender: &Sender<HostMessage>, bytes: &[u8]) {

@@ -766,28 +766,14 @@ fn kind_fields(
                 edit = Some(EditKind::TaskField(index, "point"));
             }
             ui.end_row();
-            ui.label("axes");
-            if axes_editor(ui, axes) {
-                edit = Some(EditKind::TaskField(index, "axes"));
+            if let Some(changed) = axes_and_goal_rows(ui, index, axes, target) {
+                edit = Some(changed);
             }
-            ui.end_row();
-            ui.label("goal");
-            if vector_editor(ui, target, *axes) {
-                edit = Some(EditKind::TaskField(index, "target"));
-            }
-            ui.end_row();
         }
         TaskKindSpec::Com { axes, target } => {
-            ui.label("axes");
-            if axes_editor(ui, axes) {
-                edit = Some(EditKind::TaskField(index, "axes"));
+            if let Some(changed) = axes_and_goal_rows(ui, index, axes, target) {
+                edit = Some(changed);
             }
-            ui.end_row();
-            ui.label("goal");
-            if vector_editor(ui, target, *axes) {
-                edit = Some(EditKind::TaskField(index, "target"));
-            }
-            ui.end_row();
         }
         TaskKindSpec::Gaze {
             joint,
@@ -996,6 +982,27 @@ fn orientation_editor(ui: &mut egui::Ui, quaternion: &mut [f64; 4]) -> bool {
         }
     }
     false
+}
+
+/// The "axes" and "goal" rows of a position or centre-of-mass task.
+fn axes_and_goal_rows(
+    ui: &mut egui::Ui,
+    index: usize,
+    axes: &mut Axes,
+    target: &mut [f64; 3],
+) -> Option<EditKind> {
+    let mut edit = None;
+    ui.label("axes");
+    if axes_editor(ui, axes) {
+        edit = Some(EditKind::TaskField(index, "axes"));
+    }
+    ui.end_row();
+    ui.label("goal");
+    if vector_editor(ui, target, *axes) {
+        edit = Some(EditKind::TaskField(index, "target"));
+    }
+    ui.end_row();
+    edit
 }
 
 fn axes_editor(ui: &mut egui::Ui, axes: &mut Axes) -> bool {

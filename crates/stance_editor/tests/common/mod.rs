@@ -1,0 +1,75 @@
+//! Helpers shared by the editor's kittest suites: a harness around `StanceApp::show`, frames
+//! until the solver settles, the published state, and clicks where a hand would make them.
+
+#![allow(dead_code)]
+
+use egui::{Modifiers, PointerButton, Pos2};
+use egui_kittest::Harness;
+use serde_json::Value;
+use stance_editor::StanceApp;
+
+/// The editor in a window of `size` points, run until it settles.
+pub fn harness_sized(app: StanceApp, size: egui::Vec2) -> Harness<'static, StanceApp> {
+    let frame = eframe::Frame::_new_kittest();
+    let mut harness = Harness::builder()
+        .with_size(size)
+        .build_ui_state(move |ui, app: &mut StanceApp| app.show(ui, &frame), app);
+    settle(&mut harness);
+    harness
+}
+
+/// The editor in a 1280 x 720 window (the smallest layout it supports), settled.
+pub fn harness_for(app: StanceApp) -> Harness<'static, StanceApp> {
+    harness_sized(app, egui::vec2(1280.0, 720.0))
+}
+
+/// Runs frames until the solver has settled (or a generous bound).
+pub fn settle(harness: &mut Harness<'static, StanceApp>) {
+    for _ in 0..400 {
+        harness.step();
+        if harness.state().session().is_settled() {
+            break;
+        }
+    }
+    harness.run_steps(2);
+}
+
+/// The state the page's test hook sees.
+pub fn state(harness: &Harness<'static, StanceApp>) -> Value {
+    serde_json::from_str(&harness.state().state_json()).unwrap()
+}
+
+/// Where a joint is on screen (points).
+pub fn screen_position(harness: &Harness<'static, StanceApp>, joint: &str) -> Pos2 {
+    let state = state(harness);
+    let xy = &state["screen"][joint];
+    Pos2::new(
+        xy[0].as_f64().unwrap() as f32,
+        xy[1].as_f64().unwrap() as f32,
+    )
+}
+
+/// A click like a hand makes it: the pointer comes, presses, and releases a frame later.
+pub fn click_at(harness: &mut Harness<'static, StanceApp>, pos: Pos2) {
+    harness.event(egui::Event::PointerMoved(pos));
+    harness.step();
+    for pressed in [true, false] {
+        harness.event(egui::Event::PointerButton {
+            pos,
+            button: PointerButton::Primary,
+            pressed,
+            modifiers: Modifiers::NONE,
+        });
+        harness.step();
+    }
+    harness.run_steps(2);
+}
+
+/// Clicks the button the editor published under `name` (see `buttons` in the state).
+pub fn click_button(harness: &mut Harness<'static, StanceApp>, name: &str) {
+    let state = state(harness);
+    let rect = &state["buttons"][name];
+    assert!(rect.is_array(), "no button {name} in {}", state["buttons"]);
+    let [x, y, w, h] = [0, 1, 2, 3].map(|i| rect[i].as_f64().unwrap() as f32);
+    click_at(harness, egui::pos2(x + w / 2.0, y + h / 2.0));
+}
