@@ -748,3 +748,41 @@ fn the_pin_tool_pins_a_body_part_in_one_click_and_undo_removes_the_pin() {
     settle(&mut harness);
     assert_eq!(document(&harness).tasks, before.tasks);
 }
+
+#[test]
+fn a_level_dragged_by_its_title_takes_the_place_of_another_and_undo_restores_the_order() {
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    let before = document(&harness);
+    let levels_of = |document: &Document| -> Vec<(u32, String)> {
+        document
+            .tasks
+            .iter()
+            .map(|task| (task.level, task.kind.name().to_owned()))
+            .collect()
+    };
+    // Default: feet at 1, balance at 2, comfort (posture) at 10.
+    assert!(levels_of(&before).contains(&(10, "posture".to_owned())));
+    let from = harness.get_by_label("Level 10").rect().center();
+    let onto = harness.get_by_label("Level 1").rect().center();
+    let path: Vec<Pos2> = (0..=12)
+        .map(|step| from + (onto - from) * (step as f32 / 12.0))
+        .collect();
+    drag(&mut harness, &path);
+    settle(&mut harness);
+    let after = document(&harness);
+    let moved = levels_of(&after);
+    assert!(moved.contains(&(1, "posture".to_owned())), "{moved:?}");
+    assert!(
+        after
+            .tasks
+            .iter()
+            .filter(|task| task.kind.name() == "position")
+            .all(|task| task.level == 2),
+        "the feet moved down one place: {moved:?}"
+    );
+    assert!(moved.contains(&(10, "com".to_owned())), "{moved:?}");
+    harness.key_press_modifiers(Modifiers::COMMAND, Key::Z);
+    settle(&mut harness);
+    assert_eq!(document(&harness).tasks, before.tasks);
+}

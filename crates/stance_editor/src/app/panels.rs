@@ -16,9 +16,13 @@ const GAVE_WAY_COLOR: Color32 = Color32::from_rgb(235, 150, 60);
 const PROBLEM_COLOR: Color32 = Color32::from_rgb(240, 90, 90);
 const INACTIVE_COLOR: Color32 = Color32::GRAY;
 
-/// The payload of a task dragged onto another level.
-#[derive(Debug, Clone, Copy)]
-struct DraggedTask(usize);
+/// What is being dragged in the tasks panel: a task (onto another level) or a whole level
+/// (onto another level's place).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Dragged {
+    Task(usize),
+    Level(u32),
+}
 
 impl StanceApp {
     pub(super) fn side_panel(&mut self, ui: &mut egui::Ui) {
@@ -293,6 +297,8 @@ impl StanceApp {
         let mut remove: Option<usize> = None;
         let mut move_to_level: Option<(usize, u32)> = None;
         let mut swap_levels: Option<(u32, u32)> = None;
+        // A level dropped onto another level's place (`None`: made the lowest).
+        let mut move_level: Option<(u32, Option<u32>)> = None;
 
         for (position, &level) in levels.iter().enumerate() {
             let members: Vec<usize> = (0..tasks.len())
@@ -306,14 +312,21 @@ impl StanceApp {
                         .is_some_and(|status| status.gave_way.is_none() && status.problem.is_none())
             });
             let frame = egui::Frame::new().inner_margin(4.0).corner_radius(4.0);
-            let (_, dropped) = ui.dnd_drop_zone::<DraggedTask, ()>(frame, |ui| {
+            let (_, dropped) = ui.dnd_drop_zone::<Dragged, ()>(frame, |ui| {
                 ui.horizontal(|ui| {
                     let (mark, color) = if level_met {
                         ("all met", MET_COLOR)
                     } else {
                         ("not all met", GAVE_WAY_COLOR)
                     };
-                    ui.label(RichText::new(format!("Level {level}")).strong());
+                    // The level's title drags the whole level onto another level's place.
+                    ui.dnd_drag_source(
+                        egui::Id::NULL.with(("stance_level_drag", level)),
+                        Dragged::Level(level),
+                        |ui| ui.label(RichText::new(format!("Level {level}")).strong()),
+                    )
+                    .response
+                    .on_hover_text("drag onto another level to take its place");
                     ui.colored_label(color, mark).on_hover_text(if level_met {
                         "every task of this level is met"
                     } else {
@@ -346,7 +359,7 @@ impl StanceApp {
                     // Only the handle drags the task: a drag source senses the press at once,
                     // which would take the clicks of the header and the fields under it.
                     ui.horizontal_top(|ui| {
-                        ui.dnd_drag_source(id, DraggedTask(index), |ui| {
+                        ui.dnd_drag_source(id, Dragged::Task(index), |ui| {
                             ui.label(RichText::new("::").strong());
                         })
                         .response
@@ -366,22 +379,30 @@ impl StanceApp {
                     });
                 }
             });
-            if let Some(dragged) = dropped {
-                move_to_level = Some((dragged.0, level));
+            match dropped.as_deref() {
+                Some(Dragged::Task(index)) => move_to_level = Some((*index, level)),
+                Some(Dragged::Level(from)) if *from != level => {
+                    move_level = Some((*from, Some(level)));
+                }
+                _ => {}
             }
         }
         // Dropping below the last level makes a new lowest level.
         let lowest = levels.last().copied().unwrap_or(0) + 1;
         let (_, dropped) =
-            ui.dnd_drop_zone::<DraggedTask, ()>(egui::Frame::new().inner_margin(4.0), |ui| {
+            ui.dnd_drop_zone::<Dragged, ()>(egui::Frame::new().inner_margin(4.0), |ui| {
                 ui.label(
-                    RichText::new("drop a task here for a new lowest level")
-                        .small()
-                        .weak(),
+                    RichText::new(
+                        "drop a task here for a new lowest level, or a level to make it the lowest",
+                    )
+                    .small()
+                    .weak(),
                 );
             });
-        if let Some(dragged) = dropped {
-            move_to_level = Some((dragged.0, lowest));
+        match dropped.as_deref() {
+            Some(Dragged::Task(index)) => move_to_level = Some((*index, lowest)),
+            Some(Dragged::Level(from)) => move_level = Some((*from, None)),
+            None => {}
         }
 
         if let Some(index) = remove
@@ -393,6 +414,9 @@ impl StanceApp {
             if let Some(task) = tasks.get_mut(index) {
                 task.level = level;
             }
+            self.commit_tasks(EditKind::Command, tasks);
+        } else if let Some((from, onto)) = move_level {
+            reorder_levels(&mut tasks, &levels, from, onto);
             self.commit_tasks(EditKind::Command, tasks);
         } else if let Some((a, b)) = swap_levels {
             for task in &mut tasks {
@@ -982,6 +1006,29 @@ fn orientation_editor(ui: &mut egui::Ui, quaternion: &mut [f64; 4]) -> bool {
         }
     }
     false
+}
+
+/// Moves the group of tasks at level `from` to the place of level `onto` (the last place when
+/// `None`); the groups in between shift by one. The set of level numbers stays the same, so
+/// the default gaps (1, 2, 10...) are kept.
+fn reorder_levels(tasks: &mut [TaskSpec], levels: &[u32], from: u32, onto: Option<u32>) {
+    let mut order: Vec<u32> = levels.to_vec();
+    let Some(source) = order.iter().position(|&level| level == from) else {
+        return;
+    };
+    order.remove(source);
+    let target = onto
+        .and_then(|onto| levels.iter().position(|&level| level == onto))
+        .unwrap_or(order.len())
+        .min(order.len());
+    order.insert(target, from);
+    for task in tasks.iter_mut() {
+        if let Some(rank) = order.iter().position(|&level| level == task.level)
+            && let Some(&number) = levels.get(rank)
+        {
+            task.level = number;
+        }
+    }
 }
 
 /// The "axes" and "goal" rows of a position or centre-of-mass task.
