@@ -3,6 +3,9 @@
 # scenario. The wasm build is the same CLI compiled for wasm32-wasip1 and run by Node's
 # built-in WASI (V8, the engine of Chromium); wall-clock time comes from WASI clock_time_get.
 #
+# Then the same for the sensor decoders (`stance_mocap`'s decode_throughput example): MB/s
+# natively and as wasm.
+#
 # Usage: crates/stance_cli/bench-wasm.sh [extra `stance bench` flags, e.g. --millis 500]
 # Needs: rustup target wasm32-wasip1 (added below if missing), node >= 20.
 set -euo pipefail
@@ -14,6 +17,9 @@ cargo build --release -p stance_cli
 # wasm SIMD); the web build should enable it too.
 CARGO_TARGET_WASM32_WASIP1_RUSTFLAGS="${CARGO_TARGET_WASM32_WASIP1_RUSTFLAGS:--C target-feature=+simd128}" \
   cargo build --release -p stance_cli --target wasm32-wasip1
+CARGO_TARGET_WASM32_WASIP1_RUSTFLAGS="${CARGO_TARGET_WASM32_WASIP1_RUSTFLAGS:--C target-feature=+simd128}" \
+  cargo build --release -p stance_mocap --example decode_throughput --target wasm32-wasip1
+cargo build --release -p stance_mocap --example decode_throughput
 runner=$(mktemp --suffix=.mjs)
 trap 'rm -f "$runner"' EXIT
 cat > "$runner" <<'JS'
@@ -39,4 +45,19 @@ for (const k of Object.keys(n)) {
 }
 for (const r of rows) console.log(r.map((c, i) => String(c).padStart(i ? 15 : 3)).join(" "));
 console.log(JSON.stringify({ native: n, wasm: w }));
+'
+echo "decoders, native..." >&2
+decode_native=$("$target_dir/release/examples/decode_throughput")
+echo "decoders, wasm..." >&2
+decode_wasm=$(node --no-warnings "$runner" "$target_dir/wasm32-wasip1/release/examples/decode_throughput.wasm")
+NATIVE="$decode_native" WASM="$decode_wasm" node -e '
+const parse = (text) => Object.fromEntries(text.trim().split("\n").map((line) => {
+  const [name, rate] = line.trim().split(/\s+/);
+  return [name, Number(rate)];
+}));
+const n = parse(process.env.NATIVE), w = parse(process.env.WASM);
+console.log("decoder        native MB/s   wasm MB/s   wasm/native");
+for (const k of Object.keys(n)) {
+  console.log(k.padEnd(12), n[k].toFixed(1).padStart(12), (w[k] ?? NaN).toFixed(1).padStart(11), ((w[k] ?? NaN) / n[k]).toFixed(2).padStart(13));
+}
 '
