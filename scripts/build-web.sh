@@ -11,7 +11,7 @@ wasm=target/wasm32-unknown-unknown/release/stance_web.wasm
 mkdir -p dist/pkg
 if [ ! -f dist/pkg/stance_web_bg.wasm ] || [ "$wasm" -nt dist/pkg/stance_web_bg.wasm ]; then
   say "wasm-bindgen"
-  wasm-bindgen --target web --no-typescript --out-dir dist/pkg "$wasm"
+  wasm-bindgen --target web --no-typescript --remove-name-section --out-dir dist/pkg "$wasm"
 fi
 cp -r web/. dist/
 cp -r public/. dist/
