@@ -30,6 +30,10 @@ pub const SENSOR_SETTINGS_KEY: &str = "stance.sensors.settings";
 pub const DEFAULT_REPLAY_RATE_HZ: f64 = 100.0;
 /// Bytes fed to the decoder at a time while replaying (small enough to stop on time).
 const REPLAY_CHUNK_BYTES: usize = 32;
+/// At most this many bytes are replayed per frame, so that a file the decoder cannot read
+/// (no samples to pace it) plays out over frames with its progress shown instead of freezing
+/// the page.
+const MAX_REPLAY_BYTES_PER_TICK: usize = 256 * 1024;
 /// Seconds of arrivals kept to measure each sensor's rate.
 const RATE_WINDOW_SECS: f64 = 1.0;
 /// Latency samples kept for the median and maximum.
@@ -448,6 +452,8 @@ pub struct SensorHub {
     assignments: BTreeMap<SensorId, SensorAssignment>,
     calibration: Option<Calibration<String>>,
     recording: Option<Vec<u8>>,
+    /// The recording reached [`MAX_RECORDING_BYTES`] and takes nothing more.
+    recording_full: bool,
     replay: Option<Replay>,
     samples: u64,
     scratch: Vec<Sample>,
@@ -486,6 +492,7 @@ impl SensorHub {
             assignments: BTreeMap::new(),
             calibration: None,
             recording: None,
+            recording_full: false,
             replay: None,
             samples: 0,
             scratch: Vec::new(),
@@ -612,10 +619,16 @@ impl SensorHub {
     fn record(&mut self, bytes: &[u8]) {
         if let Some(recording) = &mut self.recording {
             if recording.len() + bytes.len() > MAX_RECORDING_BYTES {
+                self.recording_full = true;
                 return;
             }
             recording.extend_from_slice(bytes);
         }
+    }
+
+    /// The recording is full (see [`MAX_RECORDING_BYTES`]): stop and save it.
+    pub fn is_recording_full(&self) -> bool {
+        self.recording.is_some() && self.recording_full
     }
 
     fn ingest(&mut self, samples: &[Sample], now_secs: f64, arrived: web_time::Instant) {
@@ -646,6 +659,7 @@ impl SensorHub {
     /// that `stance decode` and the replay read).
     pub fn start_recording(&mut self) {
         self.recording = Some(Vec::new());
+        self.recording_full = false;
     }
 
     /// Stops recording and gives the bytes (a file named by [`SensorHub::recording_name`]).
@@ -707,7 +721,11 @@ impl SensorHub {
         // Samples per sensor due by now; the busiest sensor sets the pace.
         let wanted = ((now_secs - replay.started_secs).max(0.0) * rate).ceil() as u64;
         let arrived = web_time::Instant::now();
-        while self.busiest_track_samples() < wanted && replay.offset < replay.bytes.len() {
+        let tick_end = replay.offset.saturating_add(MAX_REPLAY_BYTES_PER_TICK);
+        while self.busiest_track_samples() < wanted
+            && replay.offset < replay.bytes.len()
+            && replay.offset < tick_end
+        {
             let end = (replay.offset + REPLAY_CHUNK_BYTES).min(replay.bytes.len());
             let chunk = replay
                 .bytes

@@ -481,3 +481,28 @@ fn settings_survive_as_json_and_bad_requests_say_why() {
     assert_eq!(json["kind"], "serial");
     assert_eq!(json["baud_rate"], 115_200);
 }
+
+/// A file the decoder cannot read plays out over frames (bounded work per frame) and ends
+/// with counts that say so.
+#[test]
+fn an_unreadable_replay_is_paced_and_reported() {
+    let mut hub = SensorHub::new(SensorSettings::default());
+    let garbage: Vec<u8> = (0..1_000_000u32)
+        .map(|i| (i.wrapping_mul(2_654_435_761) >> 24) as u8 & 0x7F)
+        .collect();
+    hub.start_replay("noise.bin", garbage, 0.0);
+    let mut ticks = 0;
+    let message = loop {
+        ticks += 1;
+        let (done, total) = hub.replay_progress().unwrap();
+        assert!(done <= total);
+        if let Some(message) = hub.tick(f64::from(ticks) / 60.0) {
+            break message;
+        }
+        assert!(ticks < 100, "the replay ends");
+    };
+    assert!(ticks >= 4, "spread over frames: {ticks}");
+    assert!(message.contains("0 samples"), "{message}");
+    assert_eq!(hub.stats().bytes_received, 1_000_000);
+    assert_eq!(hub.sample_count(), 0);
+}

@@ -312,6 +312,15 @@ impl StanceApp {
         {
             ui.label(format!("Recording ({} KiB received)", bytes / 1024));
         }
+        if self.sensors.is_recording_full() {
+            ui.colored_label(
+                ui.visuals().warn_fg_color,
+                format!(
+                    "The recording is full ({} MiB): stop and save it.",
+                    crate::sensors::MAX_RECORDING_BYTES / (1024 * 1024)
+                ),
+            );
+        }
         if let Some((median, max)) = self.sensors.latency_ms() {
             ui.label(format!(
                 "Bytes to posture: {median:.1} ms median, {max:.1} ms max"
