@@ -8,6 +8,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export CARGO_TERM_COLOR="${CARGO_TERM_COLOR:-always}"
+# CI builds from a fresh clone once: incremental compilation only adds work there.
+if [ -n "${CI:-}" ]; then export CARGO_INCREMENTAL=0; fi
 started=$SECONDS
 step() { printf '\n\033[1;34m[test %3ds]\033[0m %s\n' "$((SECONDS - started))" "$*"; }
 

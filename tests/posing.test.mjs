@@ -141,8 +141,8 @@ describe("posing in the browser", () => {
     const solverMs = [];
     await page.mouse.move(grabX, grabY);
     await page.mouse.down();
-    for (let step = 1; step <= 60; step += 1) {
-      await page.mouse.move(grabX + 40 * Math.sin(step / 10), grabY - step);
+    for (let step = 1; step <= 30; step += 1) {
+      await page.mouse.move(grabX + 40 * Math.sin(step / 5), grabY - 2 * step);
       const sample = await state(page);
       cpuMs.push(sample.frame_ms);
       solverMs.push(sample.solver_ms);
@@ -155,7 +155,7 @@ describe("posing in the browser", () => {
       return t.slice(1).map((time, i) => time - t[i]);
     });
     assert.equal(during.pulling, true, "the drag grabbed the body");
-    assert.ok(intervals.length > 20, `frames were drawn while dragging: ${intervals.length}`);
+    assert.ok(intervals.length > 10, `frames were drawn while dragging: ${intervals.length}`);
     const levelOne = during.tasks.filter((task) => task.level === 1);
     for (const task of levelOne) {
       assert.ok(task.residual < 1e-3, `level 1 holds while pulling: ${task.description} ${task.residual}`);
