@@ -250,7 +250,8 @@ pub fn prioritized_step(
         }
     }
     let nf = kn.free.len();
-    kn.v.clear();
+    // Column j of `v` is only read in rows j.., which `extend_basis` writes before any read:
+    // stale values elsewhere are never seen, so the buffer is not cleared.
     kn.v.resize(nf * nf, 0.0);
     kn.beta.clear();
     kn.beta.resize(nf, 0.0);
