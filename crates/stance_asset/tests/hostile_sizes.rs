@@ -63,18 +63,6 @@ fn views_over_one_buffer(primitives: usize, buffer_bytes: usize) -> Vec<u8> {
     common::join(&gltf, &vec![0u8; buffer_bytes])
 }
 
-#[cfg(target_os = "linux")]
-fn status_kb(key: &str) -> u64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with(key))
-                .and_then(|l| l.split_whitespace().nth(1).and_then(|v| v.parse().ok()))
-        })
-        .unwrap_or(0)
-}
-
 /// 4 000 views over one 4 MiB buffer: copying each view would allocate 16 GB from a
 /// 4.6 MB file. Views are borrowed, so the file loads within a 16 MiB budget and the peak
 /// memory grows by little more than the file.
@@ -87,12 +75,12 @@ fn many_views_over_one_buffer_are_not_copied() {
     #[cfg(target_os = "linux")]
     let _ = std::fs::write("/proc/self/clear_refs", "5");
     #[cfg(target_os = "linux")]
-    let before = status_kb("VmRSS:");
+    let before = common::status_kb("VmRSS:");
     let avatar = load_avatar(&glb, &options(16 * MIB)).unwrap();
     assert_eq!(avatar.meshes[0].primitives.len(), 4_000);
     #[cfg(target_os = "linux")]
     {
-        let grown_mb = status_kb("VmHWM:").saturating_sub(before) / 1024;
+        let grown_mb = common::status_kb("VmHWM:").saturating_sub(before) / 1024;
         eprintln!("4 000 views over a 4 MiB buffer: peak RSS +{grown_mb} MB");
         assert!(grown_mb < 256, "peak RSS grew by {grown_mb} MB");
     }

@@ -161,17 +161,7 @@ fn hand_reach_moves_the_hand_at_loa1_and_loa2() {
 #[cfg(not(target_arch = "wasm32"))]
 #[test]
 fn load_time_and_memory_report() {
-    fn status_kb(key: &str) -> u64 {
-        std::fs::read_to_string("/proc/self/status")
-            .ok()
-            .and_then(|s| {
-                s.lines()
-                    .find(|l| l.starts_with(key))
-                    .and_then(|l| l.split_whitespace().nth(1).and_then(|v| v.parse().ok()))
-            })
-            .unwrap_or(0)
-    }
-    let rss_before = status_kb("VmRSS:");
+    let rss_before = common::status_kb("VmRSS:");
     let t = std::time::Instant::now();
     let geometry_only = load_avatar(
         AVATAR,
@@ -186,7 +176,7 @@ fn load_time_and_memory_report() {
     let t = std::time::Instant::now();
     let avatar = load_avatar(AVATAR, &LoadOptions::default()).unwrap();
     let secs = t.elapsed().as_secs_f64();
-    let rss_after = status_kb("VmRSS:");
+    let rss_after = common::status_kb("VmRSS:");
     let mesh_bytes: usize = avatar
         .meshes
         .iter()
@@ -209,7 +199,7 @@ fn load_time_and_memory_report() {
         mesh_bytes as f64 / 1e6,
         tex_bytes as f64 / 1e6,
         (rss_after.saturating_sub(rss_before)) as f64 / 1e3,
-        status_kb("VmHWM:") as f64 / 1e3,
+        common::status_kb("VmHWM:") as f64 / 1e3,
     );
 }
 

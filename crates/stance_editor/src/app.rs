@@ -1003,15 +1003,11 @@ impl StanceApp {
     }
 
     fn pick(&self, bones: &[MannequinBone], pointer: egui::Pos2) -> Option<(usize, DVec3)> {
-        let rect = self.viewport_rect;
-        if !rect.contains(pointer) {
+        if !self.viewport_rect.contains(pointer) {
             return None;
         }
-        let local = pointer - rect.min;
-        let (origin, direction) = self.camera.ray_through(
-            Vec2::new(local.x, local.y),
-            Vec2::new(rect.width(), rect.height()),
-        );
+        let (origin, direction) = self.pointer_ray(pointer);
+        let (origin, direction) = (origin.as_vec3(), direction.as_vec3());
         let capsules: Vec<_> = bones.iter().map(|bone| bone.capsule).collect();
         let hit = pick_capsule(&capsules, origin, direction)?;
         let bone = bones.get(hit.index)?;
@@ -1024,22 +1020,21 @@ impl StanceApp {
         pointer: egui::Pos2,
         plane_point_world: DVec3,
     ) -> Option<DVec3> {
+        let (origin, direction) = self.pointer_ray(pointer);
+        let normal = (self.camera.target_world.as_dvec3() - self.camera.eye_world().as_dvec3())
+            .normalize_or_zero();
+        ray_meets_plane(origin, direction, plane_point_world, normal, 1e-6)
+    }
+
+    /// The camera ray under the pointer: origin and direction in the world.
+    fn pointer_ray(&self, pointer: egui::Pos2) -> (DVec3, DVec3) {
         let rect = self.viewport_rect;
         let local = pointer - rect.min;
         let (origin, direction) = self.camera.ray_through(
             Vec2::new(local.x, local.y),
             Vec2::new(rect.width(), rect.height()),
         );
-        let origin = origin.as_dvec3();
-        let direction = direction.as_dvec3();
-        let normal = (self.camera.target_world.as_dvec3() - self.camera.eye_world().as_dvec3())
-            .normalize_or_zero();
-        let denominator = direction.dot(normal);
-        if denominator.abs() < 1e-6 {
-            return None;
-        }
-        let distance = (plane_point_world - origin).dot(normal) / denominator;
-        (distance > 0.0 && distance.is_finite()).then(|| origin + direction * distance)
+        (origin.as_dvec3(), direction.as_dvec3())
     }
 
     fn begin_pull(&mut self, joint: usize, point_world: DVec3) {
@@ -1491,6 +1486,23 @@ impl StanceApp {
         }
         self.publish_state();
     }
+}
+
+/// Where the ray `origin + t direction` (t > 0) meets the plane through `plane_point` with
+/// `normal`; `None` when the ray is within `min_cosine` of parallel to it or points away.
+fn ray_meets_plane(
+    origin: DVec3,
+    direction: DVec3,
+    plane_point: DVec3,
+    normal: DVec3,
+    min_cosine: f64,
+) -> Option<DVec3> {
+    let denominator = direction.dot(normal);
+    if denominator.abs() < min_cosine {
+        return None;
+    }
+    let distance = (plane_point - origin).dot(normal) / denominator;
+    (distance > 0.0 && distance.is_finite()).then(|| origin + direction * distance)
 }
 
 /// The WebAssembly memory the editor holds (bytes); `None` natively.

@@ -422,7 +422,6 @@ impl SensorTrack {
 /// A recording being played back as if it came from the device.
 #[derive(Debug, Clone)]
 struct Replay {
-    name: String,
     bytes: Vec<u8>,
     offset: usize,
     started_secs: f64,
@@ -459,6 +458,8 @@ pub struct SensorHub {
     scratch: Vec<Sample>,
     /// New orientations since the posture was last driven.
     fresh: bool,
+    /// The session's revision after the last drive (the body has not moved since when equal).
+    driven_revision: Option<u64>,
     /// When the oldest bytes not yet shown in a posture arrived.
     oldest_unshown: Option<web_time::Instant>,
     latencies_ms: VecDeque<f64>,
@@ -497,6 +498,7 @@ impl SensorHub {
             samples: 0,
             scratch: Vec::new(),
             fresh: false,
+            driven_revision: None,
             oldest_unshown: None,
             latencies_ms: VecDeque::new(),
         }
@@ -511,22 +513,28 @@ impl SensorHub {
         if settings == self.settings {
             return;
         }
-        let device_changed = settings.device != self.settings.device
-            || settings.decoder_config() != self.settings.decoder_config();
+        let decoder_changed = settings.decoder_config() != self.settings.decoder_config();
         self.settings = settings;
-        if device_changed {
+        if decoder_changed {
             self.decoder = new_decoder(&self.settings.decoder_config());
             self.forget_sensors();
         }
     }
 
+    /// A new device: readings, counts and calibration forgotten.
     fn forget_sensors(&mut self) {
-        self.decoder.reset();
-        self.tracks.clear();
+        self.reset_stream();
         self.calibration = None;
-        self.samples = 0;
         self.fresh = false;
         self.oldest_unshown = None;
+    }
+
+    /// A new stream from the same device (connect, replay): decoder, readings and counts start
+    /// again; the calibration stays.
+    fn reset_stream(&mut self) {
+        self.decoder.reset();
+        self.tracks.clear();
+        self.samples = 0;
     }
 
     pub fn link(&self) -> &SensorLink {
@@ -561,9 +569,7 @@ impl SensorHub {
     /// The page is opening a device: counts start again.
     pub fn begin_connect(&mut self) {
         self.replay = None;
-        self.decoder.reset();
-        self.samples = 0;
-        self.tracks.clear();
+        self.reset_stream();
         self.link = SensorLink::Connecting;
     }
 
@@ -684,22 +690,15 @@ impl SensorHub {
 
     /// Plays `bytes` back through the decoder at the replay rate, as if the device sent them.
     pub fn start_replay(&mut self, name: &str, bytes: Vec<u8>, now_secs: f64) {
-        self.forget_sensors_keep_calibration();
+        self.reset_stream();
         self.link = SensorLink::Replaying {
             name: name.to_owned(),
         };
         self.replay = Some(Replay {
-            name: name.to_owned(),
             bytes,
             offset: 0,
             started_secs: now_secs,
         });
-    }
-
-    fn forget_sensors_keep_calibration(&mut self) {
-        self.decoder.reset();
-        self.tracks.clear();
-        self.samples = 0;
     }
 
     /// Replay progress: bytes played and total.
@@ -727,23 +726,22 @@ impl SensorHub {
             && replay.offset < tick_end
         {
             let end = (replay.offset + REPLAY_CHUNK_BYTES).min(replay.bytes.len());
-            let chunk = replay
-                .bytes
-                .get(replay.offset..end)
-                .unwrap_or_default()
-                .to_vec();
+            let chunk = replay.bytes.get(replay.offset..end).unwrap_or_default();
             replay.offset = end;
-            self.receive_bytes(&chunk, now_secs, arrived);
+            self.receive_bytes(chunk, now_secs, arrived);
         }
         if replay.offset >= replay.bytes.len() {
             let mut tail = Vec::new();
             self.decoder.finish(&mut tail);
             self.ingest(&tail, now_secs, arrived);
-            self.link = SensorLink::Idle;
+            let name = match std::mem::replace(&mut self.link, SensorLink::Idle) {
+                SensorLink::Replaying { name } => name,
+                _ => "the recording".to_owned(),
+            };
             let stats = self.decoder.stats();
             return Some(format!(
-                "Replay of {} finished: {} samples, {} bad frames, {} bytes skipped.",
-                replay.name, stats.samples, stats.bad_frames, stats.skipped_bytes
+                "Replay of {name} finished: {} samples, {} bad frames, {} bytes skipped.",
+                stats.samples, stats.bad_frames, stats.skipped_bytes
             ));
         }
         self.replay = Some(replay);
@@ -907,13 +905,19 @@ impl SensorHub {
             session.hold_joints(&held);
         }
         let fresh = self.fresh;
-        match self.take_driven_rotations(session.skeleton(), session.frames(), !held.is_empty()) {
-            Some(rotations) => {
-                session.drive_joints(&rotations);
-                fresh
-            }
-            None => false,
+        // Nothing to redo while neither the readings nor the body changed.
+        let moved = self.driven_revision != Some(session.revision());
+        let rotations = self.take_driven_rotations(
+            session.skeleton(),
+            session.frames(),
+            !held.is_empty() && moved,
+        );
+        let used = rotations.is_some();
+        if let Some(rotations) = rotations {
+            session.drive_joints(&rotations);
         }
+        self.driven_revision = Some(session.revision());
+        fresh && used
     }
 
     /// Joints held by the calibrated sensors (whether or not a reading arrived yet).

@@ -4,8 +4,8 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+use egui::Modifiers;
 use egui::accesskit::Role;
-use egui::{Modifiers, PointerButton, Pos2};
 use egui_kittest::Harness;
 use egui_kittest::kittest::{NodeT, Queryable};
 use glam::DVec3;
@@ -16,7 +16,7 @@ use stance_hanim::{LevelOfArticulation, SkeletonOptions};
 use stance_ik::Frames;
 
 mod common;
-use common::{harness_sized, settle, state};
+use common::{drag_right_forearm_up, harness_sized, release_at, settle, state};
 
 /// A small skinned humanoid with H-Anim joint names (the generated default avatar), as GLB.
 fn avatar_bytes() -> Vec<u8> {
@@ -230,41 +230,10 @@ fn the_posed_avatar_is_exported_as_glb_that_reads_back_in_the_same_posture() {
     let mut harness = harness_with_avatar(&host);
 
     // Pull the right forearm up and out.
-    let screen = |harness: &Harness<'static, StanceApp>, joint: &str| {
-        let xy = &state(harness)["screen"][joint];
-        Pos2::new(
-            xy[0].as_f64().unwrap() as f32,
-            xy[1].as_f64().unwrap() as f32,
-        )
-    };
-    let wrist = screen(&harness, "r_radiocarpal");
-    let elbow = screen(&harness, "r_elbow");
-    let pelvis = screen(&harness, "sacroiliac");
-    let outward = egui::vec2((wrist.x - pelvis.x).signum() * 3.0, 0.0);
-    let start = elbow + (wrist - elbow) * 0.6 + outward;
-    let end = start + egui::vec2(-60.0, -120.0);
-    harness.event(egui::Event::PointerMoved(start));
-    harness.step();
-    harness.event(egui::Event::PointerButton {
-        pos: start,
-        button: PointerButton::Primary,
-        pressed: true,
-        modifiers: Modifiers::NONE,
-    });
-    harness.step();
-    for step in 1..=20 {
-        let t = step as f32 / 20.0;
-        harness.event(egui::Event::PointerMoved(start + (end - start) * t));
-        harness.step();
-    }
+    let (_, end) = drag_right_forearm_up(&mut harness);
     assert_eq!(state(&harness)["pulling"], true, "the drag grabbed the arm");
     harness.run_steps(20);
-    harness.event(egui::Event::PointerButton {
-        pos: end,
-        button: PointerButton::Primary,
-        pressed: false,
-        modifiers: Modifiers::NONE,
-    });
+    release_at(&mut harness, end);
     settle(&mut harness);
 
     harness.get_by_label("File").click();

@@ -10,7 +10,9 @@ use stance_document::{Document, TaskKindSpec};
 use stance_editor::{MemoryHost, StanceApp};
 
 mod common;
-use common::{click_at, harness_for, screen_position, settle, state};
+use common::{
+    click_at, drag_right_forearm_up, harness_for, release_at, screen_position, settle, state,
+};
 
 fn harness(host: &MemoryHost) -> Harness<'static, StanceApp> {
     let app = StanceApp::without_gpu(Box::new(host.clone())).unwrap();
@@ -105,27 +107,7 @@ fn dragging_the_right_hand_pulls_it_while_the_pinned_feet_hold() {
     let foot_before = joint_world(&harness, "l_talocrural");
     let hand_before = joint_world(&harness, "r_radiocarpal");
     // Press on the forearm below the elbow, on the side away from the body.
-    let wrist = screen_position(&harness, "r_radiocarpal");
-    let elbow = screen_position(&harness, "r_elbow");
-    let pelvis = screen_position(&harness, "sacroiliac");
-    let outward = egui::vec2((wrist.x - pelvis.x).signum() * 3.0, 0.0);
-    let start = elbow + (wrist - elbow) * 0.6 + outward;
-    let end = start + egui::vec2(-60.0, -120.0);
-
-    harness.event(egui::Event::PointerMoved(start));
-    harness.step();
-    harness.event(egui::Event::PointerButton {
-        pos: start,
-        button: PointerButton::Primary,
-        pressed: true,
-        modifiers: Modifiers::NONE,
-    });
-    harness.step();
-    for step in 1..=20 {
-        let t = step as f32 / 20.0;
-        harness.event(egui::Event::PointerMoved(start + (end - start) * t));
-        harness.step();
-    }
+    let (start, end) = drag_right_forearm_up(&mut harness);
     assert_eq!(
         state(&harness)["pulling"],
         true,
@@ -140,12 +122,7 @@ fn dragging_the_right_hand_pulls_it_while_the_pinned_feet_hold() {
         harness.step();
     }
     let hand_during = screen_position(&harness, "r_radiocarpal");
-    harness.event(egui::Event::PointerButton {
-        pos: end,
-        button: PointerButton::Primary,
-        pressed: false,
-        modifiers: Modifiers::NONE,
-    });
+    release_at(&mut harness, end);
     settle(&mut harness);
     assert_eq!(state(&harness)["pulling"], false);
 

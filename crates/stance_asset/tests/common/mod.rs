@@ -46,3 +46,17 @@ pub fn join(json: &Value, bin: &[u8]) -> Vec<u8> {
 pub fn default_glb() -> Vec<u8> {
     stance_asset::export_glb(&stance_asset::make_default_avatar().unwrap()).unwrap()
 }
+
+/// A memory figure of this process from `/proc/self/status` (`VmRSS:`, `VmHWM:`), in KiB;
+/// 0 where the file does not exist.
+#[cfg(not(target_arch = "wasm32"))]
+pub fn status_kb(key: &str) -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with(key))
+                .and_then(|l| l.split_whitespace().nth(1).and_then(|v| v.parse().ok()))
+        })
+        .unwrap_or(0)
+}

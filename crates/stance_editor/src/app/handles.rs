@@ -410,35 +410,17 @@ impl StanceApp {
     /// Where the pointer's ray meets the plane through `centre` across `axis` (the swivel
     /// circle's plane); seen edge-on, the plane facing the camera is used instead.
     fn pointer_around_axis(&self, pointer: Pos2, centre: DVec3, axis: DVec3) -> Option<DVec3> {
-        let rect = self.viewport_rect;
-        let local = pointer - rect.min;
-        let (origin, direction) = self.camera.ray_through(
-            glam::Vec2::new(local.x, local.y),
-            glam::Vec2::new(rect.width(), rect.height()),
-        );
-        let (origin, direction) = (origin.as_dvec3(), direction.as_dvec3());
-        let denominator = direction.dot(axis);
-        if denominator.abs() < 0.1 {
+        let (origin, direction) = self.pointer_ray(pointer);
+        if direction.dot(axis).abs() < 0.1 {
             return self.pointer_on_view_plane(pointer, centre);
         }
-        let distance = (centre - origin).dot(axis) / denominator;
-        (distance > 0.0 && distance.is_finite()).then(|| origin + direction * distance)
+        super::ray_meets_plane(origin, direction, centre, axis, 0.1)
     }
 
     /// Where the pointer's ray meets the floor (y = 0).
     fn pointer_on_floor(&self, pointer: Pos2) -> Option<DVec3> {
-        let rect = self.viewport_rect;
-        let local = pointer - rect.min;
-        let (origin, direction) = self.camera.ray_through(
-            glam::Vec2::new(local.x, local.y),
-            glam::Vec2::new(rect.width(), rect.height()),
-        );
-        let (origin, direction) = (origin.as_dvec3(), direction.as_dvec3());
-        if direction.y.abs() < 1e-6 {
-            return None;
-        }
-        let distance = -origin.y / direction.y;
-        (distance > 0.0).then(|| origin + direction * distance)
+        let (origin, direction) = self.pointer_ray(pointer);
+        super::ray_meets_plane(origin, direction, DVec3::ZERO, DVec3::Y, 1e-6)
     }
 
     /// Draws the rings of the selected joint (the dragged one thicker).

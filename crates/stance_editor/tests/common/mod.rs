@@ -73,3 +73,40 @@ pub fn click_button(harness: &mut Harness<'static, StanceApp>, name: &str) {
     let [x, y, w, h] = [0, 1, 2, 3].map(|i| rect[i].as_f64().unwrap() as f32);
     click_at(harness, egui::pos2(x + w / 2.0, y + h / 2.0));
 }
+
+/// Presses on the right forearm (below the elbow, on the side away from the body) and drags
+/// the pointer up and inward in 20 frames, still holding the button. Returns where the press
+/// started and where the pointer is (release there with [`release_at`]).
+pub fn drag_right_forearm_up(harness: &mut Harness<'static, StanceApp>) -> (Pos2, Pos2) {
+    let wrist = screen_position(harness, "r_radiocarpal");
+    let elbow = screen_position(harness, "r_elbow");
+    let pelvis = screen_position(harness, "sacroiliac");
+    let outward = egui::vec2((wrist.x - pelvis.x).signum() * 3.0, 0.0);
+    let start = elbow + (wrist - elbow) * 0.6 + outward;
+    let end = start + egui::vec2(-60.0, -120.0);
+    harness.event(egui::Event::PointerMoved(start));
+    harness.step();
+    harness.event(egui::Event::PointerButton {
+        pos: start,
+        button: PointerButton::Primary,
+        pressed: true,
+        modifiers: Modifiers::NONE,
+    });
+    harness.step();
+    for step in 1..=20 {
+        let t = step as f32 / 20.0;
+        harness.event(egui::Event::PointerMoved(start + (end - start) * t));
+        harness.step();
+    }
+    (start, end)
+}
+
+/// Releases the primary button at `pos`.
+pub fn release_at(harness: &mut Harness<'static, StanceApp>, pos: Pos2) {
+    harness.event(egui::Event::PointerButton {
+        pos,
+        button: PointerButton::Primary,
+        pressed: false,
+        modifiers: Modifiers::NONE,
+    });
+}
