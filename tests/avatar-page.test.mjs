@@ -9,7 +9,7 @@ import { tmpdir } from "node:os";
 import { join } from "node:path";
 import { BACKGROUND, CONFIGURATIONS, decodePng, launch, openEditor, saveArtifact, freshStoragePerTab, serve } from "./browser.mjs";
 
-const SHARED_AVATAR = fileURLToPath(new URL("../../shared/avatars/Black_F_2_Casual.glb", import.meta.url));
+const SHARED_AVATAR = fileURLToPath(new URL("./fixtures/avatars/Black_F_2_Casual.glb", import.meta.url));
 
 let site;
 let context;

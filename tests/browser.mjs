@@ -1,5 +1,5 @@
-// Shared helpers of the end-to-end tests: the two Chromium configurations of TOOLCHAIN.md,
-// the static server, PNG pixels.
+// Shared helpers of the end-to-end tests: the two Chromium configurations (WebGL2 and
+// WebGPU), the static server, PNG pixels.
 import { chromium } from "playwright-core";
 import { mkdtempSync, mkdirSync, writeFileSync } from "node:fs";
 import { tmpdir } from "node:os";

@@ -1,5 +1,6 @@
-//! The shared real avatar (EXT_meshopt_compression, KHR_mesh_quantization, WebP textures):
-//! loads, maps the 18 LOA1 joints, and a hand-reach task moves its hand.
+//! The vendored real avatar (`tests/fixtures/avatars`, VALID avatars, MIT;
+//! EXT_meshopt_compression, KHR_mesh_quantization, WebP textures): loads, maps the 18 LOA1
+//! joints, and a hand-reach task moves its hand.
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
@@ -15,7 +16,7 @@ use stance_asset::{LoadOptions, export_glb, load_avatar};
 use stance_hanim::{LevelOfArticulation, SkeletonOptions};
 use stance_ik::{Axes, Effector, Frames, Posture, Solver, SolverSettings, Task, TaskKind};
 
-const AVATAR: &[u8] = include_bytes!("../../../../shared/avatars/Black_F_2_Casual.glb");
+const AVATAR: &[u8] = include_bytes!("../../../tests/fixtures/avatars/Black_F_2_Casual.glb");
 
 #[test]
 fn shared_avatar_loads_and_maps_loa1() {

@@ -1,4 +1,4 @@
-//! The shared third-party avatar (../shared/avatars, MIT) loaded, mapped onto H-Anim, posed by
+//! The vendored third-party avatar (tests/fixtures/avatars, MIT) loaded, mapped onto H-Anim, posed by
 //! the solver and drawn skinned on the GPU offscreen (lavapipe on CI): pixels checked.
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
@@ -14,7 +14,7 @@ use stance_render::{
 
 const SHARED_AVATAR: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/avatars/Black_F_2_Casual.glb"
+    "/../../tests/fixtures/avatars/Black_F_2_Casual.glb"
 );
 
 fn device() -> (wgpu::Device, wgpu::Queue) {
@@ -42,7 +42,7 @@ fn is_background([r, g, b, _]: [u8; 4]) -> bool {
 
 #[test]
 fn the_shared_avatar_maps_renders_skinned_and_reaches_with_its_hand() {
-    let bytes = std::fs::read(SHARED_AVATAR).expect("the shared avatar is beside the repository");
+    let bytes = std::fs::read(SHARED_AVATAR).expect("the avatar is in tests/fixtures/avatars");
     let (mut loaded, humanoid) =
         LoadedAvatar::load("Black_F_2_Casual.glb", &bytes, LevelOfArticulation::Loa2).unwrap();
     let (mapped, _) = loaded.mapping_summary();

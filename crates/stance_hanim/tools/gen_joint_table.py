@@ -2,7 +2,10 @@
 """Generate src/joint_table.rs from data/hanim_joints.csv (H-Anim 2.0 joints, X3DUOM 4.0).
 
 Run from the crate root: python3 tools/gen_joint_table.py > src/joint_table.rs
-The CSV is a copy of shared/reference/hanim/joints.csv (sources documented there).
+Sources of the CSV: the `hanimJointNameValues` table of the Web3D X3D Unified Object Model 4.0
+(names, LOA, parents, `default` centres, aliases),
+https://www.web3d.org/specifications/X3dUnifiedObjectModel-4.0.xml, and the Web3D example
+JinScaledV2L1LOA4Humanoid (columns `jin_*`).
 """
 import csv, sys
 

@@ -1,8 +1,8 @@
 //! Kinematics and the prioritized damped least-squares IK solver of Stance.
 //!
-//! Pure `f64` math, no I/O; builds for `wasm32`. The mathematical contract is
-//! `design/SOLVER.md`: variational IK with strict priorities [SIC 91] in the recursive form
-//! of [BAE 98] (Boulic & Baerlocher), damped least squares per level [MAC 90].
+//! Pure `f64` math, no I/O; builds for `wasm32`. The method: variational IK with strict
+//! priorities [SIC 91] in the recursive form of [BAE 98] (Boulic & Baerlocher), damped least
+//! squares per level [MAC 90] (references in the repository's README).
 //!
 //! - [`Skeleton`]: joints with 0-3 rotational DOF (the root 6), limits, masses.
 //! - [`Posture`] / [`Frames`]: DOF values (rotation vectors, no Euler singularity) and

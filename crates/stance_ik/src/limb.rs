@@ -1,4 +1,4 @@
-//! Closed-form IK of a limb (design/SOLVER.md, "Analytic IK for a limb"; [TOL 96], [KOR 86],
+//! Closed-form IK of a limb ([TOL 96] Tolani & Badler, [KOR 86] Korein,
 //! IKAN): an upper joint with 3 rotational DOF (shoulder, hip), a middle hinge (elbow, knee)
 //! and an end joint (wrist, ankle). The goal position of the end joint fixes 3 of the 4 DOF;
 //! the **swivel angle** of the middle joint around the upper-end axis fixes the fourth. An

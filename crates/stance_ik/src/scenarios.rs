@@ -4,9 +4,10 @@
 //! the H-Anim vocabulary) without touching the solver.
 //!
 //! Source of the numbers: H-Anim 2.0 (ISO/IEC 19774-1:2019) default joint centres as
-//! published in the Web3D X3D Unified Object Model 4.0 (`hanimJointNameValues`, attribute
-//! `default`), copied in `shared/reference/hanim/joints.csv` (columns `default_x/y/z`);
-//! parents follow its `parent_loa2` column (nearest ancestor present in the body).
+//! published in the H-Anim 2.0 joints table of the Web3D X3D Unified Object Model 4.0
+//! (`hanimJointNameValues`, attribute `default`), the table that
+//! `crates/stance_hanim/data/hanim_joints.csv` holds (columns `default_x/y/z`); parents follow
+//! its `parent_loa2` column (nearest ancestor present in the body).
 //! Segment masses: fractions of a 70 kg body after de Leva (1996), rounded.
 
 use glam::{DQuat, DVec3};
@@ -15,7 +16,7 @@ use crate::{
     Axes, Dof, Frames, IkError, JointDef, Limb, LimbBase, LimbGoal, Posture, Skeleton, Task,
 };
 
-/// (name, LOA2 parent, default centre x, y, z) — from `joints.csv`.
+/// (name, LOA2 parent, default centre x, y, z) — from `hanim_joints.csv`.
 const HANIM_LOA2_CENTRES: &[(&str, &str, [f64; 3])] = &[
     ("humanoid_root", "", [0.0, 0.8240, 0.0277]),
     ("sacroiliac", "humanoid_root", [0.0, 0.9149, 0.0016]),

@@ -1,4 +1,4 @@
-//! Sensor-to-joint calibration after Molet et al. (magnetic sensors, SOLVER.md).
+//! Sensor-to-joint calibration after Molet, Boulic & Thalmann 1999 (magnetic sensors).
 //!
 //! In a calibration posture whose joint world rotations `J_cal` are known (the editor's current
 //! posture: rest pose, T-pose...), each sensor's constant sensor-to-joint rotation is

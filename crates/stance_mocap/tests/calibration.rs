@@ -1,4 +1,4 @@
-//! Calibration properties (SOLVER.md, magnetic sensors).
+//! Calibration properties (Molet et al., magnetic sensors).
 
 // Test helpers outside #[test] functions may unwrap too (clippy.toml only covers the tests).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]

@@ -1,4 +1,5 @@
-//! The test vectors of SENSORS.md, decoded whole, split at every point and byte by byte.
+//! Byte-level test vectors of every protocol, decoded whole, split at every point and byte by
+//! byte.
 
 // Test helpers outside #[test] functions may unwrap too (clippy.toml only covers the tests).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
