@@ -15,7 +15,7 @@ fn benches(c: &mut Criterion) {
     for s in &all {
         let n = s.skeleton.dof_count();
         let full = SolverSettings {
-            cascade: false,
+            restarts: false,
             ..SolverSettings::default()
         };
         let mut solver = Solver::new(full).unwrap_or_default();

@@ -14,10 +14,12 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::Result;
+use std::collections::BTreeMap;
+
+use anyhow::{Context, Result, bail};
 use serde::Serialize;
 use stance_ik::scenarios;
-use stance_ik::{Posture, Skeleton, SolveStatus, Solver, SolverSettings, Task};
+use stance_ik::{Damping, Posture, Skeleton, SolveStatus, Solver, SolverSettings, Task};
 
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
@@ -27,6 +29,10 @@ pub struct BenchArgs {
     /// Time this problem file instead of the built-in scenarios.
     #[arg(long)]
     pub problem: Option<PathBuf>,
+    /// Solve every problem file (`*.json`) of this directory: how many met every level, the
+    /// median time per solve and per iteration.
+    #[arg(long)]
+    pub suite: Option<PathBuf>,
     /// Only these scenarios (e.g. `--scenario S2 --scenario S6`).
     #[arg(long)]
     pub scenario: Vec<String>,
@@ -47,6 +53,10 @@ pub struct BenchResult {
     pub dof: usize,
     pub rows: usize,
     pub levels: usize,
+    /// Final residual norm of every level, highest priority first.
+    pub residuals: Vec<f64>,
+    /// Every level (posture attraction aside) within the tolerance.
+    pub met_every_level: bool,
 }
 
 /// Native targets of the issue (us per iteration; S6: us per converged sample).
@@ -65,33 +75,22 @@ fn target_us(name: &str) -> Option<f64> {
 
 pub fn run(args: BenchArgs) -> Result<()> {
     let budget = std::time::Duration::from_millis(args.millis);
+    if let Some(dir) = &args.suite {
+        return run_suite(dir, &args);
+    }
     if let Some(path) = &args.problem {
-        let problem = crate::solve::load_problem(path)?;
-        let r = bench(
-            &problem.skeleton,
-            &problem.tasks,
-            &crate::solve::start_posture(&problem).0,
-            problem.settings,
-            budget,
-            args.iterations,
-        )?;
+        let r = bench_file(path, budget, args.iterations)?;
         if args.json {
-            println!(
-                "{}",
-                serde_json::json!({
-                    "us_per_iteration": r.us_per_iteration,
-                    "us_per_solve": r.us_per_solve,
-                    "iterations": r.iterations,
-                })
-            );
+            println!("{}", serde_json::to_string(&r)?);
         } else {
             println!(
-                "{}: {:.2} us/iteration, {:.1} us/solve ({} iterations, {:?})",
+                "{}: {:.2} us/iteration, {:.1} us/solve ({} iterations, {:?}; residuals {:?})",
                 path.display(),
                 r.us_per_iteration,
                 r.us_per_solve,
                 r.iterations,
-                r.status
+                r.status,
+                r.residuals
             );
         }
         return Ok(());
@@ -115,6 +114,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
             &s.tasks,
             &s.start,
             settings,
+            &BTreeMap::new(),
             budget,
             args.iterations,
         )?;
@@ -186,6 +186,84 @@ pub fn run(args: BenchArgs) -> Result<()> {
     Ok(())
 }
 
+/// Times one problem file from its start posture, with its settings and per-level damping.
+fn bench_file(
+    path: &std::path::Path,
+    budget: std::time::Duration,
+    iterations: usize,
+) -> Result<BenchResult> {
+    let problem = crate::solve::load_problem(path)?;
+    bench(
+        &problem.skeleton,
+        &problem.tasks,
+        &crate::solve::start_posture(&problem).0,
+        problem.settings,
+        &problem.level_damping,
+        budget,
+        iterations,
+    )
+}
+
+/// `--suite DIR`: every `*.json` problem file of `dir`, in name order.
+fn run_suite(dir: &std::path::Path, args: &BenchArgs) -> Result<()> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| format!("{}: cannot list the directory", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .collect();
+    files.sort();
+    if files.is_empty() {
+        bail!(
+            "{}: no problem file (*.json) in the directory",
+            dir.display()
+        );
+    }
+    // Each problem: a short measuring time (at least 5 runs), so that a suite of hundreds runs
+    // in seconds.
+    let budget = std::time::Duration::from_millis(args.millis.min(20));
+    let mut rows = Vec::new();
+    let (mut per_solve, mut per_iteration) = (Vec::new(), Vec::new());
+    let mut met = 0;
+    for path in &files {
+        let r = bench_file(path, budget, args.iterations)?;
+        met += usize::from(r.met_every_level);
+        per_solve.push(r.us_per_solve);
+        per_iteration.push(r.us_per_solve / r.iterations.max(1) as f64);
+        if !args.json {
+            println!(
+                "{}: {:?} after {} iterations, {:.1} us/solve, residuals {:?}",
+                path.display(),
+                r.status,
+                r.iterations,
+                r.us_per_solve,
+                r.residuals
+            );
+        }
+        rows.push(serde_json::json!({
+            "problem": path.file_name().map(|n| n.to_string_lossy().into_owned()),
+            "status": r.status,
+            "iterations": r.iterations,
+            "us_per_solve": r.us_per_solve,
+            "residuals": r.residuals,
+            "met_every_level": r.met_every_level,
+        }));
+    }
+    let summary = serde_json::json!({
+        "problems": files.len(),
+        "met_every_level": met,
+        "median_us_per_solve": median(per_solve),
+        "median_us_per_iteration": median(per_iteration),
+    });
+    if args.json {
+        let mut out = summary;
+        out["results"] = serde_json::Value::Array(rows);
+        println!("{out}");
+    } else {
+        println!("{summary}");
+    }
+    Ok(())
+}
+
 /// Times S7 (see the module docs).
 pub fn bench_limb(s: &scenarios::LimbScenario, budget: std::time::Duration) -> BenchResult {
     const BATCH: usize = 1000;
@@ -219,6 +297,8 @@ pub fn bench_limb(s: &scenarios::LimbScenario, budget: std::time::Duration) -> B
         dof: s.skeleton.dof_count(),
         rows: 3,
         levels: 1,
+        residuals: Vec::new(),
+        met_every_level: reached,
     }
 }
 
@@ -237,6 +317,7 @@ pub fn bench(
     tasks: &[Task],
     start: &Posture,
     settings: SolverSettings,
+    level_damping: &BTreeMap<u32, Damping>,
     budget: std::time::Duration,
     iterations: usize,
 ) -> Result<BenchResult> {
@@ -248,10 +329,11 @@ pub fn bench(
         stall_step: 0.0,
         stall_improvement: 0.0,
         time_budget_secs: None,
-        cascade: false,
+        restarts: false,
         ..settings
     };
     let mut solver = Solver::new(fixed)?;
+    solver.level_damping = level_damping.clone();
     let mut per_iteration = Vec::new();
     let t0 = Instant::now();
     while t0.elapsed() < budget || per_iteration.len() < 5 {
@@ -262,6 +344,7 @@ pub fn bench(
         per_iteration.push(dt * 1e6 / report.iterations.max(1) as f64);
     }
     let mut solver = Solver::new(settings)?;
+    solver.level_damping = level_damping.clone();
     let mut per_solve = Vec::new();
     let mut last = None;
     let t0 = Instant::now();
@@ -272,9 +355,17 @@ pub fn bench(
         per_solve.push(t.elapsed().as_secs_f64() * 1e6);
         last = Some(report);
     }
-    let (iters, status, levels) = last
-        .map(|r| (r.iterations, r.status, r.levels.len()))
-        .unwrap_or((0, SolveStatus::Converged, 0));
+    let (iters, status, levels, residuals, met) = last
+        .map(|r| {
+            (
+                r.iterations,
+                r.status,
+                r.levels.len(),
+                r.levels.iter().map(|l| l.residual_after).collect(),
+                r.levels.iter().all(|l| l.met || l.posture_only),
+            )
+        })
+        .unwrap_or((0, SolveStatus::Converged, 0, Vec::new(), true));
     Ok(BenchResult {
         us_per_iteration: median(per_iteration),
         us_per_solve: median(per_solve),
@@ -283,5 +374,7 @@ pub fn bench(
         dof: skeleton.dof_count(),
         rows: tasks.iter().filter(|t| t.active).map(Task::rows).sum(),
         levels,
+        residuals,
+        met_every_level: met,
     })
 }

@@ -28,6 +28,8 @@ pub struct Problem {
     pub skeleton: Skeleton,
     pub tasks: Vec<Task>,
     pub settings: SolverSettings,
+    /// Per-level damping (`settings.levels`).
+    pub level_damping: BTreeMap<u32, Damping>,
     pub start: Posture,
     /// The `limb` tasks (each also a position task in `tasks`), in file order.
     pub limb_tasks: Vec<LimbTask>,
@@ -118,7 +120,7 @@ pub fn run(args: SolveArgs) -> Result<()> {
 /// applied, see [`start_posture`]).
 pub fn solve(problem: &Problem) -> Result<(Posture, SolveReport)> {
     let (mut posture, _) = start_posture(problem);
-    let mut solver = Solver::new(problem.settings)?.with_limbs(problem.hybrid_limbs.clone());
+    let mut solver = solver_for(problem, problem.settings)?;
     let report = solver.solve(&problem.skeleton, &problem.tasks, &mut posture)?;
     Ok((posture, report))
 }
@@ -214,8 +216,8 @@ pub fn parse_problem(text: &str) -> Result<Problem> {
             tasks.push(task);
         }
     }
-    let (settings, hybrid) = match root.get("settings") {
-        None | Some(Value::Null) => (SolverSettings::default(), false),
+    let (settings, hybrid, level_damping) = match root.get("settings") {
+        None | Some(Value::Null) => (SolverSettings::default(), false, BTreeMap::new()),
         Some(v) => parse_settings(v)?,
     };
     let mut hybrid_limbs: Vec<Limb> = limb_tasks.iter().map(|t| t.limb.clone()).collect();
@@ -241,10 +243,18 @@ pub fn parse_problem(text: &str) -> Result<Problem> {
         skeleton,
         tasks,
         settings,
+        level_damping,
         start,
         limb_tasks,
         hybrid_limbs,
     })
+}
+
+/// The solver of a problem: its settings, per-level damping and hybrid limbs.
+pub fn solver_for(problem: &Problem, settings: SolverSettings) -> Result<Solver> {
+    let mut solver = Solver::new(settings)?.with_limbs(problem.hybrid_limbs.clone());
+    solver.level_damping = problem.level_damping.clone();
+    Ok(solver)
 }
 
 /// The three joints of a limb task: `joints` (names) or the `limb` shorthand.
@@ -381,7 +391,57 @@ fn parse_task(skeleton: &Skeleton, v: &Value, at: &str) -> Result<Task> {
         .map_err(|e| anyhow!("{}", e.within(at)))
 }
 
-fn parse_settings(v: &Value) -> Result<(SolverSettings, bool)> {
+/// `lambda` (constant damping) or `adaptive_damping` (`{"lambda_max", "epsilon"}`) of `o`.
+fn parse_damping(o: &Map<String, Value>, at: &str) -> Result<Option<Damping>> {
+    let mut damping = None;
+    if let Some(v) = o.get("lambda").filter(|v| !v.is_null()) {
+        let lambda = number(v, &format!("{at}.lambda"))?;
+        if !(lambda.is_finite() && lambda >= 0.0) {
+            bail!("{at}.lambda: expected a number >= 0");
+        }
+        damping = Some(Damping::Constant { lambda });
+    }
+    if let Some(a) = o.get("adaptive_damping").filter(|a| !a.is_null()) {
+        let here = format!("{at}.adaptive_damping");
+        let a = obj(a, &here)?;
+        let lambda_max = number(
+            field(a, "lambda_max", &here)?,
+            &format!("{here}.lambda_max"),
+        )?;
+        let epsilon = number(field(a, "epsilon", &here)?, &format!("{here}.epsilon"))?;
+        if !(lambda_max.is_finite() && lambda_max >= 0.0 && epsilon.is_finite() && epsilon > 0.0) {
+            bail!("{here}: expected lambda_max >= 0 and epsilon > 0");
+        }
+        damping = Some(Damping::Adaptive {
+            lambda_max,
+            epsilon,
+        });
+    }
+    Ok(damping)
+}
+
+/// `settings.levels`: `{"3": {"lambda": 0.05}}` or `{"3": {"adaptive_damping": {..}}}`.
+fn parse_level_damping(o: &Map<String, Value>) -> Result<BTreeMap<u32, Damping>> {
+    let mut out = BTreeMap::new();
+    let Some(levels) = o.get("levels").filter(|v| !v.is_null()) else {
+        return Ok(out);
+    };
+    for (key, v) in obj(levels, "settings.levels")? {
+        let at = format!("settings.levels.{key}");
+        let level: u32 = key
+            .parse()
+            .ok()
+            .filter(|&l| l >= 1)
+            .ok_or_else(|| anyhow!("{at}: a level is a whole number >= 1"))?;
+        let entry = obj(v, &at)?;
+        let damping = parse_damping(entry, &at)?
+            .ok_or_else(|| anyhow!("{at}: expected `lambda` or `adaptive_damping`"))?;
+        out.insert(level, damping);
+    }
+    Ok(out)
+}
+
+fn parse_settings(v: &Value) -> Result<(SolverSettings, bool, BTreeMap<u32, Damping>)> {
     let o = obj(v, "settings")?;
     let mut s = SolverSettings::default();
     let num = |k: &str| -> Result<Option<f64>> {
@@ -408,23 +468,8 @@ fn parse_settings(v: &Value) -> Result<(SolverSettings, bool)> {
     if let Some(n) = num("time_budget_ms")? {
         s.time_budget_secs = Some(n / 1000.0);
     }
-    if let Some(n) = num("lambda")? {
-        s.damping = Damping::Constant { lambda: n };
-    }
-    if let Some(a) = o.get("adaptive_damping").filter(|a| !a.is_null()) {
-        let a = obj(a, "settings.adaptive_damping")?;
-        let lambda_max = number(
-            field(a, "lambda_max", "settings.adaptive_damping")?,
-            "settings.adaptive_damping.lambda_max",
-        )?;
-        let epsilon = number(
-            field(a, "epsilon", "settings.adaptive_damping")?,
-            "settings.adaptive_damping.epsilon",
-        )?;
-        s.damping = Damping::Adaptive {
-            lambda_max,
-            epsilon,
-        };
+    if let Some(d) = parse_damping(o, "settings")? {
+        s.damping = d;
     }
     if let Some(n) = num("rank_tolerance")? {
         s.rank_tolerance = n;
@@ -449,7 +494,7 @@ fn parse_settings(v: &Value) -> Result<(SolverSettings, bool)> {
         Some(Value::Bool(b)) => *b,
         Some(_) => bail!("settings.hybrid: expected true or false"),
     };
-    Ok((s, hybrid))
+    Ok((s, hybrid, parse_level_damping(o)?))
 }
 
 /// `{joint: {dof: value}}`; missing DOF are 0 (`stance_document::PostureValues`).

@@ -182,6 +182,73 @@ fn bench_times_a_problem_file() {
     assert!(v["us_per_iteration"].as_f64().unwrap() > 0.0);
     assert!(v["us_per_solve"].as_f64().unwrap() > 0.0);
     assert!(v["iterations"].as_u64().is_some());
+    // The final residual of every level and the status, as `stance solve` reports them.
+    let (ok, solved, _) = stance(&["solve", path.to_str().unwrap()]);
+    assert!(ok);
+    let solved: Value = serde_json::from_str(&solved).unwrap();
+    let levels = solved["report"]["levels"].as_array().unwrap();
+    let residuals = v["residuals"].as_array().unwrap();
+    assert_eq!(residuals.len(), levels.len(), "{v}");
+    for (r, l) in residuals.iter().zip(levels) {
+        let (r, l) = (r.as_f64().unwrap(), l["residual_after"].as_f64().unwrap());
+        assert!((r - l).abs() < 1e-9, "bench {r} vs solve {l}");
+    }
+    assert_eq!(v["status"], solved["report"]["status"]);
+}
+
+#[test]
+fn bench_suite_counts_the_problems_that_met_every_level() {
+    let dir = std::env::temp_dir().join(format!("stance-cli-suite-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // One reachable problem, and the same body asked to reach 10 m away (never met).
+    std::fs::write(dir.join("a-reachable.json"), EXAMPLE).unwrap();
+    let far = EXAMPLE.replace("[0.25,1.1,0.3]", "[10.0,1.1,0.3]");
+    std::fs::write(dir.join("b-unreachable.json"), far).unwrap();
+    std::fs::write(dir.join("notes.txt"), "not a problem").unwrap();
+    let (ok, stdout, stderr) = stance(&[
+        "bench",
+        "--suite",
+        dir.to_str().unwrap(),
+        "--json",
+        "--millis",
+        "5",
+    ]);
+    assert!(ok, "{stderr}");
+    let v: Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(v["problems"], 2, "{v}");
+    assert_eq!(v["met_every_level"], 1, "{v}");
+    assert!(v["median_us_per_solve"].as_f64().unwrap() > 0.0);
+    assert!(v["median_us_per_iteration"].as_f64().unwrap() > 0.0);
+    let results = v["results"].as_array().unwrap();
+    assert_eq!(results[0]["met_every_level"], true);
+    assert_eq!(results[1]["met_every_level"], false);
+    assert_ne!(results[1]["status"], "converged");
+}
+
+#[test]
+fn per_level_damping_in_problem_files() {
+    let with = |levels: &str| {
+        EXAMPLE.replace(
+            r#""settings":{"max_iterations":200,"tolerance":1e-6}"#,
+            &format!(r#""settings":{{"max_iterations":200,"tolerance":1e-6,"levels":{levels}}}"#),
+        )
+    };
+    let path = write_temp("levels.json", &with(r#"{"2":{"lambda":0.05}}"#));
+    let (ok, stdout, stderr) = stance(&["solve", path.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    let v: Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(v["report"]["levels"][0]["met"], true, "{v}");
+    for (levels, named) in [
+        (r#"{"0":{"lambda":0.05}}"#, "settings.levels.0"),
+        (r#"{"x":{"lambda":0.05}}"#, "settings.levels.x"),
+        (r#"{"2":{}}"#, "settings.levels.2"),
+        (r#"{"2":{"lambda":-1}}"#, "settings.levels.2.lambda"),
+    ] {
+        let path = write_temp("bad-levels.json", &with(levels));
+        let (ok, _, stderr) = stance(&["solve", path.to_str().unwrap()]);
+        assert!(!ok, "{levels} accepted");
+        assert!(stderr.contains(named), "{levels}: {stderr}");
+    }
 }
 
 #[test]

@@ -97,6 +97,9 @@ impl PosingSession {
         let settings = SolverSettings {
             max_iterations: ITERATIONS_PER_FRAME,
             time_budget_secs: Some(FRAME_BUDGET_SECS),
+            // Every frame is shown and starts where the last one ended: the guarded
+            // iteration only, no restart from the frame's start posture.
+            restarts: false,
             ..SolverSettings::default()
         };
         let posture = Posture::rest(&humanoid.skeleton);

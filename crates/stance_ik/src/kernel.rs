@@ -400,7 +400,8 @@ fn level_step(
     // y = (G + lambda^2 I)^-1 e, or the filtered eigen-solution.
     kn.y.clear();
     let mut solved = false;
-    if let Damping::Constant { lambda } = params.damping
+    let damping = level.damping.unwrap_or(params.damping);
+    if let Damping::Constant { lambda } = damping
         && lambda > 0.0
     {
         kn.y.extend_from_slice(&kn.e);
@@ -417,7 +418,7 @@ fn level_step(
     if !solved {
         let g = DMatrix::from_column_slice(m, m, &kn.g);
         let e = DVector::from_column_slice(&kn.e);
-        let y = damped_solve(&g, &e, params.damping, tol);
+        let y = damped_solve(&g, &e, damping, tol);
         kn.y.clear();
         kn.y.extend_from_slice(y.as_slice());
     }

@@ -10,7 +10,9 @@
 //! - [`Task`]: position, orientation, gaze, centre of mass, posture attraction; each with a
 //!   level, a weight and an active flag.
 //! - [`Solver`]: iterates prioritized steps (joint-limit clamping, shared step budget, line
-//!   search, cascade) and returns a [`SolveReport`]; time budget through an injectable [`Clock`].
+//!   search, cascade; per-level damping), and when it stalls runs once more as the textbook
+//!   recursion ([`Iteration`]), keeping the better result in priority order; returns a
+//!   [`SolveReport`]; time budget through an injectable [`Clock`].
 //! - [`prioritized_step`]: one step of [BAE 98] on contiguous slices (the default);
 //!   [`prioritized_step_nalgebra`]: the same on nalgebra matrices (kept for the comparison).
 //! - [`Limb`]: closed-form IK of a shoulder-elbow-wrist / hip-knee-ankle limb with the swivel
@@ -42,6 +44,7 @@ pub use skeleton::{Dof, Joint, JointDef, Skeleton};
 #[cfg(not(all(target_arch = "wasm32", target_os = "unknown")))]
 pub use solver::SystemClock;
 pub use solver::{
-    AnalyticRestart, Backend, Clock, LevelReport, SolveReport, SolveStatus, Solver, SolverSettings,
+    AnalyticRestart, Backend, Clock, Iteration, LevelReport, SolveReport, SolveStatus, Solver,
+    SolverSettings,
 };
 pub use task::{Axes, Effector, Task, TaskFeature, TaskKind};

@@ -50,6 +50,8 @@ pub struct LevelSystem {
     pub dx: DVector<f64>,
     /// Sorted DOF indices of the possibly non-zero rows of `jacobian_t` (empty: all).
     pub support: Vec<usize>,
+    /// This level's damping (`None`: the step's `StepParams::damping`).
+    pub damping: Option<Damping>,
 }
 
 /// Parameters of one prioritized step.
@@ -219,7 +221,7 @@ pub fn prioritized_step_nalgebra(
             ws.jts.tr_mul(&ws.jts)
         };
         ws.all_rows = all;
-        let y = damped_solve(&g, &e, params.damping, tol);
+        let y = damped_solve(&g, &e, level.damping.unwrap_or(params.damping), tol);
         let mut step = &ws.jht * y;
         let max = step.amax();
         let left = budget.max(0.0);

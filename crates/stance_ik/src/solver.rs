@@ -1,6 +1,8 @@
 //! The iterative solver: linearise every level, take a prioritized step, enforce joint
 //! limits, repeat until converged, stalled or out of budget; report per-level residuals.
 
+use std::collections::BTreeMap;
+
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
@@ -57,13 +59,20 @@ pub struct SolverSettings {
     pub tolerance: f64,
     /// Stalled when no DOF moves more than this in an iteration (default 1e-10).
     pub stall_step: f64,
-    /// Stalled when for 5 iterations in a row the residuals (in priority order, met levels
-    /// aside) beat the best so far by no more than this (m / rad, default 1e-10) or 1e-4 of
-    /// themselves.
+    /// Stalled when for `stall_window` iterations in a row the residuals (in priority order,
+    /// met levels aside) beat the best so far by no more than this (m / rad, default 1e-10) or
+    /// 1e-4 of themselves.
     pub stall_improvement: f64,
+    /// How each iteration is taken (default [`Iteration::Guarded`]).
+    pub iteration: Iteration,
+    /// Stalled when this many iterations in a row bring no meaningful improvement in priority
+    /// order (default 5; the multi-start's textbook run uses 40: the plain recursion wanders
+    /// for a while before it settles).
+    pub stall_window: usize,
     /// Wall-clock budget in seconds (needs a [`Clock`]; default none).
     pub time_budget_secs: Option<f64>,
-    /// Per-level damping (default constant 0.002).
+    /// Damping of every level without its own (default constant 0.002; see
+    /// [`Solver::level_damping`]).
     pub damping: Damping,
     /// Relative rank threshold of the projector (default 1e-9).
     pub rank_tolerance: f64,
@@ -71,15 +80,35 @@ pub struct SolverSettings {
     pub max_linear_step: f64,
     /// Largest orientation / gaze / posture change asked per iteration (rad, default 0.3).
     pub max_angular_step: f64,
-    /// Largest DOF change per iteration, shared by the levels in priority order (default 0.2).
+    /// Largest DOF change per guarded iteration, shared by the levels in priority order
+    /// (default 0.2; the textbook iteration has none).
     pub max_dof_step: f64,
     /// Enforce the joint limits by clamping (default true).
     pub enforce_limits: bool,
     /// Linear-algebra implementation of the step (default: the slice kernel).
     pub backend: Backend,
-    /// Let the levels below the first unmet level wait while it still makes real progress
-    /// (default true; see `Solver::iteration`). With `false` every iteration takes every level.
-    pub cascade: bool,
+    /// When a solve stalls with a level unmet (and at least half the time budget is left),
+    /// solve once more from the start posture with [`Iteration::Textbook`] (within what is
+    /// left of the iteration budget) and keep the better result in priority order (default
+    /// true).
+    pub restarts: bool,
+}
+
+/// How the solver takes an iteration.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Iteration {
+    /// The prioritized step with safeguards for strict priority through the non-linearity:
+    /// the levels share `max_dof_step` in priority order, the levels below the first unmet
+    /// level wait while it still makes real progress (the cascade), and a step that leaves a
+    /// level clearly worse is halved, then loses its lowest levels (see
+    /// `Solver::guarded_iteration`). Every iteration's posture keeps the higher levels: what
+    /// an interactive editor shows frame by frame.
+    #[default]
+    Guarded,
+    /// The textbook recursion: every level's step at once, joint-limit clamping, nothing
+    /// else. Converges on multi-level problems where the safeguards stop lower levels short,
+    /// but its first steps may throw higher levels far off on the way.
+    Textbook,
 }
 
 /// Which implementation computes the prioritized step (same mathematics; kept selectable for
@@ -100,6 +129,8 @@ impl Default for SolverSettings {
             tolerance: 1e-6,
             stall_step: 1e-10,
             stall_improvement: 1e-10,
+            iteration: Iteration::Guarded,
+            stall_window: STALL_WINDOW,
             time_budget_secs: None,
             damping: Damping::default(),
             rank_tolerance: 1e-9,
@@ -108,7 +139,7 @@ impl Default for SolverSettings {
             max_dof_step: 0.2,
             enforce_limits: true,
             backend: Backend::Kernel,
-            cascade: true,
+            restarts: true,
         }
     }
 }
@@ -131,18 +162,7 @@ impl SolverSettings {
         {
             return Err(IkError::BadSetting("time_budget_secs"));
         }
-        match self.damping {
-            Damping::Constant { lambda } if !(lambda.is_finite() && lambda >= 0.0) => {
-                return Err(IkError::BadSetting("damping.lambda"));
-            }
-            Damping::Adaptive {
-                lambda_max,
-                epsilon,
-            } if !(pos(epsilon) && lambda_max >= 0.0) => {
-                return Err(IkError::BadSetting("damping"));
-            }
-            _ => {}
-        }
+        validate_damping(self.damping)?;
         if !(self.rank_tolerance.is_finite() && self.rank_tolerance > 0.0) {
             return Err(IkError::BadSetting("rank_tolerance"));
         }
@@ -162,8 +182,31 @@ impl SolverSettings {
         StepParams {
             damping: self.damping,
             rank_tolerance: self.rank_tolerance,
-            max_dof_step: self.max_dof_step,
+            max_dof_step: match self.iteration {
+                Iteration::Guarded => self.max_dof_step,
+                Iteration::Textbook => f64::INFINITY,
+            },
         }
+    }
+}
+
+/// Checks a damping's parameters.
+fn validate_damping(damping: Damping) -> Result<(), IkError> {
+    match damping {
+        Damping::Constant { lambda } if !(lambda.is_finite() && lambda >= 0.0) => {
+            Err(IkError::BadSetting("damping.lambda"))
+        }
+        Damping::Adaptive {
+            lambda_max,
+            epsilon,
+        } if !(epsilon.is_finite()
+            && epsilon > 0.0
+            && lambda_max.is_finite()
+            && lambda_max >= 0.0) =>
+        {
+            Err(IkError::BadSetting("damping"))
+        }
+        _ => Ok(()),
     }
 }
 
@@ -171,6 +214,9 @@ impl SolverSettings {
 const STALL_RELATIVE: f64 = 1e-4;
 /// Iterations without a meaningful new best (in priority order) before "stalled".
 const STALL_WINDOW: usize = 5;
+/// The stall window of the textbook run: the plain recursion wanders for a while before it
+/// settles.
+const TEXTBOOK_STALL_WINDOW: usize = 40;
 
 /// Why the solver stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -249,6 +295,14 @@ struct LevelLayout {
     posture_only: bool,
 }
 
+/// How one run of iterations ended.
+struct RunOutcome {
+    status: SolveStatus,
+    iterations: usize,
+    clamped_dofs: usize,
+    analytic_restarts: Vec<AnalyticRestart>,
+}
+
 /// The prioritized inverse-kinematics solver. Keeps its buffers between solves.
 #[derive(Debug, Clone, Default)]
 pub struct Solver {
@@ -259,6 +313,11 @@ pub struct Solver {
     /// solution (swivel kept as far as the limits allow) and the iterations go on. Empty by
     /// default (pure variational solver).
     pub limbs: Vec<Limb>,
+    /// Damping of particular levels (level number -> damping), overriding
+    /// `settings.damping` there: e.g. more damping on a level that is expected to conflict
+    /// with the ones above (an algorithmic singularity), none on a level that must converge
+    /// fast. Empty by default.
+    pub level_damping: BTreeMap<u32, Damping>,
     /// DOF held where they are (driven from outside, e.g. by motion-capture sensors): they
     /// leave every step like clamped DOF, and no hybrid restart moves them. Empty: none.
     locked: Vec<bool>,
@@ -269,8 +328,8 @@ pub struct Solver {
     residual_sq: Vec<f64>,
     workspace: StepWorkspace,
     fixed: DVector<f64>,
-    scratch: Vec<f64>,
     weighted_sq: Vec<f64>,
+    scratch: Vec<f64>,
 }
 
 impl Solver {
@@ -349,62 +408,61 @@ impl Solver {
         clock: Option<&dyn Clock>,
     ) -> Result<SolveReport, IkError> {
         self.settings.validate()?;
+        for &d in self.level_damping.values() {
+            validate_damping(d)?;
+        }
         self.prepare(skeleton, tasks, posture)?;
         let start = clock.map(|c| c.now_secs());
         let values = posture.values_mut();
         self.clamp_free(skeleton, values);
+        let initial = values.to_vec();
         let before = self.linearize(skeleton, tasks, values);
-        let mut best_values = values.to_vec();
-        let mut best_residuals = before.clone();
-        let mut iterations = 0;
-        let mut clamped_dofs = 0;
-        let mut flat_iterations = 0;
-        let mut analytic_restarts = Vec::new();
+        let mut run = self.run(skeleton, tasks, values, clock, start);
         let tol = self.settings.tolerance;
-        let status = loop {
-            if self.all_met(tol) {
-                break SolveStatus::Converged;
-            }
-            if iterations >= self.settings.max_iterations {
-                break SolveStatus::IterationBudget;
-            }
-            if let (Some(c), Some(s), Some(budget)) = (clock, start, self.settings.time_budget_secs)
-                && c.now_secs() - s >= budget
-            {
-                break SolveStatus::TimeBudget;
-            }
-            let (moved, clamped) = self.iteration(skeleton, tasks, values);
-            clamped_dofs = clamped;
-            iterations += 1;
-            if self.meaningfully_better(&self.residual_sq, &best_residuals) {
-                flat_iterations = 0;
-            } else {
-                flat_iterations += 1;
-            }
-            if self.lexicographically_better(&self.residual_sq, &best_residuals) {
-                best_values.copy_from_slice(values);
-                best_residuals.clone_from(&self.residual_sq);
-            }
-            if moved <= self.settings.stall_step || flat_iterations >= STALL_WINDOW {
-                if self.all_met(tol) {
-                    break SolveStatus::Converged;
-                }
-                if let Some(restart) =
-                    self.analytic_restart(skeleton, tasks, values, iterations, &analytic_restarts)
-                {
-                    analytic_restarts.push(restart);
-                    flat_iterations = 0;
-                    continue;
-                }
-                break SolveStatus::Stalled;
-            }
+        // Multi-start: the guarded iteration stops lower levels short on some multi-level
+        // problems, the textbook recursion on others (its first steps near a singularity can
+        // throw a problem into another basin); a stalled solve runs once more from the start
+        // along the textbook path, and the better of the two in priority order is returned.
+        let time_left = match (clock, start, self.settings.time_budget_secs) {
+            (Some(c), Some(s), Some(budget)) => c.now_secs() - s < 0.5 * budget,
+            _ => true,
         };
-        // Return the best posture met on the way (the last one unless a lower level's pull left
-        // a higher level worse than it was).
-        if self.lexicographically_better(&best_residuals, &self.residual_sq) {
-            values.copy_from_slice(&best_values);
-            self.residual_sq = best_residuals;
+        let iterations_left = self.settings.max_iterations.saturating_sub(run.iterations);
+        if self.settings.restarts
+            && run.status == SolveStatus::Stalled
+            && iterations_left > 0
+            && time_left
+        {
+            let first_values = values.to_vec();
+            let first_residuals = self.residual_sq.clone();
+            let saved = self.settings;
+            self.settings.iteration = Iteration::Textbook;
+            self.settings.stall_window = TEXTBOOK_STALL_WINDOW;
+            self.settings.max_iterations = iterations_left;
+            values.copy_from_slice(&initial);
+            self.linearize(skeleton, tasks, values);
+            let second = self.run(skeleton, tasks, values, clock, start);
+            self.settings = saved;
+            let iterations = run.iterations + second.iterations;
+            if self.lexicographically_better(&self.residual_sq, &first_residuals) {
+                let mut restarts = run.analytic_restarts;
+                restarts.extend(second.analytic_restarts);
+                run = RunOutcome {
+                    analytic_restarts: restarts,
+                    ..second
+                };
+            } else {
+                values.copy_from_slice(&first_values);
+                self.residual_sq = first_residuals;
+            }
+            run.iterations = iterations;
         }
+        let RunOutcome {
+            status,
+            iterations,
+            clamped_dofs,
+            analytic_restarts,
+        } = run;
         let levels: Vec<LevelReport> = self
             .layout
             .iter()
@@ -435,6 +493,76 @@ impl Solver {
             },
             analytic_restarts,
         })
+    }
+
+    /// Iterates from `values` (linearised) until converged, stalled or out of budget, and
+    /// leaves the best posture met on the way in `values` (the last one unless a lower
+    /// level's pull left a higher level worse than it was), with its residuals.
+    fn run(
+        &mut self,
+        skeleton: &Skeleton,
+        tasks: &[Task],
+        values: &mut [f64],
+        clock: Option<&dyn Clock>,
+        start: Option<f64>,
+    ) -> RunOutcome {
+        let mut best_values = values.to_vec();
+        let mut best_residuals = self.residual_sq.clone();
+        let mut iterations = 0;
+        let mut clamped_dofs = 0;
+        let mut flat_iterations = 0;
+        let mut analytic_restarts = Vec::new();
+        let tol = self.settings.tolerance;
+        let status = loop {
+            if self.all_met(tol) {
+                break SolveStatus::Converged;
+            }
+            if iterations >= self.settings.max_iterations {
+                break SolveStatus::IterationBudget;
+            }
+            if let (Some(c), Some(s), Some(budget)) = (clock, start, self.settings.time_budget_secs)
+                && c.now_secs() - s >= budget
+            {
+                break SolveStatus::TimeBudget;
+            }
+            let (moved, clamped) = self.iteration(skeleton, tasks, values);
+            clamped_dofs = clamped;
+            iterations += 1;
+            if self.meaningfully_better(&self.residual_sq, &best_residuals) {
+                flat_iterations = 0;
+            } else {
+                flat_iterations += 1;
+            }
+            if self.lexicographically_better(&self.residual_sq, &best_residuals) {
+                best_values.copy_from_slice(values);
+                best_residuals.clone_from(&self.residual_sq);
+            }
+            if moved <= self.settings.stall_step
+                || flat_iterations >= self.settings.stall_window.max(1)
+            {
+                if self.all_met(tol) {
+                    break SolveStatus::Converged;
+                }
+                if let Some(restart) =
+                    self.analytic_restart(skeleton, tasks, values, iterations, &analytic_restarts)
+                {
+                    analytic_restarts.push(restart);
+                    flat_iterations = 0;
+                    continue;
+                }
+                break SolveStatus::Stalled;
+            }
+        };
+        if self.lexicographically_better(&best_residuals, &self.residual_sq) {
+            values.copy_from_slice(&best_values);
+            self.residual_sq = best_residuals;
+        }
+        RunOutcome {
+            status,
+            iterations,
+            clamped_dofs,
+            analytic_restarts,
+        }
     }
 
     /// The hybrid: for the first unmet level, a limb (not yet restarted in this solve) whose end
@@ -605,9 +733,11 @@ impl Solver {
             jacobian_t: DMatrix::zeros(0, 0),
             dx: DVector::zeros(0),
             support: Vec::new(),
+            damping: None,
         });
         for (sys, l) in self.systems.iter_mut().zip(&self.layout) {
             sys.level = l.level;
+            sys.damping = self.level_damping.get(&l.level).copied();
             let mut support: Vec<usize> = l
                 .tasks
                 .iter()
@@ -696,13 +826,47 @@ impl Solver {
         }
     }
 
+    /// One iteration as the textbook recursion takes it: the prioritized step of every level
+    /// at once (each task's error clamped by the linearisation) with the joint-limit clamping
+    /// loop, nothing else (no cascade, no step control, no shared budget). Leaves the systems
+    /// linearised at the new `values`. Returns (largest DOF change, clamped DOF count).
+    fn textbook_iteration(
+        &mut self,
+        skeleton: &Skeleton,
+        tasks: &[Task],
+        values: &mut [f64],
+    ) -> (f64, usize) {
+        let (step, clamped) = self.compute_step(skeleton, values, self.layout.len());
+        let mut moved: f64 = 0.0;
+        for (v, d) in values.iter_mut().zip(step.iter()) {
+            *v += d;
+            moved = moved.max(d.abs());
+        }
+        self.clamp_free(skeleton, values);
+        self.linearize(skeleton, tasks, values);
+        (moved, clamped)
+    }
+
+    /// One iteration of the kind the settings ask for.
+    fn iteration(
+        &mut self,
+        skeleton: &Skeleton,
+        tasks: &[Task],
+        values: &mut [f64],
+    ) -> (f64, usize) {
+        match self.settings.iteration {
+            Iteration::Guarded => self.guarded_iteration(skeleton, tasks, values),
+            Iteration::Textbook => self.textbook_iteration(skeleton, tasks, values),
+        }
+    }
+
     /// One iteration from `values`, where the systems are linearised: prioritized step with
     /// joint limits, then step-length control. While the step makes the residuals clearly
     /// worse in priority order (see `first_worse_level`), it is halved (up to 3 times); if
     /// that is not enough, the levels below the one that got worse are dropped and the step
     /// is recomputed and halved again. Leaves the systems linearised at the new `values`.
     /// Returns (largest DOF change, clamped DOF count).
-    fn iteration(
+    fn guarded_iteration(
         &mut self,
         skeleton: &Skeleton,
         tasks: &[Task],
@@ -715,9 +879,7 @@ impl Solver {
         // in a conflict promises little and lets the levels below move. (Its promise does not
         // depend on the levels below: the priority is strict.)
         let all_levels = self.layout.len();
-        let first_unmet = self
-            .first_unmet_level()
-            .filter(|&k| self.settings.cascade && k + 1 < all_levels);
+        let first_unmet = self.first_unmet_level().filter(|&k| k + 1 < all_levels);
         let (mut step, mut clamped) =
             self.compute_step(skeleton, values, first_unmet.map_or(all_levels, |k| k + 1));
         if let Some(k) = first_unmet {

@@ -352,6 +352,93 @@ fn gaze_basis(axis: DVec3) -> (DVec3, DVec3, DVec3) {
     (a, l1, l2)
 }
 
+/// A gaze task's geometry in the joint frame: the axis `a`, the pair `l1`, `l2` orthogonal
+/// to it, and the unit direction `q` from the eye to the target at angle `angle` from `a`.
+///
+/// The task's feature is the logarithm of `q` on the sphere around `a`, written in
+/// (`l1`, `l2`): `angle * u` with `u` the unit direction of `q`'s part orthogonal to `a`
+/// (the azimuthal equidistant map). Driving it to zero turns `a` along the great circle
+/// toward the target from any side: from behind, the error still points toward the target,
+/// never toward its antipode, and the map's only singular point is the exact antipode,
+/// where any perpendicular is as good as another (`l1` is taken).
+struct GazeGeometry {
+    a: DVec3,
+    l1: DVec3,
+    l2: DVec3,
+    /// Unit direction to the target, joint frame.
+    q: DVec3,
+    /// Distance from the eye to the target.
+    len: f64,
+    /// Unit direction of `q`'s part orthogonal to `a` (`l1` at the poles).
+    u: DVec3,
+    /// `sin(angle)`, `cos(angle)`.
+    sin: f64,
+    cos: f64,
+    angle: f64,
+}
+
+/// Below this `sin(angle)` the gaze geometry uses its pole limits.
+const GAZE_POLE: f64 = 1e-9;
+/// Largest gain of the azimuthal row near the antipode (`angle / sin(angle)`).
+const GAZE_MAX_GAIN: f64 = 1e3;
+
+impl GazeGeometry {
+    fn new(frames: &Frames, effector: &Effector, axis: DVec3, target: DVec3) -> Option<Self> {
+        let (a, l1, l2) = gaze_basis(axis);
+        let v = gaze_local(frames, effector, target);
+        let len = v.length();
+        if len < 1e-12 {
+            return None;
+        }
+        let q = v / len;
+        let (x1, x2) = (l1.dot(q), l2.dot(q));
+        let sin = (x1 * x1 + x2 * x2).sqrt();
+        let cos = a.dot(q);
+        let u = if sin > GAZE_POLE {
+            (l1 * x1 + l2 * x2) / sin
+        } else {
+            l1
+        };
+        Some(Self {
+            a,
+            l1,
+            l2,
+            q,
+            len,
+            u,
+            sin,
+            cos,
+            angle: sin.atan2(cos),
+        })
+    }
+
+    /// The feature: `angle * u` in (`l1`, `l2`).
+    fn log(&self) -> [f64; 2] {
+        let x = self.u * self.angle;
+        [self.l1.dot(x), self.l2.dot(x)]
+    }
+
+    /// The feature's change for a change `dv` of the (unnormalised) eye-to-target vector.
+    fn log_derivative(&self, dv: DVec3) -> [f64; 2] {
+        let dq = (dv - self.q * self.q.dot(dv)) / self.len;
+        let d = if self.sin <= GAZE_POLE && self.cos > 0.0 {
+            // At the axis the map is the identity on the tangent plane.
+            dq
+        } else {
+            // Meridian (toward larger angles) and azimuth directions at q.
+            let m = self.u * self.cos - self.a * self.sin;
+            let w = self.a.cross(self.u);
+            let gain = if self.sin > GAZE_POLE {
+                (self.angle / self.sin).min(GAZE_MAX_GAIN)
+            } else {
+                GAZE_MAX_GAIN
+            };
+            self.u * m.dot(dq) + w * (gain * w.dot(dq))
+        };
+        [self.l1.dot(d), self.l2.dot(d)]
+    }
+}
+
 /// Vector from the eye to the target in the joint frame.
 fn gaze_local(frames: &Frames, effector: &Effector, target: DVec3) -> DVec3 {
     let rot = frames.world_from_joint_rotation[effector.joint];
@@ -385,9 +472,9 @@ impl Task {
                 axis,
                 target,
             } => {
-                let (_, l1, l2) = gaze_basis(*axis);
-                let q = gaze_local(frames, effector, *target).normalize_or_zero();
-                TaskFeature::Vector(vec![l1.dot(q), l2.dot(q)])
+                let x = GazeGeometry::new(frames, effector, *axis, *target)
+                    .map_or([0.0, 0.0], |g| g.log());
+                TaskFeature::Vector(x.to_vec())
             }
             TaskKind::CenterOfMass { axes, .. } => {
                 let c = frames.center_of_mass();
@@ -453,35 +540,17 @@ impl Task {
                 axis,
                 target,
             } => {
-                let (a, l1, l2) = gaze_basis(*axis);
-                let q = gaze_local(frames, effector, *target);
-                let len = q.length();
-                if len < 1e-12 {
+                let Some(g) = GazeGeometry::new(frames, effector, *axis, *target) else {
                     // Target at the eye: any direction is right.
                     err[0] = 0.0;
                     err[1] = 0.0;
                     return 0.0;
-                }
-                let q = q / len;
-                let (x1, x2) = (l1.dot(q), l2.dot(q));
-                let angle = a.cross(q).length().atan2(a.dot(q));
-                let (mut e1, mut e2) = (-x1, -x2);
-                if a.dot(q) < 0.0 {
-                    // Behind the eye: the linear error vanishes at the antipode; push at
-                    // full strength in the direction that turns toward the target.
-                    let n = (x1 * x1 + x2 * x2).sqrt();
-                    if n > 1e-9 {
-                        e1 = -x1 / n;
-                        e2 = -x2 / n;
-                    } else {
-                        e1 = 1.0;
-                        e2 = 0.0;
-                    }
-                }
-                err[0] = e1;
-                err[1] = e2;
+                };
+                let [x1, x2] = g.log();
+                err[0] = -x1;
+                err[1] = -x2;
                 clamp_vec(err, limits.map(|l| l.angular));
-                angle
+                g.angle
             }
             TaskKind::PostureAttraction { reference, dofs } => {
                 for (e, &d) in err.iter_mut().zip(dofs) {
@@ -553,13 +622,9 @@ impl Task {
                 axis,
                 target,
             } => {
-                let (_, l1, l2) = gaze_basis(*axis);
-                let q = gaze_local(frames, effector, *target);
-                let len = q.length();
-                if len < 1e-12 {
+                let Some(g) = GazeGeometry::new(frames, effector, *axis, *target) else {
                     return;
-                }
-                let qh = q / len;
+                };
                 let rot_t = frames.world_from_joint_rotation[effector.joint].transpose();
                 for &d in support {
                     let axis_w = frames.dof_axis[d];
@@ -569,9 +634,9 @@ impl Task {
                     } else {
                         -(rot_t * axis_w)
                     };
-                    let dqh = (dq - qh * qh.dot(dq)) / len;
-                    jac_t[d] = l1.dot(dqh);
-                    jac_t[n + d] = l2.dot(dqh);
+                    let [r1, r2] = g.log_derivative(dq);
+                    jac_t[d] = r1;
+                    jac_t[n + d] = r2;
                 }
             }
             TaskKind::PostureAttraction { dofs, .. } => {

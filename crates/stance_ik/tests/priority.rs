@@ -529,3 +529,55 @@ fn clamped_moves_are_compensated_by_the_free_dof() {
     }
     assert_eq!(checked, 120);
 }
+
+#[test]
+fn per_level_damping_acts_on_its_level_only() {
+    // Two levels on a 3-link planar chain: the tip's x at level 1, its y at level 2.
+    let chain = straight_chain(3, 0.5);
+    let tip = chain.joint_count() - 1;
+    let mut p = Posture::rest(&chain);
+    p.values_mut().iter_mut().for_each(|v| *v = 0.3);
+    let tasks = vec![
+        Task::position(tip, DVec3::ZERO, DVec3::new(0.2, 0.0, 0.0))
+            .with_axes(stance_ik::Axes::new(true, false, false))
+            .at_level(1),
+        Task::position(tip, DVec3::ZERO, DVec3::new(0.0, 0.9, 0.0))
+            .with_axes(stance_ik::Axes::new(false, true, false))
+            .at_level(2),
+    ];
+    let n = chain.dof_count();
+    let plain = Solver::default()
+        .linear_systems(&chain, &tasks, &p)
+        .unwrap();
+    let mut damped = plain.clone();
+    damped[1].damping = Some(Damping::Constant { lambda: 1.0 });
+    let params = exact_params(0.0);
+    let mut ws = StepWorkspace::default();
+    let a = prioritized_step(&plain, n, &params, None, None, &mut ws, None);
+    let b = prioritized_step(&damped, n, &params, None, None, &mut ws, None);
+    // Level 1 gets the same linearised result; level 2 asks for the same change but gets
+    // less of it (damped), not nothing.
+    let (r1a, r1b) = (
+        linearized_residual(&plain[0], &a),
+        linearized_residual(&plain[0], &b),
+    );
+    assert!((r1a - r1b).abs() < 1e-9, "level 1: {r1a} vs {r1b}");
+    let (r2a, r2b) = (
+        linearized_residual(&plain[1], &a),
+        linearized_residual(&plain[1], &b),
+    );
+    let asked = plain[1].dx.norm();
+    assert!(r2a < 1e-9 * asked.max(1.0), "undamped level 2 met: {r2a}");
+    assert!(
+        r2b > 0.2 * asked && r2b < 0.99 * asked,
+        "damped: {r2b} of {asked}"
+    );
+    // The same through the solver's per-level setting.
+    let mut solver = Solver::default();
+    solver
+        .level_damping
+        .insert(2, Damping::Constant { lambda: 1.0 });
+    let systems = solver.linear_systems(&chain, &tasks, &p).unwrap();
+    assert_eq!(systems[1].damping, Some(Damping::Constant { lambda: 1.0 }));
+    assert_eq!(systems[0].damping, None);
+}

@@ -273,3 +273,117 @@ pub fn exact_params(lambda: f64) -> StepParams {
         max_dof_step: f64::INFINITY,
     }
 }
+
+/// The active tasks with rows, grouped by priority level, highest first.
+pub fn tasks_by_level(tasks: &[Task]) -> Vec<Vec<&Task>> {
+    let active = || tasks.iter().filter(|t| t.active && t.rows() > 0);
+    let mut levels: Vec<u32> = active().map(|t| t.level).collect();
+    levels.sort_unstable();
+    levels.dedup();
+    levels
+        .iter()
+        .map(|&l| active().filter(|t| t.level == l).collect())
+        .collect()
+}
+
+/// Residual norm per priority level (posture attraction included), in level order.
+pub fn level_residuals(skeleton: &Skeleton, tasks: &[Task], posture: &Posture) -> Vec<f64> {
+    let frames = Frames::new(skeleton, posture);
+    tasks_by_level(tasks)
+        .iter()
+        .map(|level| {
+            level
+                .iter()
+                .map(|t| t.residual(skeleton, &frames, posture.values()).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        })
+        .collect()
+}
+
+/// The textbook recursion as a whole solver (the oracle of the convergence suites): per
+/// iteration each level's error clamped per task (0.1 m / 0.3 rad, the solver's
+/// `linear_systems`), `dtheta_k = dtheta_{k-1} + (J_k P_{k-1})^{+lambda} (dx_k - J_k
+/// dtheta_{k-1})`, `P_k = P_{k-1} - Jh_k^+ Jh_k` (undamped, rank-decided), all with explicit
+/// `N x N` matrices and a Jacobi SVD; joint limits by the textbook clamping loop (a DOF that
+/// would leave its range is put on the bound, its column removed, its move subtracted from
+/// every level's error, and the step recomputed); `theta += dtheta`. No line search, no
+/// cascade, no budget. Stops when every level is met (1e-6) or after `iterations`. Returns the
+/// final posture and the iterations taken.
+pub fn plain_recursion(
+    skeleton: &Skeleton,
+    tasks: &[Task],
+    start: &Posture,
+    iterations: usize,
+) -> (Posture, usize) {
+    let n = skeleton.dof_count();
+    let (lo, hi) = (skeleton.lower_limits(), skeleton.upper_limits());
+    let mut posture = start.clone();
+    let mut solver = stance_ik::Solver::default();
+    let posture_only: Vec<bool> = tasks_by_level(tasks)
+        .iter()
+        .map(|level| level.iter().all(|t| t.is_posture()))
+        .collect();
+    for it in 0..iterations {
+        let res = level_residuals(skeleton, tasks, &posture);
+        if res.iter().zip(&posture_only).all(|(&r, &p)| p || r <= 1e-6) {
+            return (posture, it);
+        }
+        let systems = solver
+            .linear_systems(skeleton, tasks, &posture)
+            .expect("valid problem");
+        let values = posture.values().to_vec();
+        let mut clamped = vec![false; n];
+        let mut fixed = DVector::<f64>::zeros(n);
+        let mut total;
+        loop {
+            let mut dtheta = DVector::<f64>::zeros(n);
+            let mut p = DMatrix::<f64>::identity(n, n);
+            for c in 0..n {
+                if clamped[c] {
+                    p[(c, c)] = 0.0;
+                }
+            }
+            for level in &systems {
+                let j = level.jacobian_t.transpose();
+                let scale = (0..j.nrows()).map(|r| j.row(r).norm()).fold(0.0, f64::max);
+                if scale <= 0.0 {
+                    continue;
+                }
+                // One SVD of Jh^T = U S V^T (N x m): Jh^{+lambda} = U f(S) V^T, and the
+                // row space of Jh is spanned by the columns of U with s above the threshold.
+                let jht = &p * level.jacobian_t.clone();
+                let e = &level.dx - &j * (&dtheta + &fixed);
+                let (u, s, v) = jacobi_svd(&jht);
+                let ve = v.transpose() * e;
+                for (i, &si) in s.iter().enumerate() {
+                    if si > 1e-9 * scale {
+                        let ui = u.column(i);
+                        dtheta += ui * (ve[i] * si / (si * si + 0.002 * 0.002));
+                        p -= ui * ui.transpose();
+                    }
+                }
+            }
+            total = dtheta + &fixed;
+            let mut new_clamp = false;
+            for i in 0..n {
+                if clamped[i] {
+                    continue;
+                }
+                let next = values[i] + total[i];
+                if next > hi[i] || next < lo[i] {
+                    clamped[i] = true;
+                    fixed[i] = next.clamp(lo[i], hi[i]) - values[i];
+                    new_clamp = true;
+                }
+            }
+            if !new_clamp {
+                break;
+            }
+        }
+        for i in 0..n {
+            posture.values_mut()[i] = (values[i] + total[i]).clamp(lo[i], hi[i]);
+        }
+    }
+    (posture, iterations)
+}
