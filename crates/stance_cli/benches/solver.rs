@@ -7,7 +7,8 @@ use std::hint::black_box;
 use criterion::{Criterion, criterion_group, criterion_main};
 use stance_ik::scenarios;
 use stance_ik::{
-    Solver, SolverSettings, StepParams, StepWorkspace, prioritized_step, prioritized_step_nalgebra,
+    Iteration, Solver, SolverSettings, StepParams, StepWorkspace, prioritized_step,
+    prioritized_step_nalgebra,
 };
 
 fn benches(c: &mut Criterion) {
@@ -16,6 +17,7 @@ fn benches(c: &mut Criterion) {
         let n = s.skeleton.dof_count();
         let full = SolverSettings {
             restarts: false,
+            iteration: Iteration::Textbook,
             ..SolverSettings::default()
         };
         let mut solver = Solver::new(full).unwrap_or_default();

@@ -2,8 +2,8 @@
 //!
 //! Per scenario: `us_per_iteration` is the median, over many runs, of the time of a solve forced
 //! to take exactly `--iterations` iterations from the start posture (tolerance and stall tests
-//! off, and the cascade off so that every iteration computes every level: the cost of one full
-//! prioritized iteration, line search included) divided by that count; `us_per_solve` is the
+//! off, and the textbook iteration so that every iteration computes every level: the cost of one
+//! full prioritized iteration) divided by that count; `us_per_solve` is the
 //! median time of a normal solve (default settings) from the start posture, which takes
 //! `iterations` iterations and ends with `status`.
 //!
@@ -19,7 +19,7 @@ use std::collections::BTreeMap;
 use anyhow::{Context, Result, bail};
 use serde::Serialize;
 use stance_ik::scenarios;
-use stance_ik::{Damping, Posture, Skeleton, SolveStatus, Solver, SolverSettings, Task};
+use stance_ik::{Damping, Iteration, Posture, Skeleton, SolveStatus, Solver, SolverSettings, Task};
 
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
@@ -330,6 +330,7 @@ pub fn bench(
         stall_improvement: 0.0,
         time_budget_secs: None,
         restarts: false,
+        iteration: Iteration::Textbook,
         ..settings
     };
     let mut solver = Solver::new(fixed)?;
