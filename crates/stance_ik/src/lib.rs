@@ -7,8 +7,9 @@
 //! - [`Skeleton`]: joints with 0-3 rotational DOF (the root 6), limits, masses.
 //! - [`Posture`] / [`Frames`]: DOF values (rotation vectors, no Euler singularity) and
 //!   forward kinematics.
-//! - [`Task`]: position, orientation, gaze, centre of mass, posture attraction; each with a
-//!   level, a weight and an active flag.
+//! - [`Task`]: position, orientation, direction (partial orientation), gaze, centre of mass,
+//!   balance (the centre of mass inside the support polygon, an inequality), posture
+//!   attraction; each with a level, a weight and an active flag.
 //! - [`Solver`]: iterates prioritized steps (joint-limit clamping, shared step budget, line
 //!   search, cascade; per-level damping), and when it stalls runs once more as the textbook
 //!   recursion ([`Iteration`]), keeping the better result in priority order; returns a
@@ -47,4 +48,4 @@ pub use solver::{
     AnalyticRestart, Backend, Clock, Iteration, LevelReport, SolveReport, SolveStatus, Solver,
     SolverSettings,
 };
-pub use task::{Axes, Effector, Task, TaskFeature, TaskKind};
+pub use task::{Axes, BALANCE_BAND, Effector, Task, TaskFeature, TaskKind};

@@ -103,12 +103,38 @@ pub enum TaskKind {
         /// World point to look at.
         target: DVec3,
     },
+    /// Partial orientation: the segment axis `axis` (joint frame) points along the world
+    /// direction `target`, the rotation about it left free. 2 rows, like a gaze at infinity:
+    /// pelvis upright (its up axis along world up), a palm facing down (the palm normal
+    /// along -Y), a forearm horizontal...
+    Direction {
+        /// The joint.
+        joint: usize,
+        /// Axis in the joint frame (unit).
+        axis: DVec3,
+        /// World direction (unit).
+        target: DVec3,
+    },
     /// Whole-body centre of mass along the selected world axes (`Axes::XZ`: horizontal).
     CenterOfMass {
         /// Controlled axes.
         axes: Axes,
         /// World target.
         target: DVec3,
+    },
+    /// Balance as an inequality: the horizontal projection of the centre of mass stays inside
+    /// the support polygon (the convex hull, in the floor plane XZ, of the `support` points)
+    /// shrunk by `margin`. 1 row, along the outward normal of the nearest boundary: active
+    /// (with an error) when the projection is outside, active with a zero error within
+    /// [`BALANCE_BAND`] inside the boundary (the centre of mass may slide along it but not
+    /// leave), and empty (a zero row, no constraint on the lower levels) deeper inside.
+    /// With one support point the polygon is that point, with two the segment between them;
+    /// the margin only applies to a polygon with an area.
+    Balance {
+        /// Contact points on the body (e.g. the corners of the soles of the pinned feet).
+        support: Vec<Effector>,
+        /// Distance kept from the polygon's edges (m), >= 0.
+        margin: f64,
     },
     /// Attraction of the chosen DOF toward a reference posture (Jacobian = identity rows).
     PostureAttraction {
@@ -169,6 +195,20 @@ impl Task {
         })
     }
 
+    /// The `axis` of `joint` (joint frame) along the world direction `target`.
+    pub fn direction(joint: usize, axis: DVec3, target: DVec3) -> Self {
+        Self::new(TaskKind::Direction {
+            joint,
+            axis,
+            target,
+        })
+    }
+
+    /// The centre of mass inside the support polygon of `support`, `margin` from its edges.
+    pub fn balance(support: Vec<Effector>, margin: f64) -> Self {
+        Self::new(TaskKind::Balance { support, margin })
+    }
+
     /// Centre of mass on `axes`.
     pub fn center_of_mass(axes: Axes, target: DVec3) -> Self {
         Self::new(TaskKind::CenterOfMass { axes, target })
@@ -221,7 +261,8 @@ impl Task {
         match &self.kind {
             TaskKind::Position { axes, .. } | TaskKind::CenterOfMass { axes, .. } => axes.count(),
             TaskKind::Orientation { .. } => 3,
-            TaskKind::Gaze { .. } => 2,
+            TaskKind::Gaze { .. } | TaskKind::Direction { .. } => 2,
+            TaskKind::Balance { .. } => 1,
             TaskKind::PostureAttraction { dofs, .. } => dofs.len(),
         }
     }
@@ -281,10 +322,40 @@ impl Task {
                     return Err(bad("gaze axis has zero length".into()));
                 }
             }
+            TaskKind::Direction {
+                joint,
+                axis,
+                target,
+            } => {
+                joint_ok(*joint)?;
+                finite(*axis, "axis")?;
+                finite(*target, "target")?;
+                if axis.length() < 1e-9 {
+                    return Err(bad("direction axis has zero length".into()));
+                }
+                if target.length() < 1e-9 {
+                    return Err(bad("target direction has zero length".into()));
+                }
+            }
             TaskKind::CenterOfMass { target, .. } => {
                 finite(*target, "target")?;
                 if skeleton.total_mass() <= 0.0 {
                     return Err(bad("centre-of-mass task on a skeleton without mass".into()));
+                }
+            }
+            TaskKind::Balance { support, margin } => {
+                if support.is_empty() {
+                    return Err(bad("balance needs at least one support point".into()));
+                }
+                for s in support {
+                    joint_ok(s.joint)?;
+                    finite(s.point, "support point")?;
+                }
+                if !(margin.is_finite() && *margin >= 0.0) {
+                    return Err(bad("margin must be finite and >= 0".into()));
+                }
+                if skeleton.total_mass() <= 0.0 {
+                    return Err(bad("balance task on a skeleton without mass".into()));
                 }
             }
             TaskKind::PostureAttraction { reference, dofs } => {
@@ -312,12 +383,14 @@ impl Task {
             TaskKind::Position { effector, .. } | TaskKind::Gaze { effector, .. } => {
                 skeleton.chain_dofs(effector.joint)
             }
-            TaskKind::Orientation { joint, .. } => skeleton
+            TaskKind::Orientation { joint, .. } | TaskKind::Direction { joint, .. } => skeleton
                 .chain_dofs(*joint)
                 .into_iter()
                 .filter(|&d| skeleton.dof_kinds()[d].is_rotation())
                 .collect(),
-            TaskKind::CenterOfMass { .. } => (0..skeleton.dof_count()).collect(),
+            TaskKind::CenterOfMass { .. } | TaskKind::Balance { .. } => {
+                (0..skeleton.dof_count()).collect()
+            }
             TaskKind::PostureAttraction { dofs, .. } => {
                 let mut d = dofs.clone();
                 d.sort_unstable();
@@ -384,8 +457,19 @@ const GAZE_MAX_GAIN: f64 = 1e3;
 
 impl GazeGeometry {
     fn new(frames: &Frames, effector: &Effector, axis: DVec3, target: DVec3) -> Option<Self> {
+        Self::from_local(axis, gaze_local(frames, effector, target))
+    }
+
+    /// A direction task's geometry: the world direction `target` seen from the joint frame
+    /// (a gaze at a point infinitely far along `target`).
+    fn direction(frames: &Frames, joint: usize, axis: DVec3, target: DVec3) -> Option<Self> {
+        let rot = frames.world_from_joint_rotation[joint];
+        Self::from_local(axis, rot.transpose() * target.normalize_or_zero())
+    }
+
+    /// From the vector `v` toward the target in the joint frame.
+    fn from_local(axis: DVec3, v: DVec3) -> Option<Self> {
         let (a, l1, l2) = gaze_basis(axis);
-        let v = gaze_local(frames, effector, target);
         let len = v.length();
         if len < 1e-12 {
             return None;
@@ -445,6 +529,199 @@ fn gaze_local(frames: &Frames, effector: &Effector, target: DVec3) -> DVec3 {
     rot.transpose() * (target - frames.point(effector.joint, effector.point))
 }
 
+/// Width of the band inside the support polygon where the balance row is already active
+/// (with a zero error), so that the lower levels slide the centre of mass along the boundary
+/// instead of pushing it out every other iteration (m).
+pub const BALANCE_BAND: f64 = 0.002;
+
+/// Where the centre of mass stands with respect to the shrunk support polygon.
+#[derive(Debug, Clone, Copy)]
+struct BalanceGeometry {
+    /// Outward unit normal of the nearest boundary, horizontal.
+    normal: DVec3,
+    /// Signed distance of the centre of mass's projection past the shrunk polygon (m):
+    /// > 0 outside, <= 0 inside.
+    violation: f64,
+    /// The nearest boundary point is `(1 - t) a + t b` of the support points `a`, `b` (a
+    /// vertex: `a == b`); inside, the foot of the perpendicular on the nearest edge's line.
+    /// The violation's derivative is `normal . (dc - (1 - t) da - t db)`: the support moves
+    /// with the body unless something holds it.
+    a: usize,
+    b: usize,
+    t: f64,
+}
+
+/// A support point in the floor plane with its index in the task's list.
+type FloorPoint = ([f64; 2], usize);
+
+impl BalanceGeometry {
+    fn new(frames: &Frames, support: &[Effector], margin: f64) -> Option<Self> {
+        let points: Vec<FloorPoint> = support
+            .iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let p = frames.point(s.joint, s.point);
+                ([p.x, p.z], i)
+            })
+            .collect();
+        let c = frames.center_of_mass();
+        let c = [c.x, c.z];
+        let hull = convex_hull(points);
+        let (nearest, margin) = match hull.as_slice() {
+            [] => return None,
+            [a] => (Nearest::vertex(c, *a), 0.0),
+            [a, b] => (Nearest::on_segment(c, *a, *b), 0.0),
+            _ => (Nearest::on_polygon(c, &hull), margin),
+        };
+        Some(Self {
+            normal: DVec3::new(nearest.normal[0], 0.0, nearest.normal[1]),
+            violation: nearest.signed_distance + margin,
+            a: nearest.a,
+            b: nearest.b,
+            t: nearest.t,
+        })
+    }
+
+    /// Whether the row constrains the lower levels.
+    fn active(&self) -> bool {
+        self.violation > -BALANCE_BAND
+    }
+}
+
+/// The boundary feature of a support polygon nearest to a point.
+struct Nearest {
+    normal: [f64; 2],
+    signed_distance: f64,
+    a: usize,
+    b: usize,
+    t: f64,
+}
+
+impl Nearest {
+    fn vertex(c: [f64; 2], (p, i): FloorPoint) -> Self {
+        let d = [c[0] - p[0], c[1] - p[1]];
+        let len = d[0].hypot(d[1]);
+        let normal = if len < 1e-12 {
+            [1.0, 0.0]
+        } else {
+            [d[0] / len, d[1] / len]
+        };
+        Self {
+            normal,
+            signed_distance: len,
+            a: i,
+            b: i,
+            t: 0.0,
+        }
+    }
+
+    /// Outside distance to the segment `a b`.
+    fn on_segment(c: [f64; 2], (a, ia): FloorPoint, (b, ib): FloorPoint) -> Self {
+        let e = [b[0] - a[0], b[1] - a[1]];
+        let len2 = e[0] * e[0] + e[1] * e[1];
+        let t = if len2 > 0.0 {
+            (((c[0] - a[0]) * e[0] + (c[1] - a[1]) * e[1]) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let p = [a[0] + t * e[0], a[1] + t * e[1]];
+        Self {
+            a: ia,
+            b: ib,
+            t,
+            ..Self::vertex(c, (p, ia))
+        }
+    }
+
+    /// Signed distance to a counter-clockwise convex polygon: outside, the distance to the
+    /// nearest edge; inside, minus the distance to the nearest edge's line.
+    fn on_polygon(c: [f64; 2], hull: &[FloorPoint]) -> Self {
+        let edges = || (0..hull.len()).map(|i| (hull[i], hull[(i + 1) % hull.len()]));
+        let outside = edges().any(|((a, _), (b, _))| {
+            let e = [b[0] - a[0], b[1] - a[1]];
+            e[1] * (c[0] - a[0]) - e[0] * (c[1] - a[1]) > 0.0
+        });
+        if outside {
+            return edges()
+                .map(|(a, b)| Self::on_segment(c, a, b))
+                .min_by(|x, y| x.signed_distance.total_cmp(&y.signed_distance))
+                .unwrap_or_else(|| Self::vertex(c, hull[0]));
+        }
+        edges()
+            .map(|((a, ia), (b, ib))| {
+                let e = [b[0] - a[0], b[1] - a[1]];
+                let len = e[0].hypot(e[1]);
+                let normal = [e[1] / len, -e[0] / len];
+                let d = [c[0] - a[0], c[1] - a[1]];
+                Self {
+                    normal,
+                    signed_distance: normal[0] * d[0] + normal[1] * d[1],
+                    a: ia,
+                    b: ib,
+                    t: (d[0] * e[0] + d[1] * e[1]) / (len * len),
+                }
+            })
+            .max_by(|x, y| x.signed_distance.total_cmp(&y.signed_distance))
+            .unwrap_or_else(|| Self::vertex(c, hull[0]))
+    }
+}
+
+/// Convex hull in counter-clockwise order (Andrew's monotone chain), without collinear or
+/// repeated points.
+fn convex_hull(mut points: Vec<FloorPoint>) -> Vec<FloorPoint> {
+    points.sort_by(|(a, _), (b, _)| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
+    points.dedup_by(|(a, _), (b, _)| (a[0] - b[0]).hypot(a[1] - b[1]) < 1e-9);
+    if points.len() < 3 {
+        return points;
+    }
+    let cross = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| {
+        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    };
+    let mut hull: Vec<FloorPoint> = Vec::with_capacity(2 * points.len());
+    for pass in 0..2 {
+        let start = hull.len();
+        let mut push = |p: FloorPoint| {
+            while hull.len() >= start + 2
+                && cross(hull[hull.len() - 2].0, hull[hull.len() - 1].0, p.0) <= 1e-12
+            {
+                hull.pop();
+            }
+            hull.push(p);
+        };
+        if pass == 0 {
+            points.iter().for_each(|&p| push(p));
+        } else {
+            points.iter().rev().for_each(|&p| push(p));
+        }
+        hull.pop();
+    }
+    hull
+}
+
+/// The velocity of the world point `p` carried by `joint` for a unit velocity of DOF `d`.
+fn point_column(skeleton: &Skeleton, frames: &Frames, d: usize, joint: usize, p: DVec3) -> DVec3 {
+    let owner = skeleton.dof_joint(d);
+    if !skeleton.is_ancestor_or_self(owner, joint) {
+        DVec3::ZERO
+    } else if skeleton.dof_kinds()[d].is_rotation() {
+        frames.dof_axis[d].cross(p - frames.joint_position[owner])
+    } else {
+        frames.dof_axis[d]
+    }
+}
+
+/// The centre of mass's velocity for a unit velocity of DOF `d`.
+fn com_column(skeleton: &Skeleton, frames: &Frames, d: usize, total: f64) -> DVec3 {
+    let j = skeleton.dof_joint(d);
+    let axis = frames.dof_axis[d];
+    if skeleton.dof_kinds()[d].is_rotation() {
+        axis.cross(frames.subtree_moment[j] - frames.subtree_mass[j] * frames.joint_position[j])
+            / total
+    } else {
+        axis * (frames.subtree_mass[j] / total)
+    }
+}
+
 /// Shortest rotation vector of `q`.
 pub(crate) fn log_rotation(q: DQuat) -> DVec3 {
     let q = if q.w < 0.0 { -q } else { q };
@@ -476,9 +753,25 @@ impl Task {
                     .map_or([0.0, 0.0], |g| g.log());
                 TaskFeature::Vector(x.to_vec())
             }
+            TaskKind::Direction {
+                joint,
+                axis,
+                target,
+            } => {
+                let x = GazeGeometry::direction(frames, *joint, *axis, *target)
+                    .map_or([0.0, 0.0], |g| g.log());
+                TaskFeature::Vector(x.to_vec())
+            }
             TaskKind::CenterOfMass { axes, .. } => {
                 let c = frames.center_of_mass();
                 TaskFeature::Vector((0..3).filter(|&i| axes.has(i)).map(|i| c[i]).collect())
+            }
+            TaskKind::Balance { support, margin } => {
+                // The signed distance past the shrunk polygon; constant where the row is empty.
+                let x = BalanceGeometry::new(frames, support, *margin)
+                    .filter(BalanceGeometry::active)
+                    .map_or(-BALANCE_BAND, |g| g.violation);
+                TaskFeature::Vector(vec![x])
             }
             TaskKind::PostureAttraction { dofs, .. } => TaskFeature::Vector(
                 dofs.iter()
@@ -492,6 +785,14 @@ impl Task {
     pub fn residual(&self, skeleton: &Skeleton, frames: &Frames, values: &[f64]) -> f64 {
         let mut err = vec![0.0; self.rows()];
         self.error(skeleton, frames, values, &mut err, None)
+    }
+
+    /// The desired change of the task's feature (unclamped, one value per row): the error
+    /// the solver drives to zero, whose derivative is minus the Jacobian.
+    pub fn error_vector(&self, skeleton: &Skeleton, frames: &Frames, values: &[f64]) -> Vec<f64> {
+        let mut err = vec![0.0; self.rows()];
+        self.error(skeleton, frames, values, &mut err, None);
+        err
     }
 
     /// Writes the desired change (clamped by `limits` when given) into `err` and returns the
@@ -540,17 +841,22 @@ impl Task {
                 axis,
                 target,
             } => {
-                let Some(g) = GazeGeometry::new(frames, effector, *axis, *target) else {
-                    // Target at the eye: any direction is right.
-                    err[0] = 0.0;
-                    err[1] = 0.0;
-                    return 0.0;
-                };
-                let [x1, x2] = g.log();
-                err[0] = -x1;
-                err[1] = -x2;
-                clamp_vec(err, limits.map(|l| l.angular));
-                g.angle
+                let geometry = GazeGeometry::new(frames, effector, *axis, *target);
+                direction_error(geometry, err, limits)
+            }
+            TaskKind::Direction {
+                joint,
+                axis,
+                target,
+            } => {
+                let geometry = GazeGeometry::direction(frames, *joint, *axis, *target);
+                direction_error(geometry, err, limits)
+            }
+            TaskKind::Balance { support, margin } => {
+                let violation = BalanceGeometry::new(frames, support, *margin)
+                    .map_or(0.0, |g| g.violation.max(0.0));
+                err[0] = -violation;
+                clamp_vec(err, limits.map(|l| l.linear))
             }
             TaskKind::PostureAttraction { reference, dofs } => {
                 for (e, &d) in err.iter_mut().zip(dofs) {
@@ -597,17 +903,29 @@ impl Task {
                     return;
                 }
                 for &d in support {
-                    let j = skeleton.dof_joint(d);
-                    let axis = frames.dof_axis[d];
-                    let v = if kinds[d].is_rotation() {
-                        axis.cross(
-                            frames.subtree_moment[j]
-                                - frames.subtree_mass[j] * frames.joint_position[j],
-                        ) / total
-                    } else {
-                        axis * (frames.subtree_mass[j] / total)
-                    };
-                    write_axes(jac_t, n, d, v, *axes);
+                    write_axes(jac_t, n, d, com_column(skeleton, frames, d, total), *axes);
+                }
+            }
+            TaskKind::Balance {
+                support: contacts,
+                margin,
+            } => {
+                let total = frames.subtree_mass.first().copied().unwrap_or(0.0);
+                let Some(g) = BalanceGeometry::new(frames, contacts, *margin) else {
+                    return;
+                };
+                if total <= 0.0 || !g.active() {
+                    return;
+                }
+                let (a, b) = (&contacts[g.a], &contacts[g.b]);
+                let (pa, pb) = (
+                    frames.point(a.joint, a.point),
+                    frames.point(b.joint, b.point),
+                );
+                for &d in support {
+                    let moved = point_column(skeleton, frames, d, a.joint, pa) * (1.0 - g.t)
+                        + point_column(skeleton, frames, d, b.joint, pb) * g.t;
+                    jac_t[d] = g.normal.dot(com_column(skeleton, frames, d, total) - moved);
                 }
             }
             TaskKind::Orientation { .. } => {
@@ -639,6 +957,25 @@ impl Task {
                     jac_t[n + d] = r2;
                 }
             }
+            TaskKind::Direction {
+                joint,
+                axis,
+                target,
+            } => {
+                let Some(g) = GazeGeometry::direction(frames, *joint, *axis, *target) else {
+                    return;
+                };
+                let rot_t = frames.world_from_joint_rotation[*joint].transpose();
+                let world = target.normalize_or_zero();
+                for &d in support {
+                    if kinds[d].is_rotation() {
+                        let dq = -(rot_t * frames.dof_axis[d].cross(world));
+                        let [r1, r2] = g.log_derivative(dq);
+                        jac_t[d] = r1;
+                        jac_t[n + d] = r2;
+                    }
+                }
+            }
             TaskKind::PostureAttraction { dofs, .. } => {
                 for (row, &d) in dofs.iter().enumerate() {
                     jac_t[row * n + d] = 1.0;
@@ -646,6 +983,33 @@ impl Task {
             }
         }
     }
+}
+
+/// A gaze or direction task's desired change (minus the log map, clamped to the angular
+/// step limit) and its unclamped error (the angle to the target direction).
+fn direction_error(
+    geometry: Option<GazeGeometry>,
+    err: &mut [f64],
+    limits: Option<StepLimits>,
+) -> f64 {
+    let Some(g) = geometry else {
+        // Target at the eye (or a zero direction): any direction is right.
+        err[0] = 0.0;
+        err[1] = 0.0;
+        return 0.0;
+    };
+    let [x1, x2] = g.log();
+    err[0] = -x1;
+    err[1] = -x2;
+    if let Some(l) = limits {
+        let norm = x1.hypot(x2);
+        if norm > l.angular {
+            let s = l.angular / norm;
+            err[0] *= s;
+            err[1] *= s;
+        }
+    }
+    g.angle
 }
 
 fn fill_axes(err: &mut [f64], d: DVec3, axes: Axes) {

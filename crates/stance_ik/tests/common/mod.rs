@@ -90,7 +90,7 @@ pub fn random_axes(rng: &mut StdRng) -> Axes {
 /// One random task of any kind.
 pub fn random_task(rng: &mut StdRng, skeleton: &Skeleton, level: u32) -> Task {
     let j = rng.random_range(0..skeleton.joint_count());
-    let task = match rng.random_range(0..10) {
+    let task = match rng.random_range(0..13) {
         0..=4 => Task::position(j, vec3(rng, 0.2), vec3(rng, 1.5)).with_axes(random_axes(rng)),
         5 => {
             let axis = vec3(rng, 1.0).normalize_or(DVec3::Z);
@@ -104,6 +104,22 @@ pub fn random_task(rng: &mut StdRng, skeleton: &Skeleton, level: u32) -> Task {
             t
         }
         8 => Task::center_of_mass(random_axes(rng), vec3(rng, 1.0)),
+        9 | 10 => Task::direction(
+            j,
+            vec3(rng, 1.0).normalize_or(DVec3::Y),
+            vec3(rng, 1.0).normalize_or(DVec3::Y),
+        ),
+        11 => {
+            // 1 to 5 contact points on random segments; a margin up to 5 cm.
+            let count = rng.random_range(1..6);
+            let support = (0..count)
+                .map(|_| stance_ik::Effector {
+                    joint: rng.random_range(0..skeleton.joint_count()),
+                    point: vec3(rng, 0.3),
+                })
+                .collect();
+            Task::balance(support, uniform(rng, 0.0, 0.05))
+        }
         _ => {
             let n = skeleton.dof_count();
             let dofs: Vec<usize> = (0..n).filter(|_| rng.random::<f64>() < 0.5).collect();
