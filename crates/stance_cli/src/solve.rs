@@ -7,10 +7,10 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, anyhow, bail};
 use glam::{DQuat, DVec3};
 use serde_json::{Map, Value, json};
-use stance_document::{PostureValues, TaskSpec};
+use stance_document::{PostureValues, TaskKindSpec, TaskSpec};
 use stance_ik::{
     Damping, Dof, Frames, JointDef, Limb, LimbGoal, Posture, Skeleton, SolveReport, Solver,
-    SolverSettings, Task, TaskKind,
+    SolverSettings, Task,
 };
 
 #[derive(clap::Args, Debug)]
@@ -196,24 +196,20 @@ pub fn parse_problem(text: &str) -> Result<Problem> {
     let mut tasks = Vec::new();
     let mut limb_tasks = Vec::new();
     if let Some(v) = root.get("tasks").filter(|v| !v.is_null()) {
-        for (i, t) in arr(v, "tasks")?.iter().enumerate() {
+        // The fields and their errors are those of `stance_document::TaskSpec` (the editor's
+        // document shares the problem file's task format), and so is the conversion: a `limb`
+        // task gives its position task on the end joint (and an orientation task when it has
+        // one); [`parse_limb_task`] adds the closed-form start.
+        let specs = TaskSpec::list_from_json_value(v, "tasks").map_err(|e| anyhow!("{e}"))?;
+        for (i, (spec, t)) in specs.iter().zip(arr(v, "tasks")?).enumerate() {
             let at = format!("tasks[{i}]");
-            let task = parse_task(&skeleton, t, &at)?;
-            if t.get("kind").and_then(Value::as_str) == Some("limb") {
-                let limb = parse_limb_task(&skeleton, t, &at)?;
-                if let Some(orientation) = limb.goal.orientation {
-                    let end = limb.limb.joints()[2];
-                    tasks.push(Task {
-                        kind: TaskKind::Orientation {
-                            joint: end,
-                            target: orientation,
-                        },
-                        ..task.clone()
-                    });
-                }
-                limb_tasks.push(limb);
+            tasks.extend(
+                spec.to_solver_tasks(&skeleton, &specs)
+                    .map_err(|e| anyhow!("{}", e.within(&at)))?,
+            );
+            if matches!(spec.kind, TaskKindSpec::Limb { .. }) {
+                limb_tasks.push(parse_limb_task(&skeleton, t, &at)?);
             }
-            tasks.push(task);
         }
     }
     let (settings, hybrid, level_damping) = match root.get("settings") {
@@ -380,15 +376,6 @@ fn joint_index(skeleton: &Skeleton, v: &Value, at: &str) -> Result<usize> {
     skeleton
         .joint_index(name)
         .ok_or_else(|| anyhow!("{at}: unknown joint `{name}`"))
-}
-
-/// One task; the fields and their errors are those of `stance_document::TaskSpec` (the
-/// editor's document shares the problem file's task format). A `limb` task gives its position
-/// task on the end joint here; [`parse_limb_task`] adds the closed-form start.
-fn parse_task(skeleton: &Skeleton, v: &Value, at: &str) -> Result<Task> {
-    let spec = TaskSpec::from_json_value(v, at).map_err(|e| anyhow!("{e}"))?;
-    spec.to_task(skeleton)
-        .map_err(|e| anyhow!("{}", e.within(at)))
 }
 
 /// `lambda` (constant damping) or `adaptive_damping` (`{"lambda_max", "epsilon"}`) of `o`.

@@ -262,3 +262,48 @@ fn bench_runs_every_scenario() {
         assert!(v[s]["iterations"].as_u64().is_some());
     }
 }
+
+#[test]
+fn direction_and_balance_in_problem_files() {
+    // The forearm (its elbow-to-wrist offset as the axis) points straight ahead; the rotation
+    // about it stays free. The centre of mass stays over the left foot's sole.
+    let axis = "[-0.003,-0.2694,0.0099]";
+    let tasks = format!(
+        r#""tasks":[
+ {{"level":1,"kind":"direction","joint":"l_elbow","axis":{axis},"target":[0,0,1]}},
+ {{"level":1,"kind":"position","joint":"l_knee","target":[0.1,0.45,0.05]}},
+ {{"level":2,"kind":"balance","support":["l_knee"],"margin":0.0}}
+],"#
+    );
+    let problem = EXAMPLE.replacen(
+        &EXAMPLE[EXAMPLE.find("\"tasks\"").unwrap()..EXAMPLE.find("\"settings\"").unwrap()],
+        &tasks,
+        1,
+    );
+    let path = write_temp("direction.json", &problem);
+    let (ok, stdout, stderr) = stance(&["solve", path.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    let v: Value = serde_json::from_str(&stdout).unwrap();
+    let at = |joint: &str| -> Vec<f64> {
+        v["joints"][joint]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect()
+    };
+    let (elbow, wrist) = (at("l_elbow"), at("l_wrist"));
+    let d: Vec<f64> = (0..3).map(|i| wrist[i] - elbow[i]).collect();
+    let len = d.iter().map(|x| x * x).sum::<f64>().sqrt();
+    assert!(
+        (d[2] / len - 1.0).abs() < 1e-6,
+        "the forearm points ahead: {d:?}"
+    );
+    let levels = v["report"]["levels"].as_array().unwrap();
+    assert!(levels.iter().all(|l| l["met"].as_bool() == Some(true)), "{levels:?}");
+
+    let bad = problem.replace("\"support\":[\"l_knee\"]", "\"support\":[\"tail\"]");
+    expect_error("balance-bad.json", &bad, &["tasks[2].support[0]", "tail"]);
+    let bad = problem.replace("\"target\":[0,0,1]", "\"target\":[0,0,0]");
+    expect_error("direction-bad.json", &bad, &["tasks[0].target", "zero-length"]);
+}

@@ -4,7 +4,9 @@ use glam::{DQuat, DVec3};
 use stance_ik::{Axes, Effector, Limb, LimbGoal, Posture, Skeleton, Task, TaskKind};
 
 use crate::DocumentError;
-use crate::document::{Document, DofValues, PostureValues, TaskKindSpec, TaskSpec};
+use crate::document::{
+    CONTACT_HEIGHT, Document, DofValues, PostureValues, TaskKindSpec, TaskSpec,
+};
 
 /// Finds `name` in the skeleton: the exact name first, then through the H-Anim aliases
 /// (`l_ankle` finds `l_talocrural` and the other way round).
@@ -151,8 +153,13 @@ impl TaskSpec {
 
     /// Every solver task this task stands for: one, except a `limb` task with an `orientation`
     /// (a position task on the end joint and an orientation task, both at the task's level).
-    pub fn to_solver_tasks(&self, skeleton: &Skeleton) -> Result<Vec<Task>, DocumentError> {
-        let task = self.to_task(skeleton)?;
+    /// `problem` is every task of the problem this one belongs to (see [`TaskSpec::to_task`]).
+    pub fn to_solver_tasks(
+        &self,
+        skeleton: &Skeleton,
+        problem: &[TaskSpec],
+    ) -> Result<Vec<Task>, DocumentError> {
+        let task = self.to_task(skeleton, problem)?;
         let mut out = vec![task.clone()];
         if let TaskKindSpec::Limb {
             orientation: Some(q),
@@ -180,7 +187,10 @@ impl TaskSpec {
     /// A `limb` task gives its variational part, the position task of the end joint (like
     /// `stance solve`); its closed-form start is [`TaskSpec::to_limb`], its optional orientation
     /// goal an extra task of [`TaskSpec::to_solver_tasks`].
-    pub fn to_task(&self, skeleton: &Skeleton) -> Result<Task, DocumentError> {
+    ///
+    /// `problem` is every task of the problem this one belongs to: a `balance` task without
+    /// `support` stands on the problem's pinned contacts ([`pinned_contacts`]).
+    pub fn to_task(&self, skeleton: &Skeleton, problem: &[TaskSpec]) -> Result<Task, DocumentError> {
         self.validate()?;
         let kind = match &self.kind {
             TaskKindSpec::Position {
@@ -212,6 +222,19 @@ impl TaskSpec {
                 },
                 axis: v3(*axis).normalize(),
                 target: v3(*target),
+            },
+            TaskKindSpec::Direction {
+                joint,
+                axis,
+                target,
+            } => TaskKind::Direction {
+                joint: joint_at(skeleton, joint, "joint")?,
+                axis: v3(*axis).normalize(),
+                target: v3(*target).normalize(),
+            },
+            TaskKindSpec::Balance { support, margin } => TaskKind::Balance {
+                support: support_points(skeleton, support.as_deref(), problem)?,
+                margin: *margin,
             },
             TaskKindSpec::Com { axes, target } => TaskKind::CenterOfMass {
                 axes: *axes,
@@ -275,6 +298,89 @@ impl TaskSpec {
     }
 }
 
+/// The joints that support the body in a problem: the active `position` (controlling the
+/// height) and `limb` tasks whose target is at most [`CONTACT_HEIGHT`] above the floor, at any
+/// level. A pin held elsewhere (a hand on a table) does not count.
+pub fn pinned_contacts(problem: &[TaskSpec]) -> Vec<(String, [f64; 3])> {
+    problem
+        .iter()
+        .filter(|t| t.active)
+        .filter_map(|t| match &t.kind {
+            TaskKindSpec::Position {
+                joint,
+                point,
+                axes,
+                target,
+            } if axes.has(1) && target[1] <= CONTACT_HEIGHT => Some((joint.clone(), *point)),
+            TaskKindSpec::Limb {
+                limb: Some(limb),
+                target,
+                ..
+            } if target[1] <= CONTACT_HEIGHT => Some((limb.joints()[2].to_owned(), [0.0; 3])),
+            TaskKindSpec::Limb {
+                joints: Some(joints),
+                target,
+                ..
+            } if target[1] <= CONTACT_HEIGHT => Some((joints[2].clone(), [0.0; 3])),
+            _ => None,
+        })
+        .collect()
+}
+
+/// The support points of a balance task: for each contact, the sole of its foot (a foot
+/// joint: the four corners of [`stance_hanim::anatomy::sole`], once per foot) or the point
+/// itself. `support: None` takes the problem's [`pinned_contacts`], or both ankles when
+/// nothing is pinned on the floor.
+fn support_points(
+    skeleton: &Skeleton,
+    support: Option<&[String]>,
+    problem: &[TaskSpec],
+) -> Result<Vec<Effector>, DocumentError> {
+    let contacts: Vec<(usize, DVec3)> = match support {
+        Some(names) => names
+            .iter()
+            .enumerate()
+            .map(|(k, name)| Ok((joint_at(skeleton, name, &format!("support[{k}]"))?, DVec3::ZERO)))
+            .collect::<Result<_, DocumentError>>()?,
+        None => {
+            let pinned: Vec<(usize, DVec3)> = pinned_contacts(problem)
+                .iter()
+                .filter_map(|(name, point)| Some((resolve_joint(skeleton, name)?, v3(*point))))
+                .collect();
+            if pinned.is_empty() {
+                ["l_talocrural", "r_talocrural"]
+                    .iter()
+                    .filter_map(|name| Some((resolve_joint(skeleton, name)?, DVec3::ZERO)))
+                    .collect()
+            } else {
+                pinned
+            }
+        }
+    };
+    let mut feet = Vec::new();
+    let mut points = Vec::new();
+    for (joint, point) in contacts {
+        match stance_hanim::anatomy::ankle_of(skeleton, joint) {
+            Some(ankle) if !feet.contains(&ankle) => {
+                feet.push(ankle);
+                points.extend(
+                    stance_hanim::anatomy::sole(skeleton, ankle)
+                        .map(|point| Effector { joint: ankle, point }),
+                );
+            }
+            Some(_) => {}
+            None => points.push(Effector { joint, point }),
+        }
+    }
+    if points.is_empty() {
+        return Err(DocumentError::field(
+            "support",
+            "no support: pin a foot (or another part) on the floor, or name the support joints",
+        ));
+    }
+    Ok(points)
+}
+
 impl Document {
     /// The posture on `skeleton` (errors at `posture.<joint>.<dof>`).
     pub fn to_posture(&self, skeleton: &Skeleton) -> Result<Posture, DocumentError> {
@@ -287,7 +393,7 @@ impl Document {
         let mut out = Vec::with_capacity(self.tasks.len());
         for (i, t) in self.tasks.iter().enumerate() {
             out.extend(
-                t.to_solver_tasks(skeleton)
+                t.to_solver_tasks(skeleton, &self.tasks)
                     .map_err(|e| e.within(&format!("tasks[{i}]")))?,
             );
         }

@@ -175,6 +175,13 @@ impl LimbName {
     }
 }
 
+/// Default `margin` of a balance task (m).
+pub const DEFAULT_BALANCE_MARGIN: f64 = 0.02;
+
+/// A pinned part whose target is at most this high above the floor (y = 0) touches it and
+/// supports the body (m): an ankle stands about 8 cm high, a hand or knee on the floor less.
+pub const CONTACT_HEIGHT: f64 = 0.15;
+
 /// One task of the document, as in the problem format's `tasks[]`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TaskSpec {
@@ -232,6 +239,25 @@ pub enum TaskKindSpec {
         /// World point to look at (m).
         target: [f64; 3],
     },
+    /// `"direction"`: partial orientation, a segment axis along a world direction (the
+    /// rotation about it left free): pelvis upright, palm facing down.
+    Direction {
+        /// Joint name.
+        joint: String,
+        /// Axis in the joint frame (non-zero).
+        axis: [f64; 3],
+        /// World direction (non-zero).
+        target: [f64; 3],
+    },
+    /// `"balance"`: the centre of mass's projection inside the support polygon, `margin` from
+    /// its edges (an inequality: no constraint while it is inside).
+    Balance {
+        /// The contacts (joint names; a foot joint stands for its whole sole). `None`: the
+        /// problem's pinned parts touching the floor ([`CONTACT_HEIGHT`]), else both feet.
+        support: Option<Vec<String>>,
+        /// Distance kept from the polygon's edges (m), >= 0.
+        margin: f64,
+    },
     /// `"com"`: the whole-body centre of mass.
     Com {
         /// Controlled world axes (`xz`: the horizontal projection).
@@ -269,6 +295,8 @@ impl TaskKindSpec {
             TaskKindSpec::Position { .. } => "position",
             TaskKindSpec::Orientation { .. } => "orientation",
             TaskKindSpec::Gaze { .. } => "gaze",
+            TaskKindSpec::Direction { .. } => "direction",
+            TaskKindSpec::Balance { .. } => "balance",
             TaskKindSpec::Com { .. } => "com",
             TaskKindSpec::Posture { .. } => "posture",
             TaskKindSpec::Limb { .. } => "limb",
@@ -336,6 +364,26 @@ impl TaskSpec {
                 nonzero(axis, "axis", "axis")?;
                 finite_all(point, "point")?;
                 finite_all(target, "target")?;
+            }
+            TaskKindSpec::Direction { axis, target, .. } => {
+                finite_all(axis, "axis")?;
+                nonzero(axis, "axis", "axis")?;
+                finite_all(target, "target")?;
+                nonzero(target, "target", "direction")?;
+            }
+            TaskKindSpec::Balance { support, margin } => {
+                if !margin.is_finite() || *margin < 0.0 {
+                    return Err(DocumentError::field(
+                        "margin",
+                        "must be a finite number >= 0",
+                    ));
+                }
+                if support.as_ref().is_some_and(Vec::is_empty) {
+                    return Err(DocumentError::field(
+                        "support",
+                        "empty (leave it out for the pinned contacts)",
+                    ));
+                }
             }
             TaskKindSpec::Com { target, .. } => finite_all(target, "target")?,
             TaskKindSpec::Posture { reference, .. } => {
@@ -557,6 +605,60 @@ impl TaskSpec {
                     target: vec3(f("target")?, &here("target"))?,
                 }
             }
+            "direction" => {
+                let axis = match opt("axis") {
+                    None => [0.0, 1.0, 0.0],
+                    Some(a) => vec3(a, &here("axis"))?,
+                };
+                if axis.iter().map(|x| x * x).sum::<f64>().sqrt() < 1e-9 {
+                    return Err(DocumentError::field(here("axis"), "zero-length axis"));
+                }
+                let target = vec3(f("target")?, &here("target"))?;
+                if target.iter().map(|x| x * x).sum::<f64>().sqrt() < 1e-9 {
+                    return Err(DocumentError::field(
+                        here("target"),
+                        "zero-length direction",
+                    ));
+                }
+                TaskKindSpec::Direction {
+                    joint: joint("joint")?,
+                    axis,
+                    target,
+                }
+            }
+            "balance" => {
+                let support = match opt("support") {
+                    None => None,
+                    Some(list) => {
+                        let names = arr(list, &here("support"))?
+                            .iter()
+                            .enumerate()
+                            .map(|(k, j)| {
+                                string(j, &format!("{}[{k}]", here("support")))
+                                    .map(str::to_owned)
+                            })
+                            .collect::<Result<Vec<_>, _>>()?;
+                        if names.is_empty() {
+                            return Err(DocumentError::field(
+                                here("support"),
+                                "empty (leave it out for the pinned contacts)",
+                            ));
+                        }
+                        Some(names)
+                    }
+                };
+                let margin = match opt("margin") {
+                    None => DEFAULT_BALANCE_MARGIN,
+                    Some(m) => {
+                        let m = number(m, &here("margin"))?;
+                        if m < 0.0 {
+                            return Err(DocumentError::field(here("margin"), "must be >= 0"));
+                        }
+                        m
+                    }
+                };
+                TaskKindSpec::Balance { support, margin }
+            }
             "com" => TaskKindSpec::Com {
                 axes,
                 target: vec3(f("target")?, &here("target"))?,
@@ -658,7 +760,7 @@ impl TaskSpec {
                 return Err(DocumentError::field(
                     here("kind"),
                     format!(
-                        "unknown kind `{other}` (expected position, orientation, gaze, com, posture or limb)"
+                        "unknown kind `{other}` (expected position, orientation, direction, gaze, com, balance, posture or limb)"
                     ),
                 ));
             }
@@ -837,6 +939,21 @@ impl Serialize for TaskSpec {
                 m.serialize_entry("axis", axis)?;
                 m.serialize_entry("point", point)?;
                 m.serialize_entry("target", target)?;
+            }
+            TaskKindSpec::Direction {
+                joint,
+                axis,
+                target,
+            } => {
+                m.serialize_entry("joint", joint)?;
+                m.serialize_entry("axis", axis)?;
+                m.serialize_entry("target", target)?;
+            }
+            TaskKindSpec::Balance { support, margin } => {
+                if let Some(names) = support {
+                    m.serialize_entry("support", names)?;
+                }
+                m.serialize_entry("margin", margin)?;
             }
             TaskKindSpec::Com { axes, target } => {
                 m.serialize_entry("axes", &axes.to_letters())?;

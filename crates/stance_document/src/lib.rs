@@ -14,10 +14,10 @@ mod error;
 pub mod link;
 mod range_coder;
 
-pub use convert::{LimbStartSpec, resolve_joint};
+pub use convert::{LimbStartSpec, pinned_contacts, resolve_joint};
 pub use document::{
-    AvatarReference, DOCUMENT_VERSION, Document, DofValues, LimbName, PostureValues, TaskKindSpec,
-    TaskSpec,
+    AvatarReference, CONTACT_HEIGHT, DEFAULT_BALANCE_MARGIN, DOCUMENT_VERSION, Document, DofValues,
+    LimbName, PostureValues, TaskKindSpec, TaskSpec,
 };
 pub use error::DocumentError;
 pub use link::LinkError;

@@ -301,6 +301,7 @@ const HAS_SWIVEL: usize = 11;
 const HANIM_JOINT: usize = 12;
 const WEIGHT_DECIMAL: usize = 13;
 const HAS_ORIENTATION: usize = 14;
+const AXIS_Y: usize = 15;
 
 /// `m / 10^k`, correctly rounded (both are exact in f64 for the ranges used).
 fn from_decimal(m: u64, k: i32) -> f64 {
@@ -320,7 +321,16 @@ fn short_decimal(w: f64) -> Option<(u64, u8)> {
     })
 }
 
-const KINDS: [&str; 6] = ["position", "orientation", "gaze", "com", "posture", "limb"];
+const KINDS: [&str; 8] = [
+    "position",
+    "orientation",
+    "gaze",
+    "com",
+    "posture",
+    "limb",
+    "direction",
+    "balance",
+];
 
 fn quantise(x: f64, step: f64) -> i64 {
     const LIMIT: f64 = 4.611_686_018_427_388e18; // 2^62
@@ -553,14 +563,36 @@ impl Writer {
                 let z = axis == [0.0, 0.0, 1.0];
                 self.flag(AXIS_Z, z);
                 if !z {
-                    for x in axis {
-                        self.m
-                            .direction
-                            .encode_signed(&mut self.e, quantise(x, DIRECTION_STEP));
-                    }
+                    self.direction(axis);
                 }
                 self.point(*point);
                 self.position(*target);
+            }
+            TaskKindSpec::Direction {
+                joint,
+                axis,
+                target,
+            } => {
+                self.joint(joint);
+                let axis = unit(*axis);
+                let y = axis == [0.0, 1.0, 0.0];
+                self.flag(AXIS_Y, y);
+                if !y {
+                    self.direction(axis);
+                }
+                self.direction(unit(*target));
+            }
+            TaskKindSpec::Balance { support, margin } => {
+                self.flag(HAS_JOINTS, support.is_some());
+                if let Some(list) = support {
+                    self.count(list.len());
+                    for j in list {
+                        self.joint(j);
+                    }
+                }
+                self.m
+                    .position
+                    .encode_signed(&mut self.e, quantise(*margin, POSITION_STEP_M));
             }
             TaskKindSpec::Com { axes, target } => {
                 self.axes(*axes);
@@ -620,6 +652,15 @@ impl Writer {
         let r = if r.is_finite() { r } else { DVec3::ZERO };
         for x in r.to_array() {
             self.angle(x);
+        }
+    }
+
+    /// A unit vector, at the direction step.
+    fn direction(&mut self, v: [f64; 3]) {
+        for x in v {
+            self.m
+                .direction
+                .encode_signed(&mut self.e, quantise(x, DIRECTION_STEP));
         }
     }
 
@@ -712,6 +753,14 @@ impl Reader<'_> {
         let mut v = [0.0; 3];
         for x in &mut v {
             *x = Self::signed(&mut self.m.position, &mut self.d, POSITION_STEP_M)?;
+        }
+        Ok(v)
+    }
+
+    fn direction(&mut self) -> R<[f64; 3]> {
+        let mut v = [0.0; 3];
+        for x in &mut v {
+            *x = Self::signed(&mut self.m.direction, &mut self.d, DIRECTION_STEP)?;
         }
         Ok(v)
     }
@@ -852,11 +901,7 @@ impl Reader<'_> {
                 let axis = if self.flag(AXIS_Z) {
                     [0.0, 0.0, 1.0]
                 } else {
-                    let mut a = [0.0; 3];
-                    for x in &mut a {
-                        *x = Self::signed(&mut self.m.direction, &mut self.d, DIRECTION_STEP)?;
-                    }
-                    a
+                    self.direction()?
                 };
                 TaskKindSpec::Gaze {
                     joint,
@@ -864,6 +909,34 @@ impl Reader<'_> {
                     point: self.point()?,
                     target: self.position()?,
                 }
+            }
+            Some("direction") => {
+                let joint = self.joint()?;
+                let axis = if self.flag(AXIS_Y) {
+                    [0.0, 1.0, 0.0]
+                } else {
+                    self.direction()?
+                };
+                TaskKindSpec::Direction {
+                    joint,
+                    axis,
+                    target: self.direction()?,
+                }
+            }
+            Some("balance") => {
+                let support = if self.flag(HAS_JOINTS) {
+                    let n = self.count("support joints")?;
+                    let mut list = Vec::with_capacity(n);
+                    for _ in 0..n {
+                        list.push(self.joint()?);
+                        self.check()?;
+                    }
+                    Some(list)
+                } else {
+                    None
+                };
+                let margin = Self::signed(&mut self.m.position, &mut self.d, POSITION_STEP_M)?;
+                TaskKindSpec::Balance { support, margin }
             }
             Some("com") => TaskKindSpec::Com {
                 axes: self.axes()?,

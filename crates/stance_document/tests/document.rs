@@ -226,7 +226,7 @@ fn postures_convert_both_ways_and_aliases_resolve() {
         axes: stance_ik::Axes::XYZ,
         target: [0.0, 1.0, 0.0],
     });
-    let task = t.to_task(&s).unwrap();
+    let task = t.to_task(&s, &[]).unwrap();
     let wrist = s.joint_index("l_radiocarpal").unwrap();
     assert!(matches!(task.kind, TaskKind::Position { effector, .. } if effector.joint == wrist));
 }
@@ -257,4 +257,124 @@ fn every_task_kind_converts() {
         }
         k => panic!("{k:?}"),
     }
+}
+
+#[test]
+fn direction_and_balance_convert() {
+    let s = loa2_body40().unwrap();
+    let d = Document::from_json(&doc_with_tasks(
+        r#"[{"kind":"direction","joint":"sacroiliac","target":[0,2,0]},
+            {"kind":"direction","joint":"r_wrist","axis":[3,0,0],"target":[0,-1,0],"level":2},
+            {"kind":"balance","support":["l_talocrural","l_ankle","r_wrist"],"margin":0.05}]"#,
+    ))
+    .unwrap();
+    let t = d.to_tasks(&s).unwrap();
+    match &t[0].kind {
+        TaskKind::Direction { axis, target, .. } => {
+            // The axis defaults to +Y; both are made unit.
+            assert_eq!((*axis, *target), (glam::DVec3::Y, glam::DVec3::Y));
+        }
+        k => panic!("{k:?}"),
+    }
+    match &t[1].kind {
+        TaskKind::Direction { joint, axis, .. } => {
+            assert_eq!(*joint, s.joint_index("r_radiocarpal").unwrap());
+            assert_eq!(*axis, glam::DVec3::X);
+        }
+        k => panic!("{k:?}"),
+    }
+    match &t[2].kind {
+        TaskKind::Balance { support, margin } => {
+            // The left foot once (named twice, one sole: 4 corners), the wrist as a
+            // point.
+            let ankle = s.joint_index("l_talocrural").unwrap();
+            let wrist = s.joint_index("r_radiocarpal").unwrap();
+            assert_eq!(support.len(), 5);
+            assert_eq!(support.iter().filter(|e| e.joint == ankle).count(), 4);
+            assert_eq!(support[4].joint, wrist);
+            assert_eq!(*margin, 0.05);
+        }
+        k => panic!("{k:?}"),
+    }
+    // The JSON round trip keeps them.
+    assert_eq!(Document::from_json(&d.to_json(false)).unwrap(), d);
+}
+
+#[test]
+fn balance_without_support_stands_on_the_pinned_contacts() {
+    let s = loa2_body40().unwrap();
+    let joint_of = |t: &TaskKind| match t {
+        TaskKind::Balance { support, .. } => {
+            let mut joints: Vec<String> = support
+                .iter()
+                .map(|e| s.joints()[e.joint].name.clone())
+                .collect();
+            joints.dedup();
+            joints
+        }
+        k => panic!("{k:?}"),
+    };
+    // The left ankle is pinned on the floor, the right hand on a table (1 m up), the right
+    // knee on the floor at level 3, the left wrist's height is free (axes "xz").
+    let d = Document::from_json(&doc_with_tasks(
+        r#"[{"kind":"position","joint":"l_talocrural","target":[0.1,0.08,0]},
+            {"kind":"position","joint":"r_radiocarpal","target":[0.3,1.0,0.4]},
+            {"kind":"position","joint":"r_knee","point":[0,0,0.05],"target":[-0.1,0.05,0.3],"level":3},
+            {"kind":"position","joint":"l_radiocarpal","axes":"xz","target":[0,0,0]},
+            {"kind":"balance","level":2}]"#,
+    ))
+    .unwrap();
+    let t = d.to_tasks(&s).unwrap();
+    assert_eq!(joint_of(&t[4].kind), ["l_talocrural", "r_knee"]);
+    match &t[4].kind {
+        TaskKind::Balance { support, margin } => {
+            assert_eq!(*margin, stance_document::DEFAULT_BALANCE_MARGIN);
+            assert_eq!(support[4].point, glam::DVec3::new(0.0, 0.0, 0.05));
+        }
+        k => panic!("{k:?}"),
+    }
+    // Nothing pinned on the floor: both feet.
+    let d = Document::from_json(&doc_with_tasks(r#"[{"kind":"balance"}]"#)).unwrap();
+    let t = d.to_tasks(&s).unwrap();
+    assert_eq!(joint_of(&t[0].kind), ["l_talocrural", "r_talocrural"]);
+}
+
+#[test]
+fn direction_and_balance_errors_name_the_field() {
+    for (tasks, want) in [
+        (
+            r#"[{"kind":"direction","joint":"sacroiliac","target":[0,0,0]}]"#,
+            "tasks[0].target: zero-length direction",
+        ),
+        (
+            r#"[{"kind":"direction","joint":"sacroiliac","axis":[0,0,0],"target":[0,1,0]}]"#,
+            "tasks[0].axis: zero-length axis",
+        ),
+        (
+            r#"[{"kind":"direction","target":[0,1,0]}]"#,
+            "tasks[0].joint",
+        ),
+        (
+            r#"[{"kind":"balance","margin":-0.1}]"#,
+            "tasks[0].margin: must be >= 0",
+        ),
+        (
+            r#"[{"kind":"balance","support":[]}]"#,
+            "tasks[0].support: empty",
+        ),
+        (
+            r#"[{"kind":"balance","support":[3]}]"#,
+            "tasks[0].support[0]",
+        ),
+    ] {
+        let e = Document::from_json(&doc_with_tasks(tasks)).unwrap_err();
+        assert!(e.to_string().contains(want), "{e} (wanted {want})");
+    }
+    let s = loa2_body40().unwrap();
+    let d = Document::from_json(&doc_with_tasks(
+        r#"[{"kind":"balance","support":["l_talocrural","tail"]}]"#,
+    ))
+    .unwrap();
+    let e = d.to_tasks(&s).unwrap_err().to_string();
+    assert!(e.contains("tasks[0].support[1]") && e.contains("tail"), "{e}");
 }

@@ -22,7 +22,9 @@
 //! positions (percent of segment length from the proximal end), averaged over the female and
 //! male columns.
 
+use glam::DVec3;
 use stance_ik::Dof::{self, Rx, Ry, Rz, Tx, Ty, Tz};
+use stance_ik::{Frames, Posture, Skeleton};
 
 /// Which side of the body a joint is on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -302,12 +304,110 @@ pub fn segment_of(class: JointClass) -> Option<&'static Segment> {
     SEGMENTS.iter().find(|s| s.name == name)
 }
 
+/// The ankle of a foot: `joint` itself when it is an ankle (`*_talocrural`), else its
+/// nearest ancestor that is one, when `joint` is a mid-foot or toe joint.
+pub fn ankle_of(skeleton: &Skeleton, joint: usize) -> Option<usize> {
+    let class = |j: usize| JointClass::of(&skeleton.joints()[j].name);
+    if !matches!(
+        class(joint),
+        JointClass::Ankle | JointClass::MidFoot | JointClass::Toe | JointClass::ToeHinge
+    ) {
+        return None;
+    }
+    let mut j = Some(joint);
+    while let Some(k) = j {
+        if class(k) == JointClass::Ankle {
+            return Some(k);
+        }
+        j = skeleton.joints()[k].parent;
+    }
+    None
+}
+
+/// Foot length, breadth and the hip-to-ankle height as fractions of stature (Drillis &
+/// Contini 1966, *Body segment parameters*, the segment lengths of Winter's *Biomechanics and
+/// Motor Control of Human Movement*, fig. 4.1).
+const FOOT_LENGTH: f64 = 0.152;
+const FOOT_BREADTH: f64 = 0.055;
+const HIP_TO_ANKLE: f64 = 0.491;
+/// Share of the foot's length behind the ankle.
+const HEEL_SHARE: f64 = 0.2;
+/// Share of the foot's length from the ankle to the ball of the foot (the
+/// metatarsophalangeal joints).
+const BALL_SHARE: f64 = 0.55;
+
+/// The sole of the foot whose ankle is `ankle`: its four corners (heel and toe, inside and
+/// outside), horizontal around the ankle, in the ankle's joint frame at the rest posture
+/// (where joint frames are parallel to the body frame: +Z ahead). Only their floor-plane
+/// positions matter to a support polygon. The length comes from the foot's own joints when
+/// the skeleton has them (the mean of its metatarsophalangeal joints is the ball of the foot,
+/// [`BALL_SHARE`] of the length ahead), else from the leg's length in the anthropometric
+/// proportions above.
+pub fn sole(skeleton: &Skeleton, ankle: usize) -> [DVec3; 4] {
+    let frames = Frames::new(skeleton, &Posture::rest(skeleton));
+    let at = |j: usize| frames.joint_position[j];
+    let balls: Vec<f64> = (0..skeleton.joint_count())
+        .filter(|&j| {
+            skeleton.is_ancestor_or_self(ankle, j)
+                && JointClass::of(&skeleton.joints()[j].name) == JointClass::Toe
+        })
+        .map(|j| at(j).z - at(ankle).z)
+        .collect();
+    let ahead = balls.iter().sum::<f64>() / balls.len().max(1) as f64;
+    let leg = skeleton.joints()[ankle]
+        .parent
+        .and_then(|knee| skeleton.joints()[knee].parent)
+        .map(|hip| (at(hip) - at(ankle)).length())
+        .filter(|&l| l > 0.0);
+    let stature = leg.map_or(1.7, |l| l / HIP_TO_ANKLE);
+    let length = if ahead > 0.02 {
+        ahead / BALL_SHARE
+    } else {
+        FOOT_LENGTH * stature
+    };
+    let half = 0.5 * FOOT_BREADTH * stature;
+    let (heel, toe) = (-HEEL_SHARE * length, (1.0 - HEEL_SHARE) * length);
+    [
+        DVec3::new(-half, 0.0, heel),
+        DVec3::new(half, 0.0, heel),
+        DVec3::new(half, 0.0, toe),
+        DVec3::new(-half, 0.0, toe),
+    ]
+}
+
 #[cfg(test)]
 mod tests {
     #[cfg(target_arch = "wasm32")]
     use wasm_bindgen_test::wasm_bindgen_test as test;
 
     use super::*;
+
+    #[test]
+    fn soles_are_foot_sized_at_every_level_of_articulation() {
+        use crate::{LevelOfArticulation, SkeletonOptions, default_skeleton};
+        for loa in LevelOfArticulation::ALL {
+            let body = default_skeleton(&SkeletonOptions {
+                loa,
+                ..SkeletonOptions::default()
+            })
+            .unwrap_or_else(|e| panic!("{e}"));
+            let s = &body.skeleton;
+            let ankle = s.joint_index("l_talocrural").unwrap_or_else(|| panic!("ankle"));
+            assert_eq!(ankle_of(s, ankle), Some(ankle));
+            if let Some(toe) = s.joint_index("l_metatarsophalangeal_2") {
+                assert_eq!(ankle_of(s, toe), Some(ankle));
+            }
+            assert_eq!(ankle_of(s, s.joint_index("l_knee").unwrap_or(0)), None);
+            let corners = sole(s, ankle);
+            let length = corners[2].z - corners[1].z;
+            let breadth = corners[1].x - corners[0].x;
+            // The H-Anim default body is about 1.75 m tall: a foot of 18-30 cm by 8-12 cm,
+            // mostly ahead of the ankle.
+            assert!((0.18..0.30).contains(&length), "{loa:?}: length {length}");
+            assert!((0.08..0.12).contains(&breadth), "{loa:?}: breadth {breadth}");
+            assert!(corners[2].z > 2.0 * -corners[1].z, "{loa:?}: {corners:?}");
+        }
+    }
 
     #[test]
     fn de_leva_fractions_sum_to_one() {

@@ -96,7 +96,7 @@ pub fn random_posture(r: &mut StdRng) -> PostureValues {
 }
 
 pub fn random_task(r: &mut StdRng) -> TaskSpec {
-    let kind = match r.random_range(0..6) {
+    let kind = match r.random_range(0..8) {
         0 => TaskKindSpec::Position {
             joint: random_joint_name(r),
             point: if r.random_bool(0.5) {
@@ -154,6 +154,27 @@ pub fn random_task(r: &mut StdRng) -> TaskSpec {
             }),
             reference: r.random_bool(0.3).then(|| random_posture(r)),
         },
+        6 => TaskKindSpec::Direction {
+            joint: random_joint_name(r),
+            axis: if r.random_bool(0.5) {
+                [0.0, 1.0, 0.0]
+            } else {
+                nonzero3(v3(r, 1.0))
+            },
+            target: nonzero3(v3(r, 1.0)),
+        },
+        7 => TaskKindSpec::Balance {
+            support: r.random_bool(0.5).then(|| {
+                (0..r.random_range(1..5))
+                    .map(|_| random_joint_name(r))
+                    .collect()
+            }),
+            margin: if r.random_bool(0.5) {
+                0.02
+            } else {
+                uniform(r, 0.0, 0.1)
+            },
+        },
         _ => {
             let named = r.random_bool(0.7);
             TaskKindSpec::Limb {
@@ -191,6 +212,14 @@ pub fn random_task(r: &mut StdRng) -> TaskSpec {
         },
         active: r.random_bool(0.8),
         kind,
+    }
+}
+
+fn nonzero3(a: [f64; 3]) -> [f64; 3] {
+    if a.iter().map(|x| x * x).sum::<f64>() < 1e-4 {
+        [1.0, 0.0, 0.0]
+    } else {
+        a
     }
 }
 
@@ -391,6 +420,32 @@ pub fn document_close(a: &Document, b: &Document) -> Result<(), String> {
                     && close3(*p1, *p2, POSITION_STEP_M)
                     && close3(*t1, *t2, POSITION_STEP_M)
             }
+            (
+                TaskKindSpec::Direction {
+                    joint: j1,
+                    axis: a1,
+                    target: t1,
+                },
+                TaskKindSpec::Direction {
+                    joint: j2,
+                    axis: a2,
+                    target: t2,
+                },
+            ) => {
+                j1 == j2
+                    && close3(unit(*a1), *a2, DIRECTION_STEP)
+                    && close3(unit(*t1), *t2, DIRECTION_STEP)
+            }
+            (
+                TaskKindSpec::Balance {
+                    support: s1,
+                    margin: m1,
+                },
+                TaskKindSpec::Balance {
+                    support: s2,
+                    margin: m2,
+                },
+            ) => s1 == s2 && close(*m1, *m2, POSITION_STEP_M),
             (
                 TaskKindSpec::Com {
                     axes: a1,
