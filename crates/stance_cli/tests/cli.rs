@@ -300,10 +300,17 @@ fn direction_and_balance_in_problem_files() {
         "the forearm points ahead: {d:?}"
     );
     let levels = v["report"]["levels"].as_array().unwrap();
-    assert!(levels.iter().all(|l| l["met"].as_bool() == Some(true)), "{levels:?}");
+    assert!(
+        levels.iter().all(|l| l["met"].as_bool() == Some(true)),
+        "{levels:?}"
+    );
 
     let bad = problem.replace("\"support\":[\"l_knee\"]", "\"support\":[\"tail\"]");
     expect_error("balance-bad.json", &bad, &["tasks[2].support[0]", "tail"]);
     let bad = problem.replace("\"target\":[0,0,1]", "\"target\":[0,0,0]");
-    expect_error("direction-bad.json", &bad, &["tasks[0].target", "zero-length"]);
+    expect_error(
+        "direction-bad.json",
+        &bad,
+        &["tasks[0].target", "zero-length"],
+    );
 }

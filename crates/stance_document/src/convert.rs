@@ -4,9 +4,7 @@ use glam::{DQuat, DVec3};
 use stance_ik::{Axes, Effector, Limb, LimbGoal, Posture, Skeleton, Task, TaskKind};
 
 use crate::DocumentError;
-use crate::document::{
-    CONTACT_HEIGHT, Document, DofValues, PostureValues, TaskKindSpec, TaskSpec,
-};
+use crate::document::{CONTACT_HEIGHT, Document, DofValues, PostureValues, TaskKindSpec, TaskSpec};
 
 /// Finds `name` in the skeleton: the exact name first, then through the H-Anim aliases
 /// (`l_ankle` finds `l_talocrural` and the other way round).
@@ -190,7 +188,11 @@ impl TaskSpec {
     ///
     /// `problem` is every task of the problem this one belongs to: a `balance` task without
     /// `support` stands on the problem's pinned contacts ([`pinned_contacts`]).
-    pub fn to_task(&self, skeleton: &Skeleton, problem: &[TaskSpec]) -> Result<Task, DocumentError> {
+    pub fn to_task(
+        &self,
+        skeleton: &Skeleton,
+        problem: &[TaskSpec],
+    ) -> Result<Task, DocumentError> {
         self.validate()?;
         let kind = match &self.kind {
             TaskKindSpec::Position {
@@ -340,7 +342,12 @@ fn support_points(
         Some(names) => names
             .iter()
             .enumerate()
-            .map(|(k, name)| Ok((joint_at(skeleton, name, &format!("support[{k}]"))?, DVec3::ZERO)))
+            .map(|(k, name)| {
+                Ok((
+                    joint_at(skeleton, name, &format!("support[{k}]"))?,
+                    DVec3::ZERO,
+                ))
+            })
             .collect::<Result<_, DocumentError>>()?,
         None => {
             let pinned: Vec<(usize, DVec3)> = pinned_contacts(problem)
@@ -364,8 +371,10 @@ fn support_points(
             Some(ankle) if !feet.contains(&ankle) => {
                 feet.push(ankle);
                 points.extend(
-                    stance_hanim::anatomy::sole(skeleton, ankle)
-                        .map(|point| Effector { joint: ankle, point }),
+                    stance_hanim::anatomy::sole(skeleton, ankle).map(|point| Effector {
+                        joint: ankle,
+                        point,
+                    }),
                 );
             }
             Some(_) => {}

@@ -634,8 +634,7 @@ impl TaskSpec {
                             .iter()
                             .enumerate()
                             .map(|(k, j)| {
-                                string(j, &format!("{}[{k}]", here("support")))
-                                    .map(str::to_owned)
+                                string(j, &format!("{}[{k}]", here("support"))).map(str::to_owned)
                             })
                             .collect::<Result<Vec<_>, _>>()?;
                         if names.is_empty() {

@@ -376,5 +376,8 @@ fn direction_and_balance_errors_name_the_field() {
     ))
     .unwrap();
     let e = d.to_tasks(&s).unwrap_err().to_string();
-    assert!(e.contains("tasks[0].support[1]") && e.contains("tail"), "{e}");
+    assert!(
+        e.contains("tasks[0].support[1]") && e.contains("tail"),
+        "{e}"
+    );
 }

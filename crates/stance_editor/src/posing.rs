@@ -3,7 +3,9 @@
 //! every frame within a time budget. No egui here: everything is tested natively.
 
 use glam::{DQuat, DVec3};
-use stance_document::{Document, LimbName, PostureValues, TaskKindSpec, TaskSpec};
+use stance_document::{
+    DEFAULT_BALANCE_MARGIN, Document, LimbName, PostureValues, TaskKindSpec, TaskSpec,
+};
 use stance_hanim::{HumanoidSkeleton, LevelOfArticulation, SkeletonOptions, default_skeleton};
 use stance_ik::{
     Axes, Clock, Frames, Limb, LimbGoal, Posture, Skeleton, SolveReport, SolveStatus, Solver,
@@ -144,17 +146,11 @@ impl PosingSession {
                 tasks.push(pin_task(foot, position.to_array()));
             }
         }
-        let feet_centre = tasks
-            .iter()
-            .filter_map(|task| match &task.kind {
-                TaskKindSpec::Position { target, .. } => Some(DVec3::from_array(*target)),
-                _ => None,
-            })
-            .fold(DVec3::ZERO, |sum, p| sum + p)
-            / tasks.len().max(1) as f64;
-        let mut balance = TaskSpec::new(TaskKindSpec::Com {
-            axes: Axes::new(true, false, true),
-            target: [feet_centre.x, 0.0, self.frames.center_of_mass().z],
+        // Balance as the support polygon of the pinned feet (an inequality): the body leans
+        // freely as long as its centre of mass stays over them.
+        let mut balance = TaskSpec::new(TaskKindSpec::Balance {
+            support: None,
+            margin: DEFAULT_BALANCE_MARGIN,
         });
         balance.level = 2;
         tasks.push(balance);
@@ -520,8 +516,8 @@ impl PosingSession {
         }
         let mut tasks = Vec::with_capacity(self.tasks.len() + 1);
         for spec in &self.tasks {
-            if let Ok(task) = spec.to_task(self.skeleton()) {
-                tasks.push(task);
+            if let Ok(converted) = spec.to_solver_tasks(self.skeleton(), &self.tasks) {
+                tasks.extend(converted);
             }
         }
         if let Some((joint, position)) = self.held {
@@ -575,8 +571,14 @@ impl PosingSession {
         let evaluated: Vec<(Option<f64>, Option<String>)> = self
             .tasks
             .iter()
-            .map(|spec| match spec.to_task(skeleton) {
-                Ok(task) => (Some(task.residual(skeleton, &self.frames, values)), None),
+            .map(|spec| match spec.to_solver_tasks(skeleton, &self.tasks) {
+                Ok(converted) => {
+                    let squares: f64 = converted
+                        .iter()
+                        .map(|task| task.residual(skeleton, &self.frames, values).powi(2))
+                        .sum();
+                    (Some(squares.sqrt()), None)
+                }
                 Err(error) => (None, Some(error.to_string())),
             })
             .collect();
@@ -607,7 +609,7 @@ impl PosingSession {
             return "still moving".to_owned();
         }
         let skeleton = self.skeleton();
-        let Ok(task) = spec.to_task(skeleton) else {
+        let Ok(task) = spec.to_task(skeleton, &self.tasks) else {
             return "out of reach".to_owned();
         };
         let higher: Vec<(&TaskSpec, Task)> = self
@@ -620,7 +622,7 @@ impl PosingSession {
                     && !matches!(other.kind, TaskKindSpec::Posture { .. })
                     && residual.is_some()
             })
-            .filter_map(|(other, _)| Some((other, other.to_task(skeleton).ok()?)))
+            .filter_map(|(other, _)| Some((other, other.to_task(skeleton, &self.tasks).ok()?)))
             .collect();
         let solver_tasks: Vec<Task> = higher.iter().map(|(_, task)| task.clone()).collect();
         match conflict::diagnose(skeleton, &self.posture, &task, &solver_tasks) {
@@ -699,6 +701,24 @@ pub fn mirror_task(task: &TaskSpec) -> TaskSpec {
             axis: reflect(*axis),
             point: reflect(*point),
             target: reflect(*target),
+        },
+        TaskKindSpec::Direction {
+            joint,
+            axis,
+            target,
+        } => TaskKindSpec::Direction {
+            joint: mirror_joint_name(joint),
+            axis: reflect(*axis),
+            target: reflect(*target),
+        },
+        TaskKindSpec::Balance { support, margin } => TaskKindSpec::Balance {
+            support: support.as_ref().map(|joints| {
+                joints
+                    .iter()
+                    .map(|joint| mirror_joint_name(joint))
+                    .collect()
+            }),
+            margin: *margin,
         },
         TaskKindSpec::Com { axes, target } => TaskKindSpec::Com {
             axes: *axes,
@@ -800,6 +820,21 @@ pub fn describe_task(task: &TaskSpec) -> String {
         }
         TaskKindSpec::Orientation { joint, .. } => format!("{} orientation", describe_joint(joint)),
         TaskKindSpec::Gaze { joint, .. } => format!("{} gaze", describe_joint(joint)),
+        TaskKindSpec::Direction { joint, .. } => format!("{} direction", describe_joint(joint)),
+        TaskKindSpec::Balance { support: None, .. } => {
+            "balance (centre of mass over the pinned feet)".to_owned()
+        }
+        TaskKindSpec::Balance {
+            support: Some(joints),
+            ..
+        } => format!(
+            "balance (centre of mass over {})",
+            joints
+                .iter()
+                .map(|joint| describe_joint(joint))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
         TaskKindSpec::Com { axes, .. } => {
             if axes.to_letters() == "xz" {
                 "balance (centre of mass over the floor)".to_owned()
@@ -893,6 +928,52 @@ mod tests {
         assert!((feet_after.1 - feet_before.1).length() < 1e-4);
         session.end_grab();
         assert!(session.grab().is_none());
+    }
+
+    /// Pulls the right hand 1.2 m ahead and 0.2 m up over 30 frames; returns the centre of
+    /// mass and how far ahead of the ankles it ends.
+    fn long_forward_pull(session: &mut PosingSession) -> DVec3 {
+        let wrist = session.skeleton().joint_index("r_radiocarpal").unwrap();
+        let start = session.frames().joint_position[wrist];
+        session.begin_grab(wrist, start);
+        let goal = start + DVec3::new(0.0, 0.2, 1.2);
+        for step in 1..=30 {
+            session.move_grab(start + (goal - start) * (f64::from(step) / 30.0));
+            session.solve_frame(None);
+        }
+        settle(session);
+        session.frames().center_of_mass()
+    }
+
+    #[test]
+    fn a_long_forward_pull_keeps_the_centre_of_mass_over_the_feet() {
+        let mut session = session();
+        let ankles_z = session
+            .joint_position("l_talocrural")
+            .unwrap()
+            .z
+            .max(session.joint_position("r_talocrural").unwrap().z);
+        // The toes of the default body end about 16 cm ahead of its ankles.
+        let toes_z = ankles_z + 0.16;
+        let com = long_forward_pull(&mut session);
+        assert!(com.z <= toes_z, "centre of mass {com} ahead of the toes");
+        let balance = session
+            .tasks()
+            .iter()
+            .position(|task| matches!(task.kind, TaskKindSpec::Balance { .. }))
+            .unwrap();
+        assert!(session.statuses()[balance].residual.unwrap() <= MET_TOLERANCE);
+        // Without the balance task the same pull carries it past them.
+        let mut free = self::session();
+        let tasks: Vec<TaskSpec> = free
+            .tasks()
+            .iter()
+            .filter(|task| !matches!(task.kind, TaskKindSpec::Balance { .. }))
+            .cloned()
+            .collect();
+        free.set_tasks(tasks);
+        let com = long_forward_pull(&mut free);
+        assert!(com.z > toes_z + 0.05, "unbalanced: {com}");
     }
 
     #[test]

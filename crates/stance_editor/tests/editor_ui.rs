@@ -758,7 +758,7 @@ fn a_level_dragged_by_its_title_takes_the_place_of_another_and_undo_restores_the
             .all(|task| task.level == 2),
         "the feet moved down one place: {moved:?}"
     );
-    assert!(moved.contains(&(10, "com".to_owned())), "{moved:?}");
+    assert!(moved.contains(&(10, "balance".to_owned())), "{moved:?}");
     harness.key_press_modifiers(Modifiers::COMMAND, Key::Z);
     settle(&mut harness);
     assert_eq!(document(&harness).tasks, before.tasks);

@@ -392,7 +392,9 @@ mod tests {
             })
             .unwrap_or_else(|e| panic!("{e}"));
             let s = &body.skeleton;
-            let ankle = s.joint_index("l_talocrural").unwrap_or_else(|| panic!("ankle"));
+            let ankle = s
+                .joint_index("l_talocrural")
+                .unwrap_or_else(|| panic!("ankle"));
             assert_eq!(ankle_of(s, ankle), Some(ankle));
             if let Some(toe) = s.joint_index("l_metatarsophalangeal_2") {
                 assert_eq!(ankle_of(s, toe), Some(ankle));
@@ -404,7 +406,10 @@ mod tests {
             // The H-Anim default body is about 1.75 m tall: a foot of 18-30 cm by 8-12 cm,
             // mostly ahead of the ankle.
             assert!((0.18..0.30).contains(&length), "{loa:?}: length {length}");
-            assert!((0.08..0.12).contains(&breadth), "{loa:?}: breadth {breadth}");
+            assert!(
+                (0.08..0.12).contains(&breadth),
+                "{loa:?}: breadth {breadth}"
+            );
             assert!(corners[2].z > 2.0 * -corners[1].z, "{loa:?}: {corners:?}");
         }
     }

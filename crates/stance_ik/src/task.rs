@@ -787,6 +787,27 @@ impl Task {
         self.error(skeleton, frames, values, &mut err, None)
     }
 
+    /// The support polygon of a balance task at `frames`, as the solver sees it: the corners
+    /// of the convex hull of the support points, counter-clockwise seen from below (x, z), on
+    /// the floor plane y = 0. Empty for other kinds.
+    pub fn support_polygon(&self, frames: &Frames) -> Vec<DVec3> {
+        let TaskKind::Balance { support, .. } = &self.kind else {
+            return Vec::new();
+        };
+        let points = support
+            .iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let p = frames.point(s.joint, s.point);
+                ([p.x, p.z], i)
+            })
+            .collect();
+        convex_hull(points)
+            .into_iter()
+            .map(|([x, z], _)| DVec3::new(x, 0.0, z))
+            .collect()
+    }
+
     /// The desired change of the task's feature (unclamped, one value per row): the error
     /// the solver drives to zero, whose derivative is minus the Jacobian.
     pub fn error_vector(&self, skeleton: &Skeleton, frames: &Frames, values: &[f64]) -> Vec<f64> {

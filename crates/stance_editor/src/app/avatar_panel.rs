@@ -522,7 +522,7 @@ impl StanceApp {
             .tasks()
             .iter()
             .cloned()
-            .partition(|task| task.to_solver_tasks(session.skeleton()).is_ok());
+            .partition(|task| task.to_solver_tasks(session.skeleton(), &[]).is_ok());
         if let Some(posture) = carry_posture(&self.session, session.skeleton()) {
             session.set_posture(posture);
         }

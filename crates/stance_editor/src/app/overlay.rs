@@ -42,6 +42,7 @@ impl StanceApp {
 
         // Task goals.
         let mut has_balance = false;
+        let mut polygon = Vec::new();
         for (task, status) in self.session.tasks().iter().zip(self.session.statuses()) {
             let color = if !task.active {
                 GOAL_INACTIVE
@@ -83,13 +84,19 @@ impl StanceApp {
                         painter.circle_filled(goal, 2.5, color);
                     }
                 }
-                TaskKindSpec::Com { .. } => has_balance = task.active,
+                TaskKindSpec::Com { .. } => has_balance |= task.active,
+                TaskKindSpec::Balance { .. } if task.active => {
+                    has_balance = true;
+                    if let Ok(solver_task) = task.to_task(skeleton, self.session.tasks()) {
+                        polygon = solver_task.support_polygon(frames);
+                    }
+                }
                 _ => {}
             }
         }
 
         if has_balance {
-            self.draw_balance(&painter, rect);
+            self.draw_balance(&painter, rect, &polygon);
         }
 
         // The pulled point and where the cursor wants it.
@@ -134,34 +141,15 @@ impl StanceApp {
         }
     }
 
-    /// The centre of mass, its projection on the floor, and the support polygon of the feet.
-    fn draw_balance(&self, painter: &egui::Painter, rect: egui::Rect) {
+    /// The centre of mass, its projection on the floor, and the support polygon of the balance
+    /// task (as the solver sees it), if there is one.
+    fn draw_balance(&self, painter: &egui::Painter, rect: egui::Rect, polygon: &[DVec3]) {
         let com = self.session.frames().center_of_mass();
         let floor_com = DVec3::new(com.x, 0.0, com.z);
-        let mut contact: Vec<(f64, f64)> = Vec::new();
-        for name in [
-            "l_talocrural",
-            "r_talocrural",
-            "l_tarsometatarsal_2",
-            "r_tarsometatarsal_2",
-            "l_metatarsophalangeal_2",
-            "r_metatarsophalangeal_2",
-        ] {
-            if let Some(position) = self.session.joint_position(name)
-                && position.y < 0.15
-            {
-                contact.push((position.x, position.z));
-                // The heel is behind the ankle.
-                if name.ends_with("talocrural") {
-                    contact.push((position.x, position.z - 0.06));
-                }
-            }
-        }
-        let hull = convex_hull(&contact);
-        if hull.len() >= 2 {
-            let mut points: Vec<Pos2> = hull
+        if polygon.len() >= 2 {
+            let mut points: Vec<Pos2> = polygon
                 .iter()
-                .filter_map(|(x, z)| self.to_screen(rect, DVec3::new(*x, 0.0, *z)))
+                .filter_map(|corner| self.to_screen(rect, *corner))
                 .collect();
             if let Some(first) = points.first().copied() {
                 points.push(first);
@@ -215,54 +203,5 @@ impl StanceApp {
             };
             painter.circle_filled(here, 2.5, color);
         }
-    }
-}
-
-/// Convex hull of points in the floor plane (Andrew's monotone chain), counter-clockwise.
-pub(crate) fn convex_hull(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
-    let mut sorted: Vec<(f64, f64)> = points
-        .iter()
-        .copied()
-        .filter(|(x, z)| x.is_finite() && z.is_finite())
-        .collect();
-    sorted.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
-    sorted.dedup();
-    if sorted.len() < 3 {
-        return sorted;
-    }
-    let cross = |o: (f64, f64), a: (f64, f64), b: (f64, f64)| {
-        (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0)
-    };
-    let mut hull: Vec<(f64, f64)> = Vec::with_capacity(sorted.len() * 2);
-    for pass in 0..2 {
-        let start = hull.len();
-        let iter: Box<dyn Iterator<Item = &(f64, f64)>> = if pass == 0 {
-            Box::new(sorted.iter())
-        } else {
-            Box::new(sorted.iter().rev())
-        };
-        for &point in iter {
-            while hull.len() >= start + 2
-                && cross(hull[hull.len() - 2], hull[hull.len() - 1], point) <= 0.0
-            {
-                hull.pop();
-            }
-            hull.push(point);
-        }
-        hull.pop();
-    }
-    hull
-}
-
-#[cfg(test)]
-mod tests {
-    use super::convex_hull;
-
-    #[test]
-    fn the_hull_of_a_square_with_an_inside_point_is_the_square() {
-        let hull = convex_hull(&[(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0), (0.5, 0.5)]);
-        assert_eq!(hull.len(), 4);
-        assert!(!hull.contains(&(0.5, 0.5)));
-        assert!(convex_hull(&[(f64::NAN, 0.0), (1.0, 1.0)]).len() == 1);
     }
 }

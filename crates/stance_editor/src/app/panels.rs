@@ -3,7 +3,7 @@
 
 use egui::{Color32, RichText};
 use glam::{DQuat, DVec3};
-use stance_document::{LimbName, TaskKindSpec, TaskSpec};
+use stance_document::{DEFAULT_BALANCE_MARGIN, LimbName, TaskKindSpec, TaskSpec};
 use stance_ik::Axes;
 
 use super::StanceApp;
@@ -457,11 +457,43 @@ impl StanceApp {
             self.add_orientation_task(joint);
             ui.close();
         }
+        if ui
+            .add_enabled(
+                selected.is_some(),
+                egui::Button::new(label("Direction (keep an axis upright)")),
+            )
+            .on_hover_text(
+                "keeps the segment's up axis along its present direction, the turn about it free; edit the axis and direction in the task list (e.g. a palm facing down)",
+            )
+            .clicked()
+            && let Some(joint) = selected
+        {
+            self.add_direction_task(joint);
+            ui.close();
+        }
         if ui.button("Gaze (head looks at a point)").clicked() {
             self.add_gaze_task();
             ui.close();
         }
-        if ui.button("Centre of mass (balance)").clicked() {
+        if ui
+            .button("Balance (centre of mass over the pinned feet)")
+            .on_hover_text(
+                "keeps the centre of mass inside the support polygon of the parts pinned on the floor, 2 cm from its edges; no constraint while it is inside",
+            )
+            .clicked()
+        {
+            let mut task = TaskSpec::new(TaskKindSpec::Balance {
+                support: None,
+                margin: DEFAULT_BALANCE_MARGIN,
+            });
+            task.level = 2;
+            self.push_task(task);
+            ui.close();
+        }
+        if ui
+            .button("Centre of mass (a point over the floor)")
+            .clicked()
+        {
             let com = self.session.frames().center_of_mass();
             let mut task = TaskSpec::new(TaskKindSpec::Com {
                 axes: Axes::XZ,
@@ -547,6 +579,20 @@ impl StanceApp {
         let mut task = TaskSpec::new(TaskKindSpec::Orientation {
             joint: name,
             target: rotation.to_array(),
+        });
+        task.level = self.next_level();
+        self.push_task(task);
+    }
+
+    pub(super) fn add_direction_task(&mut self, joint: usize) {
+        let Some(name) = self.joint_name(joint) else {
+            return;
+        };
+        let up = joint_rotation(self.session.frames(), joint) * DVec3::Y;
+        let mut task = TaskSpec::new(TaskKindSpec::Direction {
+            joint: name,
+            axis: [0.0, 1.0, 0.0],
+            target: up.to_array(),
         });
         task.level = self.next_level();
         self.push_task(task);
@@ -763,7 +809,9 @@ fn task_editor(
 fn task_is_angular(task: &TaskSpec) -> bool {
     matches!(
         task.kind,
-        TaskKindSpec::Orientation { .. } | TaskKindSpec::Gaze { .. }
+        TaskKindSpec::Orientation { .. }
+            | TaskKindSpec::Gaze { .. }
+            | TaskKindSpec::Direction { .. }
     )
 }
 
@@ -876,6 +924,57 @@ fn kind_fields(
             );
             if orientation_editor(ui, target) {
                 edit = Some(EditKind::TaskField(index, "target"));
+            }
+            ui.end_row();
+        }
+        TaskKindSpec::Direction {
+            joint,
+            axis,
+            target,
+        } => {
+            if joint_row(ui, index, joint, joint_names) {
+                edit = Some(EditKind::TaskField(index, "joint"));
+            }
+            ui.label("axis")
+                .on_hover_text("the segment's axis that is turned, in the joint's frame");
+            if axis_editor(ui, axis) {
+                edit = Some(EditKind::TaskField(index, "axis"));
+            }
+            ui.end_row();
+            ui.label("along").on_hover_text(
+                "the world direction the axis turns to (y up, z the body's front); the turn about it stays free",
+            );
+            if axis_editor(ui, target) {
+                edit = Some(EditKind::TaskField(index, "target"));
+            }
+            ui.end_row();
+        }
+        TaskKindSpec::Balance { support, margin } => {
+            ui.label("support");
+            ui.label(match support {
+                None => "the parts pinned on the floor".to_owned(),
+                Some(joints) => joints
+                    .iter()
+                    .map(|joint| describe_joint(joint))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            });
+            ui.end_row();
+            ui.label("margin").on_hover_text(
+                "how far inside the support polygon's edges the centre of mass stays",
+            );
+            let mut centimetres = *margin * 100.0;
+            if ui
+                .add(
+                    egui::DragValue::new(&mut centimetres)
+                        .range(0.0..=20.0)
+                        .speed(0.1)
+                        .suffix(" cm"),
+                )
+                .changed()
+            {
+                *margin = centimetres / 100.0;
+                edit = Some(EditKind::TaskField(index, "margin"));
             }
             ui.end_row();
         }
