@@ -18,9 +18,10 @@ use common::*;
 use glam::DVec3;
 use nalgebra::DVector;
 use rand::RngExt;
+use rand::rngs::StdRng;
 use stance_ik::{
-    Damping, Dof, JointDef, LevelSystem, Posture, Skeleton, SolveStatus, Solver, SolverSettings,
-    StepParams, StepWorkspace, Task, prioritized_step,
+    Damping, Dof, Iteration, JointDef, LevelSystem, Posture, Skeleton, SolveStatus, Solver,
+    SolverSettings, StepParams, StepWorkspace, Task, prioritized_step,
 };
 
 fn random_problem(seed: u64, limits: bool) -> (Skeleton, Posture, Vec<Task>) {
@@ -179,6 +180,69 @@ fn strict_priority_holds_through_solver_iterations() {
     }
 }
 
+/// Strict priority over whole solves, per residual vector: at every iteration of a solve
+/// (the textbook iteration), the move the solver takes changes no row of a higher level's
+/// linearised error compared with the step of the higher levels alone. On problems where every
+/// level has work left all along (three points of one chain pulled out of reach in different
+/// directions) and not vacuously: the lower levels do change the move.
+#[test]
+fn strict_priority_holds_per_residual_vector_over_whole_solves() {
+    let mut checked = 0;
+    let mut lower_levels_moved = 0;
+    for seed in 2100..2130 {
+        let mut r = rng(seed);
+        // Two-DOF joints only: no rotation vector to re-wrap, so that the move taken is the
+        // step's.
+        let s = limited_chain(9, 0.2, 100.0);
+        let mut posture = random_posture(&mut r, &s, 0.8);
+        let far = |r: &mut StdRng| vec3(r, 1.0).normalize_or(DVec3::X) * 4.0;
+        let tasks = vec![
+            Task::position(9, DVec3::ZERO, far(&mut r)),
+            Task::position(6, DVec3::ZERO, far(&mut r)).at_level(2),
+            Task::position(3, DVec3::ZERO, far(&mut r)).at_level(3),
+        ];
+        let settings = SolverSettings {
+            iteration: Iteration::Textbook,
+            restarts: false,
+            ..SolverSettings::default()
+        };
+        let params = StepParams {
+            damping: settings.damping,
+            rank_tolerance: settings.rank_tolerance,
+            max_dof_step: f64::INFINITY,
+        };
+        let mut solver = Solver::new(settings).unwrap();
+        let n = s.dof_count();
+        let mut ws = StepWorkspace::default();
+        for _ in 0..20 {
+            let systems = solver.linear_systems(&s, &tasks, &posture).unwrap();
+            assert!(systems.iter().all(|l| l.dx.norm() > 0.05), "work left");
+            let before = DVector::from_column_slice(posture.values());
+            solver.iterate(&s, &tasks, &mut posture).unwrap();
+            let taken = DVector::from_column_slice(posture.values()) - before;
+            for k in 1..systems.len() {
+                let higher = prioritized_step(&systems[..k], n, &params, None, None, &mut ws, None);
+                for level in &systems[..k] {
+                    let a = level.jacobian_t.tr_mul(&taken);
+                    let b = level.jacobian_t.tr_mul(&higher);
+                    let off = (&a - &b).amax();
+                    assert!(
+                        off < 1e-9,
+                        "seed {seed}: level {} row moved by {off}",
+                        level.level
+                    );
+                    checked += 1;
+                }
+                if (&taken - &higher).norm() > 1e-4 {
+                    lower_levels_moved += 1;
+                }
+            }
+        }
+    }
+    assert_eq!(checked, 30 * 20 * 3);
+    assert!(lower_levels_moved > 30 * 20, "{lower_levels_moved}");
+}
+
 #[test]
 fn joint_limits_are_never_exceeded() {
     for seed in 3000..3060 {
@@ -203,6 +267,96 @@ fn joint_limits_are_never_exceeded() {
             }
         }
     }
+}
+
+/// A planar-ish chain of `links` links with `rx`, `rz` in `[-limit, limit]`.
+fn limited_chain(links: usize, length: f64, limit: f64) -> Skeleton {
+    let mut defs = vec![JointDef::new("j0", None, DVec3::ZERO, &[])];
+    for i in 1..=links {
+        defs.push(
+            JointDef::new(
+                format!("j{i}"),
+                Some(&format!("j{}", i - 1)),
+                if i == 1 {
+                    DVec3::ZERO
+                } else {
+                    DVec3::Y * length
+                },
+                &[Dof::Rx, Dof::Rz],
+            )
+            .with_limit(Dof::Rx, -limit, limit)
+            .with_limit(Dof::Rz, -limit, limit),
+        );
+    }
+    defs.push(JointDef::new(
+        "tip",
+        Some(&format!("j{links}")),
+        DVec3::Y * length,
+        &[],
+    ));
+    Skeleton::new(defs).unwrap()
+}
+
+/// The clamping loop of [BAE 98]: a DOF that would leave its range is put on its bound, its
+/// column taken out and its move subtracted from every level's error, and the step solved
+/// again, so that the free DOF make up for it. One iteration from a posture near the bounds,
+/// where the lower level pulls four DOF past their range: the DOF that hit their bounds sit
+/// exactly on them and the top level's linearised error is still met exactly by the step
+/// taken. Clamping the values after an unchanged step instead (the loop removed) leaves the
+/// top level off by what the clamped DOF did not do.
+#[test]
+fn higher_levels_stay_exact_while_dof_sit_on_their_limits() {
+    let s = limited_chain(8, 0.2, 0.35);
+    let tip = s.joint_count() - 1;
+    let (lo, hi) = (s.lower_limits().to_vec(), s.upper_limits().to_vec());
+    let mut solver = Solver::new(SolverSettings {
+        iteration: Iteration::Textbook,
+        restarts: false,
+        max_iterations: 1,
+        damping: Damping::Constant { lambda: 0.0 },
+        ..SolverSettings::default()
+    })
+    .unwrap();
+    let mut on_bounds = 0;
+    for seed in 7100..7160 {
+        let mut r = rng(seed);
+        // A curled chain (every DOF 0.2-0.3 rad), away from the straight singular posture.
+        let curl: Vec<f64> = (0..s.dof_count())
+            .map(|_| uniform(&mut r, 0.2, 0.3))
+            .collect();
+        let start = Posture::from_values(&s, curl).unwrap();
+        let tip_now = stance_ik::Frames::new(&s, &start).point(tip, DVec3::ZERO);
+        let pulled: Vec<usize> = (0..4).map(|_| r.random_range(0..s.dof_count())).collect();
+        let tasks = vec![
+            Task::position(tip, DVec3::ZERO, tip_now + vec3(&mut r, 0.02)),
+            Task::posture(vec![0.8; s.dof_count()], pulled).at_level(2),
+        ];
+        let systems = solver.linear_systems(&s, &tasks, &start).unwrap();
+        let mut posture = start.clone();
+        solver.iterate(&s, &tasks, &mut posture).unwrap();
+        let step = DVector::from_iterator(
+            s.dof_count(),
+            posture
+                .values()
+                .iter()
+                .zip(start.values())
+                .map(|(a, b)| a - b),
+        );
+        let residual = linearized_residual(&systems[0], &step);
+        assert!(residual < 1e-9, "seed {seed}: level 1 off by {residual}");
+        let here = posture
+            .values()
+            .iter()
+            .enumerate()
+            .filter(|&(i, v)| *v == lo[i] || *v == hi[i])
+            .count();
+        assert!(here > 0, "seed {seed}: no DOF reached its bound");
+        on_bounds += here;
+    }
+    assert!(
+        on_bounds >= 60,
+        "{on_bounds} DOF on their bounds in 60 cases"
+    );
 }
 
 fn all_finite(p: &Posture) -> bool {
