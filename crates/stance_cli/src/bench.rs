@@ -196,7 +196,7 @@ fn bench_file(
     bench(
         &problem.skeleton,
         &problem.tasks,
-        &crate::solve::start_posture(&problem).0,
+        &problem.start_posture().0,
         problem.settings,
         &problem.level_damping,
         budget,

@@ -6,10 +6,11 @@ use std::collections::BTreeMap;
 
 use serde::ser::{SerializeMap, SerializeStruct};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
-use serde_json::{Map, Value};
+use serde_json::Value;
 use stance_ik::{Axes, Dof};
 
 use crate::DocumentError;
+use crate::json::{arr, field, number, numbers, obj, string, vec3};
 
 /// The version written in the `version` field of a document's JSON; newer versions are refused.
 pub const DOCUMENT_VERSION: u32 = 1;
@@ -804,64 +805,6 @@ impl TaskSpec {
             kind,
         })
     }
-}
-
-// ---------------------------------------------------------------------------------------------
-// JSON helpers (errors name the field, like the problem-file parser)
-
-fn obj<'a>(v: &'a Value, at: &str) -> Result<&'a Map<String, Value>, DocumentError> {
-    v.as_object()
-        .ok_or_else(|| DocumentError::field(at, "expected an object"))
-}
-
-fn arr<'a>(v: &'a Value, at: &str) -> Result<&'a Vec<Value>, DocumentError> {
-    v.as_array()
-        .ok_or_else(|| DocumentError::field(at, "expected an array"))
-}
-
-fn field<'a>(o: &'a Map<String, Value>, name: &str, at: &str) -> Result<&'a Value, DocumentError> {
-    let path = if at.is_empty() {
-        name.to_owned()
-    } else {
-        format!("{at}.{name}")
-    };
-    o.get(name)
-        .filter(|v| !v.is_null())
-        .ok_or_else(|| DocumentError::field(path, "missing"))
-}
-
-fn string<'a>(v: &'a Value, at: &str) -> Result<&'a str, DocumentError> {
-    v.as_str()
-        .ok_or_else(|| DocumentError::field(at, "expected a string"))
-}
-
-fn number(v: &Value, at: &str) -> Result<f64, DocumentError> {
-    let n = v
-        .as_f64()
-        .ok_or_else(|| DocumentError::field(at, "expected a number"))?;
-    if !n.is_finite() {
-        return Err(DocumentError::field(at, "not a finite number"));
-    }
-    Ok(n)
-}
-
-fn numbers(v: &Value, at: &str, len: usize) -> Result<Vec<f64>, DocumentError> {
-    let a = arr(v, at)?;
-    if a.len() != len {
-        return Err(DocumentError::field(
-            at,
-            format!("expected {len} numbers, found {}", a.len()),
-        ));
-    }
-    a.iter()
-        .enumerate()
-        .map(|(i, x)| number(x, &format!("{at}[{i}]")))
-        .collect()
-}
-
-fn vec3(v: &Value, at: &str) -> Result<[f64; 3], DocumentError> {
-    let n = numbers(v, at, 3)?;
-    Ok([n[0], n[1], n[2]])
 }
 
 // ---------------------------------------------------------------------------------------------

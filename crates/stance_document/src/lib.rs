@@ -7,11 +7,15 @@
 //! - [`TaskSpec::to_task`], [`PostureValues::to_posture`], [`PostureValues::from_posture`]:
 //!   to and from the solver's types; errors name the field (`tasks[2].joint: unknown joint ...`).
 //! - [`link`]: the compact, versioned, checksummed URL-fragment form of a document.
+//! - [`Problem`]: the one way from tasks to a solver problem (tasks by level, closed-form limb
+//!   starts, settings), from a problem file (`stance solve`) or a document on a skeleton.
 
 mod convert;
 mod document;
 mod error;
+mod json;
 pub mod link;
+mod problem;
 mod range_coder;
 
 pub use convert::{LimbStartSpec, pinned_contacts, resolve_joint};
@@ -21,3 +25,4 @@ pub use document::{
 };
 pub use error::DocumentError;
 pub use link::LinkError;
+pub use problem::{LimbStart, Problem};

@@ -1,0 +1,359 @@
+//! The one way from tasks to a solver problem: a skeleton, its tasks by level (through
+//! [`TaskSpec::to_solver_tasks`]), the `limb` tasks' closed-form starts, the settings with
+//! per-level damping, and the start posture. Built from a problem file (`stance solve`,
+//! `docs/problem-format.md`) or from a document on a skeleton (the editor, the tests); every
+//! error names the field (`tasks[2].joint: unknown joint ...`, `settings.levels.3.lambda`).
+
+use std::collections::BTreeMap;
+
+use serde_json::{Map, Value};
+use stance_ik::{
+    Damping, Dof, Frames, IkError, JointDef, Limb, Posture, Skeleton, SolveReport, Solver,
+    SolverSettings, Task,
+};
+
+use crate::convert::LimbStartSpec;
+use crate::json::{arr, field, number, obj, string, vec3};
+use crate::{Document, DocumentError, LimbName, PostureValues, TaskKindSpec, TaskSpec};
+
+/// A solver problem (see the module documentation).
+#[derive(Debug, Clone)]
+pub struct Problem {
+    /// The body.
+    pub skeleton: Skeleton,
+    /// The tasks as written (document form).
+    pub specs: Vec<TaskSpec>,
+    /// The solver tasks, in order (a `limb` task with an orientation gives two).
+    pub tasks: Vec<Task>,
+    /// Solver settings.
+    pub settings: SolverSettings,
+    /// Per-level damping (`settings.levels`).
+    pub level_damping: BTreeMap<u32, Damping>,
+    /// Where solving starts, before the closed-form limb starts.
+    pub start: Posture,
+    /// The `limb` tasks' closed forms, in task order.
+    pub limb_starts: Vec<LimbStartSpec>,
+    /// Limbs for the solver's hybrid restart: those of the limb tasks, plus every H-Anim limb
+    /// of the skeleton with `settings.hybrid`.
+    pub hybrid_limbs: Vec<Limb>,
+}
+
+/// What the closed form did for one limb task.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LimbStart {
+    /// The limb's upper, middle and end joints.
+    pub joints: [String; 3],
+    /// Swivel angle of the closed-form start posture (rad).
+    pub swivel: f64,
+    /// Whether the goal was reached.
+    pub reached: bool,
+    /// Whether the solution is inside the joint limits.
+    pub within_limits: bool,
+}
+
+impl Problem {
+    /// A document's tasks and posture on `skeleton`, with default settings.
+    pub fn from_document(document: &Document, skeleton: Skeleton) -> Result<Self, DocumentError> {
+        let start = document.to_posture(&skeleton)?;
+        Self::build(
+            skeleton,
+            document.tasks.clone(),
+            start,
+            SolverSettings::default(),
+            BTreeMap::new(),
+            false,
+        )
+    }
+
+    /// Parses a problem file (`docs/problem-format.md`).
+    pub fn from_json(text: &str) -> Result<Self, DocumentError> {
+        let root: Value =
+            serde_json::from_str(text).map_err(|e| DocumentError::Json(e.to_string()))?;
+        let root = obj(&root, "the problem")?;
+        let skeleton = parse_skeleton(field(root, "skeleton", "")?)?;
+        let specs = match root.get("tasks").filter(|v| !v.is_null()) {
+            None => Vec::new(),
+            Some(v) => TaskSpec::list_from_json_value(v, "tasks")?,
+        };
+        let (settings, hybrid, level_damping) = match root.get("settings") {
+            None | Some(Value::Null) => (SolverSettings::default(), false, BTreeMap::new()),
+            Some(v) => parse_settings(v)?,
+        };
+        let start = match root.get("posture") {
+            None | Some(Value::Null) => Posture::rest(&skeleton),
+            Some(v) => {
+                PostureValues::from_json_value(v, "posture")?.to_posture_at(&skeleton, "posture")?
+            }
+        };
+        Self::build(skeleton, specs, start, settings, level_damping, hybrid)
+    }
+
+    fn build(
+        skeleton: Skeleton,
+        specs: Vec<TaskSpec>,
+        start: Posture,
+        settings: SolverSettings,
+        level_damping: BTreeMap<u32, Damping>,
+        hybrid: bool,
+    ) -> Result<Self, DocumentError> {
+        let mut tasks = Vec::with_capacity(specs.len());
+        let mut limb_starts = Vec::new();
+        for (i, spec) in specs.iter().enumerate() {
+            let at = format!("tasks[{i}]");
+            tasks.extend(
+                spec.to_solver_tasks(&skeleton, &specs)
+                    .map_err(|e| e.within(&at))?,
+            );
+            if let Some(limb) = spec.to_limb(&skeleton).map_err(|e| e.within(&at))? {
+                limb_starts.push(limb);
+            }
+        }
+        let mut hybrid_limbs: Vec<Limb> = limb_starts.iter().map(|l| l.limb.clone()).collect();
+        if hybrid {
+            for name in LimbName::ALL {
+                let spec = TaskSpec::new(TaskKindSpec::Limb {
+                    limb: Some(name),
+                    joints: None,
+                    target: [0.0; 3],
+                    swivel: None,
+                    orientation: None,
+                });
+                if let Ok(Some(l)) = spec.to_limb(&skeleton)
+                    && !hybrid_limbs.iter().any(|h| h.joints() == l.limb.joints())
+                {
+                    hybrid_limbs.push(l.limb);
+                }
+            }
+        }
+        Ok(Self {
+            skeleton,
+            specs,
+            tasks,
+            settings,
+            level_damping,
+            start,
+            limb_starts,
+            hybrid_limbs,
+        })
+    }
+
+    /// The solver of this problem with `settings` (usually [`Problem::settings`]): its
+    /// per-level damping and hybrid limbs.
+    pub fn solver(&self, settings: SolverSettings) -> Result<Solver, IkError> {
+        let mut solver = Solver::new(settings)?.with_limbs(self.hybrid_limbs.clone());
+        solver.level_damping = self.level_damping.clone();
+        Ok(solver)
+    }
+
+    /// The start posture with every limb task's closed-form solution applied in task order
+    /// (the swivel asked, or the start posture's, moved to the nearest one within the joint
+    /// limits), and what each closed form did.
+    pub fn start_posture(&self) -> (Posture, Vec<LimbStart>) {
+        let mut posture = self.start.clone();
+        let mut starts = Vec::with_capacity(self.limb_starts.len());
+        for t in &self.limb_starts {
+            let frames = Frames::new(&self.skeleton, &posture);
+            let base = t.limb.base(&self.skeleton, &frames);
+            let preferred = t
+                .swivel
+                .unwrap_or_else(|| t.limb.swivel_angle(&self.skeleton, &posture));
+            let solution = t.limb.solve_within_limits(base, &t.goal, preferred);
+            t.limb.apply(&solution, &mut posture);
+            starts.push(LimbStart {
+                joints: t
+                    .limb
+                    .joints()
+                    .map(|j| self.skeleton.joints()[j].name.clone()),
+                swivel: solution.swivel_angle,
+                reached: solution.reached,
+                within_limits: solution.within_limits,
+            });
+        }
+        (posture, starts)
+    }
+
+    /// Solves from [`Problem::start_posture`] with the problem's settings.
+    pub fn solve(&self) -> Result<(Posture, SolveReport), IkError> {
+        let (mut posture, _) = self.start_posture();
+        let mut solver = self.solver(self.settings)?;
+        let report = solver.solve(&self.skeleton, &self.tasks, &mut posture)?;
+        Ok((posture, report))
+    }
+}
+
+fn parse_skeleton(v: &Value) -> Result<Skeleton, DocumentError> {
+    let s = obj(v, "skeleton")?;
+    let joints = arr(field(s, "joints", "skeleton")?, "skeleton.joints")?;
+    let mut defs = Vec::with_capacity(joints.len());
+    for (i, j) in joints.iter().enumerate() {
+        let at = format!("skeleton.joints[{i}]");
+        let o = obj(j, &at)?;
+        let name = string(field(o, "name", &at)?, &format!("{at}.name"))?.to_owned();
+        let at = format!("skeleton.joints[{i}] (`{name}`)");
+        let parent = match o.get("parent") {
+            None | Some(Value::Null) => None,
+            Some(p) => Some(string(p, &format!("{at}.parent"))?.to_owned()),
+        };
+        let offset = match o.get("offset") {
+            None => [0.0; 3],
+            Some(v) => vec3(v, &format!("{at}.offset"))?,
+        };
+        let dofs = match o.get("dofs") {
+            None | Some(Value::Null) => Vec::new(),
+            Some(v) => arr(v, &format!("{at}.dofs"))?
+                .iter()
+                .enumerate()
+                .map(|(k, d)| dof(d, &format!("{at}.dofs[{k}]")))
+                .collect::<Result<_, _>>()?,
+        };
+        let mut def = JointDef::new(
+            name,
+            parent.as_deref(),
+            glam::DVec3::from_array(offset),
+            &dofs,
+        );
+        if let Some(l) = o.get("limits").filter(|l| !l.is_null()) {
+            for (key, range) in obj(l, &format!("{at}.limits"))? {
+                let here = format!("{at}.limits.{key}");
+                let d = Dof::from_name(key).ok_or_else(|| {
+                    DocumentError::field(&here, "unknown DOF (expected tx, ty, tz, rx, ry or rz)")
+                })?;
+                let r = arr(range, &here)?;
+                if r.len() != 2 {
+                    return Err(DocumentError::field(here, "expected [lower, upper]"));
+                }
+                def = def.with_limit(d, number(&r[0], &here)?, number(&r[1], &here)?);
+            }
+        }
+        if let Some(m) = o.get("mass").filter(|m| !m.is_null()) {
+            def.mass = number(m, &format!("{at}.mass"))?;
+        }
+        if let Some(c) = o.get("com").filter(|c| !c.is_null()) {
+            def.com = glam::DVec3::from_array(vec3(c, &format!("{at}.com"))?);
+        }
+        defs.push(def);
+    }
+    Skeleton::new(defs).map_err(|e| DocumentError::field("skeleton", e.to_string()))
+}
+
+fn dof(v: &Value, at: &str) -> Result<Dof, DocumentError> {
+    let s = string(v, at)?;
+    Dof::from_name(s).ok_or_else(|| {
+        DocumentError::field(
+            at,
+            format!("unknown DOF `{s}` (expected tx, ty, tz, rx, ry or rz)"),
+        )
+    })
+}
+
+/// `lambda` (constant damping) or `adaptive_damping` (`{"lambda_max", "epsilon"}`) of `o`.
+fn parse_damping(o: &Map<String, Value>, at: &str) -> Result<Option<Damping>, DocumentError> {
+    let mut damping = None;
+    if let Some(v) = o.get("lambda").filter(|v| !v.is_null()) {
+        let here = format!("{at}.lambda");
+        let lambda = number(v, &here)?;
+        if lambda < 0.0 {
+            return Err(DocumentError::field(here, "expected a number >= 0"));
+        }
+        damping = Some(Damping::Constant { lambda });
+    }
+    if let Some(a) = o.get("adaptive_damping").filter(|a| !a.is_null()) {
+        let here = format!("{at}.adaptive_damping");
+        let a = obj(a, &here)?;
+        let lambda_max = number(
+            field(a, "lambda_max", &here)?,
+            &format!("{here}.lambda_max"),
+        )?;
+        let epsilon = number(field(a, "epsilon", &here)?, &format!("{here}.epsilon"))?;
+        if !(lambda_max >= 0.0 && epsilon > 0.0) {
+            return Err(DocumentError::field(
+                here,
+                "expected lambda_max >= 0 and epsilon > 0",
+            ));
+        }
+        damping = Some(Damping::Adaptive {
+            lambda_max,
+            epsilon,
+        });
+    }
+    Ok(damping)
+}
+
+/// `settings.levels`: `{"3": {"lambda": 0.05}}` or `{"3": {"adaptive_damping": {..}}}`.
+fn parse_level_damping(o: &Map<String, Value>) -> Result<BTreeMap<u32, Damping>, DocumentError> {
+    let mut out = BTreeMap::new();
+    let Some(levels) = o.get("levels").filter(|v| !v.is_null()) else {
+        return Ok(out);
+    };
+    for (key, v) in obj(levels, "settings.levels")? {
+        let at = format!("settings.levels.{key}");
+        let level: u32 = key
+            .parse()
+            .ok()
+            .filter(|&l| l >= 1)
+            .ok_or_else(|| DocumentError::field(&at, "a level is a whole number >= 1"))?;
+        let entry = obj(v, &at)?;
+        let damping = parse_damping(entry, &at)?
+            .ok_or_else(|| DocumentError::field(&at, "expected `lambda` or `adaptive_damping`"))?;
+        out.insert(level, damping);
+    }
+    Ok(out)
+}
+
+type Settings = (SolverSettings, bool, BTreeMap<u32, Damping>);
+
+fn parse_settings(v: &Value) -> Result<Settings, DocumentError> {
+    let o = obj(v, "settings")?;
+    let mut s = SolverSettings::default();
+    let num = |k: &str| -> Result<Option<f64>, DocumentError> {
+        match o.get(k) {
+            None | Some(Value::Null) => Ok(None),
+            Some(v) => number(v, &format!("settings.{k}")).map(Some),
+        }
+    };
+    let flag = |k: &str| -> Result<Option<bool>, DocumentError> {
+        match o.get(k) {
+            None | Some(Value::Null) => Ok(None),
+            Some(Value::Bool(b)) => Ok(Some(*b)),
+            Some(_) => Err(DocumentError::field(
+                format!("settings.{k}"),
+                "expected true or false",
+            )),
+        }
+    };
+    if let Some(n) = num("max_iterations")? {
+        if n < 0.0 || n.fract() != 0.0 {
+            return Err(DocumentError::field(
+                "settings.max_iterations",
+                "expected a non-negative integer",
+            ));
+        }
+        s.max_iterations = n as usize;
+    }
+    let set = |k: &str, slot: &mut f64| -> Result<(), DocumentError> {
+        if let Some(n) = num(k)? {
+            *slot = n;
+        }
+        Ok(())
+    };
+    set("tolerance", &mut s.tolerance)?;
+    set("stall_step", &mut s.stall_step)?;
+    set("stall_improvement", &mut s.stall_improvement)?;
+    set("rank_tolerance", &mut s.rank_tolerance)?;
+    set("max_linear_step", &mut s.max_linear_step)?;
+    set("max_angular_step", &mut s.max_angular_step)?;
+    set("max_dof_step", &mut s.max_dof_step)?;
+    if let Some(n) = num("time_budget_ms")? {
+        s.time_budget_secs = Some(n / 1000.0);
+    }
+    if let Some(d) = parse_damping(o, "settings")? {
+        s.damping = d;
+    }
+    if let Some(b) = flag("enforce_limits")? {
+        s.enforce_limits = b;
+    }
+    s.validate()
+        .map_err(|e| DocumentError::field("settings", e.to_string()))?;
+    let hybrid = flag("hybrid")?.unwrap_or(false);
+    Ok((s, hybrid, parse_level_damping(o)?))
+}

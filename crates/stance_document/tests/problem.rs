@@ -1,0 +1,134 @@
+//! `Problem`: the one way from tasks to a solver problem, from a problem file and from a
+//! document, with the same tasks, limb starts and results.
+
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+#[cfg(target_arch = "wasm32")]
+use wasm_bindgen_test::wasm_bindgen_test as test;
+#[cfg(target_arch = "wasm32")]
+wasm_bindgen_test::wasm_bindgen_test_configure!(run_in_browser);
+
+use glam::{DQuat, DVec3};
+use stance_document::{Document, Problem};
+use stance_ik::scenarios::loa2_body40;
+use stance_ik::{Frames, Skeleton, TaskKind};
+
+/// The LOA2 body as a problem file's `skeleton` (names, parents, offsets, DOF, limits).
+fn skeleton_json(s: &Skeleton) -> String {
+    let joints: Vec<String> = s
+        .joints()
+        .iter()
+        .map(|j| {
+            let parent = j
+                .parent
+                .map_or("null".to_owned(), |p| format!("\"{}\"", s.joints()[p].name));
+            let dofs: Vec<String> = j.dofs.iter().map(|d| format!("\"{}\"", d.name())).collect();
+            let limits: Vec<String> = j
+                .dofs
+                .iter()
+                .enumerate()
+                .map(|(k, d)| {
+                    let i = j.dof_start + k;
+                    let (lo, hi) = (s.lower_limits()[i], s.upper_limits()[i]);
+                    let lo = if lo.is_finite() { lo } else { -1e9 };
+                    let hi = if hi.is_finite() { hi } else { 1e9 };
+                    format!("\"{}\":[{lo},{hi}]", d.name())
+                })
+                .collect();
+            format!(
+                r#"{{"name":"{}","parent":{parent},"offset":[{},{},{}],"dofs":[{}],"limits":{{{}}},"mass":{},"com":[{},{},{}]}}"#,
+                j.name,
+                j.offset.x,
+                j.offset.y,
+                j.offset.z,
+                dofs.join(","),
+                limits.join(","),
+                j.mass,
+                j.com.x,
+                j.com.y,
+                j.com.z
+            )
+        })
+        .collect();
+    format!(r#"{{"joints":[{}]}}"#, joints.join(","))
+}
+
+const TASKS: &str = r#"[
+ {"kind":"position","joint":"l_talocrural","target":[0.09,0.08,0.0]},
+ {"kind":"limb","limb":"r_arm","target":[-0.25,1.15,0.3],"orientation":[0,0,0.3826834,0.9238795],"level":2},
+ {"kind":"balance","level":3}
+]"#;
+
+#[test]
+fn a_limb_task_with_an_orientation_is_the_same_problem_from_a_file_and_a_document() {
+    let s = loa2_body40().unwrap();
+    let file = Problem::from_json(&format!(
+        r#"{{"skeleton":{},"tasks":{TASKS},"settings":{{"max_iterations":300}}}}"#,
+        skeleton_json(&s)
+    ))
+    .unwrap();
+    let document = Document::from_json(&format!(
+        r#"{{"avatar":"default","posture":{{}},"tasks":{TASKS}}}"#
+    ))
+    .unwrap();
+    let doc = Problem::from_document(&document, s.clone()).unwrap();
+    // 4 solver tasks: the pin, the wrist's orientation and position, the balance.
+    assert_eq!(file.tasks.len(), 4);
+    assert_eq!(file.tasks, doc.tasks);
+    assert_eq!(file.limb_starts.len(), 1);
+    assert_eq!(doc.limb_starts.len(), 1);
+    let wrist = s.joint_index("r_radiocarpal").unwrap();
+    assert!(matches!(
+        file.tasks[1].kind,
+        TaskKind::Orientation { joint, .. } if joint == wrist
+    ));
+    // Solved, the hand holds the orientation as well as the position.
+    let (posture, report) = file.solve().unwrap();
+    let frames = Frames::new(&s, &posture);
+    let want = DQuat::from_xyzw(0.0, 0.0, 0.3826834, 0.9238795).normalize();
+    assert!(report.levels[1].met, "{report:?}");
+    assert!(frames.rotation(wrist).angle_between(want) < 1e-5);
+    assert!((frames.joint_position[wrist] - DVec3::new(-0.25, 1.15, 0.3)).length() < 1e-5);
+    let (same, _) = doc.solve().unwrap();
+    assert_eq!(posture, same, "the document's problem solves the same");
+}
+
+#[test]
+fn problem_file_errors_name_the_field() {
+    let s = loa2_body40().unwrap();
+    let skeleton = skeleton_json(&s);
+    for (tail, want) in [
+        (
+            r#""tasks":[{"kind":"limb","limb":"l_tail","target":[0,1,0]}]"#,
+            "tasks[0].limb",
+        ),
+        (
+            r#""settings":{"levels":{"0":{"lambda":0.1}}}"#,
+            "settings.levels.0",
+        ),
+        (
+            r#""settings":{"levels":{"2":{"lambda":-1}}}"#,
+            "settings.levels.2.lambda",
+        ),
+        (r#""settings":{"hybrid":1}"#, "settings.hybrid"),
+        (r#""settings":{"tolerance":-1}"#, "settings"),
+        (r#""posture":{"l_knee":{"rq":1}}"#, "posture.l_knee"),
+    ] {
+        let text = format!(r#"{{"skeleton":{skeleton},{tail}}}"#);
+        let e = Problem::from_json(&text).unwrap_err().to_string();
+        assert!(e.contains(want), "{e} (wanted {want})");
+    }
+    let e = Problem::from_json(r#"{"skeleton":{"joints":[{"name":"a","dofs":["rq"]}]}}"#)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("skeleton.joints[0] (`a`).dofs[0]") && e.contains("rq"),
+        "{e}"
+    );
+    assert!(
+        Problem::from_json("{")
+            .unwrap_err()
+            .to_string()
+            .contains("not valid JSON")
+    );
+}
