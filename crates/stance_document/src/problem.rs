@@ -6,7 +6,7 @@
 
 use std::collections::BTreeMap;
 
-use serde_json::{Map, Value};
+use serde_json::{Map, Value, json};
 use stance_ik::{
     Damping, Dof, Frames, IkError, JointDef, Limb, Posture, Skeleton, SolveReport, Solver,
     SolverSettings, Task,
@@ -170,6 +170,50 @@ impl Problem {
             });
         }
         (posture, starts)
+    }
+
+    /// The solution as `stance solve` prints it: `{"joints": {name: [x, y, z]}, "posture":
+    /// {joint: {dof: value}}, "report": {...}}`, and with limb tasks `"limbs"`: per limb task
+    /// its joints, final swivel, the closed-form start's swivel and whether that start reached
+    /// the goal within the limits.
+    pub fn solution_json(&self, posture: &Posture, report: &SolveReport) -> Value {
+        let frames = Frames::new(&self.skeleton, posture);
+        let joints: Map<String, Value> = self
+            .skeleton
+            .joints()
+            .iter()
+            .enumerate()
+            .map(|(j, joint)| {
+                let p = frames.joint_position[j];
+                (joint.name.clone(), json!([p.x, p.y, p.z]))
+            })
+            .collect();
+        let mut out = json!({
+            "joints": joints,
+            "posture": PostureValues::from_posture(&self.skeleton, posture),
+            "report": serde_json::to_value(report).unwrap_or(Value::Null),
+        });
+        if !self.limb_starts.is_empty()
+            && let Some(o) = out.as_object_mut()
+        {
+            let (_, starts) = self.start_posture();
+            let limbs: Vec<Value> = self
+                .limb_starts
+                .iter()
+                .zip(starts)
+                .map(|(t, s)| {
+                    json!({
+                        "joints": s.joints,
+                        "swivel": t.limb.swivel_angle(&self.skeleton, posture),
+                        "start_swivel": s.swivel,
+                        "reached": s.reached,
+                        "within_limits": s.within_limits,
+                    })
+                })
+                .collect();
+            o.insert("limbs".to_owned(), Value::Array(limbs));
+        }
+        out
     }
 
     /// Solves from [`Problem::start_posture`] with the problem's settings.
