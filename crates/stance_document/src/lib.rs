@@ -25,4 +25,4 @@ pub use document::{
 };
 pub use error::DocumentError;
 pub use link::LinkError;
-pub use problem::{LimbStart, Problem};
+pub use problem::{LimbStart, Problem, ProblemSettings, parse_skeleton};

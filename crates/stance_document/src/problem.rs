@@ -225,7 +225,9 @@ impl Problem {
     }
 }
 
-fn parse_skeleton(v: &Value) -> Result<Skeleton, DocumentError> {
+/// Parses a problem file's `skeleton` (`{"joints": [{"name", "parent", "offset", "dofs",
+/// "limits", "mass", "com"}]}`); errors at `skeleton.joints[i] (`name`).<field>`.
+pub fn parse_skeleton(v: &Value) -> Result<Skeleton, DocumentError> {
     let s = obj(v, "skeleton")?;
     let joints = arr(field(s, "joints", "skeleton")?, "skeleton.joints")?;
     let mut defs = Vec::with_capacity(joints.len());
@@ -342,6 +344,29 @@ fn parse_level_damping(o: &Map<String, Value>) -> Result<BTreeMap<u32, Damping>,
         out.insert(level, damping);
     }
     Ok(out)
+}
+
+/// A problem file's `settings`: the solver's, per-level damping (`levels`) and `hybrid`.
+#[derive(Debug, Clone, Default)]
+pub struct ProblemSettings {
+    /// The solver settings.
+    pub solver: SolverSettings,
+    /// Per-level damping.
+    pub level_damping: BTreeMap<u32, Damping>,
+    /// Whether a stalled solve may restart every H-Anim limb from its closed form.
+    pub hybrid: bool,
+}
+
+impl ProblemSettings {
+    /// Parses a `settings` object (`docs/problem-format.md`); errors at `settings.<field>`.
+    pub fn from_json_value(v: &Value) -> Result<Self, DocumentError> {
+        let (solver, hybrid, level_damping) = parse_settings(v)?;
+        Ok(Self {
+            solver,
+            level_damping,
+            hybrid,
+        })
+    }
 }
 
 type Settings = (SolverSettings, bool, BTreeMap<u32, Damping>);

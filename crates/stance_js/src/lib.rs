@@ -1,0 +1,306 @@
+//! Stance's solver for JavaScript: the core of the `stance-ik` npm package
+//! (`packages/stance-ik`). Everything here is plain Rust, tested natively; the
+//! `wasm-bindgen` layer in `js.rs` only converts between JavaScript values and these types.
+//!
+//! - [`solve_json`]: a problem file in, `stance solve`'s output out (same formats,
+//!   `docs/problem-format.md`), through [`stance_document::Problem`].
+//! - [`Body`]: a skeleton built once (the H-Anim default body at a level of articulation, a
+//!   problem file's joints, or a skin's joints mapped onto H-Anim).
+//! - [`PoseSolver`]: tasks by level set once, solved every frame into a caller's array of DOF
+//!   values; world joint transforms; the closed-form limb and its swivel angle.
+
+#[cfg(target_arch = "wasm32")]
+mod js;
+
+use glam::{DQuat, DVec3};
+use serde_json::Value;
+use stance_document::{LimbName, Problem, ProblemSettings, TaskSpec, parse_skeleton};
+use stance_hanim::{
+    LevelOfArticulation, Mapping, SkeletonOptions, SourceJoint, build_skeleton, default_skeleton,
+};
+use stance_ik::{Frames, Limb, LimbGoal, Posture, Skeleton, SolveReport, Solver, Task};
+
+/// An error for JavaScript: the message names the field where there is one.
+pub type JsResult<T> = Result<T, String>;
+
+fn json(text: &str) -> JsResult<Value> {
+    serde_json::from_str(text).map_err(|e| format!("not valid JSON: {e}"))
+}
+
+/// Solves a problem file (JSON text) as `stance solve` does and returns its output (JSON).
+pub fn solve_json(problem: &str) -> JsResult<String> {
+    let problem = Problem::from_json(problem).map_err(|e| e.to_string())?;
+    let (posture, report) = problem.solve().map_err(|e| e.to_string())?;
+    Ok(problem.solution_json(&posture, &report).to_string())
+}
+
+fn level_of_articulation(loa: u8) -> JsResult<LevelOfArticulation> {
+    LevelOfArticulation::ALL
+        .into_iter()
+        .find(|l| l.number() == loa)
+        .ok_or_else(|| format!("loa: {loa} is not a level of articulation (1 to 4)"))
+}
+
+/// A skeleton built once, and for a skin, which skin joint each of its joints stands for.
+#[derive(Debug, Clone)]
+pub struct Body {
+    /// The solver's skeleton (H-Anim names for the H-Anim and skin bodies).
+    pub skeleton: Skeleton,
+    /// Per skeleton joint, the skin joint index it was built from (`-1`: none).
+    pub source: Vec<i32>,
+}
+
+impl Body {
+    /// The H-Anim default body at level of articulation `loa` (1 to 4).
+    pub fn hanim(loa: u8) -> JsResult<Self> {
+        let body = default_skeleton(&SkeletonOptions {
+            loa: level_of_articulation(loa)?,
+            ..SkeletonOptions::default()
+        })
+        .map_err(|e| e.to_string())?;
+        let source = vec![-1; body.skeleton.joint_count()];
+        Ok(Self {
+            skeleton: body.skeleton,
+            source,
+        })
+    }
+
+    /// A problem file's `skeleton` (JSON text: `{"joints": [...]}`).
+    pub fn from_joints(skeleton: &str) -> JsResult<Self> {
+        let skeleton = parse_skeleton(&json(skeleton)?).map_err(|e| e.to_string())?;
+        let source = vec![-1; skeleton.joint_count()];
+        Ok(Self { skeleton, source })
+    }
+
+    /// A skin's joints (glTF `skin.joints` order): names, parent indices (`-1` for a root) and
+    /// rest positions (`x y z` per joint, +Y up, the body facing +Z, metres), mapped onto
+    /// H-Anim by name and geometry (as the editor maps avatars) and built at `loa`.
+    pub fn from_skin(names: &[String], parents: &[i32], rest: &[f64], loa: u8) -> JsResult<Self> {
+        let n = names.len();
+        if parents.len() != n || rest.len() != 3 * n {
+            return Err(format!(
+                "fromSkin: {n} names need {n} parents and {} rest coordinates, got {} and {}",
+                3 * n,
+                parents.len(),
+                rest.len()
+            ));
+        }
+        let mut joints = Vec::with_capacity(n);
+        for (i, name) in names.iter().enumerate() {
+            let parent = match parents[i] {
+                p if p < 0 => None,
+                p if (p as usize) < n && p as usize != i => Some(p as usize),
+                p => return Err(format!("parents[{i}]: {p} is not a joint index")),
+            };
+            let position = DVec3::new(rest[3 * i], rest[3 * i + 1], rest[3 * i + 2]);
+            if !position.is_finite() {
+                return Err(format!("rest[{}]: not a finite number", 3 * i));
+            }
+            joints.push(SourceJoint {
+                name: name.clone(),
+                parent,
+                position,
+            });
+        }
+        let mapping = Mapping::auto(&joints, &[], false);
+        let positions: Vec<DVec3> = joints.iter().map(|j| j.position).collect();
+        let options = SkeletonOptions {
+            loa: level_of_articulation(loa)?,
+            ..SkeletonOptions::default()
+        };
+        let body = build_skeleton(&mapping, &positions, &options).map_err(|e| e.to_string())?;
+        let source = body
+            .joints
+            .iter()
+            .map(|j| j.source.map_or(-1, |s| s as i32))
+            .collect();
+        Ok(Self {
+            skeleton: body.skeleton,
+            source,
+        })
+    }
+
+    /// Joint names, in skeleton order.
+    pub fn joint_names(&self) -> Vec<String> {
+        self.skeleton
+            .joints()
+            .iter()
+            .map(|j| j.name.clone())
+            .collect()
+    }
+
+    /// `joint.dof` names (`l_knee.rx`), in DOF order.
+    pub fn dof_names(&self) -> Vec<String> {
+        self.skeleton
+            .joints()
+            .iter()
+            .flat_map(|j| {
+                j.dofs
+                    .iter()
+                    .map(move |d| format!("{}.{}", j.name, d.name()))
+            })
+            .collect()
+    }
+}
+
+/// Tasks by level on a body, solved every frame without re-parsing.
+#[derive(Debug, Clone)]
+pub struct PoseSolver {
+    skeleton: Skeleton,
+    solver: Solver,
+    specs: Vec<TaskSpec>,
+    tasks: Vec<Task>,
+    report: Option<SolveReport>,
+}
+
+impl PoseSolver {
+    /// A solver on `body` with a problem file's `settings` (JSON text; empty: defaults).
+    pub fn new(body: &Body, settings: &str) -> JsResult<Self> {
+        let settings = if settings.trim().is_empty() {
+            ProblemSettings::default()
+        } else {
+            ProblemSettings::from_json_value(&json(settings)?).map_err(|e| e.to_string())?
+        };
+        let mut solver = Solver::new(settings.solver).map_err(|e| format!("settings: {e}"))?;
+        solver.level_damping = settings.level_damping;
+        if settings.hybrid {
+            let limbs = LimbName::ALL
+                .iter()
+                .filter_map(|l| limb(&body.skeleton, l.name()).ok())
+                .collect();
+            solver = solver.with_limbs(limbs);
+        }
+        Ok(Self {
+            skeleton: body.skeleton.clone(),
+            solver,
+            specs: Vec::new(),
+            tasks: Vec::new(),
+            report: None,
+        })
+    }
+
+    /// Sets the tasks (JSON text: an array of tasks as in a problem file's `tasks`).
+    pub fn set_tasks(&mut self, tasks: &str) -> JsResult<()> {
+        let specs =
+            TaskSpec::list_from_json_value(&json(tasks)?, "tasks").map_err(|e| e.to_string())?;
+        let mut solver_tasks = Vec::with_capacity(specs.len());
+        for (i, spec) in specs.iter().enumerate() {
+            solver_tasks.extend(
+                spec.to_solver_tasks(&self.skeleton, &specs)
+                    .map_err(|e| e.within(&format!("tasks[{i}]")).to_string())?,
+            );
+        }
+        self.specs = specs;
+        self.tasks = solver_tasks;
+        Ok(())
+    }
+
+    fn posture(&self, values: &[f64]) -> JsResult<Posture> {
+        Posture::from_values(&self.skeleton, values.to_vec()).map_err(|e| format!("values: {e}"))
+    }
+
+    /// Solves from `values` (one per DOF) and writes the solution into them; returns the
+    /// report (JSON text: status, iterations, per-level residuals, the level that gave way).
+    pub fn solve(&mut self, values: &mut [f64]) -> JsResult<String> {
+        let mut posture = self.posture(values)?;
+        let report = self
+            .solver
+            .solve(&self.skeleton, &self.tasks, &mut posture)
+            .map_err(|e| e.to_string())?;
+        values.copy_from_slice(posture.values());
+        let text = serde_json::to_string(&report).map_err(|e| e.to_string())?;
+        self.report = Some(report);
+        Ok(text)
+    }
+
+    /// World transforms of every joint at `values` into `out`: 7 numbers per joint, the
+    /// position `x y z` and the `world_from_joint` rotation `qx qy qz qw`.
+    pub fn world_transforms(&self, values: &[f64], out: &mut [f64]) -> JsResult<()> {
+        let n = self.skeleton.joint_count();
+        if out.len() != 7 * n {
+            return Err(format!(
+                "out: {} numbers for {n} joints, expected {}",
+                out.len(),
+                7 * n
+            ));
+        }
+        let frames = Frames::new(&self.skeleton, &self.posture(values)?);
+        for j in 0..n {
+            let p = frames.joint_position[j];
+            let q = frames.rotation(j);
+            out[7 * j..7 * j + 7].copy_from_slice(&[p.x, p.y, p.z, q.x, q.y, q.z, q.w]);
+        }
+        Ok(())
+    }
+
+    /// The closed-form limb (`l_arm`, `r_arm`, `l_leg`, `r_leg`): puts its end joint at
+    /// `target` (world, 3 numbers) with the swivel angle `swivel` (rad; `None` keeps the
+    /// current one) and the optional end orientation `[qx, qy, qz, qw]`, moved to the nearest
+    /// swivel within the joint limits; writes into `values`. Returns
+    /// `{"swivel", "reached", "within_limits"}` (JSON text).
+    pub fn solve_limb(
+        &self,
+        values: &mut [f64],
+        name: &str,
+        target: &[f64],
+        swivel: Option<f64>,
+        orientation: Option<Vec<f64>>,
+    ) -> JsResult<String> {
+        let limb = limb(&self.skeleton, name)?;
+        let [x, y, z] =
+            <[f64; 3]>::try_from(target).map_err(|_| "target: expected 3 numbers".to_owned())?;
+        let orientation = match orientation {
+            None => None,
+            Some(q) => {
+                let [qx, qy, qz, qw] = <[f64; 4]>::try_from(q.as_slice())
+                    .map_err(|_| "orientation: expected 4 numbers".to_owned())?;
+                let q = DQuat::from_xyzw(qx, qy, qz, qw);
+                if !(q.is_finite() && q.length() > 1e-9) {
+                    return Err("orientation: the quaternion has zero length".to_owned());
+                }
+                Some(q.normalize())
+            }
+        };
+        let position = DVec3::new(x, y, z);
+        if !position.is_finite() {
+            return Err("target: not a finite number".to_owned());
+        }
+        let mut posture = self.posture(values)?;
+        let frames = Frames::new(&self.skeleton, &posture);
+        let base = limb.base(&self.skeleton, &frames);
+        let preferred = swivel.unwrap_or_else(|| limb.swivel_angle(&self.skeleton, &posture));
+        let goal = LimbGoal {
+            position,
+            orientation,
+        };
+        let solution = limb.solve_within_limits(base, &goal, preferred);
+        limb.apply(&solution, &mut posture);
+        values.copy_from_slice(posture.values());
+        Ok(serde_json::json!({
+            "swivel": solution.swivel_angle,
+            "reached": solution.reached,
+            "within_limits": solution.within_limits,
+        })
+        .to_string())
+    }
+
+    /// The swivel angle of a limb at `values` (rad).
+    pub fn swivel_angle(&self, values: &[f64], name: &str) -> JsResult<f64> {
+        let limb = limb(&self.skeleton, name)?;
+        Ok(limb.swivel_angle(&self.skeleton, &self.posture(values)?))
+    }
+}
+
+/// A limb by its H-Anim shorthand on `skeleton`.
+fn limb(skeleton: &Skeleton, name: &str) -> JsResult<Limb> {
+    let limb = LimbName::from_name(name).ok_or_else(|| {
+        format!("limb: unknown limb `{name}` (expected l_arm, r_arm, l_leg or r_leg)")
+    })?;
+    let mut joints = [0usize; 3];
+    for (slot, joint) in joints.iter_mut().zip(limb.joints()) {
+        *slot = stance_document::resolve_joint(skeleton, joint)
+            .ok_or_else(|| format!("limb: the skeleton lacks the H-Anim joints of `{name}`"))?;
+    }
+    let names = joints.map(|j| skeleton.joints()[j].name.as_str());
+    Limb::from_names(skeleton, names).map_err(|e| format!("limb: {e}"))
+}

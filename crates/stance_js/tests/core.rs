@@ -1,0 +1,203 @@
+//! The package's core, natively: problem files solved as `stance solve` solves them, bodies
+//! built from H-Anim, joints and a real avatar's skin, per-frame solving into a values array,
+//! world transforms, the closed-form limb; errors name the field.
+
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use glam::{DQuat, DVec3};
+use serde_json::Value;
+use stance_asset::{LoadOptions, load_avatar};
+use stance_hanim::{LevelOfArticulation, SkeletonOptions};
+use stance_js::{Body, PoseSolver, solve_json};
+
+const AVATAR: &[u8] = include_bytes!("../../../tests/fixtures/avatars/Black_F_2_Casual.glb");
+
+const PROBLEM: &str = r#"{"skeleton":{"joints":[
+ {"name":"root","parent":null,"offset":[0,0,0],"dofs":["rx","ry","rz"]},
+ {"name":"elbow","parent":"root","offset":[0,0.3,0],"dofs":["rx"],"limits":{"rx":[-2.5,0]}},
+ {"name":"wrist","parent":"elbow","offset":[0,0.3,0]}
+]},
+"posture":{"elbow":{"rx":-0.5}},
+"tasks":[{"kind":"position","joint":"wrist","target":[0.1,0.4,0.2]}]}"#;
+
+fn at(v: &Value, key: &str) -> Vec<f64> {
+    v[key]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
+
+#[test]
+fn a_problem_file_is_solved_and_reported_like_stance_solve() {
+    let out: Value = serde_json::from_str(&solve_json(PROBLEM).unwrap()).unwrap();
+    let wrist = at(&out["joints"], "wrist");
+    let target = [0.1, 0.4, 0.2];
+    for i in 0..3 {
+        assert!((wrist[i] - target[i]).abs() < 1e-6, "{wrist:?}");
+    }
+    assert_eq!(out["report"]["status"], "converged");
+    assert!(out["posture"]["elbow"]["rx"].as_f64().unwrap() <= 0.0);
+    for (text, want) in [
+        (
+            PROBLEM.replace("\"wrist\",\"target\"", "\"wirst\",\"target\""),
+            "tasks[0].joint",
+        ),
+        (
+            PROBLEM.replace("[0.1,0.4,0.2]", "[0.1,0.4]"),
+            "tasks[0].target",
+        ),
+        ("{".to_owned(), "not valid JSON"),
+    ] {
+        let e = solve_json(&text).unwrap_err();
+        assert!(e.contains(want), "{e}");
+    }
+}
+
+#[test]
+fn bodies_from_hanim_joints_and_a_real_skin() {
+    let loa2 = Body::hanim(2).unwrap();
+    let reference = stance_hanim::default_skeleton(&SkeletonOptions::default()).unwrap();
+    assert_eq!(loa2.skeleton.dof_count(), reference.skeleton.dof_count());
+    assert_eq!(loa2.dof_names().len(), loa2.skeleton.dof_count());
+    assert!(loa2.dof_names().contains(&"l_knee.rx".to_owned()));
+    assert!(Body::hanim(5).unwrap_err().contains("loa"));
+
+    let joints =
+        r#"{"joints":[{"name":"a","dofs":["rz"]},{"name":"b","parent":"a","offset":[1,0,0]}]}"#;
+    assert_eq!(Body::from_joints(joints).unwrap().joint_names(), ["a", "b"]);
+    assert!(
+        Body::from_joints(r#"{"joints":[{"name":"a","dofs":["rq"]}]}"#)
+            .unwrap_err()
+            .contains("dofs[0]")
+    );
+
+    // The vendored avatar's nodes, as a three.js page would pass a skin's bones: the same
+    // H-Anim skeleton as the editor builds from the file.
+    let avatar = load_avatar(AVATAR, &LoadOptions::default()).unwrap();
+    let names: Vec<String> = avatar.nodes.iter().map(|n| n.name.clone()).collect();
+    let parents: Vec<i32> = avatar
+        .nodes
+        .iter()
+        .map(|n| n.parent.map_or(-1, |p| p as i32))
+        .collect();
+    let rest: Vec<f64> = avatar
+        .hanim_rest_positions()
+        .iter()
+        .flat_map(|p| p.to_array())
+        .collect();
+    let body = Body::from_skin(&names, &parents, &rest, 2).unwrap();
+    let editor = avatar
+        .skeleton(&SkeletonOptions {
+            loa: LevelOfArticulation::Loa2,
+            ..SkeletonOptions::default()
+        })
+        .unwrap();
+    assert_eq!(
+        body.joint_names(),
+        editor
+            .skeleton
+            .joints()
+            .iter()
+            .map(|j| j.name.clone())
+            .collect::<Vec<_>>()
+    );
+    let hips = body
+        .joint_names()
+        .iter()
+        .position(|n| n == "humanoid_root")
+        .unwrap();
+    assert!(body.source[hips] >= 0, "the root stands for a skin joint");
+    let bad = Body::from_skin(&names, &parents[1..], &rest, 2).unwrap_err();
+    assert!(bad.contains("parents"), "{bad}");
+}
+
+#[test]
+fn a_pose_solver_solves_into_the_values_and_reports() {
+    let body = Body::hanim(2).unwrap();
+    let s = &body.skeleton;
+    let mut solver = PoseSolver::new(&body, r#"{"max_iterations": 200}"#).unwrap();
+    let mut values = vec![0.0; s.dof_count()];
+    let mut out = vec![0.0; 7 * s.joint_count()];
+    solver.world_transforms(&values, &mut out).unwrap();
+    let index = |name: &str| s.joint_index(name).unwrap();
+    let position = |out: &[f64], name: &str| {
+        let j = index(name);
+        DVec3::new(out[7 * j], out[7 * j + 1], out[7 * j + 2])
+    };
+    let ankle_l = position(&out, "l_talocrural");
+    let ankle_r = position(&out, "r_talocrural");
+    let hand = position(&out, "r_radiocarpal") + DVec3::new(0.0, 0.35, 0.3);
+    solver
+        .set_tasks(&format!(
+            r#"[{{"kind":"position","joint":"l_talocrural","target":{:?}}},
+                {{"kind":"position","joint":"r_talocrural","target":{:?}}},
+                {{"kind":"balance","level":2}},
+                {{"kind":"position","joint":"r_radiocarpal","target":{:?},"level":3}}]"#,
+            ankle_l.to_array(),
+            ankle_r.to_array(),
+            hand.to_array()
+        ))
+        .unwrap();
+    let report: Value = serde_json::from_str(&solver.solve(&mut values).unwrap()).unwrap();
+    assert_eq!(report["status"], "converged", "{report}");
+    solver.world_transforms(&values, &mut out).unwrap();
+    assert!((position(&out, "r_radiocarpal") - hand).length() < 1e-6);
+    assert!((position(&out, "l_talocrural") - ankle_l).length() < 1e-6);
+    let j = index("r_radiocarpal");
+    let q = DQuat::from_xyzw(
+        out[7 * j + 3],
+        out[7 * j + 4],
+        out[7 * j + 5],
+        out[7 * j + 6],
+    );
+    assert!((q.length() - 1.0).abs() < 1e-9);
+
+    // The closed-form arm: the wrist on a goal with a chosen swivel.
+    let goal = [0.35, 1.1, 0.25];
+    let limb: Value = serde_json::from_str(
+        &solver
+            .solve_limb(&mut values, "l_arm", &goal, Some(0.4), None)
+            .unwrap(),
+    )
+    .unwrap();
+    assert_eq!(limb["reached"], true, "{limb}");
+    solver.world_transforms(&values, &mut out).unwrap();
+    assert!((position(&out, "l_radiocarpal") - DVec3::from_array(goal)).length() < 1e-6);
+    let swivel = solver.swivel_angle(&values, "l_arm").unwrap();
+    assert!((swivel - limb["swivel"].as_f64().unwrap()).abs() < 1e-6);
+
+    // Errors name what is wrong and leave the values alone.
+    let before = values.clone();
+    assert!(
+        solver
+            .solve(&mut values[1..])
+            .unwrap_err()
+            .contains("values")
+    );
+    assert!(
+        solver
+            .world_transforms(&values, &mut out[1..])
+            .unwrap_err()
+            .contains("out")
+    );
+    assert!(
+        solver
+            .solve_limb(&mut values, "l_tail", &goal, None, None)
+            .unwrap_err()
+            .contains("l_tail")
+    );
+    assert!(
+        solver
+            .set_tasks(r#"[{"kind":"gaze"}]"#)
+            .unwrap_err()
+            .contains("tasks[0].joint")
+    );
+    assert!(
+        PoseSolver::new(&body, r#"{"tolerance": -1}"#)
+            .unwrap_err()
+            .contains("settings")
+    );
+    assert_eq!(values, before);
+}
