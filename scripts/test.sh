@@ -2,8 +2,9 @@
 # Runs every layer of Stance's tests and its quality gates; stops at the first failure.
 #   1. gates: rustfmt, clippy (native and wasm32, -D warnings), purity of the core crates
 #   2. native `cargo test --workspace` (includes the lavapipe offscreen render)
-#   3. the pure crates' tests in headless Chromium (wasm-bindgen-test)
-#   4. the built site in headless Chromium, WebGL2 and WebGPU (Playwright)
+#   3. the pure crates' and stance_asset's tests in headless Chromium (wasm-pack test)
+#   4. the built site in headless Chromium, WebGL2 and WebGPU (Playwright), and the npm
+#      package stance-ik from Node (tests/package.test.mjs)
 # Expects scripts/setup.sh --test to have run (npm test does both).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -16,7 +17,7 @@ step() { printf '\n\033[1;34m[test %3ds]\033[0m %s\n' "$((SECONDS - started))" "
 PURE_CRATES=(stance_hanim stance_ik stance_mocap)
 # Crates added later join the pure list once they exist (stance_document: the share-link codec).
 [ -d crates/stance_document ] && PURE_CRATES+=(stance_document)
-WASM_ONLY_LIB_CRATES=(stance_render stance_editor stance_web)
+WASM_ONLY_LIB_CRATES=(stance_render stance_editor stance_web stance_js)
 
 step "rustfmt"
 cargo fmt --all --check
@@ -43,11 +44,18 @@ cargo clippy --target wasm32-unknown-unknown "${web_args[@]}" --lib --quiet -- -
 step "native tests"
 cargo test --workspace --quiet
 
-step "pure crates in headless Chromium (wasm-bindgen-test)"
-cargo test --target wasm32-unknown-unknown "${pure_args[@]}"
+# wasm-pack runs each crate's wasm-bindgen tests in headless Chromium (Debian's chromedriver);
+# `stance_asset` builds for wasm32 too (the page imports avatars with it).
+for crate in "${PURE_CRATES[@]}" stance_asset; do
+  step "$crate in headless Chromium (wasm-pack test)"
+  wasm-pack test --headless --chrome --chromedriver "$(command -v chromedriver)" "crates/$crate"
+done
 
 step "site build"
 bash scripts/build-web.sh
+
+step "npm package stance-ik (wasm-pack build)"
+bash scripts/build-package.sh
 
 step "end to end in headless Chromium (WebGL2 and WebGPU)"
 node --test --test-concurrency=1 tests/

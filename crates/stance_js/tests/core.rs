@@ -201,3 +201,31 @@ fn a_pose_solver_solves_into_the_values_and_reports() {
     );
     assert_eq!(values, before);
 }
+
+/// The Table-1-like problem of `tests/fixtures/problems/table1-loa2-tasks.json`, solved from
+/// the rest posture: every level met; prints the time per solve (the package's test prints
+/// the same figure from JavaScript, for the wasm/native ratio; no time is asserted).
+#[test]
+fn table1_on_the_hanim_body_is_solved_and_timed() {
+    let fixture: Value = serde_json::from_str(include_str!(
+        "../../../tests/fixtures/problems/table1-loa2-tasks.json"
+    ))
+    .unwrap();
+    let body = Body::hanim(2).unwrap();
+    let mut solver = PoseSolver::new(&body, "").unwrap();
+    solver.set_tasks(&fixture["tasks"].to_string()).unwrap();
+    let mut values = vec![0.0; body.skeleton.dof_count()];
+    let report: Value = serde_json::from_str(&solver.solve(&mut values).unwrap()).unwrap();
+    assert_eq!(report["status"], "converged", "{report}");
+    let runs = 20;
+    let start = std::time::Instant::now();
+    for _ in 0..runs {
+        values.fill(0.0);
+        solver.solve(&mut values).unwrap();
+    }
+    let us = start.elapsed().as_secs_f64() * 1e6 / f64::from(runs);
+    println!(
+        "table1 native: {us:.0} us/solve, {} iterations",
+        report["iterations"]
+    );
+}

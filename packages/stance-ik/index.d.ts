@@ -1,0 +1,111 @@
+// Types of the stance-ik package. The classes come from the wasm-bindgen declarations; the
+// problem, task and report shapes are those of Stance's problem format.
+
+export { Skeleton, Solver } from './pkg/stance_ik.js';
+
+/** World axes a position or centre-of-mass task controls: "xyz", "xz", "y"... */
+export type Axes = string;
+/** `[x, y, z]` in metres, H-Anim frame: +Y up, +Z the body's front, +X its left. */
+export type Vec3 = [number, number, number];
+/** `[qx, qy, qz, qw]` (world_from_joint). */
+export type Quat = [number, number, number, number];
+
+interface TaskCommon {
+  /** Priority level, 1 = highest (default 1). */
+  level?: number;
+  /** Weight inside the level (default 1). */
+  weight?: number;
+  /** Inactive tasks are kept but not solved (default true). */
+  active?: boolean;
+}
+
+/** The task kinds, with the problem format's fields. */
+export type Task = TaskCommon &
+  (
+    | { kind: 'position'; joint: string; point?: Vec3; axes?: Axes; target: Vec3 }
+    | { kind: 'orientation'; joint: string; target: Quat }
+    | { kind: 'direction'; joint: string; axis?: Vec3; target: Vec3 }
+    | { kind: 'gaze'; joint: string; axis?: Vec3; point?: Vec3; target: Vec3 }
+    | { kind: 'com'; axes?: Axes; target: Vec3 }
+    | { kind: 'balance'; support?: string[]; margin?: number }
+    | { kind: 'posture'; joints?: string[]; reference?: Posture }
+    | {
+        kind: 'limb';
+        limb?: 'l_arm' | 'r_arm' | 'l_leg' | 'r_leg';
+        joints?: [string, string, string];
+        target: Vec3;
+        swivel?: number;
+        orientation?: Quat;
+      }
+  );
+
+/** DOF values by joint: `{"l_knee": {"rx": 0.4}}` (radians and metres). */
+export type Posture = Record<string, Partial<Record<'tx' | 'ty' | 'tz' | 'rx' | 'ry' | 'rz', number>>>;
+
+/** One joint of a problem's skeleton. */
+export interface JointDefinition {
+  name: string;
+  parent?: string | null;
+  offset?: Vec3;
+  dofs?: Array<'tx' | 'ty' | 'tz' | 'rx' | 'ry' | 'rz'>;
+  limits?: Partial<Record<'tx' | 'ty' | 'tz' | 'rx' | 'ry' | 'rz', [number, number]>>;
+  mass?: number;
+  com?: Vec3;
+}
+
+/** Solver settings (all optional). */
+export interface Settings {
+  max_iterations?: number;
+  tolerance?: number;
+  time_budget_ms?: number;
+  lambda?: number;
+  adaptive_damping?: { lambda_max: number; epsilon: number };
+  levels?: Record<string, { lambda?: number; adaptive_damping?: { lambda_max: number; epsilon: number } }>;
+  enforce_limits?: boolean;
+  hybrid?: boolean;
+  [setting: string]: unknown;
+}
+
+/** A whole problem, as `stance solve` reads it. */
+export interface Problem {
+  skeleton: { joints: JointDefinition[] };
+  tasks?: Task[];
+  settings?: Settings;
+  posture?: Posture;
+}
+
+/** One level of a solve. */
+export interface LevelReport {
+  level: number;
+  tasks: number;
+  rows: number;
+  residual_before: number;
+  residual_after: number;
+  met: boolean;
+  posture_only: boolean;
+}
+
+/** How a solve went. */
+export interface Report {
+  status: 'converged' | 'stalled' | 'iteration_budget' | 'time_budget' | string;
+  iterations: number;
+  levels: LevelReport[];
+  /** The highest level left unmet (it gave way to the levels above). */
+  gave_way: number | null;
+  clamped_dofs: number;
+  elapsed_secs: number | null;
+  analytic_restarts: unknown[];
+}
+
+/** What `solve` returns (the output of `stance solve`). */
+export interface Solution {
+  joints: Record<string, Vec3>;
+  posture: Posture;
+  report: Report;
+  limbs?: Array<{ joints: [string, string, string]; swivel: number; start_swivel: number; reached: boolean; within_limits: boolean }>;
+}
+
+/**
+ * Solves a problem (object or JSON text); throws an Error naming the offending field.
+ */
+export function solve(problem: Problem | string): Solution;

@@ -1,0 +1,163 @@
+// The `stance-ik` npm package (packages/stance-ik, built by scripts/build-package.sh) from
+// Node: `solve` gives what `stance solve` prints for the same problem file; errors are thrown
+// `Error`s naming the field; the per-frame Skeleton/Solver API solves into a Float64Array;
+// the closed-form limb; and `npm pack` gives a tarball that installs and solves in a
+// directory of its own. Prints the time per solve of the Table-1-like problem (the native
+// figure is printed by crates/stance_js/tests/core.rs).
+import { before, describe, test } from "node:test";
+import assert from "node:assert/strict";
+import { execFileSync, spawnSync } from "node:child_process";
+import { existsSync, mkdtempSync, readFileSync, writeFileSync } from "node:fs";
+import { tmpdir } from "node:os";
+import { dirname, join } from "node:path";
+import { fileURLToPath, pathToFileURL } from "node:url";
+
+const root = join(dirname(fileURLToPath(import.meta.url)), "..");
+const packageDir = join(root, "packages", "stance-ik");
+let ik;
+let stance;
+
+const problem = {
+  skeleton: {
+    joints: [
+      { name: "root", parent: null, offset: [0, 0, 0], dofs: ["rx", "ry", "rz"] },
+      { name: "elbow", parent: "root", offset: [0, 0.3, 0], dofs: ["rx"], limits: { rx: [-2.5, 0] } },
+      { name: "wrist", parent: "elbow", offset: [0, 0.3, 0] },
+    ],
+  },
+  posture: { elbow: { rx: -0.5 } },
+  tasks: [
+    { kind: "position", joint: "wrist", target: [0.1, 0.4, 0.2] },
+    { kind: "direction", joint: "elbow", axis: [0, 1, 0], target: [0.3, 0.2, 0.9], level: 2 },
+  ],
+};
+
+before(async () => {
+  if (!existsSync(join(packageDir, "pkg", "stance_ik_bg.wasm"))) {
+    execFileSync("bash", ["scripts/build-package.sh"], { cwd: root, stdio: "inherit" });
+  }
+  ik = await import(pathToFileURL(join(packageDir, "index.js")).href);
+  stance = process.env.STANCE_BIN ?? join(root, "target", "debug", "stance");
+  if (!existsSync(stance)) {
+    execFileSync("cargo", ["build", "--quiet", "-p", "stance_cli", "--bin", "stance"], {
+      cwd: root,
+      stdio: "inherit",
+    });
+  }
+});
+
+describe("stance-ik", () => {
+  test("solve gives what stance solve prints for the same problem", () => {
+    const work = mkdtempSync(join(tmpdir(), "stance-package-"));
+    const file = join(work, "problem.json");
+    writeFileSync(file, JSON.stringify(problem));
+    const native = JSON.parse(execFileSync(stance, ["solve", file], { encoding: "utf8" }));
+    const fromObject = ik.solve(problem);
+    const fromText = ik.solve(JSON.stringify(problem));
+    for (const result of [fromObject, fromText]) {
+      assert.equal(result.report.status, native.report.status);
+      assert.equal(result.report.iterations, native.report.iterations);
+      for (const [joint, position] of Object.entries(native.joints)) {
+        position.forEach((x, i) => assert.ok(Math.abs(result.joints[joint][i] - x) < 1e-9, joint));
+      }
+    }
+    const wrist = fromObject.joints.wrist;
+    [0.1, 0.4, 0.2].forEach((x, i) => assert.ok(Math.abs(wrist[i] - x) < 1e-6, `${wrist}`));
+  });
+
+  test("a malformed problem throws an Error that names the field", () => {
+    const bad = structuredClone(problem);
+    bad.tasks[0].joint = "wirst";
+    assert.throws(() => ik.solve(bad), (e) => e instanceof Error && /tasks\[0\]\.joint/.test(e.message) && /wirst/.test(e.message));
+    assert.throws(() => ik.solve("{"), /not valid JSON/);
+    assert.throws(() => ik.Skeleton.hanim(9), /loa/);
+  });
+
+  test("the per-frame API solves into a Float64Array and reports by level", () => {
+    const skeleton = ik.Skeleton.hanim(2);
+    const solver = new ik.Solver(skeleton, { max_iterations: 200 });
+    const values = new Float64Array(skeleton.dofCount);
+    const names = skeleton.jointNames;
+    const transforms = new Float64Array(7 * names.length);
+    const at = (name) => {
+      const j = names.indexOf(name);
+      return Array.from(transforms.slice(7 * j, 7 * j + 3));
+    };
+    solver.worldTransforms(values, transforms);
+    const ankle = at("l_talocrural");
+    const hand = at("r_radiocarpal").map((x, i) => x + [0, 0.35, 0.3][i]);
+    solver.setTasks([
+      { kind: "position", joint: "l_talocrural", target: ankle },
+      { kind: "position", joint: "r_talocrural", target: at("r_talocrural") },
+      { kind: "balance", level: 2 },
+      { kind: "position", joint: "r_radiocarpal", target: hand, level: 3 },
+    ]);
+    const report = solver.solve(values);
+    assert.equal(report.status, "converged");
+    assert.equal(report.levels.length, 3);
+    assert.ok(values.some((v) => v !== 0), "the values hold the solution");
+    solver.worldTransforms(values, transforms);
+    at("r_radiocarpal").forEach((x, i) => assert.ok(Math.abs(x - hand[i]) < 1e-6));
+    at("l_talocrural").forEach((x, i) => assert.ok(Math.abs(x - ankle[i]) < 1e-6));
+    // The closed-form arm, and its swivel read back.
+    const limb = solver.solveLimb(values, "l_arm", [0.35, 1.1, 0.25], 0.4);
+    assert.equal(limb.reached, true);
+    assert.ok(Math.abs(solver.swivelAngle(values, "l_arm") - limb.swivel) < 1e-6);
+    assert.throws(() => solver.setTasks([{ kind: "gaze" }]), /tasks\[0\]\.joint/);
+    assert.throws(() => solver.solve(new Float64Array(3)), /values/);
+    solver.free();
+    skeleton.free();
+  });
+
+  test("the Table-1-like problem is solved from JavaScript (time per solve printed)", (t) => {
+    const fixture = JSON.parse(readFileSync(join(root, "tests", "fixtures", "problems", "table1-loa2-tasks.json"), "utf8"));
+    const skeleton = ik.Skeleton.hanim(2);
+    const solver = new ik.Solver(skeleton, {});
+    solver.setTasks(fixture.tasks);
+    const values = new Float64Array(skeleton.dofCount);
+    const report = solver.solve(values);
+    assert.equal(report.status, "converged");
+    // Warm up (the engine compiles WebAssembly with a baseline compiler first and optimises
+    // the hot functions later), then time.
+    const warm = performance.now();
+    while (performance.now() - warm < 500) {
+      values.fill(0);
+      solver.solve(values);
+    }
+    const runs = 40;
+    const start = performance.now();
+    for (let i = 0; i < runs; i++) {
+      values.fill(0);
+      solver.solve(values);
+    }
+    const us = ((performance.now() - start) * 1000) / runs;
+    t.diagnostic(`table1 wasm (node): ${us.toFixed(0)} us/solve, ${report.iterations} iterations`);
+    console.log(`table1 wasm (node): ${us.toFixed(0)} us/solve, ${report.iterations} iterations`);
+  });
+
+  test("npm pack gives a tarball that installs and solves on its own", () => {
+    const work = mkdtempSync(join(tmpdir(), "stance-pack-"));
+    const packed = spawnSync("npm", ["pack", "--pack-destination", work, "--silent"], {
+      cwd: packageDir,
+      encoding: "utf8",
+    });
+    assert.equal(packed.status, 0, packed.stderr);
+    const tarball = join(work, packed.stdout.trim().split("\n").pop());
+    const version = JSON.parse(readFileSync(join(packageDir, "package.json"), "utf8")).version;
+    assert.match(tarball, new RegExp(`stance-ik-${version.replace(/\./g, "\\.")}\\.tgz$`));
+    const app = join(work, "app");
+    execFileSync("mkdir", ["-p", app]);
+    writeFileSync(join(app, "package.json"), JSON.stringify({ name: "app", private: true, type: "module" }));
+    const installed = spawnSync("npm", ["install", "--no-audit", "--no-fund", "--offline", tarball], {
+      cwd: app,
+      encoding: "utf8",
+    });
+    assert.equal(installed.status, 0, installed.stderr);
+    writeFileSync(
+      join(app, "main.js"),
+      `import { solve } from "stance-ik";\nconst r = solve(${JSON.stringify(problem)});\nconsole.log(JSON.stringify(r.joints.wrist));\n`,
+    );
+    const out = execFileSync("node", ["main.js"], { cwd: app, encoding: "utf8" });
+    JSON.parse(out).forEach((x, i) => assert.ok(Math.abs(x - [0.1, 0.4, 0.2][i]) < 1e-6));
+  });
+});
