@@ -135,6 +135,15 @@ describe("stance-ik", () => {
     console.log(`table1 wasm (node): ${us.toFixed(0)} us/solve, ${report.iterations} iterations`);
   });
 
+  test("a TypeScript page type-checks against the declarations (tsc --strict)", () => {
+    const tsc = spawnSync(
+      process.execPath,
+      [join(root, "node_modules", "typescript", "bin", "tsc"), "-p", join(root, "tests", "fixtures", "typescript", "tsconfig.json")],
+      { cwd: root, encoding: "utf8" },
+    );
+    assert.equal(tsc.status, 0, tsc.stdout + tsc.stderr);
+  });
+
   test("npm pack gives a tarball that installs and solves on its own", () => {
     const work = mkdtempSync(join(tmpdir(), "stance-pack-"));
     const packed = spawnSync("npm", ["pack", "--pack-destination", work, "--silent"], {
