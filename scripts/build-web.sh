@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Builds the site into dist/: the release wasm, its wasm-bindgen glue, web/ and public/.
+# Builds the site into dist/: the release wasm, its wasm-bindgen glue, web/ and public/, and
+# the three.js example of the stance-ik package (dist/examples/three).
 # Cargo and wasm-bindgen only redo work when their inputs changed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -15,6 +16,22 @@ if [ ! -f dist/pkg/stance_web_bg.wasm ] || [ "$wasm" -nt dist/pkg/stance_web_bg.
 fi
 cp -r web/. dist/
 cp -r public/. dist/
+
+# The three.js example (examples/three, served at /examples/three/): the page, the stance-ik
+# package and the three.js modules it imports.
+bash scripts/build-package.sh
+example=dist/examples/three
+mkdir -p "$example/stance-ik/pkg" "$example/vendor/three/build" \
+  "$example/vendor/three/examples/jsm/loaders" "$example/vendor/three/examples/jsm/utils" \
+  "$example/vendor/three/examples/jsm/libs"
+cp examples/three/index.html examples/three/main.js "$example/"
+cp packages/stance-ik/index.js "$example/stance-ik/"
+cp packages/stance-ik/pkg/stance_ik.js packages/stance-ik/pkg/stance_ik_bg.wasm "$example/stance-ik/pkg/"
+three=node_modules/three
+cp "$three/build/three.module.js" "$three/build/three.core.js" "$example/vendor/three/build/"
+cp "$three/examples/jsm/loaders/GLTFLoader.js" "$example/vendor/three/examples/jsm/loaders/"
+cp "$three/examples/jsm/utils/BufferGeometryUtils.js" "$example/vendor/three/examples/jsm/utils/"
+cp "$three/examples/jsm/libs/meshopt_decoder.module.js" "$example/vendor/three/examples/jsm/libs/"
 size=$(stat -c %s dist/pkg/stance_web_bg.wasm)
 gzip_size=$(gzip -9 -c dist/pkg/stance_web_bg.wasm | wc -c)
 echo "$gzip_size" > dist/pkg/wasm-gzip-bytes.txt

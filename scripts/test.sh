@@ -51,11 +51,8 @@ for crate in "${PURE_CRATES[@]}" stance_asset; do
   wasm-pack test --headless --chrome --chromedriver "$(command -v chromedriver)" "crates/$crate"
 done
 
-step "site build"
+step "site build (and the stance-ik package with its three.js example)"
 bash scripts/build-web.sh
-
-step "npm package stance-ik (wasm-pack build)"
-bash scripts/build-package.sh
 
 step "end to end in headless Chromium (WebGL2 and WebGPU)"
 node --test --test-concurrency=1 tests/

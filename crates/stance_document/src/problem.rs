@@ -8,8 +8,8 @@ use std::collections::BTreeMap;
 
 use serde_json::{Map, Value, json};
 use stance_ik::{
-    Damping, Dof, Frames, IkError, JointDef, Limb, Posture, Skeleton, SolveReport, Solver,
-    SolverSettings, Task,
+    Damping, Dof, Frames, IkError, Iteration, JointDef, Limb, Posture, Skeleton, SolveReport,
+    Solver, SolverSettings, Task,
 };
 
 use crate::convert::LimbStartSpec;
@@ -420,6 +420,20 @@ fn parse_settings(v: &Value) -> Result<Settings, DocumentError> {
     }
     if let Some(b) = flag("enforce_limits")? {
         s.enforce_limits = b;
+    }
+    if let Some(b) = flag("restarts")? {
+        s.restarts = b;
+    }
+    match o.get("iteration") {
+        None | Some(Value::Null) => {}
+        Some(Value::String(name)) if name == "guarded" => s.iteration = Iteration::Guarded,
+        Some(Value::String(name)) if name == "textbook" => s.iteration = Iteration::Textbook,
+        Some(_) => {
+            return Err(DocumentError::field(
+                "settings.iteration",
+                "expected \"guarded\" or \"textbook\"",
+            ));
+        }
     }
     s.validate()
         .map_err(|e| DocumentError::field("settings", e.to_string()))?;

@@ -23,6 +23,20 @@ fn parsed(text: &str) -> Result<JsValue, JsError> {
     js_sys::JSON::parse(text).map_err(|_| JsError::new("internal: invalid JSON output"))
 }
 
+/// `performance.now()` (browsers and Node), for the solver's time budget.
+fn performance_now_ms() -> f64 {
+    js_sys::Reflect::get(&js_sys::global(), &"performance".into())
+        .ok()
+        .and_then(|performance| {
+            let now = js_sys::Reflect::get(&performance, &"now".into()).ok()?;
+            js_sys::Function::from(now)
+                .call0(&performance)
+                .ok()?
+                .as_f64()
+        })
+        .unwrap_or_else(js_sys::Date::now)
+}
+
 fn error(message: String) -> JsError {
     JsError::new(&message)
 }
@@ -123,7 +137,13 @@ impl JsSolver {
     /// Solves from `values` (one per DOF), writes the solution into them and returns the
     /// report (`status`, `iterations`, `levels`, `gave_way`...).
     pub fn solve(&mut self, values: &mut [f64]) -> Result<JsValue, JsError> {
-        parsed(&self.inner.solve(values).map_err(error)?)
+        let clock = || performance_now_ms() / 1000.0;
+        parsed(
+            &self
+                .inner
+                .solve_with_clock(values, Some(&clock))
+                .map_err(error)?,
+        )
     }
 
     /// Writes 7 numbers per joint into `out` (position x y z, rotation qx qy qz qw).

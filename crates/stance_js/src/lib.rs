@@ -18,7 +18,7 @@ use stance_document::{LimbName, Problem, ProblemSettings, TaskSpec, parse_skelet
 use stance_hanim::{
     LevelOfArticulation, Mapping, SkeletonOptions, SourceJoint, build_skeleton, default_skeleton,
 };
-use stance_ik::{Frames, Limb, LimbGoal, Posture, Skeleton, SolveReport, Solver, Task};
+use stance_ik::{Clock, Frames, Limb, LimbGoal, Posture, Skeleton, SolveReport, Solver, Task};
 
 /// An error for JavaScript: the message names the field where there is one.
 pub type JsResult<T> = Result<T, String>;
@@ -202,11 +202,25 @@ impl PoseSolver {
     /// Solves from `values` (one per DOF) and writes the solution into them; returns the
     /// report (JSON text: status, iterations, per-level residuals, the level that gave way).
     pub fn solve(&mut self, values: &mut [f64]) -> JsResult<String> {
+        self.solve_with_clock(values, None)
+    }
+
+    /// [`PoseSolver::solve`] with a clock for the settings' time budget (`time_budget_ms`):
+    /// the JavaScript layer passes `performance.now()`.
+    pub fn solve_with_clock(
+        &mut self,
+        values: &mut [f64],
+        clock: Option<&dyn Clock>,
+    ) -> JsResult<String> {
         let mut posture = self.posture(values)?;
-        let report = self
-            .solver
-            .solve(&self.skeleton, &self.tasks, &mut posture)
-            .map_err(|e| e.to_string())?;
+        let report = match clock {
+            Some(clock) => {
+                self.solver
+                    .solve_with_clock(&self.skeleton, &self.tasks, &mut posture, Some(clock))
+            }
+            None => self.solver.solve(&self.skeleton, &self.tasks, &mut posture),
+        }
+        .map_err(|e| e.to_string())?;
         values.copy_from_slice(posture.values());
         let text = serde_json::to_string(&report).map_err(|e| e.to_string())?;
         self.report = Some(report);
