@@ -79,7 +79,7 @@ fn scenario_timings() {
         if !["S2", "S3", "S4", "S5"].contains(&s.name) {
             continue;
         }
-        let mut solver = Solver::new(textbook.clone()).unwrap();
+        let mut solver = Solver::new(textbook).unwrap();
         let per_iteration = median_ms(5, || {
             let mut p = s.start.clone();
             solver.iterate(&s.skeleton, &s.tasks, &mut p).unwrap();
