@@ -42,13 +42,17 @@ cargo clippy --target wasm32-unknown-unknown "${pure_args[@]}" --all-targets --q
 cargo clippy --target wasm32-unknown-unknown "${web_args[@]}" --lib --quiet -- -D warnings
 
 step "native tests"
-cargo test --workspace --quiet
+cargo test --workspace --quiet -- --skip scenario_timings
+# The S2..S5 timings, printed (the same test prints them in the browser below).
+cargo test --quiet -p stance_ik --test timing -- --nocapture
 
 # wasm-pack runs each crate's wasm-bindgen tests in headless Chromium (Debian's chromedriver);
 # `stance_asset` builds for wasm32 too (the page imports avatars with it).
 for crate in "${PURE_CRATES[@]}" stance_asset; do
   step "$crate in headless Chromium (wasm-pack test)"
-  wasm-pack test --headless --chrome --chromedriver "$(command -v chromedriver)" "crates/$crate"
+  # stance_ik's console output carries its S2..S5 timings.
+  show=(); [ "$crate" = stance_ik ] && show=(-- --nocapture)
+  wasm-pack test --headless --chrome --chromedriver "$(command -v chromedriver)" "crates/$crate" "${show[@]}"
 done
 
 step "site build (and the stance-ik package with its three.js example)"

@@ -42,7 +42,7 @@ pub const MET_TOLERANCE: f64 = 1e-3;
 /// Iterations per frame and the time they may take: the page stays interactive. The time
 /// bounds a frame; the count is enough for the Table 1 example to converge in one frame
 /// (33 iterations, about 1.7 ms natively) and a pull converges in 2 or 3 a frame.
-const ITERATIONS_PER_FRAME: usize = 60;
+const ITERATIONS_PER_FRAME: usize = 40;
 const FRAME_BUDGET_SECS: f64 = 0.008;
 
 /// A humanoid being posed.

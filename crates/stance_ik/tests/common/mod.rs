@@ -181,10 +181,13 @@ pub fn jacobi_svd(a: &DMatrix<f64>) -> (DMatrix<f64>, Vec<f64>, DMatrix<f64>) {
         let mut rotated = false;
         for p in 0..n {
             for q in p + 1..n {
-                let alpha = u.column(p).norm_squared();
-                let beta = u.column(q).norm_squared();
-                let gamma = u.column(p).dot(&u.column(q));
-                if gamma.abs() <= 1e-300 || gamma.abs() <= 1e-17 * (alpha * beta).sqrt() {
+                let (mut alpha, mut beta, mut gamma) = (0.0, 0.0, 0.0);
+                for (x, y) in u.column(p).iter().zip(u.column(q).iter()) {
+                    alpha += x * x;
+                    beta += y * y;
+                    gamma += x * y;
+                }
+                if gamma.abs() <= 1e-300 || gamma.abs() <= f64::EPSILON * (alpha * beta).sqrt() {
                     continue;
                 }
                 rotated = true;
@@ -324,7 +327,8 @@ pub fn level_residuals(skeleton: &Skeleton, tasks: &[Task], posture: &Posture) -
 /// `N x N` matrices and a Jacobi SVD; joint limits by the textbook clamping loop (a DOF that
 /// would leave its range is put on the bound, its column removed, its move subtracted from
 /// every level's error, and the step recomputed); `theta += dtheta`. No line search, no
-/// cascade, no budget. Stops when every level is met (1e-6) or after `iterations`. Returns the
+/// cascade, no budget. Stops when every level is met (1e-6), at a fixed point (no DOF moves by
+/// 1e-12) or after `iterations`. Returns the
 /// final posture and the iterations taken.
 pub fn plain_recursion(
     skeleton: &Skeleton,
@@ -368,15 +372,16 @@ pub fn plain_recursion(
                 }
                 // One SVD of Jh^T = U S V^T (N x m): Jh^{+lambda} = U f(S) V^T, and the
                 // row space of Jh is spanned by the columns of U with s above the threshold.
-                let jht = &p * level.jacobian_t.clone();
+                let jht = &p * &level.jacobian_t;
                 let e = &level.dx - &j * (&dtheta + &fixed);
                 let (u, s, v) = jacobi_svd(&jht);
                 let ve = v.transpose() * e;
                 for (i, &si) in s.iter().enumerate() {
                     if si > 1e-9 * scale {
                         let ui = u.column(i);
-                        dtheta += ui * (ve[i] * si / (si * si + 0.002 * 0.002));
-                        p -= ui * ui.transpose();
+                        dtheta.axpy(ve[i] * si / (si * si + 0.002 * 0.002), &ui, 1.0);
+                        // P -= u_i u_i^T, in place.
+                        p.ger(-1.0, &ui, &ui, 1.0);
                     }
                 }
             }
@@ -397,8 +402,15 @@ pub fn plain_recursion(
                 break;
             }
         }
+        let mut moved: f64 = 0.0;
         for i in 0..n {
-            posture.values_mut()[i] = (values[i] + total[i]).clamp(lo[i], hi[i]);
+            let next = (values[i] + total[i]).clamp(lo[i], hi[i]);
+            moved = moved.max((next - values[i]).abs());
+            posture.values_mut()[i] = next;
+        }
+        if moved < 1e-12 {
+            // A fixed point: every further iteration would leave the posture as it is.
+            return (posture, it + 1);
         }
     }
     (posture, iterations)
