@@ -88,7 +88,6 @@ pub struct StanceApp {
     library_name: String,
     autosaved: Option<Document>,
     last_autosave_secs: f64,
-    published: Option<String>,
     solver_ms: f64,
     frame_ms: f64,
     /// CPU time of this frame's scene (mannequin capsules, or the avatar's skinning palettes).
@@ -162,7 +161,6 @@ impl StanceApp {
             library_name: String::new(),
             autosaved: None,
             last_autosave_secs: f64::NEG_INFINITY,
-            published: None,
             solver_ms: 0.0,
             frame_ms: 0.0,
             scene_ms: 0.0,
@@ -1446,14 +1444,6 @@ impl StanceApp {
         .to_string()
     }
 
-    fn publish_state(&mut self) {
-        let state = self.state_json();
-        if self.published.as_deref() != Some(state.as_str()) {
-            self.hooks.publish_state(&state);
-            self.published = Some(state);
-        }
-    }
-
     /// Draws the whole editor into `ui` (shared by eframe and the UI tests).
     pub fn show(&mut self, ui: &mut egui::Ui, frame: &eframe::Frame) {
         let ctx = ui.ctx().clone();
@@ -1484,7 +1474,6 @@ impl StanceApp {
         if let Some(cpu_seconds) = frame.info().cpu_usage {
             self.frame_ms = f64::from(cpu_seconds) * 1000.0;
         }
-        self.publish_state();
     }
 }
 
@@ -1580,5 +1569,11 @@ const HELP_ROWS: &[(&str, &str)] = &[
 impl eframe::App for StanceApp {
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         self.show(ui, frame);
+    }
+
+    /// Lets the page reach the app (its test hook builds `state_json` when asked).
+    #[cfg(target_arch = "wasm32")]
+    fn as_any_mut(&mut self) -> Option<&mut dyn std::any::Any> {
+        Some(&mut *self)
     }
 }

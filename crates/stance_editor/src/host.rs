@@ -91,10 +91,6 @@ pub trait HostHooks {
     fn download_bytes(&self, _file_name: &str, _bytes: &[u8]) -> Result<(), String> {
         Err("this shell cannot download files".to_owned())
     }
-
-    /// The editor's observable state changed (JSON, see `StanceApp::state_json`): the page
-    /// keeps it for its test hook and for other scripts.
-    fn publish_state(&self, _state_json: &str) {}
 }
 
 /// What the host tells the editor, through the sender given to `StanceApp::with_inbox`.
@@ -132,7 +128,7 @@ impl HostHooks for NoHostHooks {
 }
 
 /// A host that keeps everything in memory, shared through `Rc` so that a test can look at
-/// what the editor stored, downloaded and published.
+/// what the editor stored and downloaded.
 #[derive(Debug, Default, Clone)]
 pub struct MemoryHost {
     pub inner: Rc<RefCell<MemoryHostState>>,
@@ -144,7 +140,6 @@ pub struct MemoryHostState {
     pub storage: BTreeMap<String, String>,
     pub downloads: Vec<(String, String)>,
     pub address_fragment: Option<String>,
-    pub state_json: String,
     pub file_requests: usize,
     pub fetches: Vec<String>,
     pub first_frame: Option<BackendSummary>,
@@ -191,10 +186,6 @@ impl HostHooks for MemoryHost {
     fn fetch(&self, url: &str) -> Result<(), String> {
         self.inner.borrow_mut().fetches.push(url.to_owned());
         Ok(())
-    }
-
-    fn publish_state(&self, state_json: &str) {
-        state_json.clone_into(&mut self.inner.borrow_mut().state_json);
     }
 
     fn connect_sensor(&self, request: &SensorConnection) -> Result<(), String> {

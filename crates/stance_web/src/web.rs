@@ -45,11 +45,9 @@ fn describe(error: &JsValue) -> String {
 }
 
 /// Tells the page about the editor: attributes on `<body>` when the first frame is up
-/// (`data-backend`, `data-adapter`, `data-first-frame-ms`), the state JSON for scripts and
-/// tests, and the browser services behind `window.stanceHost`.
-struct PageHooks {
-    state: Rc<RefCell<String>>,
-}
+/// (`data-backend`, `data-adapter`, `data-first-frame-ms`), and the browser services behind
+/// `window.stanceHost`.
+struct PageHooks;
 
 impl HostHooks for PageHooks {
     fn first_frame_rendered(&self, backend: &BackendSummary) {
@@ -102,10 +100,6 @@ impl HostHooks for PageHooks {
         host_fetch_file(url).map_err(|error| describe(&error))
     }
 
-    fn publish_state(&self, state_json: &str) {
-        state_json.clone_into(&mut self.state.borrow_mut());
-    }
-
     fn connect_sensor(&self, request: &SensorConnection) -> Result<(), String> {
         host_connect_sensor(&request.to_json()).map_err(|error| describe(&error))
     }
@@ -125,7 +119,6 @@ impl HostHooks for PageHooks {
 #[wasm_bindgen]
 pub struct WebHandle {
     runner: eframe::WebRunner,
-    state: Rc<RefCell<String>>,
     inbox: RefCell<Option<Sender<HostMessage>>>,
     context: Rc<RefCell<Option<egui::Context>>>,
 }
@@ -140,7 +133,6 @@ impl WebHandle {
         eframe::WebLogger::init(log::LevelFilter::Info).ok();
         Self {
             runner: eframe::WebRunner::new(),
-            state: Rc::new(RefCell::new(String::from("{}"))),
             inbox: RefCell::new(None),
             context: Rc::new(RefCell::new(None)),
         }
@@ -157,7 +149,6 @@ impl WebHandle {
     ) -> Result<(), JsValue> {
         let (sender, receiver) = std::sync::mpsc::channel();
         *self.inbox.borrow_mut() = Some(sender);
-        let state = Rc::clone(&self.state);
         let context = Rc::clone(&self.context);
         self.runner
             .start(
@@ -168,8 +159,8 @@ impl WebHandle {
                         return Err("neither WebGPU nor WebGL2 could start".into());
                     }
                     *context.borrow_mut() = Some(creation.egui_ctx.clone());
-                    let mut app = StanceApp::new(creation, Box::new(PageHooks { state }))?
-                        .with_inbox(receiver);
+                    let mut app =
+                        StanceApp::new(creation, Box::new(PageHooks))?.with_inbox(receiver);
                     app.open_startup(Some(&link_fragment));
                     Ok(Box::new(app))
                 }),
@@ -236,10 +227,14 @@ impl WebHandle {
     }
 
     /// The editor's state as JSON: document, joint positions (world and screen), task
-    /// statuses, notice, button rectangles (see `StanceApp::state_json`).
+    /// statuses, notice, button rectangles (see `StanceApp::state_json`). Built when asked
+    /// (the page's test hook and scripts), never per frame; `"{}"` before the editor runs or
+    /// while it is busy.
     #[wasm_bindgen]
     pub fn state_json(&self) -> String {
-        self.state.borrow().clone()
+        self.runner
+            .app_mut::<StanceApp>()
+            .map_or_else(|| "{}".to_owned(), |app| app.state_json())
     }
 
     /// Stops the editor and frees its resources.
