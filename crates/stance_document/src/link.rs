@@ -583,13 +583,7 @@ impl Writer {
                 self.direction(unit(*target));
             }
             TaskKindSpec::Balance { support, margin } => {
-                self.flag(HAS_JOINTS, support.is_some());
-                if let Some(list) = support {
-                    self.count(list.len());
-                    for j in list {
-                        self.joint(j);
-                    }
-                }
+                self.joint_list(support.as_deref());
                 self.m
                     .position
                     .encode_signed(&mut self.e, quantise(*margin, POSITION_STEP_M));
@@ -599,13 +593,7 @@ impl Writer {
                 self.position(*target);
             }
             TaskKindSpec::Posture { joints, reference } => {
-                self.flag(HAS_JOINTS, joints.is_some());
-                if let Some(list) = joints {
-                    self.count(list.len());
-                    for j in list {
-                        self.joint(j);
-                    }
-                }
+                self.joint_list(joints.as_deref());
                 self.flag(HAS_REFERENCE, reference.is_some());
                 if let Some(r) = reference {
                     self.posture(r);
@@ -652,6 +640,17 @@ impl Writer {
         let r = if r.is_finite() { r } else { DVec3::ZERO };
         for x in r.to_array() {
             self.angle(x);
+        }
+    }
+
+    /// An optional list of joints (`HAS_JOINTS`, then a count and the joints).
+    fn joint_list(&mut self, joints: Option<&[String]>) {
+        self.flag(HAS_JOINTS, joints.is_some());
+        if let Some(list) = joints {
+            self.count(list.len());
+            for j in list {
+                self.joint(j);
+            }
         }
     }
 
@@ -755,6 +754,20 @@ impl Reader<'_> {
             *x = Self::signed(&mut self.m.position, &mut self.d, POSITION_STEP_M)?;
         }
         Ok(v)
+    }
+
+    /// An optional list of joints (`HAS_JOINTS`, then a count and the joints).
+    fn joint_list(&mut self, what: &str) -> R<Option<Vec<String>>> {
+        if !self.flag(HAS_JOINTS) {
+            return Ok(None);
+        }
+        let n = self.count(what)?;
+        let mut list = Vec::with_capacity(n);
+        for _ in 0..n {
+            list.push(self.joint()?);
+            self.check()?;
+        }
+        Ok(Some(list))
     }
 
     fn direction(&mut self) -> R<[f64; 3]> {
@@ -924,17 +937,7 @@ impl Reader<'_> {
                 }
             }
             Some("balance") => {
-                let support = if self.flag(HAS_JOINTS) {
-                    let n = self.count("support joints")?;
-                    let mut list = Vec::with_capacity(n);
-                    for _ in 0..n {
-                        list.push(self.joint()?);
-                        self.check()?;
-                    }
-                    Some(list)
-                } else {
-                    None
-                };
+                let support = self.joint_list("support joints")?;
                 let margin = Self::signed(&mut self.m.position, &mut self.d, POSITION_STEP_M)?;
                 TaskKindSpec::Balance { support, margin }
             }
@@ -943,17 +946,7 @@ impl Reader<'_> {
                 target: self.position()?,
             },
             Some("posture") => {
-                let joints = if self.flag(HAS_JOINTS) {
-                    let n = self.count("posture joints")?;
-                    let mut list = Vec::with_capacity(n);
-                    for _ in 0..n {
-                        list.push(self.joint()?);
-                        self.check()?;
-                    }
-                    Some(list)
-                } else {
-                    None
-                };
+                let joints = self.joint_list("posture joints")?;
                 let reference = if self.flag(HAS_REFERENCE) {
                     Some(self.posture()?)
                 } else {

@@ -156,13 +156,7 @@ impl PosingSession {
         });
         balance.level = 2;
         tasks.push(balance);
-        let mut comfort = TaskSpec::new(TaskKindSpec::Posture {
-            joints: None,
-            reference: None,
-        });
-        comfort.level = 10;
-        comfort.weight = 0.05;
-        tasks.push(comfort);
+        tasks.push(comfort_task());
         tasks
     }
 
@@ -217,13 +211,7 @@ impl PosingSession {
         });
         bar_task.level = 3;
         tasks.push(bar_task);
-        let mut comfort = TaskSpec::new(TaskKindSpec::Posture {
-            joints: None,
-            reference: None,
-        });
-        comfort.level = 10;
-        comfort.weight = 0.05;
-        tasks.push(comfort);
+        tasks.push(comfort_task());
         tasks
     }
 
@@ -775,12 +763,7 @@ pub fn mirror_task(task: &TaskSpec) -> TaskSpec {
             target: reflect(*target),
         },
         TaskKindSpec::Balance { support, margin } => TaskKindSpec::Balance {
-            support: support.as_ref().map(|joints| {
-                joints
-                    .iter()
-                    .map(|joint| mirror_joint_name(joint))
-                    .collect()
-            }),
+            support: support.as_deref().map(mirror_joint_names),
             margin: *margin,
         },
         TaskKindSpec::Com { axes, target } => TaskKindSpec::Com {
@@ -788,12 +771,7 @@ pub fn mirror_task(task: &TaskSpec) -> TaskSpec {
             target: reflect(*target),
         },
         TaskKindSpec::Posture { joints, reference } => TaskKindSpec::Posture {
-            joints: joints.as_ref().map(|joints| {
-                joints
-                    .iter()
-                    .map(|joint| mirror_joint_name(joint))
-                    .collect()
-            }),
+            joints: joints.as_deref().map(mirror_joint_names),
             reference: reference.as_ref().map(mirror_posture_values),
         },
         TaskKindSpec::Limb {
@@ -829,6 +807,25 @@ fn mirror_posture_values(values: &PostureValues) -> PostureValues {
         }
     }
     mirrored
+}
+
+/// Comfort: a light attraction of every joint toward the rest posture, at level 10.
+pub fn comfort_task() -> TaskSpec {
+    let mut comfort = TaskSpec::new(TaskKindSpec::Posture {
+        joints: None,
+        reference: None,
+    });
+    comfort.level = 10;
+    comfort.weight = 0.05;
+    comfort
+}
+
+/// Every name of `joints` on the other side.
+fn mirror_joint_names(joints: &[String]) -> Vec<String> {
+    joints
+        .iter()
+        .map(|joint| mirror_joint_name(joint))
+        .collect()
 }
 
 /// The other side's joint name (`l_` <-> `r_`); central joints keep theirs.

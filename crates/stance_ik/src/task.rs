@@ -554,16 +554,21 @@ struct BalanceGeometry {
 /// A support point in the floor plane with its index in the task's list.
 type FloorPoint = ([f64; 2], usize);
 
+/// The support points' floor-plane positions (x, z) at `frames`, with their indices.
+fn floor_points(frames: &Frames, support: &[Effector]) -> Vec<FloorPoint> {
+    support
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let p = frames.point(s.joint, s.point);
+            ([p.x, p.z], i)
+        })
+        .collect()
+}
+
 impl BalanceGeometry {
     fn new(frames: &Frames, support: &[Effector], margin: f64) -> Option<Self> {
-        let points: Vec<FloorPoint> = support
-            .iter()
-            .enumerate()
-            .map(|(i, s)| {
-                let p = frames.point(s.joint, s.point);
-                ([p.x, p.z], i)
-            })
-            .collect();
+        let points = floor_points(frames, support);
         let c = frames.center_of_mass();
         let c = [c.x, c.z];
         let hull = convex_hull(points);
@@ -794,15 +799,7 @@ impl Task {
         let TaskKind::Balance { support, .. } = &self.kind else {
             return Vec::new();
         };
-        let points = support
-            .iter()
-            .enumerate()
-            .map(|(i, s)| {
-                let p = frames.point(s.joint, s.point);
-                ([p.x, p.z], i)
-            })
-            .collect();
-        convex_hull(points)
+        convex_hull(floor_points(frames, support))
             .into_iter()
             .map(|([x, z], _)| DVec3::new(x, 0.0, z))
             .collect()

@@ -8,7 +8,7 @@ use stance_ik::Axes;
 
 use super::StanceApp;
 use crate::history::EditKind;
-use crate::posing::{MET_TOLERANCE, describe_joint, describe_task, joint_rotation};
+use crate::posing::{MET_TOLERANCE, comfort_task, describe_joint, describe_task, joint_rotation};
 
 /// Colours of task states.
 const MET_COLOR: Color32 = Color32::from_rgb(90, 200, 120);
@@ -504,13 +504,7 @@ impl StanceApp {
             ui.close();
         }
         if ui.button("Posture attraction (comfort)").clicked() {
-            let mut task = TaskSpec::new(TaskKindSpec::Posture {
-                joints: None,
-                reference: None,
-            });
-            task.level = 10;
-            task.weight = 0.05;
-            self.push_task(task);
+            self.push_task(comfort_task());
             ui.close();
         }
         ui.separator();
