@@ -38,11 +38,13 @@ cargo clippy --workspace --all-targets --quiet -- -D warnings
 step "clippy (wasm32)"
 pure_args=(); for crate in "${PURE_CRATES[@]}"; do pure_args+=(-p "$crate"); done
 web_args=(); for crate in "${WASM_ONLY_LIB_CRATES[@]}"; do web_args+=(-p "$crate"); done
-cargo clippy --target wasm32-unknown-unknown "${pure_args[@]}" --all-targets --quiet -- -D warnings
+# Their tests are linted natively above and compiled for wasm32 by wasm-pack below.
+cargo clippy --target wasm32-unknown-unknown "${pure_args[@]}" --lib --quiet -- -D warnings
 cargo clippy --target wasm32-unknown-unknown "${web_args[@]}" --lib --quiet -- -D warnings
 
 step "native tests"
-cargo test --workspace --quiet -- --skip scenario_timings
+# No doc tests: the crates have none, and each would cost a rustdoc run.
+cargo test --workspace --quiet --lib --bins --tests -- --skip scenario_timings
 # The S2..S5 timings, printed (the same test prints them in the browser below).
 cargo test --quiet -p stance_ik --test timing -- --nocapture
 

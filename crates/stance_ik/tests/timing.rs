@@ -40,11 +40,11 @@ fn report(line: &str) {
 }
 
 /// Median of `runs` timings of `f` (ms each), each run repeated until it lasts 20 ms, after
-/// 400 ms of warm-up (the browser compiles WebAssembly with a baseline compiler first and
+/// `warm_ms` of warm-up (the browser compiles WebAssembly with a baseline compiler first and
 /// optimises the hot functions later).
-fn median_ms(runs: usize, mut f: impl FnMut()) -> f64 {
+fn median_ms(runs: usize, warm_ms: f64, mut f: impl FnMut()) -> f64 {
     let start = now_ms();
-    while now_ms() - start < 400.0 {
+    while now_ms() - start < warm_ms {
         f();
     }
     let mut samples: Vec<f64> = (0..runs)
@@ -82,7 +82,7 @@ fn scenario_timings() {
     // Every scenario's code paths warmed up before any is timed.
     for s in &chosen {
         let mut solver = Solver::default();
-        median_ms(1, || {
+        median_ms(1, 400.0, || {
             let mut p = s.start.clone();
             solver.solve(&s.skeleton, &s.tasks, &mut p).unwrap();
         });
@@ -90,12 +90,12 @@ fn scenario_timings() {
     let mut timed = 0;
     for s in &chosen {
         let mut solver = Solver::new(textbook).unwrap();
-        let per_iteration = median_ms(5, || {
+        let per_iteration = median_ms(5, 100.0, || {
             let mut p = s.start.clone();
             solver.iterate(&s.skeleton, &s.tasks, &mut p).unwrap();
         });
         let mut solver = Solver::default();
-        let per_solve = median_ms(3, || {
+        let per_solve = median_ms(3, 100.0, || {
             let mut p = s.start.clone();
             solver.solve(&s.skeleton, &s.tasks, &mut p).unwrap();
         });
