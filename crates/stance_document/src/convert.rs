@@ -4,7 +4,9 @@ use glam::{DQuat, DVec3};
 use stance_ik::{Axes, Effector, Limb, LimbGoal, Posture, Skeleton, Task, TaskKind};
 
 use crate::DocumentError;
-use crate::document::{CONTACT_HEIGHT, Document, DofValues, PostureValues, TaskKindSpec, TaskSpec};
+use crate::document::{
+    CONTACT_HEIGHT, Document, DofValues, LimbName, PostureValues, TaskKindSpec, TaskSpec,
+};
 
 /// Finds `name` in the skeleton: the exact name first, then through the H-Anim aliases
 /// (`l_ankle` finds `l_talocrural` and the other way round).
@@ -96,16 +98,7 @@ impl TaskSpec {
         };
         let mut out = [0usize; 3];
         match (limb, joints) {
-            (Some(l), None) => {
-                for (k, name) in l.joints().iter().enumerate() {
-                    out[k] = resolve_joint(skeleton, name).ok_or_else(|| {
-                        DocumentError::field(
-                            "limb",
-                            format!("the skeleton lacks the H-Anim joints of `{}`", l.name()),
-                        )
-                    })?;
-                }
-            }
+            (Some(l), None) => out = l.joint_indices(skeleton)?,
             (None, Some(names)) => {
                 for (k, name) in names.iter().enumerate() {
                     out[k] = joint_at(skeleton, name, &format!("joints[{k}]"))?;
@@ -390,6 +383,43 @@ fn support_points(
     Ok(points)
 }
 
+/// Every solver task of `specs` (one problem's tasks) on `skeleton`, in order; errors at
+/// `tasks[i].<field>`.
+pub fn solver_tasks(skeleton: &Skeleton, specs: &[TaskSpec]) -> Result<Vec<Task>, DocumentError> {
+    let mut out = Vec::with_capacity(specs.len());
+    for (i, t) in specs.iter().enumerate() {
+        out.extend(
+            t.to_solver_tasks(skeleton, specs)
+                .map_err(|e| e.within(&format!("tasks[{i}]")))?,
+        );
+    }
+    Ok(out)
+}
+
+impl LimbName {
+    /// The limb's (upper, middle, end) joint indices on `skeleton`, through the H-Anim aliases.
+    pub fn joint_indices(self, skeleton: &Skeleton) -> Result<[usize; 3], DocumentError> {
+        let mut out = [0usize; 3];
+        for (slot, name) in out.iter_mut().zip(self.joints()) {
+            *slot = resolve_joint(skeleton, name).ok_or_else(|| {
+                DocumentError::field(
+                    "limb",
+                    format!("the skeleton lacks the H-Anim joints of `{}`", self.name()),
+                )
+            })?;
+        }
+        Ok(out)
+    }
+
+    /// The closed-form limb on `skeleton`.
+    pub fn on(self, skeleton: &Skeleton) -> Result<Limb, DocumentError> {
+        let names = self
+            .joint_indices(skeleton)?
+            .map(|j| skeleton.joints()[j].name.as_str());
+        Limb::from_names(skeleton, names).map_err(|e| DocumentError::field("limb", e.to_string()))
+    }
+}
+
 impl Document {
     /// The posture on `skeleton` (errors at `posture.<joint>.<dof>`).
     pub fn to_posture(&self, skeleton: &Skeleton) -> Result<Posture, DocumentError> {
@@ -399,14 +429,7 @@ impl Document {
     /// Every solver task on `skeleton`, in document order (errors at `tasks[i].<field>`); a
     /// `limb` task with an `orientation` gives two (see [`TaskSpec::to_solver_tasks`]).
     pub fn to_tasks(&self, skeleton: &Skeleton) -> Result<Vec<Task>, DocumentError> {
-        let mut out = Vec::with_capacity(self.tasks.len());
-        for (i, t) in self.tasks.iter().enumerate() {
-            out.extend(
-                t.to_solver_tasks(skeleton, &self.tasks)
-                    .map_err(|e| e.within(&format!("tasks[{i}]")))?,
-            );
-        }
-        Ok(out)
+        solver_tasks(skeleton, &self.tasks)
     }
 
     /// The closed-form limbs of the `limb` tasks, with the index of their task.

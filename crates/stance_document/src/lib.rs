@@ -18,7 +18,7 @@ pub mod link;
 mod problem;
 mod range_coder;
 
-pub use convert::{LimbStartSpec, pinned_contacts, resolve_joint};
+pub use convert::{LimbStartSpec, pinned_contacts, resolve_joint, solver_tasks};
 pub use document::{
     AvatarReference, CONTACT_HEIGHT, DEFAULT_BALANCE_MARGIN, DOCUMENT_VERSION, Document, DofValues,
     LimbName, PostureValues, TaskKindSpec, TaskSpec,

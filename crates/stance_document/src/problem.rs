@@ -13,8 +13,9 @@ use stance_ik::{
 };
 
 use crate::convert::LimbStartSpec;
+use crate::convert::solver_tasks;
 use crate::json::{arr, field, number, obj, string, vec3};
-use crate::{Document, DocumentError, LimbName, PostureValues, TaskKindSpec, TaskSpec};
+use crate::{Document, DocumentError, LimbName, PostureValues, TaskSpec};
 
 /// A solver problem (see the module documentation).
 #[derive(Debug, Clone)]
@@ -96,32 +97,21 @@ impl Problem {
         level_damping: BTreeMap<u32, Damping>,
         hybrid: bool,
     ) -> Result<Self, DocumentError> {
-        let mut tasks = Vec::with_capacity(specs.len());
+        let tasks = solver_tasks(&skeleton, &specs)?;
         let mut limb_starts = Vec::new();
         for (i, spec) in specs.iter().enumerate() {
-            let at = format!("tasks[{i}]");
-            tasks.extend(
-                spec.to_solver_tasks(&skeleton, &specs)
-                    .map_err(|e| e.within(&at))?,
-            );
-            if let Some(limb) = spec.to_limb(&skeleton).map_err(|e| e.within(&at))? {
+            if let Some(limb) = spec
+                .to_limb(&skeleton)
+                .map_err(|e| e.within(&format!("tasks[{i}]")))?
+            {
                 limb_starts.push(limb);
             }
         }
         let mut hybrid_limbs: Vec<Limb> = limb_starts.iter().map(|l| l.limb.clone()).collect();
         if hybrid {
-            for name in LimbName::ALL {
-                let spec = TaskSpec::new(TaskKindSpec::Limb {
-                    limb: Some(name),
-                    joints: None,
-                    target: [0.0; 3],
-                    swivel: None,
-                    orientation: None,
-                });
-                if let Ok(Some(l)) = spec.to_limb(&skeleton)
-                    && !hybrid_limbs.iter().any(|h| h.joints() == l.limb.joints())
-                {
-                    hybrid_limbs.push(l.limb);
+            for limb in LimbName::ALL.iter().filter_map(|l| l.on(&skeleton).ok()) {
+                if !hybrid_limbs.iter().any(|h| h.joints() == limb.joints()) {
+                    hybrid_limbs.push(limb);
                 }
             }
         }

@@ -14,7 +14,7 @@ mod js;
 
 use glam::{DQuat, DVec3};
 use serde_json::Value;
-use stance_document::{LimbName, Problem, ProblemSettings, TaskSpec, parse_skeleton};
+use stance_document::{LimbName, Problem, ProblemSettings, TaskSpec, parse_skeleton, solver_tasks};
 use stance_hanim::{
     LevelOfArticulation, Mapping, SkeletonOptions, SourceJoint, build_skeleton, default_skeleton,
 };
@@ -183,15 +183,8 @@ impl PoseSolver {
     pub fn set_tasks(&mut self, tasks: &str) -> JsResult<()> {
         let specs =
             TaskSpec::list_from_json_value(&json(tasks)?, "tasks").map_err(|e| e.to_string())?;
-        let mut solver_tasks = Vec::with_capacity(specs.len());
-        for (i, spec) in specs.iter().enumerate() {
-            solver_tasks.extend(
-                spec.to_solver_tasks(&self.skeleton, &specs)
-                    .map_err(|e| e.within(&format!("tasks[{i}]")).to_string())?,
-            );
-        }
+        self.tasks = solver_tasks(&self.skeleton, &specs).map_err(|e| e.to_string())?;
         self.specs = specs;
-        self.tasks = solver_tasks;
         Ok(())
     }
 
@@ -307,14 +300,10 @@ impl PoseSolver {
 
 /// A limb by its H-Anim shorthand on `skeleton`.
 fn limb(skeleton: &Skeleton, name: &str) -> JsResult<Limb> {
-    let limb = LimbName::from_name(name).ok_or_else(|| {
-        format!("limb: unknown limb `{name}` (expected l_arm, r_arm, l_leg or r_leg)")
-    })?;
-    let mut joints = [0usize; 3];
-    for (slot, joint) in joints.iter_mut().zip(limb.joints()) {
-        *slot = stance_document::resolve_joint(skeleton, joint)
-            .ok_or_else(|| format!("limb: the skeleton lacks the H-Anim joints of `{name}`"))?;
-    }
-    let names = joints.map(|j| skeleton.joints()[j].name.as_str());
-    Limb::from_names(skeleton, names).map_err(|e| format!("limb: {e}"))
+    LimbName::from_name(name)
+        .ok_or_else(|| {
+            format!("limb: unknown limb `{name}` (expected l_arm, r_arm, l_leg or r_leg)")
+        })?
+        .on(skeleton)
+        .map_err(|e| e.to_string())
 }
