@@ -5,7 +5,7 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use stance_ik::scenarios;
+use stance_hanim::scenarios;
 use stance_ik::{
     Iteration, Solver, SolverSettings, StepParams, StepWorkspace, prioritized_step,
     prioritized_step_nalgebra,

@@ -18,7 +18,7 @@ use std::collections::BTreeMap;
 
 use anyhow::{Context, Result, bail};
 use serde::Serialize;
-use stance_ik::scenarios;
+use stance_hanim::scenarios;
 use stance_ik::{Damping, Iteration, Posture, Skeleton, SolveStatus, Solver, SolverSettings, Task};
 
 #[derive(clap::Args, Debug)]

@@ -8,17 +8,7 @@ use crate::document::{
     CONTACT_HEIGHT, Document, DofValues, LimbName, PostureValues, TaskKindSpec, TaskSpec,
 };
 
-/// Finds `name` in the skeleton: the exact name first, then through the H-Anim aliases
-/// (`l_ankle` finds `l_talocrural` and the other way round).
-pub fn resolve_joint(skeleton: &Skeleton, name: &str) -> Option<usize> {
-    if let Some(j) = skeleton.joint_index(name) {
-        return Some(j);
-    }
-    let (_, def) = stance_hanim::joint_by_name(name)?;
-    std::iter::once(def.name)
-        .chain(def.aliases.iter().copied())
-        .find_map(|n| skeleton.joint_index(n))
-}
+pub use stance_hanim::resolve_joint;
 
 fn joint_at(skeleton: &Skeleton, name: &str, at: &str) -> Result<usize, DocumentError> {
     resolve_joint(skeleton, name)
@@ -98,7 +88,7 @@ impl TaskSpec {
         };
         let mut out = [0usize; 3];
         match (limb, joints) {
-            (Some(l), None) => out = l.joint_indices(skeleton)?,
+            (Some(l), None) => out = limb_joint_indices(*l, skeleton)?,
             (None, Some(names)) => {
                 for (k, name) in names.iter().enumerate() {
                     out[k] = joint_at(skeleton, name, &format!("joints[{k}]"))?;
@@ -396,28 +386,17 @@ pub fn solver_tasks(skeleton: &Skeleton, specs: &[TaskSpec]) -> Result<Vec<Task>
     Ok(out)
 }
 
-impl LimbName {
-    /// The limb's (upper, middle, end) joint indices on `skeleton`, through the H-Anim aliases.
-    pub fn joint_indices(self, skeleton: &Skeleton) -> Result<[usize; 3], DocumentError> {
-        let mut out = [0usize; 3];
-        for (slot, name) in out.iter_mut().zip(self.joints()) {
-            *slot = resolve_joint(skeleton, name).ok_or_else(|| {
-                DocumentError::field(
-                    "limb",
-                    format!("the skeleton lacks the H-Anim joints of `{}`", self.name()),
-                )
-            })?;
-        }
-        Ok(out)
-    }
-
-    /// The closed-form limb on `skeleton`.
-    pub fn on(self, skeleton: &Skeleton) -> Result<Limb, DocumentError> {
-        let names = self
-            .joint_indices(skeleton)?
-            .map(|j| skeleton.joints()[j].name.as_str());
-        Limb::from_names(skeleton, names).map_err(|e| DocumentError::field("limb", e.to_string()))
-    }
+/// The limb's (upper, middle, end) joint indices on `skeleton`, or an error at `limb`.
+pub fn limb_joint_indices(
+    limb: LimbName,
+    skeleton: &Skeleton,
+) -> Result<[usize; 3], DocumentError> {
+    limb.joint_indices(skeleton).ok_or_else(|| {
+        DocumentError::field(
+            "limb",
+            format!("the skeleton lacks the H-Anim joints of `{}`", limb.name()),
+        )
+    })
 }
 
 impl Document {

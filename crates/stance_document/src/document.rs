@@ -128,53 +128,8 @@ impl PostureValues {
     }
 }
 
-/// Which limb an analytic limb task drives.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum LimbName {
-    /// `l_shoulder`, `l_elbow`, `l_radiocarpal`.
-    LeftArm,
-    /// `r_shoulder`, `r_elbow`, `r_radiocarpal`.
-    RightArm,
-    /// `l_hip`, `l_knee`, `l_talocrural`.
-    LeftLeg,
-    /// `r_hip`, `r_knee`, `r_talocrural`.
-    RightLeg,
-}
-
-impl LimbName {
-    /// All four, in link order.
-    pub const ALL: [LimbName; 4] = [
-        LimbName::LeftArm,
-        LimbName::RightArm,
-        LimbName::LeftLeg,
-        LimbName::RightLeg,
-    ];
-
-    /// `"l_arm"`, `"r_arm"`, `"l_leg"`, `"r_leg"`.
-    pub fn name(self) -> &'static str {
-        match self {
-            LimbName::LeftArm => "l_arm",
-            LimbName::RightArm => "r_arm",
-            LimbName::LeftLeg => "l_leg",
-            LimbName::RightLeg => "r_leg",
-        }
-    }
-
-    /// Parses `"l_arm"`...
-    pub fn from_name(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|l| l.name() == name)
-    }
-
-    /// The H-Anim names of the root, middle and end joints of the limb.
-    pub fn joints(self) -> [&'static str; 3] {
-        match self {
-            LimbName::LeftArm => ["l_shoulder", "l_elbow", "l_radiocarpal"],
-            LimbName::RightArm => ["r_shoulder", "r_elbow", "r_radiocarpal"],
-            LimbName::LeftLeg => ["l_hip", "l_knee", "l_talocrural"],
-            LimbName::RightLeg => ["r_hip", "r_knee", "r_talocrural"],
-        }
-    }
-}
+/// Which limb an analytic limb task drives (H-Anim words, kept in `stance_hanim`).
+pub use stance_hanim::LimbName;
 
 /// Default `margin` of a balance task (m).
 pub const DEFAULT_BALANCE_MARGIN: f64 = 0.02;

@@ -18,7 +18,9 @@ pub mod link;
 mod problem;
 mod range_coder;
 
-pub use convert::{LimbStartSpec, pinned_contacts, resolve_joint, solver_tasks};
+pub use convert::{
+    LimbStartSpec, limb_joint_indices, pinned_contacts, resolve_joint, solver_tasks,
+};
 pub use document::{
     AvatarReference, CONTACT_HEIGHT, DEFAULT_BALANCE_MARGIN, DOCUMENT_VERSION, Document, DofValues,
     LimbName, PostureValues, TaskKindSpec, TaskSpec,

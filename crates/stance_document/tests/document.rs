@@ -13,7 +13,7 @@ use common::*;
 use stance_document::{
     AvatarReference, Document, DocumentError, PostureValues, TaskKindSpec, TaskSpec,
 };
-use stance_ik::scenarios::loa2_body40;
+use stance_hanim::scenarios::loa2_body40;
 use stance_ik::{Dof, Posture, TaskKind};
 
 /// The `tasks` array of the example in docs/problem-format.md.

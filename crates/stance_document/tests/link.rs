@@ -217,8 +217,8 @@ fn report_link_lengths_and_the_general_compressors() {
     // Not a target: lengths for other value spreads, and what deflate would give.
     let mut r = rng(11);
     // The paper's Table 1 body (~40 DOF) in a relaxed standing posture, with its 6 tasks.
-    let body = stance_ik::scenarios::loa2_body40().unwrap();
-    let standing = stance_ik::scenarios::standing_posture(&body);
+    let body = stance_hanim::scenarios::loa2_body40().unwrap();
+    let standing = stance_hanim::scenarios::standing_posture(&body);
     let table1 = Document {
         avatar: AvatarReference::Default,
         posture: PostureValues::from_posture(&body, &standing),

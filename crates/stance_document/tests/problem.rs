@@ -10,7 +10,7 @@ wasm_bindgen_test::wasm_bindgen_test_configure!(run_in_browser);
 
 use glam::{DQuat, DVec3};
 use stance_document::{Document, Problem};
-use stance_ik::scenarios::loa2_body40;
+use stance_hanim::scenarios::loa2_body40;
 use stance_ik::{Frames, Skeleton, TaskKind};
 
 /// The LOA2 body as a problem file's `skeleton` (names, parents, offsets, DOF, limits).

@@ -6,13 +6,15 @@ use glam::{DQuat, DVec3};
 use stance_document::{
     DEFAULT_BALANCE_MARGIN, Document, LimbName, PostureValues, TaskKindSpec, TaskSpec,
 };
-use stance_hanim::{HumanoidSkeleton, LevelOfArticulation, SkeletonOptions, default_skeleton};
+use stance_hanim::{
+    HumanoidSkeleton, LevelOfArticulation, SkeletonOptions, default_skeleton, mirror_name,
+    readable_name,
+};
+use stance_ik::conflict::Unmet;
 use stance_ik::{
     Axes, Clock, Frames, Limb, LimbGoal, Posture, Skeleton, SolveReport, SolveStatus, Solver,
     SolverSettings, SwivelInterval, Task,
 };
-
-mod conflict;
 
 /// The temporary lowest-priority task of grab-and-pull: a point of a segment, pulled along.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -531,8 +533,8 @@ impl PosingSession {
         let skeleton = self.skeleton();
         let mut values = vec![0.0; skeleton.dof_count()];
         for (index, joint) in skeleton.joints().iter().enumerate() {
-            let mirror_name = mirror_joint_name(&joint.name);
-            let source = skeleton.joint_index(&mirror_name).unwrap_or(index);
+            let other_name = mirror_name(&joint.name);
+            let source = skeleton.joint_index(&other_name).unwrap_or(index);
             let source_joint = &skeleton.joints()[source];
             for (dof_position, dof) in joint.dofs.iter().enumerate() {
                 let Some(source_position) = source_joint.dofs.iter().position(|d| d == dof) else {
@@ -676,8 +678,8 @@ impl PosingSession {
             .filter_map(|(other, _)| Some((other, other.to_task(skeleton, &self.tasks).ok()?)))
             .collect();
         let solver_tasks: Vec<Task> = higher.iter().map(|(_, task)| task.clone()).collect();
-        match conflict::diagnose(skeleton, &self.posture, &task, &solver_tasks) {
-            conflict::Unmet::Conflicts(indices) => {
+        match stance_ik::conflict::diagnose(skeleton, &self.posture, &task, &solver_tasks) {
+            Unmet::Conflicts(indices) => {
                 let names: Vec<String> = indices
                     .iter()
                     .filter_map(|&index| higher.get(index))
@@ -685,8 +687,8 @@ impl PosingSession {
                     .collect();
                 format!("conflicts with {}", names.join(", "))
             }
-            conflict::Unmet::JointLimits => "limited by joint limits".to_owned(),
-            conflict::Unmet::OutOfReach => "out of reach".to_owned(),
+            Unmet::JointLimits => "limited by joint limits".to_owned(),
+            Unmet::OutOfReach => "out of reach".to_owned(),
         }
     }
 }
@@ -733,13 +735,13 @@ pub fn mirror_task(task: &TaskSpec) -> TaskSpec {
             axes,
             target,
         } => TaskKindSpec::Position {
-            joint: mirror_joint_name(joint),
+            joint: mirror_name(joint),
             point: reflect(*point),
             axes: *axes,
             target: reflect(*target),
         },
         TaskKindSpec::Orientation { joint, target } => TaskKindSpec::Orientation {
-            joint: mirror_joint_name(joint),
+            joint: mirror_name(joint),
             target: reflect_rotation(*target),
         },
         TaskKindSpec::Gaze {
@@ -748,7 +750,7 @@ pub fn mirror_task(task: &TaskSpec) -> TaskSpec {
             point,
             target,
         } => TaskKindSpec::Gaze {
-            joint: mirror_joint_name(joint),
+            joint: mirror_name(joint),
             axis: reflect(*axis),
             point: reflect(*point),
             target: reflect(*target),
@@ -758,12 +760,12 @@ pub fn mirror_task(task: &TaskSpec) -> TaskSpec {
             axis,
             target,
         } => TaskKindSpec::Direction {
-            joint: mirror_joint_name(joint),
+            joint: mirror_name(joint),
             axis: reflect(*axis),
             target: reflect(*target),
         },
         TaskKindSpec::Balance { support, margin } => TaskKindSpec::Balance {
-            support: support.as_deref().map(mirror_joint_names),
+            support: support.as_deref().map(mirror_names),
             margin: *margin,
         },
         TaskKindSpec::Com { axes, target } => TaskKindSpec::Com {
@@ -771,7 +773,7 @@ pub fn mirror_task(task: &TaskSpec) -> TaskSpec {
             target: reflect(*target),
         },
         TaskKindSpec::Posture { joints, reference } => TaskKindSpec::Posture {
-            joints: joints.as_deref().map(mirror_joint_names),
+            joints: joints.as_deref().map(mirror_names),
             reference: reference.as_ref().map(mirror_posture_values),
         },
         TaskKindSpec::Limb {
@@ -784,7 +786,7 @@ pub fn mirror_task(task: &TaskSpec) -> TaskSpec {
             limb: limb.map(mirror_limb),
             joints: joints
                 .as_ref()
-                .map(|joints| joints.clone().map(|joint| mirror_joint_name(&joint))),
+                .map(|joints| joints.clone().map(|joint| mirror_name(&joint))),
             target: reflect(*target),
             swivel: swivel.map(|angle| -angle),
             orientation: orientation.map(reflect_rotation),
@@ -797,7 +799,7 @@ pub fn mirror_task(task: &TaskSpec) -> TaskSpec {
 fn mirror_posture_values(values: &PostureValues) -> PostureValues {
     let mut mirrored = PostureValues::new();
     for (joint, dofs) in &values.joints {
-        let name = mirror_joint_name(joint);
+        let name = mirror_name(joint);
         for (dof, value) in dofs.iter() {
             let sign = match dof.name() {
                 "tx" | "ry" | "rz" => -1.0,
@@ -821,50 +823,8 @@ pub fn comfort_task() -> TaskSpec {
 }
 
 /// Every name of `joints` on the other side.
-fn mirror_joint_names(joints: &[String]) -> Vec<String> {
-    joints
-        .iter()
-        .map(|joint| mirror_joint_name(joint))
-        .collect()
-}
-
-/// The other side's joint name (`l_` <-> `r_`); central joints keep theirs.
-pub fn mirror_joint_name(name: &str) -> String {
-    if let Some(rest) = name.strip_prefix("l_") {
-        format!("r_{rest}")
-    } else if let Some(rest) = name.strip_prefix("r_") {
-        format!("l_{rest}")
-    } else {
-        name.to_owned()
-    }
-}
-
-/// A joint name for people: `l_talocrural` -> "left talocrural (ankle)".
-pub fn describe_joint(name: &str) -> String {
-    let (side, rest) = if let Some(rest) = name.strip_prefix("l_") {
-        ("left ", rest)
-    } else if let Some(rest) = name.strip_prefix("r_") {
-        ("right ", rest)
-    } else {
-        ("", name)
-    };
-    let common = match rest {
-        "talocrural" => Some("ankle"),
-        "radiocarpal" => Some("wrist"),
-        "sternoclavicular" => Some("collarbone"),
-        "acromioclavicular" => Some("shoulder blade"),
-        "skullbase" => Some("head"),
-        "sacroiliac" => Some("pelvis"),
-        "humanoid_root" => Some("body root"),
-        "metatarsophalangeal_2" => Some("toes"),
-        "tarsometatarsal_2" => Some("midfoot"),
-        _ => None,
-    };
-    let words = rest.replace('_', " ");
-    match common {
-        Some(common) => format!("{side}{common}"),
-        None => format!("{side}{words}"),
-    }
+fn mirror_names(joints: &[String]) -> Vec<String> {
+    joints.iter().map(|joint| mirror_name(joint)).collect()
 }
 
 /// A task in words, as the panels and messages name it.
@@ -873,14 +833,14 @@ pub fn describe_task(task: &TaskSpec) -> String {
         TaskKindSpec::Position { joint, axes, .. } => {
             let axes = axes.to_letters();
             if axes == "xyz" {
-                format!("{} position", describe_joint(joint))
+                format!("{} position", readable_name(joint))
             } else {
-                format!("{} position ({axes})", describe_joint(joint))
+                format!("{} position ({axes})", readable_name(joint))
             }
         }
-        TaskKindSpec::Orientation { joint, .. } => format!("{} orientation", describe_joint(joint)),
-        TaskKindSpec::Gaze { joint, .. } => format!("{} gaze", describe_joint(joint)),
-        TaskKindSpec::Direction { joint, .. } => format!("{} direction", describe_joint(joint)),
+        TaskKindSpec::Orientation { joint, .. } => format!("{} orientation", readable_name(joint)),
+        TaskKindSpec::Gaze { joint, .. } => format!("{} gaze", readable_name(joint)),
+        TaskKindSpec::Direction { joint, .. } => format!("{} direction", readable_name(joint)),
         TaskKindSpec::Balance { support: None, .. } => {
             "balance (centre of mass over the pinned feet)".to_owned()
         }
@@ -891,7 +851,7 @@ pub fn describe_task(task: &TaskSpec) -> String {
             "balance (centre of mass over {})",
             joints
                 .iter()
-                .map(|joint| describe_joint(joint))
+                .map(|joint| readable_name(joint))
                 .collect::<Vec<_>>()
                 .join(", ")
         ),
@@ -905,7 +865,7 @@ pub fn describe_task(task: &TaskSpec) -> String {
         TaskKindSpec::Posture { .. } => "comfort (toward the rest posture)".to_owned(),
         TaskKindSpec::Limb { limb, joints, .. } => match (limb, joints) {
             (Some(limb), _) => format!("{} reach", limb.name().replace('_', " ")),
-            (None, Some(joints)) => format!("{} limb", describe_joint(&joints[2])),
+            (None, Some(joints)) => format!("{} limb", readable_name(&joints[2])),
             (None, None) => "limb".to_owned(),
         },
     }
@@ -1216,9 +1176,9 @@ mod tests {
 
     #[test]
     fn joints_are_described_in_words() {
-        assert_eq!(describe_joint("l_talocrural"), "left ankle");
-        assert_eq!(describe_joint("r_elbow"), "right elbow");
-        assert_eq!(mirror_joint_name("l_hip"), "r_hip");
-        assert_eq!(mirror_joint_name("vl5"), "vl5");
+        assert_eq!(readable_name("l_talocrural"), "left ankle");
+        assert_eq!(readable_name("r_elbow"), "right elbow");
+        assert_eq!(mirror_name("l_hip"), "r_hip");
+        assert_eq!(mirror_name("vl5"), "vl5");
     }
 }

@@ -327,7 +327,7 @@ pub enum SensorAssignment {
 impl SensorAssignment {
     pub fn label(&self) -> String {
         match self {
-            SensorAssignment::Joint(name) => crate::posing::describe_joint(name),
+            SensorAssignment::Joint(name) => stance_hanim::readable_name(name),
             SensorAssignment::Spine => "spine (upper back)".to_owned(),
         }
     }

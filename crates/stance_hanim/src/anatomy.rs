@@ -26,29 +26,7 @@ use glam::DVec3;
 use stance_ik::Dof::{self, Rx, Ry, Rz, Tx, Ty, Tz};
 use stance_ik::{Frames, Posture, Skeleton};
 
-/// Which side of the body a joint is on.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Side {
-    /// Name starts with `l_`: the body's left, +X.
-    Left,
-    /// Name starts with `r_`: the body's right, -X.
-    Right,
-    /// On the mid-sagittal plane.
-    Centre,
-}
-
-impl Side {
-    /// The side of an H-Anim joint name.
-    pub fn of(name: &str) -> Side {
-        if name.starts_with("l_") {
-            Side::Left
-        } else if name.starts_with("r_") {
-            Side::Right
-        } else {
-            Side::Centre
-        }
-    }
-}
+pub use crate::names::Side;
 
 /// Functional class of an H-Anim joint; decides its DOF, ranges and mass share.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -98,10 +76,7 @@ pub enum JointClass {
 impl JointClass {
     /// The class of an H-Anim joint name (any LOA).
     pub fn of(name: &str) -> JointClass {
-        let bare = name
-            .strip_prefix("l_")
-            .or_else(|| name.strip_prefix("r_"))
-            .unwrap_or(name);
+        let (_, bare) = Side::split(name);
         match bare {
             "humanoid_root" => JointClass::Root,
             "sacroiliac" => JointClass::Pelvis,

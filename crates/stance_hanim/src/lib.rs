@@ -11,11 +11,14 @@ pub mod anatomy;
 pub mod builder;
 mod joint_table;
 pub mod mapping;
+pub mod names;
+pub mod scenarios;
 
 pub use builder::{
     BuildError, BuiltJoint, HumanoidSkeleton, SkeletonOptions, build_skeleton, default_skeleton,
 };
 pub use mapping::{JointMatch, Mapping, MappingError, MatchMethod, SourceJoint, vrm_bone_to_hanim};
+pub use names::{LimbName, Side, mirror_name, readable_name, resolve_joint};
 
 use glam::DVec3;
 
@@ -97,14 +100,7 @@ pub fn default_centre(definition: &JointDefinition) -> DVec3 {
     if let Some(c) = definition.default_centre {
         return DVec3::from_array(c);
     }
-    let partner = if let Some(rest) = definition.name.strip_prefix("l_") {
-        Some(format!("r_{rest}"))
-    } else {
-        definition
-            .name
-            .strip_prefix("r_")
-            .map(|rest| format!("l_{rest}"))
-    };
+    let partner = (Side::of(definition.name) != Side::Centre).then(|| mirror_name(definition.name));
     partner
         .and_then(|p| joint_by_name(&p))
         .and_then(|(_, d)| d.default_centre)

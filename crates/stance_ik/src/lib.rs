@@ -21,16 +21,16 @@
 //!   of a stalled [`Solver`] from the analytic solution (`Solver::limbs`);
 //!   [`nearest_rotation_vector`]: the rotation of a joint's DOF (within its limits) nearest
 //!   to a wanted rotation.
-//! - [`scenarios`]: the benchmark / test bodies built from the H-Anim default joint centres
-//!   (to move to `stance_hanim` once it exists).
+//! - [`conflict`]: why an unmet task is not met (which higher tasks stand in its way, the
+//!   joint limits, or a goal out of reach), from the linearised tasks.
 
+pub mod conflict;
 mod error;
 mod joint_rotation;
 mod kernel;
 mod limb;
 mod posture;
 mod priority;
-pub mod scenarios;
 mod skeleton;
 mod solver;
 mod task;

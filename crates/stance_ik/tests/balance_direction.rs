@@ -11,7 +11,7 @@ use wasm_bindgen_test::wasm_bindgen_test as test;
 wasm_bindgen_test::wasm_bindgen_test_configure!(run_in_browser);
 
 use glam::{DQuat, DVec3};
-use stance_ik::scenarios::{humanoid50, standing_posture};
+use stance_hanim::scenarios::{humanoid50, standing_posture};
 use stance_ik::{Effector, Frames, Posture, Skeleton, Solver, Task};
 
 /// Sole corners of a foot, relative to its ankle (world axes at the standing posture): 4 cm

@@ -20,7 +20,7 @@ use common::*;
 use glam::DVec3;
 use rand::RngExt;
 use rand::rngs::StdRng;
-use stance_ik::scenarios::{humanoid50, standing_posture};
+use stance_hanim::scenarios::{humanoid50, standing_posture};
 use stance_ik::{Axes, Frames, Posture, Skeleton, Solver, SolverSettings, Task, TaskKind};
 
 /// Cases per suite: the 1,000 natively (`STANCE_CASES` overrides); fewer in the

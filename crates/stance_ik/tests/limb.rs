@@ -19,7 +19,7 @@ use common::*;
 use glam::{DQuat, DVec3};
 use rand::RngExt;
 use rand::rngs::StdRng;
-use stance_ik::scenarios;
+use stance_hanim::scenarios;
 use stance_ik::{
     Dof, Frames, IkError, JointDef, Limb, LimbBase, LimbGoal, Posture, Skeleton, SolveStatus,
     Solver, Task, rotation_angle,

@@ -10,7 +10,7 @@ use wasm_bindgen_test::wasm_bindgen_test as test;
 wasm_bindgen_test::wasm_bindgen_test_configure!(run_in_browser);
 
 use glam::DVec3;
-use stance_ik::scenarios::{self, Table1Goals};
+use stance_hanim::scenarios::{self, Table1Goals};
 use stance_ik::{Frames, SolveStatus, Solver, SolverSettings, Task};
 
 fn solve_table1(goals: Table1Goals) -> (stance_ik::SolveReport, Vec<f64>, Vec<Task>) {

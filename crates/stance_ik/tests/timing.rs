@@ -10,7 +10,7 @@ use wasm_bindgen_test::wasm_bindgen_test as test;
 #[cfg(target_arch = "wasm32")]
 wasm_bindgen_test::wasm_bindgen_test_configure!(run_in_browser);
 
-use stance_ik::scenarios;
+use stance_hanim::scenarios;
 use stance_ik::{Iteration, Solver, SolverSettings};
 
 #[cfg(not(target_arch = "wasm32"))]

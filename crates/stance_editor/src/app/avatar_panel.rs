@@ -15,7 +15,8 @@ use stance_ik::{Posture, Skeleton};
 
 use super::StanceApp;
 use crate::avatar::LoadedAvatar;
-use crate::posing::{PosingSession, describe_joint, describe_task, mirror_joint_name};
+use crate::posing::{PosingSession, describe_task};
+use stance_hanim::{mirror_name, readable_name};
 
 /// Matches less sure than this are guesses the user should check (name patterns, geometry).
 const LOW_CONFIDENCE: f32 = 0.8;
@@ -621,7 +622,7 @@ fn suggestions(
 ) -> Vec<&'static str> {
     const MOST: usize = 8;
     let mirrored = current
-        .and_then(|hanim| joint_by_name(&mirror_joint_name(hanim)))
+        .and_then(|hanim| joint_by_name(&mirror_name(hanim)))
         .map(|(_, joint)| joint.name);
     let mut out: Vec<&'static str> = Vec::new();
     for hanim in needed
@@ -639,7 +640,7 @@ fn suggestions(
 
 /// A combo box entry: the H-Anim name and the joint in words (`l_elbow · left elbow`).
 fn joint_item_text(name: &str) -> String {
-    format!("{name} · {}", describe_joint(name))
+    format!("{name} · {}", readable_name(name))
 }
 
 fn method_text(method: MatchMethod) -> &'static str {

@@ -9,7 +9,6 @@ use stance_document::{LimbName, TaskKindSpec};
 use stance_ik::SwivelInterval;
 
 use super::StanceApp;
-use super::panels::limb_of;
 use crate::history::EditKind;
 
 /// How close (points) the pointer must be to a handle to take it.
@@ -157,7 +156,7 @@ impl StanceApp {
     /// The swivel handle of the selected joint's arm or leg (none for a straight limb).
     pub(super) fn swivel_handle(&self) -> Option<SwivelHandle> {
         let joint = self.session.skeleton().joints().get(self.selected_joint?)?;
-        let limb = limb_of(&joint.name)?;
+        let limb = LimbName::of_joint(&joint.name)?;
         let [upper, middle, end] = limb.joints().map(|name| self.session.joint_position(name));
         let (upper, middle_world, end) = (upper?, middle?, end?);
         let axis_world = (end - upper).normalize_or_zero();

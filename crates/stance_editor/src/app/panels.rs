@@ -8,7 +8,8 @@ use stance_ik::Axes;
 
 use super::StanceApp;
 use crate::history::EditKind;
-use crate::posing::{MET_TOLERANCE, comfort_task, describe_joint, describe_task, joint_rotation};
+use crate::posing::{MET_TOLERANCE, comfort_task, describe_task, joint_rotation};
+use stance_hanim::readable_name;
 
 /// Colours of task states.
 const MET_COLOR: Color32 = Color32::from_rgb(90, 200, 120);
@@ -117,7 +118,7 @@ impl StanceApp {
         };
         let lower = skeleton.lower_limits().to_vec();
         let upper = skeleton.upper_limits().to_vec();
-        ui.label(RichText::new(describe_joint(&joint.name)).strong());
+        ui.label(RichText::new(readable_name(&joint.name)).strong());
         ui.label(RichText::new(&joint.name).small().weak());
         ui.horizontal(|ui| {
             if ui.button("Pin").on_hover_text("P").clicked() {
@@ -177,7 +178,7 @@ impl StanceApp {
             self.record(EditKind::Joint(dof));
             self.session.set_dof(dof, value);
         }
-        if let Some(limb) = limb_of(&joint.name) {
+        if let Some(limb) = LimbName::of_joint(&joint.name) {
             self.swivel_section(ui, limb);
         }
     }
@@ -436,7 +437,7 @@ impl StanceApp {
         let selected = self.selected_joint;
         let selected_name = selected
             .and_then(|joint| self.session.skeleton().joints().get(joint))
-            .map(|joint| describe_joint(&joint.name));
+            .map(|joint| readable_name(&joint.name));
         let label = |what: &str| match &selected_name {
             Some(name) => format!("{what} of the {name}"),
             None => format!("{what} (select a body part first)"),
@@ -633,26 +634,6 @@ impl StanceApp {
         let tasks = self.session.table1_example();
         self.commit_tasks(EditKind::Command, tasks);
         self.inform("Table 1 of the paper: level 1 holds the left foot, the gaze and the right hand; balance is level 2; the left hand on the bar level 3.");
-    }
-}
-
-/// The limb a joint belongs to (H-Anim names), for the swivel handle.
-pub(super) fn limb_of(joint: &str) -> Option<LimbName> {
-    let (side_left, rest) = if let Some(rest) = joint.strip_prefix("l_") {
-        (true, rest)
-    } else if let Some(rest) = joint.strip_prefix("r_") {
-        (false, rest)
-    } else {
-        return None;
-    };
-    let arm = matches!(rest, "shoulder" | "elbow" | "radiocarpal");
-    let leg = matches!(rest, "hip" | "knee" | "talocrural");
-    match (side_left, arm, leg) {
-        (true, true, _) => Some(LimbName::LeftArm),
-        (false, true, _) => Some(LimbName::RightArm),
-        (true, _, true) => Some(LimbName::LeftLeg),
-        (false, _, true) => Some(LimbName::RightLeg),
-        _ => None,
     }
 }
 
@@ -895,7 +876,7 @@ fn kind_fields(
                 None => "the parts pinned on the floor".to_owned(),
                 Some(joints) => joints
                     .iter()
-                    .map(|joint| describe_joint(joint))
+                    .map(|joint| readable_name(joint))
                     .collect::<Vec<_>>()
                     .join(", "),
             });
@@ -928,13 +909,13 @@ fn joint_row(ui: &mut egui::Ui, index: usize, joint: &mut String, joint_names: &
     let label = ui.label("joint");
     let mut changed = false;
     let response = egui::ComboBox::from_id_salt(("task_joint", index))
-        .selected_text(describe_joint(joint))
+        .selected_text(readable_name(joint))
         .height(320.0)
         .show_ui(ui, |ui| {
             for name in joint_names {
                 let selected = name == joint;
                 if ui
-                    .selectable_label(selected, describe_joint(name))
+                    .selectable_label(selected, readable_name(name))
                     .on_hover_text(name)
                     .clicked()
                     && !selected
@@ -958,7 +939,7 @@ fn limb_picker(
 ) -> bool {
     let current = match (limb.as_ref(), joints.as_ref()) {
         (Some(limb), _) => limb.name().replace('_', " "),
-        (None, Some(joints)) => describe_joint(&joints[2]),
+        (None, Some(joints)) => readable_name(&joints[2]),
         (None, None) => "limb".to_owned(),
     };
     let mut changed = false;

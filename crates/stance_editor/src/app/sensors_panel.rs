@@ -9,11 +9,11 @@ use stance_mocap::ascii::ComponentOrder;
 use stance_mocap::fob::FobMode;
 
 use super::StanceApp;
-use crate::posing::describe_joint;
 use crate::sensors::{
     AssignmentPreset, DeviceFrame, DeviceKind, SENSOR_SETTINGS_KEY, SensorAssignment, SensorHub,
     SensorLink, SensorSettings,
 };
+use stance_hanim::readable_name;
 
 /// Baud rates offered first (any other can be typed).
 const BAUD_RATES: [u32; 6] = [9_600, 19_200, 38_400, 57_600, 115_200, 230_400];
@@ -386,7 +386,7 @@ impl StanceApp {
                             }
                             for segment in &segments {
                                 let label = match segment {
-                                    SensorAssignment::Joint(name) => describe_joint(name),
+                                    SensorAssignment::Joint(name) => readable_name(name),
                                     SensorAssignment::Spine => segment.label(),
                                 };
                                 if ui

@@ -11,7 +11,9 @@
 //! possible to begin with, or nothing above takes it away, the goal is out of reach (or the
 //! joint limits stop the task).
 
-use stance_ik::{Posture, Skeleton, Solver, Task};
+use nalgebra::{DMatrix, DVector};
+
+use crate::{Posture, Skeleton, Solver, Task};
 
 /// A higher task is named when holding it takes away at least this fraction of the progress
 /// the unmet task could make.
@@ -28,7 +30,7 @@ const LIMITS_TAKE: f64 = 0.5;
 
 /// Why an unmet task is not met.
 #[derive(Debug, Clone, PartialEq)]
-pub(crate) enum Unmet {
+pub enum Unmet {
     /// It gave way to these higher tasks (indices into the list given to [`diagnose`]).
     Conflicts(Vec<usize>),
     /// DOF of its chain sit at their limits, in the way.
@@ -37,10 +39,10 @@ pub(crate) enum Unmet {
     OutOfReach,
 }
 
-/// One task linearised on its own: the rows of its Jacobian and its desired change.
+/// One task linearised on its own: its Jacobian (`m x N`) and its desired change.
 struct Linear {
-    rows: Vec<Vec<f64>>,
-    desired: Vec<f64>,
+    rows: DMatrix<f64>,
+    desired: DVector<f64>,
     support: Vec<usize>,
 }
 
@@ -54,143 +56,91 @@ fn linearise(skeleton: &Skeleton, posture: &Posture, task: &Task) -> Option<Line
         .linear_systems(skeleton, std::slice::from_ref(&single), posture)
         .ok()?;
     let system = systems.into_iter().next()?;
-    let rows = (0..system.jacobian_t.ncols())
-        .map(|row| system.jacobian_t.column(row).iter().copied().collect())
-        .collect();
     Some(Linear {
-        rows,
-        desired: system.dx.iter().copied().collect(),
+        rows: system.jacobian_t.transpose(),
+        desired: system.dx,
         support,
     })
 }
 
-fn norm(values: &[f64]) -> f64 {
-    values.iter().map(|v| v * v).sum::<f64>().sqrt()
+/// `gram x = b` for a symmetric positive definite `gram` (Cholesky; LU when rounding makes it
+/// indefinite). `None` when singular or not finite.
+fn solve_gram(gram: DMatrix<f64>, b: &DMatrix<f64>) -> Option<DMatrix<f64>> {
+    let x = match gram.clone().cholesky() {
+        Some(cholesky) => cholesky.solve(b),
+        None => gram.lu().solve(b)?,
+    };
+    x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
-/// Solves the small dense system `a x = b` (Gaussian elimination with partial pivoting).
-fn solve_small(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
-    let n = b.len();
-    for column in 0..n {
-        let pivot =
-            (column..n).max_by(|&i, &j| a[i][column].abs().total_cmp(&a[j][column].abs()))?;
-        if a[pivot][column].abs() < 1e-300 {
-            return None;
-        }
-        a.swap(column, pivot);
-        b.swap(column, pivot);
-        for row in column + 1..n {
-            let factor = a[row][column] / a[column][column];
-            for k in column..n {
-                a[row][k] -= factor * a[column][k];
-            }
-            b[row] -= factor * b[column];
-        }
+/// `rows rows^T + damping^2 I`.
+fn damped_gram(rows: &DMatrix<f64>) -> DMatrix<f64> {
+    let mut gram = rows * rows.transpose();
+    for i in 0..gram.nrows() {
+        gram[(i, i)] += DAMPING * DAMPING;
     }
-    let mut x = vec![0.0; n];
-    for row in (0..n).rev() {
-        let tail: f64 = (row + 1..n).map(|k| a[row][k] * x[k]).sum();
-        x[row] = (b[row] - tail) / a[row][row];
-    }
-    x.iter().all(|v| v.is_finite()).then_some(x)
+    gram
 }
 
 /// Damped least-squares motion `dq = S^2 J^T (J S^2 J^T + damping^2 I)^-1 e` over the DOF with
 /// a non-zero `scale` (S = diag(scale)).
-fn motion(linear: &Linear, scale: &[f64]) -> Option<Vec<f64>> {
-    let m = linear.rows.len();
-    let gram: Vec<Vec<f64>> = (0..m)
-        .map(|i| {
-            (0..m)
-                .map(|j| {
-                    let dot: f64 = linear.rows[i]
-                        .iter()
-                        .zip(&linear.rows[j])
-                        .zip(scale)
-                        .map(|((a, b), s)| a * b * s * s)
-                        .sum();
-                    if i == j { dot + DAMPING * DAMPING } else { dot }
-                })
-                .collect()
-        })
-        .collect();
-    let y = solve_small(gram, linear.desired.clone())?;
-    Some(
-        (0..scale.len())
-            .map(|dof| {
-                let s2 = scale[dof] * scale[dof];
-                if s2 == 0.0 {
-                    return 0.0;
-                }
-                s2 * (0..m).map(|i| linear.rows[i][dof] * y[i]).sum::<f64>()
-            })
-            .collect(),
-    )
+fn motion(linear: &Linear, scale: &[f64]) -> Option<DVector<f64>> {
+    let scaled_rows = scaled(&linear.rows, scale);
+    let y = solve_gram(
+        damped_gram(&scaled_rows),
+        &DMatrix::from_column_slice(linear.desired.len(), 1, linear.desired.as_slice()),
+    )?;
+    let mut dq = scaled_rows.transpose() * y.column(0);
+    for (value, s) in dq.iter_mut().zip(scale) {
+        *value *= s;
+    }
+    Some(dq)
 }
 
 /// The rows with each column `j` multiplied by `scale[j]`.
-fn scaled(rows: &[Vec<f64>], scale: &[f64]) -> Vec<Vec<f64>> {
-    rows.iter()
-        .map(|row| row.iter().zip(scale).map(|(a, s)| a * s).collect())
-        .collect()
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-/// `a b^T` for row lists.
-fn outer(a: &[Vec<f64>], b: &[Vec<f64>]) -> Vec<Vec<f64>> {
-    a.iter()
-        .map(|row_a| b.iter().map(|row_b| dot(row_a, row_b)).collect())
-        .collect()
+fn scaled(rows: &DMatrix<f64>, scale: &[f64]) -> DMatrix<f64> {
+    let mut out = rows.clone();
+    for (mut column, s) in out.column_iter_mut().zip(scale) {
+        column *= *s;
+    }
+    out
 }
 
 /// The fraction of `desired` that the damped least-squares motion along `rows` makes.
-fn achieved(rows: &[Vec<f64>], desired: &[f64], wanted: f64) -> f64 {
-    let mut gram = outer(rows, rows);
-    for (i, row) in gram.iter_mut().enumerate() {
-        row[i] += DAMPING * DAMPING;
-    }
-    let Some(y) = solve_small(gram, desired.to_vec()) else {
+fn achieved(rows: &DMatrix<f64>, desired: &DVector<f64>, wanted: f64) -> f64 {
+    let b = DMatrix::from_column_slice(desired.len(), 1, desired.as_slice());
+    let Some(y) = solve_gram(damped_gram(rows), &b) else {
         return 0.0;
     };
     // J J^T y = desired - damping^2 y.
-    let made: Vec<f64> = desired
-        .iter()
-        .zip(&y)
-        .map(|(d, y)| d - DAMPING * DAMPING * y)
-        .collect();
-    norm(&made) / wanted
+    let made = desired - y.column(0) * (DAMPING * DAMPING);
+    made.norm() / wanted
 }
 
 /// The rows restricted to motions that leave `constraint` unchanged:
 /// `A - A B^T (B B^T)^-1 B` (slightly regularised for rank-deficient `B`).
-fn without_moving(rows: &[Vec<f64>], constraint: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
-    let mut gram = outer(constraint, constraint);
-    let size = gram.iter().enumerate().map(|(i, row)| row[i]).sum::<f64>();
-    for (i, row) in gram.iter_mut().enumerate() {
-        row[i] += 1e-9 * size.max(1e-12);
+fn without_moving(rows: &DMatrix<f64>, constraint: &DMatrix<f64>) -> Option<DMatrix<f64>> {
+    let mut gram = constraint * constraint.transpose();
+    let size = gram.trace();
+    for i in 0..gram.nrows() {
+        gram[(i, i)] += 1e-9 * size.max(1e-12);
     }
-    let cross = outer(rows, constraint);
-    rows.iter()
-        .zip(&cross)
-        .map(|(row, cross_row)| {
-            // Coefficients c = (B B^T)^-1 B a for this row a.
-            let c = solve_small(gram.clone(), cross_row.clone())?;
-            Some(
-                (0..row.len())
-                    .map(|j| {
-                        row[j]
-                            - c.iter()
-                                .zip(constraint)
-                                .map(|(ci, b)| ci * b[j])
-                                .sum::<f64>()
-                    })
-                    .collect(),
-            )
-        })
-        .collect()
+    // C^T = (B B^T)^-1 B A^T.
+    let coefficients_t = solve_gram(gram, &(constraint * rows.transpose()))?;
+    Some(rows - coefficients_t.transpose() * constraint)
+}
+
+/// The rows of several linearised tasks, stacked.
+fn stacked<'a>(parts: impl Iterator<Item = &'a DMatrix<f64>>, columns: usize) -> DMatrix<f64> {
+    let parts: Vec<&DMatrix<f64>> = parts.collect();
+    let total = parts.iter().map(|part| part.nrows()).sum();
+    let mut out = DMatrix::zeros(total, columns);
+    let mut row = 0;
+    for part in parts {
+        out.rows_mut(row, part.nrows()).copy_from(part);
+        row += part.nrows();
+    }
+    out
 }
 
 /// Why `low` (unmet at `posture`) is not met, given the active higher-priority tasks.
@@ -199,16 +149,11 @@ fn without_moving(rows: &[Vec<f64>], constraint: &[Vec<f64>]) -> Option<Vec<Vec<
 /// takes away a good part of the progress the unmet task could make (`LOSS_RATIO`). Tasks that
 /// only block together (the feet and the balance holding the body where it stands) are not
 /// named: the goal is then out of reach from there.
-pub(crate) fn diagnose(
-    skeleton: &Skeleton,
-    posture: &Posture,
-    low: &Task,
-    higher: &[Task],
-) -> Unmet {
+pub fn diagnose(skeleton: &Skeleton, posture: &Posture, low: &Task, higher: &[Task]) -> Unmet {
     let Some(linear) = linearise(skeleton, posture, low) else {
         return Unmet::OutOfReach;
     };
-    let wanted = norm(&linear.desired);
+    let wanted = linear.desired.norm();
     if wanted <= 0.0 || !wanted.is_finite() {
         return Unmet::OutOfReach;
     }
@@ -226,7 +171,7 @@ pub(crate) fn diagnose(
     let body_moves_it = linear
         .support
         .iter()
-        .any(|&dof| !root[dof] && linear.rows.iter().any(|row| row[dof] != 0.0));
+        .any(|&dof| !root[dof] && linear.rows.column(dof).iter().any(|value| *value != 0.0));
     let mut scale: Vec<f64> = (0..n)
         .map(|dof| if root[dof] && body_moves_it { 0.0 } else { 1.0 })
         .collect();
@@ -238,7 +183,7 @@ pub(crate) fn diagnose(
     // DOF at a limit that the motion pushes further are out. Those at a limit that the motion
     // does not move away from cannot help to hold a higher task either (which way they would
     // have to go is not known): they are out of that test.
-    let free = motion(&linear, &scale).unwrap_or_else(|| vec![0.0; n]);
+    let free = motion(&linear, &scale).unwrap_or_else(|| DVector::zeros(n));
     let largest = free.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
     let values = posture.values();
     let (lower, upper) = (skeleton.lower_limits(), skeleton.upper_limits());
@@ -274,7 +219,7 @@ pub(crate) fn diagnose(
     let mut conflicts = Vec::new();
     if can >= MIN_PROGRESS {
         let own = scaled(&linear.rows, &holding_scale);
-        let others: Vec<(usize, Vec<Vec<f64>>)> = higher
+        let others: Vec<(usize, DMatrix<f64>)> = higher
             .iter()
             .enumerate()
             .filter(|(_, task)| !task.is_posture())
@@ -284,9 +229,9 @@ pub(crate) fn diagnose(
             })
             .collect();
         // What is left of the progress while these higher tasks hold.
-        let left_holding = |held: &mut dyn Iterator<Item = &Vec<Vec<f64>>>| {
-            let constraint: Vec<Vec<f64>> = held.flatten().cloned().collect();
-            if constraint.is_empty() {
+        let left_holding = |held: &mut dyn Iterator<Item = &DMatrix<f64>>| {
+            let constraint = stacked(held, n);
+            if constraint.nrows() == 0 {
                 return can;
             }
             without_moving(&own, &constraint)
@@ -322,5 +267,88 @@ pub(crate) fn diagnose(
         Unmet::JointLimits
     } else {
         Unmet::OutOfReach
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::*;
+    use crate::{Axes, Dof, Effector, JointDef, TaskKind};
+
+    /// A planar three-link arm on a fixed base: three hinges about Z, links of 0.3 m along X.
+    fn arm() -> Skeleton {
+        let hinge = |name: &str, parent: Option<&str>, x: f64| {
+            JointDef::new(name, parent, DVec3::new(x, 0.0, 0.0), &[Dof::Rz])
+        };
+        let defs = vec![
+            hinge("shoulder", None, 0.0),
+            hinge("elbow", Some("shoulder"), 0.3),
+            hinge("wrist", Some("elbow"), 0.3),
+            JointDef::new("tip", Some("wrist"), DVec3::new(0.3, 0.0, 0.0), &[]),
+        ];
+        let Ok(skeleton) = Skeleton::new(defs) else {
+            panic!("the arm builds");
+        };
+        skeleton
+    }
+
+    fn position(skeleton: &Skeleton, joint: &str, target: DVec3) -> Task {
+        let joint = skeleton.joint_index(joint).unwrap_or(0);
+        Task::new(TaskKind::Position {
+            effector: Effector {
+                joint,
+                point: DVec3::ZERO,
+            },
+            axes: Axes::XYZ,
+            target,
+        })
+    }
+
+    #[test]
+    fn a_higher_task_holding_the_same_chain_is_named() {
+        let skeleton = arm();
+        let posture = Posture::rest(&skeleton);
+        // The elbow held where it is; the tip wants to go up: only the wrist hinge is left,
+        // which moves the tip on a circle of 0.3 m: part of the way, not all.
+        let hold_elbow = position(&skeleton, "wrist", DVec3::new(0.6, 0.0, 0.0));
+        let unrelated = position(&skeleton, "elbow", DVec3::new(0.3, 0.0, 0.0));
+        let tip_up = position(&skeleton, "tip", DVec3::new(0.5, 0.5, 0.0));
+        let unmet = diagnose(&skeleton, &posture, &tip_up, &[hold_elbow.clone()]);
+        assert_eq!(unmet, Unmet::Conflicts(vec![0]));
+        // Holding only the elbow's position still leaves the elbow hinge turning: the wrist
+        // can go up, and the tip with it; nothing is named then.
+        let unmet = diagnose(&skeleton, &posture, &tip_up, &[unrelated]);
+        assert_eq!(unmet, Unmet::OutOfReach);
+    }
+
+    #[test]
+    fn a_stretched_arm_cannot_reach_further_out() {
+        let skeleton = arm();
+        let posture = Posture::rest(&skeleton);
+        let far = position(&skeleton, "tip", DVec3::new(1.5, 0.0, 0.0));
+        assert_eq!(diagnose(&skeleton, &posture, &far, &[]), Unmet::OutOfReach);
+    }
+
+    #[test]
+    fn a_hinge_at_its_limit_is_the_reason() {
+        let defs = vec![
+            JointDef::new("shoulder", None, DVec3::ZERO, &[Dof::Rz]).with_limit(Dof::Rz, 0.0, 0.0),
+            JointDef::new(
+                "elbow",
+                Some("shoulder"),
+                DVec3::new(0.3, 0.0, 0.0),
+                &[Dof::Rz],
+            )
+            .with_limit(Dof::Rz, 0.0, 0.0),
+            JointDef::new("tip", Some("elbow"), DVec3::new(0.3, 0.0, 0.0), &[]),
+        ];
+        let Ok(skeleton) = Skeleton::new(defs) else {
+            panic!("the arm builds");
+        };
+        let posture = Posture::rest(&skeleton);
+        let up = position(&skeleton, "tip", DVec3::new(0.5, 0.3, 0.0));
+        assert_eq!(diagnose(&skeleton, &posture, &up, &[]), Unmet::JointLimits);
     }
 }

@@ -1,121 +1,27 @@
 //! Benchmark and test scenarios S1..S6 on bodies built from the H-Anim default joint centres.
 //!
-//! Kept in one self-contained module so that it can move to `stance_hanim` (which will own
-//! the H-Anim vocabulary) without touching the solver.
-//!
-//! Source of the numbers: H-Anim 2.0 (ISO/IEC 19774-1:2019) default joint centres as
-//! published in the H-Anim 2.0 joints table of the Web3D X3D Unified Object Model 4.0
-//! (`hanimJointNameValues`, attribute `default`), the table that
-//! `crates/stance_hanim/data/hanim_joints.csv` holds (columns `default_x/y/z`); parents follow
-//! its `parent_loa2` column (nearest ancestor present in the body).
+//! The joint centres are the H-Anim 2.0 defaults of this crate's joint table
+//! (`data/hanim_joints.csv`); each joint's parent is its nearest ancestor present in the body.
 //! Segment masses: fractions of a 70 kg body after de Leva (1996), rounded.
 
 use glam::{DQuat, DVec3};
 
-use crate::{
+use stance_ik::{
     Axes, Dof, Frames, IkError, JointDef, Limb, LimbBase, LimbGoal, Posture, Skeleton, Task,
 };
 
-/// (name, LOA2 parent, default centre x, y, z) — from `hanim_joints.csv`.
-const HANIM_LOA2_CENTRES: &[(&str, &str, [f64; 3])] = &[
-    ("humanoid_root", "", [0.0, 0.8240, 0.0277]),
-    ("sacroiliac", "humanoid_root", [0.0, 0.9149, 0.0016]),
-    ("l_hip", "sacroiliac", [0.0961, 0.9124, -0.0001]),
-    ("l_knee", "l_hip", [0.1040, 0.4867, 0.0308]),
-    ("l_talocrural", "l_knee", [0.1101, 0.0656, -0.0736]),
-    (
-        "l_tarsometatarsal_2",
-        "l_talocrural",
-        [0.1086, 0.0001, -0.0368],
-    ),
-    (
-        "l_metatarsophalangeal_2",
-        "l_tarsometatarsal_2",
-        [0.1086, 0.0001, 0.0368],
-    ),
-    (
-        "l_tarsal_distal_interphalangeal_2",
-        "l_metatarsophalangeal_2",
-        [0.1086, 0.0000, 0.0762],
-    ),
-    ("r_hip", "sacroiliac", [-0.0950, 0.9171, 0.0029]),
-    ("r_knee", "r_hip", [-0.0867, 0.4913, 0.0318]),
-    ("r_talocrural", "r_knee", [-0.0801, 0.0712, -0.0766]),
-    (
-        "r_tarsometatarsal_2",
-        "r_talocrural",
-        [-0.0801, 0.0000, -0.0368],
-    ),
-    (
-        "r_metatarsophalangeal_2",
-        "r_tarsometatarsal_2",
-        [-0.0801, 0.0000, 0.0368],
-    ),
-    (
-        "r_tarsal_distal_interphalangeal_2",
-        "r_metatarsophalangeal_2",
-        [-0.0801, 0.0039, 0.0732],
-    ),
-    ("vl5", "humanoid_root", [0.0028, 1.0568, -0.0776]),
-    ("vl3", "vl5", [0.0041, 1.1276, -0.0796]),
-    ("vl1", "vl3", [0.0048, 1.1912, -0.0805]),
-    ("vt10", "vl1", [0.0056, 1.2848, -0.0822]),
-    ("vt6", "vt10", [0.0059, 1.3866, -0.0800]),
-    ("vt1", "vt6", [0.0065, 1.4951, -0.0387]),
-    ("vc4", "vt1", [0.0066, 1.5662, -0.0084]),
-    ("vc2", "vc4", [0.0066, 1.5928, -0.0103]),
-    ("skullbase", "vc2", [0.0044, 1.6209, 0.0236]),
-    ("l_sternoclavicular", "vt1", [0.0820, 1.4488, -0.0353]),
-    (
-        "l_acromioclavicular",
-        "l_sternoclavicular",
-        [0.0962, 1.4269, -0.0424],
-    ),
-    (
-        "l_shoulder",
-        "l_acromioclavicular",
-        [0.2029, 1.4376, -0.0387],
-    ),
-    ("l_elbow", "l_shoulder", [0.2014, 1.1357, -0.0682]),
-    ("l_radiocarpal", "l_elbow", [0.1984, 0.8663, -0.0583]),
-    (
-        "l_carpal_distal_interphalangeal_3",
-        "l_radiocarpal",
-        [0.2026, 0.7011, -0.0494],
-    ),
-    ("r_sternoclavicular", "vt1", [-0.0694, 1.4600, -0.0330]),
-    (
-        "r_acromioclavicular",
-        "r_sternoclavicular",
-        [-0.0836, 1.4281, -0.0401],
-    ),
-    (
-        "r_shoulder",
-        "r_acromioclavicular",
-        [-0.1907, 1.4407, -0.0325],
-    ),
-    ("r_elbow", "r_shoulder", [-0.1949, 1.1388, -0.0620]),
-    ("r_radiocarpal", "r_elbow", [-0.1959, 0.8694, -0.0521]),
-    (
-        "r_carpal_distal_interphalangeal_3",
-        "r_radiocarpal",
-        [-0.1939, 0.7042, -0.0432],
-    ),
-];
+use crate::{all_joints, default_centre, joint_by_name};
 
-/// Default centre of an H-Anim joint (the subset above).
+/// Default centre of an H-Anim joint (X3DUOM's default, see [`crate::default_centre`]).
 pub fn hanim_centre(name: &str) -> Option<DVec3> {
-    HANIM_LOA2_CENTRES
-        .iter()
-        .find(|(n, _, _)| *n == name)
-        .map(|(_, _, c)| DVec3::from_array(*c))
+    joint_by_name(name).map(|(_, definition)| default_centre(definition))
 }
 
+/// The joint's parent at LOA 4 (the finest chain: every coarser parent is an ancestor on it).
 fn hanim_parent(name: &str) -> Option<&'static str> {
-    HANIM_LOA2_CENTRES
-        .iter()
-        .find(|(n, _, _)| *n == name)
-        .map(|(_, p, _)| *p)
+    let (_, definition) = joint_by_name(name)?;
+    let parent = definition.parent_by_loa[3]?;
+    all_joints().get(parent).map(|parent| parent.name)
 }
 
 use Dof::{Rx, Ry, Rz, Tx, Ty, Tz};
@@ -415,7 +321,7 @@ fn feasible_targets(
         };
         *v = (*v + scale * rng.next()).clamp(lo[i], hi[i]);
     }
-    let frames = crate::Frames::new(skeleton, &goal);
+    let frames = Frames::new(skeleton, &goal);
     effectors.iter().map(|&(j, p)| frames.point(j, p)).collect()
 }
 
