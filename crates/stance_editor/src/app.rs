@@ -11,84 +11,38 @@ mod sensors_panel;
 use std::sync::mpsc::Receiver;
 
 use egui::{Color32, Key, KeyboardShortcut, Modifiers, RichText, Sense};
-use glam::{DVec3, Vec2, Vec3};
+use glam::{DVec3, Vec2};
 use serde_json::{Map, Value, json};
-use stance_document::{AvatarReference, Document, link};
-use stance_hanim::LevelOfArticulation;
-use stance_render::{
-    BODY_COLOR_LINEAR, MannequinBone, MannequinJoint, OrbitCamera, Scene, mannequin_bones,
-    pick_capsule,
-};
+use stance_document::link;
+use stance_hanim::{LevelOfArticulation, LimbName, readable_name};
+use stance_render::{BODY_COLOR_LINEAR, OrbitCamera, Scene, pick_capsule};
 
-use self::handles::HandleDrag;
-use crate::avatar::LoadedAvatar;
-use crate::history::{EditKind, History};
 use crate::host::{BackendSummary, HostHooks, HostMessage};
-use crate::library::{AUTOSAVE_KEY, LIBRARY_KEY, PoseLibrary};
-use crate::posing::{PosingError, PosingSession, describe_joint};
-use crate::sensors::SensorHub;
+use crate::model::{Command, EditorModel, Gesture};
+use crate::posing::PosingError;
 use crate::viewport::{ViewportInput, ViewportRenderer, apply_gestures};
 
 /// Colour of the selected body part (linear RGB).
 const SELECTED_COLOR_LINEAR: [f32; 4] = [0.15, 0.45, 0.85, 1.0];
 /// Colour of the body part under the cursor (linear RGB).
 const HOVERED_COLOR_LINEAR: [f32; 4] = [0.85, 0.45, 0.22, 1.0];
-/// Seconds between autosaves while the document changes.
-const AUTOSAVE_INTERVAL_SECS: f64 = 1.0;
-/// Seconds an information notice stays (errors stay until dismissed).
-const NOTICE_SECS: f64 = 8.0;
-/// Points of the effector trace kept.
-const MAX_TRACE_POINTS: usize = 2000;
-
-/// A message for the user, shown above the viewport.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Notice {
-    pub text: String,
-    pub is_error: bool,
-    pub since_secs: f64,
-}
-
-/// A grab-and-pull in progress: the pulled point moves in the plane facing the camera
-/// through `plane_point_world`.
-#[derive(Debug, Clone)]
-struct PullGesture {
-    plane_point_world: DVec3,
-    document_before: Document,
-}
-
 /// The Stance editor.
 pub struct StanceApp {
+    /// Everything the editor knows and does, without egui.
+    model: EditorModel,
     camera: OrbitCamera,
     show_floor: bool,
     show_help: bool,
     show_trace: bool,
     backend: Option<BackendSummary>,
     renderer: Option<ViewportRenderer>,
-    hooks: Box<dyn HostHooks>,
     inbox: Option<Receiver<HostMessage>>,
     first_frame_reported: bool,
     viewport_size_px: [u32; 2],
     viewport_rect: egui::Rect,
-    session: PosingSession,
-    history: History,
-    selected_joint: Option<usize>,
-    hovered_joint: Option<usize>,
-    pull: Option<PullGesture>,
-    handle_drag: Option<HandleDrag>,
-    avatar: Option<LoadedAvatar>,
-    /// The URL the avatar came from (links and autosave name it); `None` for local files.
-    avatar_url: Option<String>,
-    /// A document waiting for its avatar to arrive (a link or autosave naming a URL).
-    pending_document: Option<Document>,
     show_skeleton: bool,
     avatar_uploaded: bool,
-    trace: Vec<DVec3>,
-    notice: Option<Notice>,
-    library: PoseLibrary,
     library_name: String,
-    autosaved: Option<Document>,
-    last_autosave_secs: f64,
-    solver_ms: f64,
     frame_ms: f64,
     /// CPU time of this frame's scene (mannequin capsules, or the avatar's skinning palettes).
     scene_ms: f64,
@@ -97,20 +51,18 @@ pub struct StanceApp {
     clock_origin: web_time::Instant,
     /// Screen rectangles (points) of named buttons, published for the page's test hook.
     button_rects: Vec<(&'static str, egui::Rect)>,
-    sensors: SensorHub,
     show_sensors: bool,
     /// A left click on the body pins it (touch-friendly one-click pin).
     pin_tool: bool,
-    /// The next picked file is a sensor recording to replay.
-    replay_pick_pending: bool,
     mapping_editor: avatar_panel::MappingEditor,
+    /// The model's session generation the views were built for.
+    session_generation: u64,
 }
 
 impl std::fmt::Debug for StanceApp {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("StanceApp")
-            .field("session", &self.session)
-            .field("selected_joint", &self.selected_joint)
+            .field("model", &self.model)
             .finish_non_exhaustive()
     }
 }
@@ -131,51 +83,31 @@ impl StanceApp {
 
     /// The editor with no GPU: panels work, the viewport says why it is empty (tests).
     pub fn without_gpu(hooks: Box<dyn HostHooks>) -> Result<Self, PosingError> {
-        let session = PosingSession::new(LevelOfArticulation::Loa2)?;
-        let mut app = Self {
+        Ok(Self {
+            model: EditorModel::new(hooks)?,
             camera: OrbitCamera::default(),
             show_floor: true,
             show_help: false,
             show_trace: true,
             backend: None,
             renderer: None,
-            hooks,
             inbox: None,
             first_frame_reported: false,
             viewport_size_px: [0, 0],
             viewport_rect: egui::Rect::NOTHING,
-            session,
-            history: History::default(),
-            selected_joint: None,
-            hovered_joint: None,
-            pull: None,
-            handle_drag: None,
-            avatar: None,
-            avatar_url: None,
-            pending_document: None,
             show_skeleton: false,
             avatar_uploaded: false,
-            trace: Vec::new(),
-            notice: None,
-            library: PoseLibrary::default(),
             library_name: String::new(),
-            autosaved: None,
-            last_autosave_secs: f64::NEG_INFINITY,
-            solver_ms: 0.0,
             frame_ms: 0.0,
             scene_ms: 0.0,
             render_ms: 0.0,
             clock_origin: web_time::Instant::now(),
             button_rects: Vec::new(),
-            sensors: SensorHub::default(),
             show_sensors: false,
             pin_tool: false,
-            replay_pick_pending: false,
             mapping_editor: avatar_panel::MappingEditor::default(),
-        };
-        app.load_library();
-        app.load_sensor_settings();
-        Ok(app)
+            session_generation: 0,
+        })
     }
 
     /// Messages from the host (links, files) arrive through this receiver.
@@ -187,485 +119,59 @@ impl StanceApp {
     /// Opens what the page was opened with: a posture link when the address has one (a bad
     /// link says why and the editor opens normally), otherwise the autosaved work.
     pub fn open_startup(&mut self, link_fragment: Option<&str>) {
-        let fragment = link_fragment
-            .map(|fragment| fragment.trim_start_matches('#').trim())
-            .filter(|fragment| !fragment.is_empty());
-        if let Some(fragment) = fragment
-            && self.open_link(fragment, 0.0)
-        {
-            return;
-        }
-        if let Some(text) = self.hooks.load_text(AUTOSAVE_KEY) {
-            match Document::from_json(&text) {
-                Ok(document) => {
-                    if let AvatarReference::Url(url) = &document.avatar {
-                        self.pending_document = Some(document.clone());
-                        let url = url.clone();
-                        self.fetch_avatar(&url);
-                    }
-                    if let Err(error) = self.session.restore_document(&document) {
-                        self.warn(format!("The autosaved work could not be restored: {error}"));
-                    } else {
-                        self.autosaved = Some(document);
-                    }
-                }
-                Err(error) => {
-                    self.warn(format!("The autosaved work could not be read: {error}"));
-                }
-            }
-        }
+        self.model.open_startup(link_fragment);
+    }
+
+    /// The editor's model (what the panels and the viewport show).
+    pub fn model(&self) -> &EditorModel {
+        &self.model
+    }
+
+    /// Carries out a command as the UI would (scripts and tests).
+    pub fn apply(&mut self, command: Command) {
+        self.model.apply(command);
     }
 
     pub fn camera(&self) -> &OrbitCamera {
         &self.camera
     }
 
-    pub fn level_of_articulation(&self) -> LevelOfArticulation {
-        self.session.level_of_articulation()
-    }
-
-    pub fn session(&self) -> &PosingSession {
-        &self.session
-    }
-
-    pub fn notice(&self) -> Option<&Notice> {
-        self.notice.as_ref()
-    }
-
-    pub fn selected_joint(&self) -> Option<usize> {
-        self.selected_joint
-    }
-
-    pub fn library(&self) -> &PoseLibrary {
-        &self.library
-    }
-
-    /// The document: the session's posture and tasks, and the avatar they are for.
-    pub fn document(&self) -> Document {
-        let mut document = self.session.document();
-        if let Some(url) = &self.avatar_url {
-            document.avatar = AvatarReference::Url(url.clone());
-        }
-        document
-    }
-
-    pub fn avatar(&self) -> Option<&LoadedAvatar> {
-        self.avatar.as_ref()
-    }
-
-    /// Loads an avatar file; on failure says why and keeps the current one.
-    pub fn load_avatar(&mut self, name: &str, bytes: &[u8]) {
-        let loa = self.session.level_of_articulation();
-        let mut mapping_note = None;
-        match LoadedAvatar::load(name, bytes, loa).and_then(|(mut avatar, mut humanoid)| {
-            mapping_note = self.mapping_editor.reapply(&mut avatar, loa, &mut humanoid);
-            let session =
-                PosingSession::with_humanoid(humanoid).map_err(|error| error.to_string())?;
-            Ok((avatar, session))
-        }) {
-            Ok((avatar, session)) => {
-                let (mapped, unmapped) = avatar.mapping_summary();
-                let mut text = format!(
-                    "Loaded {name}: {} vertices, {mapped} joints mapped onto H-Anim ({unmapped} left unmapped); posed at LOA {}.",
-                    avatar.vertex_count,
-                    loa.number()
-                );
-                if !avatar.warnings.is_empty() {
-                    text.push_str(&format!(" Notes: {}", avatar.warnings.join("; ")));
-                }
-                if let Some(note) = mapping_note {
-                    text.push_str(&format!(" {note}"));
-                }
-                self.session = session;
-                self.sensors.release();
-                self.history = History::default();
-                self.avatar = Some(avatar);
-                self.avatar_url = is_url(name).then(|| name.to_owned());
-                self.selected_joint = None;
-                self.hovered_joint = None;
-                self.pull = None;
-                self.handle_drag = None;
-                self.trace.clear();
-                self.camera = OrbitCamera::default();
-                self.inform(text);
-                if let Some(document) = self.pending_document.take()
-                    && let Err(error) = self.session.restore_document(&document)
-                {
-                    self.warn(format!("The posture does not fit this avatar: {error}"));
-                }
-            }
-            Err(error) => {
-                self.pending_document = None;
-                self.warn(format!(
-                    "{name} could not be opened as an avatar: {error}. The previous avatar stays."
-                ));
-            }
-        }
-    }
-
-    /// Back to the built-in mannequin (the posture carries over by joint name).
-    pub fn use_mannequin(&mut self) {
-        let document = self.session.document();
-        match PosingSession::new(self.session.level_of_articulation()) {
-            Ok(mut session) => {
-                if session.restore_document(&document).is_err() {
-                    self.inform("The posture did not fit the mannequin; it stands at rest.");
-                }
-                self.session = session;
-                self.sensors.release();
-                self.history = History::default();
-                self.avatar = None;
-                self.avatar_url = None;
-                self.avatar_uploaded = false;
-                self.selected_joint = None;
-            }
-            Err(error) => self.warn(format!("The mannequin could not be built: {error}")),
-        }
-    }
-
-    /// Asks the page to fetch an avatar by URL (it arrives as a file).
-    fn fetch_avatar(&mut self, url: &str) {
-        if let Err(error) = self.hooks.fetch(url) {
-            self.pending_document = None;
-            self.warn(format!("The avatar at {url} could not be fetched: {error}"));
-        }
-    }
-
     fn now_secs(&self) -> f64 {
         self.clock_origin.elapsed().as_secs_f64()
     }
 
-    fn inform(&mut self, text: impl Into<String>) {
-        self.notice = Some(Notice {
-            text: text.into(),
-            is_error: false,
-            since_secs: self.now_secs(),
-        });
-    }
-
-    fn warn(&mut self, text: impl Into<String>) {
-        let text = text.into();
-        log::warn!("{text}");
-        self.notice = Some(Notice {
-            text,
-            is_error: true,
-            since_secs: self.now_secs(),
-        });
-    }
-
-    // -----------------------------------------------------------------------------------------
-    // Edits: each one records the document before it, so that undo restores it exactly.
-
-    fn record(&mut self, kind: EditKind) {
-        let before = self.session.document();
-        let now = self.now_secs();
-        self.history.record(&before, kind, now);
-    }
-
-    /// Replaces the task list as one undoable edit of `kind`.
-    fn commit_tasks(&mut self, kind: EditKind, tasks: Vec<stance_document::TaskSpec>) {
-        if tasks.as_slice() != self.session.tasks() {
-            self.record(kind);
-            self.session.set_tasks(tasks);
-        }
-    }
-
-    pub fn undo(&mut self) {
-        self.cancel_pull_silently();
-        let current = self.session.document();
-        match self.history.undo(&current) {
-            Some(previous) => self.restore(&previous, "undo"),
-            None => self.inform("Nothing to undo."),
-        }
-    }
-
-    pub fn redo(&mut self) {
-        self.cancel_pull_silently();
-        let current = self.session.document();
-        match self.history.redo(&current) {
-            Some(next) => self.restore(&next, "redo"),
-            None => self.inform("Nothing to redo."),
-        }
-    }
-
-    fn restore(&mut self, document: &Document, what: &str) {
-        if let Err(error) = self.session.restore_document(document) {
-            self.warn(format!("Could not {what}: {error}"));
-        }
-    }
-
-    pub fn reset_to_rest(&mut self) {
-        self.record(EditKind::Command);
-        self.session.reset_to_rest();
-        self.trace.clear();
-    }
-
-    pub fn mirror(&mut self) {
-        self.record(EditKind::Command);
-        self.session.mirror();
-    }
-
-    pub fn pin_selected(&mut self) {
-        match self.selected_joint {
-            Some(joint) => self.pin(joint),
-            None => self.inform("Select a body part first (click it), then pin it."),
-        }
-    }
-
-    fn pin(&mut self, joint: usize) {
-        self.record(EditKind::Command);
-        self.session.pin(joint);
-        let name = self
-            .session
-            .skeleton()
-            .joints()
-            .get(joint)
-            .map(|joint| describe_joint(&joint.name))
-            .unwrap_or_default();
-        self.inform(format!("Pinned the {name} where it is (level 1)."));
-    }
-
-    fn set_level_of_articulation(&mut self, loa: LevelOfArticulation) {
-        if loa == self.session.level_of_articulation() {
-            return;
-        }
-        let document = self.session.document();
-        let built = match &self.avatar {
-            Some(avatar) => avatar.skeleton(loa).and_then(|humanoid| {
-                PosingSession::with_humanoid(humanoid).map_err(|e| e.to_string())
-            }),
-            None => PosingSession::new(loa).map_err(|error| error.to_string()),
-        };
-        match built.and_then(|mut session| {
-            session
-                .restore_document(&document)
-                .map_err(|error| error.to_string())?;
-            Ok(session)
-        }) {
-            Ok(session) => {
-                self.record(EditKind::Command);
-                self.session = session;
-                self.sensors.release();
-                self.selected_joint = None;
-                self.hovered_joint = None;
-                self.pull = None;
-            }
-            Err(error) => self.warn(format!("Could not switch to LOA {}: {error}", loa.number())),
-        }
-    }
-
-    /// Opens a posture link (fragment or URL); on failure says why and changes nothing.
-    /// Returns whether it opened.
-    pub fn open_link(&mut self, link_text: &str, _now: f64) -> bool {
-        match link::decode(link_text) {
-            Ok(document) => {
-                let current = self.session.document();
-                match self.session.restore_document(&document) {
-                    Ok(()) => {
-                        self.history
-                            .record(&current, EditKind::Command, self.now_secs());
-                        self.selected_joint = None;
-                        self.trace.clear();
-                        match &document.avatar {
-                            AvatarReference::Url(url) if self.avatar_url.as_ref() != Some(url) => {
-                                self.inform(format!(
-                                    "Opened the posture link; loading its avatar {url}…"
-                                ));
-                                self.pending_document = Some(document.clone());
-                                let url = url.clone();
-                                self.fetch_avatar(&url);
-                            }
-                            _ => self.inform("Opened the posture link."),
-                        }
-                        true
-                    }
-                    Err(error) => {
-                        self.warn(format!(
-                            "This posture link does not fit the humanoid: {error}. The editor opened normally."
-                        ));
-                        false
-                    }
-                }
-            }
-            Err(error) => {
-                self.warn(format!(
-                    "This posture link could not be opened: {error}. The editor opened normally."
-                ));
-                false
-            }
-        }
-    }
-
     /// Encodes the document into the address bar and the clipboard.
     pub fn copy_link(&mut self, ctx: &egui::Context) {
-        let fragment = link::encode(&self.document());
-        let url = self.hooks.share_link(&fragment);
+        let fragment = link::encode(&self.model.document());
+        let url = self.model.hooks.share_link(&fragment);
         ctx.copy_text(url);
-        self.inform(format!(
+        self.model.apply(Command::Inform(format!(
             "Link copied to the clipboard ({} characters): opening it shows exactly this posture and these tasks.",
             fragment.len()
-        ));
-    }
-
-    /// Opens a JSON file: a document (posture and tasks) or a pose library.
-    pub fn open_file(&mut self, name: &str, bytes: &[u8]) {
-        if std::mem::take(&mut self.replay_pick_pending) {
-            self.replay_sensor_recording(name, bytes.to_vec());
-            return;
-        }
-        let lower = name.to_ascii_lowercase();
-        let is_avatar = [".glb", ".gltf", ".vrm"].iter().any(|extension| {
-            lower
-                .split(['?', '#'])
-                .next()
-                .unwrap_or("")
-                .ends_with(extension)
-        }) || bytes.starts_with(b"glTF");
-        if is_avatar {
-            self.load_avatar(name, bytes);
-            return;
-        }
-        let Ok(text) = std::str::from_utf8(bytes) else {
-            self.warn(format!("{name} is not a text (JSON) file."));
-            return;
-        };
-        let is_library = serde_json::from_str::<Value>(text)
-            .ok()
-            .is_some_and(|value| value.get("entries").is_some());
-        if is_library {
-            match PoseLibrary::from_json(text) {
-                Ok((imported, warnings)) => {
-                    let mut added = 0;
-                    for entry in imported.entries() {
-                        if self
-                            .library
-                            .save(&entry.name, entry.document.clone())
-                            .is_ok()
-                        {
-                            added += 1;
-                        }
-                    }
-                    self.store_library();
-                    if warnings.is_empty() {
-                        self.inform(format!("Imported {added} poses from {name}."));
-                    } else {
-                        self.warn(format!(
-                            "Imported {added} poses from {name}; skipped: {}",
-                            warnings.join("; ")
-                        ));
-                    }
-                }
-                Err(error) => self.warn(format!("{name}: {error}")),
-            }
-            return;
-        }
-        match Document::from_json(text) {
-            Ok(document) => {
-                let current = self.session.document();
-                match self.session.restore_document(&document) {
-                    Ok(()) => {
-                        self.history
-                            .record(&current, EditKind::Command, self.now_secs());
-                        self.inform(format!("Opened {name}."));
-                    }
-                    Err(error) => self.warn(format!("{name} does not fit the humanoid: {error}")),
-                }
-            }
-            Err(error) => self.warn(format!("{name} is not a Stance document: {error}")),
-        }
+        )));
     }
 
     fn export_document(&mut self) {
-        let text = self.document().to_json(true);
-        if let Err(error) = self.hooks.download("stance-pose.json", &text) {
-            self.warn(format!("Could not export the pose: {error}"));
+        let text = self.model.document().to_json(true);
+        if let Err(error) = self.model.hooks.download("stance-pose.json", &text) {
+            self.model
+                .apply(Command::Warn(format!("Could not export the pose: {error}")));
         }
     }
 
     fn export_library(&mut self) {
-        let text = self.library.to_json();
-        if let Err(error) = self.hooks.download("stance-library.json", &text) {
-            self.warn(format!("Could not export the library: {error}"));
+        let text = self.model.library.to_json();
+        if let Err(error) = self.model.hooks.download("stance-library.json", &text) {
+            self.model.apply(Command::Warn(format!(
+                "Could not export the library: {error}"
+            )));
         }
     }
 
     fn import_file(&mut self) {
-        if let Err(error) = self.hooks.pick_file() {
-            self.warn(format!("Could not open a file: {error}"));
-        }
-    }
-
-    fn load_library(&mut self) {
-        let Some(text) = self.hooks.load_text(LIBRARY_KEY) else {
-            return;
-        };
-        match PoseLibrary::from_json(&text) {
-            Ok((library, warnings)) => {
-                self.library = library;
-                if !warnings.is_empty() {
-                    self.warn(format!(
-                        "Some saved poses could not be read: {}",
-                        warnings.join("; ")
-                    ));
-                }
-            }
-            Err(error) => self.warn(format!("The pose library could not be read: {error}")),
-        }
-    }
-
-    fn store_library(&mut self) {
-        if let Err(error) = self.hooks.save_text(LIBRARY_KEY, &self.library.to_json()) {
-            self.warn(format!("The pose library could not be saved: {error}"));
-        }
-    }
-
-    pub fn save_to_library(&mut self, name: &str) {
-        match self.library.save(name, self.session.document()) {
-            Ok(()) => {
-                self.store_library();
-                self.inform(format!("Saved the pose \"{}\".", name.trim()));
-            }
-            Err(error) => self.warn(error),
-        }
-    }
-
-    fn load_from_library(&mut self, index: usize) {
-        let Some(entry) = self.library.entries().get(index).cloned() else {
-            return;
-        };
-        let current = self.session.document();
-        match self.session.restore_document(&entry.document) {
-            Ok(()) => {
-                self.history
-                    .record(&current, EditKind::Command, self.now_secs());
-                self.inform(format!("Loaded the pose \"{}\".", entry.name));
-            }
-            Err(error) => self.warn(format!(
-                "The pose \"{}\" does not fit the humanoid: {error}",
-                entry.name
-            )),
-        }
-    }
-
-    fn autosave(&mut self) {
-        let now = self.now_secs();
-        if self.pull.is_some() || now - self.last_autosave_secs < AUTOSAVE_INTERVAL_SECS {
-            return;
-        }
-        let document = self.document();
-        if self.autosaved.as_ref() == Some(&document) {
-            return;
-        }
-        self.last_autosave_secs = now;
-        match self.hooks.save_text(AUTOSAVE_KEY, &document.to_json(false)) {
-            Ok(()) => self.autosaved = Some(document),
-            Err(error) => {
-                // Say it once, not every second.
-                if self.autosaved.is_some() || self.notice.is_none() {
-                    self.warn(format!("Autosave failed: {error}"));
-                }
-                self.autosaved = Some(document);
-            }
+        if let Err(error) = self.model.hooks.pick_file() {
+            self.model
+                .apply(Command::Warn(format!("Could not open a file: {error}")));
         }
     }
 
@@ -675,39 +181,7 @@ impl StanceApp {
             None => return,
         };
         for message in messages {
-            match message {
-                HostMessage::OpenLink(fragment) => {
-                    let now = self.now_secs();
-                    self.open_link(&fragment, now);
-                }
-                HostMessage::OpenFile { name, bytes } => self.open_file(&name, &bytes),
-                HostMessage::Failed(reason) => {
-                    self.replay_pick_pending = false;
-                    self.warn(reason);
-                }
-                HostMessage::SensorConnected { device } => {
-                    self.inform(format!("Sensors: {device} connected."));
-                    self.sensors.connected(device);
-                }
-                HostMessage::SensorBytes { bytes, arrived } => {
-                    let now = self.now_secs();
-                    self.sensors.receive_bytes(&bytes, now, arrived);
-                }
-                HostMessage::SensorReport {
-                    report_id,
-                    data,
-                    arrived,
-                } => {
-                    let now = self.now_secs();
-                    self.sensors.receive_report(report_id, &data, now, arrived);
-                }
-                HostMessage::SensorLost { reason } => {
-                    self.warn(format!(
-                        "Sensors: {reason} The posture stays as the last reading left it."
-                    ));
-                    self.sensors.lost(reason);
-                }
-            }
+            self.model.receive(message);
         }
     }
 
@@ -721,22 +195,22 @@ impl StanceApp {
         if ctx.input_mut(|input| input.consume_shortcut(&redo_shift))
             || ctx.input_mut(|input| input.consume_shortcut(&redo_y))
         {
-            self.redo();
+            self.model.apply(Command::Redo);
         } else if ctx.input_mut(|input| input.consume_shortcut(&undo)) {
-            self.undo();
+            self.model.apply(Command::Undo);
         }
         if ctx.egui_wants_keyboard_input() {
             return;
         }
         let plain = |key| KeyboardShortcut::new(Modifiers::NONE, key);
         if ctx.input_mut(|input| input.consume_shortcut(&plain(Key::P))) {
-            self.pin_selected();
+            self.model.apply(Command::PinSelected);
         }
         if ctx.input_mut(|input| input.consume_shortcut(&plain(Key::M))) {
-            self.mirror();
+            self.model.apply(Command::Mirror);
         }
         if ctx.input_mut(|input| input.consume_shortcut(&plain(Key::R))) {
-            self.reset_to_rest();
+            self.model.apply(Command::ResetToRest);
         }
         if ctx.input_mut(|input| input.consume_shortcut(&plain(Key::F))) {
             self.camera = OrbitCamera::default();
@@ -756,10 +230,10 @@ impl StanceApp {
             self.show_help = !self.show_help;
         }
         if ctx.input_mut(|input| input.consume_shortcut(&plain(Key::Escape))) {
-            if self.pull.is_some() {
-                self.cancel_pull();
+            if self.model.gesture().is_some() {
+                self.model.apply(Command::CancelGesture);
             } else {
-                self.selected_joint = None;
+                self.model.apply(Command::Select(None));
             }
         }
     }
@@ -798,17 +272,19 @@ impl StanceApp {
                     ui.close();
                 }
                 if ui.button("Bundled skinned humanoid").clicked() {
-                    self.fetch_avatar("default-avatar.glb");
+                    self.model
+                        .apply(Command::FetchAvatar("default-avatar.glb".to_owned()));
                     ui.close();
                 }
                 if ui
                     .add_enabled(
-                        self.avatar.is_some(),
+                        self.model.avatar().is_some(),
                         egui::Button::new("Back to the mannequin"),
                     )
                     .clicked()
                 {
-                    self.use_mannequin();
+                    self.model.apply(Command::UseMannequin);
+                    self.avatar_uploaded = false;
                     ui.close();
                 }
                 ui.checkbox(&mut self.show_skeleton, "Show the skeleton");
@@ -816,22 +292,22 @@ impl StanceApp {
             ui.menu_button("Edit", |ui| {
                 if ui
                     .add_enabled(
-                        self.history.can_undo(),
+                        self.model.history().can_undo(),
                         egui::Button::new("Undo").shortcut_text("Ctrl+Z"),
                     )
                     .clicked()
                 {
-                    self.undo();
+                    self.model.apply(Command::Undo);
                     ui.close();
                 }
                 if ui
                     .add_enabled(
-                        self.history.can_redo(),
+                        self.model.history().can_redo(),
                         egui::Button::new("Redo").shortcut_text("Ctrl+Shift+Z"),
                     )
                     .clicked()
                 {
-                    self.redo();
+                    self.model.apply(Command::Redo);
                     ui.close();
                 }
                 ui.separator();
@@ -839,21 +315,21 @@ impl StanceApp {
                     .add(egui::Button::new("Pin selected part").shortcut_text("P"))
                     .clicked()
                 {
-                    self.pin_selected();
+                    self.model.apply(Command::PinSelected);
                     ui.close();
                 }
                 if ui
                     .add(egui::Button::new("Mirror left/right").shortcut_text("M"))
                     .clicked()
                 {
-                    self.mirror();
+                    self.model.apply(Command::Mirror);
                     ui.close();
                 }
                 if ui
                     .add(egui::Button::new("Reset to rest pose").shortcut_text("R"))
                     .clicked()
                 {
-                    self.reset_to_rest();
+                    self.model.apply(Command::ResetToRest);
                     ui.close();
                 }
             });
@@ -866,13 +342,13 @@ impl StanceApp {
                 }
                 ui.separator();
                 ui.label("Level of articulation");
-                let current = self.session.level_of_articulation();
+                let current = self.model.level_of_articulation();
                 for loa in LevelOfArticulation::ALL {
                     if ui
                         .radio(current == loa, format!("LOA {}", loa.number()))
                         .clicked()
                     {
-                        self.set_level_of_articulation(loa);
+                        self.model.apply(Command::SetLevelOfArticulation(loa));
                     }
                 }
             });
@@ -912,8 +388,8 @@ impl StanceApp {
                 ui.label(format!("frame {:.1} ms", cpu_seconds * 1000.0));
             }
             ui.separator();
-            ui.label(format!("solver {:.2} ms", self.solver_ms));
-            if let Some(report) = self.session.report() {
+            ui.label(format!("solver {:.2} ms", self.model.solver_ms));
+            if let Some(report) = self.model.session.report() {
                 ui.separator();
                 let status = match report.status {
                     stance_ik::SolveStatus::Converged => "converged",
@@ -933,14 +409,7 @@ impl StanceApp {
     }
 
     fn notice_strip(&mut self, ui: &mut egui::Ui) {
-        let now = self.now_secs();
-        if let Some(notice) = &self.notice
-            && !notice.is_error
-            && now - notice.since_secs > NOTICE_SECS
-        {
-            self.notice = None;
-        }
-        let Some(notice) = self.notice.clone() else {
+        let Some(notice) = self.model.notice().cloned() else {
             return;
         };
         let (fill, text_color) = if notice.is_error {
@@ -961,7 +430,7 @@ impl StanceApp {
                 ui.horizontal(|ui| {
                     ui.add(egui::Label::new(RichText::new(&notice.text).color(text_color)).wrap());
                     if ui.small_button("x").on_hover_text("dismiss").clicked() {
-                        self.notice = None;
+                        self.model.apply(Command::DismissNotice);
                     }
                 });
             });
@@ -974,38 +443,15 @@ impl StanceApp {
     // -----------------------------------------------------------------------------------------
     // Viewport
 
-    /// The posed mannequin: one capsule per bone, with the joint that carries it.
-    fn mannequin(&self) -> Vec<MannequinBone> {
-        let skeleton = self.session.skeleton();
-        let frames = self.session.frames();
-        let joints: Vec<MannequinJoint<'_>> = skeleton
-            .joints()
-            .iter()
-            .enumerate()
-            .map(|(index, joint)| MannequinJoint {
-                name: &joint.name,
-                parent: joint.parent,
-                position_world: frames
-                    .joint_position
-                    .get(index)
-                    .copied()
-                    .unwrap_or_default()
-                    .as_vec3(),
-                up_world: frames
-                    .world_from_joint_rotation
-                    .get(index)
-                    .map_or(Vec3::Y, |rotation| (*rotation * DVec3::Y).as_vec3()),
-            })
-            .collect();
-        mannequin_bones(&joints)
-    }
-
-    fn pick(&self, bones: &[MannequinBone], pointer: egui::Pos2) -> Option<(usize, DVec3)> {
+    /// The body part under `pointer` (on the bones drawn, as of the last step) and the point
+    /// hit.
+    fn pick(&self, pointer: egui::Pos2) -> Option<(usize, DVec3)> {
         if !self.viewport_rect.contains(pointer) {
             return None;
         }
         let (origin, direction) = self.pointer_ray(pointer);
         let (origin, direction) = (origin.as_vec3(), direction.as_vec3());
+        let bones = self.model.bones();
         let capsules: Vec<_> = bones.iter().map(|bone| bone.capsule).collect();
         let hit = pick_capsule(&capsules, origin, direction)?;
         let bone = bones.get(hit.index)?;
@@ -1035,42 +481,6 @@ impl StanceApp {
         (origin.as_dvec3(), direction.as_dvec3())
     }
 
-    fn begin_pull(&mut self, joint: usize, point_world: DVec3) {
-        let document_before = self.session.document();
-        self.record(EditKind::Command);
-        self.history.break_coalescing();
-        self.session.begin_grab(joint, point_world);
-        self.trace.clear();
-        self.trace.push(point_world);
-        self.selected_joint = Some(joint);
-        self.pull = Some(PullGesture {
-            plane_point_world: point_world,
-            document_before,
-        });
-    }
-
-    fn end_pull(&mut self) {
-        if self.pull.take().is_some() {
-            self.session.end_grab();
-        }
-    }
-
-    /// Escape during a pull: the body goes back to where it was.
-    fn cancel_pull(&mut self) {
-        if let Some(pull) = self.pull.take() {
-            self.session.end_grab();
-            if let Err(error) = self.session.restore_document(&pull.document_before) {
-                self.warn(format!("Could not cancel the pull: {error}"));
-            }
-        }
-    }
-
-    fn cancel_pull_silently(&mut self) {
-        if self.pull.take().is_some() {
-            self.session.end_grab();
-        }
-    }
-
     fn viewport(&mut self, ui: &mut egui::Ui, frame: &eframe::Frame) {
         self.notice_strip(ui);
         let rect = ui.available_rect_before_wrap();
@@ -1084,104 +494,167 @@ impl StanceApp {
             Sense::click_and_drag(),
         );
         let input = ViewportInput::read(ui, &response);
-        let bones = self.mannequin();
+        let pointer = response.hover_pos();
+        self.viewport_gestures(ui, &response, &input);
+        self.viewport_context_menu(&response);
+        if self.model.is_busy() {
+            ui.ctx().request_repaint();
+        }
+        self.draw_viewport(ui, frame, rect);
+        self.model.readings_shown();
+        self.draw_overlay(ui.painter(), rect);
+        if self.show_skeleton
+            || (self.model.avatar().is_some() && self.model.selected_joint().is_some())
+        {
+            self.draw_skeleton(&ui.painter().with_clip_rect(rect), rect);
+        }
+        self.draw_rings(&ui.painter().with_clip_rect(rect), rect);
+        let gesture = self.model.gesture().is_some();
+        let over_handle =
+            !gesture && pointer.is_some_and(|pointer| self.pick_handle(pointer).is_some());
+        if gesture {
+            ui.ctx().set_cursor_icon(egui::CursorIcon::Grabbing);
+        } else if over_handle || self.model.hovered_joint().is_some() {
+            ui.ctx().set_cursor_icon(egui::CursorIcon::Grab);
+        }
+    }
+
+    /// The pointer on the viewport, as commands: a drag with the primary button (no Shift,
+    /// one finger) that starts on a handle (a task's goal, a ring or the swivel of the selected
+    /// joint) moves it; on the body it pulls that point; elsewhere it moves the camera. A
+    /// click selects (and with the pin tool or Alt pins).
+    fn viewport_gestures(
+        &mut self,
+        ui: &egui::Ui,
+        response: &egui::Response,
+        input: &ViewportInput,
+    ) {
         let pointer = response.hover_pos();
         let press_origin = ui.input(|input| input.pointer.press_origin());
         let interact_pos = response.interact_pointer_pos();
-
-        // A drag with the primary button (no Shift, one finger) that starts on a handle (a
-        // task's goal, a ring of the selected joint) moves it; on the body it pulls that
-        // point; elsewhere it moves the camera.
         if response.drag_started_by(egui::PointerButton::Primary)
             && !input.shift_held
             && input.touch_count < 2
             && let Some(origin) = press_origin
         {
-            if let Some(drag) = self.pick_handle(origin) {
-                self.begin_handle_drag(drag);
-            } else if let Some((joint, point_world)) = self.pick(&bones, origin) {
-                self.begin_pull(joint, point_world);
+            if let Some(handle) = self.pick_handle(origin) {
+                self.model.apply(Command::BeginHandle(handle));
+            } else if let Some((joint, point_world)) = self.pick(origin) {
+                self.model.apply(Command::BeginPull { joint, point_world });
             }
         }
-        if self.handle_drag.is_some() {
-            match interact_pos {
-                Some(pointer) if response.dragged() && input.touch_count < 2 => {
-                    self.drag_handle(pointer);
+        let dragging = response.dragged() && input.touch_count < 2;
+        match (self.model.gesture().cloned(), interact_pos) {
+            (Some(gesture), Some(pointer)) if dragging => self.drag_gesture(&gesture, pointer),
+            (Some(_), _) => self.model.apply(Command::EndGesture),
+            (None, _) => {
+                if apply_gestures(
+                    &mut self.camera,
+                    &input.gestures(),
+                    self.viewport_rect.height(),
+                ) {
+                    ui.ctx().request_repaint();
                 }
-                _ => self.end_handle_drag(),
             }
-        } else if let Some(pull) = &self.pull {
-            if response.dragged() && input.touch_count < 2 {
-                if let Some(pointer) = interact_pos
-                    && let Some(target) =
-                        self.pointer_on_view_plane(pointer, pull.plane_point_world)
-                {
-                    self.session.move_grab(target);
-                }
-            } else {
-                self.end_pull();
-            }
-        } else if apply_gestures(&mut self.camera, &input.gestures(), rect.height()) {
-            ui.ctx().request_repaint();
         }
-
-        self.hovered_joint = if self.pull.is_some() || self.handle_drag.is_some() {
+        let hovered = if self.model.gesture().is_some() {
             None
         } else {
-            pointer.and_then(|pointer| self.pick(&bones, pointer).map(|(joint, _)| joint))
+            pointer.and_then(|pointer| self.pick(pointer).map(|(joint, _)| joint))
         };
+        self.model.apply(Command::Hover(hovered));
         if response.clicked_by(egui::PointerButton::Primary) {
             let clicked =
-                interact_pos.and_then(|pointer| self.pick(&bones, pointer).map(|(joint, _)| joint));
-            self.selected_joint = clicked;
+                interact_pos.and_then(|pointer| self.pick(pointer).map(|(joint, _)| joint));
+            self.model.apply(Command::Select(clicked));
             // The pin tool (or Alt + click): one click pins the part where it is.
             let alt = ui.input(|input| input.modifiers.alt);
             if let Some(joint) = clicked
                 && (self.pin_tool || alt)
             {
-                self.pin(joint);
+                self.model.apply(Command::Pin(joint));
             }
         }
-        let context_joint = self.hovered_joint.or(self.selected_joint);
+    }
+
+    /// The pointer moved during `gesture`: the command that follows it.
+    fn drag_gesture(&mut self, gesture: &Gesture, pointer: egui::Pos2) {
+        let command = match gesture {
+            Gesture::Pull {
+                plane_point_world, ..
+            } => self
+                .pointer_on_view_plane(pointer, *plane_point_world)
+                .map(|target_world| Command::MoveGrab { target_world }),
+            Gesture::Goal {
+                plane_point_world, ..
+            } => self
+                .pointer_on_view_plane(pointer, *plane_point_world)
+                .map(|goal_world| Command::MoveGoal {
+                    goal_world,
+                    floor_world: self.pointer_on_floor(pointer),
+                }),
+            Gesture::Ring { centre_px, .. } => Some(Command::TurnRing {
+                screen_angle: handles::screen_angle(
+                    egui::pos2(centre_px[0], centre_px[1]),
+                    pointer,
+                ),
+            }),
+            Gesture::Swivel {
+                centre_world,
+                axis_world,
+                ..
+            } => self
+                .pointer_around_axis(pointer, *centre_world, *axis_world)
+                .map(|point_world| Command::TurnSwivel { point_world }),
+        };
+        if let Some(command) = command {
+            self.model.apply(command);
+        }
+    }
+
+    /// Right-click on the body: pin, select, add a task on that part.
+    fn viewport_context_menu(&mut self, response: &egui::Response) {
+        let context_joint = self.model.hovered_joint().or(self.model.selected_joint());
         response.context_menu(|ui| match context_joint {
             Some(joint) => {
                 let name = self
+                    .model
                     .session
                     .skeleton()
                     .joints()
                     .get(joint)
-                    .map(|joint| describe_joint(&joint.name))
+                    .map(|joint| readable_name(&joint.name))
                     .unwrap_or_default();
                 ui.label(RichText::new(&name).strong());
                 if ui.button("Pin here (level 1)").clicked() {
-                    self.selected_joint = Some(joint);
-                    self.pin(joint);
+                    self.model.apply(Command::Pin(joint));
                     ui.close();
                 }
                 if ui.button("Select").clicked() {
-                    self.selected_joint = Some(joint);
+                    self.model.apply(Command::Select(Some(joint)));
                     ui.close();
                 }
                 ui.separator();
                 if ui.button("Add position task").clicked() {
-                    self.selected_joint = Some(joint);
+                    self.model.apply(Command::Select(Some(joint)));
                     self.add_position_task(joint);
                     ui.close();
                 }
                 if ui.button("Add orientation task").clicked() {
-                    self.selected_joint = Some(joint);
+                    self.model.apply(Command::Select(Some(joint)));
                     self.add_orientation_task(joint);
                     ui.close();
                 }
                 if let Some(limb) = self
+                    .model
                     .session
                     .skeleton()
                     .joints()
                     .get(joint)
-                    .and_then(|definition| panels::limb_of(&definition.name))
+                    .and_then(|definition| LimbName::of_joint(&definition.name))
                     && ui.button("Add limb task (with swivel)").clicked()
                 {
-                    self.selected_joint = Some(joint);
+                    self.model.apply(Command::Select(Some(joint)));
                     self.add_limb_task(limb);
                     ui.close();
                 }
@@ -1190,32 +663,10 @@ impl StanceApp {
                 ui.label("Right-click a body part to pin it.");
             }
         });
+    }
 
-        // Sensor readings drive their joints; the solver then moves the rest of the body.
-        let sensors_drove = self.apply_sensors();
-        // Solve this frame's iterations before drawing, so the picture shows this frame's pose.
-        let started = web_time::Instant::now();
-        let origin = self.clock_origin;
-        let clock = move || origin.elapsed().as_secs_f64();
-        self.session.solve_frame(Some(&clock));
-        self.solver_ms = started.elapsed().as_secs_f64() * 1000.0;
-        if let Some(point) = self.session.grabbed_point_world() {
-            let moved = self
-                .trace
-                .last()
-                .is_none_or(|last| (*last - point).length() > 0.002);
-            if moved && self.trace.len() < MAX_TRACE_POINTS {
-                self.trace.push(point);
-            }
-        }
-        if !self.session.is_settled()
-            || self.pull.is_some()
-            || self.handle_drag.is_some()
-            || self.sensors.replay_progress().is_some()
-        {
-            ui.ctx().request_repaint();
-        }
-
+    /// The 3D picture of this frame's posture.
+    fn draw_viewport(&mut self, ui: &mut egui::Ui, frame: &eframe::Frame, rect: egui::Rect) {
         let pixels_per_point = ui.ctx().pixels_per_point();
         let size_px = [
             (rect.width() * pixels_per_point).round().max(1.0) as u32,
@@ -1224,12 +675,16 @@ impl StanceApp {
         self.viewport_size_px = size_px;
         if let (Some(renderer), Some(render_state)) =
             (&mut self.renderer, frame.wgpu_render_state())
-            && let Some(model) = self.avatar.as_mut().and_then(|avatar| avatar.model.take())
+            && let Some(model) = self
+                .model
+                .avatar
+                .as_mut()
+                .and_then(|avatar| avatar.model.take())
         {
             renderer.set_avatar(render_state, Some(&model));
             self.avatar_uploaded = true;
         }
-        if self.avatar.is_none() && self.avatar_uploaded {
+        if self.model.avatar().is_none() && self.avatar_uploaded {
             self.avatar_uploaded = false;
         }
         let scene_started = web_time::Instant::now();
@@ -1245,7 +700,7 @@ impl StanceApp {
                 if !self.first_frame_reported {
                     self.first_frame_reported = true;
                     if let Some(backend) = &self.backend {
-                        self.hooks.first_frame_rendered(backend);
+                        self.model.hooks.first_frame_rendered(backend);
                     }
                 }
             }
@@ -1259,33 +714,18 @@ impl StanceApp {
                 );
             }
         }
-        if sensors_drove {
-            self.sensors.shown();
-        }
-        self.draw_overlay(ui.painter(), rect);
-        if self.show_skeleton || (self.avatar.is_some() && self.selected_joint.is_some()) {
-            self.draw_skeleton(&ui.painter().with_clip_rect(rect), rect);
-        }
-        self.draw_rings(&ui.painter().with_clip_rect(rect), rect);
-        let over_handle = self.pull.is_none()
-            && self.handle_drag.is_none()
-            && pointer.is_some_and(|pointer| self.pick_handle(pointer).is_some());
-        if self.pull.is_some() || self.handle_drag.is_some() {
-            ui.ctx().set_cursor_icon(egui::CursorIcon::Grabbing);
-        } else if over_handle || self.hovered_joint.is_some() {
-            ui.ctx().set_cursor_icon(egui::CursorIcon::Grab);
-        }
     }
 
     fn scene(&self) -> Scene {
         let capsules = self
-            .mannequin()
-            .into_iter()
+            .model
+            .bones()
+            .iter()
             .map(|bone| {
                 let mut capsule = bone.capsule;
-                capsule.color_linear = if Some(bone.owner) == self.selected_joint {
+                capsule.color_linear = if Some(bone.owner) == self.model.selected_joint() {
                     SELECTED_COLOR_LINEAR
-                } else if Some(bone.owner) == self.hovered_joint {
+                } else if Some(bone.owner) == self.model.hovered_joint() {
                     HOVERED_COLOR_LINEAR
                 } else {
                     BODY_COLOR_LINEAR
@@ -1293,12 +733,13 @@ impl StanceApp {
                 capsule
             })
             .collect();
+        let session = self.model.session();
         let avatar_palettes = self
-            .avatar
-            .as_ref()
-            .and_then(|avatar| avatar.palettes(self.session.humanoid(), self.session.posture()))
+            .model
+            .avatar()
+            .and_then(|avatar| avatar.palettes(session.humanoid(), session.posture()))
             .unwrap_or_default();
-        let show_avatar = self.avatar.is_some() && self.avatar_uploaded;
+        let show_avatar = self.model.avatar().is_some() && self.avatar_uploaded;
         Scene {
             // With an avatar the mannequin is hidden; the skeleton overlay shows the bones.
             capsules: if show_avatar { Vec::new() } else { capsules },
@@ -1331,8 +772,8 @@ impl StanceApp {
     /// on screen (CSS pixels), per-task statuses, the notice, and the rectangles of the main
     /// buttons. The page's test hook and scripts read it.
     pub fn state_json(&self) -> String {
-        let skeleton = self.session.skeleton();
-        let frames = self.session.frames();
+        let skeleton = self.model.session.skeleton();
+        let frames = self.model.session.frames();
         let rect = self.viewport_rect;
         let mut joints = Map::new();
         let mut screen = Map::new();
@@ -1356,10 +797,11 @@ impl StanceApp {
             }
         }
         let tasks: Vec<Value> = self
+            .model
             .session
             .tasks()
             .iter()
-            .zip(self.session.statuses())
+            .zip(self.model.session.statuses())
             .map(|(task, status)| {
                 json!({
                     "description": crate::posing::describe_task(task),
@@ -1381,7 +823,7 @@ impl StanceApp {
                 )
             })
             .collect();
-        let document = serde_json::from_str::<Value>(&self.session.document().to_json(false))
+        let document = serde_json::from_str::<Value>(&self.model.session.document().to_json(false))
             .unwrap_or(Value::Null);
         let goals: Vec<Value> = self
             .goal_handles()
@@ -1400,36 +842,36 @@ impl StanceApp {
                 Some(json!({
                     "dof": skeleton.dof_name(ring.dof),
                     "index": ring.dof,
-                    "value": self.session.posture().values().get(ring.dof),
+                    "value": self.model.session.posture().values().get(ring.dof),
                     "screen": [point.x, point.y],
                     "centre": [centre.x, centre.y],
                 }))
             })
             .collect();
         json!({
-            "revision": self.session.revision(),
-            "settled": self.session.is_settled(),
-            "loa": self.session.level_of_articulation().number(),
+            "revision": self.model.session.revision(),
+            "settled": self.model.session.is_settled(),
+            "loa": self.model.session.level_of_articulation().number(),
             "document": document,
             "joints": joints,
             "screen": screen,
             "tasks": tasks,
-            "gave_way": self.session.report().and_then(|report| report.gave_way),
-            "notice": self.notice.as_ref().map(|notice| json!({"text": notice.text, "error": notice.is_error})),
-            "avatar": self.avatar.as_ref().map(|avatar| json!({
+            "gave_way": self.model.session.report().and_then(|report| report.gave_way),
+            "notice": self.model.notice.as_ref().map(|notice| json!({"text": notice.text, "error": notice.is_error})),
+            "avatar": self.model.avatar.as_ref().map(|avatar| json!({
                 "name": avatar.name,
                 "vertices": avatar.vertex_count,
                 "triangles": avatar.triangle_count,
                 "uploaded": self.avatar_uploaded,
                 "mapped": avatar.mapping_summary().0,
             })),
-            "selected": self.selected_joint.and_then(|joint| skeleton.joints().get(joint)).map(|joint| joint.name.clone()),
-            "pulling": self.pull.is_some(),
-            "dragging_handle": self.handle_drag.is_some(),
-            "undo_steps": self.history.undo_steps(),
-            "can_redo": self.history.can_redo(),
-            "library": self.library.entries().iter().map(|entry| entry.name.clone()).collect::<Vec<_>>(),
-            "solver_ms": self.solver_ms,
+            "selected": self.model.selected_joint.and_then(|joint| skeleton.joints().get(joint)).map(|joint| joint.name.clone()),
+            "pulling": self.model.is_pulling(),
+            "dragging_handle": self.model.gesture().is_some() && !self.model.is_pulling(),
+            "undo_steps": self.model.history.undo_steps(),
+            "can_redo": self.model.history.can_redo(),
+            "library": self.model.library.entries().iter().map(|entry| entry.name.clone()).collect::<Vec<_>>(),
+            "solver_ms": self.model.solver_ms,
             "frame_ms": self.frame_ms,
             "scene_ms": self.scene_ms,
             "render_ms": self.render_ms,
@@ -1450,6 +892,16 @@ impl StanceApp {
         self.button_rects.clear();
         self.drain_inbox();
         self.shortcuts(&ctx);
+        // The frame's step runs before anything is drawn: the panels and the viewport show
+        // this frame's posture and statuses. Gestures read below are solved by the next step.
+        let origin = self.clock_origin;
+        let clock = move || origin.elapsed().as_secs_f64();
+        self.model.step(self.now_secs(), Some(&clock));
+        if self.model.session_generation() != self.session_generation {
+            // Another body: the mapping draft was for the old one.
+            self.session_generation = self.model.session_generation();
+            self.mapping_editor.restart();
+        }
         egui::Panel::top("menu_bar").show(ui, |ui| self.menu_bar(ui));
         egui::Panel::bottom("status_bar").show(ui, |ui| self.status_bar(ui, frame));
         egui::Panel::left("side_panel")
@@ -1470,7 +922,6 @@ impl StanceApp {
         self.help_window(&ctx);
         self.sensors_window(&ctx);
         self.mapping_window(&ctx);
-        self.autosave();
         if let Some(cpu_seconds) = frame.info().cpu_usage {
             self.frame_ms = f64::from(cpu_seconds) * 1000.0;
         }
@@ -1504,13 +955,6 @@ fn wasm_memory_bytes() -> Option<u64> {
     {
         None
     }
-}
-
-fn is_url(name: &str) -> bool {
-    name.starts_with("http://")
-        || name.starts_with("https://")
-        || (!name.contains(['\\', ':']) && name.contains('/'))
-        || name == "default-avatar.glb"
 }
 
 /// The help window's rows: gesture or key, and what it does.

@@ -7,10 +7,12 @@ pub mod avatar;
 pub mod history;
 mod host;
 pub mod library;
+pub mod model;
 pub mod posing;
 pub mod sensors;
 mod viewport;
 
-pub use app::{Notice, StanceApp};
+pub use app::StanceApp;
 pub use host::{BackendSummary, HostHooks, HostMessage, MemoryHost, MemoryHostState, NoHostHooks};
+pub use model::{Command, EditorModel, Gesture, Notice, SessionChange};
 pub use viewport::{CameraGesture, ViewportInput};

@@ -11,7 +11,7 @@ use egui_kittest::kittest::{NodeT, Queryable};
 use glam::DVec3;
 use stance_asset::{LoadOptions, export_glb, load_avatar, make_default_avatar};
 use stance_editor::posing::pin_task;
-use stance_editor::{MemoryHost, NoHostHooks, StanceApp};
+use stance_editor::{Command, MemoryHost, NoHostHooks, StanceApp};
 use stance_hanim::{LevelOfArticulation, SkeletonOptions};
 use stance_ik::Frames;
 
@@ -25,14 +25,18 @@ fn avatar_bytes() -> Vec<u8> {
 
 fn harness_with_avatar(host: &MemoryHost) -> Harness<'static, StanceApp> {
     let mut app = StanceApp::without_gpu(Box::new(host.clone())).unwrap();
-    app.load_avatar("figure.glb", &avatar_bytes());
-    assert!(app.avatar().is_some(), "{:?}", app.notice());
+    app.apply(Command::LoadAvatar {
+        name: "figure.glb".to_owned(),
+        bytes: avatar_bytes(),
+    });
+    assert!(app.model().avatar().is_some(), "{:?}", app.model().notice());
     harness_sized(app, egui::vec2(1280.0, 800.0))
 }
 
 fn notice(harness: &Harness<'static, StanceApp>) -> String {
     harness
         .state()
+        .model()
         .notice()
         .map(|notice| notice.text.clone())
         .unwrap_or_default()
@@ -41,10 +45,10 @@ fn notice(harness: &Harness<'static, StanceApp>) -> String {
 /// The node (joint of the file) that drives an H-Anim joint of the session's skeleton.
 fn source_node(harness: &Harness<'static, StanceApp>, hanim: &str) -> Option<String> {
     let app = harness.state();
-    let humanoid = app.session().humanoid();
+    let humanoid = app.model().session().humanoid();
     let index = humanoid.skeleton.joint_index(hanim)?;
     let source = humanoid.joints[index].source?;
-    Some(app.avatar()?.avatar.nodes[source].name.clone())
+    Some(app.model().avatar()?.avatar.nodes[source].name.clone())
 }
 
 fn type_filter(harness: &mut Harness<'static, StanceApp>, text: &str) {
@@ -80,10 +84,11 @@ fn is_enabled(harness: &Harness<'static, StanceApp>, label: &str) -> bool {
 fn swapping_the_elbows_in_the_mapping_window_rebuilds_the_skeleton() {
     let host = MemoryHost::default();
     let mut harness = harness_with_avatar(&host);
-    let joints_before = harness.state().session().skeleton().joint_count();
-    let tasks_before = harness.state().session().tasks().to_vec();
+    let joints_before = harness.state().model().session().skeleton().joint_count();
+    let tasks_before = harness.state().model().session().tasks().to_vec();
     let left_elbow_x = harness
         .state()
+        .model()
         .session()
         .joint_position("l_elbow")
         .unwrap()
@@ -117,7 +122,7 @@ fn swapping_the_elbows_in_the_mapping_window_rebuilds_the_skeleton() {
 
     assert_eq!(source_node(&harness, "l_elbow").as_deref(), Some("r_elbow"));
     assert_eq!(source_node(&harness, "r_elbow").as_deref(), Some("l_elbow"));
-    let session = harness.state().session();
+    let session = harness.state().model().session();
     let swapped_x = session.joint_position("l_elbow").unwrap().x;
     assert!(
         swapped_x < -0.1,
@@ -133,26 +138,28 @@ fn swapping_the_elbows_in_the_mapping_window_rebuilds_the_skeleton() {
     assert!(text.contains("Mapping corrected"), "{text}");
     assert!(text.contains("Ctrl+Z does not undo"), "{text}");
     assert!(
-        !harness.state().notice().unwrap().is_error,
+        !harness.state().model().notice().unwrap().is_error,
         "{text} is no error"
     );
 
     // Unmapping a joint takes it out of the skeleton, and the task on it goes with it.
-    let mut document = harness.state().session().document();
+    let mut document = harness.state().model().session().document();
     let collarbone = harness
         .state()
+        .model()
         .session()
         .joint_position("l_sternoclavicular")
         .unwrap();
     document
         .tasks
         .push(pin_task("l_sternoclavicular", collarbone.to_array()));
-    harness
-        .state_mut()
-        .open_file("pose.json", document.to_json(false).as_bytes());
+    harness.state_mut().apply(Command::OpenFile {
+        name: "pose.json".to_owned(),
+        bytes: document.to_json(false).as_bytes().to_vec(),
+    });
     settle(&mut harness);
     assert_eq!(
-        harness.state().session().tasks().len(),
+        harness.state().model().session().tasks().len(),
         tasks_before.len() + 1
     );
     type_filter(&mut harness, "sternoclavicular");
@@ -163,7 +170,7 @@ fn swapping_the_elbows_in_the_mapping_window_rebuilds_the_skeleton() {
     );
     harness.get_by_label("Apply").click();
     settle(&mut harness);
-    let session = harness.state().session();
+    let session = harness.state().model().session();
     assert!(
         session
             .skeleton()
@@ -185,11 +192,12 @@ fn swapping_the_elbows_in_the_mapping_window_rebuilds_the_skeleton() {
 
     // The corrections stay with this avatar for the session: back to the mannequin, then
     // the same file again.
-    harness.state_mut().use_mannequin();
+    harness.state_mut().apply(Command::UseMannequin);
     harness.run_steps(2);
-    harness
-        .state_mut()
-        .load_avatar("figure.glb", &avatar_bytes());
+    harness.state_mut().apply(Command::LoadAvatar {
+        name: "figure.glb".to_owned(),
+        bytes: avatar_bytes(),
+    });
     settle(&mut harness);
     assert!(
         notice(&harness).contains("made again"),
@@ -200,6 +208,7 @@ fn swapping_the_elbows_in_the_mapping_window_rebuilds_the_skeleton() {
     assert!(
         harness
             .state()
+            .model()
             .session()
             .skeleton()
             .joint_index("l_sternoclavicular")
@@ -214,6 +223,7 @@ fn swapping_the_elbows_in_the_mapping_window_rebuilds_the_skeleton() {
     assert!(
         harness
             .state()
+            .model()
             .session()
             .skeleton()
             .joint_index("l_sternoclavicular")
@@ -255,7 +265,7 @@ fn the_posed_avatar_is_exported_as_glb_that_reads_back_in_the_same_posture() {
         .unwrap();
     let read_back = again.current_posture(&body).unwrap();
     let exported = Frames::new(&body.skeleton, &read_back);
-    let session = harness.state().session();
+    let session = harness.state().model().session();
     let posed = session.frames();
     let mut largest_turn: f64 = 0.0;
     for (index, joint) in session.skeleton().joints().iter().enumerate() {
@@ -282,11 +292,14 @@ fn the_posed_avatar_is_exported_as_glb_that_reads_back_in_the_same_posture() {
 fn an_export_the_host_cannot_download_says_why() {
     let mut app = StanceApp::without_gpu(Box::new(NoHostHooks)).unwrap();
     app.export_posed_avatar();
-    let notice = app.notice().unwrap();
+    let notice = app.model().notice().unwrap();
     assert!(notice.is_error && notice.text.contains("Load an avatar first"));
-    app.load_avatar("figure.glb", &avatar_bytes());
+    app.apply(Command::LoadAvatar {
+        name: "figure.glb".to_owned(),
+        bytes: avatar_bytes(),
+    });
     app.export_posed_avatar();
-    let notice = app.notice().unwrap();
+    let notice = app.model().notice().unwrap();
     assert!(notice.is_error, "{}", notice.text);
     assert!(notice.text.contains("cannot download"), "{}", notice.text);
 }

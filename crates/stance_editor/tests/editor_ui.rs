@@ -7,7 +7,7 @@ use egui::{Key, Modifiers, PointerButton, Pos2};
 use egui_kittest::Harness;
 use egui_kittest::kittest::{NodeT, Queryable};
 use stance_document::{Document, TaskKindSpec};
-use stance_editor::{MemoryHost, StanceApp};
+use stance_editor::{Command, MemoryHost, StanceApp};
 
 mod common;
 use common::{
@@ -20,7 +20,7 @@ fn harness(host: &MemoryHost) -> Harness<'static, StanceApp> {
 }
 
 fn document(harness: &Harness<'static, StanceApp>) -> Document {
-    harness.state().session().document()
+    harness.state().model().session().document()
 }
 
 fn joint_world(harness: &Harness<'static, StanceApp>, joint: &str) -> [f64; 3] {
@@ -161,7 +161,7 @@ fn a_copied_link_opens_the_same_posture_and_tasks_and_a_tampered_one_says_so() {
 
     let mut opened = StanceApp::without_gpu(Box::new(MemoryHost::default())).unwrap();
     opened.open_startup(Some(&format!("#{fragment}")));
-    let reopened = opened.session().document();
+    let reopened = opened.model().session().document();
     assert_eq!(reopened.tasks.len(), original.tasks.len());
     for (joint, dofs) in original.posture.joints.iter() {
         for (dof, value) in dofs.iter() {
@@ -173,7 +173,7 @@ fn a_copied_link_opens_the_same_posture_and_tasks_and_a_tampered_one_says_so() {
             );
         }
     }
-    assert!(opened.notice().is_some_and(|notice| !notice.is_error));
+    assert!(opened.model().notice().is_some_and(|notice| !notice.is_error));
 
     let mut tampered_fragment = fragment.clone().into_bytes();
     let middle = tampered_fragment.len() / 2;
@@ -184,16 +184,16 @@ fn a_copied_link_opens_the_same_posture_and_tasks_and_a_tampered_one_says_so() {
     };
     let tampered = String::from_utf8(tampered_fragment).unwrap();
     let mut damaged = StanceApp::without_gpu(Box::new(MemoryHost::default())).unwrap();
-    let default_document = damaged.session().document();
+    let default_document = damaged.model().session().document();
     damaged.open_startup(Some(&tampered));
-    let notice = damaged.notice().unwrap();
+    let notice = damaged.model().notice().unwrap();
     assert!(
         notice.is_error && notice.text.contains("could not be opened"),
         "{}",
         notice.text
     );
     assert_eq!(
-        damaged.session().document(),
+        damaged.model().session().document(),
         default_document,
         "the editor opens normally"
     );
@@ -221,12 +221,12 @@ fn work_survives_a_reload_and_the_library_keeps_named_poses() {
     let mut reloaded = StanceApp::without_gpu(Box::new(host.clone())).unwrap();
     reloaded.open_startup(None);
     assert_eq!(
-        reloaded.session().document(),
+        reloaded.model().session().document(),
         edited,
         "autosave restored the work"
     );
     let names: Vec<&str> = reloaded
-        .library()
+        .model().library()
         .entries()
         .iter()
         .map(|entry| entry.name.as_str())
@@ -237,20 +237,26 @@ fn work_survives_a_reload_and_the_library_keeps_named_poses() {
 #[test]
 fn a_bad_file_says_what_is_wrong_and_changes_nothing() {
     let mut app = StanceApp::without_gpu(Box::new(MemoryHost::default())).unwrap();
-    let before = app.session().document();
-    app.open_file(
-        "pose.json",
-        br#"{"tasks":[{"kind":"position","joint":"l_wirst","target":[0,1]}]}"#,
-    );
-    let notice = app.notice().unwrap();
+    let before = app.model().session().document();
+    app.apply(Command::OpenFile {
+        name: "pose.json".to_owned(),
+        bytes: br#"{"tasks":[{"kind":"position","joint":"l_wirst","target":[0,1]}]}"#.to_vec(),
+    });
+    let notice = app.model().notice().unwrap();
     assert!(notice.is_error, "{}", notice.text);
     assert!(notice.text.contains("target"), "{}", notice.text);
-    assert_eq!(app.session().document(), before);
-    app.open_file("avatar.glb", b"glTF");
-    assert!(app.notice().unwrap().is_error);
-    app.open_file("binary.json", &[0xff, 0xfe, 0x00]);
-    assert!(app.notice().unwrap().text.contains("not a text"));
-    assert_eq!(app.session().document(), before);
+    assert_eq!(app.model().session().document(), before);
+    app.apply(Command::OpenFile {
+        name: "avatar.glb".to_owned(),
+        bytes: b"glTF".to_vec(),
+    });
+    assert!(app.model().notice().unwrap().is_error);
+    app.apply(Command::OpenFile {
+        name: "binary.json".to_owned(),
+        bytes: vec![0xff, 0xfe, 0x00],
+    });
+    assert!(app.model().notice().unwrap().text.contains("not a text"));
+    assert_eq!(app.model().session().document(), before);
 }
 
 fn drag(harness: &mut Harness<'static, StanceApp>, path: &[Pos2]) {
@@ -366,8 +372,8 @@ fn the_ring_gizmo_turns_the_selected_joint_within_its_limits() {
         .collect();
     drag(&mut harness, &path);
     settle(&mut harness);
-    let skeleton = harness.state().session().skeleton().clone();
-    let after = harness.state().session().posture().values()[index];
+    let skeleton = harness.state().model().session().skeleton().clone();
+    let after = harness.state().model().session().posture().values()[index];
     assert!(
         (after - before).abs() > 0.2,
         "the joint turned: {before} -> {after}"
@@ -635,9 +641,10 @@ fn dragging_the_swivel_handle_turns_the_elbow_and_the_hand_stays() {
     // A pose with the right elbow bent, opened from a file.
     let mut pose = document(&harness);
     pose.posture.set("r_elbow", stance_ik::Dof::Rx, -1.2);
-    harness
-        .state_mut()
-        .open_file("bent.json", pose.to_json(false).as_bytes());
+    harness.state_mut().apply(Command::OpenFile {
+        name: "bent.json".to_owned(),
+        bytes: pose.to_json(false).as_bytes().to_vec(),
+    });
     settle(&mut harness);
     // Select the right upper arm by clicking it.
     let shoulder = screen_position(&harness, "r_shoulder");

@@ -113,11 +113,13 @@ fn a_streamed_flock_of_birds_drives_the_arm_after_calibration() {
     let feet_before = [
         harness
             .state()
+            .model()
             .session()
             .joint_position("l_talocrural")
             .unwrap(),
         harness
             .state()
+            .model()
             .session()
             .joint_position("r_talocrural")
             .unwrap(),
@@ -158,7 +160,7 @@ fn a_streamed_flock_of_birds_drives_the_arm_after_calibration() {
     assert_eq!(state(&harness)["sensors"]["assigned"], 4);
     harness.run_steps(10);
     let at_calibration = |harness: &Harness<'static, StanceApp>, joint: &str| {
-        let session = harness.state().session();
+        let session = harness.state().model().session();
         session
             .frames()
             .rotation(session.skeleton().joint_index(joint).unwrap())
@@ -197,7 +199,7 @@ fn a_streamed_flock_of_birds_drives_the_arm_after_calibration() {
             let error = angle_deg(world, expected_world(&truth[k], sensor, *calibrated));
             assert!(error < 0.2, "frame {k}: {joint} off by {error:.3} degrees");
         }
-        let session = harness.state().session();
+        let session = harness.state().model().session();
         assert!(
             session.is_settled(),
             "frame {k}: the solver settles with sensors holding"
@@ -210,7 +212,7 @@ fn a_streamed_flock_of_birds_drives_the_arm_after_calibration() {
         assert!(latency.as_f64().is_some(), "latency measured");
     }
 
-    let held = harness.state().session().posture().clone();
+    let held = harness.state().model().session().posture().clone();
     sender
         .send(HostMessage::SensorLost {
             reason: "The serial device was unplugged.".to_owned(),
@@ -222,7 +224,7 @@ fn a_streamed_flock_of_birds_drives_the_arm_after_calibration() {
     let notice = after["notice"]["text"].as_str().unwrap();
     assert!(notice.contains("unplugged"), "{notice}");
     assert_eq!(after["notice"]["error"], true);
-    let posture = harness.state().session().posture();
+    let posture = harness.state().model().session().posture();
     let drift = posture
         .values()
         .iter()

@@ -2,20 +2,11 @@
 //! which H-Anim joint each joint of the file drives (the skeleton and the posing session are
 //! rebuilt from the corrected mapping), and the export of the posed avatar as GLB.
 
-use std::collections::BTreeMap;
-
 use egui::{Color32, RichText};
-use glam::{DQuat, DVec3};
-use stance_document::TaskSpec;
-use stance_hanim::{
-    HumanoidSkeleton, LevelOfArticulation, Mapping, MappingError, MatchMethod, all_joints,
-    joint_by_name,
-};
-use stance_ik::{Posture, Skeleton};
+use stance_hanim::{LevelOfArticulation, Mapping, MatchMethod, all_joints, joint_by_name};
 
 use super::StanceApp;
-use crate::avatar::LoadedAvatar;
-use crate::posing::{PosingSession, describe_task};
+use crate::model::{Command, Correction};
 use stance_hanim::{mirror_name, readable_name};
 
 /// Matches less sure than this are guesses the user should check (name patterns, geometry).
@@ -27,48 +18,7 @@ const MISSING_COLOR: Color32 = Color32::from_rgb(240, 90, 90);
 /// What an unmapped row shows.
 const UNMAPPED: &str = "none";
 
-/// One correction: source joint (node index) `source` drives `hanim`, or nothing.
-#[derive(Debug, Clone, PartialEq)]
-struct Correction {
-    source: usize,
-    hanim: Option<&'static str>,
-}
-
-impl Correction {
-    fn apply(&self, mapping: &mut Mapping) -> Result<(), MappingError> {
-        match self.hanim {
-            Some(hanim) => mapping.set(hanim, self.source),
-            None => {
-                if let Some(hanim) = mapping.hanim_of(self.source) {
-                    mapping.remove(hanim);
-                }
-                Ok(())
-            }
-        }
-    }
-}
-
-/// The corrections applied to one avatar (by name) during the session.
-#[derive(Debug)]
-struct AvatarCorrections {
-    /// The mapping the file got on import.
-    automatic: Mapping,
-    /// Each applied batch, oldest first.
-    applied: Vec<Vec<Correction>>,
-}
-
-impl AvatarCorrections {
-    /// The automatic mapping with the first `batches` batches applied.
-    fn mapping(&self, batches: usize) -> Result<Mapping, MappingError> {
-        let mut mapping = self.automatic.clone();
-        for correction in self.applied.iter().take(batches).flatten() {
-            correction.apply(&mut mapping)?;
-        }
-        Ok(mapping)
-    }
-}
-
-/// The mapping window's state and the corrections kept for the session.
+/// The mapping window's state (the corrections kept for the session are the model's).
 #[derive(Debug, Default)]
 pub(super) struct MappingEditor {
     pub(super) open: bool,
@@ -78,55 +28,13 @@ pub(super) struct MappingEditor {
     staged: Vec<Correction>,
     filter: String,
     only_guesses: bool,
-    /// Per avatar name.
-    by_avatar: BTreeMap<String, AvatarCorrections>,
 }
 
 impl MappingEditor {
-    /// An avatar file was imported: the draft starts again and, when the user corrected an
-    /// avatar of that name earlier in the session (the same file: same automatic mapping),
-    /// those corrections are made again and `humanoid` rebuilt. Returns a line for the load
-    /// message.
-    pub(super) fn reapply(
-        &mut self,
-        avatar: &mut LoadedAvatar,
-        loa: LevelOfArticulation,
-        humanoid: &mut HumanoidSkeleton,
-    ) -> Option<String> {
+    /// Another avatar arrived: the draft starts again.
+    pub(super) fn restart(&mut self) {
         self.draft = None;
         self.staged.clear();
-        let entry = self.by_avatar.get(&avatar.name)?;
-        if entry.automatic != avatar.avatar.mapping {
-            // Another file under the same name: its joints are not the same.
-            self.by_avatar.remove(&avatar.name);
-            return None;
-        }
-        if entry.applied.is_empty() {
-            return None;
-        }
-        let count: usize = entry.applied.iter().map(Vec::len).sum();
-        let rebuilt = entry
-            .mapping(entry.applied.len())
-            .map_err(|error| error.to_string())
-            .and_then(|mapping| {
-                let built = avatar.skeleton_with_mapping(&mapping, loa)?;
-                Ok((mapping, built))
-            });
-        match rebuilt {
-            Ok((mapping, built)) => {
-                avatar.avatar.mapping = mapping;
-                *humanoid = built;
-                Some(format!(
-                    "Your {count} mapping correction(s) of this session were made again."
-                ))
-            }
-            Err(error) => {
-                self.by_avatar.remove(&avatar.name);
-                Some(format!(
-                    "Your mapping corrections could not be made again ({error}); the automatic mapping is used."
-                ))
-            }
-        }
     }
 }
 
@@ -151,7 +59,7 @@ struct MappingRow {
 impl StanceApp {
     /// The side panel's line about guessed joints and the button that opens the window.
     pub(super) fn avatar_mapping_button(&mut self, ui: &mut egui::Ui) {
-        let Some(avatar) = &self.avatar else {
+        let Some(avatar) = &self.model.avatar else {
             return;
         };
         let guesses = avatar
@@ -181,7 +89,7 @@ impl StanceApp {
     pub(super) fn export_posed_menu_item(&mut self, ui: &mut egui::Ui) {
         let button = ui
             .add_enabled(
-                self.avatar.is_some(),
+                self.model.avatar.is_some(),
                 egui::Button::new("Export posed avatar (GLB)…"),
             )
             .on_disabled_hover_text("load an avatar first (Avatar menu)");
@@ -195,24 +103,27 @@ impl StanceApp {
     /// Offers the avatar in the current posture as a GLB download (what `stance
     /// export-posed` writes); says why when it cannot.
     pub fn export_posed_avatar(&mut self) {
-        let Some(avatar) = self.avatar.as_mut() else {
-            self.warn("Load an avatar first (Avatar menu): the mannequin cannot be exported.");
+        let Some(avatar) = self.model.avatar.as_mut() else {
+            self.model
+                .warn("Load an avatar first (Avatar menu): the mannequin cannot be exported.");
             return;
         };
         let file_name = posed_file_name(&avatar.name);
-        let bytes = match avatar.posed_glb(self.session.humanoid(), self.session.posture()) {
-            Ok(bytes) => bytes,
-            Err(error) => {
-                self.warn(format!("The posed avatar could not be exported: {error}"));
-                return;
-            }
-        };
-        match self.hooks.download_bytes(&file_name, &bytes) {
-            Ok(()) => self.inform(format!(
+        let bytes =
+            match avatar.posed_glb(self.model.session.humanoid(), self.model.session.posture()) {
+                Ok(bytes) => bytes,
+                Err(error) => {
+                    self.model
+                        .warn(format!("The posed avatar could not be exported: {error}"));
+                    return;
+                }
+            };
+        match self.model.hooks.download_bytes(&file_name, &bytes) {
+            Ok(()) => self.model.inform(format!(
                 "Exported {file_name} ({} KB): the avatar in this posture, for any glTF viewer or engine.",
                 bytes.len().div_ceil(1024)
             )),
-            Err(error) => self.warn(format!("{file_name} could not be downloaded: {error}")),
+            Err(error) => self.model.warn(format!("{file_name} could not be downloaded: {error}")),
         }
     }
 
@@ -221,18 +132,18 @@ impl StanceApp {
         if !self.mapping_editor.open {
             return;
         }
-        let Some(avatar) = self.avatar.as_ref() else {
+        let Some(avatar) = self.model.avatar.as_ref() else {
             self.mapping_editor.open = false;
             self.mapping_editor.draft = None;
             self.mapping_editor.staged.clear();
             return;
         };
-        let loa = self.session.level_of_articulation();
+        let loa = self.model.session.level_of_articulation();
         let can_revert = self
-            .mapping_editor
-            .by_avatar
-            .get(&avatar.name)
-            .is_some_and(|entry| !entry.applied.is_empty());
+            .model
+            .mapping_corrections
+            .before_last(&avatar.name)
+            .is_some();
         let MappingEditor {
             draft,
             staged,
@@ -383,9 +294,12 @@ impl StanceApp {
             Some(MappingAction::Discard) => {
                 self.mapping_editor.draft = None;
                 self.mapping_editor.staged.clear();
-                self.inform("The mapping changes were discarded.");
+                self.model.inform("The mapping changes were discarded.");
             }
-            Some(MappingAction::Revert) => self.revert_mapping_correction(),
+            Some(MappingAction::Revert) => {
+                self.mapping_editor.restart();
+                self.model.apply(Command::RevertMappingCorrection);
+            }
             None => {}
         }
     }
@@ -397,146 +311,25 @@ impl StanceApp {
         let correction = Correction { source, hanim };
         match correction.apply(draft) {
             Ok(()) => self.mapping_editor.staged.push(correction),
-            Err(error) => self.warn(format!("That correction is not possible: {error}")),
+            Err(error) => self
+                .model
+                .warn(format!("That correction is not possible: {error}")),
         }
     }
 
     /// Rebuilds the skeleton and the session from the draft, as one correction to revert.
     fn apply_mapping_corrections(&mut self) {
-        let Some(avatar) = &self.avatar else {
-            return;
-        };
-        let Some(draft) = self
-            .mapping_editor
-            .draft
-            .clone()
-            .filter(|_| !self.mapping_editor.staged.is_empty())
-        else {
-            self.inform("Nothing to apply: pick another H-Anim joint in a row first.");
-            return;
-        };
-        let name = avatar.name.clone();
-        let before = avatar.avatar.mapping.clone();
-        let changes: Vec<String> = avatar
-            .joint_nodes()
-            .into_iter()
-            .filter(|&source| before.hanim_of(source) != draft.hanim_of(source))
-            .map(|source| {
-                let node = avatar
-                    .avatar
-                    .nodes
-                    .get(source)
-                    .map_or("?", |node| node.name.as_str());
-                match draft.hanim_of(source) {
-                    Some(hanim) => format!("{node} drives {hanim}"),
-                    None => format!("{node} drives no joint"),
-                }
-            })
-            .collect();
-        match self.remap_avatar(draft) {
-            Ok(dropped) => {
-                let staged = std::mem::take(&mut self.mapping_editor.staged);
-                self.mapping_editor
-                    .by_avatar
-                    .entry(name)
-                    .or_insert_with(|| AvatarCorrections {
-                        automatic: before,
-                        applied: Vec::new(),
-                    })
-                    .applied
-                    .push(staged);
-                self.mapping_editor.draft = None;
-                self.inform(format!(
-                    "Mapping corrected ({}): {} Ctrl+Z does not undo this; Revert last correction in the mapping window does.",
-                    summarize(&changes),
-                    self.rebuilt_summary(&dropped)
-                ));
-            }
-            Err(error) => self.warn(format!(
-                "The corrected mapping could not be applied: {error}. The skeleton stays as it was."
+        let draft = self.mapping_editor.draft.take();
+        let corrections = std::mem::take(&mut self.mapping_editor.staged);
+        match draft {
+            Some(mapping) if !corrections.is_empty() => self.model.apply(Command::ApplyMapping {
+                mapping: Box::new(mapping),
+                corrections,
+            }),
+            _ => self.model.apply(Command::Inform(
+                "Nothing to apply: pick another H-Anim joint in a row first.".to_owned(),
             )),
         }
-    }
-
-    /// Goes back to the mapping before the last applied correction.
-    fn revert_mapping_correction(&mut self) {
-        let Some(avatar) = &self.avatar else {
-            return;
-        };
-        let name = avatar.name.clone();
-        let previous = match self.mapping_editor.by_avatar.get(&name) {
-            Some(entry) if !entry.applied.is_empty() => entry.mapping(entry.applied.len() - 1),
-            _ => {
-                self.inform("There is no mapping correction to revert.");
-                return;
-            }
-        };
-        match previous
-            .map_err(|error| error.to_string())
-            .and_then(|mapping| self.remap_avatar(mapping))
-        {
-            Ok(dropped) => {
-                if let Some(entry) = self.mapping_editor.by_avatar.get_mut(&name) {
-                    entry.applied.pop();
-                }
-                self.mapping_editor.draft = None;
-                self.mapping_editor.staged.clear();
-                self.inform(format!(
-                    "Reverted the last mapping correction: {}",
-                    self.rebuilt_summary(&dropped)
-                ));
-            }
-            Err(error) => self.warn(format!("The correction could not be reverted: {error}")),
-        }
-    }
-
-    fn rebuilt_summary(&self, dropped: &[String]) -> String {
-        let skeleton = self.session.skeleton();
-        let mut text = format!(
-            "the skeleton was rebuilt ({} joints, {} DOF); the posture and {} task(s) carried over.",
-            skeleton.joint_count(),
-            skeleton.dof_count(),
-            self.session.tasks().len()
-        );
-        if !dropped.is_empty() {
-            text.push_str(&format!(
-                " Dropped, their joints are gone: {}.",
-                dropped.join(", ")
-            ));
-        }
-        text
-    }
-
-    /// Rebuilds the avatar's skeleton and the posing session from `mapping` at the current
-    /// LOA: the posture carries over by joint name, the tasks that still fit stay. On error
-    /// nothing changes. Returns the dropped tasks, described.
-    fn remap_avatar(&mut self, mapping: Mapping) -> Result<Vec<String>, String> {
-        let loa = self.session.level_of_articulation();
-        let Some(avatar) = self.avatar.as_mut() else {
-            return Err("no avatar is loaded".to_owned());
-        };
-        let humanoid = avatar.skeleton_with_mapping(&mapping, loa)?;
-        let mut session =
-            PosingSession::with_humanoid(humanoid).map_err(|error| error.to_string())?;
-        let (kept, dropped): (Vec<TaskSpec>, Vec<TaskSpec>) = self
-            .session
-            .tasks()
-            .iter()
-            .cloned()
-            .partition(|task| task.to_solver_tasks(session.skeleton(), &[]).is_ok());
-        if let Some(posture) = carry_posture(&self.session, session.skeleton()) {
-            session.set_posture(posture);
-        }
-        session.set_tasks(kept);
-        avatar.avatar.mapping = mapping;
-        self.session = session;
-        self.sensors.release();
-        self.selected_joint = None;
-        self.hovered_joint = None;
-        self.pull = None;
-        self.handle_drag = None;
-        self.trace.clear();
-        Ok(dropped.iter().map(describe_task).collect())
     }
 }
 
@@ -655,62 +448,6 @@ fn method_text(method: MatchMethod) -> &'static str {
     }
 }
 
-/// The first changes in a line.
-fn summarize(changes: &[String]) -> String {
-    const SHOWN: usize = 4;
-    let mut text = changes
-        .iter()
-        .take(SHOWN)
-        .cloned()
-        .collect::<Vec<_>>()
-        .join(", ");
-    if changes.len() > SHOWN {
-        text.push_str(&format!(" and {} more", changes.len() - SHOWN));
-    }
-    if text.is_empty() {
-        text.push_str("no joint changed");
-    }
-    text
-}
-
-/// The posture of `old` on `skeleton`, by joint name: each joint keeps its world rotation (a
-/// joint new to the skeleton turns with its parent), projected onto its DOF; the root keeps
-/// its translation.
-fn carry_posture(old: &PosingSession, skeleton: &Skeleton) -> Option<Posture> {
-    let old_skeleton = old.skeleton();
-    let frames = old.frames();
-    let mut world: Vec<DQuat> = Vec::with_capacity(skeleton.joint_count());
-    for joint in skeleton.joints() {
-        let own = old_skeleton
-            .joint_index(&joint.name)
-            .filter(|&index| index < frames.world_from_joint_rotation.len())
-            .map(|index| frames.rotation(index).normalize());
-        let inherited = joint.parent.and_then(|parent| world.get(parent).copied());
-        world.push(own.or(inherited).unwrap_or(DQuat::IDENTITY));
-    }
-    let locals: Vec<DQuat> = skeleton
-        .joints()
-        .iter()
-        .zip(&world)
-        .map(
-            |(joint, rotation)| match joint.parent.and_then(|parent| world.get(parent)) {
-                Some(parent) => (parent.inverse() * *rotation).normalize(),
-                None => *rotation,
-            },
-        )
-        .collect();
-    let values = old.posture().values();
-    let mut translation = DVec3::ZERO;
-    if let Some(root) = old_skeleton.joints().first() {
-        for axis in 0..3 {
-            if let Some(value) = root.translation_dof[axis].and_then(|dof| values.get(dof)) {
-                translation[axis] = *value;
-            }
-        }
-    }
-    Posture::from_rotations(skeleton, translation, &locals).ok()
-}
-
 /// `Avatars/Jane.vrm?x=1` -> `Jane-posed.glb`.
 fn posed_file_name(name: &str) -> String {
     let path = name.split(['?', '#']).next().unwrap_or(name);
@@ -733,21 +470,5 @@ mod tests {
         );
         assert_eq!(posed_file_name("C:\\models\\x.gltf"), "x-posed.glb");
         assert_eq!(posed_file_name(""), "avatar-posed.glb");
-    }
-
-    #[test]
-    fn a_posture_carries_over_by_joint_name() {
-        let mut old = PosingSession::new(LevelOfArticulation::Loa2).unwrap();
-        let elbow = old.skeleton().joint_index("l_elbow").unwrap();
-        let dof = old.skeleton().joints()[elbow].dof_start;
-        old.set_dof(dof, 0.7);
-        let target = PosingSession::new(LevelOfArticulation::Loa1).unwrap();
-        let carried = carry_posture(&old, target.skeleton()).unwrap();
-        let frames = stance_ik::Frames::new(target.skeleton(), &carried);
-        let new_elbow = target.skeleton().joint_index("l_elbow").unwrap();
-        let angle = frames
-            .rotation(new_elbow)
-            .angle_between(old.frames().rotation(elbow));
-        assert!(angle < 1e-6, "the elbow turned {angle} rad away");
     }
 }

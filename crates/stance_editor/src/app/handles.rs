@@ -9,7 +9,7 @@ use stance_document::{LimbName, TaskKindSpec};
 use stance_ik::SwivelInterval;
 
 use super::StanceApp;
-use crate::history::EditKind;
+use crate::model::Gesture;
 
 /// How close (points) the pointer must be to a handle to take it.
 const HANDLE_REACH_PT: f32 = 9.0;
@@ -33,37 +33,6 @@ const SWIVEL_HANDLE_PT: f32 = 6.0;
 /// Below this distance from the shoulder-wrist axis (m) the limb is straight: turning it
 /// around the axis moves nothing, and there is no handle.
 const SWIVEL_MIN_RADIUS_M: f64 = 0.01;
-
-/// A handle being dragged.
-#[derive(Debug, Clone)]
-pub(super) enum HandleDrag {
-    /// The goal of `tasks` (several when their goals coincide, like the gaze and the hand on
-    /// the same sphere), moved in the plane facing the camera through its start.
-    Goal {
-        tasks: Vec<usize>,
-        plane_point_world: DVec3,
-    },
-    /// A ring of the joint gizmo: DOF `dof` turns with the pointer around `centre_px`.
-    Ring {
-        dof: usize,
-        centre_px: Pos2,
-        last_angle: f32,
-        accumulated: f64,
-        start_value: f64,
-        /// +1 when the DOF axis points toward the camera (a counter-clockwise drag on screen
-        /// is then a positive rotation), -1 otherwise.
-        sign: f64,
-    },
-    /// The swivel handle: the elbow or knee turns around the limb's axis with the pointer.
-    Swivel {
-        limb: LimbName,
-        start_swivel: f64,
-        /// Unit direction from the axis to the middle joint when the drag started.
-        start_direction: DVec3,
-        centre_world: DVec3,
-        axis_world: DVec3,
-    },
-}
 
 /// The swivel handle of the selected arm or leg.
 #[derive(Debug, Clone)]
@@ -106,7 +75,8 @@ pub(super) struct Ring {
 impl StanceApp {
     /// Tasks whose goal can be dragged, with the goal's world position.
     pub(super) fn goal_handles(&self) -> Vec<(usize, DVec3)> {
-        self.session
+        self.model
+            .session
             .tasks()
             .iter()
             .enumerate()
@@ -124,11 +94,11 @@ impl StanceApp {
 
     /// The rings of the selected joint's rotational DOF.
     pub(super) fn rings(&self) -> Vec<Ring> {
-        let Some(joint_index) = self.selected_joint else {
+        let Some(joint_index) = self.model.selected_joint else {
             return Vec::new();
         };
-        let skeleton = self.session.skeleton();
-        let frames = self.session.frames();
+        let skeleton = self.model.session.skeleton();
+        let frames = self.model.session.frames();
         let Some(joint) = skeleton.joints().get(joint_index) else {
             return Vec::new();
         };
@@ -155,9 +125,16 @@ impl StanceApp {
 
     /// The swivel handle of the selected joint's arm or leg (none for a straight limb).
     pub(super) fn swivel_handle(&self) -> Option<SwivelHandle> {
-        let joint = self.session.skeleton().joints().get(self.selected_joint?)?;
+        let joint = self
+            .model
+            .session
+            .skeleton()
+            .joints()
+            .get(self.model.selected_joint?)?;
         let limb = LimbName::of_joint(&joint.name)?;
-        let [upper, middle, end] = limb.joints().map(|name| self.session.joint_position(name));
+        let [upper, middle, end] = limb
+            .joints()
+            .map(|name| self.model.session.joint_position(name));
         let (upper, middle_world, end) = (upper?, middle?, end?);
         let axis_world = (end - upper).normalize_or_zero();
         if axis_world == DVec3::ZERO {
@@ -169,7 +146,7 @@ impl StanceApp {
         if radius.is_nan() || radius < SWIVEL_MIN_RADIUS_M {
             return None;
         }
-        let (swivel, intervals) = self.session.limb_swivel(limb)?;
+        let (swivel, intervals) = self.model.session.limb_swivel(limb)?;
         Some(SwivelHandle {
             limb,
             middle_world,
@@ -237,7 +214,7 @@ impl StanceApp {
     }
 
     /// The handle under `pointer`, if any: goals first, then rings.
-    pub(super) fn pick_handle(&self, pointer: Pos2) -> Option<HandleDrag> {
+    pub(super) fn pick_handle(&self, pointer: Pos2) -> Option<Gesture> {
         let rect = self.viewport_rect;
         let nearest_goal = self
             .goal_handles()
@@ -254,7 +231,7 @@ impl StanceApp {
                 .filter(|(_, other)| (*other - goal).length() < 1e-3)
                 .map(|(task, _)| task)
                 .collect();
-            return Some(HandleDrag::Goal {
+            return Some(Gesture::Goal {
                 tasks,
                 plane_point_world: goal,
             });
@@ -264,7 +241,7 @@ impl StanceApp {
                 .to_screen(rect, handle.middle_world)
                 .is_some_and(|at| at.distance(pointer) <= HANDLE_REACH_PT)
         {
-            return Some(HandleDrag::Swivel {
+            return Some(Gesture::Swivel {
                 limb: handle.limb,
                 start_swivel: handle.swivel,
                 start_direction: (handle.middle_world - handle.centre_world) / handle.radius,
@@ -281,15 +258,21 @@ impl StanceApp {
                 continue;
             }
             let centre_px = self.to_screen(rect, ring.centre_world)?;
-            let start_value = self.session.posture().values().get(ring.dof).copied()?;
+            let start_value = self
+                .model
+                .session
+                .posture()
+                .values()
+                .get(ring.dof)
+                .copied()?;
             let sign = if ring.axis_world.dot(eye - ring.centre_world) >= 0.0 {
                 1.0
             } else {
                 -1.0
             };
-            return Some(HandleDrag::Ring {
+            return Some(Gesture::Ring {
                 dof: ring.dof,
-                centre_px,
+                centre_px: [centre_px.x, centre_px.y],
                 last_angle: screen_angle(centre_px, pointer),
                 accumulated: 0.0,
                 start_value,
@@ -299,116 +282,14 @@ impl StanceApp {
         None
     }
 
-    /// Starts dragging a handle: one undo step for the whole drag.
-    pub(super) fn begin_handle_drag(&mut self, drag: HandleDrag) {
-        self.record(EditKind::Command);
-        self.history.break_coalescing();
-        if let HandleDrag::Swivel { limb, .. } = &drag {
-            self.session.hold_limb_end(*limb);
-        }
-        self.handle_drag = Some(drag);
-    }
-
-    /// Moves the dragged handle to follow `pointer`.
-    pub(super) fn drag_handle(&mut self, pointer: Pos2) {
-        let Some(drag) = self.handle_drag.clone() else {
-            return;
-        };
-        match drag {
-            HandleDrag::Goal {
-                tasks: moved,
-                plane_point_world,
-            } => {
-                let Some(goal) = self.pointer_on_view_plane(pointer, plane_point_world) else {
-                    return;
-                };
-                let on_floor = self.pointer_on_floor(pointer);
-                let mut tasks = self.session.tasks().to_vec();
-                for task in moved {
-                    let Some(spec) = tasks.get_mut(task) else {
-                        continue;
-                    };
-                    match &mut spec.kind {
-                        TaskKindSpec::Position { target, .. }
-                        | TaskKindSpec::Gaze { target, .. }
-                        | TaskKindSpec::Limb { target, .. } => *target = goal.to_array(),
-                        TaskKindSpec::Com { target, .. } => {
-                            // The balance goal slides on the floor under the pointer.
-                            if let Some(on_floor) = on_floor {
-                                target[0] = on_floor.x;
-                                target[2] = on_floor.z;
-                            }
-                        }
-                        _ => {}
-                    }
-                }
-                self.session.set_tasks(tasks);
-            }
-            HandleDrag::Ring {
-                dof,
-                centre_px,
-                last_angle,
-                accumulated,
-                start_value,
-                sign,
-            } => {
-                let angle = screen_angle(centre_px, pointer);
-                let mut delta = angle - last_angle;
-                if delta > std::f32::consts::PI {
-                    delta -= std::f32::consts::TAU;
-                } else if delta < -std::f32::consts::PI {
-                    delta += std::f32::consts::TAU;
-                }
-                let accumulated = accumulated + f64::from(delta);
-                // Screen y points down: a counter-clockwise drag has a negative screen angle.
-                self.session.set_dof(dof, start_value - sign * accumulated);
-                self.handle_drag = Some(HandleDrag::Ring {
-                    dof,
-                    centre_px,
-                    last_angle: angle,
-                    accumulated,
-                    start_value,
-                    sign,
-                });
-            }
-            HandleDrag::Swivel {
-                limb,
-                start_swivel,
-                start_direction,
-                centre_world,
-                axis_world,
-            } => {
-                let Some(point) = self.pointer_around_axis(pointer, centre_world, axis_world)
-                else {
-                    return;
-                };
-                let direction = point - centre_world;
-                let direction = direction - axis_world * direction.dot(axis_world);
-                if direction.length() < 1e-9 {
-                    return;
-                }
-                // The angle from where the drag started, right-handed about the axis (the
-                // swivel's own sense).
-                let turn = axis_world
-                    .dot(start_direction.cross(direction))
-                    .atan2(start_direction.dot(direction));
-                self.session.set_limb_swivel(limb, start_swivel + turn);
-            }
-        }
-    }
-
-    pub(super) fn end_handle_drag(&mut self) {
-        if let Some(drag) = self.handle_drag.take() {
-            if matches!(drag, HandleDrag::Swivel { .. }) {
-                self.session.release_hold();
-            }
-            self.history.break_coalescing();
-        }
-    }
-
     /// Where the pointer's ray meets the plane through `centre` across `axis` (the swivel
     /// circle's plane); seen edge-on, the plane facing the camera is used instead.
-    fn pointer_around_axis(&self, pointer: Pos2, centre: DVec3, axis: DVec3) -> Option<DVec3> {
+    pub(super) fn pointer_around_axis(
+        &self,
+        pointer: Pos2,
+        centre: DVec3,
+        axis: DVec3,
+    ) -> Option<DVec3> {
         let (origin, direction) = self.pointer_ray(pointer);
         if direction.dot(axis).abs() < 0.1 {
             return self.pointer_on_view_plane(pointer, centre);
@@ -417,15 +298,15 @@ impl StanceApp {
     }
 
     /// Where the pointer's ray meets the floor (y = 0).
-    fn pointer_on_floor(&self, pointer: Pos2) -> Option<DVec3> {
+    pub(super) fn pointer_on_floor(&self, pointer: Pos2) -> Option<DVec3> {
         let (origin, direction) = self.pointer_ray(pointer);
         super::ray_meets_plane(origin, direction, DVec3::ZERO, DVec3::Y, 1e-6)
     }
 
     /// Draws the rings of the selected joint (the dragged one thicker).
     pub(super) fn draw_rings(&self, painter: &egui::Painter, rect: egui::Rect) {
-        let active_dof = match &self.handle_drag {
-            Some(HandleDrag::Ring { dof, .. }) => Some(*dof),
+        let active_dof = match self.model.gesture() {
+            Some(Gesture::Ring { dof, .. }) => Some(*dof),
             _ => None,
         };
         for ring in self.rings() {
@@ -452,7 +333,7 @@ impl StanceApp {
         let Some(handle) = self.swivel_handle() else {
             return;
         };
-        let dragging = matches!(self.handle_drag, Some(HandleDrag::Swivel { .. }));
+        let dragging = matches!(self.model.gesture(), Some(Gesture::Swivel { .. }));
         painter.add(egui::Shape::dashed_line(
             &self.swivel_points(rect, &handle),
             Stroke::new(1.5, SWIVEL_COLOR.gamma_multiply(0.8)),
@@ -491,7 +372,7 @@ impl StanceApp {
     }
 }
 
-fn screen_angle(centre: Pos2, pointer: Pos2) -> f32 {
+pub(super) fn screen_angle(centre: Pos2, pointer: Pos2) -> f32 {
     (pointer.y - centre.y).atan2(pointer.x - centre.x)
 }
 

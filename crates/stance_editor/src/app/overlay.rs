@@ -27,12 +27,13 @@ impl StanceApp {
 
     pub(super) fn draw_overlay(&self, painter: &egui::Painter, rect: egui::Rect) {
         let painter = painter.with_clip_rect(rect);
-        let skeleton = self.session.skeleton();
-        let frames = self.session.frames();
+        let skeleton = self.model.session.skeleton();
+        let frames = self.model.session.frames();
 
         // Trace of the pulled point.
-        if self.show_trace && self.trace.len() > 1 {
+        if self.show_trace && self.model.trace.len() > 1 {
             let points: Vec<Pos2> = self
+                .model
                 .trace
                 .iter()
                 .filter_map(|point| self.to_screen(rect, *point))
@@ -43,7 +44,13 @@ impl StanceApp {
         // Task goals.
         let mut has_balance = false;
         let mut polygon = Vec::new();
-        for (task, status) in self.session.tasks().iter().zip(self.session.statuses()) {
+        for (task, status) in self
+            .model
+            .session
+            .tasks()
+            .iter()
+            .zip(self.model.session.statuses())
+        {
             let color = if !task.active {
                 GOAL_INACTIVE
             } else if status.gave_way.is_some() || status.problem.is_some() {
@@ -67,7 +74,9 @@ impl StanceApp {
                 }
                 TaskKindSpec::Limb { target, limb, .. } => {
                     let end = limb.map(|limb| limb.joints()[2]);
-                    if let Some(effector) = end.and_then(|end| self.session.joint_position(end)) {
+                    if let Some(effector) =
+                        end.and_then(|end| self.model.session.joint_position(end))
+                    {
                         self.goal_marker(
                             &painter,
                             rect,
@@ -87,7 +96,7 @@ impl StanceApp {
                 TaskKindSpec::Com { .. } => has_balance |= task.active,
                 TaskKindSpec::Balance { .. } if task.active => {
                     has_balance = true;
-                    if let Ok(solver_task) = task.to_task(skeleton, self.session.tasks()) {
+                    if let Ok(solver_task) = task.to_task(skeleton, self.model.session.tasks()) {
                         polygon = solver_task.support_polygon(frames);
                     }
                 }
@@ -100,12 +109,13 @@ impl StanceApp {
         }
 
         // The pulled point and where the cursor wants it.
-        if let (Some(grab), Some(point)) = (self.session.grab(), self.session.grabbed_point_world())
-            && let (Some(from), Some(to)) = (
-                self.to_screen(rect, point),
-                self.to_screen(rect, grab.target_world),
-            )
-        {
+        if let (Some(grab), Some(point)) = (
+            self.model.session.grab(),
+            self.model.session.grabbed_point_world(),
+        ) && let (Some(from), Some(to)) = (
+            self.to_screen(rect, point),
+            self.to_screen(rect, grab.target_world),
+        ) {
             painter.line_segment([from, to], Stroke::new(1.5, PULL_COLOR));
             painter.circle_filled(from, 4.0, PULL_COLOR);
             painter.circle_stroke(to, 6.0, Stroke::new(2.0, PULL_COLOR));
@@ -144,7 +154,7 @@ impl StanceApp {
     /// The centre of mass, its projection on the floor, and the support polygon of the balance
     /// task (as the solver sees it), if there is one.
     fn draw_balance(&self, painter: &egui::Painter, rect: egui::Rect, polygon: &[DVec3]) {
-        let com = self.session.frames().center_of_mass();
+        let com = self.model.session.frames().center_of_mass();
         let floor_com = DVec3::new(com.x, 0.0, com.z);
         if polygon.len() >= 2 {
             let mut points: Vec<Pos2> = polygon
@@ -180,8 +190,8 @@ impl StanceApp {
 impl StanceApp {
     /// The skeleton over the avatar: a line per bone, a dot per joint.
     pub(super) fn draw_skeleton(&self, painter: &egui::Painter, rect: egui::Rect) {
-        let skeleton = self.session.skeleton();
-        let frames = self.session.frames();
+        let skeleton = self.model.session.skeleton();
+        let frames = self.model.session.frames();
         let stroke = Stroke::new(1.5, Color32::from_rgba_unmultiplied(255, 255, 255, 170));
         for (index, joint) in skeleton.joints().iter().enumerate() {
             let Some(position) = frames.joint_position.get(index).copied() else {
@@ -196,7 +206,7 @@ impl StanceApp {
             {
                 painter.line_segment([there, here], stroke);
             }
-            let color = if Some(index) == self.selected_joint {
+            let color = if Some(index) == self.model.selected_joint {
                 Color32::from_rgb(80, 160, 255)
             } else {
                 Color32::WHITE

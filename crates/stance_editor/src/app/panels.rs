@@ -8,6 +8,7 @@ use stance_ik::Axes;
 
 use super::StanceApp;
 use crate::history::EditKind;
+use crate::model::Command;
 use crate::posing::{MET_TOLERANCE, comfort_task, describe_task, joint_rotation};
 use stance_hanim::readable_name;
 
@@ -28,7 +29,7 @@ enum Dragged {
 impl StanceApp {
     pub(super) fn side_panel(&mut self, ui: &mut egui::Ui) {
         ui.heading("Humanoid");
-        match &self.avatar {
+        match &self.model.avatar {
             Some(avatar) => {
                 ui.label(RichText::new(&avatar.name).strong());
                 ui.label(format!(
@@ -42,7 +43,7 @@ impl StanceApp {
                 ui.label("H-Anim 2.0 mannequin (Avatar menu or drop a file to pose yours)");
             }
         }
-        let current = self.session.level_of_articulation();
+        let current = self.model.session.level_of_articulation();
         let mut chosen = current;
         egui::ComboBox::from_label("Articulation")
             .selected_text(format!("LOA {}", current.number()))
@@ -52,35 +53,35 @@ impl StanceApp {
                 }
             });
         if chosen != current {
-            self.set_level_of_articulation(chosen);
+            self.model.apply(Command::SetLevelOfArticulation(chosen));
         }
         ui.label(format!(
             "{} joints, {} DOF",
-            self.session.skeleton().joint_count(),
-            self.session.skeleton().dof_count()
+            self.model.session.skeleton().joint_count(),
+            self.model.session.skeleton().dof_count()
         ));
         ui.horizontal(|ui| {
             if ui
-                .add_enabled(self.history.can_undo(), egui::Button::new("Undo"))
+                .add_enabled(self.model.history.can_undo(), egui::Button::new("Undo"))
                 .on_hover_text("Ctrl+Z")
                 .clicked()
             {
-                self.undo();
+                self.model.apply(Command::Undo);
             }
             if ui
-                .add_enabled(self.history.can_redo(), egui::Button::new("Redo"))
+                .add_enabled(self.model.history.can_redo(), egui::Button::new("Redo"))
                 .on_hover_text("Ctrl+Shift+Z or Ctrl+Y")
                 .clicked()
             {
-                self.redo();
+                self.model.apply(Command::Redo);
             }
         });
         ui.horizontal(|ui| {
             if ui.button("Mirror").on_hover_text("M").clicked() {
-                self.mirror();
+                self.model.apply(Command::Mirror);
             }
             if ui.button("Rest pose").on_hover_text("R").clicked() {
-                self.reset_to_rest();
+                self.model.apply(Command::ResetToRest);
             }
         });
         let copy = ui.button("Copy posture link").on_hover_text("L");
@@ -107,13 +108,13 @@ impl StanceApp {
 
     fn selection_section(&mut self, ui: &mut egui::Ui) {
         ui.heading("Selection");
-        let Some(joint_index) = self.selected_joint else {
+        let Some(joint_index) = self.model.selected_joint else {
             ui.label("Click a body part to select it; drag it to pull it.");
             return;
         };
-        let skeleton = self.session.skeleton();
+        let skeleton = self.model.session.skeleton();
         let Some(joint) = skeleton.joints().get(joint_index).cloned() else {
-            self.selected_joint = None;
+            self.model.apply(Command::Select(None));
             return;
         };
         let lower = skeleton.lower_limits().to_vec();
@@ -122,7 +123,7 @@ impl StanceApp {
         ui.label(RichText::new(&joint.name).small().weak());
         ui.horizontal(|ui| {
             if ui.button("Pin").on_hover_text("P").clicked() {
-                self.pin(joint_index);
+                self.model.apply(Command::Pin(joint_index));
             }
             if ui
                 .button("Hold orientation")
@@ -133,7 +134,7 @@ impl StanceApp {
             }
         });
         // Joint mode: each DOF within its anatomical limits.
-        let values = self.session.posture().values().to_vec();
+        let values = self.model.session.posture().values().to_vec();
         let mut edit: Option<(usize, f64)> = None;
         egui::Grid::new("joint_dofs").num_columns(2).show(ui, |ui| {
             for (offset, dof) in joint.dofs.iter().enumerate() {
@@ -175,8 +176,7 @@ impl StanceApp {
             }
         });
         if let Some((dof, value)) = edit {
-            self.record(EditKind::Joint(dof));
-            self.session.set_dof(dof, value);
+            self.model.apply(Command::SetDof { dof, value });
         }
         if let Some(limb) = LimbName::of_joint(&joint.name) {
             self.swivel_section(ui, limb);
@@ -184,7 +184,7 @@ impl StanceApp {
     }
 
     fn swivel_section(&mut self, ui: &mut egui::Ui, limb: LimbName) {
-        let Some((swivel, intervals)) = self.session.limb_swivel(limb) else {
+        let Some((swivel, intervals)) = self.model.session.limb_swivel(limb) else {
             return;
         };
         ui.separator();
@@ -212,8 +212,10 @@ impl StanceApp {
             .small(),
         );
         if response.changed() {
-            self.record(EditKind::Swivel(limb as usize));
-            self.session.set_limb_swivel(limb, degrees.to_radians());
+            self.model.apply(Command::SetSwivel {
+                limb,
+                swivel_angle: degrees.to_radians(),
+            });
         }
     }
 
@@ -229,12 +231,12 @@ impl StanceApp {
             .labelled_by(label.id);
             if ui.button("Save").clicked() {
                 let name = self.library_name.clone();
-                self.save_to_library(&name);
+                self.model.apply(Command::SaveToLibrary(name));
             }
         });
         let mut load = None;
         let mut delete = None;
-        for (index, entry) in self.library.entries().iter().enumerate() {
+        for (index, entry) in self.model.library.entries().iter().enumerate() {
             ui.horizontal(|ui| {
                 if ui.button("Load").clicked() {
                     load = Some(index);
@@ -246,11 +248,10 @@ impl StanceApp {
             });
         }
         if let Some(index) = load {
-            self.load_from_library(index);
+            self.model.apply(Command::LoadFromLibrary(index));
         }
         if let Some(index) = delete {
-            self.library.remove(index);
-            self.store_library();
+            self.model.apply(Command::DeleteFromLibrary(index));
         }
         ui.horizontal(|ui| {
             if ui.button("Import…").clicked() {
@@ -282,9 +283,10 @@ impl StanceApp {
         });
         ui.separator();
 
-        let mut tasks = self.session.tasks().to_vec();
-        let statuses = self.session.statuses().to_vec();
+        let mut tasks = self.model.session.tasks().to_vec();
+        let statuses = self.model.session.statuses().to_vec();
         let joint_names: Vec<String> = self
+            .model
             .session
             .skeleton()
             .joints()
@@ -410,15 +412,24 @@ impl StanceApp {
             && index < tasks.len()
         {
             tasks.remove(index);
-            self.commit_tasks(EditKind::Command, tasks);
+            self.model.apply(Command::SetTasks {
+                kind: EditKind::Command,
+                tasks,
+            });
         } else if let Some((index, level)) = move_to_level {
             if let Some(task) = tasks.get_mut(index) {
                 task.level = level;
             }
-            self.commit_tasks(EditKind::Command, tasks);
+            self.model.apply(Command::SetTasks {
+                kind: EditKind::Command,
+                tasks,
+            });
         } else if let Some((from, onto)) = move_level {
             reorder_levels(&mut tasks, &levels, from, onto);
-            self.commit_tasks(EditKind::Command, tasks);
+            self.model.apply(Command::SetTasks {
+                kind: EditKind::Command,
+                tasks,
+            });
         } else if let Some((a, b)) = swap_levels {
             for task in &mut tasks {
                 if task.level == a {
@@ -427,16 +438,19 @@ impl StanceApp {
                     task.level = a;
                 }
             }
-            self.commit_tasks(EditKind::Command, tasks);
+            self.model.apply(Command::SetTasks {
+                kind: EditKind::Command,
+                tasks,
+            });
         } else if let Some(kind) = edit {
-            self.commit_tasks(kind, tasks);
+            self.model.apply(Command::SetTasks { kind, tasks });
         }
     }
 
     fn add_task_menu(&mut self, ui: &mut egui::Ui) {
-        let selected = self.selected_joint;
+        let selected = self.model.selected_joint;
         let selected_name = selected
-            .and_then(|joint| self.session.skeleton().joints().get(joint))
+            .and_then(|joint| self.model.session.skeleton().joints().get(joint))
             .map(|joint| readable_name(&joint.name));
         let label = |what: &str| match &selected_name {
             Some(name) => format!("{what} of the {name}"),
@@ -495,7 +509,7 @@ impl StanceApp {
             .button("Centre of mass (a point over the floor)")
             .clicked()
         {
-            let com = self.session.frames().center_of_mass();
+            let com = self.model.session.frames().center_of_mass();
             let mut task = TaskSpec::new(TaskKindSpec::Com {
                 axes: Axes::XZ,
                 target: [com.x, 0.0, com.z],
@@ -525,7 +539,8 @@ impl StanceApp {
 
     /// The level for a new task: below every task but the posture attraction.
     fn next_level(&self) -> u32 {
-        self.session
+        self.model
+            .session
             .tasks()
             .iter()
             .filter(|task| !matches!(task.kind, TaskKindSpec::Posture { .. }))
@@ -536,13 +551,17 @@ impl StanceApp {
     }
 
     fn push_task(&mut self, task: TaskSpec) {
-        let mut tasks = self.session.tasks().to_vec();
+        let mut tasks = self.model.session.tasks().to_vec();
         tasks.push(task);
-        self.commit_tasks(EditKind::Command, tasks);
+        self.model.apply(Command::SetTasks {
+            kind: EditKind::Command,
+            tasks,
+        });
     }
 
     fn joint_name(&self, joint: usize) -> Option<String> {
-        self.session
+        self.model
+            .session
             .skeleton()
             .joints()
             .get(joint)
@@ -552,7 +571,12 @@ impl StanceApp {
     pub(super) fn add_position_task(&mut self, joint: usize) {
         let (Some(name), Some(position)) = (
             self.joint_name(joint),
-            self.session.frames().joint_position.get(joint).copied(),
+            self.model
+                .session
+                .frames()
+                .joint_position
+                .get(joint)
+                .copied(),
         ) else {
             return;
         };
@@ -570,7 +594,7 @@ impl StanceApp {
         let Some(name) = self.joint_name(joint) else {
             return;
         };
-        let rotation = joint_rotation(self.session.frames(), joint);
+        let rotation = joint_rotation(self.model.session.frames(), joint);
         let mut task = TaskSpec::new(TaskKindSpec::Orientation {
             joint: name,
             target: rotation.to_array(),
@@ -583,7 +607,7 @@ impl StanceApp {
         let Some(name) = self.joint_name(joint) else {
             return;
         };
-        let up = joint_rotation(self.session.frames(), joint) * DVec3::Y;
+        let up = joint_rotation(self.model.session.frames(), joint) * DVec3::Y;
         let mut task = TaskSpec::new(TaskKindSpec::Direction {
             joint: name,
             axis: [0.0, 1.0, 0.0],
@@ -594,11 +618,12 @@ impl StanceApp {
     }
 
     fn add_gaze_task(&mut self) {
-        let Some(head) = self.session.skeleton().joint_index("skullbase") else {
-            self.warn("This body has no head joint (skullbase) to aim.");
+        let Some(head) = self.model.session.skeleton().joint_index("skullbase") else {
+            self.model
+                .warn("This body has no head joint (skullbase) to aim.");
             return;
         };
-        let frames = self.session.frames();
+        let frames = self.model.session.frames();
         let position = frames.joint_position.get(head).copied().unwrap_or_default();
         let forward = joint_rotation(frames, head) * DVec3::Z;
         let mut task = TaskSpec::new(TaskKindSpec::Gaze {
@@ -613,11 +638,15 @@ impl StanceApp {
 
     pub(super) fn add_limb_task(&mut self, limb: LimbName) {
         let end = limb.joints()[2];
-        let Some(position) = self.session.joint_position(end) else {
-            self.warn(format!("This body has no {end} joint."));
+        let Some(position) = self.model.session.joint_position(end) else {
+            self.model.warn(format!("This body has no {end} joint."));
             return;
         };
-        let swivel = self.session.limb_swivel(limb).map(|(swivel, _)| swivel);
+        let swivel = self
+            .model
+            .session
+            .limb_swivel(limb)
+            .map(|(swivel, _)| swivel);
         let mut task = TaskSpec::new(TaskKindSpec::Limb {
             limb: Some(limb),
             joints: None,
@@ -631,9 +660,12 @@ impl StanceApp {
 
     /// The paper's Table 1 ([`PosingSession::table1_example`]).
     pub fn load_table1_example(&mut self) {
-        let tasks = self.session.table1_example();
-        self.commit_tasks(EditKind::Command, tasks);
-        self.inform("Table 1 of the paper: level 1 holds the left foot, the gaze and the right hand; balance is level 2; the left hand on the bar level 3.");
+        let tasks = self.model.session.table1_example();
+        self.model.apply(Command::SetTasks {
+            kind: EditKind::Command,
+            tasks,
+        });
+        self.model.inform("Table 1 of the paper: level 1 holds the left foot, the gaze and the right hand; balance is level 2; the left hand on the bar level 3.");
     }
 }
 

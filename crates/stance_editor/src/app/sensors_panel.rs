@@ -9,9 +9,9 @@ use stance_mocap::ascii::ComponentOrder;
 use stance_mocap::fob::FobMode;
 
 use super::StanceApp;
+use crate::model::Command;
 use crate::sensors::{
-    AssignmentPreset, DeviceFrame, DeviceKind, SENSOR_SETTINGS_KEY, SensorAssignment, SensorHub,
-    SensorLink, SensorSettings,
+    AssignmentPreset, DeviceFrame, DeviceKind, SensorAssignment, SensorLink, SensorSettings,
 };
 use stance_hanim::readable_name;
 
@@ -19,105 +19,13 @@ use stance_hanim::readable_name;
 const BAUD_RATES: [u32; 6] = [9_600, 19_200, 38_400, 57_600, 115_200, 230_400];
 
 impl StanceApp {
-    pub(super) fn load_sensor_settings(&mut self) {
-        let Some(text) = self.hooks.load_text(SENSOR_SETTINGS_KEY) else {
-            return;
-        };
-        match serde_json::from_str::<SensorSettings>(&text) {
-            Ok(settings) => self.sensors = SensorHub::new(settings),
-            Err(error) => log::warn!("the saved sensor settings could not be read: {error}"),
-        }
-    }
-
-    fn store_sensor_settings(&mut self) {
-        let Ok(text) = serde_json::to_string(self.sensors.settings()) else {
-            return;
-        };
-        if let Err(error) = self.hooks.save_text(SENSOR_SETTINGS_KEY, &text) {
-            log::warn!("the sensor settings could not be saved: {error}");
-        }
-    }
-
-    /// The sensors of the page (tests and scripts use it too).
-    pub fn sensors(&self) -> &SensorHub {
-        &self.sensors
-    }
-
-    /// Asks the page to open the device chosen in the settings.
-    pub fn connect_sensors(&mut self) {
-        let request = match self.sensors.settings().connection() {
-            Ok(request) => request,
-            Err(error) => {
-                self.warn(format!("Sensors: {error}."));
-                return;
-            }
-        };
-        self.store_sensor_settings();
-        self.sensors.begin_connect();
-        if let Err(error) = self.hooks.connect_sensor(&request) {
-            self.sensors.lost(error.clone());
-            self.warn(format!("Sensors: {error}"));
-        }
-    }
-
-    pub fn disconnect_sensors(&mut self) {
-        self.hooks.disconnect_sensor();
-        self.sensors.disconnected();
-        self.inform("Sensors disconnected; the posture stays as it is.");
-    }
-
-    /// Plays a recorded byte stream through the same decoder and calibration as a device.
-    pub fn replay_sensor_recording(&mut self, name: &str, bytes: Vec<u8>) {
-        if bytes.is_empty() {
-            self.warn(format!("Sensors: {name} is empty."));
-            return;
-        }
-        let now = self.now_secs();
-        self.sensors.start_replay(name, bytes, now);
-        self.inform(format!("Replaying {name}."));
-    }
-
-    /// Calibrates the assigned sensors in the current posture.
-    pub fn calibrate_sensors(&mut self) {
-        let result = self
-            .sensors
-            .calibrate(self.session.skeleton(), self.session.frames());
-        match result {
-            Ok(()) => {
-                let joints = self.sensors.driven_joints(self.session.skeleton());
-                self.session.hold_joints(&joints);
-                self.inform(format!(
-                    "Sensors calibrated: they now drive {} joints; the other joints keep the \
-                     tasks.",
-                    joints.len()
-                ));
-            }
-            Err(error) => self.warn(format!("Calibration failed: {error}.")),
-        }
-    }
-
-    /// Releases the joints the sensors held.
-    pub fn release_sensor_joints(&mut self) {
-        self.sensors.release();
-        self.session.hold_joints(&[]);
-    }
-
-    /// One frame of sensors: advances a replay, then the calibrated sensors set their joints.
-    /// Returns whether new readings were put in the posture.
-    pub(super) fn apply_sensors(&mut self) -> bool {
-        let now = self.now_secs();
-        if let Some(message) = self.sensors.tick(now) {
-            self.inform(message);
-        }
-        self.sensors.drive(&mut self.session)
-    }
-
     pub(super) fn sensors_state_json(&self) -> Value {
-        let mut state = self.sensors.state_json();
-        let skeleton = self.session.skeleton();
-        let posture = self.session.posture();
-        let frames = self.session.frames();
+        let mut state = self.model.sensors.state_json();
+        let skeleton = self.model.session.skeleton();
+        let posture = self.model.session.posture();
+        let frames = self.model.session.frames();
         let driven: Map<String, Value> = self
+            .model
             .session
             .held_joints()
             .into_iter()
@@ -162,60 +70,61 @@ impl StanceApp {
     }
 
     fn sensors_contents(&mut self, ui: &mut egui::Ui) {
-        let mut settings = self.sensors.settings().clone();
-        let busy = self.sensors.link().is_live() || self.sensors.replay_progress().is_some();
+        let mut settings = self.model.sensors.settings().clone();
+        let busy =
+            self.model.sensors.link().is_live() || self.model.sensors.replay_progress().is_some();
         ui.add_enabled_ui(!busy, |ui| device_settings(ui, &mut settings));
-        if settings != *self.sensors.settings() {
-            self.sensors.set_settings(settings);
-            self.store_sensor_settings();
+        if settings != *self.model.sensors.settings() {
+            self.model
+                .apply(Command::SetSensorSettings(Box::new(settings)));
         }
 
         ui.horizontal(|ui| {
-            if self.sensors.link().is_live() {
+            if self.model.sensors.link().is_live() {
                 let button = ui.button("Disconnect");
                 self.button_rects.push(("sensors_disconnect", button.rect));
                 if button.clicked() {
-                    self.disconnect_sensors();
+                    self.model.apply(Command::DisconnectSensors);
                 }
             } else {
                 let button = ui
                     .add_enabled(
-                        self.sensors.replay_progress().is_none(),
+                        self.model.sensors.replay_progress().is_none(),
                         egui::Button::new("Connect…"),
                     )
                     .on_hover_text("The browser asks which serial port or HID device to use");
                 self.button_rects.push(("sensors_connect", button.rect));
                 if button.clicked() {
-                    self.connect_sensors();
+                    self.model.apply(Command::ConnectSensors);
                 }
             }
-            if self.sensors.replay_progress().is_some() {
+            if self.model.sensors.replay_progress().is_some() {
                 if ui.button("Stop replay").clicked() {
-                    self.sensors.stop_replay();
+                    self.model.sensors.stop_replay();
                 }
             } else {
                 let button = ui
                     .add_enabled(
-                        !self.sensors.link().is_live(),
+                        !self.model.sensors.link().is_live(),
                         egui::Button::new("Replay file…"),
                     )
                     .on_hover_text("Play a recording (or `stance simulate-sensors` output)");
                 self.button_rects.push(("sensors_replay", button.rect));
                 if button.clicked() {
-                    match self.hooks.pick_file() {
-                        Ok(()) => self.replay_pick_pending = true,
-                        Err(error) => self.warn(format!("Sensors: {error}")),
+                    match self.model.hooks.pick_file() {
+                        Ok(()) => self.model.apply(Command::ExpectRecording),
+                        Err(error) => self.model.warn(format!("Sensors: {error}")),
                     }
                 }
             }
-            let recording = self.sensors.is_recording();
+            let recording = self.model.sensors.is_recording();
             let button = ui.button(if recording { "Stop and save" } else { "Record" });
             self.button_rects.push(("sensors_record", button.rect));
             if button.clicked() {
                 if recording {
                     self.save_sensor_recording();
                 } else {
-                    self.sensors.start_recording();
+                    self.model.sensors.start_recording();
                 }
             }
         });
@@ -228,35 +137,39 @@ impl StanceApp {
         );
         ui.horizontal(|ui| {
             let button = ui.add_enabled(
-                !self.sensors.assignments().is_empty(),
+                !self.model.sensors.assignments().is_empty(),
                 egui::Button::new("Calibrate"),
             );
             self.button_rects.push(("sensors_calibrate", button.rect));
 
             if button.clicked() {
-                self.calibrate_sensors();
+                self.model.apply(Command::CalibrateSensors);
             }
-            let calibrated = self.sensors.is_calibrated();
+            let calibrated = self.model.sensors.is_calibrated();
             let button = ui
                 .add_enabled(calibrated, egui::Button::new("Reset heading"))
                 .on_hover_text("Face the front, then press: turns every sensor about the vertical");
             self.button_rects
                 .push(("sensors_reset_heading", button.rect));
-            if button.clicked() && self.sensors.reset_heading() {
-                self.inform("Heading reset: the body faces the front again.");
+            if button.clicked() && self.model.sensors.reset_heading() {
+                self.model
+                    .inform("Heading reset: the body faces the front again.");
             }
             if ui
                 .add_enabled(calibrated, egui::Button::new("Release joints"))
                 .on_hover_text("Stop driving the joints (the solver takes them back)")
                 .clicked()
             {
-                self.release_sensor_joints();
+                self.model.apply(Command::ReleaseSensorJoints);
             }
         });
-        if self.sensors.is_calibrated() {
+        if self.model.sensors.is_calibrated() {
             ui.label(format!(
                 "Driving {} joints.",
-                self.sensors.driven_joints(self.session.skeleton()).len()
+                self.model
+                    .sensors
+                    .driven_joints(self.model.session.skeleton())
+                    .len()
             ));
         }
         ui.separator();
@@ -266,8 +179,10 @@ impl StanceApp {
                 let button = ui.small_button(preset.label());
                 self.button_rects.push((preset.button_name(), button.rect));
                 if button.clicked() {
-                    self.sensors.apply_preset(preset, self.session.skeleton());
-                    self.release_sensor_joints();
+                    self.model
+                        .sensors
+                        .apply_preset(preset, self.model.session.skeleton());
+                    self.model.apply(Command::ReleaseSensorJoints);
                 }
             }
         });
@@ -275,8 +190,8 @@ impl StanceApp {
     }
 
     fn link_line(&self, ui: &mut egui::Ui) {
-        let stats = self.sensors.stats();
-        let (text, colour) = match self.sensors.link() {
+        let stats = self.model.sensors.stats();
+        let (text, colour) = match self.model.sensors.link() {
             SensorLink::Idle => ("Not connected".to_owned(), ui.visuals().weak_text_color()),
             SensorLink::Connecting => (
                 "Waiting for the device…".to_owned(),
@@ -287,7 +202,7 @@ impl StanceApp {
                 egui::Color32::from_rgb(60, 160, 80),
             ),
             SensorLink::Replaying { name } => {
-                let (done, total) = self.sensors.replay_progress().unwrap_or_default();
+                let (done, total) = self.model.sensors.replay_progress().unwrap_or_default();
                 (
                     format!(
                         "Replaying {name}: {}%",
@@ -301,18 +216,19 @@ impl StanceApp {
         ui.colored_label(colour, text);
         ui.label(format!(
             "{} samples, {} bad frames, {} bytes skipped",
-            self.sensors.sample_count(),
+            self.model.sensors.sample_count(),
             stats.bad_frames,
             stats.skipped_bytes
         ));
         if let Some(bytes) = self
+            .model
             .sensors
             .is_recording()
-            .then(|| self.sensors.stats().bytes_received)
+            .then(|| self.model.sensors.stats().bytes_received)
         {
             ui.label(format!("Recording ({} KiB received)", bytes / 1024));
         }
-        if self.sensors.is_recording_full() {
+        if self.model.sensors.is_recording_full() {
             ui.colored_label(
                 ui.visuals().warn_fg_color,
                 format!(
@@ -321,7 +237,7 @@ impl StanceApp {
                 ),
             );
         }
-        if let Some((median, max)) = self.sensors.latency_ms() {
+        if let Some((median, max)) = self.model.sensors.latency_ms() {
             ui.label(format!(
                 "Bytes to posture: {median:.1} ms median, {max:.1} ms max"
             ));
@@ -330,6 +246,7 @@ impl StanceApp {
 
     fn sensor_table(&mut self, ui: &mut egui::Ui) {
         let tracks: Vec<(SensorId, f64, Option<[f64; 3]>)> = self
+            .model
             .sensors
             .tracks()
             .iter()
@@ -347,7 +264,8 @@ impl StanceApp {
         }
         let mut segments: Vec<SensorAssignment> = vec![SensorAssignment::Spine];
         segments.extend(
-            self.session
+            self.model
+                .session
                 .skeleton()
                 .joints()
                 .iter()
@@ -373,7 +291,7 @@ impl StanceApp {
                         }
                         None => ui.label("no orientation"),
                     };
-                    let current = self.sensors.assignments().get(&sensor).cloned();
+                    let current = self.model.sensors.assignments().get(&sensor).cloned();
                     let text = current
                         .as_ref()
                         .map_or_else(|| "nothing".to_owned(), SensorAssignment::label);
@@ -401,19 +319,23 @@ impl StanceApp {
                 }
             });
         if let Some((sensor, assignment)) = change {
-            self.sensors.assign(sensor, assignment);
-            self.release_sensor_joints();
+            self.model.sensors.assign(sensor, assignment);
+            self.model.apply(Command::ReleaseSensorJoints);
         }
     }
 
     fn save_sensor_recording(&mut self) {
-        let Some(bytes) = self.sensors.stop_recording() else {
+        let Some(bytes) = self.model.sensors.stop_recording() else {
             return;
         };
-        let name = self.sensors.recording_name();
-        match self.hooks.download_bytes(&name, &bytes) {
-            Ok(()) => self.inform(format!("Saved {} bytes as {name}.", bytes.len())),
-            Err(error) => self.warn(format!("The recording could not be saved: {error}")),
+        let name = self.model.sensors.recording_name();
+        match self.model.hooks.download_bytes(&name, &bytes) {
+            Ok(()) => self
+                .model
+                .inform(format!("Saved {} bytes as {name}.", bytes.len())),
+            Err(error) => self
+                .model
+                .warn(format!("The recording could not be saved: {error}")),
         }
     }
 }

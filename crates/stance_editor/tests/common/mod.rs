@@ -27,7 +27,7 @@ pub fn harness_for(app: StanceApp) -> Harness<'static, StanceApp> {
 pub fn settle(harness: &mut Harness<'static, StanceApp>) {
     for _ in 0..400 {
         harness.step();
-        if harness.state().session().is_settled() {
+        if harness.state().model().session().is_settled() {
             break;
         }
     }

@@ -1,0 +1,1301 @@
+//! The editor's model, without egui: the posing session (posture, tasks, solver), the undo
+//! history, the selection, the one gesture in progress, the avatar and its mapping
+//! corrections, the pose library, the sensors, the notice and the autosave.
+//!
+//! The UI sends [`Command`]s; [`EditorModel::apply`] carries every one of them out in one
+//! place (undo and redo included). [`EditorModel::step`] runs once per frame, before anything
+//! is drawn: sensors, then the solve, then forward kinematics once, then the cached bones
+//! (picking and drawing) and the effector trace. Panels and the viewport draw from that state.
+//! Every change of the posing session (avatar, LOA, mannequin, mapping) goes through
+//! [`EditorModel::replace_session`], which resets what belonged to the old one.
+
+mod mapping;
+
+use glam::{DVec3, Vec3};
+use serde_json::Value;
+use stance_document::{AvatarReference, Document, LimbName, TaskSpec, link};
+use stance_hanim::{LevelOfArticulation, Mapping, readable_name};
+use stance_ik::Clock;
+use stance_render::{MannequinBone, MannequinJoint, mannequin_bones};
+
+pub use self::mapping::Correction;
+use self::mapping::MappingCorrections;
+use crate::avatar::LoadedAvatar;
+use crate::history::{EditKind, History};
+use crate::host::{HostHooks, HostMessage};
+use crate::library::{AUTOSAVE_KEY, LIBRARY_KEY, PoseLibrary};
+use crate::posing::{PosingError, PosingSession, describe_task};
+use crate::sensors::{SENSOR_SETTINGS_KEY, SensorHub, SensorSettings};
+
+/// Seconds between autosaves while the document changes.
+const AUTOSAVE_INTERVAL_SECS: f64 = 1.0;
+/// Seconds an information notice stays (errors stay until dismissed).
+pub const NOTICE_SECS: f64 = 8.0;
+/// Points of the effector trace kept.
+const MAX_TRACE_POINTS: usize = 2000;
+/// The trace takes a new point when the grabbed point moved this far (m).
+const TRACE_STEP_M: f64 = 0.002;
+
+/// A message for the user, shown above the viewport.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Notice {
+    pub text: String,
+    pub is_error: bool,
+    pub since_secs: f64,
+}
+
+/// The gesture in progress: at most one at a time.
+#[derive(Debug, Clone)]
+pub enum Gesture {
+    /// Grab-and-pull: the grabbed point follows the pointer in the plane facing the camera
+    /// through `plane_point_world`; cancelling restores `document_before`.
+    Pull {
+        joint: usize,
+        plane_point_world: DVec3,
+        document_before: Box<Document>,
+    },
+    /// The goal of `tasks` (several when their goals coincide) moves in the plane facing the
+    /// camera through `plane_point_world`.
+    Goal {
+        tasks: Vec<usize>,
+        plane_point_world: DVec3,
+    },
+    /// A ring of the joint gizmo: DOF `dof` turns with the pointer around `centre_px`
+    /// (screen points), from `start_value`.
+    Ring {
+        dof: usize,
+        centre_px: [f32; 2],
+        last_angle: f32,
+        accumulated: f64,
+        start_value: f64,
+        /// +1 when the DOF axis points toward the camera (a counter-clockwise drag on screen
+        /// is then a positive rotation), -1 otherwise.
+        sign: f64,
+    },
+    /// The swivel handle: the elbow or knee turns around the limb's axis with the pointer.
+    Swivel {
+        limb: LimbName,
+        start_swivel: f64,
+        /// Unit direction from the axis to the middle joint when the drag started.
+        start_direction: DVec3,
+        centre_world: DVec3,
+        axis_world: DVec3,
+    },
+}
+
+/// What the UI asks the model to do.
+#[derive(Debug, Clone)]
+pub enum Command {
+    /// Select a joint (or nothing).
+    Select(Option<usize>),
+    /// The joint under the pointer (or nothing).
+    Hover(Option<usize>),
+    /// Grab `joint` at `point_world` and start pulling it.
+    BeginPull {
+        joint: usize,
+        point_world: DVec3,
+    },
+    /// Start a handle drag (goal, ring or swivel); a pull starts with `BeginPull`.
+    BeginHandle(Gesture),
+    /// The pulled point's new target.
+    MoveGrab {
+        target_world: DVec3,
+    },
+    /// The dragged goal's new place, and where the pointer meets the floor (balance goals
+    /// slide on the floor).
+    MoveGoal {
+        goal_world: DVec3,
+        floor_world: Option<DVec3>,
+    },
+    /// The pointer's screen angle around the ring's centre (radians).
+    TurnRing {
+        screen_angle: f32,
+    },
+    /// Where the pointer meets the swivel circle's plane.
+    TurnSwivel {
+        point_world: DVec3,
+    },
+    /// The gesture ends where it is.
+    EndGesture,
+    /// The gesture ends and a pull's body goes back to where it was.
+    CancelGesture,
+    /// Pin a joint where it is (level 1).
+    Pin(usize),
+    /// Pin the selected joint.
+    PinSelected,
+    /// Replace the task list as one edit of `kind`.
+    SetTasks {
+        kind: EditKind,
+        tasks: Vec<TaskSpec>,
+    },
+    /// Set one DOF (a slider or field), as one edit of `EditKind::Joint`.
+    SetDof {
+        dof: usize,
+        value: f64,
+    },
+    /// Set a limb's swivel angle (rad).
+    SetSwivel {
+        limb: LimbName,
+        swivel_angle: f64,
+    },
+    Undo,
+    Redo,
+    ResetToRest,
+    Mirror,
+    SetLevelOfArticulation(LevelOfArticulation),
+    /// Load an avatar file (glTF, GLB, VRM).
+    LoadAvatar {
+        name: String,
+        bytes: Vec<u8>,
+    },
+    /// Ask the page to fetch an avatar by URL (it arrives as a file).
+    FetchAvatar(String),
+    /// Back to the built-in mannequin.
+    UseMannequin,
+    /// Rebuild the avatar's skeleton from a corrected mapping (`corrections` made it).
+    ApplyMapping {
+        mapping: Box<Mapping>,
+        corrections: Vec<Correction>,
+    },
+    /// Go back to the mapping before the last applied correction.
+    RevertMappingCorrection,
+    /// Open a posture link (fragment or URL).
+    OpenLink(String),
+    /// Open a file: avatar, document, pose library, or a sensor recording when one was asked.
+    OpenFile {
+        name: String,
+        bytes: Vec<u8>,
+    },
+    /// Save the posture in the library under a name.
+    SaveToLibrary(String),
+    /// Load the library's entry `index`.
+    LoadFromLibrary(usize),
+    /// The replaced entry of the library, by index.
+    DeleteFromLibrary(usize),
+    /// The next picked file is a sensor recording to replay.
+    ExpectRecording,
+    /// Replay a recorded byte stream through the same decoder and calibration as a device.
+    ReplayRecording {
+        name: String,
+        bytes: Vec<u8>,
+    },
+    /// New device settings (kept in the host's storage).
+    SetSensorSettings(Box<SensorSettings>),
+    /// Ask the page to open the device chosen in the settings.
+    ConnectSensors,
+    DisconnectSensors,
+    /// Calibrate the assigned sensors in the current posture.
+    CalibrateSensors,
+    /// Release the joints the sensors hold.
+    ReleaseSensorJoints,
+    /// A message for the user.
+    Inform(String),
+    /// A problem for the user.
+    Warn(String),
+    DismissNotice,
+}
+
+/// Why a session is replaced: what carries over.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SessionChange {
+    /// Another body (avatar, mannequin): the history starts again.
+    NewBody,
+    /// The same body rebuilt (LOA switch, mapping correction): the history stays.
+    Rebuilt,
+}
+
+/// The editor's model.
+pub struct EditorModel {
+    pub(crate) session: PosingSession,
+    pub(crate) history: History,
+    pub(crate) selected_joint: Option<usize>,
+    pub(crate) hovered_joint: Option<usize>,
+    pub(crate) gesture: Option<Gesture>,
+    pub(crate) avatar: Option<LoadedAvatar>,
+    /// The URL the avatar came from (links and autosave name it); `None` for local files.
+    pub(crate) avatar_url: Option<String>,
+    /// A document waiting for its avatar to arrive (a link or autosave naming a URL).
+    pending_document: Option<Document>,
+    pub(crate) mapping_corrections: MappingCorrections,
+    pub(crate) trace: Vec<DVec3>,
+    pub(crate) notice: Option<Notice>,
+    pub(crate) library: PoseLibrary,
+    pub(crate) sensors: SensorHub,
+    /// The next picked file is a sensor recording to replay.
+    replay_pick_pending: bool,
+    pub(crate) hooks: Box<dyn HostHooks>,
+    autosaved: Option<Document>,
+    last_autosave_secs: f64,
+    /// Seconds since the editor started, as of the last step.
+    now_secs: f64,
+    /// The posed mannequin's bones after the last step.
+    bones: Vec<MannequinBone>,
+    /// Whether the last step put sensor readings in the posture.
+    sensors_drove: bool,
+    /// CPU time of the last step's solve (ms).
+    pub(crate) solver_ms: f64,
+    /// How many times the session was replaced (views keep per-session state by it).
+    session_generation: u64,
+}
+
+impl std::fmt::Debug for EditorModel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("EditorModel")
+            .field("session", &self.session)
+            .field("selected_joint", &self.selected_joint)
+            .field("gesture", &self.gesture)
+            .finish_non_exhaustive()
+    }
+}
+
+impl EditorModel {
+    /// The model on the built-in mannequin at LOA 2, with the library and sensor settings
+    /// the host kept.
+    pub fn new(hooks: Box<dyn HostHooks>) -> Result<Self, PosingError> {
+        let session = PosingSession::new(LevelOfArticulation::Loa2)?;
+        let mut model = Self {
+            session,
+            history: History::default(),
+            selected_joint: None,
+            hovered_joint: None,
+            gesture: None,
+            avatar: None,
+            avatar_url: None,
+            pending_document: None,
+            mapping_corrections: MappingCorrections::default(),
+            trace: Vec::new(),
+            notice: None,
+            library: PoseLibrary::default(),
+            sensors: SensorHub::default(),
+            replay_pick_pending: false,
+            hooks,
+            autosaved: None,
+            last_autosave_secs: f64::NEG_INFINITY,
+            now_secs: 0.0,
+            bones: Vec::new(),
+            sensors_drove: false,
+            solver_ms: 0.0,
+            session_generation: 0,
+        };
+        model.load_library();
+        model.load_sensor_settings();
+        model.refresh_bones();
+        Ok(model)
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // What the UI reads
+
+    pub fn session(&self) -> &PosingSession {
+        &self.session
+    }
+
+    pub fn history(&self) -> &History {
+        &self.history
+    }
+
+    pub fn level_of_articulation(&self) -> LevelOfArticulation {
+        self.session.level_of_articulation()
+    }
+
+    pub fn selected_joint(&self) -> Option<usize> {
+        self.selected_joint
+    }
+
+    pub fn hovered_joint(&self) -> Option<usize> {
+        self.hovered_joint
+    }
+
+    pub fn gesture(&self) -> Option<&Gesture> {
+        self.gesture.as_ref()
+    }
+
+    pub fn is_pulling(&self) -> bool {
+        matches!(self.gesture, Some(Gesture::Pull { .. }))
+    }
+
+    pub fn avatar(&self) -> Option<&LoadedAvatar> {
+        self.avatar.as_ref()
+    }
+
+    pub fn notice(&self) -> Option<&Notice> {
+        self.notice.as_ref()
+    }
+
+    pub fn library(&self) -> &PoseLibrary {
+        &self.library
+    }
+
+    pub fn sensors(&self) -> &SensorHub {
+        &self.sensors
+    }
+
+    /// The effector trace of the current pull (world points).
+    pub fn trace(&self) -> &[DVec3] {
+        &self.trace
+    }
+
+    /// The posed mannequin's bones (capsules with the joint that carries each) as of the last
+    /// step: what is drawn and picked.
+    pub fn bones(&self) -> &[MannequinBone] {
+        &self.bones
+    }
+
+    /// How many times the session was replaced (a new body, LOA or mapping).
+    pub fn session_generation(&self) -> u64 {
+        self.session_generation
+    }
+
+    /// Whether the last step put new sensor readings in the posture.
+    pub fn sensors_drove(&self) -> bool {
+        self.sensors_drove
+    }
+
+    /// Seconds since the editor started, as of the last step.
+    pub fn now_secs(&self) -> f64 {
+        self.now_secs
+    }
+
+    /// The document: the session's posture and tasks, and the avatar they are for.
+    pub fn document(&self) -> Document {
+        let mut document = self.session.document();
+        if let Some(url) = &self.avatar_url {
+            document.avatar = AvatarReference::Url(url.clone());
+        }
+        document
+    }
+
+    /// Whether anything still moves: the solver has not settled, a gesture or a replay goes
+    /// on (the UI keeps drawing frames).
+    pub fn is_busy(&self) -> bool {
+        !self.session.is_settled()
+            || self.gesture.is_some()
+            || self.sensors.replay_progress().is_some()
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // The frame
+
+    /// One frame at `now_secs`: a replay advances and the calibrated sensors set their
+    /// joints, the solver runs this frame's iterations (within the time budget `clock`
+    /// measures), forward kinematics runs once, and the bones and the trace follow; the
+    /// document autosaves when it changed.
+    pub fn step(&mut self, now_secs: f64, clock: Option<&dyn Clock>) {
+        self.now_secs = now_secs;
+        self.expire_notice();
+        if let Some(message) = self.sensors.tick(now_secs) {
+            self.inform(message);
+        }
+        self.sensors_drove = self.sensors.drive(&mut self.session);
+        let started = web_time::Instant::now();
+        self.session.solve_frame(clock);
+        self.solver_ms = started.elapsed().as_secs_f64() * 1000.0;
+        if let Some(point) = self.session.grabbed_point_world() {
+            let moved = self
+                .trace
+                .last()
+                .is_none_or(|last| (*last - point).length() > TRACE_STEP_M);
+            if moved && self.trace.len() < MAX_TRACE_POINTS {
+                self.trace.push(point);
+            }
+        }
+        self.refresh_bones();
+        self.autosave();
+    }
+
+    /// The sensors' readings were shown: their latency is measured up to here.
+    pub fn readings_shown(&mut self) {
+        if self.sensors_drove {
+            self.sensors.shown();
+        }
+    }
+
+    fn refresh_bones(&mut self) {
+        let skeleton = self.session.skeleton();
+        let frames = self.session.frames();
+        let joints: Vec<MannequinJoint<'_>> = skeleton
+            .joints()
+            .iter()
+            .enumerate()
+            .map(|(index, joint)| MannequinJoint {
+                name: &joint.name,
+                parent: joint.parent,
+                position_world: frames
+                    .joint_position
+                    .get(index)
+                    .copied()
+                    .unwrap_or_default()
+                    .as_vec3(),
+                up_world: frames
+                    .world_from_joint_rotation
+                    .get(index)
+                    .map_or(Vec3::Y, |rotation| (*rotation * DVec3::Y).as_vec3()),
+            })
+            .collect();
+        self.bones = mannequin_bones(&joints);
+    }
+
+    fn expire_notice(&mut self) {
+        if let Some(notice) = &self.notice
+            && !notice.is_error
+            && self.now_secs - notice.since_secs > NOTICE_SECS
+        {
+            self.notice = None;
+        }
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // Commands
+
+    /// Carries out one command of the UI.
+    pub fn apply(&mut self, command: Command) {
+        match command {
+            Command::Select(joint) => self.selected_joint = joint,
+            Command::Hover(joint) => self.hovered_joint = joint,
+            Command::BeginPull { joint, point_world } => self.begin_pull(joint, point_world),
+            Command::BeginHandle(gesture) => self.begin_handle(gesture),
+            Command::MoveGrab { target_world } => {
+                if self.is_pulling() {
+                    self.session.move_grab(target_world);
+                }
+            }
+            Command::MoveGoal {
+                goal_world,
+                floor_world,
+            } => self.move_goal(goal_world, floor_world),
+            Command::TurnRing { screen_angle } => self.turn_ring(screen_angle),
+            Command::TurnSwivel { point_world } => self.turn_swivel(point_world),
+            Command::EndGesture => self.end_gesture(),
+            Command::CancelGesture => self.cancel_gesture(),
+            Command::Pin(joint) => self.pin(joint),
+            Command::PinSelected => match self.selected_joint {
+                Some(joint) => self.pin(joint),
+                None => self.inform("Select a body part first (click it), then pin it."),
+            },
+            Command::SetTasks { kind, tasks } => self.commit_tasks(kind, tasks),
+            Command::SetDof { dof, value } => {
+                self.record(EditKind::Joint(dof));
+                self.session.set_dof(dof, value);
+            }
+            Command::SetSwivel { limb, swivel_angle } => {
+                self.record(EditKind::Swivel(limb as usize));
+                self.session.set_limb_swivel(limb, swivel_angle);
+            }
+            Command::Undo => self.undo(),
+            Command::Redo => self.redo(),
+            Command::ResetToRest => {
+                self.record(EditKind::Command);
+                self.session.reset_to_rest();
+                self.trace.clear();
+            }
+            Command::Mirror => {
+                self.record(EditKind::Command);
+                self.session.mirror();
+            }
+            Command::SetLevelOfArticulation(loa) => self.set_level_of_articulation(loa),
+            Command::LoadAvatar { name, bytes } => self.load_avatar(&name, &bytes),
+            Command::FetchAvatar(url) => self.fetch_avatar(&url),
+            Command::UseMannequin => self.use_mannequin(),
+            Command::ApplyMapping {
+                mapping,
+                corrections,
+            } => self.apply_mapping(*mapping, corrections),
+            Command::RevertMappingCorrection => self.revert_mapping_correction(),
+            Command::OpenLink(text) => {
+                self.open_link(&text);
+            }
+            Command::OpenFile { name, bytes } => self.open_file(&name, bytes),
+            Command::SaveToLibrary(name) => self.save_to_library(&name),
+            Command::LoadFromLibrary(index) => self.load_from_library(index),
+            Command::DeleteFromLibrary(index) => {
+                if self.library.remove(index).is_some() {
+                    self.store_library();
+                }
+            }
+            Command::ExpectRecording => self.replay_pick_pending = true,
+            Command::ReplayRecording { name, bytes } => self.replay_sensor_recording(&name, bytes),
+            Command::SetSensorSettings(settings) => self.set_sensor_settings(*settings),
+            Command::ConnectSensors => self.connect_sensors(),
+            Command::DisconnectSensors => self.disconnect_sensors(),
+            Command::CalibrateSensors => self.calibrate_sensors(),
+            Command::ReleaseSensorJoints => self.release_sensor_joints(),
+            Command::Inform(text) => self.inform(text),
+            Command::Warn(text) => self.warn(text),
+            Command::DismissNotice => self.notice = None,
+        }
+    }
+
+    /// Carries out what the host sent (links, files, sensor bytes).
+    pub fn receive(&mut self, message: HostMessage) {
+        match message {
+            HostMessage::OpenLink(fragment) => {
+                self.open_link(&fragment);
+            }
+            HostMessage::OpenFile { name, bytes } => self.open_file(&name, bytes),
+            HostMessage::Failed(reason) => {
+                self.replay_pick_pending = false;
+                self.warn(reason);
+            }
+            HostMessage::SensorConnected { device } => {
+                self.inform(format!("Sensors: {device} connected."));
+                self.sensors.connected(device);
+            }
+            HostMessage::SensorBytes { bytes, arrived } => {
+                self.sensors.receive_bytes(&bytes, self.now_secs, arrived);
+            }
+            HostMessage::SensorReport {
+                report_id,
+                data,
+                arrived,
+            } => {
+                self.sensors
+                    .receive_report(report_id, &data, self.now_secs, arrived);
+            }
+            HostMessage::SensorLost { reason } => {
+                self.warn(format!(
+                    "Sensors: {reason} The posture stays as the last reading left it."
+                ));
+                self.sensors.lost(reason);
+            }
+        }
+    }
+
+    pub(crate) fn inform(&mut self, text: impl Into<String>) {
+        self.notice = Some(Notice {
+            text: text.into(),
+            is_error: false,
+            since_secs: self.now_secs,
+        });
+    }
+
+    pub(crate) fn warn(&mut self, text: impl Into<String>) {
+        let text = text.into();
+        log::warn!("{text}");
+        self.notice = Some(Notice {
+            text,
+            is_error: true,
+            since_secs: self.now_secs,
+        });
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // Edits: each one records the document before it, so that undo restores it exactly.
+
+    fn record(&mut self, kind: EditKind) {
+        let before = self.session.document();
+        self.history.record(&before, kind, self.now_secs);
+    }
+
+    fn commit_tasks(&mut self, kind: EditKind, tasks: Vec<TaskSpec>) {
+        if tasks.as_slice() != self.session.tasks() {
+            self.record(kind);
+            self.session.set_tasks(tasks);
+        }
+    }
+
+    fn undo(&mut self) {
+        self.drop_gesture();
+        let current = self.session.document();
+        match self.history.undo(&current) {
+            Some(previous) => self.restore(&previous, "undo"),
+            None => self.inform("Nothing to undo."),
+        }
+    }
+
+    fn redo(&mut self) {
+        self.drop_gesture();
+        let current = self.session.document();
+        match self.history.redo(&current) {
+            Some(next) => self.restore(&next, "redo"),
+            None => self.inform("Nothing to redo."),
+        }
+    }
+
+    fn restore(&mut self, document: &Document, what: &str) {
+        if let Err(error) = self.session.restore_document(document) {
+            self.warn(format!("Could not {what}: {error}"));
+        }
+    }
+
+    /// Opens `document` in the session as one undoable edit; `Err` says why it does not fit.
+    fn open_document(&mut self, document: &Document) -> Result<(), PosingError> {
+        let current = self.session.document();
+        self.session.restore_document(document)?;
+        self.history
+            .record(&current, EditKind::Command, self.now_secs);
+        Ok(())
+    }
+
+    fn pin(&mut self, joint: usize) {
+        self.record(EditKind::Command);
+        self.session.pin(joint);
+        self.selected_joint = Some(joint);
+        let name = self
+            .session
+            .skeleton()
+            .joints()
+            .get(joint)
+            .map(|joint| readable_name(&joint.name))
+            .unwrap_or_default();
+        self.inform(format!("Pinned the {name} where it is (level 1)."));
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // Gestures
+
+    fn begin_pull(&mut self, joint: usize, point_world: DVec3) {
+        self.drop_gesture();
+        let document_before = Box::new(self.session.document());
+        self.record(EditKind::Command);
+        self.history.break_coalescing();
+        self.session.begin_grab(joint, point_world);
+        self.trace.clear();
+        self.trace.push(point_world);
+        self.selected_joint = Some(joint);
+        self.gesture = Some(Gesture::Pull {
+            joint,
+            plane_point_world: point_world,
+            document_before,
+        });
+    }
+
+    /// Starts dragging a handle: one undo step for the whole drag.
+    fn begin_handle(&mut self, gesture: Gesture) {
+        if matches!(gesture, Gesture::Pull { .. }) {
+            return;
+        }
+        self.drop_gesture();
+        self.record(EditKind::Command);
+        self.history.break_coalescing();
+        if let Gesture::Swivel { limb, .. } = &gesture {
+            self.session.hold_limb_end(*limb);
+        }
+        self.gesture = Some(gesture);
+    }
+
+    fn move_goal(&mut self, goal_world: DVec3, floor_world: Option<DVec3>) {
+        let Some(Gesture::Goal { tasks: moved, .. }) = &self.gesture else {
+            return;
+        };
+        let mut tasks = self.session.tasks().to_vec();
+        for &task in moved {
+            let Some(spec) = tasks.get_mut(task) else {
+                continue;
+            };
+            match &mut spec.kind {
+                stance_document::TaskKindSpec::Position { target, .. }
+                | stance_document::TaskKindSpec::Gaze { target, .. }
+                | stance_document::TaskKindSpec::Limb { target, .. } => {
+                    *target = goal_world.to_array();
+                }
+                stance_document::TaskKindSpec::Com { target, .. } => {
+                    // The balance goal slides on the floor under the pointer.
+                    if let Some(on_floor) = floor_world {
+                        target[0] = on_floor.x;
+                        target[2] = on_floor.z;
+                    }
+                }
+                _ => {}
+            }
+        }
+        self.session.set_tasks(tasks);
+    }
+
+    fn turn_ring(&mut self, screen_angle: f32) {
+        let Some(Gesture::Ring {
+            dof,
+            last_angle,
+            accumulated,
+            start_value,
+            sign,
+            ..
+        }) = &mut self.gesture
+        else {
+            return;
+        };
+        let mut delta = screen_angle - *last_angle;
+        if delta > std::f32::consts::PI {
+            delta -= std::f32::consts::TAU;
+        } else if delta < -std::f32::consts::PI {
+            delta += std::f32::consts::TAU;
+        }
+        *accumulated += f64::from(delta);
+        *last_angle = screen_angle;
+        // Screen y points down: a counter-clockwise drag has a negative screen angle.
+        let value = *start_value - *sign * *accumulated;
+        let dof = *dof;
+        self.session.set_dof(dof, value);
+    }
+
+    fn turn_swivel(&mut self, point_world: DVec3) {
+        let Some(Gesture::Swivel {
+            limb,
+            start_swivel,
+            start_direction,
+            centre_world,
+            axis_world,
+        }) = &self.gesture
+        else {
+            return;
+        };
+        let direction = point_world - *centre_world;
+        let direction = direction - *axis_world * direction.dot(*axis_world);
+        if direction.length() < 1e-9 {
+            return;
+        }
+        // The angle from where the drag started, right-handed about the axis (the swivel's
+        // own sense).
+        let turn = axis_world
+            .dot(start_direction.cross(direction))
+            .atan2(start_direction.dot(direction));
+        let (limb, angle) = (*limb, *start_swivel + turn);
+        self.session.set_limb_swivel(limb, angle);
+    }
+
+    fn end_gesture(&mut self) {
+        match self.gesture.take() {
+            Some(Gesture::Pull { .. }) => self.session.end_grab(),
+            Some(Gesture::Swivel { .. }) => {
+                self.session.release_hold();
+                self.history.break_coalescing();
+            }
+            Some(_) => self.history.break_coalescing(),
+            None => {}
+        }
+    }
+
+    /// Escape: a pull's body goes back to where it was; a handle stays where it got to.
+    fn cancel_gesture(&mut self) {
+        match self.gesture.take() {
+            Some(Gesture::Pull {
+                document_before, ..
+            }) => {
+                self.session.end_grab();
+                if let Err(error) = self.session.restore_document(&document_before) {
+                    self.warn(format!("Could not cancel the pull: {error}"));
+                }
+            }
+            other => {
+                self.gesture = other;
+                self.end_gesture();
+            }
+        }
+    }
+
+    /// Ends any gesture without a word (undo, redo, a new session).
+    fn drop_gesture(&mut self) {
+        self.end_gesture();
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // Sessions: one way to replace the posing session.
+
+    /// Puts `session` in place of the current one: the gesture, selection, hover, trace and
+    /// the sensors' hold end (they belonged to the old body); for a new body the history
+    /// starts again.
+    pub(crate) fn replace_session(&mut self, session: PosingSession, change: SessionChange) {
+        self.gesture = None;
+        self.session = session;
+        self.sensors.release();
+        self.selected_joint = None;
+        self.hovered_joint = None;
+        self.trace.clear();
+        if change == SessionChange::NewBody {
+            self.history = History::default();
+        }
+        self.session_generation += 1;
+        self.refresh_bones();
+    }
+
+    fn set_level_of_articulation(&mut self, loa: LevelOfArticulation) {
+        if loa == self.session.level_of_articulation() {
+            return;
+        }
+        let document = self.session.document();
+        let built = match &self.avatar {
+            Some(avatar) => avatar.skeleton(loa).and_then(|humanoid| {
+                PosingSession::with_humanoid(humanoid).map_err(|error| error.to_string())
+            }),
+            None => PosingSession::new(loa).map_err(|error| error.to_string()),
+        };
+        match built.and_then(|mut session| {
+            session
+                .restore_document(&document)
+                .map_err(|error| error.to_string())?;
+            Ok(session)
+        }) {
+            Ok(session) => {
+                self.record(EditKind::Command);
+                self.replace_session(session, SessionChange::Rebuilt);
+            }
+            Err(error) => self.warn(format!("Could not switch to LOA {}: {error}", loa.number())),
+        }
+    }
+
+    /// Loads an avatar file; on failure says why and keeps the current one.
+    fn load_avatar(&mut self, name: &str, bytes: &[u8]) {
+        let loa = self.session.level_of_articulation();
+        let mut mapping_note = None;
+        let loaded = LoadedAvatar::load(name, bytes, loa).and_then(|(mut avatar, mut humanoid)| {
+            mapping_note = self
+                .mapping_corrections
+                .reapply(&mut avatar, loa, &mut humanoid);
+            let session =
+                PosingSession::with_humanoid(humanoid).map_err(|error| error.to_string())?;
+            Ok((avatar, session))
+        });
+        match loaded {
+            Ok((avatar, session)) => {
+                let (mapped, unmapped) = avatar.mapping_summary();
+                let mut text = format!(
+                    "Loaded {name}: {} vertices, {mapped} joints mapped onto H-Anim ({unmapped} left unmapped); posed at LOA {}.",
+                    avatar.vertex_count,
+                    loa.number()
+                );
+                if !avatar.warnings.is_empty() {
+                    text.push_str(&format!(" Notes: {}", avatar.warnings.join("; ")));
+                }
+                if let Some(note) = mapping_note {
+                    text.push_str(&format!(" {note}"));
+                }
+                self.replace_session(session, SessionChange::NewBody);
+                self.avatar = Some(avatar);
+                self.avatar_url = is_url(name).then(|| name.to_owned());
+                self.inform(text);
+                if let Some(document) = self.pending_document.take()
+                    && let Err(error) = self.session.restore_document(&document)
+                {
+                    self.warn(format!("The posture does not fit this avatar: {error}"));
+                }
+            }
+            Err(error) => {
+                self.pending_document = None;
+                self.warn(format!(
+                    "{name} could not be opened as an avatar: {error}. The previous avatar stays."
+                ));
+            }
+        }
+    }
+
+    /// Back to the built-in mannequin (the posture carries over by joint name).
+    fn use_mannequin(&mut self) {
+        let document = self.session.document();
+        match PosingSession::new(self.session.level_of_articulation()) {
+            Ok(mut session) => {
+                let fits = session.restore_document(&document).is_ok();
+                self.replace_session(session, SessionChange::NewBody);
+                self.avatar = None;
+                self.avatar_url = None;
+                if !fits {
+                    self.inform("The posture did not fit the mannequin; it stands at rest.");
+                }
+            }
+            Err(error) => self.warn(format!("The mannequin could not be built: {error}")),
+        }
+    }
+
+    /// Asks the page to fetch an avatar by URL (it arrives as a file).
+    fn fetch_avatar(&mut self, url: &str) {
+        if let Err(error) = self.hooks.fetch(url) {
+            self.pending_document = None;
+            self.warn(format!("The avatar at {url} could not be fetched: {error}"));
+        }
+    }
+
+    /// Rebuilds the avatar's skeleton and the session from `mapping`, remembered as one
+    /// correction to revert.
+    fn apply_mapping(&mut self, mapping: Mapping, corrections: Vec<Correction>) {
+        let Some(avatar) = &self.avatar else {
+            return;
+        };
+        if corrections.is_empty() {
+            self.inform("Nothing to apply: pick another H-Anim joint in a row first.");
+            return;
+        }
+        let name = avatar.name.clone();
+        let before = avatar.avatar.mapping.clone();
+        let changes = mapping::describe_changes(avatar, &before, &mapping);
+        match self.remap_avatar(mapping) {
+            Ok(dropped) => {
+                self.mapping_corrections.remember(name, before, corrections);
+                self.inform(format!(
+                    "Mapping corrected ({}): {} Ctrl+Z does not undo this; Revert last correction in the mapping window does.",
+                    mapping::summarize(&changes),
+                    self.rebuilt_summary(&dropped)
+                ));
+            }
+            Err(error) => self.warn(format!(
+                "The corrected mapping could not be applied: {error}. The skeleton stays as it was."
+            )),
+        }
+    }
+
+    fn revert_mapping_correction(&mut self) {
+        let Some(avatar) = &self.avatar else {
+            return;
+        };
+        let name = avatar.name.clone();
+        let Some(previous) = self.mapping_corrections.before_last(&name) else {
+            self.inform("There is no mapping correction to revert.");
+            return;
+        };
+        match previous
+            .map_err(|error| error.to_string())
+            .and_then(|mapping| self.remap_avatar(mapping))
+        {
+            Ok(dropped) => {
+                self.mapping_corrections.forget_last(&name);
+                self.inform(format!(
+                    "Reverted the last mapping correction: {}",
+                    self.rebuilt_summary(&dropped)
+                ));
+            }
+            Err(error) => self.warn(format!("The correction could not be reverted: {error}")),
+        }
+    }
+
+    fn rebuilt_summary(&self, dropped: &[String]) -> String {
+        let skeleton = self.session.skeleton();
+        let mut text = format!(
+            "the skeleton was rebuilt ({} joints, {} DOF); the posture and {} task(s) carried over.",
+            skeleton.joint_count(),
+            skeleton.dof_count(),
+            self.session.tasks().len()
+        );
+        if !dropped.is_empty() {
+            text.push_str(&format!(
+                " Dropped, their joints are gone: {}.",
+                dropped.join(", ")
+            ));
+        }
+        text
+    }
+
+    /// Rebuilds the avatar's skeleton and the posing session from `mapping` at the current
+    /// LOA: the posture carries over by joint name, the tasks that still fit stay. On error
+    /// nothing changes. Returns the dropped tasks, described.
+    fn remap_avatar(&mut self, mapping: Mapping) -> Result<Vec<String>, String> {
+        let loa = self.session.level_of_articulation();
+        let Some(avatar) = self.avatar.as_mut() else {
+            return Err("no avatar is loaded".to_owned());
+        };
+        let humanoid = avatar.skeleton_with_mapping(&mapping, loa)?;
+        let mut session =
+            PosingSession::with_humanoid(humanoid).map_err(|error| error.to_string())?;
+        let (kept, dropped): (Vec<TaskSpec>, Vec<TaskSpec>) = self
+            .session
+            .tasks()
+            .iter()
+            .cloned()
+            .partition(|task| task.to_solver_tasks(session.skeleton(), &[]).is_ok());
+        if let Some(posture) = mapping::carry_posture(&self.session, session.skeleton()) {
+            session.set_posture(posture);
+        }
+        session.set_tasks(kept);
+        avatar.avatar.mapping = mapping;
+        self.replace_session(session, SessionChange::Rebuilt);
+        Ok(dropped.iter().map(describe_task).collect())
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // Files and links
+
+    /// Opens what the page was opened with: a posture link when the address has one (a bad
+    /// link says why and the editor opens normally), otherwise the autosaved work.
+    pub fn open_startup(&mut self, link_fragment: Option<&str>) {
+        let fragment = link_fragment
+            .map(|fragment| fragment.trim_start_matches('#').trim())
+            .filter(|fragment| !fragment.is_empty());
+        if let Some(fragment) = fragment
+            && self.open_link(fragment)
+        {
+            return;
+        }
+        let Some(text) = self.hooks.load_text(AUTOSAVE_KEY) else {
+            return;
+        };
+        match Document::from_json(&text) {
+            Ok(document) => {
+                if let AvatarReference::Url(url) = &document.avatar {
+                    self.pending_document = Some(document.clone());
+                    let url = url.clone();
+                    self.fetch_avatar(&url);
+                }
+                if let Err(error) = self.session.restore_document(&document) {
+                    self.warn(format!("The autosaved work could not be restored: {error}"));
+                } else {
+                    self.autosaved = Some(document);
+                }
+            }
+            Err(error) => self.warn(format!("The autosaved work could not be read: {error}")),
+        }
+        self.refresh_bones();
+    }
+
+    /// Opens a posture link (fragment or URL); on failure says why and changes nothing.
+    /// Returns whether it opened.
+    fn open_link(&mut self, link_text: &str) -> bool {
+        let document = match link::decode(link_text) {
+            Ok(document) => document,
+            Err(error) => {
+                self.warn(format!(
+                    "This posture link could not be opened: {error}. The editor opened normally."
+                ));
+                return false;
+            }
+        };
+        if let Err(error) = self.open_document(&document) {
+            self.warn(format!(
+                "This posture link does not fit the humanoid: {error}. The editor opened normally."
+            ));
+            return false;
+        }
+        self.selected_joint = None;
+        self.trace.clear();
+        match &document.avatar {
+            AvatarReference::Url(url) if self.avatar_url.as_ref() != Some(url) => {
+                self.inform(format!(
+                    "Opened the posture link; loading its avatar {url}…"
+                ));
+                let url = url.clone();
+                self.pending_document = Some(document);
+                self.fetch_avatar(&url);
+            }
+            _ => self.inform("Opened the posture link."),
+        }
+        true
+    }
+
+    /// Opens a file: an avatar, a document (posture and tasks) or a pose library; a sensor
+    /// recording when one was asked for.
+    fn open_file(&mut self, name: &str, bytes: Vec<u8>) {
+        if std::mem::take(&mut self.replay_pick_pending) {
+            self.replay_sensor_recording(name, bytes);
+            return;
+        }
+        let lower = name.to_ascii_lowercase();
+        let is_avatar = [".glb", ".gltf", ".vrm"].iter().any(|extension| {
+            lower
+                .split(['?', '#'])
+                .next()
+                .unwrap_or("")
+                .ends_with(extension)
+        }) || bytes.starts_with(b"glTF");
+        if is_avatar {
+            self.load_avatar(name, &bytes);
+            return;
+        }
+        let Ok(text) = std::str::from_utf8(&bytes) else {
+            self.warn(format!("{name} is not a text (JSON) file."));
+            return;
+        };
+        let is_library = serde_json::from_str::<Value>(text)
+            .ok()
+            .is_some_and(|value| value.get("entries").is_some());
+        if is_library {
+            self.import_library(name, text);
+            return;
+        }
+        match Document::from_json(text) {
+            Ok(document) => match self.open_document(&document) {
+                Ok(()) => self.inform(format!("Opened {name}.")),
+                Err(error) => self.warn(format!("{name} does not fit the humanoid: {error}")),
+            },
+            Err(error) => self.warn(format!("{name} is not a Stance document: {error}")),
+        }
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // The pose library and the autosave
+
+    fn import_library(&mut self, name: &str, text: &str) {
+        match PoseLibrary::from_json(text) {
+            Ok((imported, warnings)) => {
+                let mut added = 0;
+                for entry in imported.entries() {
+                    if self
+                        .library
+                        .save(&entry.name, entry.document.clone())
+                        .is_ok()
+                    {
+                        added += 1;
+                    }
+                }
+                self.store_library();
+                if warnings.is_empty() {
+                    self.inform(format!("Imported {added} poses from {name}."));
+                } else {
+                    self.warn(format!(
+                        "Imported {added} poses from {name}; skipped: {}",
+                        warnings.join("; ")
+                    ));
+                }
+            }
+            Err(error) => self.warn(format!("{name}: {error}")),
+        }
+    }
+
+    fn load_library(&mut self) {
+        let Some(text) = self.hooks.load_text(LIBRARY_KEY) else {
+            return;
+        };
+        match PoseLibrary::from_json(&text) {
+            Ok((library, warnings)) => {
+                self.library = library;
+                if !warnings.is_empty() {
+                    self.warn(format!(
+                        "Some saved poses could not be read: {}",
+                        warnings.join("; ")
+                    ));
+                }
+            }
+            Err(error) => self.warn(format!("The pose library could not be read: {error}")),
+        }
+    }
+
+    fn store_library(&mut self) {
+        if let Err(error) = self.hooks.save_text(LIBRARY_KEY, &self.library.to_json()) {
+            self.warn(format!("The pose library could not be saved: {error}"));
+        }
+    }
+
+    fn save_to_library(&mut self, name: &str) {
+        match self.library.save(name, self.session.document()) {
+            Ok(()) => {
+                self.store_library();
+                self.inform(format!("Saved the pose \"{}\".", name.trim()));
+            }
+            Err(error) => self.warn(error),
+        }
+    }
+
+    fn load_from_library(&mut self, index: usize) {
+        let Some(entry) = self.library.entries().get(index).cloned() else {
+            return;
+        };
+        match self.open_document(&entry.document) {
+            Ok(()) => self.inform(format!("Loaded the pose \"{}\".", entry.name)),
+            Err(error) => self.warn(format!(
+                "The pose \"{}\" does not fit the humanoid: {error}",
+                entry.name
+            )),
+        }
+    }
+
+    fn autosave(&mut self) {
+        if self.is_pulling() || self.now_secs - self.last_autosave_secs < AUTOSAVE_INTERVAL_SECS {
+            return;
+        }
+        let document = self.document();
+        if self.autosaved.as_ref() == Some(&document) {
+            return;
+        }
+        self.last_autosave_secs = self.now_secs;
+        match self.hooks.save_text(AUTOSAVE_KEY, &document.to_json(false)) {
+            Ok(()) => self.autosaved = Some(document),
+            Err(error) => {
+                // Say it once, not every second.
+                if self.autosaved.is_some() || self.notice.is_none() {
+                    self.warn(format!("Autosave failed: {error}"));
+                }
+                self.autosaved = Some(document);
+            }
+        }
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // Sensors
+
+    fn load_sensor_settings(&mut self) {
+        let Some(text) = self.hooks.load_text(SENSOR_SETTINGS_KEY) else {
+            return;
+        };
+        match serde_json::from_str::<SensorSettings>(&text) {
+            Ok(settings) => self.sensors = SensorHub::new(settings),
+            Err(error) => log::warn!("the saved sensor settings could not be read: {error}"),
+        }
+    }
+
+    fn store_sensor_settings(&mut self) {
+        let Ok(text) = serde_json::to_string(self.sensors.settings()) else {
+            return;
+        };
+        if let Err(error) = self.hooks.save_text(SENSOR_SETTINGS_KEY, &text) {
+            log::warn!("the sensor settings could not be saved: {error}");
+        }
+    }
+
+    /// New device settings (kept in the host's storage).
+    fn set_sensor_settings(&mut self, settings: SensorSettings) {
+        if &settings != self.sensors.settings() {
+            self.sensors.set_settings(settings);
+            self.store_sensor_settings();
+        }
+    }
+
+    /// Asks the page to open the device chosen in the settings.
+    fn connect_sensors(&mut self) {
+        let request = match self.sensors.settings().connection() {
+            Ok(request) => request,
+            Err(error) => {
+                self.warn(format!("Sensors: {error}."));
+                return;
+            }
+        };
+        self.store_sensor_settings();
+        self.sensors.begin_connect();
+        if let Err(error) = self.hooks.connect_sensor(&request) {
+            self.sensors.lost(error.clone());
+            self.warn(format!("Sensors: {error}"));
+        }
+    }
+
+    fn disconnect_sensors(&mut self) {
+        self.hooks.disconnect_sensor();
+        self.sensors.disconnected();
+        self.inform("Sensors disconnected; the posture stays as it is.");
+    }
+
+    /// Plays a recorded byte stream through the same decoder and calibration as a device.
+    fn replay_sensor_recording(&mut self, name: &str, bytes: Vec<u8>) {
+        if bytes.is_empty() {
+            self.warn(format!("Sensors: {name} is empty."));
+            return;
+        }
+        self.sensors.start_replay(name, bytes, self.now_secs);
+        self.inform(format!("Replaying {name}."));
+    }
+
+    /// Calibrates the assigned sensors in the current posture.
+    fn calibrate_sensors(&mut self) {
+        let result = self
+            .sensors
+            .calibrate(self.session.skeleton(), self.session.frames());
+        match result {
+            Ok(()) => {
+                let joints = self.sensors.driven_joints(self.session.skeleton());
+                self.session.hold_joints(&joints);
+                self.inform(format!(
+                    "Sensors calibrated: they now drive {} joints; the other joints keep the \
+                     tasks.",
+                    joints.len()
+                ));
+            }
+            Err(error) => self.warn(format!("Calibration failed: {error}.")),
+        }
+    }
+
+    /// Releases the joints the sensors held.
+    fn release_sensor_joints(&mut self) {
+        self.sensors.release();
+        self.session.hold_joints(&[]);
+    }
+}
+
+/// Whether an avatar's name is where it can be fetched again (links and autosave name it).
+fn is_url(name: &str) -> bool {
+    name.starts_with("http://")
+        || name.starts_with("https://")
+        || (!name.contains(['\\', ':']) && name.contains('/'))
+        || name == "default-avatar.glb"
+}
