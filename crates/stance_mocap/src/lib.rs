@@ -13,11 +13,11 @@ pub mod ascii;
 pub mod calibration;
 pub mod decoder;
 pub mod fob;
+pub mod framing;
 pub mod fusion;
 pub mod hid;
 pub mod polhemus;
 pub mod simulate;
-mod stream;
 pub mod xsens;
 
 pub use decoder::{Decoder, DecoderConfig, DecoderStats, Protocol, Sample, SensorId, new_decoder};
