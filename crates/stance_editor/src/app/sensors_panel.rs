@@ -9,10 +9,9 @@ use stance_mocap::ascii::ComponentOrder;
 use stance_mocap::fob::FobMode;
 
 use super::StanceApp;
-use crate::posing::describe_joint;
 use crate::sensors::{
     AssignmentPreset, DeviceFrame, DeviceKind, SENSOR_SETTINGS_KEY, SensorAssignment, SensorHub,
-    SensorLink, SensorSettings,
+    SensorLink, SensorSettings, assignment_label, preset_button_name,
 };
 
 /// Baud rates offered first (any other can be typed).
@@ -264,7 +263,8 @@ impl StanceApp {
         ui.horizontal_wrapped(|ui| {
             for preset in AssignmentPreset::ALL {
                 let button = ui.small_button(preset.label());
-                self.button_rects.push((preset.button_name(), button.rect));
+                self.button_rects
+                    .push((preset_button_name(preset), button.rect));
                 if button.clicked() {
                     self.sensors.apply_preset(preset, self.session.skeleton());
                     self.release_sensor_joints();
@@ -376,7 +376,7 @@ impl StanceApp {
                     let current = self.sensors.assignments().get(&sensor).cloned();
                     let text = current
                         .as_ref()
-                        .map_or_else(|| "nothing".to_owned(), SensorAssignment::label);
+                        .map_or_else(|| "nothing".to_owned(), assignment_label);
                     egui::ComboBox::from_id_salt(("sensor_segment", sensor.0))
                         .selected_text(text)
                         .height(300.0)
@@ -385,10 +385,7 @@ impl StanceApp {
                                 change = Some((sensor, None));
                             }
                             for segment in &segments {
-                                let label = match segment {
-                                    SensorAssignment::Joint(name) => describe_joint(name),
-                                    SensorAssignment::Spine => segment.label(),
-                                };
+                                let label = assignment_label(segment);
                                 if ui
                                     .selectable_label(current.as_ref() == Some(segment), label)
                                     .clicked()
