@@ -16,6 +16,19 @@ function hex4(value) {
   return Number(value).toString(16).padStart(4, "0");
 }
 
+// How long closing waits for the stop bytes to go out (a stalled port must not block it).
+const STOP_WRITE_TIMEOUT_MS = 500;
+
+async function writeBytes(port, bytes) {
+  if (!bytes?.length || !port.writable) return;
+  const writer = port.writable.getWriter();
+  try {
+    await writer.write(new Uint8Array(bytes));
+  } finally {
+    writer.releaseLock();
+  }
+}
+
 async function openSerial(handle, request) {
   if (!("serial" in navigator)) {
     throw new Error(
@@ -37,14 +50,7 @@ async function openSerial(handle, request) {
     }
   };
   navigator.serial.addEventListener("disconnect", onDisconnect);
-  if (request.setup?.length && port.writable) {
-    const writer = port.writable.getWriter();
-    try {
-      await writer.write(new Uint8Array(request.setup));
-    } finally {
-      writer.releaseLock();
-    }
-  }
+  await writeBytes(port, request.setup);
   handle.sensor_connected(name);
   (async () => {
     try {
@@ -72,6 +78,13 @@ async function openSerial(handle, request) {
   return {
     async close() {
       closing = true;
+      // The device's stop command (request.stop), so that it does not keep streaming.
+      try {
+        await Promise.race([
+          writeBytes(port, request.stop),
+          new Promise((resolve) => setTimeout(resolve, STOP_WRITE_TIMEOUT_MS)),
+        ]);
+      } catch {}
       try {
         await reader?.cancel();
       } catch {}

@@ -11,18 +11,23 @@
 
 use std::collections::{BTreeMap, VecDeque};
 
-use glam::{DMat3, DQuat, DVec3};
+use glam::DQuat;
 use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
+use stance_hanim::chains::spine_chain;
 use stance_ik::{Frames, Skeleton};
 
 use crate::posing::PosingSession;
-use stance_mocap::ascii::{AsciiConfig, ComponentOrder};
+use stance_mocap::ascii::ComponentOrder;
 use stance_mocap::calibration::{Calibration, CalibrationSetup, SensorTarget};
-use stance_mocap::fob::{FobConfig, FobMode, command};
-use stance_mocap::hid::{GamepadConfig, GamepadModel, encode_report_record};
-use stance_mocap::polhemus::{FastrakConfig, LibertyConfig};
-use stance_mocap::{Decoder, DecoderConfig, DecoderStats, Protocol, Sample, SensorId, new_decoder};
+use stance_mocap::device::DeviceSetup;
+use stance_mocap::fob::FobMode;
+use stance_mocap::hid::encode_report_record;
+use stance_mocap::{Decoder, DecoderConfig, DecoderStats, Sample, SensorId, new_decoder};
+
+// The device and rig vocabulary lives in stance_mocap; the editor's settings and hub use it.
+pub use stance_mocap::device::{DeviceFrame, DeviceKind};
+pub use stance_mocap::rig::{AssignmentPreset, SensorAssignment};
 
 /// Storage key of the sensor settings (protocol, baud rate... remembered across visits).
 pub const SENSOR_SETTINGS_KEY: &str = "stance.sensors.settings";
@@ -40,118 +45,6 @@ const RATE_WINDOW_SECS: f64 = 1.0;
 const LATENCY_WINDOW: usize = 240;
 /// Largest recording kept in memory (bytes); recording stops there with a message.
 pub const MAX_RECORDING_BYTES: usize = 64 * 1024 * 1024;
-
-/// The devices the page can talk to.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub enum DeviceKind {
-    /// Ascension Flock of Birds (RS-232 binary records).
-    #[default]
-    FlockOfBirds,
-    /// Polhemus FASTRAK (ASCII records).
-    Fastrak,
-    /// Polhemus Liberty or Patriot (binary frames).
-    Liberty,
-    /// Xsens MTi (MTData2).
-    Xsens,
-    /// Hobby IMU boards printing quaternion lines (BNO055, BNO080...).
-    AsciiImu,
-    /// SlimeVR receiver (WebHID).
-    SlimeVr,
-    /// Sony DualSense (WebHID, gyro and accelerometer fused here).
-    DualSense,
-    /// Sony DualShock 4 (WebHID, gyro and accelerometer fused here).
-    DualShock4,
-}
-
-impl DeviceKind {
-    pub const ALL: [DeviceKind; 8] = [
-        DeviceKind::FlockOfBirds,
-        DeviceKind::Fastrak,
-        DeviceKind::Liberty,
-        DeviceKind::Xsens,
-        DeviceKind::AsciiImu,
-        DeviceKind::SlimeVr,
-        DeviceKind::DualSense,
-        DeviceKind::DualShock4,
-    ];
-
-    pub fn label(self) -> &'static str {
-        match self {
-            DeviceKind::FlockOfBirds => "Ascension Flock of Birds (serial)",
-            DeviceKind::Fastrak => "Polhemus FASTRAK (serial)",
-            DeviceKind::Liberty => "Polhemus Liberty / Patriot (serial)",
-            DeviceKind::Xsens => "Xsens MTi (serial)",
-            DeviceKind::AsciiImu => "IMU board, quaternion lines (serial)",
-            DeviceKind::SlimeVr => "SlimeVR receiver (HID)",
-            DeviceKind::DualSense => "DualSense controller (HID)",
-            DeviceKind::DualShock4 => "DualShock 4 controller (HID)",
-        }
-    }
-
-    pub fn protocol(self) -> Protocol {
-        match self {
-            DeviceKind::FlockOfBirds => Protocol::FlockOfBirds,
-            DeviceKind::Fastrak => Protocol::Fastrak,
-            DeviceKind::Liberty => Protocol::Liberty,
-            DeviceKind::Xsens => Protocol::Xsens,
-            DeviceKind::AsciiImu => Protocol::AsciiQuaternion,
-            DeviceKind::SlimeVr => Protocol::SlimeVrHid,
-            DeviceKind::DualSense | DeviceKind::DualShock4 => Protocol::Gamepad,
-        }
-    }
-
-    /// The reference frame such a device usually reports in.
-    pub fn usual_frame(self) -> DeviceFrame {
-        match self {
-            DeviceKind::FlockOfBirds | DeviceKind::Fastrak | DeviceKind::Liberty => {
-                DeviceFrame::TransmitterZDown
-            }
-            _ => DeviceFrame::EarthZUp,
-        }
-    }
-}
-
-/// The reference frame of the device's orientations, as the user sets it up.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub enum DeviceFrame {
-    /// A magnetic transmitter placed as its manual shows: X toward the front of the body,
-    /// Y to the body's right, Z down.
-    #[default]
-    TransmitterZDown,
-    /// An IMU earth frame: X toward the front of the body, Y to the body's left, Z up
-    /// (use *Reset heading* once the person faces the front).
-    EarthZUp,
-    /// Already the editor's world: +Y up, +Z front, +X the body's left.
-    EditorWorld,
-}
-
-impl DeviceFrame {
-    pub const ALL: [DeviceFrame; 3] = [
-        DeviceFrame::TransmitterZDown,
-        DeviceFrame::EarthZUp,
-        DeviceFrame::EditorWorld,
-    ];
-
-    pub fn label(self) -> &'static str {
-        match self {
-            DeviceFrame::TransmitterZDown => "Transmitter: X front, Y right, Z down",
-            DeviceFrame::EarthZUp => "Earth: X front, Y left, Z up",
-            DeviceFrame::EditorWorld => "Editor world: Y up, Z front",
-        }
-    }
-
-    /// `A`: the rotation from the device frame to the editor's world (H-Anim: +Y up, +Z front,
-    /// +X the body's left).
-    pub fn world_from_device(self) -> DQuat {
-        // Columns: the device's X, Y and Z axes in world coordinates.
-        let columns = match self {
-            DeviceFrame::TransmitterZDown => [DVec3::Z, DVec3::NEG_X, DVec3::NEG_Y],
-            DeviceFrame::EarthZUp => [DVec3::Z, DVec3::X, DVec3::Y],
-            DeviceFrame::EditorWorld => [DVec3::X, DVec3::Y, DVec3::Z],
-        };
-        DQuat::from_mat3(&DMat3::from_cols(columns[0], columns[1], columns[2])).normalize()
-    }
-}
 
 /// What the user chose for the device; remembered in browser storage.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -175,13 +68,14 @@ pub struct SensorSettings {
 
 impl Default for SensorSettings {
     fn default() -> Self {
+        let setup = DeviceSetup::default();
         Self {
-            device: DeviceKind::FlockOfBirds,
+            device: setup.kind,
             baud_rate: 115_200,
-            fob_mode: FobMode::PositionQuaternion,
-            fob_group: true,
-            fob_birds: 4,
-            ascii_order: ComponentOrder::Wxyz,
+            fob_mode: setup.fob_mode,
+            fob_group: setup.fob_group,
+            fob_birds: setup.fob_birds,
+            ascii_order: setup.ascii_order,
             frame: DeviceFrame::TransmitterZDown,
             replay_rate_hz: DEFAULT_REPLAY_RATE_HZ,
         }
@@ -189,36 +83,25 @@ impl Default for SensorSettings {
 }
 
 impl SensorSettings {
-    /// The decoder configuration for these settings.
-    pub fn decoder_config(&self) -> DecoderConfig {
-        match self.device {
-            DeviceKind::FlockOfBirds => DecoderConfig::FlockOfBirds(self.fob_config()),
-            DeviceKind::Fastrak => DecoderConfig::Fastrak(FastrakConfig::default()),
-            DeviceKind::Liberty => DecoderConfig::Liberty(LibertyConfig::default()),
-            DeviceKind::Xsens => DecoderConfig::Xsens,
-            DeviceKind::AsciiImu => DecoderConfig::AsciiQuaternion(AsciiConfig {
-                order: self.ascii_order,
-                ..AsciiConfig::default()
-            }),
-            DeviceKind::SlimeVr => DecoderConfig::SlimeVrHid,
-            DeviceKind::DualSense => DecoderConfig::Gamepad(GamepadConfig::default()),
-            DeviceKind::DualShock4 => DecoderConfig::Gamepad(GamepadConfig {
-                model: GamepadModel::DualShock4,
-                ..GamepadConfig::default()
-            }),
+    /// The device with the settings that change how it is started and read.
+    pub fn device_setup(&self) -> DeviceSetup {
+        DeviceSetup {
+            kind: self.device,
+            fob_mode: self.fob_mode,
+            fob_group: self.fob_group,
+            fob_birds: self.fob_birds,
+            ascii_order: self.ascii_order,
         }
     }
 
-    fn fob_config(&self) -> FobConfig {
-        FobConfig {
-            mode: self.fob_mode,
-            group_mode: self.fob_group,
-            ..FobConfig::default()
-        }
+    /// The decoder configuration for these settings.
+    pub fn decoder_config(&self) -> DecoderConfig {
+        self.device_setup().decoder_config()
     }
 
     /// What the page must open: a serial port (with the bytes that set the device up and
-    /// start it streaming) or a HID device among these filters.
+    /// start it streaming, and those that stop it before the port closes) or a HID device
+    /// among these filters.
     pub fn connection(&self) -> Result<SensorConnection, String> {
         let protocol = self.device.protocol();
         if protocol.is_hid() {
@@ -233,19 +116,11 @@ impl SensorSettings {
         if self.baud_rate == 0 {
             return Err("the baud rate must be positive".to_owned());
         }
-        let setup = match self.device {
-            DeviceKind::FlockOfBirds => {
-                command::start_streaming(&self.fob_config(), self.fob_birds.max(1))
-                    .map_err(|error| format!("the Flock of Birds setup failed: {error}"))?
-            }
-            // Continuous output: 'C' (FASTRAK), "C\r" (Liberty / Patriot).
-            DeviceKind::Fastrak => b"C".to_vec(),
-            DeviceKind::Liberty => b"C\r".to_vec(),
-            _ => Vec::new(),
-        };
+        let setup = self.device_setup();
         Ok(SensorConnection::Serial {
             baud_rate: self.baud_rate,
-            setup,
+            setup: setup.start_bytes().map_err(|error| error.to_string())?,
+            stop: setup.stop_bytes(),
         })
     }
 }
@@ -254,8 +129,13 @@ impl SensorSettings {
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum SensorConnection {
-    /// `navigator.serial`: open at this rate, write `setup`, then stream bytes.
-    Serial { baud_rate: u32, setup: Vec<u8> },
+    /// `navigator.serial`: open at this rate, write `setup`, then stream bytes; on
+    /// disconnecting, write `stop` before closing the port.
+    Serial {
+        baud_rate: u32,
+        setup: Vec<u8>,
+        stop: Vec<u8>,
+    },
     /// `navigator.hid`: request a device matching one of `(vendor id, product id)`.
     Hid { filters: Vec<(u16, u16)> },
 }
@@ -264,9 +144,12 @@ impl SensorConnection {
     /// The request as the page's bridge reads it.
     pub fn to_json(&self) -> String {
         match self {
-            SensorConnection::Serial { baud_rate, setup } => {
-                json!({"kind": "serial", "baud_rate": baud_rate, "setup": setup}).to_string()
-            }
+            SensorConnection::Serial {
+                baud_rate,
+                setup,
+                stop,
+            } => json!({"kind": "serial", "baud_rate": baud_rate, "setup": setup, "stop": stop})
+                .to_string(),
             SensorConnection::Hid { filters } => json!({
                 "kind": "hid",
                 "filters": filters
@@ -314,88 +197,20 @@ impl SensorLink {
     }
 }
 
-/// What one sensor drives.
-#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
-pub enum SensorAssignment {
-    /// The segment of this joint.
-    Joint(String),
-    /// The upper back: the spine joints present share the sensor's rotation (Molet et al.:
-    /// lumbar joints half of it, thoracic joints the other half, evenly within each).
-    Spine,
-}
-
-impl SensorAssignment {
-    pub fn label(&self) -> String {
-        match self {
-            SensorAssignment::Joint(name) => stance_hanim::readable_name(name),
-            SensorAssignment::Spine => "spine (upper back)".to_owned(),
-        }
+/// What a sensor drives, for people (joints by their described names).
+pub fn assignment_label(assignment: &SensorAssignment) -> String {
+    match assignment {
+        SensorAssignment::Joint(name) => stance_hanim::readable_name(name),
+        SensorAssignment::Spine => "spine (upper back)".to_owned(),
     }
 }
 
-/// Ready-made assignments: sensors in increasing id order go to these segments.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum AssignmentPreset {
-    /// Upper back, right upper arm, forearm, hand.
-    TorsoRightArm,
-    /// Upper back, left upper arm, forearm, hand.
-    TorsoLeftArm,
-    /// Upper back, head, both upper arms and forearms, both thighs and shanks.
-    FullBody,
-}
-
-impl AssignmentPreset {
-    pub const ALL: [AssignmentPreset; 3] = [
-        AssignmentPreset::TorsoRightArm,
-        AssignmentPreset::TorsoLeftArm,
-        AssignmentPreset::FullBody,
-    ];
-
-    pub fn label(self) -> &'static str {
-        match self {
-            AssignmentPreset::TorsoRightArm => "Torso + right arm (4)",
-            AssignmentPreset::TorsoLeftArm => "Torso + left arm (4)",
-            AssignmentPreset::FullBody => "Full body (10)",
-        }
-    }
-
-    /// The name of its button in the page's state (tests click it).
-    pub fn button_name(self) -> &'static str {
-        match self {
-            AssignmentPreset::TorsoRightArm => "sensors_preset_right_arm",
-            AssignmentPreset::TorsoLeftArm => "sensors_preset_left_arm",
-            AssignmentPreset::FullBody => "sensors_preset_full_body",
-        }
-    }
-
-    fn segments(self) -> Vec<SensorAssignment> {
-        let joint = |name: &str| SensorAssignment::Joint(name.to_owned());
-        match self {
-            AssignmentPreset::TorsoRightArm => vec![
-                SensorAssignment::Spine,
-                joint("r_shoulder"),
-                joint("r_elbow"),
-                joint("r_radiocarpal"),
-            ],
-            AssignmentPreset::TorsoLeftArm => vec![
-                SensorAssignment::Spine,
-                joint("l_shoulder"),
-                joint("l_elbow"),
-                joint("l_radiocarpal"),
-            ],
-            AssignmentPreset::FullBody => vec![
-                SensorAssignment::Spine,
-                joint("skullbase"),
-                joint("l_shoulder"),
-                joint("l_elbow"),
-                joint("r_shoulder"),
-                joint("r_elbow"),
-                joint("l_hip"),
-                joint("l_knee"),
-                joint("r_hip"),
-                joint("r_knee"),
-            ],
-        }
+/// The name of a preset's button in the page's state (tests click it).
+pub fn preset_button_name(preset: AssignmentPreset) -> &'static str {
+    match preset {
+        AssignmentPreset::TorsoRightArm => "sensors_preset_right_arm",
+        AssignmentPreset::TorsoLeftArm => "sensors_preset_left_arm",
+        AssignmentPreset::FullBody => "sensors_preset_full_body",
     }
 }
 
@@ -977,7 +792,7 @@ impl SensorHub {
                     "rate_hz": track.rate_hz(),
                     "orientation": track.last.orientation.map(|q| [q.x, q.y, q.z, q.w]),
                     "position_m": track.last.position_m.map(|p| [p.x, p.y, p.z]),
-                    "assignment": self.assignments.get(sensor).map(SensorAssignment::label),
+                    "assignment": self.assignments.get(sensor).map(assignment_label),
                 })
             })
             .collect();
@@ -1020,57 +835,5 @@ fn world_rotations(skeleton: &Skeleton, frames: &Frames) -> BTreeMap<String, DQu
         .iter()
         .enumerate()
         .map(|(index, joint)| (joint.name.clone(), frames.rotation(index)))
-        .collect()
-}
-
-/// The spine joints an upper-back sensor drives, root to tip, with their weights: the
-/// contiguous lumbar (`vl*`) and thoracic (`vt*`) joints ending at the highest thoracic joint
-/// present; lumbar joints share half of the rotation and thoracic joints the other half
-/// (evenly within each group; one group takes all when the other is absent).
-pub fn spine_chain(skeleton: &Skeleton) -> Vec<(String, f64)> {
-    let joints = skeleton.joints();
-    let is_spine = |name: &str| name.starts_with("vl") || name.starts_with("vt");
-    // The tip: the spine joint none of whose children is a spine joint, nearest the neck.
-    let tip = joints.iter().enumerate().rev().find(|(index, joint)| {
-        is_spine(&joint.name)
-            && joint.has_rotation()
-            && !joints
-                .iter()
-                .any(|child| child.parent == Some(*index) && is_spine(&child.name))
-    });
-    let Some((mut index, _)) = tip else {
-        return Vec::new();
-    };
-    let mut chain = Vec::new();
-    while let Some(joint) = joints.get(index) {
-        if !is_spine(&joint.name) {
-            break;
-        }
-        if joint.has_rotation() {
-            chain.push(joint.name.clone());
-        }
-        match joint.parent {
-            Some(parent) => index = parent,
-            None => break,
-        }
-    }
-    chain.reverse();
-    let lumbar = chain.iter().filter(|name| name.starts_with("vl")).count();
-    let thoracic = chain.len() - lumbar;
-    let (lumbar_share, thoracic_share) = match (lumbar, thoracic) {
-        (0, _) => (0.0, 1.0),
-        (_, 0) => (1.0, 0.0),
-        _ => (0.5, 0.5),
-    };
-    chain
-        .into_iter()
-        .map(|name| {
-            let weight = if name.starts_with("vl") {
-                lumbar_share / lumbar.max(1) as f64
-            } else {
-                thoracic_share / thoracic.max(1) as f64
-            };
-            (name, weight)
-        })
         .collect()
 }

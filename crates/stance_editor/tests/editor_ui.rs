@@ -173,7 +173,12 @@ fn a_copied_link_opens_the_same_posture_and_tasks_and_a_tampered_one_says_so() {
             );
         }
     }
-    assert!(opened.model().notice().is_some_and(|notice| !notice.is_error));
+    assert!(
+        opened
+            .model()
+            .notice()
+            .is_some_and(|notice| !notice.is_error)
+    );
 
     let mut tampered_fragment = fragment.clone().into_bytes();
     let middle = tampered_fragment.len() / 2;
@@ -226,7 +231,8 @@ fn work_survives_a_reload_and_the_library_keeps_named_poses() {
         "autosave restored the work"
     );
     let names: Vec<&str> = reloaded
-        .model().library()
+        .model()
+        .library()
         .entries()
         .iter()
         .map(|entry| entry.name.as_str())

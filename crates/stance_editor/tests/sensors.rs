@@ -13,7 +13,7 @@ use serde_json::Value;
 use stance_editor::posing::PosingSession;
 use stance_editor::sensors::{
     AssignmentPreset, DeviceFrame, DeviceKind, SensorConnection, SensorHub, SensorSettings,
-    spine_chain,
+    preset_button_name,
 };
 use stance_editor::{HostMessage, MemoryHost, StanceApp};
 use stance_hanim::LevelOfArticulation;
@@ -129,8 +129,15 @@ fn a_streamed_flock_of_birds_drives_the_arm_after_calibration() {
     click_button(&mut harness, "sensors_connect");
     let requests = host.inner.borrow().sensor_requests.clone();
     match requests.as_slice() {
-        [SensorConnection::Serial { baud_rate, setup }] => {
+        [
+            SensorConnection::Serial {
+                baud_rate,
+                setup,
+                stop,
+            },
+        ] => {
             assert_eq!(*baud_rate, 115_200);
+            assert_eq!(stop.as_slice(), b"B", "POINT stops the stream");
             assert_eq!(setup.last(), Some(&b'@'), "ends with STREAM: {setup:?}");
             assert!(
                 setup.windows(3).any(|w| w == [b'P', 35, 1]),
@@ -156,7 +163,10 @@ fn a_streamed_flock_of_birds_drives_the_arm_after_calibration() {
     assert_eq!(sensors["samples"], 4);
     assert_eq!(sensors["sensors"].as_array().unwrap().len(), 4);
 
-    click_button(&mut harness, AssignmentPreset::TorsoRightArm.button_name());
+    click_button(
+        &mut harness,
+        preset_button_name(AssignmentPreset::TorsoRightArm),
+    );
     assert_eq!(state(&harness)["sensors"]["assigned"], 4);
     harness.run_steps(10);
     let at_calibration = |harness: &Harness<'static, StanceApp>, joint: &str| {
@@ -436,30 +446,6 @@ fn report_log(bytes: &[u8]) -> Vec<(u8, Vec<u8>)> {
 }
 
 #[test]
-fn the_spine_chain_shares_the_upper_back_sensor() {
-    for loa in LevelOfArticulation::ALL {
-        let session = PosingSession::new(loa).unwrap();
-        let chain = spine_chain(session.skeleton());
-        if loa == LevelOfArticulation::Loa1 && chain.is_empty() {
-            continue;
-        }
-        assert!(!chain.is_empty(), "{loa:?}");
-        let sum: f64 = chain.iter().map(|(_, w)| w).sum();
-        assert!((sum - 1.0).abs() < 1e-12, "{loa:?}: {chain:?}");
-        let skeleton = session.skeleton();
-        for pair in chain.windows(2) {
-            let child = skeleton.joint_index(&pair[1].0).unwrap();
-            let parent = skeleton.joints()[child].parent.unwrap();
-            assert_eq!(
-                skeleton.joints()[parent].name,
-                pair[0].0,
-                "{loa:?}: contiguous"
-            );
-        }
-    }
-}
-
-#[test]
 fn settings_survive_as_json_and_bad_requests_say_why() {
     let settings = SensorSettings {
         device: DeviceKind::AsciiImu,
@@ -482,6 +468,7 @@ fn settings_survive_as_json_and_bad_requests_say_why() {
         serde_json::from_str(&SensorSettings::default().connection().unwrap().to_json()).unwrap();
     assert_eq!(json["kind"], "serial");
     assert_eq!(json["baud_rate"], 115_200);
+    assert_eq!(json["stop"], serde_json::json!([b'B']));
 }
 
 /// A file the decoder cannot read plays out over frames (bounded work per frame) and ends

@@ -3,12 +3,14 @@
 //!
 //! Also: per-joint DOF and anatomical ranges of motion ([`anatomy`], AAOS / Kapandji), segment
 //! masses (de Leva 1996), bone-name mapping of avatars onto H-Anim ([`mapping`]) and the
-//! builder of `stance_ik` skeletons at a chosen LOA ([`builder`]).
+//! builder of `stance_ik` skeletons at a chosen LOA ([`builder`]), and joint chains that act
+//! together, such as the spine an upper-back sensor drives ([`chains`]).
 //!
 //! Frame: +Y up, +Z the front of the body, +X the body's left; metres.
 
 pub mod anatomy;
 pub mod builder;
+pub mod chains;
 mod joint_table;
 pub mod mapping;
 pub mod names;

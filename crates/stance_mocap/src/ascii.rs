@@ -9,8 +9,8 @@
 use glam::DQuat;
 use serde::{Deserialize, Serialize};
 
-use crate::decoder::{Decoder, DecoderStats, Protocol, Sample, SensorId, checked_unit_quat};
-use crate::stream::{ByteStream, Step};
+use crate::decoder::{Protocol, Sample, SensorId, checked_unit_quat};
+use crate::framing::{FrameFormat, FramedDecoder, Step};
 
 /// Order of the quaternion components on a line.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -42,18 +42,25 @@ impl Default for AsciiConfig {
 }
 
 /// Streaming decoder of quaternion text lines (LF or CR LF terminated).
-#[derive(Clone, Debug)]
-pub struct AsciiQuaternionDecoder {
-    config: AsciiConfig,
-    stream: ByteStream,
-}
+pub type AsciiQuaternionDecoder = FramedDecoder<AsciiConfig>;
 
 impl AsciiQuaternionDecoder {
+    /// A decoder of lines as `config` describes them.
     pub fn new(config: AsciiConfig) -> Self {
-        AsciiQuaternionDecoder {
-            config,
-            stream: ByteStream::default(),
-        }
+        FramedDecoder::with_format(config)
+    }
+}
+
+impl FrameFormat for AsciiConfig {
+    const PROTOCOL: Protocol = Protocol::AsciiQuaternion;
+    const LINE_BASED: bool = true;
+
+    fn next_frame(&self, window: &[u8], samples: &mut Vec<Sample>) -> Step {
+        line_step(self, window, samples)
+    }
+
+    fn parse_last_line(&self, line: &[u8]) -> Option<Sample> {
+        parse_line(self, line)
     }
 }
 
@@ -107,38 +114,6 @@ fn line_step(config: &AsciiConfig, window: &[u8], samples: &mut Vec<Sample>) -> 
             Step::Frame(line_len)
         }
         None => Step::Bad(line_len),
-    }
-}
-
-impl Decoder for AsciiQuaternionDecoder {
-    fn protocol(&self) -> Protocol {
-        Protocol::AsciiQuaternion
-    }
-
-    fn push(&mut self, bytes: &[u8], samples: &mut Vec<Sample>) {
-        let before = samples.len();
-        let config = &self.config;
-        self.stream
-            .push(bytes, |window| line_step(config, window, samples));
-        self.stream.stats.samples += (samples.len() - before) as u64;
-    }
-
-    fn finish(&mut self, samples: &mut Vec<Sample>) {
-        let config = &self.config;
-        self.stream
-            .finish_line(samples, |line| parse_line(config, line));
-    }
-
-    fn stats(&self) -> DecoderStats {
-        self.stream.stats
-    }
-
-    fn pending_bytes(&self) -> usize {
-        self.stream.pending()
-    }
-
-    fn reset(&mut self) {
-        self.stream.reset();
     }
 }
 

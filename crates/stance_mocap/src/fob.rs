@@ -12,10 +12,10 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::decoder::{
-    Decoder, DecoderStats, METRES_PER_INCH, Protocol, Sample, SensorId, az_el_roll_deg_from_quat,
-    checked_rotation_matrix, checked_unit_quat, quat_from_az_el_roll_deg,
+    METRES_PER_INCH, Protocol, Sample, SensorId, az_el_roll_deg_from_quat, checked_rotation_matrix,
+    checked_unit_quat, quat_from_az_el_roll_deg,
 };
-use crate::stream::{ByteStream, Step};
+use crate::framing::{FrameFormat, FramedDecoder, Step};
 
 /// Record layout selected by the mode command.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -128,22 +128,17 @@ const FULL_SCALE: f64 = 32768.0;
 const UNIT_TOLERANCE: f64 = 0.02;
 
 /// Streaming decoder of Flock of Birds records.
-#[derive(Clone, Debug)]
-pub struct FobDecoder {
-    config: FobConfig,
-    stream: ByteStream,
-}
+pub type FobDecoder = FramedDecoder<FobConfig>;
 
 impl FobDecoder {
+    /// A decoder of records laid out as `config` says.
     pub fn new(config: FobConfig) -> Self {
-        FobDecoder {
-            config,
-            stream: ByteStream::default(),
-        }
+        FramedDecoder::with_format(config)
     }
 
+    /// The record layout it reads.
     pub fn config(&self) -> &FobConfig {
-        &self.config
+        self.format()
     }
 }
 
@@ -161,7 +156,16 @@ fn words(record: &[u8], first: usize, count: usize) -> Option<Vec<f64>> {
         .collect()
 }
 
-fn frame_step(config: &FobConfig, window: &[u8], samples: &mut Vec<Sample>) -> Step {
+impl FrameFormat for FobConfig {
+    const PROTOCOL: Protocol = Protocol::FlockOfBirds;
+
+    fn next_frame(&self, window: &[u8], samples: &mut Vec<Sample>) -> Step {
+        record_step(self, window, samples)
+    }
+}
+
+/// Finds the next record: its phasing bit, its length, its address in group mode.
+fn record_step(config: &FobConfig, window: &[u8], samples: &mut Vec<Sample>) -> Step {
     let Some(&first) = window.first() else {
         return Step::NeedMore;
     };
@@ -261,36 +265,6 @@ fn decode_record(config: &FobConfig, record: &[u8], sensor: SensorId) -> Option<
         }
     };
     Some(sample)
-}
-
-impl Decoder for FobDecoder {
-    fn protocol(&self) -> Protocol {
-        Protocol::FlockOfBirds
-    }
-
-    fn push(&mut self, bytes: &[u8], samples: &mut Vec<Sample>) {
-        let before = samples.len();
-        let config = &self.config;
-        self.stream
-            .push(bytes, |window| frame_step(config, window, samples));
-        self.stream.stats.samples += (samples.len() - before) as u64;
-    }
-
-    fn finish(&mut self, _samples: &mut Vec<Sample>) {
-        self.stream.drop_pending();
-    }
-
-    fn stats(&self) -> DecoderStats {
-        self.stream.stats
-    }
-
-    fn pending_bytes(&self) -> usize {
-        self.stream.pending()
-    }
-
-    fn reset(&mut self) {
-        self.stream.reset();
-    }
 }
 
 /// Errors building commands or records.

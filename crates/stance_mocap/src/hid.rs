@@ -14,8 +14,8 @@ use glam::{DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 
 use crate::decoder::{Decoder, DecoderStats, Protocol, Sample, SensorId, checked_unit_quat};
+use crate::framing::{Framer, Step};
 use crate::fusion::{Madgwick, MadgwickSettings, STANDARD_GRAVITY};
-use crate::stream::{ByteStream, Step};
 
 // ---------------------------------------------------------------------------------------------
 // Report log records
@@ -81,7 +81,7 @@ fn record_step(window: &[u8], mut on_report: impl FnMut(u8, &[u8])) -> Step {
 /// Counts of a HID decoder: the record layer (report logs) and the report layer (packets).
 #[derive(Clone, Debug, Default)]
 struct HidCounts {
-    records: ByteStream,
+    records: Framer,
     reports: DecoderStats,
 }
 

@@ -2,7 +2,9 @@
 //!
 //! Everything here is pure: bytes (or WebHID reports) go in, [`Sample`]s come out, and
 //! [`calibration::Calibration`] turns samples into joint rotations. The browser bridge only moves
-//! bytes; native tests and recorded-file replay use exactly the same path.
+//! bytes; native tests and recorded-file replay use exactly the same path. [`device`] knows the
+//! devices (protocol, start and stop bytes, decoder settings) and [`rig`] which body segment each
+//! sensor drives.
 //!
 //! Conventions: positions in metres, quaternions are `glam::DQuat` (serialised `[x, y, z, w]`),
 //! angles in radians unless a name says otherwise. A sample's orientation maps vectors from the
@@ -12,12 +14,14 @@
 pub mod ascii;
 pub mod calibration;
 pub mod decoder;
+pub mod device;
 pub mod fob;
+pub mod framing;
 pub mod fusion;
 pub mod hid;
 pub mod polhemus;
+pub mod rig;
 pub mod simulate;
-mod stream;
 pub mod xsens;
 
 pub use decoder::{Decoder, DecoderConfig, DecoderStats, Protocol, Sample, SensorId, new_decoder};

@@ -7,10 +7,10 @@ use glam::{DMat3, DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 
 use crate::decoder::{
-    Decoder, DecoderStats, METRES_PER_INCH, Protocol, Sample, SensorId, az_el_roll_deg_from_quat,
-    checked_rotation_matrix, checked_unit_quat, quat_from_az_el_roll_deg,
+    METRES_PER_INCH, Protocol, Sample, SensorId, az_el_roll_deg_from_quat, checked_rotation_matrix,
+    checked_unit_quat, quat_from_az_el_roll_deg,
 };
-use crate::stream::{ByteStream, Step};
+use crate::framing::{FrameFormat, FramedDecoder, Step};
 
 /// Position units configured on the tracker (`U` command).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -90,18 +90,26 @@ impl FastrakConfig {
 }
 
 /// Streaming decoder of FASTRAK ASCII records (one per CR LF terminated line).
-#[derive(Clone, Debug)]
-pub struct FastrakDecoder {
-    config: FastrakConfig,
-    stream: ByteStream,
-}
+pub type FastrakDecoder = FramedDecoder<FastrakConfig>;
 
 impl FastrakDecoder {
+    /// A decoder of records with `config`'s output list and units.
     pub fn new(config: FastrakConfig) -> Self {
-        FastrakDecoder {
-            config,
-            stream: ByteStream::default(),
-        }
+        FramedDecoder::with_format(config)
+    }
+}
+
+impl FrameFormat for FastrakConfig {
+    const PROTOCOL: Protocol = Protocol::Fastrak;
+    // An unterminated last record is still a record.
+    const LINE_BASED: bool = true;
+
+    fn next_frame(&self, window: &[u8], samples: &mut Vec<Sample>) -> Step {
+        fastrak_step(self, window, samples)
+    }
+
+    fn parse_last_line(&self, line: &[u8]) -> Option<Sample> {
+        parse_fastrak_record(self, line)
     }
 }
 
@@ -188,39 +196,6 @@ fn fastrak_step(config: &FastrakConfig, window: &[u8], samples: &mut Vec<Sample>
             Step::Frame(line_len)
         }
         None => Step::Bad(line_len),
-    }
-}
-
-impl Decoder for FastrakDecoder {
-    fn protocol(&self) -> Protocol {
-        Protocol::Fastrak
-    }
-
-    fn push(&mut self, bytes: &[u8], samples: &mut Vec<Sample>) {
-        let before = samples.len();
-        let config = &self.config;
-        self.stream
-            .push(bytes, |window| fastrak_step(config, window, samples));
-        self.stream.stats.samples += (samples.len() - before) as u64;
-    }
-
-    fn finish(&mut self, samples: &mut Vec<Sample>) {
-        // An unterminated last record is still a record.
-        let config = &self.config;
-        self.stream
-            .finish_line(samples, |record| parse_fastrak_record(config, record));
-    }
-
-    fn stats(&self) -> DecoderStats {
-        self.stream.stats
-    }
-
-    fn pending_bytes(&self) -> usize {
-        self.stream.pending()
-    }
-
-    fn reset(&mut self) {
-        self.stream.reset();
     }
 }
 
@@ -336,18 +311,20 @@ const LIBERTY_MAX_PAYLOAD: usize = 1024;
 const LIBERTY_MAX_STATION: u8 = 16;
 
 /// Streaming decoder of Liberty ("LY") and Patriot ("PA") binary frames.
-#[derive(Clone, Debug)]
-pub struct LibertyDecoder {
-    config: LibertyConfig,
-    stream: ByteStream,
-}
+pub type LibertyDecoder = FramedDecoder<LibertyConfig>;
 
 impl LibertyDecoder {
+    /// A decoder of frames with `config`'s output list and units.
     pub fn new(config: LibertyConfig) -> Self {
-        LibertyDecoder {
-            config,
-            stream: ByteStream::default(),
-        }
+        FramedDecoder::with_format(config)
+    }
+}
+
+impl FrameFormat for LibertyConfig {
+    const PROTOCOL: Protocol = Protocol::Liberty;
+
+    fn next_frame(&self, window: &[u8], samples: &mut Vec<Sample>) -> Step {
+        liberty_step(self, window, samples)
     }
 }
 
@@ -447,36 +424,6 @@ fn liberty_step(config: &LibertyConfig, window: &[u8], samples: &mut Vec<Sample>
             Step::Frame(frame_len)
         }
         None => Step::Bad(1),
-    }
-}
-
-impl Decoder for LibertyDecoder {
-    fn protocol(&self) -> Protocol {
-        Protocol::Liberty
-    }
-
-    fn push(&mut self, bytes: &[u8], samples: &mut Vec<Sample>) {
-        let before = samples.len();
-        let config = &self.config;
-        self.stream
-            .push(bytes, |window| liberty_step(config, window, samples));
-        self.stream.stats.samples += (samples.len() - before) as u64;
-    }
-
-    fn finish(&mut self, _samples: &mut Vec<Sample>) {
-        self.stream.drop_pending();
-    }
-
-    fn stats(&self) -> DecoderStats {
-        self.stream.stats
-    }
-
-    fn pending_bytes(&self) -> usize {
-        self.stream.pending()
-    }
-
-    fn reset(&mut self) {
-        self.stream.reset();
     }
 }
 

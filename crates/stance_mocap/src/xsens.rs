@@ -8,10 +8,8 @@
 
 use glam::{DMat3, DQuat, DVec3};
 
-use crate::decoder::{
-    Decoder, DecoderStats, Protocol, Sample, SensorId, checked_rotation_matrix, checked_unit_quat,
-};
-use crate::stream::{ByteStream, Step};
+use crate::decoder::{Protocol, Sample, SensorId, checked_rotation_matrix, checked_unit_quat};
+use crate::framing::{FrameFormat, FramedDecoder, Step};
 
 pub const PREAMBLE: u8 = 0xFA;
 /// Bus identifier of a stand-alone device ("master").
@@ -105,16 +103,26 @@ impl Precision {
     }
 }
 
+/// Xbus message framing (the protocol has nothing to configure).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct XbusFormat;
+
 /// Streaming decoder of Xbus messages; MTData2 messages become samples, other valid messages
 /// count as frames without samples.
-#[derive(Clone, Debug, Default)]
-pub struct XsensDecoder {
-    stream: ByteStream,
-}
+pub type XsensDecoder = FramedDecoder<XbusFormat>;
 
 impl XsensDecoder {
+    /// A decoder with empty buffer and counts.
     pub fn new() -> Self {
-        XsensDecoder::default()
+        FramedDecoder::with_format(XbusFormat)
+    }
+}
+
+impl FrameFormat for XbusFormat {
+    const PROTOCOL: Protocol = Protocol::Xsens;
+
+    fn next_frame(&self, window: &[u8], samples: &mut Vec<Sample>) -> Step {
+        xsens_step(window, samples)
     }
 }
 
@@ -248,35 +256,6 @@ fn xsens_step(window: &[u8], samples: &mut Vec<Sample>) -> Step {
         }
         Some(None) => Step::Frame(frame_len),
         None => Step::Bad(frame_len),
-    }
-}
-
-impl Decoder for XsensDecoder {
-    fn protocol(&self) -> Protocol {
-        Protocol::Xsens
-    }
-
-    fn push(&mut self, bytes: &[u8], samples: &mut Vec<Sample>) {
-        let before = samples.len();
-        self.stream
-            .push(bytes, |window| xsens_step(window, samples));
-        self.stream.stats.samples += (samples.len() - before) as u64;
-    }
-
-    fn finish(&mut self, _samples: &mut Vec<Sample>) {
-        self.stream.drop_pending();
-    }
-
-    fn stats(&self) -> DecoderStats {
-        self.stream.stats
-    }
-
-    fn pending_bytes(&self) -> usize {
-        self.stream.pending()
-    }
-
-    fn reset(&mut self) {
-        self.stream.reset();
     }
 }
 

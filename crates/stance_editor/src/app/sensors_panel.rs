@@ -12,8 +12,8 @@ use super::StanceApp;
 use crate::model::Command;
 use crate::sensors::{
     AssignmentPreset, DeviceFrame, DeviceKind, SensorAssignment, SensorLink, SensorSettings,
+    assignment_label, preset_button_name,
 };
-use stance_hanim::readable_name;
 
 /// Baud rates offered first (any other can be typed).
 const BAUD_RATES: [u32; 6] = [9_600, 19_200, 38_400, 57_600, 115_200, 230_400];
@@ -177,7 +177,8 @@ impl StanceApp {
         ui.horizontal_wrapped(|ui| {
             for preset in AssignmentPreset::ALL {
                 let button = ui.small_button(preset.label());
-                self.button_rects.push((preset.button_name(), button.rect));
+                self.button_rects
+                    .push((preset_button_name(preset), button.rect));
                 if button.clicked() {
                     self.model
                         .sensors
@@ -294,7 +295,7 @@ impl StanceApp {
                     let current = self.model.sensors.assignments().get(&sensor).cloned();
                     let text = current
                         .as_ref()
-                        .map_or_else(|| "nothing".to_owned(), SensorAssignment::label);
+                        .map_or_else(|| "nothing".to_owned(), assignment_label);
                     egui::ComboBox::from_id_salt(("sensor_segment", sensor.0))
                         .selected_text(text)
                         .height(300.0)
@@ -303,10 +304,7 @@ impl StanceApp {
                                 change = Some((sensor, None));
                             }
                             for segment in &segments {
-                                let label = match segment {
-                                    SensorAssignment::Joint(name) => readable_name(name),
-                                    SensorAssignment::Spine => segment.label(),
-                                };
+                                let label = assignment_label(segment);
                                 if ui
                                     .selectable_label(current.as_ref() == Some(segment), label)
                                     .clicked()
