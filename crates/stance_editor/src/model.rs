@@ -807,29 +807,56 @@ impl EditorModel {
         self.refresh_bones();
     }
 
+    /// The body at another level of articulation: the posture carries over by joint name
+    /// (world rotations), the tasks whose joints remain stay; one undoable edit.
     fn set_level_of_articulation(&mut self, loa: LevelOfArticulation) {
         if loa == self.session.level_of_articulation() {
             return;
         }
-        let document = self.session.document();
-        let built = match &self.avatar {
-            Some(avatar) => avatar.skeleton(loa).and_then(|humanoid| {
-                PosingSession::with_humanoid(humanoid).map_err(|error| error.to_string())
-            }),
-            None => PosingSession::new(loa).map_err(|error| error.to_string()),
+        let humanoid = match &self.avatar {
+            Some(avatar) => avatar.skeleton(loa),
+            None => stance_hanim::default_skeleton(&stance_hanim::SkeletonOptions {
+                loa,
+                ..stance_hanim::SkeletonOptions::default()
+            })
+            .map_err(|error| error.to_string()),
         };
-        match built.and_then(|mut session| {
-            session
-                .restore_document(&document)
-                .map_err(|error| error.to_string())?;
-            Ok(session)
-        }) {
-            Ok(session) => {
+        match humanoid.and_then(|humanoid| self.rebuilt_session(humanoid)) {
+            Ok((session, dropped)) => {
                 self.record(EditKind::Command);
                 self.replace_session(session, SessionChange::Rebuilt);
+                if !dropped.is_empty() {
+                    self.inform(format!(
+                        "At LOA {} these tasks have no joint and were dropped (undo brings them back): {}.",
+                        loa.number(),
+                        dropped.join(", ")
+                    ));
+                }
             }
             Err(error) => self.warn(format!("Could not switch to LOA {}: {error}", loa.number())),
         }
+    }
+
+    /// A session on `humanoid` carrying the current one over: the posture by joint name
+    /// (each joint keeps its world rotation), the tasks that still fit. Returns the session
+    /// and the dropped tasks, described.
+    fn rebuilt_session(
+        &self,
+        humanoid: stance_hanim::HumanoidSkeleton,
+    ) -> Result<(PosingSession, Vec<String>), String> {
+        let mut session =
+            PosingSession::with_humanoid(humanoid).map_err(|error| error.to_string())?;
+        let (kept, dropped): (Vec<TaskSpec>, Vec<TaskSpec>) = self
+            .session
+            .tasks()
+            .iter()
+            .cloned()
+            .partition(|task| task.to_solver_tasks(session.skeleton(), &[]).is_ok());
+        if let Some(posture) = mapping::carry_posture(&self.session, session.skeleton()) {
+            session.set_posture(posture);
+        }
+        session.set_tasks(kept);
+        Ok((session, dropped.iter().map(describe_task).collect()))
     }
 
     /// Loads an avatar file; on failure says why and keeps the current one.
@@ -976,25 +1003,16 @@ impl EditorModel {
     /// nothing changes. Returns the dropped tasks, described.
     fn remap_avatar(&mut self, mapping: Mapping) -> Result<Vec<String>, String> {
         let loa = self.session.level_of_articulation();
-        let Some(avatar) = self.avatar.as_mut() else {
+        let Some(avatar) = self.avatar.as_ref() else {
             return Err("no avatar is loaded".to_owned());
         };
         let humanoid = avatar.skeleton_with_mapping(&mapping, loa)?;
-        let mut session =
-            PosingSession::with_humanoid(humanoid).map_err(|error| error.to_string())?;
-        let (kept, dropped): (Vec<TaskSpec>, Vec<TaskSpec>) = self
-            .session
-            .tasks()
-            .iter()
-            .cloned()
-            .partition(|task| task.to_solver_tasks(session.skeleton(), &[]).is_ok());
-        if let Some(posture) = mapping::carry_posture(&self.session, session.skeleton()) {
-            session.set_posture(posture);
+        let (session, dropped) = self.rebuilt_session(humanoid)?;
+        if let Some(avatar) = self.avatar.as_mut() {
+            avatar.avatar.mapping = mapping;
         }
-        session.set_tasks(kept);
-        avatar.avatar.mapping = mapping;
         self.replace_session(session, SessionChange::Rebuilt);
-        Ok(dropped.iter().map(describe_task).collect())
+        Ok(dropped)
     }
 
     // -----------------------------------------------------------------------------------------

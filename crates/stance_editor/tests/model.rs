@@ -1,0 +1,408 @@
+//! The editor's model driven by commands alone, without egui: gestures, undo, sessions,
+//! files, the per-frame step.
+
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use std::f64::consts::FRAC_PI_4;
+
+use glam::DVec3;
+use stance_document::{Document, TaskKindSpec};
+use stance_editor::posing::pin_task;
+use stance_editor::{Command, EditorModel, Gesture, MemoryHost};
+use stance_hanim::{LevelOfArticulation, LimbName};
+
+/// Seconds between two frames.
+const FRAME: f64 = 1.0 / 60.0;
+
+struct Clocked {
+    model: EditorModel,
+    now: f64,
+}
+
+impl Clocked {
+    fn new() -> Self {
+        Self::with_host(MemoryHost::default())
+    }
+
+    fn with_host(host: MemoryHost) -> Self {
+        let Ok(model) = EditorModel::new(Box::new(host)) else {
+            panic!("the model starts on the mannequin");
+        };
+        let mut clocked = Self { model, now: 0.0 };
+        clocked.frames(1);
+        clocked
+    }
+
+    fn frames(&mut self, count: usize) {
+        for _ in 0..count {
+            self.now += FRAME;
+            self.model.step(self.now, None);
+        }
+    }
+
+    /// Steps until the solver settles (at most `limit` frames).
+    fn settle(&mut self, limit: usize) {
+        for _ in 0..limit {
+            self.frames(1);
+            if self.model.session().is_settled() {
+                return;
+            }
+        }
+    }
+
+    fn apply(&mut self, command: Command) {
+        self.model.apply(command);
+    }
+
+    fn joint(&self, name: &str) -> usize {
+        self.model
+            .session()
+            .skeleton()
+            .joint_index(name)
+            .unwrap_or_else(|| panic!("{name} is in the body"))
+    }
+
+    fn position(&self, name: &str) -> DVec3 {
+        self.model
+            .session()
+            .joint_position(name)
+            .unwrap_or_else(|| panic!("{name} has a position"))
+    }
+}
+
+#[test]
+fn a_pull_moves_the_hand_while_the_pinned_feet_hold_and_undo_restores_the_document() {
+    let mut editor = Clocked::new();
+    editor.settle(200);
+    let before = editor.model.document();
+    let foot = editor.position("l_talocrural");
+    let wrist = editor.joint("r_radiocarpal");
+    let start = editor.position("r_radiocarpal");
+    editor.apply(Command::BeginPull {
+        joint: wrist,
+        point_world: start,
+    });
+    assert!(editor.model.is_pulling());
+    assert_eq!(editor.model.selected_joint(), Some(wrist));
+    let target = start + DVec3::new(0.0, 0.2, 0.1);
+    for step in 1..=20 {
+        let along = start + (target - start) * (f64::from(step) / 20.0);
+        editor.apply(Command::MoveGrab {
+            target_world: along,
+        });
+        editor.frames(1);
+    }
+    editor.settle(300);
+    let reached = editor.position("r_radiocarpal");
+    assert!(
+        (reached - target).length() < 0.01,
+        "the wrist is {:.3} m from the pulled point",
+        (reached - target).length()
+    );
+    assert!(
+        (editor.position("l_talocrural") - foot).length() < 1e-3,
+        "the pinned foot moved"
+    );
+    // The trace followed the pull.
+    assert!(editor.model.trace().len() > 5);
+    editor.apply(Command::EndGesture);
+    assert!(editor.model.gesture().is_none());
+    editor.apply(Command::Undo);
+    assert_eq!(editor.model.document(), before);
+}
+
+#[test]
+fn escape_during_a_pull_puts_the_body_back() {
+    let mut editor = Clocked::new();
+    editor.settle(200);
+    let before = editor.model.document();
+    let wrist = editor.joint("l_radiocarpal");
+    let start = editor.position("l_radiocarpal");
+    editor.apply(Command::BeginPull {
+        joint: wrist,
+        point_world: start,
+    });
+    editor.apply(Command::MoveGrab {
+        target_world: start + DVec3::new(0.1, 0.3, 0.0),
+    });
+    editor.frames(10);
+    assert_ne!(editor.model.document().posture, before.posture);
+    editor.apply(Command::CancelGesture);
+    assert!(editor.model.gesture().is_none());
+    assert_eq!(editor.model.document(), before);
+}
+
+#[test]
+fn a_goal_drag_moves_the_goals_it_took_and_is_one_undo_step() {
+    let mut editor = Clocked::new();
+    let hand = editor.position("r_radiocarpal");
+    let mut tasks = editor.model.session().tasks().to_vec();
+    let mut reach = pin_task("r_radiocarpal", hand.to_array());
+    reach.level = 3;
+    tasks.push(reach);
+    let index = tasks.len() - 1;
+    editor.apply(Command::SetTasks {
+        kind: stance_editor::history::EditKind::Command,
+        tasks,
+    });
+    let with_task = editor.model.document();
+    editor.apply(Command::BeginHandle(Gesture::Goal {
+        tasks: vec![index],
+        plane_point_world: hand,
+    }));
+    for step in 1..=5 {
+        editor.apply(Command::MoveGoal {
+            goal_world: hand + DVec3::new(0.0, 0.02 * f64::from(step), 0.0),
+            floor_world: None,
+        });
+        editor.frames(1);
+    }
+    editor.apply(Command::EndGesture);
+    let TaskKindSpec::Position { target, .. } = &editor.model.session().tasks()[index].kind else {
+        panic!("the task is a position task");
+    };
+    assert!((target[1] - (hand.y + 0.1)).abs() < 1e-12);
+    editor.apply(Command::Undo);
+    assert_eq!(editor.model.document().tasks, with_task.tasks);
+}
+
+#[test]
+fn a_ring_turns_its_dof_by_the_pointer_angle() {
+    let mut editor = Clocked::new();
+    let elbow = editor.joint("l_elbow");
+    let dof = editor.model.session().skeleton().joints()[elbow].dof_start;
+    let start_value = editor.model.session().posture().values()[dof];
+    editor.apply(Command::BeginHandle(Gesture::Ring {
+        dof,
+        centre_px: [100.0, 100.0],
+        last_angle: 0.0,
+        accumulated: 0.0,
+        start_value,
+        sign: 1.0,
+    }));
+    // A quarter turn in two steps, then across the ±π seam: the turn accumulates.
+    editor.apply(Command::TurnRing {
+        screen_angle: std::f32::consts::FRAC_PI_8,
+    });
+    editor.apply(Command::TurnRing {
+        screen_angle: std::f32::consts::FRAC_PI_4,
+    });
+    let value = editor.model.session().posture().values()[dof];
+    // Screen y points down: a positive screen angle is a clockwise turn, against the axis
+    // that points toward the camera (sign +1).
+    assert!(
+        (value - (start_value - FRAC_PI_4)).abs() < 1e-6,
+        "{value} vs {}",
+        start_value - FRAC_PI_4
+    );
+    editor.apply(Command::EndGesture);
+    assert!(editor.model.gesture().is_none());
+}
+
+#[test]
+fn a_swivel_drag_turns_the_elbow_around_the_arm_and_holds_the_hand() {
+    let mut editor = Clocked::new();
+    editor.settle(200);
+    // Bend the elbow so that the arm has a swivel circle.
+    let elbow = editor.joint("r_elbow");
+    let dof = editor.model.session().skeleton().joints()[elbow].dof_start;
+    editor.apply(Command::SetDof { dof, value: -1.2 });
+    editor.settle(200);
+    let limb = LimbName::RightArm;
+    let Some((swivel, feasible)) = editor.model.session().limb_swivel(limb) else {
+        panic!("the right arm has a swivel angle");
+    };
+    // A turn the joint limits allow.
+    let Some(wanted) = [0.4, -0.4, 0.2, -0.2].into_iter().find(|turn| {
+        feasible
+            .iter()
+            .any(|interval| interval.contains(swivel + turn))
+    }) else {
+        panic!("the arm can swivel a little: {feasible:?}");
+    };
+    let shoulder = editor.position("r_shoulder");
+    let wrist = editor.position("r_radiocarpal");
+    let middle = editor.position("r_elbow");
+    let axis = (wrist - shoulder).normalize();
+    let centre = shoulder + axis * (middle - shoulder).dot(axis);
+    let start_direction = (middle - centre).normalize();
+    editor.apply(Command::BeginHandle(Gesture::Swivel {
+        limb,
+        start_swivel: swivel,
+        start_direction,
+        centre_world: centre,
+        axis_world: axis,
+    }));
+    // The pointer `wanted` around the axis (right-handed).
+    let turned = centre
+        + (start_direction * wanted.cos() + axis.cross(start_direction) * wanted.sin()) * 0.1;
+    editor.apply(Command::TurnSwivel {
+        point_world: turned,
+    });
+    editor.frames(5);
+    let Some((now, _)) = editor.model.session().limb_swivel(limb) else {
+        panic!("the right arm has a swivel angle");
+    };
+    let turn = (now - swivel + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
+        - std::f64::consts::PI;
+    assert!(
+        (turn - wanted).abs() < 0.02,
+        "the swivel turned {turn} rad for {wanted}"
+    );
+    assert!(
+        (editor.position("r_radiocarpal") - wrist).length() < 0.01,
+        "the hand stayed"
+    );
+    editor.apply(Command::EndGesture);
+}
+
+#[test]
+fn there_is_one_gesture_at_a_time() {
+    let mut editor = Clocked::new();
+    let elbow = editor.joint("l_elbow");
+    let dof = editor.model.session().skeleton().joints()[elbow].dof_start;
+    editor.apply(Command::BeginHandle(Gesture::Ring {
+        dof,
+        centre_px: [0.0, 0.0],
+        last_angle: 0.0,
+        accumulated: 0.0,
+        start_value: 0.0,
+        sign: 1.0,
+    }));
+    let wrist = editor.joint("r_radiocarpal");
+    let point = editor.position("r_radiocarpal");
+    editor.apply(Command::BeginPull {
+        joint: wrist,
+        point_world: point,
+    });
+    assert!(editor.model.is_pulling());
+    // A ring command now does nothing: the ring gesture is over.
+    let before = editor.model.session().posture().values()[dof];
+    editor.apply(Command::TurnRing { screen_angle: 1.0 });
+    assert_eq!(editor.model.session().posture().values()[dof], before);
+}
+
+#[test]
+fn switching_the_level_of_articulation_replaces_the_session_and_keeps_the_history() {
+    let mut editor = Clocked::new();
+    let wrist = editor.joint("r_radiocarpal");
+    editor.apply(Command::Select(Some(wrist)));
+    editor.apply(Command::BeginPull {
+        joint: wrist,
+        point_world: editor.position("r_radiocarpal"),
+    });
+    let generation = editor.model.session_generation();
+    editor.apply(Command::SetLevelOfArticulation(LevelOfArticulation::Loa1));
+    assert_eq!(
+        editor.model.notice().map(|notice| notice.text.clone()),
+        None,
+        "no complaint"
+    );
+    assert_eq!(
+        editor.model.level_of_articulation(),
+        LevelOfArticulation::Loa1
+    );
+    assert!(editor.model.gesture().is_none());
+    assert_eq!(editor.model.selected_joint(), None);
+    assert!(editor.model.session_generation() > generation);
+    assert!(editor.model.history().can_undo());
+    editor.frames(1);
+    // The bones follow the new body.
+    let owners: Vec<usize> = editor.model.bones().iter().map(|bone| bone.owner).collect();
+    let joints = editor.model.session().skeleton().joint_count();
+    assert!(owners.iter().all(|&owner| owner < joints));
+}
+
+#[test]
+fn a_bad_avatar_or_document_leaves_the_work_as_it_was() {
+    let mut editor = Clocked::new();
+    editor.apply(Command::Mirror);
+    let before = editor.model.document();
+    editor.apply(Command::LoadAvatar {
+        name: "broken.glb".to_owned(),
+        bytes: b"glTF\x02\x00\x00\x00garbage".to_vec(),
+    });
+    let Some(notice) = editor.model.notice() else {
+        panic!("a notice says why");
+    };
+    assert!(notice.is_error);
+    assert!(notice.text.contains("broken.glb"), "{}", notice.text);
+    assert!(editor.model.avatar().is_none());
+    assert_eq!(editor.model.document(), before);
+    editor.apply(Command::OpenFile {
+        name: "pose.json".to_owned(),
+        bytes: br#"{"posture": {"l_elbow": "bent"}}"#.to_vec(),
+    });
+    assert!(editor.model.notice().is_some_and(|notice| notice.is_error));
+    assert_eq!(editor.model.document(), before);
+}
+
+#[test]
+fn a_document_opens_as_one_undoable_edit_and_the_step_shows_it() {
+    let mut editor = Clocked::new();
+    let rest = editor.model.document();
+    let mut bent = Clocked::new();
+    let elbow = bent.joint("l_elbow");
+    let dof = bent.model.session().skeleton().joints()[elbow].dof_start;
+    bent.apply(Command::SetDof { dof, value: -1.0 });
+    bent.frames(1);
+    let document: Document = bent.model.document();
+    let bones_before: Vec<_> = editor.model.bones().to_vec();
+    editor.apply(Command::OpenFile {
+        name: "bent.json".to_owned(),
+        bytes: document.to_json(false).into_bytes(),
+    });
+    assert_eq!(editor.model.document().posture, document.posture);
+    editor.frames(1);
+    let moved = editor
+        .model
+        .bones()
+        .iter()
+        .zip(&bones_before)
+        .any(|(now, before)| now.capsule.end_world != before.capsule.end_world);
+    assert!(moved, "the cached bones follow the opened posture");
+    editor.apply(Command::Undo);
+    assert_eq!(editor.model.document(), rest);
+}
+
+#[test]
+fn the_step_autosaves_the_document_once_it_changed() {
+    let host = MemoryHost::default();
+    let storage = host.inner.clone();
+    let mut editor = Clocked::with_host(host);
+    editor.apply(Command::Mirror);
+    editor.apply(Command::ResetToRest);
+    let elbow = editor.joint("l_elbow");
+    let dof = editor.model.session().skeleton().joints()[elbow].dof_start;
+    editor.apply(Command::SetDof { dof, value: -0.8 });
+    // More than the autosave interval later.
+    editor.frames(90);
+    let saved = storage
+        .borrow()
+        .storage
+        .get(stance_editor::library::AUTOSAVE_KEY)
+        .cloned();
+    let Some(saved) = saved else {
+        panic!("the document was autosaved");
+    };
+    let Ok(document) = Document::from_json(&saved) else {
+        panic!("the autosave is a document");
+    };
+    assert_eq!(document.posture, editor.model.document().posture);
+}
+
+#[test]
+fn library_commands_save_load_and_delete() {
+    let mut editor = Clocked::new();
+    let elbow = editor.joint("l_elbow");
+    let dof = editor.model.session().skeleton().joints()[elbow].dof_start;
+    editor.apply(Command::SetDof { dof, value: -0.9 });
+    let bent = editor.model.document();
+    editor.apply(Command::SaveToLibrary("bent".to_owned()));
+    editor.apply(Command::ResetToRest);
+    assert_ne!(editor.model.document().posture, bent.posture);
+    editor.apply(Command::LoadFromLibrary(0));
+    assert_eq!(editor.model.document().posture, bent.posture);
+    editor.apply(Command::DeleteFromLibrary(0));
+    assert!(editor.model.library().entries().is_empty());
+}
