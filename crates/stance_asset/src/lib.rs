@@ -25,6 +25,8 @@
 //! [`export_glb`] writes the posed avatar; importing that file and calling
 //! [`Avatar::current_posture`] gives the posture back.
 
+#![warn(missing_docs)]
+
 mod error;
 mod export;
 mod generate;

@@ -10,6 +10,8 @@
 //! - [`Problem`]: the one way from tasks to a solver problem (tasks by level, closed-form limb
 //!   starts, settings), from a problem file (`stance solve`) or a document on a skeleton.
 
+#![warn(missing_docs)]
+
 mod convert;
 mod document;
 mod error;

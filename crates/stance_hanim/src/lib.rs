@@ -8,6 +8,8 @@
 //!
 //! Frame: +Y up, +Z the front of the body, +X the body's left; metres.
 
+#![warn(missing_docs)]
+
 pub mod anatomy;
 pub mod builder;
 pub mod chains;

@@ -24,6 +24,8 @@
 //! - [`conflict`]: why an unmet task is not met (which higher tasks stand in its way, the
 //!   joint limits, or a goal out of reach), from the linearised tasks.
 
+#![warn(missing_docs)]
+
 pub mod conflict;
 mod error;
 mod joint_rotation;

@@ -9,6 +9,8 @@
 //! - [`PoseSolver`]: tasks by level set once, solved every frame into a caller's array of DOF
 //!   values; world joint transforms; the closed-form limb and its swivel angle.
 
+#![warn(missing_docs)]
+
 #[cfg(target_arch = "wasm32")]
 mod js;
 

@@ -22,8 +22,10 @@ pub enum ComponentOrder {
     Xyzw,
 }
 
+/// How a board prints its quaternion lines.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct AsciiConfig {
+    /// Order of the four quaternion components on a line.
     pub order: ComponentOrder,
     /// Printed quaternions are rounded; lines whose norm is farther from 1 are rejected.
     pub norm_tolerance: f64,

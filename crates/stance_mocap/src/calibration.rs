@@ -52,9 +52,12 @@ impl<K: Clone> SensorTarget<K> {
 /// lumbar spine, least in the upper thoracic (after Molet et al.).
 pub const HANIM_SPINE_WEIGHTS: [(&str, f64); 3] = [("vl5", 0.5), ("vt10", 0.3), ("vt1", 0.2)];
 
+/// One sensor and the joint or chain it drives.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SensorBinding<K> {
+    /// The sensor, as its samples name it.
     pub sensor: SensorId,
+    /// The joint (or joint chain) whose segment the sensor sits on.
     pub target: SensorTarget<K>,
 }
 
@@ -69,10 +72,12 @@ pub struct CalibrationSetup<K> {
     pub world_up: DVec3,
     /// Joint hierarchy: child -> parent. Roots are absent.
     pub parents: BTreeMap<K, K>,
+    /// What each sensor drives: a sensor may be bound once, a joint driven by one sensor only.
     pub bindings: Vec<SensorBinding<K>>,
 }
 
 impl<K: Ord> CalibrationSetup<K> {
+    /// A setup with no sensors bound yet and +Y as the world's up axis.
     pub fn new(world_from_device: DQuat, parents: BTreeMap<K, K>) -> Self {
         CalibrationSetup {
             world_from_device,
@@ -82,38 +87,59 @@ impl<K: Ord> CalibrationSetup<K> {
         }
     }
 
+    /// Binds `sensor` to what it drives (checked by [`Calibration::calibrate`]).
     pub fn bind(mut self, sensor: SensorId, target: SensorTarget<K>) -> Self {
         self.bindings.push(SensorBinding { sensor, target });
         self
     }
 }
 
+/// Why [`Calibration::calibrate`] refused a setup, posture or set of sensor readings.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum CalibrationError {
+    /// A bound sensor has no orientation at the calibration instant.
     #[error("sensor {0:?} has no reading at the calibration instant")]
     MissingSensorReading(SensorId),
+    /// A driven joint (or a chain's parent) has no world rotation in the calibration posture.
     #[error("joint {0} has no world rotation in the calibration posture")]
     MissingJointRotation(String),
+    /// The same sensor appears in two bindings.
     #[error("sensor {0:?} is bound more than once")]
     SensorBoundTwice(SensorId),
+    /// A joint is driven by two bindings, or appears twice in one chain.
     #[error("joint {0} is driven by more than one sensor")]
     JointDrivenTwice(String),
+    /// A sensor is bound to a chain without joints.
     #[error("sensor {0:?} drives an empty chain")]
     EmptyChain(SensorId),
+    /// A chain's weights are negative, not finite or do not sum to 1.
     #[error(
         "chain weights of sensor {sensor:?} must be finite and non-negative and sum to 1, sum is {sum}"
     )]
-    BadWeights { sensor: SensorId, sum: f64 },
+    BadWeights {
+        /// The sensor driving the chain.
+        sensor: SensorId,
+        /// The sum of the chain's weights.
+        sum: f64,
+    },
+    /// A chain's joints are not each the parent of the next in the hierarchy.
     #[error("joint {child} of the chain of sensor {sensor:?} is not a child of {expected_parent}")]
     NotAChain {
+        /// The sensor driving the chain.
         sensor: SensorId,
+        /// The joint whose parent is not the previous joint of the chain.
         child: String,
+        /// The previous joint of the chain, which should be its parent.
         expected_parent: String,
     },
+    /// The child-to-parent map loops back on itself.
     #[error("the joint hierarchy has a cycle through {0}")]
     CyclicHierarchy(String),
+    /// A rotation (`world_from_device`, a sensor reading or a joint's world rotation) is not a
+    /// finite unit quaternion.
     #[error("rotation of {0} is not finite or not unit length")]
     BadRotation(String),
+    /// `world_up` is zero or not finite.
     #[error("the world up axis must be a finite non-zero vector")]
     BadUpAxis,
 }

@@ -24,6 +24,7 @@ pub struct SensorId(pub u16);
 /// (transmitter/source frame for magnetic trackers, earth frame for IMUs).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Sample {
+    /// Which sensor of the device measured this.
     pub sensor: SensorId,
     /// Packet or frame counter reported by the device, when it has one.
     pub counter: Option<u32>,
@@ -114,7 +115,9 @@ pub enum Protocol {
 /// A WebHID device filter (`navigator.hid.requestDevice({filters})`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct HidFilter {
+    /// USB vendor id.
     pub vendor_id: u16,
+    /// USB product id.
     pub product_id: u16,
 }
 
@@ -171,16 +174,24 @@ impl Protocol {
 /// Everything needed to build a decoder for one device.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum DecoderConfig {
+    /// Flock of Birds records in the configured mode.
     FlockOfBirds(FobConfig),
+    /// FASTRAK ASCII records with the configured output list.
     Fastrak(FastrakConfig),
+    /// Liberty / Patriot binary frames with the configured output list.
     Liberty(LibertyConfig),
+    /// Xsens MTData2 messages (they describe their own contents).
     Xsens,
+    /// Quaternion text lines in the configured component order.
     AsciiQuaternion(AsciiConfig),
+    /// SlimeVR receiver reports (or a report log of them).
     SlimeVrHid,
+    /// DualSense / DualShock 4 reports, fused into orientations.
     Gamepad(GamepadConfig),
 }
 
 impl DecoderConfig {
+    /// The protocol the decoder built from this configuration reads.
     pub fn protocol(&self) -> Protocol {
         match self {
             DecoderConfig::FlockOfBirds(_) => Protocol::FlockOfBirds,

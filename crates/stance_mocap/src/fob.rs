@@ -94,6 +94,7 @@ impl FobMode {
 /// How the birds are set up.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FobConfig {
+    /// Record layout the birds are set to (the mode command).
     pub mode: FobMode,
     /// Group mode: every record ends with the bird's address byte.
     pub group_mode: bool,
@@ -270,10 +271,13 @@ fn decode_record(config: &FobConfig, record: &[u8], sensor: SensorId) -> Option<
 /// Errors building commands or records.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum FobCommandError {
+    /// A bird address for the RS232-TO-FBB prefix outside 1..=30.
     #[error("bird address {0} is outside 1..=30")]
     BadAddress(u8),
+    /// A sample's sensor id outside 1..=126, which a group-mode record's address byte cannot carry.
     #[error("group mode needs a bird address in 1..=126, got {0}")]
     BadRecordAddress(u16),
+    /// The sample lacks the position or orientation that the mode's records carry.
     #[error("the {0:?} mode needs a {1} in the sample")]
     MissingField(FobMode, &'static str),
 }
@@ -292,9 +296,11 @@ pub mod command {
     pub const SLEEP: u8 = b'G';
     /// CHANGE VALUE command byte.
     pub const CHANGE_VALUE: u8 = b'P';
-    /// CHANGE VALUE parameter numbers.
+    /// CHANGE VALUE parameter: position scaling (36 or 72 inch full-scale range).
     pub const PARAMETER_POSITION_SCALING: u8 = 3;
+    /// CHANGE VALUE parameter: group mode (records end with the bird address).
     pub const PARAMETER_GROUP_MODE: u8 = 35;
+    /// CHANGE VALUE parameter: FBB auto-configuration (number of birds on the bus).
     pub const PARAMETER_AUTO_CONFIG: u8 = 50;
 
     /// Selects the record layout.

@@ -44,6 +44,7 @@ pub struct Madgwick {
 }
 
 impl Madgwick {
+    /// A filter with these settings and no estimate yet.
     pub fn new(settings: MadgwickSettings) -> Self {
         Madgwick {
             settings,
@@ -56,6 +57,7 @@ impl Madgwick {
         self.earth_from_sensor
     }
 
+    /// Forgets the estimate: the next update aligns with gravity again.
     pub fn reset(&mut self) {
         self.earth_from_sensor = None;
     }

@@ -219,6 +219,7 @@ pub struct SlimeVrDecoder {
 }
 
 impl SlimeVrDecoder {
+    /// A decoder with zeroed counts.
     pub fn new() -> Self {
         SlimeVrDecoder::default()
     }
@@ -305,13 +306,17 @@ pub fn encode_slimevr_packet(sample: &Sample) -> Option<[u8; SLIMEVR_PACKET_LEN]
 /// Which Sony controller; both send report id 1 over USB with different layouts.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum GamepadModel {
+    /// Sony DualSense (and DualSense Edge).
     #[default]
     DualSense,
+    /// Sony DualShock 4 (both hardware revisions).
     DualShock4,
 }
 
+/// How a Sony controller's reports are read and fused.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct GamepadConfig {
+    /// Which controller, hence which report layout.
     pub model: GamepadModel,
     /// Degrees per second per raw gyro unit (nominal 1/16 for ±2000 °/s; the controller's
     /// calibration feature report refines it).
@@ -320,6 +325,7 @@ pub struct GamepadConfig {
     pub accel_g_per_unit: f64,
     /// Report rate used when the controller's timestamps are unusable.
     pub nominal_rate_hz: f64,
+    /// Madgwick filter settings for turning gyro and accelerometer into an orientation.
     pub fusion: MadgwickSettings,
 }
 
@@ -335,9 +341,11 @@ impl Default for GamepadConfig {
     }
 }
 
-/// Report ids.
+/// USB input report id of both controllers (63 data bytes).
 pub const REPORT_USB: u8 = 0x01;
+/// Bluetooth input report id of the DualSense ([`BLUETOOTH_REPORT_DATA_LEN`] data bytes).
 pub const REPORT_DUALSENSE_BLUETOOTH: u8 = 0x31;
+/// Bluetooth input report id of the DualShock 4 ([`BLUETOOTH_REPORT_DATA_LEN`] data bytes).
 pub const REPORT_DUALSHOCK4_BLUETOOTH: u8 = 0x11;
 /// Bluetooth reports are 78 bytes with the id, the last 4 a CRC-32 seeded with 0xA1.
 pub const BLUETOOTH_REPORT_DATA_LEN: usize = 77;
@@ -432,6 +440,7 @@ struct GamepadMotion {
 }
 
 impl GamepadDecoder {
+    /// A decoder with `config`'s scales and filter settings, its filter not yet aligned.
     pub fn new(config: GamepadConfig) -> Self {
         let filter = Madgwick::new(config.fusion);
         GamepadDecoder {
@@ -593,9 +602,13 @@ impl Decoder for GamepadDecoder {
 /// Raw motion fields of one gamepad report, for the simulator and tests.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct GamepadMotionReport {
+    /// Angular velocity, controller frame, rad/s.
     pub gyro_radps: DVec3,
+    /// Accelerometer reading (specific force), controller frame, m/s².
     pub accel_mps2: DVec3,
+    /// Device clock in microseconds, written as the controller's timestamp ticks.
     pub time_us: u64,
+    /// Report sequence number (written by DualSense layouts only).
     pub sequence: u8,
 }
 

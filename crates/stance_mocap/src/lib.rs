@@ -11,6 +11,8 @@
 //! sensor frame into the device's reference frame (transmitter, source or earth frame); the
 //! calibration's `world_from_device` rotation brings that frame into the editor's world.
 
+#![warn(missing_docs)]
+
 pub mod ascii;
 pub mod calibration;
 pub mod decoder;

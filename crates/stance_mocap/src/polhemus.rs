@@ -15,12 +15,15 @@ use crate::framing::{FrameFormat, FramedDecoder, Step};
 /// Position units configured on the tracker (`U` command).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum PolhemusUnits {
+    /// Inches (the factory setting).
     #[default]
     Inches,
+    /// Centimetres.
     Centimetres,
 }
 
 impl PolhemusUnits {
+    /// Metres per reported position unit.
     pub fn metres_per_unit(self) -> f64 {
         match self {
             PolhemusUnits::Inches => METRES_PER_INCH,
@@ -62,10 +65,12 @@ const FASTRAK_FIELD_WIDTH: usize = 7;
 const FASTRAK_HEADER_LEN: usize = 3;
 const FASTRAK_MAX_LINE: usize = 256;
 
+/// How a FASTRAK is set up: its output list and position units.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FastrakConfig {
     /// The output list, in order (default: position, Euler angles: the factory setting).
     pub items: Vec<FastrakItem>,
+    /// Units of the reported positions (`U` command).
     pub units: PolhemusUnits,
 }
 
@@ -281,10 +286,12 @@ impl LibertyItem {
     }
 }
 
+/// How a Liberty or Patriot is set up: its output list and position units.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LibertyConfig {
     /// The output list, in order (default: position, quaternion).
     pub items: Vec<LibertyItem>,
+    /// Units of the reported positions (`U` command).
     pub units: PolhemusUnits,
 }
 
@@ -430,8 +437,10 @@ fn liberty_step(config: &LibertyConfig, window: &[u8], samples: &mut Vec<Sample>
 /// Which tracker writes a Liberty-format frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum LibertyFamily {
+    /// Polhemus Liberty: frames start with "LY".
     #[default]
     Liberty,
+    /// Polhemus Patriot: frames start with "PA".
     Patriot,
 }
 

@@ -24,9 +24,13 @@ use crate::polhemus::{
 };
 use crate::xsens::{Precision, encode_mtdata2};
 
+/// Simulated sensor on the torso, at [`ArmMotion::torso_m`].
 pub const SENSOR_TORSO: SensorId = SensorId(1);
+/// Simulated sensor at the middle of the upper arm.
 pub const SENSOR_UPPER_ARM: SensorId = SensorId(2);
+/// Simulated sensor at the middle of the forearm.
 pub const SENSOR_FOREARM: SensorId = SensorId(3);
+/// Simulated sensor on the back of the hand, 6 cm past the wrist.
 pub const SENSOR_HAND: SensorId = SensorId(4);
 /// All simulated sensors, proximal to distal.
 pub const ARM_SENSORS: [SensorId; 4] =
@@ -40,8 +44,11 @@ pub const EARTH_FROM_TRANSMITTER: DQuat = DQuat::from_xyzw(1.0, 0.0, 0.0, 0.0);
 pub struct ArmMotion {
     /// Torso sensor position in the transmitter frame.
     pub torso_m: DVec3,
+    /// Shoulder to elbow, metres.
     pub upper_arm_len_m: f64,
+    /// Elbow to wrist, metres.
     pub forearm_len_m: f64,
+    /// Duration of one reach and return, seconds.
     pub period_secs: f64,
 }
 
@@ -59,13 +66,18 @@ impl Default for ArmMotion {
 /// Orientation and position of each sensor at one instant (transmitter frame).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ArmPose {
+    /// Torso sensor: position (m) and orientation.
     pub torso: (DVec3, DQuat),
+    /// Upper-arm sensor: position (m) and orientation.
     pub upper_arm: (DVec3, DQuat),
+    /// Forearm sensor: position (m) and orientation.
     pub forearm: (DVec3, DQuat),
+    /// Hand sensor: position (m) and orientation.
     pub hand: (DVec3, DQuat),
 }
 
 impl ArmPose {
+    /// Position and orientation of one of the [`ARM_SENSORS`]; `None` for any other id.
     pub fn sensor(&self, sensor: SensorId) -> Option<(DVec3, DQuat)> {
         match sensor {
             SENSOR_TORSO => Some(self.torso),
@@ -143,25 +155,33 @@ pub enum SimulatedDevice {
     /// Flock of Birds; in group mode all four birds, otherwise one (the hand) reporting as
     /// `config.standalone_sensor`.
     FlockOfBirds(FobConfig),
+    /// Polhemus FASTRAK ASCII records, the four sensors as stations 1 to 4.
     Fastrak(FastrakConfig),
+    /// Polhemus Liberty or Patriot binary frames, the four sensors as stations 1 to 4.
     Liberty(LibertyConfig, LibertyFamily),
     /// One MTData2 message per sensor and frame, bus id = sensor id.
     Xsens(Precision),
+    /// Quaternion text lines (`id: a, b, c, d`) in the given component order; orientation only.
     AsciiQuaternion(ComponentOrder),
     /// Report log of 64-byte receiver reports, four type-1 packets each.
     SlimeVr,
     /// Report log of a controller held in the hand (sensor 0).
     Gamepad {
+        /// Scales and fusion settings of the controller.
         config: GamepadConfig,
+        /// Bluetooth reports (with CRC) instead of USB ones.
         bluetooth: bool,
     },
 }
 
+/// What to simulate: the motion, the frame rate and how long.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SimulationOptions {
+    /// The arm movement.
     pub motion: ArmMotion,
     /// Frames per second (each frame has one record per sensor).
     pub rate_hz: f64,
+    /// Length of the stream, seconds (frames at `0, 1/rate, ...` up to and including it).
     pub duration_secs: f64,
 }
 
@@ -175,14 +195,19 @@ impl Default for SimulationOptions {
     }
 }
 
+/// Why [`simulate`] wrote no stream.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum SimulationError {
+    /// The rate is not a positive finite number, or the duration is negative or not finite.
     #[error("rate must be positive and finite and the duration non-negative")]
     BadTiming,
+    /// The stream would have this many frames, more than 1,000,000.
     #[error("the stream would hold {0} frames; at most 1,000,000 are simulated")]
     TooLong(u64),
+    /// The Flock of Birds configuration cannot encode the samples.
     #[error(transparent)]
     Fob(#[from] FobCommandError),
+    /// The named protocol's encoder refused a sample.
     #[error("the {0} encoder cannot write this sample (check the output list and sensor ids)")]
     Encode(&'static str),
 }
@@ -190,7 +215,9 @@ pub enum SimulationError {
 /// A simulated byte stream with the samples a perfect decoder would give back.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SimulatedStream {
+    /// The encoded stream, as the device would send it.
     pub bytes: Vec<u8>,
+    /// The samples that decoding `bytes` must give, in order.
     pub truth: Vec<Sample>,
 }
 

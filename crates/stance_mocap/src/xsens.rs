@@ -11,17 +11,25 @@ use glam::{DMat3, DQuat, DVec3};
 use crate::decoder::{Protocol, Sample, SensorId, checked_rotation_matrix, checked_unit_quat};
 use crate::framing::{FrameFormat, FramedDecoder, Step};
 
+/// First byte of every Xbus message.
 pub const PREAMBLE: u8 = 0xFA;
 /// Bus identifier of a stand-alone device ("master").
 pub const BUS_ID_MASTER: u8 = 0xFF;
+/// Message id of MTData2 (the data message).
 pub const MID_MTDATA2: u8 = 0x36;
 /// MTData2 data identifiers (with their precision/coordinate bits cleared).
 pub const DATA_PACKET_COUNTER: u16 = 0x1020;
+/// SampleTimeFine: device clock, ticks of 100 µs.
 pub const DATA_SAMPLE_TIME_FINE: u16 = 0x1060;
+/// Orientation quaternion, w x y z, sensor to earth frame.
 pub const DATA_QUATERNION: u16 = 0x2010;
+/// Orientation as a rotation matrix, column-major, sensor to earth frame.
 pub const DATA_ROTATION_MATRIX: u16 = 0x2020;
+/// Orientation as Euler angles: roll, pitch, yaw in degrees (Z-Y-X order).
 pub const DATA_EULER_ANGLES: u16 = 0x2030;
+/// Acceleration (specific force), sensor frame, m/s².
 pub const DATA_ACCELERATION: u16 = 0x4020;
+/// Rate of turn, sensor frame, rad/s.
 pub const DATA_RATE_OF_TURN: u16 = 0x8020;
 
 /// Longest payload accepted (extended-length messages go up to 2048 bytes on MTi devices).
@@ -35,14 +43,19 @@ const MICROSECONDS_PER_FINE_TICK: u64 = 100;
     Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
 )]
 pub enum Precision {
+    /// IEEE 754 single precision (4 bytes).
     #[default]
     Float32,
+    /// Signed fixed point with 12 integer and 20 fraction bits (4 bytes).
     Fixed1220,
+    /// Signed fixed point with 16 integer and 32 fraction bits (6 bytes, fraction first).
     Fixed1632,
+    /// IEEE 754 double precision (8 bytes).
     Float64,
 }
 
 impl Precision {
+    /// The precision that a data id's two low bits select.
     pub fn from_data_id(id: u16) -> Precision {
         match id & 0x3 {
             0 => Precision::Float32,
@@ -52,6 +65,7 @@ impl Precision {
         }
     }
 
+    /// The two low bits of a data id that select this precision.
     pub fn bits(self) -> u16 {
         match self {
             Precision::Float32 => 0,
@@ -61,6 +75,7 @@ impl Precision {
         }
     }
 
+    /// Bytes of one value in this precision.
     pub fn value_len(self) -> usize {
         match self {
             Precision::Float32 | Precision::Fixed1220 => 4,

@@ -45,8 +45,11 @@ fn bone_radius_m(parent: &str, child: &str) -> f32 {
 /// One joint of a posed skeleton, as the mannequin needs it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MannequinJoint<'a> {
+    /// The joint's H-Anim name (`r_shoulder`, `skullbase`...).
     pub name: &'a str,
+    /// Index of the parent joint in the same slice; `None` for the root.
     pub parent: Option<usize>,
+    /// Joint centre, world frame, metres.
     pub position_world: Vec3,
     /// World direction of the joint's local +Y axis (up the body in the rest pose).
     pub up_world: Vec3,
@@ -56,6 +59,7 @@ pub struct MannequinJoint<'a> {
 /// its child moves with the joint: the upper arm belongs to the shoulder).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MannequinBone {
+    /// The capsule drawn for this bone.
     pub capsule: Capsule,
     /// Index into the joints the mannequin was built from.
     pub owner: usize,

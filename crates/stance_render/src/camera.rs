@@ -5,12 +5,15 @@ use glam::{Mat4, Vec2, Vec3};
 /// A perspective camera orbiting `target_world` at `distance_m`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OrbitCamera {
+    /// The point the camera looks at and turns around, world frame, metres.
     pub target_world: Vec3,
     /// Rotation about the world +Y axis; 0 looks at the body's front (from +Z towards -Z).
     pub yaw: f32,
     /// Elevation above the horizontal plane; positive looks down.
     pub pitch: f32,
+    /// Distance from the target to the eye, metres.
     pub distance_m: f32,
+    /// Vertical field of view, radians.
     pub vertical_fov: f32,
 }
 
@@ -43,10 +46,13 @@ impl OrbitCamera {
         self.target_world + direction * self.distance_m
     }
 
+    /// The view matrix: world coordinates to camera coordinates (right-handed, looking down -Z).
     pub fn view_from_world(&self) -> Mat4 {
         glam::camera::rh::view::look_at_mat4(self.eye_world(), self.target_world, Vec3::Y)
     }
 
+    /// The perspective projection for a viewport of `aspect` (width / height), wgpu clip space
+    /// (depth 0..1).
     pub fn clip_from_view(&self, aspect: f32) -> Mat4 {
         // wgpu clip space: depth 0..1, y up (the "directx" convention).
         glam::camera::rh::proj::directx::perspective(
@@ -57,6 +63,7 @@ impl OrbitCamera {
         )
     }
 
+    /// Projection times view: world coordinates to wgpu clip space.
     pub fn clip_from_world(&self, aspect: f32) -> Mat4 {
         self.clip_from_view(aspect) * self.view_from_world()
     }

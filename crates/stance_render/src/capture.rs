@@ -5,8 +5,11 @@ use crate::RenderTarget;
 /// RGBA8 pixels, rows top to bottom, no padding.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Pixels {
+    /// Image width, pixels.
     pub width: u32,
+    /// Image height, pixels.
     pub height: u32,
+    /// `width * height * 4` bytes, sRGB-encoded as the target holds them.
     pub rgba: Vec<u8>,
 }
 
@@ -22,10 +25,13 @@ impl Pixels {
     }
 }
 
+/// Why [`read_pixels`] failed.
 #[derive(Debug, thiserror::Error)]
 pub enum CaptureError {
+    /// Waiting for the GPU to finish the copy failed.
     #[error("the GPU did not finish the copy: {0}")]
     Poll(String),
+    /// The read-back buffer could not be mapped for reading.
     #[error("mapping the read-back buffer failed: {0}")]
     Map(String),
 }

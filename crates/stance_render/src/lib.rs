@@ -2,6 +2,8 @@
 //! camera that looks at them. It knows nothing of egui or the browser: it renders a [`Scene`]
 //! into a [`RenderTarget`] texture that the editor shows (or a test reads back).
 
+#![warn(missing_docs)]
+
 mod body;
 mod camera;
 #[cfg(not(target_arch = "wasm32"))]
@@ -36,8 +38,11 @@ pub const SHADERS: &[(&str, &str)] = &[
 /// A capsule: the segment from `start_world` to `end_world` swept by a sphere of `radius_m`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Capsule {
+    /// Centre of the start cap, world frame, metres.
     pub start_world: Vec3,
+    /// Centre of the end cap, world frame, metres.
     pub end_world: Vec3,
+    /// Radius of the swept sphere, metres.
     pub radius_m: f32,
     /// Linear RGBA.
     pub color_linear: [f32; 4],
@@ -46,7 +51,9 @@ pub struct Capsule {
 /// What one frame shows.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Scene {
+    /// Capsules to draw this frame (the mannequin's bones when no avatar is shown).
     pub capsules: Vec<Capsule>,
+    /// Draw the floor: the y = 0 plane with a metre grid.
     pub show_floor: bool,
     /// Draw the uploaded avatar (see `SceneRenderer::set_avatar`).
     pub show_avatar: bool,

@@ -10,6 +10,7 @@ use crate::{OrbitCamera, SHADERS, Scene};
 /// Colour format of the render target: what egui can show as a native texture. The shaders
 /// write sRGB-encoded values into it.
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+/// Depth format of the render target.
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth24Plus;
 /// Background colour, sRGB-encoded.
 pub const BACKGROUND_SRGB: [f32; 4] = [0.13, 0.145, 0.17, 1.0];
@@ -95,6 +96,7 @@ impl RenderTarget {
         }
     }
 
+    /// Width and height of the target, pixels (after clamping).
     pub fn size_px(&self) -> [u32; 2] {
         self.size_px
     }
@@ -104,6 +106,7 @@ impl RenderTarget {
         &self.color
     }
 
+    /// A view of the resolved colour texture, for showing it (e.g. as an egui native texture).
     pub fn color_view(&self) -> &wgpu::TextureView {
         &self.color_view
     }
@@ -166,6 +169,8 @@ fn capsule_template() -> (Vec<[f32; 4]>, Vec<u16>) {
 }
 
 impl SceneRenderer {
+    /// Creates the pipelines (capsules, floor, skinned avatar) and buffers on `device`, with no
+    /// avatar uploaded.
     pub fn new(device: &wgpu::Device) -> Self {
         let frame_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("stance frame uniforms"),

@@ -12,8 +12,11 @@ pub const MAX_PALETTE_MATRICES: usize = 256;
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct SkinnedVertex {
+    /// Position in mesh space.
     pub position: [f32; 3],
+    /// Unit normal in mesh space.
     pub normal: [f32; 3],
+    /// Texture coordinates (glTF convention: v down the image).
     pub uv: [f32; 2],
     /// Indices into the primitive's palette.
     pub joints: [u32; 4],
@@ -24,7 +27,9 @@ pub struct SkinnedVertex {
 /// A triangle list drawn with one material and one palette.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct SkinnedPrimitive {
+    /// The primitive's vertices.
     pub vertices: Vec<SkinnedVertex>,
+    /// Triangle list: three indices into `vertices` per triangle.
     pub indices: Vec<u32>,
     /// Index into [`SkinnedModel::materials`] (out of range: a plain grey material).
     pub material: usize,
@@ -39,6 +44,7 @@ pub struct SkinnedMaterial {
     pub base_color_factor: [f32; 4],
     /// Index into [`SkinnedModel::textures`].
     pub texture: Option<usize>,
+    /// Draw without lighting: the base colour as is (glTF `KHR_materials_unlit`).
     pub unlit: bool,
     /// Alpha below this is discarded (`None`: opaque).
     pub alpha_cutoff: Option<f32>,
@@ -47,17 +53,24 @@ pub struct SkinnedMaterial {
 /// An RGBA8 texture (sRGB), rows top to bottom.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SkinnedTexture {
+    /// Width, pixels.
     pub width: u32,
+    /// Height, pixels.
     pub height: u32,
+    /// `width * height * 4` bytes.
     pub rgba8: Vec<u8>,
+    /// Sample with repeat wrapping; otherwise clamp to the edge.
     pub repeat: bool,
 }
 
 /// Everything the GPU needs of an avatar.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct SkinnedModel {
+    /// The triangle lists to draw.
     pub primitives: Vec<SkinnedPrimitive>,
+    /// Materials the primitives refer to by index.
     pub materials: Vec<SkinnedMaterial>,
+    /// Textures the materials refer to by index.
     pub textures: Vec<SkinnedTexture>,
     /// Matrices per palette.
     pub palette_sizes: Vec<usize>,
