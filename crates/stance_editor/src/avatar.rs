@@ -294,6 +294,15 @@ fn skinned_model(avatar: &Avatar) -> (SkinnedModel, Vec<PaletteSource>, Vec<Stri
     (model, sources, warnings)
 }
 
+/// `Avatars/Jane.vrm?x=1` -> `Jane-posed.glb`.
+pub fn posed_file_name(name: &str) -> String {
+    let path = name.split(['?', '#']).next().unwrap_or(name);
+    let base = path.rsplit(['/', '\\']).next().unwrap_or(path);
+    let stem = base.rsplit_once('.').map_or(base, |(stem, _)| stem).trim();
+    let stem = if stem.is_empty() { "avatar" } else { stem };
+    format!("{stem}-posed.glb")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -320,5 +329,16 @@ mod tests {
             .err()
             .unwrap();
         assert!(!error.is_empty());
+    }
+
+    #[test]
+    fn the_posed_file_is_named_after_the_avatar() {
+        assert_eq!(posed_file_name("Jane.vrm"), "Jane-posed.glb");
+        assert_eq!(
+            posed_file_name("https://example.org/a/Bob.glb?v=2#top"),
+            "Bob-posed.glb"
+        );
+        assert_eq!(posed_file_name("C:\\models\\x.gltf"), "x-posed.glb");
+        assert_eq!(posed_file_name(""), "avatar-posed.glb");
     }
 }

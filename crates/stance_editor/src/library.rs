@@ -4,6 +4,11 @@
 use serde_json::{Value, json};
 use stance_document::Document;
 
+use crate::host::HostHooks;
+
+/// Seconds between autosaves while the document changes.
+const AUTOSAVE_INTERVAL_SECS: f64 = 1.0;
+
 /// Storage key of the pose library.
 pub const LIBRARY_KEY: &str = "stance.library.v1";
 /// Storage key of the autosaved document.
@@ -91,6 +96,87 @@ impl PoseLibrary {
 
     pub fn remove(&mut self, index: usize) -> Option<LibraryEntry> {
         (index < self.entries.len()).then(|| self.entries.remove(index))
+    }
+}
+
+impl PoseLibrary {
+    /// The library the host kept (`None` when it kept none); entries that could not be read
+    /// are named in the warnings.
+    pub fn load(hooks: &dyn HostHooks) -> Option<Result<(Self, Vec<String>), String>> {
+        hooks
+            .load_text(LIBRARY_KEY)
+            .map(|text| Self::from_json(&text))
+    }
+
+    /// Keeps the library in the host's storage.
+    pub fn store(&self, hooks: &dyn HostHooks) -> Result<(), String> {
+        hooks.save_text(LIBRARY_KEY, &self.to_json())
+    }
+
+    /// Adds the entries of a library file; returns how many were added and what was skipped.
+    pub fn import(&mut self, text: &str) -> Result<(usize, Vec<String>), String> {
+        let (imported, warnings) = Self::from_json(text)?;
+        let added = imported
+            .entries
+            .into_iter()
+            .filter(|entry| self.save(&entry.name, entry.document.clone()).is_ok())
+            .count();
+        Ok((added, warnings))
+    }
+}
+
+/// The autosave of the work in progress: at most once per [`AUTOSAVE_INTERVAL_SECS`], only
+/// when the document changed.
+#[derive(Debug)]
+pub struct Autosave {
+    saved: Option<Document>,
+    last_secs: f64,
+}
+
+impl Default for Autosave {
+    fn default() -> Self {
+        Self {
+            saved: None,
+            last_secs: f64::NEG_INFINITY,
+        }
+    }
+}
+
+impl Autosave {
+    /// The autosaved document the host kept, if any.
+    pub fn load(hooks: &dyn HostHooks) -> Option<Result<Document, String>> {
+        hooks
+            .load_text(AUTOSAVE_KEY)
+            .map(|text| Document::from_json(&text).map_err(|error| error.to_string()))
+    }
+
+    /// `document` is what the host already keeps.
+    pub fn saved(&mut self, document: Document) {
+        self.saved = Some(document);
+    }
+
+    /// Saves `document` at `now_secs` when it changed and the interval has passed. Returns
+    /// the host's error the first time saving fails (then stays quiet until it works again).
+    pub fn tick(
+        &mut self,
+        now_secs: f64,
+        document: Document,
+        hooks: &dyn HostHooks,
+    ) -> Option<String> {
+        if now_secs - self.last_secs < AUTOSAVE_INTERVAL_SECS
+            || self.saved.as_ref() == Some(&document)
+        {
+            return None;
+        }
+        self.last_secs = now_secs;
+        let result = hooks.save_text(AUTOSAVE_KEY, &document.to_json(false));
+        let first_failure = self.saved.is_some();
+        self.saved = Some(document);
+        match result {
+            Ok(()) => None,
+            Err(error) if first_failure => Some(error),
+            Err(_) => None,
+        }
     }
 }
 

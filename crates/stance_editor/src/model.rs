@@ -9,200 +9,34 @@
 //! Every change of the posing session (avatar, LOA, mannequin, mapping) goes through
 //! [`EditorModel::replace_session`], which resets what belonged to the old one.
 
+mod command;
 mod mapping;
+mod tasks;
 
 use glam::{DVec3, Vec3};
 use serde_json::Value;
-use stance_document::{AvatarReference, Document, LimbName, TaskSpec, link};
+use stance_document::{AvatarReference, Document, TaskSpec, link};
 use stance_hanim::{LevelOfArticulation, Mapping, readable_name};
 use stance_ik::Clock;
 use stance_render::{MannequinBone, MannequinJoint, mannequin_bones};
 
-pub use self::mapping::Correction;
+pub use self::command::{Command, Gesture, Notice, SessionChange};
 use self::mapping::MappingCorrections;
+pub use self::mapping::{Correction, carry_posture};
+pub use self::tasks::{NewTask, make_task};
 use crate::avatar::LoadedAvatar;
 use crate::history::{EditKind, History};
 use crate::host::{HostHooks, HostMessage};
-use crate::library::{AUTOSAVE_KEY, LIBRARY_KEY, PoseLibrary};
+use crate::library::{Autosave, PoseLibrary};
 use crate::posing::{PosingError, PosingSession, describe_task};
-use crate::sensors::{SENSOR_SETTINGS_KEY, SensorHub, SensorSettings};
+use crate::sensors::{SensorCommand, SensorHub, SensorOutcome, SensorSettings};
 
-/// Seconds between autosaves while the document changes.
-const AUTOSAVE_INTERVAL_SECS: f64 = 1.0;
 /// Seconds an information notice stays (errors stay until dismissed).
 pub const NOTICE_SECS: f64 = 8.0;
 /// Points of the effector trace kept.
 const MAX_TRACE_POINTS: usize = 2000;
 /// The trace takes a new point when the grabbed point moved this far (m).
 const TRACE_STEP_M: f64 = 0.002;
-
-/// A message for the user, shown above the viewport.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Notice {
-    pub text: String,
-    pub is_error: bool,
-    pub since_secs: f64,
-}
-
-/// The gesture in progress: at most one at a time.
-#[derive(Debug, Clone)]
-pub enum Gesture {
-    /// Grab-and-pull: the grabbed point follows the pointer in the plane facing the camera
-    /// through `plane_point_world`; cancelling restores `document_before`.
-    Pull {
-        joint: usize,
-        plane_point_world: DVec3,
-        document_before: Box<Document>,
-    },
-    /// The goal of `tasks` (several when their goals coincide) moves in the plane facing the
-    /// camera through `plane_point_world`.
-    Goal {
-        tasks: Vec<usize>,
-        plane_point_world: DVec3,
-    },
-    /// A ring of the joint gizmo: DOF `dof` turns with the pointer around `centre_px`
-    /// (screen points), from `start_value`.
-    Ring {
-        dof: usize,
-        centre_px: [f32; 2],
-        last_angle: f32,
-        accumulated: f64,
-        start_value: f64,
-        /// +1 when the DOF axis points toward the camera (a counter-clockwise drag on screen
-        /// is then a positive rotation), -1 otherwise.
-        sign: f64,
-    },
-    /// The swivel handle: the elbow or knee turns around the limb's axis with the pointer.
-    Swivel {
-        limb: LimbName,
-        start_swivel: f64,
-        /// Unit direction from the axis to the middle joint when the drag started.
-        start_direction: DVec3,
-        centre_world: DVec3,
-        axis_world: DVec3,
-    },
-}
-
-/// What the UI asks the model to do.
-#[derive(Debug, Clone)]
-pub enum Command {
-    /// Select a joint (or nothing).
-    Select(Option<usize>),
-    /// The joint under the pointer (or nothing).
-    Hover(Option<usize>),
-    /// Grab `joint` at `point_world` and start pulling it.
-    BeginPull {
-        joint: usize,
-        point_world: DVec3,
-    },
-    /// Start a handle drag (goal, ring or swivel); a pull starts with `BeginPull`.
-    BeginHandle(Gesture),
-    /// The pulled point's new target.
-    MoveGrab {
-        target_world: DVec3,
-    },
-    /// The dragged goal's new place, and where the pointer meets the floor (balance goals
-    /// slide on the floor).
-    MoveGoal {
-        goal_world: DVec3,
-        floor_world: Option<DVec3>,
-    },
-    /// The pointer's screen angle around the ring's centre (radians).
-    TurnRing {
-        screen_angle: f32,
-    },
-    /// Where the pointer meets the swivel circle's plane.
-    TurnSwivel {
-        point_world: DVec3,
-    },
-    /// The gesture ends where it is.
-    EndGesture,
-    /// The gesture ends and a pull's body goes back to where it was.
-    CancelGesture,
-    /// Pin a joint where it is (level 1).
-    Pin(usize),
-    /// Pin the selected joint.
-    PinSelected,
-    /// Replace the task list as one edit of `kind`.
-    SetTasks {
-        kind: EditKind,
-        tasks: Vec<TaskSpec>,
-    },
-    /// Set one DOF (a slider or field), as one edit of `EditKind::Joint`.
-    SetDof {
-        dof: usize,
-        value: f64,
-    },
-    /// Set a limb's swivel angle (rad).
-    SetSwivel {
-        limb: LimbName,
-        swivel_angle: f64,
-    },
-    Undo,
-    Redo,
-    ResetToRest,
-    Mirror,
-    SetLevelOfArticulation(LevelOfArticulation),
-    /// Load an avatar file (glTF, GLB, VRM).
-    LoadAvatar {
-        name: String,
-        bytes: Vec<u8>,
-    },
-    /// Ask the page to fetch an avatar by URL (it arrives as a file).
-    FetchAvatar(String),
-    /// Back to the built-in mannequin.
-    UseMannequin,
-    /// Rebuild the avatar's skeleton from a corrected mapping (`corrections` made it).
-    ApplyMapping {
-        mapping: Box<Mapping>,
-        corrections: Vec<Correction>,
-    },
-    /// Go back to the mapping before the last applied correction.
-    RevertMappingCorrection,
-    /// Open a posture link (fragment or URL).
-    OpenLink(String),
-    /// Open a file: avatar, document, pose library, or a sensor recording when one was asked.
-    OpenFile {
-        name: String,
-        bytes: Vec<u8>,
-    },
-    /// Save the posture in the library under a name.
-    SaveToLibrary(String),
-    /// Load the library's entry `index`.
-    LoadFromLibrary(usize),
-    /// The replaced entry of the library, by index.
-    DeleteFromLibrary(usize),
-    /// The next picked file is a sensor recording to replay.
-    ExpectRecording,
-    /// Replay a recorded byte stream through the same decoder and calibration as a device.
-    ReplayRecording {
-        name: String,
-        bytes: Vec<u8>,
-    },
-    /// New device settings (kept in the host's storage).
-    SetSensorSettings(Box<SensorSettings>),
-    /// Ask the page to open the device chosen in the settings.
-    ConnectSensors,
-    DisconnectSensors,
-    /// Calibrate the assigned sensors in the current posture.
-    CalibrateSensors,
-    /// Release the joints the sensors hold.
-    ReleaseSensorJoints,
-    /// A message for the user.
-    Inform(String),
-    /// A problem for the user.
-    Warn(String),
-    DismissNotice,
-}
-
-/// Why a session is replaced: what carries over.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SessionChange {
-    /// Another body (avatar, mannequin): the history starts again.
-    NewBody,
-    /// The same body rebuilt (LOA switch, mapping correction): the history stays.
-    Rebuilt,
-}
 
 /// The editor's model.
 pub struct EditorModel {
@@ -224,8 +58,7 @@ pub struct EditorModel {
     /// The next picked file is a sensor recording to replay.
     replay_pick_pending: bool,
     pub(crate) hooks: Box<dyn HostHooks>,
-    autosaved: Option<Document>,
-    last_autosave_secs: f64,
+    autosave: Autosave,
     /// Seconds since the editor started, as of the last step.
     now_secs: f64,
     /// The posed mannequin's bones after the last step.
@@ -269,8 +102,7 @@ impl EditorModel {
             sensors: SensorHub::default(),
             replay_pick_pending: false,
             hooks,
-            autosaved: None,
-            last_autosave_secs: f64::NEG_INFINITY,
+            autosave: Autosave::default(),
             now_secs: 0.0,
             bones: Vec::new(),
             sensors_drove: false,
@@ -278,7 +110,9 @@ impl EditorModel {
             session_generation: 0,
         };
         model.load_library();
-        model.load_sensor_settings();
+        if let Some(settings) = SensorSettings::load(model.hooks.as_ref()) {
+            model.sensors = SensorHub::new(settings);
+        }
         model.refresh_bones();
         Ok(model)
     }
@@ -473,6 +307,19 @@ impl EditorModel {
                 None => self.inform("Select a body part first (click it), then pin it."),
             },
             Command::SetTasks { kind, tasks } => self.commit_tasks(kind, tasks),
+            Command::AddTask(what) => match make_task(&self.session, what) {
+                Ok(task) => {
+                    let mut tasks = self.session.tasks().to_vec();
+                    tasks.push(task);
+                    self.commit_tasks(EditKind::Command, tasks);
+                }
+                Err(error) => self.warn(format!("The task could not be added: {error}.")),
+            },
+            Command::LoadTable1Example => {
+                let tasks = self.session.table1_example();
+                self.commit_tasks(EditKind::Command, tasks);
+                self.inform("Table 1 of the paper: level 1 holds the left foot, the gaze and the right hand; balance is level 2; the left hand on the bar level 3.");
+            }
             Command::SetDof { dof, value } => {
                 self.record(EditKind::Joint(dof));
                 self.session.set_dof(dof, value);
@@ -512,13 +359,41 @@ impl EditorModel {
                     self.store_library();
                 }
             }
-            Command::ExpectRecording => self.replay_pick_pending = true,
-            Command::ReplayRecording { name, bytes } => self.replay_sensor_recording(&name, bytes),
-            Command::SetSensorSettings(settings) => self.set_sensor_settings(*settings),
-            Command::ConnectSensors => self.connect_sensors(),
-            Command::DisconnectSensors => self.disconnect_sensors(),
-            Command::CalibrateSensors => self.calibrate_sensors(),
-            Command::ReleaseSensorJoints => self.release_sensor_joints(),
+            Command::PickFile => {
+                if let Err(error) = self.hooks.pick_file() {
+                    self.warn(format!("Could not open a file: {error}"));
+                }
+            }
+            Command::ExportDocument => {
+                let text = self.document().to_json(true);
+                if let Err(error) = self.hooks.download("stance-pose.json", &text) {
+                    self.warn(format!("Could not export the pose: {error}"));
+                }
+            }
+            Command::ExportLibrary => {
+                let text = self.library.to_json();
+                if let Err(error) = self.hooks.download("stance-library.json", &text) {
+                    self.warn(format!("Could not export the library: {error}"));
+                }
+            }
+            Command::ExportPosedAvatar => self.export_posed_avatar(),
+            Command::PickRecording => match self.hooks.pick_file() {
+                Ok(()) => self.replay_pick_pending = true,
+                Err(error) => self.warn(format!("Sensors: {error}")),
+            },
+            Command::Sensors(command) => {
+                let outcome = self.sensors.apply(
+                    command,
+                    &mut self.session,
+                    self.hooks.as_ref(),
+                    self.now_secs,
+                );
+                match outcome {
+                    SensorOutcome::Quiet => {}
+                    SensorOutcome::Inform(text) => self.inform(text),
+                    SensorOutcome::Warn(text) => self.warn(text),
+                }
+            }
             Command::Inform(text) => self.inform(text),
             Command::Warn(text) => self.warn(text),
             Command::DismissNotice => self.notice = None,
@@ -929,6 +804,29 @@ impl EditorModel {
         }
     }
 
+    /// Offers the avatar in the current posture as a GLB download (what `stance
+    /// export-posed` writes); says why when it cannot.
+    fn export_posed_avatar(&mut self) {
+        let Some(avatar) = self.avatar.as_mut() else {
+            self.warn("Load an avatar first (Avatar menu): the mannequin cannot be exported.");
+            return;
+        };
+        let file_name = crate::avatar::posed_file_name(&avatar.name);
+        let posed = avatar.posed_glb(self.session.humanoid(), self.session.posture());
+        let result = posed.and_then(|bytes| {
+            self.hooks
+                .download_bytes(&file_name, &bytes)
+                .map(|()| bytes.len())
+        });
+        match result {
+            Ok(size) => self.inform(format!(
+                "Exported {file_name} ({} KB): the avatar in this posture, for any glTF viewer or engine.",
+                size.div_ceil(1024)
+            )),
+            Err(error) => self.warn(format!("{file_name} could not be exported: {error}")),
+        }
+    }
+
     /// Rebuilds the avatar's skeleton and the session from `mapping`, remembered as one
     /// correction to revert.
     fn apply_mapping(&mut self, mapping: Mapping, corrections: Vec<Correction>) {
@@ -1029,10 +927,10 @@ impl EditorModel {
         {
             return;
         }
-        let Some(text) = self.hooks.load_text(AUTOSAVE_KEY) else {
+        let Some(autosaved) = Autosave::load(self.hooks.as_ref()) else {
             return;
         };
-        match Document::from_json(&text) {
+        match autosaved {
             Ok(document) => {
                 if let AvatarReference::Url(url) = &document.avatar {
                     self.pending_document = Some(document.clone());
@@ -1042,7 +940,7 @@ impl EditorModel {
                 if let Err(error) = self.session.restore_document(&document) {
                     self.warn(format!("The autosaved work could not be restored: {error}"));
                 } else {
-                    self.autosaved = Some(document);
+                    self.autosave.saved(document);
                 }
             }
             Err(error) => self.warn(format!("The autosaved work could not be read: {error}")),
@@ -1088,7 +986,8 @@ impl EditorModel {
     /// recording when one was asked for.
     fn open_file(&mut self, name: &str, bytes: Vec<u8>) {
         if std::mem::take(&mut self.replay_pick_pending) {
-            self.replay_sensor_recording(name, bytes);
+            let name = name.to_owned();
+            self.apply(Command::Sensors(SensorCommand::Replay { name, bytes }));
             return;
         }
         let lower = name.to_ascii_lowercase();
@@ -1127,18 +1026,8 @@ impl EditorModel {
     // The pose library and the autosave
 
     fn import_library(&mut self, name: &str, text: &str) {
-        match PoseLibrary::from_json(text) {
-            Ok((imported, warnings)) => {
-                let mut added = 0;
-                for entry in imported.entries() {
-                    if self
-                        .library
-                        .save(&entry.name, entry.document.clone())
-                        .is_ok()
-                    {
-                        added += 1;
-                    }
-                }
+        match self.library.import(text) {
+            Ok((added, warnings)) => {
                 self.store_library();
                 if warnings.is_empty() {
                     self.inform(format!("Imported {added} poses from {name}."));
@@ -1154,11 +1043,8 @@ impl EditorModel {
     }
 
     fn load_library(&mut self) {
-        let Some(text) = self.hooks.load_text(LIBRARY_KEY) else {
-            return;
-        };
-        match PoseLibrary::from_json(&text) {
-            Ok((library, warnings)) => {
+        match PoseLibrary::load(self.hooks.as_ref()) {
+            Some(Ok((library, warnings))) => {
                 self.library = library;
                 if !warnings.is_empty() {
                     self.warn(format!(
@@ -1167,12 +1053,13 @@ impl EditorModel {
                     ));
                 }
             }
-            Err(error) => self.warn(format!("The pose library could not be read: {error}")),
+            Some(Err(error)) => self.warn(format!("The pose library could not be read: {error}")),
+            None => {}
         }
     }
 
     fn store_library(&mut self) {
-        if let Err(error) = self.hooks.save_text(LIBRARY_KEY, &self.library.to_json()) {
+        if let Err(error) = self.library.store(self.hooks.as_ref()) {
             self.warn(format!("The pose library could not be saved: {error}"));
         }
     }
@@ -1201,112 +1088,16 @@ impl EditorModel {
     }
 
     fn autosave(&mut self) {
-        if self.is_pulling() || self.now_secs - self.last_autosave_secs < AUTOSAVE_INTERVAL_SECS {
+        if self.is_pulling() {
             return;
         }
         let document = self.document();
-        if self.autosaved.as_ref() == Some(&document) {
-            return;
+        if let Some(error) = self
+            .autosave
+            .tick(self.now_secs, document, self.hooks.as_ref())
+        {
+            self.warn(format!("Autosave failed: {error}"));
         }
-        self.last_autosave_secs = self.now_secs;
-        match self.hooks.save_text(AUTOSAVE_KEY, &document.to_json(false)) {
-            Ok(()) => self.autosaved = Some(document),
-            Err(error) => {
-                // Say it once, not every second.
-                if self.autosaved.is_some() || self.notice.is_none() {
-                    self.warn(format!("Autosave failed: {error}"));
-                }
-                self.autosaved = Some(document);
-            }
-        }
-    }
-
-    // -----------------------------------------------------------------------------------------
-    // Sensors
-
-    fn load_sensor_settings(&mut self) {
-        let Some(text) = self.hooks.load_text(SENSOR_SETTINGS_KEY) else {
-            return;
-        };
-        match serde_json::from_str::<SensorSettings>(&text) {
-            Ok(settings) => self.sensors = SensorHub::new(settings),
-            Err(error) => log::warn!("the saved sensor settings could not be read: {error}"),
-        }
-    }
-
-    fn store_sensor_settings(&mut self) {
-        let Ok(text) = serde_json::to_string(self.sensors.settings()) else {
-            return;
-        };
-        if let Err(error) = self.hooks.save_text(SENSOR_SETTINGS_KEY, &text) {
-            log::warn!("the sensor settings could not be saved: {error}");
-        }
-    }
-
-    /// New device settings (kept in the host's storage).
-    fn set_sensor_settings(&mut self, settings: SensorSettings) {
-        if &settings != self.sensors.settings() {
-            self.sensors.set_settings(settings);
-            self.store_sensor_settings();
-        }
-    }
-
-    /// Asks the page to open the device chosen in the settings.
-    fn connect_sensors(&mut self) {
-        let request = match self.sensors.settings().connection() {
-            Ok(request) => request,
-            Err(error) => {
-                self.warn(format!("Sensors: {error}."));
-                return;
-            }
-        };
-        self.store_sensor_settings();
-        self.sensors.begin_connect();
-        if let Err(error) = self.hooks.connect_sensor(&request) {
-            self.sensors.lost(error.clone());
-            self.warn(format!("Sensors: {error}"));
-        }
-    }
-
-    fn disconnect_sensors(&mut self) {
-        self.hooks.disconnect_sensor();
-        self.sensors.disconnected();
-        self.inform("Sensors disconnected; the posture stays as it is.");
-    }
-
-    /// Plays a recorded byte stream through the same decoder and calibration as a device.
-    fn replay_sensor_recording(&mut self, name: &str, bytes: Vec<u8>) {
-        if bytes.is_empty() {
-            self.warn(format!("Sensors: {name} is empty."));
-            return;
-        }
-        self.sensors.start_replay(name, bytes, self.now_secs);
-        self.inform(format!("Replaying {name}."));
-    }
-
-    /// Calibrates the assigned sensors in the current posture.
-    fn calibrate_sensors(&mut self) {
-        let result = self
-            .sensors
-            .calibrate(self.session.skeleton(), self.session.frames());
-        match result {
-            Ok(()) => {
-                let joints = self.sensors.driven_joints(self.session.skeleton());
-                self.session.hold_joints(&joints);
-                self.inform(format!(
-                    "Sensors calibrated: they now drive {} joints; the other joints keep the \
-                     tasks.",
-                    joints.len()
-                ));
-            }
-            Err(error) => self.warn(format!("Calibration failed: {error}.")),
-        }
-    }
-
-    /// Releases the joints the sensors held.
-    fn release_sensor_joints(&mut self) {
-        self.sensors.release();
-        self.session.hold_joints(&[]);
     }
 }
 

@@ -17,6 +17,7 @@ use serde_json::{Value, json};
 use stance_hanim::chains::spine_chain;
 use stance_ik::{Frames, Skeleton};
 
+use crate::host::HostHooks;
 use crate::posing::PosingSession;
 use stance_mocap::ascii::ComponentOrder;
 use stance_mocap::calibration::{Calibration, CalibrationSetup, SensorTarget};
@@ -83,6 +84,24 @@ impl Default for SensorSettings {
 }
 
 impl SensorSettings {
+    /// The settings the host kept; unreadable ones are logged and ignored.
+    pub fn load(hooks: &dyn HostHooks) -> Option<Self> {
+        let text = hooks.load_text(SENSOR_SETTINGS_KEY)?;
+        serde_json::from_str(&text)
+            .map_err(|error| log::warn!("the saved sensor settings could not be read: {error}"))
+            .ok()
+    }
+
+    /// Keeps the settings in the host's storage (a failure is logged: they are a convenience).
+    pub fn store(&self, hooks: &dyn HostHooks) {
+        let Ok(text) = serde_json::to_string(self) else {
+            return;
+        };
+        if let Err(error) = hooks.save_text(SENSOR_SETTINGS_KEY, &text) {
+            log::warn!("the sensor settings could not be saved: {error}");
+        }
+    }
+
     /// The device with the settings that change how it is started and read.
     pub fn device_setup(&self) -> DeviceSetup {
         DeviceSetup {
@@ -294,6 +313,159 @@ impl std::fmt::Debug for SensorHub {
 impl Default for SensorHub {
     fn default() -> Self {
         Self::new(SensorSettings::default())
+    }
+}
+
+/// What the UI asks of the sensors.
+#[derive(Debug, Clone)]
+pub enum SensorCommand {
+    /// New device settings (kept in the host's storage).
+    SetSettings(Box<SensorSettings>),
+    /// Ask the page to open the device chosen in the settings.
+    Connect,
+    Disconnect,
+    /// Calibrate the assigned sensors in the current posture; they then drive their joints.
+    Calibrate,
+    /// Stop driving the joints (the solver takes them back).
+    ReleaseJoints,
+    /// Turn every sensor about the vertical so that the body faces the front.
+    ResetHeading,
+    /// Play a recorded byte stream through the same decoder and calibration as a device.
+    Replay {
+        name: String,
+        bytes: Vec<u8>,
+    },
+    StopReplay,
+    StartRecording,
+    /// Stop recording and offer the recording as a download.
+    SaveRecording,
+    /// Assign the sensors, in increasing id order, to a preset's segments.
+    ApplyPreset(AssignmentPreset),
+    /// What one sensor drives (nothing: `None`).
+    Assign {
+        sensor: SensorId,
+        assignment: Option<SensorAssignment>,
+    },
+}
+
+/// What came of a sensor command, for the user.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SensorOutcome {
+    Quiet,
+    Inform(String),
+    Warn(String),
+}
+
+impl SensorHub {
+    /// Carries out `command`: the session's held joints follow calibration and release; the
+    /// host opens, closes and downloads.
+    pub fn apply(
+        &mut self,
+        command: SensorCommand,
+        session: &mut PosingSession,
+        hooks: &dyn HostHooks,
+        now_secs: f64,
+    ) -> SensorOutcome {
+        match command {
+            SensorCommand::SetSettings(settings) => {
+                if *settings != self.settings {
+                    settings.store(hooks);
+                    self.set_settings(*settings);
+                }
+                SensorOutcome::Quiet
+            }
+            SensorCommand::Connect => self.connect(hooks),
+            SensorCommand::Disconnect => {
+                hooks.disconnect_sensor();
+                self.disconnected();
+                SensorOutcome::Inform(
+                    "Sensors disconnected; the posture stays as it is.".to_owned(),
+                )
+            }
+            SensorCommand::Calibrate => {
+                match self.calibrate(session.skeleton(), session.frames()) {
+                    Ok(()) => {
+                        let joints = self.driven_joints(session.skeleton());
+                        session.hold_joints(&joints);
+                        SensorOutcome::Inform(format!(
+                            "Sensors calibrated: they now drive {} joints; the other joints keep the tasks.",
+                            joints.len()
+                        ))
+                    }
+                    Err(error) => SensorOutcome::Warn(format!("Calibration failed: {error}.")),
+                }
+            }
+            SensorCommand::ReleaseJoints => {
+                self.release();
+                session.hold_joints(&[]);
+                SensorOutcome::Quiet
+            }
+            SensorCommand::ResetHeading => {
+                if self.reset_heading() {
+                    SensorOutcome::Inform(
+                        "Heading reset: the body faces the front again.".to_owned(),
+                    )
+                } else {
+                    SensorOutcome::Quiet
+                }
+            }
+            SensorCommand::Replay { name, bytes } => {
+                if bytes.is_empty() {
+                    return SensorOutcome::Warn(format!("Sensors: {name} is empty."));
+                }
+                self.start_replay(&name, bytes, now_secs);
+                SensorOutcome::Inform(format!("Replaying {name}."))
+            }
+            SensorCommand::StopReplay => {
+                self.stop_replay();
+                SensorOutcome::Quiet
+            }
+            SensorCommand::StartRecording => {
+                self.start_recording();
+                SensorOutcome::Quiet
+            }
+            SensorCommand::SaveRecording => self.save_recording(hooks),
+            SensorCommand::ApplyPreset(preset) => {
+                self.apply_preset(preset, session.skeleton());
+                self.release();
+                session.hold_joints(&[]);
+                SensorOutcome::Quiet
+            }
+            SensorCommand::Assign { sensor, assignment } => {
+                self.assign(sensor, assignment);
+                self.release();
+                session.hold_joints(&[]);
+                SensorOutcome::Quiet
+            }
+        }
+    }
+
+    /// Asks the page to open the device chosen in the settings.
+    fn connect(&mut self, hooks: &dyn HostHooks) -> SensorOutcome {
+        let request = match self.settings.connection() {
+            Ok(request) => request,
+            Err(error) => return SensorOutcome::Warn(format!("Sensors: {error}.")),
+        };
+        self.settings.store(hooks);
+        self.begin_connect();
+        match hooks.connect_sensor(&request) {
+            Ok(()) => SensorOutcome::Quiet,
+            Err(error) => {
+                self.lost(error.clone());
+                SensorOutcome::Warn(format!("Sensors: {error}"))
+            }
+        }
+    }
+
+    fn save_recording(&mut self, hooks: &dyn HostHooks) -> SensorOutcome {
+        let Some(bytes) = self.stop_recording() else {
+            return SensorOutcome::Quiet;
+        };
+        let name = self.recording_name();
+        match hooks.download_bytes(&name, &bytes) {
+            Ok(()) => SensorOutcome::Inform(format!("Saved {} bytes as {name}.", bytes.len())),
+            Err(error) => SensorOutcome::Warn(format!("The recording could not be saved: {error}")),
+        }
     }
 }
 

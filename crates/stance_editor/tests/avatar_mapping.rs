@@ -291,14 +291,14 @@ fn the_posed_avatar_is_exported_as_glb_that_reads_back_in_the_same_posture() {
 #[test]
 fn an_export_the_host_cannot_download_says_why() {
     let mut app = StanceApp::without_gpu(Box::new(NoHostHooks)).unwrap();
-    app.export_posed_avatar();
+    app.apply(Command::ExportPosedAvatar);
     let notice = app.model().notice().unwrap();
     assert!(notice.is_error && notice.text.contains("Load an avatar first"));
     app.apply(Command::LoadAvatar {
         name: "figure.glb".to_owned(),
         bytes: avatar_bytes(),
     });
-    app.export_posed_avatar();
+    app.apply(Command::ExportPosedAvatar);
     let notice = app.model().notice().unwrap();
     assert!(notice.is_error, "{}", notice.text);
     assert!(notice.text.contains("cannot download"), "{}", notice.text);

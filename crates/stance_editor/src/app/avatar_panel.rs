@@ -1,18 +1,21 @@
-//! The avatar's side of the editor: the mapping window, where the user checks and corrects
-//! which H-Anim joint each joint of the file drives (the skeleton and the posing session are
-//! rebuilt from the corrected mapping), and the export of the posed avatar as GLB.
+//! The mapping window, where the user checks and corrects which H-Anim joint each joint of
+//! the avatar's file drives (the model rebuilds the skeleton and the posing session from the
+//! corrected mapping).
 
 use egui::{Color32, RichText};
-use stance_hanim::{LevelOfArticulation, Mapping, MatchMethod, all_joints, joint_by_name};
+use stance_hanim::{
+    LevelOfArticulation, Mapping, MatchMethod, all_joints, joint_by_name, mirror_name,
+    readable_name,
+};
 
-use super::StanceApp;
-use crate::model::{Command, Correction};
-use stance_hanim::{mirror_name, readable_name};
+use super::ButtonRects;
+use crate::avatar::LoadedAvatar;
+use crate::model::{Command, Correction, EditorModel};
 
 /// Matches less sure than this are guesses the user should check (name patterns, geometry).
-const LOW_CONFIDENCE: f32 = 0.8;
+pub(super) const LOW_CONFIDENCE: f32 = 0.8;
 /// Colour of guessed matches.
-const GUESS_COLOR: Color32 = Color32::from_rgb(235, 150, 60);
+pub(super) const GUESS_COLOR: Color32 = Color32::from_rgb(235, 150, 60);
 /// Colour of the joints every humanoid needs and the draft lacks.
 const MISSING_COLOR: Color32 = Color32::from_rgb(240, 90, 90);
 /// What an unmapped row shows.
@@ -21,21 +24,12 @@ const UNMAPPED: &str = "none";
 /// The mapping window's state (the corrections kept for the session are the model's).
 #[derive(Debug, Default)]
 pub(super) struct MappingEditor {
-    pub(super) open: bool,
     /// The mapping being edited; `None` until the window shows an avatar.
     draft: Option<Mapping>,
     /// The corrections made in the draft and not applied yet.
     staged: Vec<Correction>,
     filter: String,
     only_guesses: bool,
-}
-
-impl MappingEditor {
-    /// Another avatar arrived: the draft starts again.
-    pub(super) fn restart(&mut self) {
-        self.draft = None;
-        self.staged.clear();
-    }
 }
 
 /// What the user asked for in the mapping window.
@@ -56,91 +50,30 @@ struct MappingRow {
     changed: bool,
 }
 
-impl StanceApp {
-    /// The side panel's line about guessed joints and the button that opens the window.
-    pub(super) fn avatar_mapping_button(&mut self, ui: &mut egui::Ui) {
-        let Some(avatar) = &self.model.avatar else {
-            return;
-        };
-        let guesses = avatar
-            .avatar
-            .mapping
-            .matches()
-            .iter()
-            .filter(|found| found.method != MatchMethod::Implied)
-            .filter(|found| found.confidence < LOW_CONFIDENCE)
-            .count();
-        if guesses > 0 {
-            ui.colored_label(
-                GUESS_COLOR,
-                format!("{guesses} of them guessed: check them in the mapping"),
-            );
-        }
-        let button = ui
-            .button("Avatar mapping…")
-            .on_hover_text("check and correct which H-Anim joint each joint of the file drives");
-        self.button_rects.push(("mapping_open", button.rect));
-        if button.clicked() {
-            self.mapping_editor.open = !self.mapping_editor.open;
-        }
+impl MappingEditor {
+    /// Another avatar arrived: the draft starts again.
+    pub(super) fn restart(&mut self) {
+        self.draft = None;
+        self.staged.clear();
     }
 
-    /// The File menu's entry for the posed GLB.
-    pub(super) fn export_posed_menu_item(&mut self, ui: &mut egui::Ui) {
-        let button = ui
-            .add_enabled(
-                self.model.avatar.is_some(),
-                egui::Button::new("Export posed avatar (GLB)…"),
-            )
-            .on_disabled_hover_text("load an avatar first (Avatar menu)");
-        self.button_rects.push(("export_posed", button.rect));
-        if button.clicked() {
-            self.export_posed_avatar();
-            ui.close();
+    /// The window (while `open` and an avatar is loaded); what the user picks goes to `model`.
+    pub(super) fn show(
+        &mut self,
+        ctx: &egui::Context,
+        model: &mut EditorModel,
+        open: &mut bool,
+        buttons: &mut ButtonRects,
+    ) {
+        if !*open {
+            return;
         }
-    }
-
-    /// Offers the avatar in the current posture as a GLB download (what `stance
-    /// export-posed` writes); says why when it cannot.
-    pub fn export_posed_avatar(&mut self) {
-        let Some(avatar) = self.model.avatar.as_mut() else {
-            self.model
-                .warn("Load an avatar first (Avatar menu): the mannequin cannot be exported.");
+        let Some(avatar) = model.avatar() else {
+            *open = false;
+            self.restart();
             return;
         };
-        let file_name = posed_file_name(&avatar.name);
-        let bytes =
-            match avatar.posed_glb(self.model.session.humanoid(), self.model.session.posture()) {
-                Ok(bytes) => bytes,
-                Err(error) => {
-                    self.model
-                        .warn(format!("The posed avatar could not be exported: {error}"));
-                    return;
-                }
-            };
-        match self.model.hooks.download_bytes(&file_name, &bytes) {
-            Ok(()) => self.model.inform(format!(
-                "Exported {file_name} ({} KB): the avatar in this posture, for any glTF viewer or engine.",
-                bytes.len().div_ceil(1024)
-            )),
-            Err(error) => self.model.warn(format!("{file_name} could not be downloaded: {error}")),
-        }
-    }
-
-    /// The mapping window (when open and an avatar is loaded).
-    pub(super) fn mapping_window(&mut self, ctx: &egui::Context) {
-        if !self.mapping_editor.open {
-            return;
-        }
-        let Some(avatar) = self.model.avatar.as_ref() else {
-            self.mapping_editor.open = false;
-            self.mapping_editor.draft = None;
-            self.mapping_editor.staged.clear();
-            return;
-        };
-        let loa = self.model.session.level_of_articulation();
-        let can_revert = self
-            .model
+        let can_revert = model
             .mapping_corrections
             .before_last(&avatar.name)
             .is_some();
@@ -149,42 +82,13 @@ impl StanceApp {
             staged,
             filter,
             only_guesses,
-            ..
-        } = &mut self.mapping_editor;
+        } = self;
         let draft: &Mapping = draft.get_or_insert_with(|| avatar.avatar.mapping.clone());
-        let node_name = |source: usize| {
-            avatar
-                .avatar
-                .nodes
-                .get(source)
-                .map_or_else(|| format!("node {source}"), |node| node.name.clone())
-        };
-        let rows: Vec<MappingRow> = avatar
-            .joint_nodes()
-            .into_iter()
-            .map(|source| {
-                let hanim = draft.hanim_of(source);
-                let found = hanim.and_then(|hanim| draft.get(hanim));
-                MappingRow {
-                    source,
-                    name: node_name(source),
-                    hanim,
-                    method: found.map(|found| found.method),
-                    confidence: found.map(|found| found.confidence),
-                    changed: hanim != avatar.avatar.mapping.hanim_of(source),
-                }
-            })
-            .collect();
-        let needed = draft.missing(LevelOfArticulation::Loa1);
-        let missing = draft.missing(loa);
-        let left_out = missing.len().saturating_sub(needed.len());
-        let needle = filter.trim().to_lowercase();
+        let table = MappingTable::new(avatar, draft, model.level_of_articulation());
         let staged_count = staged.len();
-        let rects = &mut self.button_rects;
         let mut action = None;
-        let mut open = true;
         egui::Window::new("Avatar mapping")
-            .open(&mut open)
+            .open(open)
             .default_width(560.0)
             .resizable(true)
             .show(ctx, |ui| {
@@ -203,134 +107,210 @@ impl StanceApp {
                     .labelled_by(label.id);
                     ui.checkbox(only_guesses, "only guesses and unmapped");
                 });
-                egui::ScrollArea::vertical()
-                    .max_height(340.0)
-                    .auto_shrink([false, true])
-                    .show(ui, |ui| {
-                        egui::Grid::new("mapping_rows")
-                            .striped(true)
-                            .num_columns(4)
-                            .show(ui, |ui| {
-                                ui.label(RichText::new("Joint in the file").strong());
-                                ui.label(RichText::new("H-Anim joint").strong());
-                                ui.label(RichText::new("Found by").strong());
-                                ui.label(RichText::new("Confidence").strong());
-                                ui.end_row();
-                                for row in &rows {
-                                    let guess = row.confidence.is_some_and(|c| c < LOW_CONFIDENCE);
-                                    if *only_guesses && !guess && row.hanim.is_some() {
-                                        continue;
-                                    }
-                                    if !needle.is_empty()
-                                        && !row.name.to_lowercase().contains(&needle)
-                                        && !row.hanim.is_some_and(|hanim| hanim.contains(&needle))
-                                    {
-                                        continue;
-                                    }
-                                    let suggested = suggestions(row.hanim, &needed, &missing);
-                                    if let Some(pick) =
-                                        mapping_row(ui, row, draft, &suggested, &node_name)
-                                    {
-                                        action = Some(pick);
-                                    }
-                                }
-                            });
-                    });
-                if !needed.is_empty() {
-                    ui.colored_label(
-                        MISSING_COLOR,
-                        format!(
-                            "Every humanoid needs these joints: {}. Pick a joint of the file for each before applying.",
-                            needed.join(", ")
-                        ),
-                    );
-                } else if left_out > 0 {
-                    ui.label(
-                        RichText::new(format!(
-                            "{left_out} joints of LOA {} are not mapped: the skeleton goes without them.",
-                            loa.number()
-                        ))
-                        .small(),
-                    );
+                if let Some(pick) = table.show(ui, filter, *only_guesses) {
+                    action = Some(pick);
                 }
-                if staged_count > 0 {
-                    ui.label(format!("{staged_count} change(s) not applied yet."));
+                table.notes(ui, staged_count);
+                let ready = staged_count > 0 && table.needed.is_empty();
+                if let Some(pressed) = footer(ui, ready, staged_count > 0, can_revert, buttons) {
+                    action = Some(pressed);
                 }
-                ui.horizontal(|ui| {
-                    let apply = ui.add_enabled(
-                        staged_count > 0 && needed.is_empty(),
-                        egui::Button::new("Apply"),
-                    );
-                    rects.push(("mapping_apply", apply.rect));
-                    if apply.clicked() {
-                        action = Some(MappingAction::Apply);
-                    }
-                    let discard =
-                        ui.add_enabled(staged_count > 0, egui::Button::new("Discard changes"));
-                    rects.push(("mapping_discard", discard.rect));
-                    if discard.clicked() {
-                        action = Some(MappingAction::Discard);
-                    }
-                    let revert =
-                        ui.add_enabled(can_revert, egui::Button::new("Revert last correction"));
-                    rects.push(("mapping_revert", revert.rect));
-                    if revert.clicked() {
-                        action = Some(MappingAction::Revert);
-                    }
-                });
-                ui.label(
-                    RichText::new(
-                        "Applying rebuilds the skeleton; the posture and the tasks that still fit carry over. Ctrl+Z does not undo a mapping change: Revert last correction does.",
-                    )
-                    .small(),
-                );
             });
-        if !open {
-            self.mapping_editor.open = false;
+        if let Some(action) = action {
+            self.act(action, model);
         }
+    }
+
+    /// Carries out what the user asked for.
+    fn act(&mut self, action: MappingAction, model: &mut EditorModel) {
         match action {
-            Some(MappingAction::Pick(source, hanim)) => self.stage_correction(source, hanim),
-            Some(MappingAction::Apply) => self.apply_mapping_corrections(),
-            Some(MappingAction::Discard) => {
-                self.mapping_editor.draft = None;
-                self.mapping_editor.staged.clear();
-                self.model.inform("The mapping changes were discarded.");
+            MappingAction::Pick(source, hanim) => {
+                let Some(draft) = self.draft.as_mut() else {
+                    return;
+                };
+                let correction = Correction { source, hanim };
+                match correction.apply(draft) {
+                    Ok(()) => self.staged.push(correction),
+                    Err(error) => model.apply(Command::Warn(format!(
+                        "That correction is not possible: {error}"
+                    ))),
+                }
             }
-            Some(MappingAction::Revert) => {
-                self.mapping_editor.restart();
-                self.model.apply(Command::RevertMappingCorrection);
+            MappingAction::Apply => {
+                let draft = self.draft.take();
+                let corrections = std::mem::take(&mut self.staged);
+                if let Some(mapping) = draft {
+                    model.apply(Command::ApplyMapping {
+                        mapping: Box::new(mapping),
+                        corrections,
+                    });
+                }
             }
-            None => {}
+            MappingAction::Discard => {
+                self.restart();
+                model.apply(Command::Inform(
+                    "The mapping changes were discarded.".to_owned(),
+                ));
+            }
+            MappingAction::Revert => {
+                self.restart();
+                model.apply(Command::RevertMappingCorrection);
+            }
+        }
+    }
+}
+
+/// The rows of the mapping window for one avatar and draft.
+struct MappingTable<'a> {
+    avatar: &'a LoadedAvatar,
+    draft: &'a Mapping,
+    loa: LevelOfArticulation,
+    rows: Vec<MappingRow>,
+    /// Joints every humanoid needs that the draft lacks.
+    needed: Vec<&'static str>,
+    /// Joints of the current LOA that the draft lacks.
+    missing: Vec<&'static str>,
+}
+
+impl<'a> MappingTable<'a> {
+    fn new(avatar: &'a LoadedAvatar, draft: &'a Mapping, loa: LevelOfArticulation) -> Self {
+        let rows = avatar
+            .joint_nodes()
+            .into_iter()
+            .map(|source| {
+                let hanim = draft.hanim_of(source);
+                let found = hanim.and_then(|hanim| draft.get(hanim));
+                MappingRow {
+                    source,
+                    name: node_name(avatar, source),
+                    hanim,
+                    method: found.map(|found| found.method),
+                    confidence: found.map(|found| found.confidence),
+                    changed: hanim != avatar.avatar.mapping.hanim_of(source),
+                }
+            })
+            .collect();
+        Self {
+            avatar,
+            draft,
+            loa,
+            rows,
+            needed: draft.missing(LevelOfArticulation::Loa1),
+            missing: draft.missing(loa),
         }
     }
 
-    fn stage_correction(&mut self, source: usize, hanim: Option<&'static str>) {
-        let Some(draft) = self.mapping_editor.draft.as_mut() else {
-            return;
-        };
-        let correction = Correction { source, hanim };
-        match correction.apply(draft) {
-            Ok(()) => self.mapping_editor.staged.push(correction),
-            Err(error) => self
-                .model
-                .warn(format!("That correction is not possible: {error}")),
-        }
+    /// The grid of rows that pass the filter; returns a pick.
+    fn show(&self, ui: &mut egui::Ui, filter: &str, only_guesses: bool) -> Option<MappingAction> {
+        let needle = filter.trim().to_lowercase();
+        let mut action = None;
+        egui::ScrollArea::vertical()
+            .max_height(340.0)
+            .auto_shrink([false, true])
+            .show(ui, |ui| {
+                egui::Grid::new("mapping_rows")
+                    .striped(true)
+                    .num_columns(4)
+                    .show(ui, |ui| {
+                        for title in [
+                            "Joint in the file",
+                            "H-Anim joint",
+                            "Found by",
+                            "Confidence",
+                        ] {
+                            ui.label(RichText::new(title).strong());
+                        }
+                        ui.end_row();
+                        for row in &self.rows {
+                            let guess = row.confidence.is_some_and(|c| c < LOW_CONFIDENCE);
+                            let filtered_out = (only_guesses && !guess && row.hanim.is_some())
+                                || (!needle.is_empty()
+                                    && !row.name.to_lowercase().contains(&needle)
+                                    && !row.hanim.is_some_and(|hanim| hanim.contains(&needle)));
+                            if filtered_out {
+                                continue;
+                            }
+                            let suggested = suggestions(row.hanim, &self.needed, &self.missing);
+                            let node_name = |source| node_name(self.avatar, source);
+                            if let Some(pick) =
+                                mapping_row(ui, row, self.draft, &suggested, &node_name)
+                            {
+                                action = Some(pick);
+                            }
+                        }
+                    });
+            });
+        action
     }
 
-    /// Rebuilds the skeleton and the session from the draft, as one correction to revert.
-    fn apply_mapping_corrections(&mut self) {
-        let draft = self.mapping_editor.draft.take();
-        let corrections = std::mem::take(&mut self.mapping_editor.staged);
-        match draft {
-            Some(mapping) if !corrections.is_empty() => self.model.apply(Command::ApplyMapping {
-                mapping: Box::new(mapping),
-                corrections,
-            }),
-            _ => self.model.apply(Command::Inform(
-                "Nothing to apply: pick another H-Anim joint in a row first.".to_owned(),
-            )),
+    /// What the draft still lacks, and how many changes wait.
+    fn notes(&self, ui: &mut egui::Ui, staged_count: usize) {
+        let left_out = self.missing.len().saturating_sub(self.needed.len());
+        if !self.needed.is_empty() {
+            ui.colored_label(
+                MISSING_COLOR,
+                format!(
+                    "Every humanoid needs these joints: {}. Pick a joint of the file for each before applying.",
+                    self.needed.join(", ")
+                ),
+            );
+        } else if left_out > 0 {
+            ui.label(
+                RichText::new(format!(
+                    "{left_out} joints of LOA {} are not mapped: the skeleton goes without them.",
+                    self.loa.number()
+                ))
+                .small(),
+            );
+        }
+        if staged_count > 0 {
+            ui.label(format!("{staged_count} change(s) not applied yet."));
         }
     }
+}
+
+/// Apply, discard and revert; returns the button pressed.
+fn footer(
+    ui: &mut egui::Ui,
+    ready: bool,
+    changed: bool,
+    can_revert: bool,
+    buttons: &mut ButtonRects,
+) -> Option<MappingAction> {
+    let mut action = None;
+    ui.horizontal(|ui| {
+        let apply = ui.add_enabled(ready, egui::Button::new("Apply"));
+        buttons.push(("mapping_apply", apply.rect));
+        if apply.clicked() {
+            action = Some(MappingAction::Apply);
+        }
+        let discard = ui.add_enabled(changed, egui::Button::new("Discard changes"));
+        buttons.push(("mapping_discard", discard.rect));
+        if discard.clicked() {
+            action = Some(MappingAction::Discard);
+        }
+        let revert = ui.add_enabled(can_revert, egui::Button::new("Revert last correction"));
+        buttons.push(("mapping_revert", revert.rect));
+        if revert.clicked() {
+            action = Some(MappingAction::Revert);
+        }
+    });
+    ui.label(
+        RichText::new(
+            "Applying rebuilds the skeleton; the posture and the tasks that still fit carry over. Ctrl+Z does not undo a mapping change: Revert last correction does.",
+        )
+        .small(),
+    );
+    action
+}
+
+/// The name of the file's joint `source`.
+fn node_name(avatar: &LoadedAvatar, source: usize) -> String {
+    avatar
+        .avatar
+        .nodes
+        .get(source)
+        .map_or_else(|| format!("node {source}"), |node| node.name.clone())
 }
 
 /// One row: the file's joint (orange when guessed, bold when changed), the H-Anim joint to
@@ -445,30 +425,5 @@ fn method_text(method: MatchMethod) -> &'static str {
         MatchMethod::Geometry => "position (guess)",
         MatchMethod::Implied => "implied",
         MatchMethod::User => "yours",
-    }
-}
-
-/// `Avatars/Jane.vrm?x=1` -> `Jane-posed.glb`.
-fn posed_file_name(name: &str) -> String {
-    let path = name.split(['?', '#']).next().unwrap_or(name);
-    let base = path.rsplit(['/', '\\']).next().unwrap_or(path);
-    let stem = base.rsplit_once('.').map_or(base, |(stem, _)| stem).trim();
-    let stem = if stem.is_empty() { "avatar" } else { stem };
-    format!("{stem}-posed.glb")
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_posed_file_is_named_after_the_avatar() {
-        assert_eq!(posed_file_name("Jane.vrm"), "Jane-posed.glb");
-        assert_eq!(
-            posed_file_name("https://example.org/a/Bob.glb?v=2#top"),
-            "Bob-posed.glb"
-        );
-        assert_eq!(posed_file_name("C:\\models\\x.gltf"), "x-posed.glb");
-        assert_eq!(posed_file_name(""), "avatar-posed.glb");
     }
 }

@@ -8,7 +8,8 @@ use glam::DVec3;
 use stance_document::{LimbName, TaskKindSpec};
 use stance_ik::SwivelInterval;
 
-use super::StanceApp;
+use super::lens::{Lens, screen_angle};
+use crate::model::EditorModel;
 use crate::model::Gesture;
 
 /// How close (points) the pointer must be to a handle to take it.
@@ -72,7 +73,14 @@ pub(super) struct Ring {
     pub axis_world: DVec3,
 }
 
-impl StanceApp {
+/// The handles of the model's tasks and selection, seen through the viewport's lens.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Handles<'a> {
+    pub model: &'a EditorModel,
+    pub lens: Lens<'a>,
+}
+
+impl Handles<'_> {
     /// Tasks whose goal can be dragged, with the goal's world position.
     pub(super) fn goal_handles(&self) -> Vec<(usize, DVec3)> {
         self.model
@@ -161,13 +169,13 @@ impl StanceApp {
     /// The swivel handle for the page's state: the limb, its swivel angle (rad), the handle
     /// and the circle's centre on screen, the circle from the handle once around, and the
     /// feasible swivel intervals; `null` when no arm or leg is selected.
-    pub(super) fn swivel_state(&self, rect: egui::Rect) -> serde_json::Value {
+    pub(super) fn swivel_state(&self) -> serde_json::Value {
         let Some(handle) = self.swivel_handle() else {
             return serde_json::Value::Null;
         };
-        let screen = |point| self.to_screen(rect, point).map(|p| [p.x, p.y]);
+        let screen = |point| self.lens.screen_point(point).map(|p| [p.x, p.y]);
         let circle: Vec<[f32; 2]> = self
-            .swivel_points(rect, &handle)
+            .swivel_points(&handle)
             .iter()
             .map(|p| [p.x, p.y])
             .collect();
@@ -187,16 +195,16 @@ impl StanceApp {
     }
 
     /// The swivel circle on screen from the handle, once around.
-    pub(super) fn swivel_points(&self, rect: egui::Rect, handle: &SwivelHandle) -> Vec<Pos2> {
+    pub(super) fn swivel_points(&self, handle: &SwivelHandle) -> Vec<Pos2> {
         (0..=RING_SEGMENTS)
             .filter_map(|segment| {
                 let turn = segment as f64 / RING_SEGMENTS as f64 * std::f64::consts::TAU;
-                self.to_screen(rect, handle.point_at(handle.swivel + turn))
+                self.lens.screen_point(handle.point_at(handle.swivel + turn))
             })
             .collect()
     }
 
-    pub(super) fn ring_points(&self, rect: egui::Rect, ring: &Ring) -> Vec<Pos2> {
+    pub(super) fn ring_points(&self, ring: &Ring) -> Vec<Pos2> {
         let helper = if ring.axis_world.x.abs() < 0.9 {
             DVec3::X
         } else {
@@ -208,19 +216,18 @@ impl StanceApp {
             .filter_map(|segment| {
                 let angle = segment as f64 / RING_SEGMENTS as f64 * std::f64::consts::TAU;
                 let point = ring.centre_world + (u * angle.cos() + v * angle.sin()) * RING_RADIUS_M;
-                self.to_screen(rect, point)
+                self.lens.screen_point(point)
             })
             .collect()
     }
 
     /// The handle under `pointer`, if any: goals first, then rings.
     pub(super) fn pick_handle(&self, pointer: Pos2) -> Option<Gesture> {
-        let rect = self.viewport_rect;
         let nearest_goal = self
             .goal_handles()
             .into_iter()
             .filter_map(|(task, goal)| {
-                let distance = self.to_screen(rect, goal)?.distance(pointer);
+                let distance = self.lens.screen_point(goal)?.distance(pointer);
                 (distance <= HANDLE_REACH_PT).then_some((distance, task, goal))
             })
             .min_by(|a, b| a.0.total_cmp(&b.0));
@@ -238,7 +245,8 @@ impl StanceApp {
         }
         if let Some(handle) = self.swivel_handle()
             && self
-                .to_screen(rect, handle.middle_world)
+                .lens
+                .screen_point(handle.middle_world)
                 .is_some_and(|at| at.distance(pointer) <= HANDLE_REACH_PT)
         {
             return Some(Gesture::Swivel {
@@ -249,15 +257,15 @@ impl StanceApp {
                 axis_world: handle.axis_world,
             });
         }
-        let eye = self.camera.eye_world().as_dvec3();
+        let eye = self.lens.camera.eye_world().as_dvec3();
         for ring in self.rings() {
-            let near = self.ring_points(rect, &ring).windows(2).any(|pair| {
+            let near = self.ring_points(&ring).windows(2).any(|pair| {
                 distance_to_segment(pointer, pair[0], pair[1]) <= HANDLE_REACH_PT * 0.7
             });
             if !near {
                 continue;
             }
-            let centre_px = self.to_screen(rect, ring.centre_world)?;
+            let centre_px = self.lens.screen_point(ring.centre_world)?;
             let start_value = self
                 .model
                 .session
@@ -282,29 +290,8 @@ impl StanceApp {
         None
     }
 
-    /// Where the pointer's ray meets the plane through `centre` across `axis` (the swivel
-    /// circle's plane); seen edge-on, the plane facing the camera is used instead.
-    pub(super) fn pointer_around_axis(
-        &self,
-        pointer: Pos2,
-        centre: DVec3,
-        axis: DVec3,
-    ) -> Option<DVec3> {
-        let (origin, direction) = self.pointer_ray(pointer);
-        if direction.dot(axis).abs() < 0.1 {
-            return self.pointer_on_view_plane(pointer, centre);
-        }
-        super::ray_meets_plane(origin, direction, centre, axis, 0.1)
-    }
-
-    /// Where the pointer's ray meets the floor (y = 0).
-    pub(super) fn pointer_on_floor(&self, pointer: Pos2) -> Option<DVec3> {
-        let (origin, direction) = self.pointer_ray(pointer);
-        super::ray_meets_plane(origin, direction, DVec3::ZERO, DVec3::Y, 1e-6)
-    }
-
     /// Draws the rings of the selected joint (the dragged one thicker).
-    pub(super) fn draw_rings(&self, painter: &egui::Painter, rect: egui::Rect) {
+    pub(super) fn draw_rings(&self, painter: &egui::Painter) {
         let active_dof = match self.model.gesture() {
             Some(Gesture::Ring { dof, .. }) => Some(*dof),
             _ => None,
@@ -320,22 +307,22 @@ impl StanceApp {
                 2.0
             };
             painter.add(egui::Shape::line(
-                self.ring_points(rect, &ring),
+                self.ring_points(&ring),
                 Stroke::new(width, color.gamma_multiply(0.9)),
             ));
         }
-        self.draw_swivel(painter, rect);
+        self.draw_swivel(painter);
     }
 
     /// Draws the swivel handle of the selected limb: the circle the elbow or knee turns on,
     /// its feasible arcs (within the joint limits) and the handle.
-    fn draw_swivel(&self, painter: &egui::Painter, rect: egui::Rect) {
+    fn draw_swivel(&self, painter: &egui::Painter) {
         let Some(handle) = self.swivel_handle() else {
             return;
         };
         let dragging = matches!(self.model.gesture(), Some(Gesture::Swivel { .. }));
         painter.add(egui::Shape::dashed_line(
-            &self.swivel_points(rect, &handle),
+            &self.swivel_points(&handle),
             Stroke::new(1.5, SWIVEL_COLOR.gamma_multiply(0.8)),
             6.0,
             4.0,
@@ -348,7 +335,7 @@ impl StanceApp {
                 .filter_map(|step| {
                     let angle = interval.start
                         + (interval.end - interval.start) * step as f64 / steps as f64;
-                    self.to_screen(rect, handle.point_at(angle))
+                    self.lens.screen_point(handle.point_at(angle))
                 })
                 .collect();
             painter.add(egui::Shape::line(
@@ -356,7 +343,7 @@ impl StanceApp {
                 Stroke::new(3.0, SWIVEL_FEASIBLE_COLOR.gamma_multiply(0.8)),
             ));
         }
-        if let Some(at) = self.to_screen(rect, handle.middle_world) {
+        if let Some(at) = self.lens.screen_point(handle.middle_world) {
             let radius = if dragging {
                 SWIVEL_HANDLE_PT + 2.0
             } else {
@@ -370,10 +357,6 @@ impl StanceApp {
             );
         }
     }
-}
-
-pub(super) fn screen_angle(centre: Pos2, pointer: Pos2) -> f32 {
-    (pointer.y - centre.y).atan2(pointer.x - centre.x)
 }
 
 fn distance_to_segment(point: Pos2, a: Pos2, b: Pos2) -> f32 {

@@ -3,10 +3,11 @@
 //! trace of the pulled effector (the paper's figure 9).
 
 use egui::{Color32, Pos2, Stroke};
-use glam::{DVec3, Vec2};
+use glam::DVec3;
 use stance_document::TaskKindSpec;
 
-use super::StanceApp;
+use super::lens::Lens;
+use crate::model::EditorModel;
 
 const GOAL_MET: Color32 = Color32::from_rgb(90, 210, 120);
 const GOAL_UNMET: Color32 = Color32::from_rgb(240, 150, 50);
@@ -15,18 +16,18 @@ const PULL_COLOR: Color32 = Color32::from_rgb(250, 230, 80);
 const COM_COLOR: Color32 = Color32::from_rgb(120, 200, 255);
 const TRACE_COLOR: Color32 = Color32::from_rgba_premultiplied(200, 120, 250, 200);
 
-impl StanceApp {
-    pub(super) fn to_screen(&self, rect: egui::Rect, point_world: DVec3) -> Option<Pos2> {
-        let pixel = self.camera.project(
-            point_world.as_vec3(),
-            Vec2::new(rect.width(), rect.height()),
-        )?;
-        let position = rect.min + egui::vec2(pixel.x, pixel.y);
-        position.x.is_finite().then_some(position)
-    }
+/// What is drawn over the 3D picture, from the model, through the viewport's lens.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Overlay<'a> {
+    pub model: &'a EditorModel,
+    pub lens: Lens<'a>,
+    /// Whether the pulled effector's trace shows.
+    pub show_trace: bool,
+}
 
-    pub(super) fn draw_overlay(&self, painter: &egui::Painter, rect: egui::Rect) {
-        let painter = painter.with_clip_rect(rect);
+impl Overlay<'_> {
+    pub(super) fn draw(&self, painter: &egui::Painter) {
+        let painter = painter.with_clip_rect(self.lens.rect);
         let skeleton = self.model.session.skeleton();
         let frames = self.model.session.frames();
 
@@ -36,7 +37,7 @@ impl StanceApp {
                 .model
                 .trace
                 .iter()
-                .filter_map(|point| self.to_screen(rect, *point))
+                .filter_map(|point| self.lens.screen_point(*point))
                 .collect();
             painter.add(egui::Shape::line(points, Stroke::new(2.0, TRACE_COLOR)));
         }
@@ -70,7 +71,7 @@ impl StanceApp {
                     };
                     let effector = frames.point(index, DVec3::from_array(*point));
                     let goal = DVec3::from_array(*target);
-                    self.goal_marker(&painter, rect, effector, goal, color, task.level == 1);
+                    self.goal_marker(&painter, effector, goal, color, task.level == 1);
                 }
                 TaskKindSpec::Limb { target, limb, .. } => {
                     let end = limb.map(|limb| limb.joints()[2]);
@@ -79,7 +80,6 @@ impl StanceApp {
                     {
                         self.goal_marker(
                             &painter,
-                            rect,
                             effector,
                             DVec3::from_array(*target),
                             color,
@@ -88,7 +88,7 @@ impl StanceApp {
                     }
                 }
                 TaskKindSpec::Gaze { target, .. } => {
-                    if let Some(goal) = self.to_screen(rect, DVec3::from_array(*target)) {
+                    if let Some(goal) = self.lens.screen_point(DVec3::from_array(*target)) {
                         painter.circle_stroke(goal, 7.0, Stroke::new(2.0, color));
                         painter.circle_filled(goal, 2.5, color);
                     }
@@ -105,7 +105,7 @@ impl StanceApp {
         }
 
         if has_balance {
-            self.draw_balance(&painter, rect, &polygon);
+            self.draw_balance(&painter, &polygon);
         }
 
         // The pulled point and where the cursor wants it.
@@ -113,8 +113,8 @@ impl StanceApp {
             self.model.session.grab(),
             self.model.session.grabbed_point_world(),
         ) && let (Some(from), Some(to)) = (
-            self.to_screen(rect, point),
-            self.to_screen(rect, grab.target_world),
+            self.lens.screen_point(point),
+            self.lens.screen_point(grab.target_world),
         ) {
             painter.line_segment([from, to], Stroke::new(1.5, PULL_COLOR));
             painter.circle_filled(from, 4.0, PULL_COLOR);
@@ -125,17 +125,16 @@ impl StanceApp {
     fn goal_marker(
         &self,
         painter: &egui::Painter,
-        rect: egui::Rect,
         effector: DVec3,
         goal: DVec3,
         color: Color32,
         pinned: bool,
     ) {
-        let Some(goal_px) = self.to_screen(rect, goal) else {
+        let Some(goal_px) = self.lens.screen_point(goal) else {
             return;
         };
         if (effector - goal).length() > 1e-3
-            && let Some(effector_px) = self.to_screen(rect, effector)
+            && let Some(effector_px) = self.lens.screen_point(effector)
         {
             painter.line_segment([effector_px, goal_px], Stroke::new(1.5, color));
         }
@@ -153,13 +152,13 @@ impl StanceApp {
 
     /// The centre of mass, its projection on the floor, and the support polygon of the balance
     /// task (as the solver sees it), if there is one.
-    fn draw_balance(&self, painter: &egui::Painter, rect: egui::Rect, polygon: &[DVec3]) {
+    fn draw_balance(&self, painter: &egui::Painter, polygon: &[DVec3]) {
         let com = self.model.session.frames().center_of_mass();
         let floor_com = DVec3::new(com.x, 0.0, com.z);
         if polygon.len() >= 2 {
             let mut points: Vec<Pos2> = polygon
                 .iter()
-                .filter_map(|corner| self.to_screen(rect, *corner))
+                .filter_map(|corner| self.lens.screen_point(*corner))
                 .collect();
             if let Some(first) = points.first().copied() {
                 points.push(first);
@@ -167,7 +166,7 @@ impl StanceApp {
             painter.add(egui::Shape::line(points, Stroke::new(1.5, COM_COLOR)));
         }
         if let (Some(com_px), Some(floor_px)) =
-            (self.to_screen(rect, com), self.to_screen(rect, floor_com))
+            (self.lens.screen_point(com), self.lens.screen_point(floor_com))
         {
             painter.line_segment(
                 [com_px, floor_px],
@@ -185,11 +184,9 @@ impl StanceApp {
             painter.circle_filled(floor_px, 3.5, COM_COLOR);
         }
     }
-}
 
-impl StanceApp {
     /// The skeleton over the avatar: a line per bone, a dot per joint.
-    pub(super) fn draw_skeleton(&self, painter: &egui::Painter, rect: egui::Rect) {
+    pub(super) fn draw_skeleton(&self, painter: &egui::Painter) {
         let skeleton = self.model.session.skeleton();
         let frames = self.model.session.frames();
         let stroke = Stroke::new(1.5, Color32::from_rgba_unmultiplied(255, 255, 255, 170));
@@ -197,12 +194,12 @@ impl StanceApp {
             let Some(position) = frames.joint_position.get(index).copied() else {
                 continue;
             };
-            let Some(here) = self.to_screen(rect, position) else {
+            let Some(here) = self.lens.screen_point(position) else {
                 continue;
             };
             if let Some(parent) = joint.parent
                 && let Some(parent_position) = frames.joint_position.get(parent).copied()
-                && let Some(there) = self.to_screen(rect, parent_position)
+                && let Some(there) = self.lens.screen_point(parent_position)
             {
                 painter.line_segment([there, here], stroke);
             }

@@ -1,90 +1,67 @@
 //! The sensors window: device, connection, per-sensor figures, assignment to segments,
-//! calibration, heading reset, recording and replay; and the per-frame step that lets the
-//! calibrated sensors drive their joints.
+//! calibration, heading reset, recording and replay, as commands to the model's sensors.
 
 use egui::RichText;
-use serde_json::{Map, Value, json};
 use stance_mocap::SensorId;
 use stance_mocap::ascii::ComponentOrder;
 use stance_mocap::fob::FobMode;
 
-use super::StanceApp;
-use crate::model::Command;
+use super::ButtonRects;
+use crate::model::{Command, EditorModel};
 use crate::sensors::{
-    AssignmentPreset, DeviceFrame, DeviceKind, SensorAssignment, SensorLink, SensorSettings,
-    assignment_label, preset_button_name,
+    AssignmentPreset, DeviceFrame, DeviceKind, SensorAssignment, SensorCommand, SensorLink,
+    SensorSettings, assignment_label, preset_button_name,
 };
 
 /// Baud rates offered first (any other can be typed).
 const BAUD_RATES: [u32; 6] = [9_600, 19_200, 38_400, 57_600, 115_200, 230_400];
 
-impl StanceApp {
-    pub(super) fn sensors_state_json(&self) -> Value {
-        let mut state = self.model.sensors.state_json();
-        let skeleton = self.model.session.skeleton();
-        let posture = self.model.session.posture();
-        let frames = self.model.session.frames();
-        let driven: Map<String, Value> = self
-            .model
-            .session
-            .held_joints()
-            .into_iter()
-            .filter_map(|joint| {
-                let name = skeleton.joints().get(joint)?.name.clone();
-                let local = posture.local_rotation(skeleton, joint);
-                let world = frames.rotation(joint);
-                Some((
-                    name,
-                    json!({
-                        "local": [local.x, local.y, local.z, local.w],
-                        "world": [world.x, world.y, world.z, world.w],
-                    }),
-                ))
-            })
-            .collect();
-        if let Value::Object(map) = &mut state {
-            map.insert("driven".to_owned(), Value::Object(driven));
-        }
-        state
-    }
+/// The sensors window over the model.
+pub(super) struct SensorsWindow<'a> {
+    pub model: &'a mut EditorModel,
+    /// Where the viewport is (the window opens over it).
+    pub viewport_rect: egui::Rect,
+    pub buttons: &'a mut ButtonRects,
+}
 
-    pub(super) fn sensors_window(&mut self, ctx: &egui::Context) {
-        if !self.show_sensors {
+impl SensorsWindow<'_> {
+    /// The window while `open`.
+    pub(super) fn show(&mut self, ctx: &egui::Context, open: &mut bool) {
+        if !*open {
             return;
         }
-        let mut open = true;
         // Sized to its contents (which grow as sensors appear), scrolling past the viewport.
         egui::Window::new("Sensors")
-            .open(&mut open)
+            .open(open)
             .default_pos(self.viewport_rect.left_top() + egui::vec2(12.0, 40.0))
             .resizable(false)
             .vscroll(true)
             .max_height((self.viewport_rect.height() - 60.0).max(200.0))
             .show(ctx, |ui| {
                 ui.set_width(360.0);
-                self.sensors_contents(ui);
+                self.contents(ui);
             });
-        if !open {
-            self.show_sensors = false;
-        }
     }
 
-    fn sensors_contents(&mut self, ui: &mut egui::Ui) {
+    fn command(&mut self, command: SensorCommand) {
+        self.model.apply(Command::Sensors(command));
+    }
+
+    fn contents(&mut self, ui: &mut egui::Ui) {
         let mut settings = self.model.sensors.settings().clone();
         let busy =
             self.model.sensors.link().is_live() || self.model.sensors.replay_progress().is_some();
         ui.add_enabled_ui(!busy, |ui| device_settings(ui, &mut settings));
         if settings != *self.model.sensors.settings() {
-            self.model
-                .apply(Command::SetSensorSettings(Box::new(settings)));
+            self.command(SensorCommand::SetSettings(Box::new(settings)));
         }
 
         ui.horizontal(|ui| {
             if self.model.sensors.link().is_live() {
                 let button = ui.button("Disconnect");
-                self.button_rects.push(("sensors_disconnect", button.rect));
+                self.buttons.push(("sensors_disconnect", button.rect));
                 if button.clicked() {
-                    self.model.apply(Command::DisconnectSensors);
+                    self.command(SensorCommand::Disconnect);
                 }
             } else {
                 let button = ui
@@ -93,14 +70,14 @@ impl StanceApp {
                         egui::Button::new("Connect…"),
                     )
                     .on_hover_text("The browser asks which serial port or HID device to use");
-                self.button_rects.push(("sensors_connect", button.rect));
+                self.buttons.push(("sensors_connect", button.rect));
                 if button.clicked() {
-                    self.model.apply(Command::ConnectSensors);
+                    self.command(SensorCommand::Connect);
                 }
             }
             if self.model.sensors.replay_progress().is_some() {
                 if ui.button("Stop replay").clicked() {
-                    self.model.sensors.stop_replay();
+                    self.command(SensorCommand::StopReplay);
                 }
             } else {
                 let button = ui
@@ -109,23 +86,20 @@ impl StanceApp {
                         egui::Button::new("Replay file…"),
                     )
                     .on_hover_text("Play a recording (or `stance simulate-sensors` output)");
-                self.button_rects.push(("sensors_replay", button.rect));
+                self.buttons.push(("sensors_replay", button.rect));
                 if button.clicked() {
-                    match self.model.hooks.pick_file() {
-                        Ok(()) => self.model.apply(Command::ExpectRecording),
-                        Err(error) => self.model.warn(format!("Sensors: {error}")),
-                    }
+                    self.model.apply(Command::PickRecording);
                 }
             }
             let recording = self.model.sensors.is_recording();
             let button = ui.button(if recording { "Stop and save" } else { "Record" });
-            self.button_rects.push(("sensors_record", button.rect));
+            self.buttons.push(("sensors_record", button.rect));
             if button.clicked() {
-                if recording {
-                    self.save_sensor_recording();
+                self.command(if recording {
+                    SensorCommand::SaveRecording
                 } else {
-                    self.model.sensors.start_recording();
-                }
+                    SensorCommand::StartRecording
+                });
             }
         });
         self.link_line(ui);
@@ -140,27 +114,25 @@ impl StanceApp {
                 !self.model.sensors.assignments().is_empty(),
                 egui::Button::new("Calibrate"),
             );
-            self.button_rects.push(("sensors_calibrate", button.rect));
+            self.buttons.push(("sensors_calibrate", button.rect));
 
             if button.clicked() {
-                self.model.apply(Command::CalibrateSensors);
+                self.command(SensorCommand::Calibrate);
             }
             let calibrated = self.model.sensors.is_calibrated();
             let button = ui
                 .add_enabled(calibrated, egui::Button::new("Reset heading"))
                 .on_hover_text("Face the front, then press: turns every sensor about the vertical");
-            self.button_rects
-                .push(("sensors_reset_heading", button.rect));
-            if button.clicked() && self.model.sensors.reset_heading() {
-                self.model
-                    .inform("Heading reset: the body faces the front again.");
+            self.buttons.push(("sensors_reset_heading", button.rect));
+            if button.clicked() {
+                self.command(SensorCommand::ResetHeading);
             }
             if ui
                 .add_enabled(calibrated, egui::Button::new("Release joints"))
                 .on_hover_text("Stop driving the joints (the solver takes them back)")
                 .clicked()
             {
-                self.model.apply(Command::ReleaseSensorJoints);
+                self.command(SensorCommand::ReleaseJoints);
             }
         });
         if self.model.sensors.is_calibrated() {
@@ -177,13 +149,9 @@ impl StanceApp {
         ui.horizontal_wrapped(|ui| {
             for preset in AssignmentPreset::ALL {
                 let button = ui.small_button(preset.label());
-                self.button_rects
-                    .push((preset_button_name(preset), button.rect));
+                self.buttons.push((preset_button_name(preset), button.rect));
                 if button.clicked() {
-                    self.model
-                        .sensors
-                        .apply_preset(preset, self.model.session.skeleton());
-                    self.model.apply(Command::ReleaseSensorJoints);
+                    self.command(SensorCommand::ApplyPreset(preset));
                 }
             }
         });
@@ -317,23 +285,7 @@ impl StanceApp {
                 }
             });
         if let Some((sensor, assignment)) = change {
-            self.model.sensors.assign(sensor, assignment);
-            self.model.apply(Command::ReleaseSensorJoints);
-        }
-    }
-
-    fn save_sensor_recording(&mut self) {
-        let Some(bytes) = self.model.sensors.stop_recording() else {
-            return;
-        };
-        let name = self.model.sensors.recording_name();
-        match self.model.hooks.download_bytes(&name, &bytes) {
-            Ok(()) => self
-                .model
-                .inform(format!("Saved {} bytes as {name}.", bytes.len())),
-            Err(error) => self
-                .model
-                .warn(format!("The recording could not be saved: {error}")),
+            self.command(SensorCommand::Assign { sensor, assignment });
         }
     }
 }

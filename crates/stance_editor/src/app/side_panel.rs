@@ -1,0 +1,289 @@
+//! The side panel: the body (avatar or mannequin, its mapping, the level of articulation),
+//! undo and the posing commands, the selection (joint angles, swivel) and the pose library.
+
+use egui::RichText;
+use stance_document::LimbName;
+use stance_hanim::{MatchMethod, readable_name};
+
+use super::avatar_panel::{GUESS_COLOR, LOW_CONFIDENCE};
+use super::{ButtonRects, Windows, copy_link};
+use crate::model::{Command, EditorModel, NewTask};
+
+/// The side panel over the model.
+pub(super) struct SidePanel<'a> {
+    pub model: &'a mut EditorModel,
+    /// A click on the body pins it.
+    pub pin_tool: &'a mut bool,
+    pub windows: &'a mut Windows,
+    /// The name typed for the next saved pose.
+    pub library_name: &'a mut String,
+    pub buttons: &'a mut ButtonRects,
+}
+
+impl SidePanel<'_> {
+    /// The whole panel.
+    pub(super) fn show(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Humanoid");
+        match &self.model.avatar {
+            Some(avatar) => {
+                ui.label(RichText::new(&avatar.name).strong());
+                ui.label(format!(
+                    "{} vertices, {} joints mapped onto H-Anim",
+                    avatar.vertex_count,
+                    avatar.mapping_summary().0
+                ));
+                self.avatar_mapping_button(ui);
+            }
+            None => {
+                ui.label("H-Anim 2.0 mannequin (Avatar menu or drop a file to pose yours)");
+            }
+        }
+        let current = self.model.session.level_of_articulation();
+        let mut chosen = current;
+        egui::ComboBox::from_label("Articulation")
+            .selected_text(format!("LOA {}", current.number()))
+            .show_ui(ui, |ui| {
+                for loa in stance_hanim::LevelOfArticulation::ALL {
+                    ui.selectable_value(&mut chosen, loa, format!("LOA {}", loa.number()));
+                }
+            });
+        if chosen != current {
+            self.model.apply(Command::SetLevelOfArticulation(chosen));
+        }
+        ui.label(format!(
+            "{} joints, {} DOF",
+            self.model.session.skeleton().joint_count(),
+            self.model.session.skeleton().dof_count()
+        ));
+        ui.horizontal(|ui| {
+            if ui
+                .add_enabled(self.model.history.can_undo(), egui::Button::new("Undo"))
+                .on_hover_text("Ctrl+Z")
+                .clicked()
+            {
+                self.model.apply(Command::Undo);
+            }
+            if ui
+                .add_enabled(self.model.history.can_redo(), egui::Button::new("Redo"))
+                .on_hover_text("Ctrl+Shift+Z or Ctrl+Y")
+                .clicked()
+            {
+                self.model.apply(Command::Redo);
+            }
+        });
+        ui.horizontal(|ui| {
+            if ui.button("Mirror").on_hover_text("M").clicked() {
+                self.model.apply(Command::Mirror);
+            }
+            if ui.button("Rest pose").on_hover_text("R").clicked() {
+                self.model.apply(Command::ResetToRest);
+            }
+        });
+        let copy = ui.button("Copy posture link").on_hover_text("L");
+        self.buttons.push(("copy_link", copy.rect));
+        if copy.clicked() {
+            copy_link(ui.ctx(), self.model);
+        }
+        let pin_tool = ui
+            .toggle_value(self.pin_tool, "Pin tool")
+            .on_hover_text("While on, a click on the body pins that part (also Alt + click)");
+        self.buttons.push(("pin_tool", pin_tool.rect));
+        let sensors = ui
+            .button("Motion-capture sensors…")
+            .on_hover_text("S: connect serial or HID sensors, calibrate, record, replay");
+        self.buttons.push(("sensors_open", sensors.rect));
+        if sensors.clicked() {
+            self.windows.sensors = !self.windows.sensors;
+        }
+        ui.separator();
+        self.selection_section(ui);
+        ui.separator();
+        self.library_section(ui);
+    }
+
+    fn selection_section(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Selection");
+        let Some(joint_index) = self.model.selected_joint else {
+            ui.label("Click a body part to select it; drag it to pull it.");
+            return;
+        };
+        let skeleton = self.model.session.skeleton();
+        let Some(joint) = skeleton.joints().get(joint_index).cloned() else {
+            self.model.apply(Command::Select(None));
+            return;
+        };
+        let lower = skeleton.lower_limits().to_vec();
+        let upper = skeleton.upper_limits().to_vec();
+        ui.label(RichText::new(readable_name(&joint.name)).strong());
+        ui.label(RichText::new(&joint.name).small().weak());
+        ui.horizontal(|ui| {
+            if ui.button("Pin").on_hover_text("P").clicked() {
+                self.model.apply(Command::Pin(joint_index));
+            }
+            if ui
+                .button("Hold orientation")
+                .on_hover_text("add an orientation task with the current orientation")
+                .clicked()
+            {
+                self.model
+                    .apply(Command::AddTask(NewTask::Orientation(joint_index)));
+            }
+        });
+        // Joint mode: each DOF within its anatomical limits.
+        let values = self.model.session.posture().values().to_vec();
+        let mut edit: Option<(usize, f64)> = None;
+        egui::Grid::new("joint_dofs").num_columns(2).show(ui, |ui| {
+            for (offset, dof) in joint.dofs.iter().enumerate() {
+                let index = joint.dof_start + offset;
+                let (Some(&value), Some(&low), Some(&high)) =
+                    (values.get(index), lower.get(index), upper.get(index))
+                else {
+                    continue;
+                };
+                ui.label(dof.name());
+                if dof.is_rotation() {
+                    let mut degrees = value.to_degrees();
+                    let range = low.to_degrees().max(-360.0)..=high.to_degrees().min(360.0);
+                    let response = ui.add(
+                        egui::DragValue::new(&mut degrees)
+                            .range(range)
+                            .speed(0.5)
+                            .suffix("°")
+                            .max_decimals(1),
+                    );
+                    if response.changed() {
+                        edit = Some((index, degrees.to_radians()));
+                    }
+                } else {
+                    let mut metres = value;
+                    if ui
+                        .add(
+                            egui::DragValue::new(&mut metres)
+                                .speed(0.005)
+                                .suffix(" m")
+                                .max_decimals(3),
+                        )
+                        .changed()
+                    {
+                        edit = Some((index, metres));
+                    }
+                }
+                ui.end_row();
+            }
+        });
+        if let Some((dof, value)) = edit {
+            self.model.apply(Command::SetDof { dof, value });
+        }
+        if let Some(limb) = LimbName::of_joint(&joint.name) {
+            self.swivel_section(ui, limb);
+        }
+    }
+
+    fn swivel_section(&mut self, ui: &mut egui::Ui, limb: LimbName) {
+        let Some((swivel, intervals)) = self.model.session.limb_swivel(limb) else {
+            return;
+        };
+        ui.separator();
+        ui.label(RichText::new(format!("{} swivel", limb.name().replace('_', " "))).strong());
+        let mut degrees = swivel.to_degrees();
+        let response = ui
+            .add(egui::Slider::new(&mut degrees, -180.0..=180.0).suffix("°"))
+            .on_hover_text("turns the elbow or knee around the shoulder-wrist (hip-ankle) axis; the hand or foot stays");
+        let feasible: Vec<String> = intervals
+            .iter()
+            .map(|interval| {
+                format!(
+                    "{:.0}° to {:.0}°",
+                    interval.start.to_degrees(),
+                    interval.end.to_degrees()
+                )
+            })
+            .collect();
+        ui.label(
+            RichText::new(if feasible.is_empty() {
+                "no swivel keeps every joint within its limits".to_owned()
+            } else {
+                format!("within limits: {}", feasible.join(", "))
+            })
+            .small(),
+        );
+        if response.changed() {
+            self.model.apply(Command::SetSwivel {
+                limb,
+                swivel_angle: degrees.to_radians(),
+            });
+        }
+    }
+
+    fn library_section(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Pose library");
+        ui.horizontal(|ui| {
+            let label = ui.label("Name");
+            ui.add(
+                egui::TextEdit::singleline(self.library_name)
+                    .hint_text("pose name")
+                    .desired_width(120.0),
+            )
+            .labelled_by(label.id);
+            if ui.button("Save").clicked() {
+                let name = self.library_name.clone();
+                self.model.apply(Command::SaveToLibrary(name));
+            }
+        });
+        let mut load = None;
+        let mut delete = None;
+        for (index, entry) in self.model.library.entries().iter().enumerate() {
+            ui.horizontal(|ui| {
+                if ui.button("Load").clicked() {
+                    load = Some(index);
+                }
+                if ui.small_button("x").on_hover_text("delete").clicked() {
+                    delete = Some(index);
+                }
+                ui.label(&entry.name);
+            });
+        }
+        if let Some(index) = load {
+            self.model.apply(Command::LoadFromLibrary(index));
+        }
+        if let Some(index) = delete {
+            self.model.apply(Command::DeleteFromLibrary(index));
+        }
+        ui.horizontal(|ui| {
+            if ui.button("Import…").clicked() {
+                self.model.apply(Command::PickFile);
+            }
+            if ui.button("Export…").clicked() {
+                self.model.apply(Command::ExportLibrary);
+            }
+        });
+    }
+
+    /// The side panel's line about guessed joints and the button that opens the window.
+    fn avatar_mapping_button(&mut self, ui: &mut egui::Ui) {
+        let Some(avatar) = &self.model.avatar else {
+            return;
+        };
+        let guesses = avatar
+            .avatar
+            .mapping
+            .matches()
+            .iter()
+            .filter(|found| found.method != MatchMethod::Implied)
+            .filter(|found| found.confidence < LOW_CONFIDENCE)
+            .count();
+        if guesses > 0 {
+            ui.colored_label(
+                GUESS_COLOR,
+                format!("{guesses} of them guessed: check them in the mapping"),
+            );
+        }
+        let button = ui
+            .button("Avatar mapping…")
+            .on_hover_text("check and correct which H-Anim joint each joint of the file drives");
+        self.buttons.push(("mapping_open", button.rect));
+        if button.clicked() {
+            self.windows.mapping = !self.windows.mapping;
+        }
+    }
+}

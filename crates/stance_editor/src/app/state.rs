@@ -1,0 +1,209 @@
+//! The editor's observable state as JSON, built when the page's test hook or a script asks
+//! (never per frame): the document, joint positions in the world and on screen (CSS pixels),
+//! per-task statuses, the notice, the handles on screen, the sensors, the frame's timings and
+//! the rectangles of the main buttons.
+
+use glam::Vec2;
+use serde_json::{Map, Value, json};
+
+use super::viewport_panel::ViewportPanel;
+use crate::model::EditorModel;
+use crate::posing::describe_task;
+
+/// What the page's state is built from.
+pub(super) struct PageState<'a> {
+    pub model: &'a EditorModel,
+    pub viewport: &'a ViewportPanel,
+    /// Screen rectangles (points) of named buttons.
+    pub buttons: &'a [(&'static str, egui::Rect)],
+    /// CPU time of the last frame (ms).
+    pub frame_ms: f64,
+}
+
+impl PageState<'_> {
+    /// The state as a JSON text.
+    pub(super) fn to_json(&self) -> String {
+        let model = self.model;
+        let session = model.session();
+        let skeleton = session.skeleton();
+        let rect = self.viewport.rect;
+        let (joints, screen) = self.joints();
+        let document = serde_json::from_str::<Value>(&session.document().to_json(false))
+            .unwrap_or(Value::Null);
+        json!({
+            "revision": session.revision(),
+            "settled": session.is_settled(),
+            "loa": session.level_of_articulation().number(),
+            "document": document,
+            "joints": joints,
+            "screen": screen,
+            "tasks": self.tasks(),
+            "gave_way": session.report().and_then(|report| report.gave_way),
+            "notice": model.notice().map(|notice| json!({"text": notice.text, "error": notice.is_error})),
+            "avatar": model.avatar().map(|avatar| json!({
+                "name": avatar.name,
+                "vertices": avatar.vertex_count,
+                "triangles": avatar.triangle_count,
+                "uploaded": self.viewport.avatar_uploaded,
+                "mapped": avatar.mapping_summary().0,
+            })),
+            "selected": model.selected_joint().and_then(|joint| skeleton.joints().get(joint)).map(|joint| joint.name.clone()),
+            "pulling": model.is_pulling(),
+            "dragging_handle": model.gesture().is_some() && !model.is_pulling(),
+            "undo_steps": model.history().undo_steps(),
+            "can_redo": model.history().can_redo(),
+            "library": model.library().entries().iter().map(|entry| entry.name.clone()).collect::<Vec<_>>(),
+            "solver_ms": model.solver_ms,
+            "frame_ms": self.frame_ms,
+            "scene_ms": self.viewport.scene_ms,
+            "render_ms": self.viewport.render_ms,
+            "wasm_memory_bytes": wasm_memory_bytes(),
+            "viewport": [rect.min.x, rect.min.y, rect.width(), rect.height()],
+            "buttons": self.buttons(),
+            "goals": self.goals(),
+            "rings": self.rings(),
+            "sensors": self.sensors(),
+            "swivel": self.viewport.handles(model).swivel_state(),
+        })
+        .to_string()
+    }
+
+    /// Joint positions in the world (m) and on screen (points), by joint name.
+    fn joints(&self) -> (Map<String, Value>, Map<String, Value>) {
+        let session = self.model.session();
+        let frames = session.frames();
+        let rect = self.viewport.rect;
+        let mut joints = Map::new();
+        let mut screen = Map::new();
+        for (index, joint) in session.skeleton().joints().iter().enumerate() {
+            let Some(position) = frames.joint_position.get(index) else {
+                continue;
+            };
+            joints.insert(
+                joint.name.clone(),
+                json!([position.x, position.y, position.z]),
+            );
+            if rect.is_positive()
+                && let Some(pixel) = self
+                    .viewport
+                    .camera
+                    .project(position.as_vec3(), Vec2::new(rect.width(), rect.height()))
+            {
+                screen.insert(
+                    joint.name.clone(),
+                    json!([rect.min.x + pixel.x, rect.min.y + pixel.y]),
+                );
+            }
+        }
+        (joints, screen)
+    }
+
+    /// Each task in words with its level and status.
+    fn tasks(&self) -> Vec<Value> {
+        let session = self.model.session();
+        session
+            .tasks()
+            .iter()
+            .zip(session.statuses())
+            .map(|(task, status)| {
+                json!({
+                    "description": describe_task(task),
+                    "level": task.level,
+                    "active": task.active,
+                    "residual": status.residual,
+                    "gave_way": status.gave_way,
+                    "problem": status.problem,
+                })
+            })
+            .collect()
+    }
+
+    fn buttons(&self) -> Map<String, Value> {
+        self.buttons
+            .iter()
+            .map(|(name, rect)| {
+                (
+                    (*name).to_owned(),
+                    json!([rect.min.x, rect.min.y, rect.width(), rect.height()]),
+                )
+            })
+            .collect()
+    }
+
+    /// The draggable goals on screen.
+    fn goals(&self) -> Vec<Value> {
+        let lens = self.viewport.lens();
+        self.viewport
+            .handles(self.model)
+            .goal_handles()
+            .into_iter()
+            .filter_map(|(task, goal)| {
+                let pixel = lens.screen_point(goal)?;
+                Some(json!({"task": task, "screen": [pixel.x, pixel.y]}))
+            })
+            .collect()
+    }
+
+    /// The rings of the selected joint on screen, with their DOF and value.
+    fn rings(&self) -> Vec<Value> {
+        let session = self.model.session();
+        let lens = self.viewport.lens();
+        let handles = self.viewport.handles(self.model);
+        handles
+            .rings()
+            .iter()
+            .filter_map(|ring| {
+                let point = handles.ring_points(ring).first().copied()?;
+                let centre = lens.screen_point(ring.centre_world)?;
+                Some(json!({
+                    "dof": session.skeleton().dof_name(ring.dof),
+                    "index": ring.dof,
+                    "value": session.posture().values().get(ring.dof),
+                    "screen": [point.x, point.y],
+                    "centre": [centre.x, centre.y],
+                }))
+            })
+            .collect()
+    }
+
+    /// The sensors' state, with the local and world rotation of every joint they drive.
+    fn sensors(&self) -> Value {
+        let session = self.model.session();
+        let mut state = self.model.sensors().state_json();
+        let skeleton = session.skeleton();
+        let posture = session.posture();
+        let frames = session.frames();
+        let driven: Map<String, Value> = session
+            .held_joints()
+            .into_iter()
+            .filter_map(|joint| {
+                let name = skeleton.joints().get(joint)?.name.clone();
+                let local = posture.local_rotation(skeleton, joint);
+                let world = frames.rotation(joint);
+                Some((
+                    name,
+                    json!({
+                        "local": [local.x, local.y, local.z, local.w],
+                        "world": [world.x, world.y, world.z, world.w],
+                    }),
+                ))
+            })
+            .collect();
+        if let Value::Object(map) = &mut state {
+            map.insert("driven".to_owned(), Value::Object(driven));
+        }
+        state
+    }
+}
+
+/// The WebAssembly memory the editor holds (bytes); `None` natively.
+fn wasm_memory_bytes() -> Option<u64> {
+    #[cfg(target_arch = "wasm32")]
+    {
+        Some(core::arch::wasm32::memory_size::<0>() as u64 * 65_536)
+    }
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        None
+    }
+}

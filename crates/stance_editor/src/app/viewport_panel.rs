@@ -1,0 +1,336 @@
+//! The 3D viewport: the camera, the pointer's gestures as commands to the model (pull, handles,
+//! selection, the context menu), and the picture of the model's posture with its overlays.
+
+use egui::{Color32, RichText, Sense};
+use glam::DVec3;
+use stance_hanim::{LimbName, readable_name};
+use stance_render::{BODY_COLOR_LINEAR, OrbitCamera, Scene, pick_capsule};
+
+use super::handles::Handles;
+use super::lens::Lens;
+use super::overlay::Overlay;
+use crate::host::BackendSummary;
+use crate::model::{Command, EditorModel, NewTask};
+use crate::viewport::{ViewportInput, ViewportRenderer, apply_gestures};
+
+/// Colour of the selected body part (linear RGB).
+const SELECTED_COLOR_LINEAR: [f32; 4] = [0.15, 0.45, 0.85, 1.0];
+/// Colour of the body part under the cursor (linear RGB).
+const HOVERED_COLOR_LINEAR: [f32; 4] = [0.85, 0.45, 0.22, 1.0];
+
+/// The viewport: camera, display options, the GPU renderer and this frame's figures.
+pub(super) struct ViewportPanel {
+    pub camera: OrbitCamera,
+    /// The viewport's rectangle this frame (points).
+    pub rect: egui::Rect,
+    /// Its size in physical pixels.
+    pub size_px: [u32; 2],
+    pub show_floor: bool,
+    pub show_trace: bool,
+    pub show_skeleton: bool,
+    /// A left click on the body pins it (touch-friendly one-click pin).
+    pub pin_tool: bool,
+    pub backend: Option<BackendSummary>,
+    renderer: Option<ViewportRenderer>,
+    /// Whether the loaded avatar's mesh is on the GPU.
+    pub avatar_uploaded: bool,
+    first_frame_reported: bool,
+    /// CPU time of this frame's scene (mannequin capsules, or the avatar's skinning palettes).
+    pub scene_ms: f64,
+    /// CPU time of recording and submitting this frame's 3D draw (uploads included).
+    pub render_ms: f64,
+}
+
+impl ViewportPanel {
+    /// A viewport with the floor and the trace shown, drawing with `renderer`.
+    pub(super) fn new(backend: Option<BackendSummary>, renderer: Option<ViewportRenderer>) -> Self {
+        Self {
+            camera: OrbitCamera::default(),
+            rect: egui::Rect::NOTHING,
+            size_px: [0, 0],
+            show_floor: true,
+            show_trace: true,
+            show_skeleton: false,
+            pin_tool: false,
+            backend,
+            renderer,
+            avatar_uploaded: false,
+            first_frame_reported: false,
+            scene_ms: 0.0,
+            render_ms: 0.0,
+        }
+    }
+
+    /// The camera looking through this frame's rectangle.
+    pub(super) fn lens(&self) -> Lens<'_> {
+        Lens {
+            camera: &self.camera,
+            rect: self.rect,
+        }
+    }
+
+    /// The model's handles as this viewport shows them.
+    pub(super) fn handles<'a>(&'a self, model: &'a EditorModel) -> Handles<'a> {
+        Handles {
+            model,
+            lens: self.lens(),
+        }
+    }
+
+    /// The viewport in `ui`'s remaining space: input as commands to `model`, then the
+    /// picture of the model's posture with its overlays.
+    pub(super) fn show(
+        &mut self,
+        ui: &mut egui::Ui,
+        frame: &eframe::Frame,
+        model: &mut EditorModel,
+    ) {
+        let rect = ui.available_rect_before_wrap();
+        self.rect = rect;
+        // A stable id: the notice strip above comes and goes (with its own widgets), and an
+        // automatic id would change with it and end a drag in progress.
+        ui.allocate_rect(rect, Sense::hover());
+        let response = ui.interact(
+            rect,
+            egui::Id::unique("stance_viewport"),
+            Sense::click_and_drag(),
+        );
+        let input = ViewportInput::read(ui, &response);
+        self.gestures(ui, &response, &input, model);
+        context_menu(&response, model);
+        if model.is_busy() {
+            ui.ctx().request_repaint();
+        }
+        self.draw(ui, frame, model);
+        model.readings_shown();
+        self.draw_overlays(ui, model, response.hover_pos());
+    }
+
+    /// Goals, the pulled point, the balance, the trace, the skeleton, rings and swivel; the
+    /// cursor says what a drag would do.
+    fn draw_overlays(&self, ui: &egui::Ui, model: &EditorModel, pointer: Option<egui::Pos2>) {
+        let overlay = Overlay {
+            model,
+            lens: self.lens(),
+            show_trace: self.show_trace,
+        };
+        overlay.draw(ui.painter());
+        let clipped = ui.painter().with_clip_rect(self.rect);
+        if self.show_skeleton || (model.avatar().is_some() && model.selected_joint().is_some()) {
+            overlay.draw_skeleton(&clipped);
+        }
+        let handles = self.handles(model);
+        handles.draw_rings(&clipped);
+        let gesture = model.gesture().is_some();
+        let over_handle =
+            !gesture && pointer.is_some_and(|pointer| handles.pick_handle(pointer).is_some());
+        if gesture {
+            ui.ctx().set_cursor_icon(egui::CursorIcon::Grabbing);
+        } else if over_handle || model.hovered_joint().is_some() {
+            ui.ctx().set_cursor_icon(egui::CursorIcon::Grab);
+        }
+    }
+
+    /// The body part under `pointer` (on the bones drawn, as of the last step) and the point
+    /// hit.
+    pub(super) fn pick(&self, model: &EditorModel, pointer: egui::Pos2) -> Option<(usize, DVec3)> {
+        if !self.rect.contains(pointer) {
+            return None;
+        }
+        let (origin, direction) = self.lens().pointer_ray(pointer);
+        let (origin, direction) = (origin.as_vec3(), direction.as_vec3());
+        let bones = model.bones();
+        let capsules: Vec<_> = bones.iter().map(|bone| bone.capsule).collect();
+        let hit = pick_capsule(&capsules, origin, direction)?;
+        let bone = bones.get(hit.index)?;
+        Some((bone.owner, hit.point_world.as_dvec3()))
+    }
+
+    /// The pointer on the viewport, as commands: a drag with the primary button (no Shift,
+    /// one finger) that starts on a handle (a task's goal, a ring or the swivel of the
+    /// selected joint) moves it; on the body it pulls that point; elsewhere it moves the
+    /// camera. A click selects (and with the pin tool or Alt pins).
+    fn gestures(
+        &mut self,
+        ui: &egui::Ui,
+        response: &egui::Response,
+        input: &ViewportInput,
+        model: &mut EditorModel,
+    ) {
+        let pointer = response.hover_pos();
+        let press_origin = ui.input(|input| input.pointer.press_origin());
+        let interact_pos = response.interact_pointer_pos();
+        if response.drag_started_by(egui::PointerButton::Primary)
+            && !input.shift_held
+            && input.touch_count < 2
+            && let Some(origin) = press_origin
+        {
+            if let Some(handle) = self.handles(model).pick_handle(origin) {
+                model.apply(Command::BeginHandle(handle));
+            } else if let Some((joint, point_world)) = self.pick(model, origin) {
+                model.apply(Command::BeginPull { joint, point_world });
+            }
+        }
+        let dragging = response.dragged() && input.touch_count < 2;
+        match (model.gesture().cloned(), interact_pos) {
+            (Some(gesture), Some(pointer)) if dragging => {
+                if let Some(command) = self.lens().follow(&gesture, pointer) {
+                    model.apply(command);
+                }
+            }
+            (Some(_), _) => model.apply(Command::EndGesture),
+            (None, _) => {
+                if apply_gestures(&mut self.camera, &input.gestures(), self.rect.height()) {
+                    ui.ctx().request_repaint();
+                }
+            }
+        }
+        let hovered = if model.gesture().is_some() {
+            None
+        } else {
+            pointer.and_then(|pointer| self.pick(model, pointer).map(|(joint, _)| joint))
+        };
+        model.apply(Command::Hover(hovered));
+        if response.clicked_by(egui::PointerButton::Primary) {
+            let clicked =
+                interact_pos.and_then(|pointer| self.pick(model, pointer).map(|(joint, _)| joint));
+            model.apply(Command::Select(clicked));
+            // The pin tool (or Alt + click): one click pins the part where it is.
+            let alt = ui.input(|input| input.modifiers.alt);
+            if let Some(joint) = clicked
+                && (self.pin_tool || alt)
+            {
+                model.apply(Command::Pin(joint));
+            }
+        }
+    }
+
+    /// The 3D picture of this frame's posture.
+    fn draw(&mut self, ui: &mut egui::Ui, frame: &eframe::Frame, model: &mut EditorModel) {
+        let rect = self.rect;
+        let pixels_per_point = ui.ctx().pixels_per_point();
+        self.size_px = [
+            (rect.width() * pixels_per_point).round().max(1.0) as u32,
+            (rect.height() * pixels_per_point).round().max(1.0) as u32,
+        ];
+        if let (Some(renderer), Some(render_state)) =
+            (&mut self.renderer, frame.wgpu_render_state())
+            && let Some(mesh) = model.avatar.as_mut().and_then(|avatar| avatar.model.take())
+        {
+            renderer.set_avatar(render_state, Some(&mesh));
+            self.avatar_uploaded = true;
+        }
+        if model.avatar().is_none() {
+            self.avatar_uploaded = false;
+        }
+        let scene_started = web_time::Instant::now();
+        let scene = self.scene(model);
+        self.scene_ms = scene_started.elapsed().as_secs_f64() * 1000.0;
+        match (&mut self.renderer, frame.wgpu_render_state()) {
+            (Some(renderer), Some(render_state)) => {
+                let render_started = web_time::Instant::now();
+                let texture_id = renderer.render(render_state, self.size_px, &self.camera, &scene);
+                self.render_ms = render_started.elapsed().as_secs_f64() * 1000.0;
+                let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
+                ui.painter().image(texture_id, rect, uv, Color32::WHITE);
+                if !self.first_frame_reported {
+                    self.first_frame_reported = true;
+                    if let Some(backend) = &self.backend {
+                        model.hooks.first_frame_rendered(backend);
+                    }
+                }
+            }
+            _ => {
+                ui.painter().text(
+                    rect.center(),
+                    egui::Align2::CENTER_CENTER,
+                    "The 3D view needs WebGPU or WebGL2, and neither could start.",
+                    egui::FontId::proportional(16.0),
+                    Color32::LIGHT_RED,
+                );
+            }
+        }
+    }
+
+    /// What the renderer draws: the mannequin's capsules (selection and hover coloured), or
+    /// the avatar's skinning palettes once its mesh is on the GPU.
+    fn scene(&self, model: &EditorModel) -> Scene {
+        let show_avatar = model.avatar().is_some() && self.avatar_uploaded;
+        // With an avatar the mannequin is hidden; the skeleton overlay shows the bones.
+        let capsules = if show_avatar {
+            Vec::new()
+        } else {
+            model
+                .bones()
+                .iter()
+                .map(|bone| {
+                    let mut capsule = bone.capsule;
+                    capsule.color_linear = if Some(bone.owner) == model.selected_joint() {
+                        SELECTED_COLOR_LINEAR
+                    } else if Some(bone.owner) == model.hovered_joint() {
+                        HOVERED_COLOR_LINEAR
+                    } else {
+                        BODY_COLOR_LINEAR
+                    };
+                    capsule
+                })
+                .collect()
+        };
+        let session = model.session();
+        let avatar_palettes = model
+            .avatar()
+            .and_then(|avatar| avatar.palettes(session.humanoid(), session.posture()))
+            .unwrap_or_default();
+        Scene {
+            capsules,
+            show_floor: self.show_floor,
+            show_avatar,
+            avatar_palettes,
+        }
+    }
+}
+
+/// Right-click on the body: pin, select, add a task on that part.
+fn context_menu(response: &egui::Response, model: &mut EditorModel) {
+    let context_joint = model.hovered_joint().or(model.selected_joint());
+    response.context_menu(|ui| {
+        let Some(joint) = context_joint else {
+            ui.label("Right-click a body part to pin it.");
+            return;
+        };
+        let name = model
+            .session()
+            .skeleton()
+            .joints()
+            .get(joint)
+            .map(|definition| definition.name.clone())
+            .unwrap_or_default();
+        ui.label(RichText::new(readable_name(&name)).strong());
+        let mut command = None;
+        if ui.button("Pin here (level 1)").clicked() {
+            command = Some(Command::Pin(joint));
+        }
+        if ui.button("Select").clicked() {
+            command = Some(Command::Select(Some(joint)));
+        }
+        ui.separator();
+        if ui.button("Add position task").clicked() {
+            command = Some(Command::AddTask(NewTask::Position(joint)));
+        }
+        if ui.button("Add orientation task").clicked() {
+            command = Some(Command::AddTask(NewTask::Orientation(joint)));
+        }
+        if let Some(limb) = LimbName::of_joint(&name)
+            && ui.button("Add limb task (with swivel)").clicked()
+        {
+            command = Some(Command::AddTask(NewTask::Limb(limb)));
+        }
+        if let Some(command) = command {
+            if matches!(command, Command::AddTask(_)) {
+                model.apply(Command::Select(Some(joint)));
+            }
+            model.apply(command);
+            ui.close();
+        }
+    });
+}

@@ -1,0 +1,179 @@
+//! What the UI says to the model: [`Command`]s, the [`Gesture`] in progress, and what the
+//! model says back ([`Notice`]).
+
+use glam::DVec3;
+use stance_document::{Document, LimbName, TaskSpec};
+use stance_hanim::{LevelOfArticulation, Mapping};
+
+use super::mapping::Correction;
+use super::tasks::NewTask;
+use crate::history::EditKind;
+use crate::sensors::SensorCommand;
+
+/// A message for the user, shown above the viewport.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Notice {
+    pub text: String,
+    pub is_error: bool,
+    pub since_secs: f64,
+}
+
+/// The gesture in progress: at most one at a time.
+#[derive(Debug, Clone)]
+pub enum Gesture {
+    /// Grab-and-pull: the grabbed point follows the pointer in the plane facing the camera
+    /// through `plane_point_world`; cancelling restores `document_before`.
+    Pull {
+        joint: usize,
+        plane_point_world: DVec3,
+        document_before: Box<Document>,
+    },
+    /// The goal of `tasks` (several when their goals coincide) moves in the plane facing the
+    /// camera through `plane_point_world`.
+    Goal {
+        tasks: Vec<usize>,
+        plane_point_world: DVec3,
+    },
+    /// A ring of the joint gizmo: DOF `dof` turns with the pointer around `centre_px`
+    /// (screen points), from `start_value`.
+    Ring {
+        dof: usize,
+        centre_px: [f32; 2],
+        last_angle: f32,
+        accumulated: f64,
+        start_value: f64,
+        /// +1 when the DOF axis points toward the camera (a counter-clockwise drag on screen
+        /// is then a positive rotation), -1 otherwise.
+        sign: f64,
+    },
+    /// The swivel handle: the elbow or knee turns around the limb's axis with the pointer.
+    Swivel {
+        limb: LimbName,
+        start_swivel: f64,
+        /// Unit direction from the axis to the middle joint when the drag started.
+        start_direction: DVec3,
+        centre_world: DVec3,
+        axis_world: DVec3,
+    },
+}
+
+/// What the UI asks the model to do.
+#[derive(Debug, Clone)]
+pub enum Command {
+    /// Select a joint (or nothing).
+    Select(Option<usize>),
+    /// The joint under the pointer (or nothing).
+    Hover(Option<usize>),
+    /// Grab `joint` at `point_world` and start pulling it.
+    BeginPull {
+        joint: usize,
+        point_world: DVec3,
+    },
+    /// Start a handle drag (goal, ring or swivel); a pull starts with `BeginPull`.
+    BeginHandle(Gesture),
+    /// The pulled point's new target.
+    MoveGrab {
+        target_world: DVec3,
+    },
+    /// The dragged goal's new place, and where the pointer meets the floor (balance goals
+    /// slide on the floor).
+    MoveGoal {
+        goal_world: DVec3,
+        floor_world: Option<DVec3>,
+    },
+    /// The pointer's screen angle around the ring's centre (radians).
+    TurnRing {
+        screen_angle: f32,
+    },
+    /// Where the pointer meets the swivel circle's plane.
+    TurnSwivel {
+        point_world: DVec3,
+    },
+    /// The gesture ends where it is.
+    EndGesture,
+    /// The gesture ends and a pull's body goes back to where it was.
+    CancelGesture,
+    /// Pin a joint where it is (level 1).
+    Pin(usize),
+    /// Pin the selected joint.
+    PinSelected,
+    /// Replace the task list as one edit of `kind`.
+    SetTasks {
+        kind: EditKind,
+        tasks: Vec<TaskSpec>,
+    },
+    /// Add a task made from where the body stands.
+    AddTask(NewTask),
+    /// The paper's Table 1 in place of the tasks.
+    LoadTable1Example,
+    /// Set one DOF (a slider or field), as one edit of `EditKind::Joint`.
+    SetDof {
+        dof: usize,
+        value: f64,
+    },
+    /// Set a limb's swivel angle (rad).
+    SetSwivel {
+        limb: LimbName,
+        swivel_angle: f64,
+    },
+    Undo,
+    Redo,
+    ResetToRest,
+    Mirror,
+    SetLevelOfArticulation(LevelOfArticulation),
+    /// Load an avatar file (glTF, GLB, VRM).
+    LoadAvatar {
+        name: String,
+        bytes: Vec<u8>,
+    },
+    /// Ask the page to fetch an avatar by URL (it arrives as a file).
+    FetchAvatar(String),
+    /// Back to the built-in mannequin.
+    UseMannequin,
+    /// Rebuild the avatar's skeleton from a corrected mapping (`corrections` made it).
+    ApplyMapping {
+        mapping: Box<Mapping>,
+        corrections: Vec<Correction>,
+    },
+    /// Go back to the mapping before the last applied correction.
+    RevertMappingCorrection,
+    /// Open a posture link (fragment or URL).
+    OpenLink(String),
+    /// Open a file: avatar, document, pose library, or a sensor recording when one was asked.
+    OpenFile {
+        name: String,
+        bytes: Vec<u8>,
+    },
+    /// Save the posture in the library under a name.
+    SaveToLibrary(String),
+    /// Load the library's entry `index`.
+    LoadFromLibrary(usize),
+    /// Delete the library's entry `index`.
+    DeleteFromLibrary(usize),
+    /// Ask the page for a file to open.
+    PickFile,
+    /// Offer the document as a JSON download.
+    ExportDocument,
+    /// Offer the pose library as a JSON download.
+    ExportLibrary,
+    /// Offer the avatar in the current posture as a GLB download.
+    ExportPosedAvatar,
+    /// Ask the page for a sensor recording to replay.
+    PickRecording,
+    /// A command for the sensors.
+    Sensors(SensorCommand),
+    /// A message for the user.
+    Inform(String),
+    /// A problem for the user.
+    Warn(String),
+    DismissNotice,
+}
+
+/// Why a session is replaced: what carries over.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SessionChange {
+    /// Another body (avatar, mannequin): the history starts again.
+    NewBody,
+    /// The same body rebuilt (LOA switch, mapping correction): the history stays.
+    Rebuilt,
+}

@@ -1,0 +1,176 @@
+//! New tasks made from where the body stands: a position, orientation or direction held where
+//! the joint is, a gaze straight ahead, a limb at its present swivel, balance, comfort, the
+//! paper's Table 1.
+
+use glam::DVec3;
+use stance_document::{DEFAULT_BALANCE_MARGIN, LimbName, TaskKindSpec, TaskSpec};
+use stance_ik::Axes;
+
+use crate::posing::{PosingSession, comfort_task, joint_rotation};
+
+/// Distance of a new gaze target in front of the eyes (m).
+const GAZE_DISTANCE_M: f64 = 1.5;
+
+/// A task to add, made from the current posture.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum NewTask {
+    /// The joint held where it is (below every task but the comfort).
+    Position(usize),
+    /// The joint's orientation held as it is.
+    Orientation(usize),
+    /// The joint's up axis held along its present direction, the turn about it free.
+    Direction(usize),
+    /// The head looks at a point straight ahead.
+    Gaze,
+    /// The limb's end held where it is, at its present swivel angle.
+    Limb(LimbName),
+    /// The centre of mass over the support polygon of the pinned feet (level 2).
+    Balance,
+    /// The centre of mass over the floor point under it now (level 2).
+    CentreOfMass,
+    /// The attraction to the rest posture, at the lowest level.
+    Comfort,
+}
+
+/// The level for a new task: below every task but the posture attraction.
+fn next_level(session: &PosingSession) -> u32 {
+    session
+        .tasks()
+        .iter()
+        .filter(|task| !matches!(task.kind, TaskKindSpec::Posture { .. }))
+        .map(|task| task.level)
+        .max()
+        .unwrap_or(0)
+        + 1
+}
+
+/// The task `what` on `session`'s body as it stands; `Err` says why it cannot be made.
+pub fn make_task(session: &PosingSession, what: NewTask) -> Result<TaskSpec, String> {
+    let skeleton = session.skeleton();
+    let frames = session.frames();
+    let joint_name = |joint: usize| {
+        skeleton
+            .joints()
+            .get(joint)
+            .map(|definition| definition.name.clone())
+            .ok_or_else(|| format!("this body has no joint {joint}"))
+    };
+    let (kind, level) = match what {
+        NewTask::Position(joint) => {
+            let position = frames
+                .joint_position
+                .get(joint)
+                .copied()
+                .unwrap_or_default();
+            let kind = TaskKindSpec::Position {
+                joint: joint_name(joint)?,
+                point: [0.0; 3],
+                axes: Axes::XYZ,
+                target: position.to_array(),
+            };
+            (kind, next_level(session))
+        }
+        NewTask::Orientation(joint) => {
+            let kind = TaskKindSpec::Orientation {
+                joint: joint_name(joint)?,
+                target: joint_rotation(frames, joint).to_array(),
+            };
+            (kind, next_level(session))
+        }
+        NewTask::Direction(joint) => {
+            let kind = TaskKindSpec::Direction {
+                joint: joint_name(joint)?,
+                axis: [0.0, 1.0, 0.0],
+                target: (joint_rotation(frames, joint) * DVec3::Y).to_array(),
+            };
+            (kind, next_level(session))
+        }
+        NewTask::Gaze => {
+            let head = skeleton
+                .joint_index("skullbase")
+                .ok_or("this body has no head joint (skullbase) to aim")?;
+            let position = frames.joint_position.get(head).copied().unwrap_or_default();
+            let forward = joint_rotation(frames, head) * DVec3::Z;
+            let kind = TaskKindSpec::Gaze {
+                joint: "skullbase".to_owned(),
+                axis: [0.0, 0.0, 1.0],
+                point: [0.0; 3],
+                target: (position + forward * GAZE_DISTANCE_M).to_array(),
+            };
+            (kind, next_level(session))
+        }
+        NewTask::Limb(limb) => {
+            let end = limb.joints()[2];
+            let position = session
+                .joint_position(end)
+                .ok_or_else(|| format!("this body has no {end} joint"))?;
+            let kind = TaskKindSpec::Limb {
+                limb: Some(limb),
+                joints: None,
+                target: position.to_array(),
+                swivel: session.limb_swivel(limb).map(|(swivel, _)| swivel),
+                orientation: None,
+            };
+            (kind, next_level(session))
+        }
+        NewTask::Balance => {
+            let kind = TaskKindSpec::Balance {
+                support: None,
+                margin: DEFAULT_BALANCE_MARGIN,
+            };
+            (kind, 2)
+        }
+        NewTask::CentreOfMass => {
+            let com = frames.center_of_mass();
+            let kind = TaskKindSpec::Com {
+                axes: Axes::XZ,
+                target: [com.x, 0.0, com.z],
+            };
+            (kind, 2)
+        }
+        NewTask::Comfort => return Ok(comfort_task()),
+    };
+    let mut task = TaskSpec::new(kind);
+    task.level = level;
+    Ok(task)
+}
+
+#[cfg(test)]
+mod tests {
+    use stance_hanim::LevelOfArticulation;
+
+    use super::*;
+
+    #[test]
+    fn a_new_task_holds_the_body_where_it_stands_below_the_others() {
+        let Ok(session) = PosingSession::new(LevelOfArticulation::Loa2) else {
+            panic!("the mannequin builds");
+        };
+        let Some(wrist) = session.skeleton().joint_index("l_radiocarpal") else {
+            panic!("the mannequin has a left wrist");
+        };
+        let Ok(task) = make_task(&session, NewTask::Position(wrist)) else {
+            panic!("a position task can be made");
+        };
+        let Some(position) = session.joint_position("l_radiocarpal") else {
+            panic!("the wrist has a position");
+        };
+        let TaskKindSpec::Position { target, .. } = task.kind else {
+            panic!("a position task");
+        };
+        assert_eq!(target, position.to_array());
+        // The default tasks stop at level 2 (balance) before the comfort.
+        assert_eq!(task.level, 3);
+        let Ok(limb) = make_task(&session, NewTask::Limb(LimbName::RightArm)) else {
+            panic!("a limb task can be made");
+        };
+        assert!(matches!(
+            limb.kind,
+            TaskKindSpec::Limb {
+                swivel: Some(_),
+                ..
+            }
+        ));
+        assert!(make_task(&session, NewTask::Position(10_000)).is_err());
+    }
+}
