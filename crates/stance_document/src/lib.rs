@@ -19,6 +19,7 @@ mod json;
 pub mod link;
 mod problem;
 mod range_coder;
+mod words;
 
 pub use convert::{
     LimbStartSpec, limb_joint_indices, pinned_contacts, resolve_joint, solver_tasks,

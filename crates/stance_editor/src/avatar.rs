@@ -303,6 +303,24 @@ pub fn posed_file_name(name: &str) -> String {
     format!("{stem}-posed.glb")
 }
 
+/// Whether an avatar's name is where it can be fetched again (links and autosave name it).
+pub fn is_url(name: &str) -> bool {
+    name.starts_with("http://")
+        || name.starts_with("https://")
+        || (!name.contains(['\\', ':']) && name.contains('/'))
+        || name == "default-avatar.glb"
+}
+
+/// Whether a file is an avatar (glTF, GLB, VRM) by its name or its first bytes.
+pub fn is_avatar_file(name: &str, bytes: &[u8]) -> bool {
+    let lower = name.to_ascii_lowercase();
+    let path = lower.split(['?', '#']).next().unwrap_or("");
+    [".glb", ".gltf", ".vrm"]
+        .iter()
+        .any(|extension| path.ends_with(extension))
+        || bytes.starts_with(b"glTF")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -20,6 +20,7 @@ use stance_hanim::{LevelOfArticulation, Mapping, readable_name};
 use stance_ik::Clock;
 use stance_render::{MannequinBone, MannequinJoint, mannequin_bones};
 
+use self::command::goals_moved;
 pub use self::command::{Command, Gesture, Notice, SessionChange};
 use self::mapping::MappingCorrections;
 pub use self::mapping::{Correction, carry_posture};
@@ -28,7 +29,7 @@ use crate::avatar::LoadedAvatar;
 use crate::history::{EditKind, History};
 use crate::host::{HostHooks, HostMessage};
 use crate::library::{Autosave, PoseLibrary};
-use crate::posing::{PosingError, PosingSession, describe_task};
+use crate::posing::{PosingError, PosingSession};
 use crate::sensors::{SensorCommand, SensorHub, SensorOutcome, SensorSettings};
 
 /// Seconds an information notice stays (errors stay until dismissed).
@@ -296,11 +297,39 @@ impl EditorModel {
             Command::MoveGoal {
                 goal_world,
                 floor_world,
-            } => self.move_goal(goal_world, floor_world),
-            Command::TurnRing { screen_angle } => self.turn_ring(screen_angle),
-            Command::TurnSwivel { point_world } => self.turn_swivel(point_world),
+            } => {
+                if let Some(Gesture::Goal { tasks: moved, .. }) = &self.gesture {
+                    let tasks = goals_moved(self.session.tasks(), moved, goal_world, floor_world);
+                    self.session.set_tasks(tasks);
+                }
+            }
+            Command::TurnRing { screen_angle } => {
+                if let Some((dof, value)) = self
+                    .gesture
+                    .as_mut()
+                    .and_then(|gesture| gesture.turn_ring(screen_angle))
+                {
+                    self.session.set_dof(dof, value);
+                }
+            }
+            Command::TurnSwivel { point_world } => {
+                if let Some((limb, angle)) = self
+                    .gesture
+                    .as_ref()
+                    .and_then(|gesture| gesture.swivel_at(point_world))
+                {
+                    self.session.set_limb_swivel(limb, angle);
+                }
+            }
             Command::EndGesture => self.end_gesture(),
             Command::CancelGesture => self.cancel_gesture(),
+            other => self.apply_edit(other),
+        }
+    }
+
+    /// The commands that edit the document (each one undoable).
+    fn apply_edit(&mut self, command: Command) {
+        match command {
             Command::Pin(joint) => self.pin(joint),
             Command::PinSelected => match self.selected_joint {
                 Some(joint) => self.pin(joint),
@@ -339,6 +368,13 @@ impl EditorModel {
                 self.record(EditKind::Command);
                 self.session.mirror();
             }
+            other => self.apply_outside(other),
+        }
+    }
+
+    /// The commands about the body, files, the library, the sensors and notices.
+    fn apply_outside(&mut self, command: Command) {
+        match command {
             Command::SetLevelOfArticulation(loa) => self.set_level_of_articulation(loa),
             Command::LoadAvatar { name, bytes } => self.load_avatar(&name, &bytes),
             Command::FetchAvatar(url) => self.fetch_avatar(&url),
@@ -354,27 +390,17 @@ impl EditorModel {
             Command::OpenFile { name, bytes } => self.open_file(&name, bytes),
             Command::SaveToLibrary(name) => self.save_to_library(&name),
             Command::LoadFromLibrary(index) => self.load_from_library(index),
-            Command::DeleteFromLibrary(index) => {
-                if self.library.remove(index).is_some() {
-                    self.store_library();
-                }
-            }
-            Command::PickFile => {
-                if let Err(error) = self.hooks.pick_file() {
-                    self.warn(format!("Could not open a file: {error}"));
-                }
-            }
+            Command::DeleteFromLibrary(index) => self.delete_from_library(index),
+            Command::PickFile => self.host_result(self.hooks.pick_file(), "Could not open a file"),
             Command::ExportDocument => {
                 let text = self.document().to_json(true);
-                if let Err(error) = self.hooks.download("stance-pose.json", &text) {
-                    self.warn(format!("Could not export the pose: {error}"));
-                }
+                let result = self.hooks.download("stance-pose.json", &text);
+                self.host_result(result, "Could not export the pose");
             }
             Command::ExportLibrary => {
                 let text = self.library.to_json();
-                if let Err(error) = self.hooks.download("stance-library.json", &text) {
-                    self.warn(format!("Could not export the library: {error}"));
-                }
+                let result = self.hooks.download("stance-library.json", &text);
+                self.host_result(result, "Could not export the library");
             }
             Command::ExportPosedAvatar => self.export_posed_avatar(),
             Command::PickRecording => match self.hooks.pick_file() {
@@ -394,45 +420,28 @@ impl EditorModel {
                     SensorOutcome::Warn(text) => self.warn(text),
                 }
             }
+            Command::HostFailed(reason) => {
+                self.replay_pick_pending = false;
+                self.warn(reason);
+            }
             Command::Inform(text) => self.inform(text),
             Command::Warn(text) => self.warn(text),
             Command::DismissNotice => self.notice = None,
+            // The gestures and edits are carried out above.
+            _ => {}
+        }
+    }
+
+    /// Says what went wrong when the host refused.
+    fn host_result(&mut self, result: Result<(), String>, what: &str) {
+        if let Err(error) = result {
+            self.warn(format!("{what}: {error}"));
         }
     }
 
     /// Carries out what the host sent (links, files, sensor bytes).
     pub fn receive(&mut self, message: HostMessage) {
-        match message {
-            HostMessage::OpenLink(fragment) => {
-                self.open_link(&fragment);
-            }
-            HostMessage::OpenFile { name, bytes } => self.open_file(&name, bytes),
-            HostMessage::Failed(reason) => {
-                self.replay_pick_pending = false;
-                self.warn(reason);
-            }
-            HostMessage::SensorConnected { device } => {
-                self.inform(format!("Sensors: {device} connected."));
-                self.sensors.connected(device);
-            }
-            HostMessage::SensorBytes { bytes, arrived } => {
-                self.sensors.receive_bytes(&bytes, self.now_secs, arrived);
-            }
-            HostMessage::SensorReport {
-                report_id,
-                data,
-                arrived,
-            } => {
-                self.sensors
-                    .receive_report(report_id, &data, self.now_secs, arrived);
-            }
-            HostMessage::SensorLost { reason } => {
-                self.warn(format!(
-                    "Sensors: {reason} The posture stays as the last reading left it."
-                ));
-                self.sensors.lost(reason);
-            }
-        }
+        self.apply(message.into());
     }
 
     pub(crate) fn inform(&mut self, text: impl Into<String>) {
@@ -548,85 +557,6 @@ impl EditorModel {
         self.gesture = Some(gesture);
     }
 
-    fn move_goal(&mut self, goal_world: DVec3, floor_world: Option<DVec3>) {
-        let Some(Gesture::Goal { tasks: moved, .. }) = &self.gesture else {
-            return;
-        };
-        let mut tasks = self.session.tasks().to_vec();
-        for &task in moved {
-            let Some(spec) = tasks.get_mut(task) else {
-                continue;
-            };
-            match &mut spec.kind {
-                stance_document::TaskKindSpec::Position { target, .. }
-                | stance_document::TaskKindSpec::Gaze { target, .. }
-                | stance_document::TaskKindSpec::Limb { target, .. } => {
-                    *target = goal_world.to_array();
-                }
-                stance_document::TaskKindSpec::Com { target, .. } => {
-                    // The balance goal slides on the floor under the pointer.
-                    if let Some(on_floor) = floor_world {
-                        target[0] = on_floor.x;
-                        target[2] = on_floor.z;
-                    }
-                }
-                _ => {}
-            }
-        }
-        self.session.set_tasks(tasks);
-    }
-
-    fn turn_ring(&mut self, screen_angle: f32) {
-        let Some(Gesture::Ring {
-            dof,
-            last_angle,
-            accumulated,
-            start_value,
-            sign,
-            ..
-        }) = &mut self.gesture
-        else {
-            return;
-        };
-        let mut delta = screen_angle - *last_angle;
-        if delta > std::f32::consts::PI {
-            delta -= std::f32::consts::TAU;
-        } else if delta < -std::f32::consts::PI {
-            delta += std::f32::consts::TAU;
-        }
-        *accumulated += f64::from(delta);
-        *last_angle = screen_angle;
-        // Screen y points down: a counter-clockwise drag has a negative screen angle.
-        let value = *start_value - *sign * *accumulated;
-        let dof = *dof;
-        self.session.set_dof(dof, value);
-    }
-
-    fn turn_swivel(&mut self, point_world: DVec3) {
-        let Some(Gesture::Swivel {
-            limb,
-            start_swivel,
-            start_direction,
-            centre_world,
-            axis_world,
-        }) = &self.gesture
-        else {
-            return;
-        };
-        let direction = point_world - *centre_world;
-        let direction = direction - *axis_world * direction.dot(*axis_world);
-        if direction.length() < 1e-9 {
-            return;
-        }
-        // The angle from where the drag started, right-handed about the axis (the swivel's
-        // own sense).
-        let turn = axis_world
-            .dot(start_direction.cross(direction))
-            .atan2(start_direction.dot(direction));
-        let (limb, angle) = (*limb, *start_swivel + turn);
-        self.session.set_limb_swivel(limb, angle);
-    }
-
     fn end_gesture(&mut self) {
         match self.gesture.take() {
             Some(Gesture::Pull { .. }) => self.session.end_grab(),
@@ -696,7 +626,7 @@ impl EditorModel {
             })
             .map_err(|error| error.to_string()),
         };
-        match humanoid.and_then(|humanoid| self.rebuilt_session(humanoid)) {
+        match humanoid.and_then(|humanoid| mapping::rebuilt_session(&self.session, humanoid)) {
             Ok((session, dropped)) => {
                 self.record(EditKind::Command);
                 self.replace_session(session, SessionChange::Rebuilt);
@@ -710,28 +640,6 @@ impl EditorModel {
             }
             Err(error) => self.warn(format!("Could not switch to LOA {}: {error}", loa.number())),
         }
-    }
-
-    /// A session on `humanoid` carrying the current one over: the posture by joint name
-    /// (each joint keeps its world rotation), the tasks that still fit. Returns the session
-    /// and the dropped tasks, described.
-    fn rebuilt_session(
-        &self,
-        humanoid: stance_hanim::HumanoidSkeleton,
-    ) -> Result<(PosingSession, Vec<String>), String> {
-        let mut session =
-            PosingSession::with_humanoid(humanoid).map_err(|error| error.to_string())?;
-        let (kept, dropped): (Vec<TaskSpec>, Vec<TaskSpec>) = self
-            .session
-            .tasks()
-            .iter()
-            .cloned()
-            .partition(|task| task.to_solver_tasks(session.skeleton(), &[]).is_ok());
-        if let Some(posture) = mapping::carry_posture(&self.session, session.skeleton()) {
-            session.set_posture(posture);
-        }
-        session.set_tasks(kept);
-        Ok((session, dropped.iter().map(describe_task).collect()))
     }
 
     /// Loads an avatar file; on failure says why and keeps the current one.
@@ -762,7 +670,7 @@ impl EditorModel {
                 }
                 self.replace_session(session, SessionChange::NewBody);
                 self.avatar = Some(avatar);
-                self.avatar_url = is_url(name).then(|| name.to_owned());
+                self.avatar_url = crate::avatar::is_url(name).then(|| name.to_owned());
                 self.inform(text);
                 if let Some(document) = self.pending_document.take()
                     && let Err(error) = self.session.restore_document(&document)
@@ -846,7 +754,7 @@ impl EditorModel {
                 self.inform(format!(
                     "Mapping corrected ({}): {} Ctrl+Z does not undo this; Revert last correction in the mapping window does.",
                     mapping::summarize(&changes),
-                    self.rebuilt_summary(&dropped)
+                    mapping::rebuilt_summary(&self.session, &dropped)
                 ));
             }
             Err(error) => self.warn(format!(
@@ -872,28 +780,11 @@ impl EditorModel {
                 self.mapping_corrections.forget_last(&name);
                 self.inform(format!(
                     "Reverted the last mapping correction: {}",
-                    self.rebuilt_summary(&dropped)
+                    mapping::rebuilt_summary(&self.session, &dropped)
                 ));
             }
             Err(error) => self.warn(format!("The correction could not be reverted: {error}")),
         }
-    }
-
-    fn rebuilt_summary(&self, dropped: &[String]) -> String {
-        let skeleton = self.session.skeleton();
-        let mut text = format!(
-            "the skeleton was rebuilt ({} joints, {} DOF); the posture and {} task(s) carried over.",
-            skeleton.joint_count(),
-            skeleton.dof_count(),
-            self.session.tasks().len()
-        );
-        if !dropped.is_empty() {
-            text.push_str(&format!(
-                " Dropped, their joints are gone: {}.",
-                dropped.join(", ")
-            ));
-        }
-        text
     }
 
     /// Rebuilds the avatar's skeleton and the posing session from `mapping` at the current
@@ -905,7 +796,7 @@ impl EditorModel {
             return Err("no avatar is loaded".to_owned());
         };
         let humanoid = avatar.skeleton_with_mapping(&mapping, loa)?;
-        let (session, dropped) = self.rebuilt_session(humanoid)?;
+        let (session, dropped) = mapping::rebuilt_session(&self.session, humanoid)?;
         if let Some(avatar) = self.avatar.as_mut() {
             avatar.avatar.mapping = mapping;
         }
@@ -990,15 +881,7 @@ impl EditorModel {
             self.apply(Command::Sensors(SensorCommand::Replay { name, bytes }));
             return;
         }
-        let lower = name.to_ascii_lowercase();
-        let is_avatar = [".glb", ".gltf", ".vrm"].iter().any(|extension| {
-            lower
-                .split(['?', '#'])
-                .next()
-                .unwrap_or("")
-                .ends_with(extension)
-        }) || bytes.starts_with(b"glTF");
-        if is_avatar {
+        if crate::avatar::is_avatar_file(name, &bytes) {
             self.load_avatar(name, &bytes);
             return;
         }
@@ -1087,6 +970,12 @@ impl EditorModel {
         }
     }
 
+    fn delete_from_library(&mut self, index: usize) {
+        if self.library.remove(index).is_some() {
+            self.store_library();
+        }
+    }
+
     fn autosave(&mut self) {
         if self.is_pulling() {
             return;
@@ -1099,12 +988,4 @@ impl EditorModel {
             self.warn(format!("Autosave failed: {error}"));
         }
     }
-}
-
-/// Whether an avatar's name is where it can be fetched again (links and autosave name it).
-fn is_url(name: &str) -> bool {
-    name.starts_with("http://")
-        || name.starts_with("https://")
-        || (!name.contains(['\\', ':']) && name.contains('/'))
-        || name == "default-avatar.glb"
 }

@@ -8,7 +8,6 @@ use stance_document::{
 };
 use stance_hanim::{
     HumanoidSkeleton, LevelOfArticulation, SkeletonOptions, default_skeleton, mirror_name,
-    readable_name,
 };
 use stance_ik::conflict::Unmet;
 use stance_ik::{
@@ -147,7 +146,7 @@ impl PosingSession {
         let mut tasks = Vec::new();
         for foot in ["l_talocrural", "r_talocrural"] {
             if let Some(position) = self.joint_position(foot) {
-                tasks.push(pin_task(foot, position.to_array()));
+                tasks.push(TaskSpec::pin(foot, position.to_array()));
             }
         }
         // Balance as the support polygon of the pinned feet (an inequality): the body leans
@@ -158,7 +157,7 @@ impl PosingSession {
         });
         balance.level = 2;
         tasks.push(balance);
-        tasks.push(comfort_task());
+        tasks.push(TaskSpec::comfort());
         tasks
     }
 
@@ -213,7 +212,7 @@ impl PosingSession {
         });
         bar_task.level = 3;
         tasks.push(bar_task);
-        tasks.push(comfort_task());
+        tasks.push(TaskSpec::comfort());
         tasks
     }
 
@@ -454,7 +453,7 @@ impl PosingSession {
     /// swap, goals are reflected in the sagittal plane), so that the solver keeps the mirror.
     pub fn mirror(&mut self) {
         let posture = self.mirrored_posture();
-        self.tasks = self.tasks.iter().map(mirror_task).collect();
+        self.tasks = self.tasks.iter().map(TaskSpec::mirrored).collect();
         self.grab = None;
         self.set_posture(posture);
     }
@@ -517,7 +516,7 @@ impl PosingSession {
         let Some(position) = self.frames.joint_position.get(joint).copied() else {
             return;
         };
-        self.tasks.push(pin_task(&name, position.to_array()));
+        self.tasks.push(TaskSpec::pin(&name, position.to_array()));
         self.wake();
     }
 
@@ -683,191 +682,13 @@ impl PosingSession {
                 let names: Vec<String> = indices
                     .iter()
                     .filter_map(|&index| higher.get(index))
-                    .map(|(other, _)| format!("level {}: {}", other.level, describe_task(other)))
+                    .map(|(other, _)| format!("level {}: {}", other.level, other.description()))
                     .collect();
                 format!("conflicts with {}", names.join(", "))
             }
             Unmet::JointLimits => "limited by joint limits".to_owned(),
             Unmet::OutOfReach => "out of reach".to_owned(),
         }
-    }
-}
-
-/// A level-1 position task holding `joint` at `position`.
-pub fn pin_task(joint: &str, position: [f64; 3]) -> TaskSpec {
-    TaskSpec::new(TaskKindSpec::Position {
-        joint: joint.to_owned(),
-        point: [0.0; 3],
-        axes: Axes::new(true, true, true),
-        target: position,
-    })
-}
-
-/// A point or direction reflected in the sagittal plane (x -> -x).
-fn reflect(v: [f64; 3]) -> [f64; 3] {
-    // `0.0 - x` keeps a zero positive (no "-0" in the saved document).
-    [0.0 - v[0], v[1], v[2]]
-}
-
-/// A rotation `[qx, qy, qz, qw]` reflected in the sagittal plane (`M R M`, M = diag(-1, 1, 1)).
-fn reflect_rotation(q: [f64; 4]) -> [f64; 4] {
-    [q[0], 0.0 - q[1], 0.0 - q[2], q[3]]
-}
-
-/// The other side's limb.
-pub fn mirror_limb(limb: LimbName) -> LimbName {
-    match limb {
-        LimbName::LeftArm => LimbName::RightArm,
-        LimbName::RightArm => LimbName::LeftArm,
-        LimbName::LeftLeg => LimbName::RightLeg,
-        LimbName::RightLeg => LimbName::LeftLeg,
-    }
-}
-
-/// A task mirrored left/right: joints swap sides, goals and local points are reflected in the
-/// sagittal plane (x -> -x), orientations accordingly; level, weight and active flag stay.
-pub fn mirror_task(task: &TaskSpec) -> TaskSpec {
-    let mut mirrored = task.clone();
-    mirrored.kind = match &task.kind {
-        TaskKindSpec::Position {
-            joint,
-            point,
-            axes,
-            target,
-        } => TaskKindSpec::Position {
-            joint: mirror_name(joint),
-            point: reflect(*point),
-            axes: *axes,
-            target: reflect(*target),
-        },
-        TaskKindSpec::Orientation { joint, target } => TaskKindSpec::Orientation {
-            joint: mirror_name(joint),
-            target: reflect_rotation(*target),
-        },
-        TaskKindSpec::Gaze {
-            joint,
-            axis,
-            point,
-            target,
-        } => TaskKindSpec::Gaze {
-            joint: mirror_name(joint),
-            axis: reflect(*axis),
-            point: reflect(*point),
-            target: reflect(*target),
-        },
-        TaskKindSpec::Direction {
-            joint,
-            axis,
-            target,
-        } => TaskKindSpec::Direction {
-            joint: mirror_name(joint),
-            axis: reflect(*axis),
-            target: reflect(*target),
-        },
-        TaskKindSpec::Balance { support, margin } => TaskKindSpec::Balance {
-            support: support.as_deref().map(mirror_names),
-            margin: *margin,
-        },
-        TaskKindSpec::Com { axes, target } => TaskKindSpec::Com {
-            axes: *axes,
-            target: reflect(*target),
-        },
-        TaskKindSpec::Posture { joints, reference } => TaskKindSpec::Posture {
-            joints: joints.as_deref().map(mirror_names),
-            reference: reference.as_ref().map(mirror_posture_values),
-        },
-        TaskKindSpec::Limb {
-            limb,
-            joints,
-            target,
-            swivel,
-            orientation,
-        } => TaskKindSpec::Limb {
-            limb: limb.map(mirror_limb),
-            joints: joints
-                .as_ref()
-                .map(|joints| joints.clone().map(|joint| mirror_name(&joint))),
-            target: reflect(*target),
-            swivel: swivel.map(|angle| -angle),
-            orientation: orientation.map(reflect_rotation),
-        },
-    };
-    mirrored
-}
-
-/// Posture values mirrored left/right, like [`PosingSession::mirrored_posture`].
-fn mirror_posture_values(values: &PostureValues) -> PostureValues {
-    let mut mirrored = PostureValues::new();
-    for (joint, dofs) in &values.joints {
-        let name = mirror_name(joint);
-        for (dof, value) in dofs.iter() {
-            let sign = match dof.name() {
-                "tx" | "ry" | "rz" => -1.0,
-                _ => 1.0,
-            };
-            mirrored.set(&name, dof, sign * value);
-        }
-    }
-    mirrored
-}
-
-/// Comfort: a light attraction of every joint toward the rest posture, at level 10.
-pub fn comfort_task() -> TaskSpec {
-    let mut comfort = TaskSpec::new(TaskKindSpec::Posture {
-        joints: None,
-        reference: None,
-    });
-    comfort.level = 10;
-    comfort.weight = 0.05;
-    comfort
-}
-
-/// Every name of `joints` on the other side.
-fn mirror_names(joints: &[String]) -> Vec<String> {
-    joints.iter().map(|joint| mirror_name(joint)).collect()
-}
-
-/// A task in words, as the panels and messages name it.
-pub fn describe_task(task: &TaskSpec) -> String {
-    match &task.kind {
-        TaskKindSpec::Position { joint, axes, .. } => {
-            let axes = axes.to_letters();
-            if axes == "xyz" {
-                format!("{} position", readable_name(joint))
-            } else {
-                format!("{} position ({axes})", readable_name(joint))
-            }
-        }
-        TaskKindSpec::Orientation { joint, .. } => format!("{} orientation", readable_name(joint)),
-        TaskKindSpec::Gaze { joint, .. } => format!("{} gaze", readable_name(joint)),
-        TaskKindSpec::Direction { joint, .. } => format!("{} direction", readable_name(joint)),
-        TaskKindSpec::Balance { support: None, .. } => {
-            "balance (centre of mass over the pinned feet)".to_owned()
-        }
-        TaskKindSpec::Balance {
-            support: Some(joints),
-            ..
-        } => format!(
-            "balance (centre of mass over {})",
-            joints
-                .iter()
-                .map(|joint| readable_name(joint))
-                .collect::<Vec<_>>()
-                .join(", ")
-        ),
-        TaskKindSpec::Com { axes, .. } => {
-            if axes.to_letters() == "xz" {
-                "balance (centre of mass over the floor)".to_owned()
-            } else {
-                format!("centre of mass ({})", axes.to_letters())
-            }
-        }
-        TaskKindSpec::Posture { .. } => "comfort (toward the rest posture)".to_owned(),
-        TaskKindSpec::Limb { limb, joints, .. } => match (limb, joints) {
-            (Some(limb), _) => format!("{} reach", limb.name().replace('_', " ")),
-            (None, Some(joints)) => format!("{} limb", readable_name(&joints[2])),
-            (None, None) => "limb".to_owned(),
-        },
     }
 }
 
@@ -906,13 +727,13 @@ mod tests {
             assert!(
                 status.problem.is_none(),
                 "{}: {:?}",
-                describe_task(task),
+                task.description(),
                 status.problem
             );
             assert!(
                 status.gave_way.is_none(),
                 "{}: {:?}",
-                describe_task(task),
+                task.description(),
                 status.gave_way
             );
         }
@@ -1047,7 +868,7 @@ mod tests {
     ) -> String {
         let start = session.joint_position(joint).unwrap();
         let mut tasks = session.tasks().to_vec();
-        let mut task = pin_task(joint, (start + offset).to_array());
+        let mut task = TaskSpec::pin(joint, (start + offset).to_array());
         task.level = level;
         tasks.push(task);
         session.set_tasks(tasks);
@@ -1108,7 +929,7 @@ mod tests {
             swivel: Some(left),
             orientation: None,
         });
-        let mirrored_task = mirror_task(&task);
+        let mirrored_task = &task.mirrored();
         let mirrored = session.mirrored_posture();
         session.set_posture(mirrored);
         let (right, _) = session.limb_swivel(LimbName::RightArm).unwrap();
@@ -1128,7 +949,7 @@ mod tests {
             (swivel.unwrap() - right).abs() < 0.02,
             "{swivel:?} vs {right}"
         );
-        assert_eq!(mirror_task(&mirror_task(&task)), task);
+        assert_eq!(task.mirrored().mirrored(), task);
     }
 
     #[test]
@@ -1168,17 +989,9 @@ mod tests {
         other.load_document(&document).unwrap();
         assert_eq!(other.tasks(), session.tasks());
         let mut broken = document.clone();
-        broken.tasks.push(pin_task("l_wirst", [0.0; 3]));
+        broken.tasks.push(TaskSpec::pin("l_wirst", [0.0; 3]));
         // An unknown joint is reported on the task, not a crash.
         other.load_document(&broken).unwrap();
         assert!(other.statuses().last().unwrap().problem.is_some());
-    }
-
-    #[test]
-    fn joints_are_described_in_words() {
-        assert_eq!(readable_name("l_talocrural"), "left ankle");
-        assert_eq!(readable_name("r_elbow"), "right elbow");
-        assert_eq!(mirror_name("l_hip"), "r_hip");
-        assert_eq!(mirror_name("vl5"), "vl5");
     }
 }

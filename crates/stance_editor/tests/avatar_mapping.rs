@@ -10,7 +10,7 @@ use egui_kittest::Harness;
 use egui_kittest::kittest::{NodeT, Queryable};
 use glam::DVec3;
 use stance_asset::{LoadOptions, export_glb, load_avatar, make_default_avatar};
-use stance_editor::posing::pin_task;
+use stance_document::TaskSpec;
 use stance_editor::{Command, MemoryHost, NoHostHooks, StanceApp};
 use stance_hanim::{LevelOfArticulation, SkeletonOptions};
 use stance_ik::Frames;
@@ -152,7 +152,7 @@ fn swapping_the_elbows_in_the_mapping_window_rebuilds_the_skeleton() {
         .unwrap();
     document
         .tasks
-        .push(pin_task("l_sternoclavicular", collarbone.to_array()));
+        .push(TaskSpec::pin("l_sternoclavicular", collarbone.to_array()));
     harness.state_mut().apply(Command::OpenFile {
         name: "pose.json".to_owned(),
         bytes: document.to_json(false).as_bytes().to_vec(),

@@ -6,7 +6,7 @@
 use glam::{DVec3, Vec2};
 use stance_document::{TaskKindSpec, TaskSpec};
 use stance_editor::avatar::LoadedAvatar;
-use stance_editor::posing::{PosingSession, pin_task};
+use stance_editor::posing::PosingSession;
 use stance_hanim::LevelOfArticulation;
 use stance_render::{
     BACKGROUND_SRGB, OrbitCamera, Pixels, RenderTarget, Scene, SceneRenderer, read_pixels,
@@ -111,7 +111,7 @@ fn the_shared_avatar_maps_renders_skinned_and_reaches_with_its_hand() {
     let arm_length = (wrist_before - shoulder).length();
     let goal = shoulder + DVec3::new(-0.2, 0.3, 0.9).normalize() * arm_length * 0.85;
     let mut tasks = session.tasks().to_vec();
-    let mut reach = pin_task("r_radiocarpal", goal.to_array());
+    let mut reach = TaskSpec::pin("r_radiocarpal", goal.to_array());
     reach.level = 3;
     tasks.push(reach);
     tasks.retain(|task: &TaskSpec| !matches!(task.kind, TaskKindSpec::Limb { .. }));

@@ -6,8 +6,7 @@
 use std::f64::consts::FRAC_PI_4;
 
 use glam::DVec3;
-use stance_document::{Document, TaskKindSpec};
-use stance_editor::posing::pin_task;
+use stance_document::{Document, TaskKindSpec, TaskSpec};
 use stance_editor::{Command, EditorModel, Gesture, MemoryHost};
 use stance_hanim::{LevelOfArticulation, LimbName};
 
@@ -137,7 +136,7 @@ fn a_goal_drag_moves_the_goals_it_took_and_is_one_undo_step() {
     let mut editor = Clocked::new();
     let hand = editor.position("r_radiocarpal");
     let mut tasks = editor.model.session().tasks().to_vec();
-    let mut reach = pin_task("r_radiocarpal", hand.to_array());
+    let mut reach = TaskSpec::pin("r_radiocarpal", hand.to_array());
     reach.level = 3;
     tasks.push(reach);
     let index = tasks.len() - 1;

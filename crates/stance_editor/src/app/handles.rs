@@ -199,7 +199,8 @@ impl Handles<'_> {
         (0..=RING_SEGMENTS)
             .filter_map(|segment| {
                 let turn = segment as f64 / RING_SEGMENTS as f64 * std::f64::consts::TAU;
-                self.lens.screen_point(handle.point_at(handle.swivel + turn))
+                self.lens
+                    .screen_point(handle.point_at(handle.swivel + turn))
             })
             .collect()
     }

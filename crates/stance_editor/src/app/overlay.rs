@@ -165,9 +165,10 @@ impl Overlay<'_> {
             }
             painter.add(egui::Shape::line(points, Stroke::new(1.5, COM_COLOR)));
         }
-        if let (Some(com_px), Some(floor_px)) =
-            (self.lens.screen_point(com), self.lens.screen_point(floor_com))
-        {
+        if let (Some(com_px), Some(floor_px)) = (
+            self.lens.screen_point(com),
+            self.lens.screen_point(floor_com),
+        ) {
             painter.line_segment(
                 [com_px, floor_px],
                 Stroke::new(1.0, COM_COLOR.gamma_multiply(0.6)),

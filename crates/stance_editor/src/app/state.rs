@@ -8,7 +8,6 @@ use serde_json::{Map, Value, json};
 
 use super::viewport_panel::ViewportPanel;
 use crate::model::EditorModel;
-use crate::posing::describe_task;
 
 /// What the page's state is built from.
 pub(super) struct PageState<'a> {
@@ -107,7 +106,7 @@ impl PageState<'_> {
             .zip(session.statuses())
             .map(|(task, status)| {
                 json!({
-                    "description": describe_task(task),
+                    "description": task.description(),
                     "level": task.level,
                     "active": task.active,
                     "residual": status.residual,

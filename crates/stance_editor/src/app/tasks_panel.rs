@@ -11,7 +11,7 @@ use stance_ik::Axes;
 use super::ButtonRects;
 use crate::history::EditKind;
 use crate::model::{Command, EditorModel, NewTask};
-use crate::posing::{MET_TOLERANCE, TaskStatus, describe_task};
+use crate::posing::{MET_TOLERANCE, TaskStatus};
 
 /// Colours of task states.
 const MET_COLOR: Color32 = Color32::from_rgb(90, 200, 120);
@@ -381,7 +381,7 @@ fn task_editor(
         None => String::new(),
     };
     let header =
-        RichText::new(format!("{}  {residual_text} {mark}", describe_task(task)).trim_end())
+        RichText::new(format!("{}  {residual_text} {mark}", task.description()).trim_end())
             .color(color);
     egui::CollapsingHeader::new(header)
         .id_salt(("task", index))

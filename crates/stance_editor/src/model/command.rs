@@ -2,12 +2,13 @@
 //! model says back ([`Notice`]).
 
 use glam::DVec3;
-use stance_document::{Document, LimbName, TaskSpec};
+use stance_document::{Document, LimbName, TaskKindSpec, TaskSpec};
 use stance_hanim::{LevelOfArticulation, Mapping};
 
 use super::mapping::Correction;
 use super::tasks::NewTask;
 use crate::history::EditKind;
+use crate::host::HostMessage;
 use crate::sensors::SensorCommand;
 
 /// A message for the user, shown above the viewport.
@@ -162,6 +163,8 @@ pub enum Command {
     PickRecording,
     /// A command for the sensors.
     Sensors(SensorCommand),
+    /// The host failed to do what the editor asked (reading a file...).
+    HostFailed(String),
     /// A message for the user.
     Inform(String),
     /// A problem for the user.
@@ -176,4 +179,113 @@ pub enum SessionChange {
     NewBody,
     /// The same body rebuilt (LOA switch, mapping correction): the history stays.
     Rebuilt,
+}
+
+impl Gesture {
+    /// A ring gesture follows the pointer to `screen_angle`: the turn accumulates across the
+    /// ±π seam. Returns the DOF and its new value; `None` for another gesture.
+    pub fn turn_ring(&mut self, screen_angle: f32) -> Option<(usize, f64)> {
+        let Gesture::Ring {
+            dof,
+            last_angle,
+            accumulated,
+            start_value,
+            sign,
+            ..
+        } = self
+        else {
+            return None;
+        };
+        let mut delta = screen_angle - *last_angle;
+        if delta > std::f32::consts::PI {
+            delta -= std::f32::consts::TAU;
+        } else if delta < -std::f32::consts::PI {
+            delta += std::f32::consts::TAU;
+        }
+        *accumulated += f64::from(delta);
+        *last_angle = screen_angle;
+        // Screen y points down: a counter-clockwise drag has a negative screen angle.
+        Some((*dof, *start_value - *sign * *accumulated))
+    }
+
+    /// The swivel angle a swivel gesture reaches with the pointer at `point_world` (on the
+    /// circle's plane): the start angle plus the turn from where the drag started,
+    /// right-handed about the axis. `None` for another gesture or a point on the axis.
+    pub fn swivel_at(&self, point_world: DVec3) -> Option<(LimbName, f64)> {
+        let Gesture::Swivel {
+            limb,
+            start_swivel,
+            start_direction,
+            centre_world,
+            axis_world,
+        } = self
+        else {
+            return None;
+        };
+        let direction = point_world - *centre_world;
+        let direction = direction - *axis_world * direction.dot(*axis_world);
+        if direction.length() < 1e-9 {
+            return None;
+        }
+        let turn = axis_world
+            .dot(start_direction.cross(direction))
+            .atan2(start_direction.dot(direction));
+        Some((*limb, *start_swivel + turn))
+    }
+}
+
+/// `tasks` with the goals of `moved` at `goal_world`; a balance goal slides on the floor
+/// under the pointer (`floor_world`).
+pub(super) fn goals_moved(
+    tasks: &[TaskSpec],
+    moved: &[usize],
+    goal_world: DVec3,
+    floor_world: Option<DVec3>,
+) -> Vec<TaskSpec> {
+    let mut tasks = tasks.to_vec();
+    for &task in moved {
+        let Some(spec) = tasks.get_mut(task) else {
+            continue;
+        };
+        match &mut spec.kind {
+            TaskKindSpec::Position { target, .. }
+            | TaskKindSpec::Gaze { target, .. }
+            | TaskKindSpec::Limb { target, .. } => *target = goal_world.to_array(),
+            TaskKindSpec::Com { target, .. } => {
+                if let Some(on_floor) = floor_world {
+                    target[0] = on_floor.x;
+                    target[2] = on_floor.z;
+                }
+            }
+            _ => {}
+        }
+    }
+    tasks
+}
+
+impl From<HostMessage> for Command {
+    /// What the host sends, as the command it asks for.
+    fn from(message: HostMessage) -> Self {
+        match message {
+            HostMessage::OpenLink(fragment) => Command::OpenLink(fragment),
+            HostMessage::OpenFile { name, bytes } => Command::OpenFile { name, bytes },
+            HostMessage::Failed(reason) => Command::HostFailed(reason),
+            HostMessage::SensorConnected { device } => {
+                Command::Sensors(SensorCommand::Connected { device })
+            }
+            HostMessage::SensorBytes { bytes, arrived } => {
+                Command::Sensors(SensorCommand::Bytes { bytes, arrived })
+            }
+            HostMessage::SensorReport {
+                report_id,
+                data,
+                arrived,
+            } => Command::Sensors(SensorCommand::Report {
+                report_id,
+                data,
+                arrived,
+            }),
+            HostMessage::SensorLost { reason } => Command::Sensors(SensorCommand::Lost { reason }),
+        }
+    }
 }

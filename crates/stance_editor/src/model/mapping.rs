@@ -5,6 +5,7 @@
 use std::collections::BTreeMap;
 
 use glam::{DQuat, DVec3};
+use stance_document::TaskSpec;
 use stance_hanim::{HumanoidSkeleton, LevelOfArticulation, Mapping, MappingError};
 use stance_ik::{Posture, Skeleton};
 
@@ -204,6 +205,44 @@ pub fn carry_posture(old: &PosingSession, skeleton: &Skeleton) -> Option<Posture
         }
     }
     Posture::from_rotations(skeleton, translation, &locals).ok()
+}
+
+/// A session on `humanoid` carrying the current one over: the posture by joint name
+/// (each joint keeps its world rotation), the tasks that still fit. Returns the session
+/// and the dropped tasks, described.
+pub fn rebuilt_session(
+    old: &PosingSession,
+    humanoid: HumanoidSkeleton,
+) -> Result<(PosingSession, Vec<String>), String> {
+    let mut session = PosingSession::with_humanoid(humanoid).map_err(|error| error.to_string())?;
+    let (kept, dropped): (Vec<TaskSpec>, Vec<TaskSpec>) = old
+        .tasks()
+        .iter()
+        .cloned()
+        .partition(|task| task.to_solver_tasks(session.skeleton(), &[]).is_ok());
+    if let Some(posture) = carry_posture(old, session.skeleton()) {
+        session.set_posture(posture);
+    }
+    session.set_tasks(kept);
+    Ok((session, dropped.iter().map(TaskSpec::description).collect()))
+}
+
+/// What a rebuilt skeleton kept and dropped, for the notice.
+pub fn rebuilt_summary(session: &PosingSession, dropped: &[String]) -> String {
+    let skeleton = session.skeleton();
+    let mut text = format!(
+        "the skeleton was rebuilt ({} joints, {} DOF); the posture and {} task(s) carried over.",
+        skeleton.joint_count(),
+        skeleton.dof_count(),
+        session.tasks().len()
+    );
+    if !dropped.is_empty() {
+        text.push_str(&format!(
+            " Dropped, their joints are gone: {}.",
+            dropped.join(", ")
+        ));
+    }
+    text
 }
 
 #[cfg(test)]

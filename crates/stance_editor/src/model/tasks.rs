@@ -6,7 +6,7 @@ use glam::DVec3;
 use stance_document::{DEFAULT_BALANCE_MARGIN, LimbName, TaskKindSpec, TaskSpec};
 use stance_ik::Axes;
 
-use crate::posing::{PosingSession, comfort_task, joint_rotation};
+use crate::posing::{PosingSession, joint_rotation};
 
 /// Distance of a new gaze target in front of the eyes (m).
 const GAZE_DISTANCE_M: f64 = 1.5;
@@ -128,7 +128,7 @@ pub fn make_task(session: &PosingSession, what: NewTask) -> Result<TaskSpec, Str
             };
             (kind, 2)
         }
-        NewTask::Comfort => return Ok(comfort_task()),
+        NewTask::Comfort => return Ok(TaskSpec::comfort()),
     };
     let mut task = TaskSpec::new(kind);
     task.level = level;

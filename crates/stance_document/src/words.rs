@@ -1,0 +1,184 @@
+//! The document's words for people and its mirror image: a task described as the panels
+//! name it, a task or posture mirrored left/right (H-Anim sides swap, the sagittal plane
+//! reflects), and the tasks every editor makes (a pin, the comfort).
+
+use stance_hanim::{mirror_name, readable_name};
+use stance_ik::Axes;
+
+use crate::{PostureValues, TaskKindSpec, TaskSpec};
+
+/// A point or direction reflected in the sagittal plane (x -> -x).
+fn reflect(v: [f64; 3]) -> [f64; 3] {
+    // `0.0 - x` keeps a zero positive (no "-0" in the saved document).
+    [0.0 - v[0], v[1], v[2]]
+}
+
+/// A rotation `[qx, qy, qz, qw]` reflected in the sagittal plane (`M R M`, M = diag(-1, 1, 1)).
+fn reflect_rotation(q: [f64; 4]) -> [f64; 4] {
+    [q[0], 0.0 - q[1], 0.0 - q[2], q[3]]
+}
+
+/// Every name of `joints` on the other side.
+fn mirror_names(joints: &[String]) -> Vec<String> {
+    joints.iter().map(|joint| mirror_name(joint)).collect()
+}
+
+impl TaskSpec {
+    /// A level-1 position task holding `joint` at `position`.
+    pub fn pin(joint: &str, position: [f64; 3]) -> TaskSpec {
+        TaskSpec::new(TaskKindSpec::Position {
+            joint: joint.to_owned(),
+            point: [0.0; 3],
+            axes: Axes::new(true, true, true),
+            target: position,
+        })
+    }
+
+    /// Comfort: a light attraction of every joint toward the rest posture, at level 10.
+    pub fn comfort() -> TaskSpec {
+        let mut comfort = TaskSpec::new(TaskKindSpec::Posture {
+            joints: None,
+            reference: None,
+        });
+        comfort.level = 10;
+        comfort.weight = 0.05;
+        comfort
+    }
+
+    /// The task mirrored left/right: joints swap sides, goals and local points are reflected
+    /// in the sagittal plane (x -> -x), orientations accordingly; level, weight and active flag
+    /// stay.
+    pub fn mirrored(&self) -> TaskSpec {
+        let mut mirrored = self.clone();
+        mirrored.kind = match &self.kind {
+            TaskKindSpec::Position {
+                joint,
+                point,
+                axes,
+                target,
+            } => TaskKindSpec::Position {
+                joint: mirror_name(joint),
+                point: reflect(*point),
+                axes: *axes,
+                target: reflect(*target),
+            },
+            TaskKindSpec::Orientation { joint, target } => TaskKindSpec::Orientation {
+                joint: mirror_name(joint),
+                target: reflect_rotation(*target),
+            },
+            TaskKindSpec::Gaze {
+                joint,
+                axis,
+                point,
+                target,
+            } => TaskKindSpec::Gaze {
+                joint: mirror_name(joint),
+                axis: reflect(*axis),
+                point: reflect(*point),
+                target: reflect(*target),
+            },
+            TaskKindSpec::Direction {
+                joint,
+                axis,
+                target,
+            } => TaskKindSpec::Direction {
+                joint: mirror_name(joint),
+                axis: reflect(*axis),
+                target: reflect(*target),
+            },
+            TaskKindSpec::Balance { support, margin } => TaskKindSpec::Balance {
+                support: support.as_deref().map(mirror_names),
+                margin: *margin,
+            },
+            TaskKindSpec::Com { axes, target } => TaskKindSpec::Com {
+                axes: *axes,
+                target: reflect(*target),
+            },
+            TaskKindSpec::Posture { joints, reference } => TaskKindSpec::Posture {
+                joints: joints.as_deref().map(mirror_names),
+                reference: reference.as_ref().map(PostureValues::mirrored),
+            },
+            TaskKindSpec::Limb {
+                limb,
+                joints,
+                target,
+                swivel,
+                orientation,
+            } => TaskKindSpec::Limb {
+                limb: limb.map(|limb| limb.mirrored()),
+                joints: joints
+                    .as_ref()
+                    .map(|joints| joints.clone().map(|joint| mirror_name(&joint))),
+                target: reflect(*target),
+                swivel: swivel.map(|angle| -angle),
+                orientation: orientation.map(reflect_rotation),
+            },
+        };
+        mirrored
+    }
+
+    /// The task in words, as the panels and messages name it.
+    pub fn description(&self) -> String {
+        match &self.kind {
+            TaskKindSpec::Position { joint, axes, .. } => {
+                let axes = axes.to_letters();
+                if axes == "xyz" {
+                    format!("{} position", readable_name(joint))
+                } else {
+                    format!("{} position ({axes})", readable_name(joint))
+                }
+            }
+            TaskKindSpec::Orientation { joint, .. } => {
+                format!("{} orientation", readable_name(joint))
+            }
+            TaskKindSpec::Gaze { joint, .. } => format!("{} gaze", readable_name(joint)),
+            TaskKindSpec::Direction { joint, .. } => format!("{} direction", readable_name(joint)),
+            TaskKindSpec::Balance { support: None, .. } => {
+                "balance (centre of mass over the pinned feet)".to_owned()
+            }
+            TaskKindSpec::Balance {
+                support: Some(joints),
+                ..
+            } => format!(
+                "balance (centre of mass over {})",
+                joints
+                    .iter()
+                    .map(|joint| readable_name(joint))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+            TaskKindSpec::Com { axes, .. } => {
+                if axes.to_letters() == "xz" {
+                    "balance (centre of mass over the floor)".to_owned()
+                } else {
+                    format!("centre of mass ({})", axes.to_letters())
+                }
+            }
+            TaskKindSpec::Posture { .. } => "comfort (toward the rest posture)".to_owned(),
+            TaskKindSpec::Limb { limb, joints, .. } => match (limb, joints) {
+                (Some(limb), _) => format!("{} reach", limb.name().replace('_', " ")),
+                (None, Some(joints)) => format!("{} limb", readable_name(&joints[2])),
+                (None, None) => "limb".to_owned(),
+            },
+        }
+    }
+}
+
+impl PostureValues {
+    /// The values mirrored left/right: joints swap sides; `tx`, `ry` and `rz` change sign
+    /// (reflection in the sagittal plane).
+    pub fn mirrored(&self) -> PostureValues {
+        let mut mirrored = PostureValues::new();
+        for (joint, dofs) in &self.joints {
+            let name = mirror_name(joint);
+            for (dof, value) in dofs.iter() {
+                let sign = match dof.name() {
+                    "tx" | "ry" | "rz" => -1.0,
+                    _ => 1.0,
+                };
+                mirrored.set(&name, dof, sign * value);
+            }
+        }
+        mirrored
+    }
+}
