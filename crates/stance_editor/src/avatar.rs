@@ -2,7 +2,7 @@
 //! GPU model (vertices, materials, textures) with the palettes that pose it every frame.
 
 use glam::{Mat4, Vec3};
-use stance_asset::{AlphaMode, Avatar, LoadOptions, Wrap, export_glb, load_avatar};
+use stance_asset::{AlphaMode, Avatar, LoadOptions, Primitive, Wrap, export_glb, load_avatar};
 use stance_hanim::{
     HumanoidSkeleton, LevelOfArticulation, Mapping, SkeletonOptions, build_skeleton,
 };
@@ -217,58 +217,9 @@ fn skinned_model(avatar: &Avatar) -> (SkinnedModel, Vec<PaletteSource>, Vec<Stri
         };
         let skinned = matches!(source, PaletteSource::Skin(_));
         for primitive in &mesh.primitives {
-            let count = primitive.positions.len();
-            let vertices = (0..count)
-                .map(|i| {
-                    let normal = primitive
-                        .normals
-                        .get(i)
-                        .copied()
-                        .filter(|n| Vec3::from_array(*n).length_squared() > 1e-12)
-                        .unwrap_or([0.0, 1.0, 0.0]);
-                    let (joints, weights) = if skinned {
-                        let joints = primitive.joints.get(i).copied().unwrap_or([0; 4]);
-                        let weights = primitive
-                            .weights
-                            .get(i)
-                            .copied()
-                            .unwrap_or([1.0, 0.0, 0.0, 0.0]);
-                        let sum: f32 = weights.iter().filter(|w| w.is_finite()).sum();
-                        let weights = if sum > 1e-6 {
-                            weights.map(|w| if w.is_finite() { w / sum } else { 0.0 })
-                        } else {
-                            [1.0, 0.0, 0.0, 0.0]
-                        };
-                        (joints.map(u32::from), weights)
-                    } else {
-                        ([0; 4], [1.0, 0.0, 0.0, 0.0])
-                    };
-                    SkinnedVertex {
-                        position: primitive.positions.get(i).copied().unwrap_or_default(),
-                        normal,
-                        uv: primitive.uvs.get(i).copied().unwrap_or_default(),
-                        joints,
-                        weights,
-                    }
-                })
-                .collect();
-            let indices = if primitive.indices.is_empty() {
-                (0..u32::try_from(count - count % 3).unwrap_or(0)).collect()
-            } else {
-                primitive
-                    .indices
-                    .iter()
-                    .copied()
-                    .filter(|&index| (index as usize) < count)
-                    .collect::<Vec<u32>>()
-            };
-            let indices_len = indices.len() - indices.len() % 3;
-            model.primitives.push(SkinnedPrimitive {
-                vertices,
-                indices: indices.into_iter().take(indices_len).collect(),
-                material: primitive.material.unwrap_or(usize::MAX),
-                palette,
-            });
+            model
+                .primitives
+                .push(skinned_primitive(primitive, palette, skinned));
         }
     }
     model.materials = avatar
@@ -292,6 +243,63 @@ fn skinned_model(avatar: &Avatar) -> (SkinnedModel, Vec<PaletteSource>, Vec<Stri
         })
         .collect();
     (model, sources, warnings)
+}
+
+/// One primitive for the GPU: unit normals, weights summing to one (a rigid mesh rides on
+/// palette entry 0), indices within the vertices and whole triangles only.
+fn skinned_primitive(primitive: &Primitive, palette: usize, skinned: bool) -> SkinnedPrimitive {
+    let count = primitive.positions.len();
+    let vertices = (0..count)
+        .map(|i| {
+            let normal = primitive
+                .normals
+                .get(i)
+                .copied()
+                .filter(|n| Vec3::from_array(*n).length_squared() > 1e-12)
+                .unwrap_or([0.0, 1.0, 0.0]);
+            let (joints, weights) = if skinned {
+                let joints = primitive.joints.get(i).copied().unwrap_or([0; 4]);
+                let weights = primitive
+                    .weights
+                    .get(i)
+                    .copied()
+                    .unwrap_or([1.0, 0.0, 0.0, 0.0]);
+                let sum: f32 = weights.iter().filter(|w| w.is_finite()).sum();
+                let weights = if sum > 1e-6 {
+                    weights.map(|w| if w.is_finite() { w / sum } else { 0.0 })
+                } else {
+                    [1.0, 0.0, 0.0, 0.0]
+                };
+                (joints.map(u32::from), weights)
+            } else {
+                ([0; 4], [1.0, 0.0, 0.0, 0.0])
+            };
+            SkinnedVertex {
+                position: primitive.positions.get(i).copied().unwrap_or_default(),
+                normal,
+                uv: primitive.uvs.get(i).copied().unwrap_or_default(),
+                joints,
+                weights,
+            }
+        })
+        .collect();
+    let indices = if primitive.indices.is_empty() {
+        (0..u32::try_from(count - count % 3).unwrap_or(0)).collect()
+    } else {
+        primitive
+            .indices
+            .iter()
+            .copied()
+            .filter(|&index| (index as usize) < count)
+            .collect::<Vec<u32>>()
+    };
+    let indices_len = indices.len() - indices.len() % 3;
+    SkinnedPrimitive {
+        vertices,
+        indices: indices.into_iter().take(indices_len).collect(),
+        material: primitive.material.unwrap_or(usize::MAX),
+        palette,
+    }
 }
 
 /// `Avatars/Jane.vrm?x=1` -> `Jane-posed.glb`.

@@ -264,6 +264,19 @@ impl SensorHub {
                     "Sensors disconnected; the posture stays as it is.".to_owned(),
                 )
             }
+            other => self.apply_rig(other, session, hooks, now_secs),
+        }
+    }
+
+    /// The commands about the rig (calibration, assignments), replay and recording.
+    fn apply_rig(
+        &mut self,
+        command: SensorCommand,
+        session: &mut PosingSession,
+        hooks: &dyn HostHooks,
+        now_secs: f64,
+    ) -> SensorOutcome {
+        match command {
             SensorCommand::Calibrate => {
                 match self.calibrate(session.skeleton(), session.frames()) {
                     Ok(()) => {
@@ -319,6 +332,13 @@ impl SensorHub {
                 session.hold_joints(&[]);
                 SensorOutcome::Quiet
             }
+            other => self.apply_stream(other, now_secs),
+        }
+    }
+
+    /// The commands about the device's byte stream.
+    fn apply_stream(&mut self, command: SensorCommand, now_secs: f64) -> SensorOutcome {
+        match command {
             SensorCommand::Connected { device } => {
                 let text = format!("Sensors: {device} connected.");
                 self.connected(device);
@@ -342,6 +362,8 @@ impl SensorHub {
                 self.lost(reason);
                 SensorOutcome::Warn(text)
             }
+            // Device and rig commands are carried out above.
+            _ => SensorOutcome::Quiet,
         }
     }
 

@@ -28,11 +28,18 @@ pub(super) struct Overlay<'a> {
 impl Overlay<'_> {
     pub(super) fn draw(&self, painter: &egui::Painter) {
         let painter = painter.with_clip_rect(self.lens.rect);
-        let skeleton = self.model.session.skeleton();
-        let frames = self.model.session.frames();
+        if self.show_trace {
+            self.draw_trace(&painter);
+        }
+        if let Some(polygon) = self.draw_goals(&painter) {
+            self.draw_balance(&painter, &polygon);
+        }
+        self.draw_pull(&painter);
+    }
 
-        // Trace of the pulled point.
-        if self.show_trace && self.model.trace.len() > 1 {
+    /// The trace of the pulled point (the paper's figure 9).
+    fn draw_trace(&self, painter: &egui::Painter) {
+        if self.model.trace.len() > 1 {
             let points: Vec<Pos2> = self
                 .model
                 .trace
@@ -41,8 +48,13 @@ impl Overlay<'_> {
                 .collect();
             painter.add(egui::Shape::line(points, Stroke::new(2.0, TRACE_COLOR)));
         }
+    }
 
-        // Task goals.
+    /// Each task's goal, coloured by its status. Returns the balance's support polygon when a
+    /// balance or centre-of-mass task is active (empty for a centre-of-mass task).
+    fn draw_goals(&self, painter: &egui::Painter) -> Option<Vec<DVec3>> {
+        let skeleton = self.model.session.skeleton();
+        let frames = self.model.session.frames();
         let mut has_balance = false;
         let mut polygon = Vec::new();
         for (task, status) in self
@@ -71,7 +83,7 @@ impl Overlay<'_> {
                     };
                     let effector = frames.point(index, DVec3::from_array(*point));
                     let goal = DVec3::from_array(*target);
-                    self.goal_marker(&painter, effector, goal, color, task.level == 1);
+                    self.goal_marker(painter, effector, goal, color, task.level == 1);
                 }
                 TaskKindSpec::Limb { target, limb, .. } => {
                     let end = limb.map(|limb| limb.joints()[2]);
@@ -79,7 +91,7 @@ impl Overlay<'_> {
                         end.and_then(|end| self.model.session.joint_position(end))
                     {
                         self.goal_marker(
-                            &painter,
+                            painter,
                             effector,
                             DVec3::from_array(*target),
                             color,
@@ -104,11 +116,11 @@ impl Overlay<'_> {
             }
         }
 
-        if has_balance {
-            self.draw_balance(&painter, &polygon);
-        }
+        has_balance.then_some(polygon)
+    }
 
-        // The pulled point and where the cursor wants it.
+    /// The pulled point and where the cursor wants it.
+    fn draw_pull(&self, painter: &egui::Painter) {
         if let (Some(grab), Some(point)) = (
             self.model.session.grab(),
             self.model.session.grabbed_point_world(),

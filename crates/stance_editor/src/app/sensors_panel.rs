@@ -56,6 +56,26 @@ impl SensorsWindow<'_> {
             self.command(SensorCommand::SetSettings(Box::new(settings)));
         }
 
+        self.connection_row(ui);
+        self.link_line(ui);
+
+        self.calibration_section(ui);
+        ui.separator();
+        ui.label(RichText::new("Sensors and segments").strong());
+        ui.horizontal_wrapped(|ui| {
+            for preset in AssignmentPreset::ALL {
+                let button = ui.small_button(preset.label());
+                self.buttons.push((preset_button_name(preset), button.rect));
+                if button.clicked() {
+                    self.command(SensorCommand::ApplyPreset(preset));
+                }
+            }
+        });
+        self.sensor_table(ui);
+    }
+
+    /// Connect or disconnect, replay or stop, record or save.
+    fn connection_row(&mut self, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
             if self.model.sensors.link().is_live() {
                 let button = ui.button("Disconnect");
@@ -102,8 +122,10 @@ impl SensorsWindow<'_> {
                 });
             }
         });
-        self.link_line(ui);
+    }
 
+    /// Calibrate, reset the heading, release the joints.
+    fn calibration_section(&mut self, ui: &mut egui::Ui) {
         ui.separator();
         ui.label(
             "Calibrate while the person holds the posture the avatar shows (rest pose or \
@@ -144,18 +166,6 @@ impl SensorsWindow<'_> {
                     .len()
             ));
         }
-        ui.separator();
-        ui.label(RichText::new("Sensors and segments").strong());
-        ui.horizontal_wrapped(|ui| {
-            for preset in AssignmentPreset::ALL {
-                let button = ui.small_button(preset.label());
-                self.buttons.push((preset_button_name(preset), button.rect));
-                if button.clicked() {
-                    self.command(SensorCommand::ApplyPreset(preset));
-                }
-            }
-        });
-        self.sensor_table(ui);
     }
 
     fn link_line(&self, ui: &mut egui::Ui) {
@@ -325,6 +335,24 @@ fn device_settings(ui: &mut egui::Ui, settings: &mut SensorSettings) {
             );
         });
     }
+    protocol_settings(ui, settings);
+    egui::ComboBox::from_label("Frame")
+        .selected_text(settings.frame.label())
+        .show_ui(ui, |ui| {
+            for frame in DeviceFrame::ALL {
+                ui.selectable_value(&mut settings.frame, frame, frame.label());
+            }
+        });
+    ui.add(
+        egui::DragValue::new(&mut settings.replay_rate_hz)
+            .range(1.0..=1000.0)
+            .prefix("replay at ")
+            .suffix(" Hz"),
+    );
+}
+
+/// The settings of the device's own protocol (Flock of Birds records, IMU line order).
+fn protocol_settings(ui: &mut egui::Ui, settings: &mut SensorSettings) {
     match settings.device {
         DeviceKind::FlockOfBirds => {
             egui::ComboBox::from_label("Record")
@@ -360,19 +388,6 @@ fn device_settings(ui: &mut egui::Ui, settings: &mut SensorSettings) {
         }
         _ => {}
     }
-    egui::ComboBox::from_label("Frame")
-        .selected_text(settings.frame.label())
-        .show_ui(ui, |ui| {
-            for frame in DeviceFrame::ALL {
-                ui.selectable_value(&mut settings.frame, frame, frame.label());
-            }
-        });
-    ui.add(
-        egui::DragValue::new(&mut settings.replay_rate_hz)
-            .range(1.0..=1000.0)
-            .prefix("replay at ")
-            .suffix(" Hz"),
-    );
 }
 
 fn fob_mode_label(mode: FobMode) -> &'static str {

@@ -489,6 +489,94 @@ impl FieldRows<'_> {
         }
     }
 
+    /// The head (or segment) that aims, its axis, its eye and the point it looks at.
+    fn gaze(
+        &mut self,
+        joint: &mut String,
+        axis: &mut [f64; 3],
+        point: &mut [f64; 3],
+        target: &mut [f64; 3],
+    ) {
+        self.joint(joint);
+        self.row(
+            "axis",
+            "the direction that aims, in the joint's frame",
+            "axis",
+            |ui, _| axis_editor(ui, axis),
+        );
+        self.row(
+            "eye",
+            "the point the aiming axis starts from, in the joint's frame (m)",
+            "point",
+            |ui, _| vector_editor(ui, point, Axes::XYZ),
+        );
+        self.row("look at", "", "target", |ui, _| {
+            vector_editor(ui, target, Axes::XYZ)
+        });
+    }
+
+    /// The segment, its axis and the world direction the axis turns to.
+    fn direction(&mut self, joint: &mut String, axis: &mut [f64; 3], target: &mut [f64; 3]) {
+        self.joint(joint);
+        self.row(
+            "axis",
+            "the segment's axis that is turned, in the joint's frame",
+            "axis",
+            |ui, _| axis_editor(ui, axis),
+        );
+        self.row(
+            "along",
+            "the world direction the axis turns to (y up, z the body's front); the turn about it stays free",
+            "target",
+            |ui, _| axis_editor(ui, target),
+        );
+    }
+
+    /// The limb, its goal and its swivel.
+    fn limb(
+        &mut self,
+        limb: &mut Option<LimbName>,
+        joints: &mut Option<[String; 3]>,
+        target: &mut [f64; 3],
+        swivel: &mut Option<f64>,
+    ) {
+        let index = self.index;
+        self.row("limb", "", "limb", |ui, _| {
+            limb_picker(ui, index, limb, joints)
+        });
+        self.row("goal", "", "target", |ui, _| {
+            vector_editor(ui, target, Axes::XYZ)
+        });
+        self.row(
+            "swivel",
+            "the elbow or knee around the shoulder-wrist (hip-ankle) axis; keep: as it is",
+            "swivel",
+            |ui, _| swivel_editor(ui, swivel),
+        );
+    }
+
+    /// The support (named joints, or the pinned parts) and the margin.
+    fn balance(&mut self, support: Option<&[String]>, margin: &mut f64) {
+        let support_text = match support {
+            None => "the parts pinned on the floor".to_owned(),
+            Some(joints) => joints
+                .iter()
+                .map(|joint| readable_name(joint))
+                .collect::<Vec<_>>()
+                .join(", "),
+        };
+        self.row("support", "", "support", |ui, _| {
+            ui.label(support_text);
+            false
+        });
+        self.row(
+            "margin",
+            "how far inside the support polygon's edges the centre of mass stays",
+            "margin",
+            |ui, _| margin_editor(ui, margin),
+        );
+    }
+
     fn axes_and_goal(&mut self, axes: &mut Axes, target: &mut [f64; 3]) {
         if let Some(changed) = axes_and_goal_rows(self.ui, self.index, axes, target) {
             self.edit = Some(changed);
@@ -531,44 +619,14 @@ fn kind_fields(
             axis,
             point,
             target,
-        } => {
-            rows.joint(joint);
-            rows.row(
-                "axis",
-                "the direction that aims, in the joint's frame",
-                "axis",
-                |ui, _| axis_editor(ui, axis),
-            );
-            rows.row(
-                "eye",
-                "the point the aiming axis starts from, in the joint's frame (m)",
-                "point",
-                |ui, _| vector_editor(ui, point, Axes::XYZ),
-            );
-            rows.row("look at", "", "target", |ui, _| {
-                vector_editor(ui, target, Axes::XYZ)
-            });
-        }
+        } => rows.gaze(joint, axis, point, target),
         TaskKindSpec::Limb {
             limb,
             joints,
             target,
             swivel,
             ..
-        } => {
-            rows.row("limb", "", "limb", |ui, _| {
-                limb_picker(ui, index, limb, joints)
-            });
-            rows.row("goal", "", "target", |ui, _| {
-                vector_editor(ui, target, Axes::XYZ)
-            });
-            rows.row(
-                "swivel",
-                "the elbow or knee around the shoulder-wrist (hip-ankle) axis; keep: as it is",
-                "swivel",
-                |ui, _| swivel_editor(ui, swivel),
-            );
-        }
+        } => rows.limb(limb, joints, target, swivel),
         TaskKindSpec::Orientation { joint, target } => {
             rows.joint(joint);
             rows.row(
@@ -582,41 +640,8 @@ fn kind_fields(
             joint,
             axis,
             target,
-        } => {
-            rows.joint(joint);
-            rows.row(
-                "axis",
-                "the segment's axis that is turned, in the joint's frame",
-                "axis",
-                |ui, _| axis_editor(ui, axis),
-            );
-            rows.row(
-                "along",
-                "the world direction the axis turns to (y up, z the body's front); the turn about it stays free",
-                "target",
-                |ui, _| axis_editor(ui, target),
-            );
-        }
-        TaskKindSpec::Balance { support, margin } => {
-            let support_text = match support {
-                None => "the parts pinned on the floor".to_owned(),
-                Some(joints) => joints
-                    .iter()
-                    .map(|joint| readable_name(joint))
-                    .collect::<Vec<_>>()
-                    .join(", "),
-            };
-            rows.row("support", "", "support", |ui, _| {
-                ui.label(support_text);
-                false
-            });
-            rows.row(
-                "margin",
-                "how far inside the support polygon's edges the centre of mass stays",
-                "margin",
-                |ui, _| margin_editor(ui, margin),
-            );
-        }
+        } => rows.direction(joint, axis, target),
+        TaskKindSpec::Balance { support, margin } => rows.balance(support.as_deref(), margin),
         TaskKindSpec::Posture { .. } => {}
     }
     rows.edit

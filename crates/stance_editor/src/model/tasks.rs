@@ -85,34 +85,8 @@ pub fn make_task(session: &PosingSession, what: NewTask) -> Result<TaskSpec, Str
             };
             (kind, next_level(session))
         }
-        NewTask::Gaze => {
-            let head = skeleton
-                .joint_index("skullbase")
-                .ok_or("this body has no head joint (skullbase) to aim")?;
-            let position = frames.joint_position.get(head).copied().unwrap_or_default();
-            let forward = joint_rotation(frames, head) * DVec3::Z;
-            let kind = TaskKindSpec::Gaze {
-                joint: "skullbase".to_owned(),
-                axis: [0.0, 0.0, 1.0],
-                point: [0.0; 3],
-                target: (position + forward * GAZE_DISTANCE_M).to_array(),
-            };
-            (kind, next_level(session))
-        }
-        NewTask::Limb(limb) => {
-            let end = limb.joints()[2];
-            let position = session
-                .joint_position(end)
-                .ok_or_else(|| format!("this body has no {end} joint"))?;
-            let kind = TaskKindSpec::Limb {
-                limb: Some(limb),
-                joints: None,
-                target: position.to_array(),
-                swivel: session.limb_swivel(limb).map(|(swivel, _)| swivel),
-                orientation: None,
-            };
-            (kind, next_level(session))
-        }
+        NewTask::Gaze => (gaze_ahead(session)?, next_level(session)),
+        NewTask::Limb(limb) => (limb_as_it_stands(session, limb)?, next_level(session)),
         NewTask::Balance => {
             let kind = TaskKindSpec::Balance {
                 support: None,
@@ -133,6 +107,38 @@ pub fn make_task(session: &PosingSession, what: NewTask) -> Result<TaskSpec, Str
     let mut task = TaskSpec::new(kind);
     task.level = level;
     Ok(task)
+}
+
+/// The head looks at a point straight ahead.
+fn gaze_ahead(session: &PosingSession) -> Result<TaskKindSpec, String> {
+    let frames = session.frames();
+    let head = session
+        .skeleton()
+        .joint_index("skullbase")
+        .ok_or("this body has no head joint (skullbase) to aim")?;
+    let position = frames.joint_position.get(head).copied().unwrap_or_default();
+    let forward = joint_rotation(frames, head) * DVec3::Z;
+    Ok(TaskKindSpec::Gaze {
+        joint: "skullbase".to_owned(),
+        axis: [0.0, 0.0, 1.0],
+        point: [0.0; 3],
+        target: (position + forward * GAZE_DISTANCE_M).to_array(),
+    })
+}
+
+/// The limb's end held where it is, at its present swivel angle.
+fn limb_as_it_stands(session: &PosingSession, limb: LimbName) -> Result<TaskKindSpec, String> {
+    let end = limb.joints()[2];
+    let position = session
+        .joint_position(end)
+        .ok_or_else(|| format!("this body has no {end} joint"))?;
+    Ok(TaskKindSpec::Limb {
+        limb: Some(limb),
+        joints: None,
+        target: position.to_array(),
+        swivel: session.limb_swivel(limb).map(|(swivel, _)| swivel),
+        orientation: None,
+    })
 }
 
 #[cfg(test)]
