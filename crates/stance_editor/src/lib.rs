@@ -2,6 +2,8 @@
 //! posture links, pose library) around the 3D viewport, and the eframe [`App`](eframe::App)
 //! that runs it natively and in the browser.
 
+#![warn(missing_docs)]
+
 mod app;
 pub mod avatar;
 pub mod history;
