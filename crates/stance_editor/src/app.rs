@@ -121,6 +121,7 @@ impl StanceApp {
         self.model.apply(command);
     }
 
+    /// The viewport's orbit camera.
     pub fn camera(&self) -> &OrbitCamera {
         &self.viewport.camera
     }

@@ -30,8 +30,9 @@ pub struct LoadedAvatar {
     palettes: Vec<PaletteSource>,
     /// What the user should know (unmapped joints, clamped skins...).
     pub warnings: Vec<String>,
-    /// Vertices and triangles, for the panels.
+    /// Vertices of all its meshes, for the panels.
     pub vertex_count: usize,
+    /// Triangles of all its meshes, for the panels.
     pub triangle_count: usize,
 }
 

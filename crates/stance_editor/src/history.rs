@@ -81,14 +81,17 @@ impl History {
         Some(next)
     }
 
+    /// Whether there is an edit to take back.
     pub fn can_undo(&self) -> bool {
         !self.undo.is_empty()
     }
 
+    /// Whether there is an edit taken back to do again.
     pub fn can_redo(&self) -> bool {
         !self.redo.is_empty()
     }
 
+    /// How many edits can be taken back (at most [`MAX_UNDO_STEPS`]).
     pub fn undo_steps(&self) -> usize {
         self.undo.len()
     }

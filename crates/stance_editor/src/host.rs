@@ -99,24 +99,40 @@ pub enum HostMessage {
     /// A posture link was opened (the address bar's fragment changed).
     OpenLink(String),
     /// The user picked or dropped a file.
-    OpenFile { name: String, bytes: Vec<u8> },
+    OpenFile {
+        /// The file's name, or the URL it was fetched from.
+        name: String,
+        /// The file's contents.
+        bytes: Vec<u8>,
+    },
     /// The host failed to do what the editor asked (reading a file...).
     Failed(String),
-    /// The sensor device is open (its name as the browser gives it).
-    SensorConnected { device: String },
-    /// Bytes from the serial sensor device; `arrived` is when the page received them.
+    /// The sensor device is open.
+    SensorConnected {
+        /// The device's name as the browser gives it.
+        device: String,
+    },
+    /// Bytes from the serial sensor device.
     SensorBytes {
+        /// The bytes as read, in order (a line may be split across messages).
         bytes: Vec<u8>,
+        /// When the page received them.
         arrived: web_time::Instant,
     },
     /// One input report from the HID sensor device.
     SensorReport {
+        /// The HID report ID (0 when the device uses none).
         report_id: u8,
+        /// The report's bytes, without the report ID.
         data: Vec<u8>,
+        /// When the page received it.
         arrived: web_time::Instant,
     },
     /// The sensor device went away or failed (unplugged, permission refused, read error).
-    SensorLost { reason: String },
+    SensorLost {
+        /// What happened, for the user.
+        reason: String,
+    },
 }
 
 /// Hooks that do nothing: the native shell.
@@ -131,20 +147,30 @@ impl HostHooks for NoHostHooks {
 /// what the editor stored and downloaded.
 #[derive(Debug, Default, Clone)]
 pub struct MemoryHost {
+    /// What the editor stored, downloaded and asked for.
     pub inner: Rc<RefCell<MemoryHostState>>,
 }
 
 /// The contents of a [`MemoryHost`].
 #[derive(Debug, Default)]
 pub struct MemoryHostState {
+    /// The durable text by key (what `localStorage` would hold).
     pub storage: BTreeMap<String, String>,
+    /// The text downloads offered, in order: file name and contents.
     pub downloads: Vec<(String, String)>,
+    /// The last posture link fragment put in the address bar.
     pub address_fragment: Option<String>,
+    /// How many times the file picker was opened.
     pub file_requests: usize,
+    /// The URLs asked for, in order.
     pub fetches: Vec<String>,
+    /// The backend reported after the first rendered frame; `None` before it.
     pub first_frame: Option<BackendSummary>,
+    /// The sensor connections asked for, in order.
     pub sensor_requests: Vec<SensorConnection>,
+    /// How many times the sensor device was closed.
     pub sensor_disconnects: usize,
+    /// The binary downloads offered, in order: file name and contents.
     pub binary_downloads: Vec<(String, Vec<u8>)>,
 }
 

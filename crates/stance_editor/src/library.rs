@@ -19,7 +19,9 @@ pub const MAX_LIBRARY_ENTRIES: usize = 500;
 /// One saved pose.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LibraryEntry {
+    /// The name the user gave it (trimmed, unique in the library).
     pub name: String,
+    /// The posture and tasks, and the avatar they are for.
     pub document: Document,
 }
 
@@ -68,6 +70,7 @@ impl PoseLibrary {
         json!({"version": 1, "entries": entries}).to_string()
     }
 
+    /// The saved poses, oldest first.
     pub fn entries(&self) -> &[LibraryEntry] {
         &self.entries
     }
@@ -94,6 +97,7 @@ impl PoseLibrary {
         Ok(())
     }
 
+    /// Takes out the pose at `index`; `None` when there is none.
     pub fn remove(&mut self, index: usize) -> Option<LibraryEntry> {
         (index < self.entries.len()).then(|| self.entries.remove(index))
     }

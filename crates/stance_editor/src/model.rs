@@ -121,46 +121,57 @@ impl EditorModel {
     // -----------------------------------------------------------------------------------------
     // What the UI reads
 
+    /// The posing session: the body, its posture, the tasks and the solver.
     pub fn session(&self) -> &PosingSession {
         &self.session
     }
 
+    /// The undo and redo history.
     pub fn history(&self) -> &History {
         &self.history
     }
 
+    /// The body's H-Anim level of articulation (how many joints it has).
     pub fn level_of_articulation(&self) -> LevelOfArticulation {
         self.session.level_of_articulation()
     }
 
+    /// The selected joint (skeleton index), if any.
     pub fn selected_joint(&self) -> Option<usize> {
         self.selected_joint
     }
 
+    /// The joint under the pointer (skeleton index), if any.
     pub fn hovered_joint(&self) -> Option<usize> {
         self.hovered_joint
     }
 
+    /// The gesture in progress, if any.
     pub fn gesture(&self) -> Option<&Gesture> {
         self.gesture.as_ref()
     }
 
+    /// Whether a grab-and-pull is in progress.
     pub fn is_pulling(&self) -> bool {
         matches!(self.gesture, Some(Gesture::Pull { .. }))
     }
 
+    /// The loaded avatar; `None` while the built-in mannequin is shown.
     pub fn avatar(&self) -> Option<&LoadedAvatar> {
         self.avatar.as_ref()
     }
 
+    /// The message shown above the viewport, if any.
     pub fn notice(&self) -> Option<&Notice> {
         self.notice.as_ref()
     }
 
+    /// The pose library: postures saved under names.
     pub fn library(&self) -> &PoseLibrary {
         &self.library
     }
 
+    /// The motion sensors: connection, calibration, replay.
     pub fn sensors(&self) -> &SensorHub {
         &self.sensors
     }

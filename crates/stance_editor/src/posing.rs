@@ -76,10 +76,13 @@ impl std::fmt::Debug for PosingSession {
 /// Why a session could not be made.
 #[derive(Debug, thiserror::Error)]
 pub enum PosingError {
+    /// The H-Anim skeleton could not be built.
     #[error("the humanoid could not be built: {0}")]
     Build(#[from] stance_hanim::BuildError),
+    /// The solver refused its settings.
     #[error("the solver settings were rejected: {0}")]
     Solver(#[from] stance_ik::IkError),
+    /// The document does not fit this body (unknown joints, wrong number of values...).
     #[error("{0}")]
     Document(#[from] stance_document::DocumentError),
 }
@@ -216,38 +219,48 @@ impl PosingSession {
         tasks
     }
 
+    /// The kinematic skeleton the solver works on: joints, DOFs and their limits.
     pub fn skeleton(&self) -> &Skeleton {
         &self.humanoid.skeleton
     }
 
+    /// The H-Anim body: the skeleton, how each joint was built, the level of articulation.
     pub fn humanoid(&self) -> &HumanoidSkeleton {
         &self.humanoid
     }
 
+    /// The body's H-Anim level of articulation.
     pub fn level_of_articulation(&self) -> LevelOfArticulation {
         self.humanoid.loa
     }
 
+    /// The current posture: every DOF's value (rad; m for the root's translation).
     pub fn posture(&self) -> &Posture {
         &self.posture
     }
 
+    /// Forward kinematics of the current posture: each joint's world position (m) and
+    /// rotation, and each DOF's world axis.
     pub fn frames(&self) -> &Frames {
         &self.frames
     }
 
+    /// The user's tasks, in the document's order.
     pub fn tasks(&self) -> &[TaskSpec] {
         &self.tasks
     }
 
+    /// How each task fares in the current posture, one per task in the same order.
     pub fn statuses(&self) -> &[TaskStatus] {
         &self.statuses
     }
 
+    /// The last solve's report; `None` before the first solve and after a restored document.
     pub fn report(&self) -> Option<&SolveReport> {
         self.report.as_ref()
     }
 
+    /// The grab-and-pull task while a pull goes on.
     pub fn grab(&self) -> Option<&Grab> {
         self.grab.as_ref()
     }

@@ -47,17 +47,23 @@ pub const MAX_RECORDING_BYTES: usize = 64 * 1024 * 1024;
 /// The state of the device link.
 #[derive(Clone, Debug, PartialEq)]
 pub enum SensorLink {
+    /// No device and no replay.
     Idle,
     /// The page is asking the user for a device and opening it.
     Connecting,
+    /// A device is open and sending.
     Connected {
+        /// The device's name as the browser gives it.
         device: String,
     },
+    /// A recording plays as if it came from the device.
     Replaying {
+        /// The recording's file name.
         name: String,
     },
     /// The device went away or failed; the posture stays as the last sample left it.
     Lost {
+        /// What happened, for the user.
         reason: String,
     },
 }
@@ -99,7 +105,9 @@ pub fn preset_button_name(preset: AssignmentPreset) -> &'static str {
 /// Running figures of one sensor.
 #[derive(Clone, Debug, Default)]
 pub struct SensorTrack {
+    /// The sensor's latest sample, as the device reported it.
     pub last: Sample,
+    /// Samples decoded from this sensor since the device was connected or the replay started.
     pub samples: u64,
     arrivals_secs: VecDeque<f64>,
 }
@@ -127,14 +135,19 @@ struct Replay {
 /// Why calibrating failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SensorError {
+    /// No sensor drives anything.
     #[error("no sensor is assigned to a body segment")]
     NothingAssigned,
+    /// An assigned sensor (by id) has not reported an orientation.
     #[error("sensor {0} has sent no orientation yet")]
     NoReading(u16),
+    /// A sensor is assigned to a joint (by H-Anim name) that this body lacks.
     #[error("this body has no joint {0}")]
     UnknownJoint(String),
+    /// A sensor is assigned to the spine, and this body has no spine joints.
     #[error("this body has no spine joints for the upper-back sensor")]
     NoSpine,
+    /// The calibration itself failed.
     #[error("{0}")]
     Calibration(#[from] stance_mocap::calibration::CalibrationError),
 }
@@ -186,6 +199,7 @@ pub enum SensorCommand {
     SetSettings(Box<SensorSettings>),
     /// Ask the page to open the device chosen in the settings.
     Connect,
+    /// Close the device; the posture stays as it is.
     Disconnect,
     /// Calibrate the assigned sensors in the current posture; they then drive their joints.
     Calibrate,
@@ -195,10 +209,14 @@ pub enum SensorCommand {
     ResetHeading,
     /// Play a recorded byte stream through the same decoder and calibration as a device.
     Replay {
+        /// The recording's file name.
         name: String,
+        /// The recorded bytes (serial bytes, or a HID report log).
         bytes: Vec<u8>,
     },
+    /// Stop the replay where it is.
     StopReplay,
+    /// Start keeping what the device sends, to save as a recording.
     StartRecording,
     /// Stop recording and offer the recording as a download.
     SaveRecording,
@@ -206,26 +224,35 @@ pub enum SensorCommand {
     ApplyPreset(AssignmentPreset),
     /// What one sensor drives (nothing: `None`).
     Assign {
+        /// The sensor, by the id the device gives it.
         sensor: SensorId,
+        /// The joint or the spine it drives; `None` for nothing.
         assignment: Option<SensorAssignment>,
     },
-    /// The device is open (its name as the browser gives it).
+    /// The device is open.
     Connected {
+        /// The device's name as the browser gives it.
         device: String,
     },
-    /// Bytes from the serial device; `arrived` is when the page received them.
+    /// Bytes from the serial device.
     Bytes {
+        /// The bytes as read, in order (a line may be split across messages).
         bytes: Vec<u8>,
+        /// When the page received them.
         arrived: web_time::Instant,
     },
     /// One input report from the HID device.
     Report {
+        /// The HID report ID (0 when the device uses none).
         report_id: u8,
+        /// The report's bytes, without the report ID.
         data: Vec<u8>,
+        /// When the page received it.
         arrived: web_time::Instant,
     },
     /// The device went away or failed; the posture stays as the last reading left it.
     Lost {
+        /// What happened, for the user.
         reason: String,
     },
 }
@@ -233,8 +260,11 @@ pub enum SensorCommand {
 /// What came of a sensor command, for the user.
 #[derive(Debug, Clone, PartialEq)]
 pub enum SensorOutcome {
+    /// Nothing to say.
     Quiet,
+    /// A message for the user.
     Inform(String),
+    /// A problem for the user.
     Warn(String),
 }
 
@@ -397,6 +427,7 @@ impl SensorHub {
 }
 
 impl SensorHub {
+    /// A hub with `settings`: no device, no sensors, not calibrated.
     pub fn new(settings: SensorSettings) -> Self {
         let decoder = new_decoder(&settings.decoder_config());
         Self {
@@ -418,6 +449,7 @@ impl SensorHub {
         }
     }
 
+    /// The device settings: which device, its link and decoder options.
     pub fn settings(&self) -> &SensorSettings {
         &self.settings
     }
@@ -451,26 +483,33 @@ impl SensorHub {
         self.samples = 0;
     }
 
+    /// The state of the device link.
     pub fn link(&self) -> &SensorLink {
         &self.link
     }
 
+    /// The running figures of each sensor heard since the device was connected or the replay
+    /// started, by sensor id.
     pub fn tracks(&self) -> &BTreeMap<SensorId, SensorTrack> {
         &self.tracks
     }
 
+    /// What each assigned sensor drives, by sensor id.
     pub fn assignments(&self) -> &BTreeMap<SensorId, SensorAssignment> {
         &self.assignments
     }
 
+    /// Whether the sensors are calibrated (they then drive their joints).
     pub fn is_calibrated(&self) -> bool {
         self.calibration.is_some()
     }
 
+    /// Whether what the device sends is being recorded.
     pub fn is_recording(&self) -> bool {
         self.recording.is_some()
     }
 
+    /// The decoder's running counts: bytes received, frames, bad frames, skipped bytes.
     pub fn stats(&self) -> DecoderStats {
         self.decoder.stats()
     }
@@ -487,6 +526,7 @@ impl SensorHub {
         self.link = SensorLink::Connecting;
     }
 
+    /// The device `device` (its name as the browser gives it) is open.
     pub fn connected(&mut self, device: String) {
         self.link = SensorLink::Connected { device };
     }

@@ -8,9 +8,14 @@ use stance_render::{OrbitCamera, RenderTarget, Scene, SceneRenderer};
 /// What the user asked the camera to do this frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum CameraGesture {
+    /// Turn around the target by a drag of this many screen points (x: yaw, y: pitch).
     Orbit(Vec2),
+    /// Move the target so that the point under the pointer follows a drag of this many
+    /// screen points.
     Pan(Vec2),
+    /// Come closer by this factor (above 1) or go away (below 1).
     Zoom(f32),
+    /// Frame the body again, seen from the front.
     Reset,
 }
 
@@ -18,14 +23,23 @@ pub enum CameraGesture {
 /// gestures to camera moves can be tested without a window.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct ViewportInput {
+    /// How far the pointer was dragged over the viewport this frame (screen points, y down).
     pub drag_delta_px: Vec2,
+    /// Whether the drag is with the primary (left) button, or one finger.
     pub primary_dragged: bool,
+    /// Whether the drag is with the secondary (right) or the middle button.
     pub secondary_or_middle_dragged: bool,
+    /// Whether Shift is held.
     pub shift_held: bool,
+    /// Vertical wheel scroll over the viewport this frame (screen points; 0 elsewhere).
     pub scroll_px: f32,
+    /// Pinch or Ctrl+wheel zoom over the viewport this frame (1 for none).
     pub zoom_factor: f32,
+    /// Fingers on the screen (0 without a multi-touch gesture).
     pub touch_count: usize,
+    /// How far the fingers moved together this frame (screen points).
     pub touch_translation_px: Vec2,
+    /// Whether the viewport was double-clicked.
     pub double_clicked: bool,
 }
 

@@ -14,8 +14,12 @@ use crate::sensors::SensorCommand;
 /// A message for the user, shown above the viewport.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Notice {
+    /// What the user is told, in one or two sentences.
     pub text: String,
+    /// An error stays until dismissed; information goes after
+    /// [`NOTICE_SECS`](crate::model::NOTICE_SECS) seconds.
     pub is_error: bool,
+    /// When it appeared, in seconds since the editor started.
     pub since_secs: f64,
 }
 
@@ -25,23 +29,33 @@ pub enum Gesture {
     /// Grab-and-pull: the grabbed point follows the pointer in the plane facing the camera
     /// through `plane_point_world`; cancelling restores `document_before`.
     Pull {
+        /// The grabbed joint (skeleton index).
         joint: usize,
+        /// Where the grab started (world frame, m).
         plane_point_world: DVec3,
+        /// The document as it was when the pull started.
         document_before: Box<Document>,
     },
     /// The goal of `tasks` (several when their goals coincide) moves in the plane facing the
     /// camera through `plane_point_world`.
     Goal {
+        /// The moved tasks (indices in the task list).
         tasks: Vec<usize>,
+        /// The goal's place when the drag started (world frame, m).
         plane_point_world: DVec3,
     },
     /// A ring of the joint gizmo: DOF `dof` turns with the pointer around `centre_px`
     /// (screen points), from `start_value`.
     Ring {
+        /// The turned DOF (index in the posture's values).
         dof: usize,
+        /// The ring's centre on screen (points).
         centre_px: [f32; 2],
+        /// The pointer's screen angle around the centre at the last move (rad).
         last_angle: f32,
+        /// The pointer's turn since the drag started, unwrapped across ±π (rad).
         accumulated: f64,
+        /// The DOF's value when the drag started (rad).
         start_value: f64,
         /// +1 when the DOF axis points toward the camera (a counter-clockwise drag on screen
         /// is then a positive rotation), -1 otherwise.
@@ -49,11 +63,16 @@ pub enum Gesture {
     },
     /// The swivel handle: the elbow or knee turns around the limb's axis with the pointer.
     Swivel {
+        /// The turned limb.
         limb: LimbName,
+        /// The limb's swivel angle when the drag started (rad).
         start_swivel: f64,
         /// Unit direction from the axis to the middle joint when the drag started.
         start_direction: DVec3,
+        /// The swivel circle's centre, on the limb's axis (world frame, m).
         centre_world: DVec3,
+        /// The limb's axis, a unit vector from the upper joint toward the end joint (world
+        /// frame).
         axis_world: DVec3,
     },
 }
@@ -67,27 +86,34 @@ pub enum Command {
     Hover(Option<usize>),
     /// Grab `joint` at `point_world` and start pulling it.
     BeginPull {
+        /// The grabbed joint (skeleton index).
         joint: usize,
+        /// The grabbed point on the body (world frame, m).
         point_world: DVec3,
     },
     /// Start a handle drag (goal, ring or swivel); a pull starts with `BeginPull`.
     BeginHandle(Gesture),
     /// The pulled point's new target.
     MoveGrab {
+        /// Where the pointer is on the plane of the pull (world frame, m).
         target_world: DVec3,
     },
     /// The dragged goal's new place, and where the pointer meets the floor (balance goals
     /// slide on the floor).
     MoveGoal {
+        /// Where the pointer is on the plane of the drag (world frame, m).
         goal_world: DVec3,
+        /// Where the pointer's ray meets the floor (y = 0), if it does.
         floor_world: Option<DVec3>,
     },
     /// The pointer's screen angle around the ring's centre (radians).
     TurnRing {
+        /// The angle, measured on screen where y points down (rad).
         screen_angle: f32,
     },
     /// Where the pointer meets the swivel circle's plane.
     TurnSwivel {
+        /// The pointer on the circle's plane (world frame, m).
         point_world: DVec3,
     },
     /// The gesture ends where it is.
@@ -100,7 +126,9 @@ pub enum Command {
     PinSelected,
     /// Replace the task list as one edit of `kind`.
     SetTasks {
+        /// What kind of edit it is (edits of one kind in quick succession make one undo step).
         kind: EditKind,
+        /// The whole new task list, in priority order.
         tasks: Vec<TaskSpec>,
     },
     /// Add a task made from where the body stands.
@@ -109,22 +137,35 @@ pub enum Command {
     LoadTable1Example,
     /// Set one DOF (a slider or field), as one edit of `EditKind::Joint`.
     SetDof {
+        /// The DOF (index in the posture's values).
         dof: usize,
+        /// Its new value (rad; m for a translation of the root).
         value: f64,
     },
     /// Set a limb's swivel angle (rad).
     SetSwivel {
+        /// The arm or leg.
         limb: LimbName,
+        /// The elbow's or knee's angle around the limb's axis (rad).
         swivel_angle: f64,
     },
+    /// Take back the last edit.
     Undo,
+    /// Do again the last edit taken back.
     Redo,
+    /// Put the body back in its rest posture; the tasks stay.
     ResetToRest,
+    /// Swap left and right: the posture and the tasks with it, reflected in the body's
+    /// sagittal plane.
     Mirror,
+    /// Rebuild the body at another level of articulation: the posture carries over by joint
+    /// name, and the tasks whose joints remain stay.
     SetLevelOfArticulation(LevelOfArticulation),
     /// Load an avatar file (glTF, GLB, VRM).
     LoadAvatar {
+        /// The file's name: the avatar goes by it (notices, mapping corrections).
         name: String,
+        /// The file's contents.
         bytes: Vec<u8>,
     },
     /// Ask the page to fetch an avatar by URL (it arrives as a file).
@@ -133,7 +174,9 @@ pub enum Command {
     UseMannequin,
     /// Rebuild the avatar's skeleton from a corrected mapping (`corrections` made it).
     ApplyMapping {
+        /// The corrected mapping of the avatar's joints onto H-Anim.
         mapping: Box<Mapping>,
+        /// The corrections, in the order the user made them.
         corrections: Vec<Correction>,
     },
     /// Go back to the mapping before the last applied correction.
@@ -142,7 +185,9 @@ pub enum Command {
     OpenLink(String),
     /// Open a file: avatar, document, pose library, or a sensor recording when one was asked.
     OpenFile {
+        /// The file's name (with the contents, it tells what kind of file it is).
         name: String,
+        /// The file's contents.
         bytes: Vec<u8>,
     },
     /// Save the posture in the library under a name.
@@ -169,6 +214,7 @@ pub enum Command {
     Inform(String),
     /// A problem for the user.
     Warn(String),
+    /// Close the notice shown above the viewport.
     DismissNotice,
 }
 

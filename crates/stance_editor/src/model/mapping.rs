@@ -15,7 +15,9 @@ use crate::posing::PosingSession;
 /// One correction: source joint (node index) `source` drives `hanim`, or nothing.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Correction {
+    /// The avatar's joint (index of its node in the file).
     pub source: usize,
+    /// The H-Anim joint it drives from now on; `None` takes its mapping away.
     pub hanim: Option<&'static str>,
 }
 

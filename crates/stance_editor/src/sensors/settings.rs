@@ -17,6 +17,7 @@ pub const SENSOR_SETTINGS_KEY: &str = "stance.sensors.settings";
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct SensorSettings {
+    /// The device and its protocol (Flock of Birds, Xsens, SlimeVR...).
     pub device: DeviceKind,
     /// Serial baud rate (ignored for HID devices).
     pub baud_rate: u32,
@@ -28,6 +29,7 @@ pub struct SensorSettings {
     pub fob_birds: u8,
     /// Component order of quaternion lines.
     pub ascii_order: ComponentOrder,
+    /// How the device's reference frame lies relative to the body.
     pub frame: DeviceFrame,
     /// Samples per sensor per second when replaying a recording.
     pub replay_rate_hz: f64,
@@ -117,12 +119,18 @@ pub enum SensorConnection {
     /// `navigator.serial`: open at this rate, write `setup`, then stream bytes; on
     /// disconnecting, write `stop` before closing the port.
     Serial {
+        /// Bits per second.
         baud_rate: u32,
+        /// The bytes that set the device up and start its stream.
         setup: Vec<u8>,
+        /// The bytes that stop the stream.
         stop: Vec<u8>,
     },
     /// `navigator.hid`: request a device matching one of `(vendor id, product id)`.
-    Hid { filters: Vec<(u16, u16)> },
+    Hid {
+        /// The devices offered to the user: USB vendor and product ids.
+        filters: Vec<(u16, u16)>,
+    },
 }
 
 impl SensorConnection {
