@@ -129,7 +129,7 @@ impl PoseLibrary {
     }
 }
 
-/// The autosave of the work in progress: at most once per [`AUTOSAVE_INTERVAL_SECS`], only
+/// The autosave of the work in progress: at most once per `AUTOSAVE_INTERVAL_SECS` (1 s), only
 /// when the document changed.
 #[derive(Debug)]
 pub struct Autosave {

@@ -7,24 +7,25 @@
 //! is drawn: sensors, then the solve, then forward kinematics once, then the cached bones
 //! (picking and drawing) and the effector trace. Panels and the viewport draw from that state.
 //! Every change of the posing session (avatar, LOA, mannequin, mapping) goes through
-//! [`EditorModel::replace_session`], which resets what belonged to the old one.
+//! `EditorModel::replace_session`, which resets what belonged to the old one.
 
+mod bones;
 mod command;
 mod mapping;
 mod tasks;
 
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 use serde_json::Value;
 use stance_document::{AvatarReference, Document, TaskSpec, link};
 use stance_hanim::{LevelOfArticulation, Mapping, readable_name};
 use stance_ik::Clock;
-use stance_render::{MannequinBone, MannequinJoint, mannequin_bones};
+use stance_render::MannequinBone;
 
 use self::command::goals_moved;
 pub use self::command::{Command, Gesture, Notice, SessionChange};
 use self::mapping::MappingCorrections;
 pub use self::mapping::{Correction, carry_posture};
-pub use self::tasks::{NewTask, make_task};
+pub use self::tasks::{NewTask, make_task, table1_example};
 use crate::avatar::LoadedAvatar;
 use crate::history::{EditKind, History};
 use crate::host::{HostHooks, HostMessage};
@@ -257,28 +258,7 @@ impl EditorModel {
     }
 
     fn refresh_bones(&mut self) {
-        let skeleton = self.session.skeleton();
-        let frames = self.session.frames();
-        let joints: Vec<MannequinJoint<'_>> = skeleton
-            .joints()
-            .iter()
-            .enumerate()
-            .map(|(index, joint)| MannequinJoint {
-                name: &joint.name,
-                parent: joint.parent,
-                position_world: frames
-                    .joint_position
-                    .get(index)
-                    .copied()
-                    .unwrap_or_default()
-                    .as_vec3(),
-                up_world: frames
-                    .world_from_joint_rotation
-                    .get(index)
-                    .map_or(Vec3::Y, |rotation| (*rotation * DVec3::Y).as_vec3()),
-            })
-            .collect();
-        self.bones = mannequin_bones(&joints);
+        self.bones = bones::posed_bones(&self.session);
     }
 
     fn expire_notice(&mut self) {
@@ -356,7 +336,7 @@ impl EditorModel {
                 Err(error) => self.warn(format!("The task could not be added: {error}.")),
             },
             Command::LoadTable1Example => {
-                let tasks = self.session.table1_example();
+                let tasks = table1_example(&self.session);
                 self.commit_tasks(EditKind::Command, tasks);
                 self.inform("Table 1 of the paper: level 1 holds the left foot, the gaze and the right hand; balance is level 2; the left hand on the bar level 3.");
             }

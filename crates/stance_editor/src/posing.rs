@@ -11,7 +11,7 @@ use stance_hanim::{
 };
 use stance_ik::conflict::Unmet;
 use stance_ik::{
-    Axes, Clock, Frames, Limb, LimbGoal, Posture, Skeleton, SolveReport, SolveStatus, Solver,
+    Clock, Frames, Limb, LimbGoal, Posture, Skeleton, SolveReport, SolveStatus, Solver,
     SolverSettings, SwivelInterval, Task,
 };
 
@@ -160,61 +160,6 @@ impl PosingSession {
         });
         balance.level = 2;
         tasks.push(balance);
-        tasks.push(TaskSpec::comfort());
-        tasks
-    }
-
-    /// The paper's Table 1: left foot on the floor, gaze and right hand on a sphere (level 1);
-    /// the centre of mass over a point between the feet (level 2); left hand on a vertical bar
-    /// (level 3); comfort.
-    pub fn table1_example(&self) -> Vec<TaskSpec> {
-        let position = |name: &str| self.joint_position(name).unwrap_or_default();
-        let ankle = position("l_talocrural");
-        let sphere = [-0.3, 1.15, 0.4];
-        let bar = [0.35, 1.0, 0.2];
-        let mut tasks = Vec::new();
-        let mut foot = TaskSpec::new(TaskKindSpec::Position {
-            joint: "l_talocrural".to_owned(),
-            point: [0.0; 3],
-            axes: Axes::XYZ,
-            target: ankle.to_array(),
-        });
-        foot.level = 1;
-        tasks.push(foot);
-        tasks.push(TaskSpec::new(TaskKindSpec::Orientation {
-            joint: "l_talocrural".to_owned(),
-            target: DQuat::IDENTITY.to_array(),
-        }));
-        tasks.push(TaskSpec::new(TaskKindSpec::Gaze {
-            joint: "skullbase".to_owned(),
-            axis: [0.0, 0.0, 1.0],
-            point: [0.0; 3],
-            target: sphere,
-        }));
-        tasks.push(TaskSpec::new(TaskKindSpec::Position {
-            joint: "r_radiocarpal".to_owned(),
-            point: [0.0; 3],
-            axes: Axes::XYZ,
-            target: sphere,
-        }));
-        let left = position("l_talocrural");
-        let right = position("r_talocrural");
-        let between = (left + right) * 0.5;
-        let com_goal = between + (left - between) * 0.3;
-        let mut balance = TaskSpec::new(TaskKindSpec::Com {
-            axes: Axes::XZ,
-            target: [com_goal.x, 0.0, com_goal.z],
-        });
-        balance.level = 2;
-        tasks.push(balance);
-        let mut bar_task = TaskSpec::new(TaskKindSpec::Position {
-            joint: "l_radiocarpal".to_owned(),
-            point: [0.0; 3],
-            axes: Axes::XZ,
-            target: bar,
-        });
-        bar_task.level = 3;
-        tasks.push(bar_task);
         tasks.push(TaskSpec::comfort());
         tasks
     }
@@ -846,7 +791,7 @@ mod tests {
             assert_eq!(report.status, SolveStatus::Converged, "pull step {step}");
         }
         let mut session = self::session();
-        let tasks = session.table1_example();
+        let tasks = crate::model::table1_example(&session);
         session.set_tasks(tasks);
         session.solve_frame(None);
         let report = session.report().unwrap();

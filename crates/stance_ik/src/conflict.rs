@@ -324,7 +324,12 @@ mod tests {
         let (wrist, tip) = (at("wrist"), at("tip"));
         let inward = position(&skeleton, "tip", tip + (wrist - tip).normalize() * 0.1);
         let hold_wrist = position(&skeleton, "wrist", wrist);
-        let unmet = diagnose(&skeleton, &posture, &inward, std::slice::from_ref(&hold_wrist));
+        let unmet = diagnose(
+            &skeleton,
+            &posture,
+            &inward,
+            std::slice::from_ref(&hold_wrist),
+        );
         assert_eq!(unmet, Unmet::Conflicts(vec![0]));
         // Holding the elbow leaves two bent hinges to move the tip anywhere in the plane:
         // nothing above is in the way.

@@ -2,7 +2,7 @@
 //! the joint is, a gaze straight ahead, a limb at its present swivel, balance, comfort, the
 //! paper's Table 1.
 
-use glam::DVec3;
+use glam::{DQuat, DVec3};
 use stance_document::{DEFAULT_BALANCE_MARGIN, LimbName, TaskKindSpec, TaskSpec};
 use stance_ik::Axes;
 
@@ -139,6 +139,61 @@ fn limb_as_it_stands(session: &PosingSession, limb: LimbName) -> Result<TaskKind
         swivel: session.limb_swivel(limb).map(|(swivel, _)| swivel),
         orientation: None,
     })
+}
+
+/// The paper's Table 1: left foot on the floor, gaze and right hand on a sphere (level 1);
+/// the centre of mass over a point between the feet (level 2); left hand on a vertical bar
+/// (level 3); comfort.
+pub fn table1_example(session: &PosingSession) -> Vec<TaskSpec> {
+    let position = |name: &str| session.joint_position(name).unwrap_or_default();
+    let ankle = position("l_talocrural");
+    let sphere = [-0.3, 1.15, 0.4];
+    let bar = [0.35, 1.0, 0.2];
+    let mut tasks = Vec::new();
+    let mut foot = TaskSpec::new(TaskKindSpec::Position {
+        joint: "l_talocrural".to_owned(),
+        point: [0.0; 3],
+        axes: Axes::XYZ,
+        target: ankle.to_array(),
+    });
+    foot.level = 1;
+    tasks.push(foot);
+    tasks.push(TaskSpec::new(TaskKindSpec::Orientation {
+        joint: "l_talocrural".to_owned(),
+        target: DQuat::IDENTITY.to_array(),
+    }));
+    tasks.push(TaskSpec::new(TaskKindSpec::Gaze {
+        joint: "skullbase".to_owned(),
+        axis: [0.0, 0.0, 1.0],
+        point: [0.0; 3],
+        target: sphere,
+    }));
+    tasks.push(TaskSpec::new(TaskKindSpec::Position {
+        joint: "r_radiocarpal".to_owned(),
+        point: [0.0; 3],
+        axes: Axes::XYZ,
+        target: sphere,
+    }));
+    let left = position("l_talocrural");
+    let right = position("r_talocrural");
+    let between = (left + right) * 0.5;
+    let com_goal = between + (left - between) * 0.3;
+    let mut balance = TaskSpec::new(TaskKindSpec::Com {
+        axes: Axes::XZ,
+        target: [com_goal.x, 0.0, com_goal.z],
+    });
+    balance.level = 2;
+    tasks.push(balance);
+    let mut bar_task = TaskSpec::new(TaskKindSpec::Position {
+        joint: "l_radiocarpal".to_owned(),
+        point: [0.0; 3],
+        axes: Axes::XZ,
+        target: bar,
+    });
+    bar_task.level = 3;
+    tasks.push(bar_task);
+    tasks.push(TaskSpec::comfort());
+    tasks
 }
 
 #[cfg(test)]
