@@ -493,9 +493,15 @@ impl EditorModel {
     }
 
     /// Opens `document` in the session as one undoable edit; `Err` says why it does not fit.
+    /// A document with a posture opens exactly as it was saved; one with tasks and no
+    /// posture (written by hand or by a script) is posed by the solver from the rest pose.
     fn open_document(&mut self, document: &Document) -> Result<(), PosingError> {
         let current = self.session.document();
-        self.session.restore_document(document)?;
+        if document.posture.joints.is_empty() {
+            self.session.load_document(document)?;
+        } else {
+            self.session.restore_document(document)?;
+        }
         self.history
             .record(&current, EditKind::Command, self.now_secs);
         Ok(())

@@ -405,3 +405,35 @@ fn library_commands_save_load_and_delete() {
     editor.apply(Command::DeleteFromLibrary(0));
     assert!(editor.model.library().entries().is_empty());
 }
+
+#[test]
+fn a_limb_task_with_an_orientation_holds_the_hand_turned_as_in_the_cli() {
+    // The same limb task as `stance_document`'s problem test: the editor solves it with the
+    // orientation too (it used to drop it). A document without a posture is posed when
+    // opened.
+    let document = r#"{"avatar":"default","posture":{},"tasks":[
+      {"kind":"position","joint":"l_talocrural","target":[0.09,0.08,0.0]},
+      {"kind":"limb","limb":"r_arm","target":[-0.25,1.15,0.3],"orientation":[0,0,0.3826834,0.9238795],"level":2},
+      {"kind":"balance","level":3}
+    ]}"#;
+    let mut editor = Clocked::new();
+    editor.apply(Command::OpenFile {
+        name: "reach.json".to_owned(),
+        bytes: document.as_bytes().to_vec(),
+    });
+    assert!(editor.model.notice().is_some_and(|notice| !notice.is_error));
+    editor.settle(600);
+    let wrist = editor.joint("r_radiocarpal");
+    let frames = editor.model.session().frames();
+    let want = glam::DQuat::from_xyzw(0.0, 0.0, 0.382_683_4, 0.923_879_5).normalize();
+    let angle = frames.rotation(wrist).angle_between(want);
+    assert!(
+        angle < 1e-3,
+        "the hand is {angle} rad from the asked orientation"
+    );
+    let reached = editor.position("r_radiocarpal");
+    assert!(
+        (reached - DVec3::new(-0.25, 1.15, 0.3)).length() < 1e-3,
+        "the hand is at {reached}"
+    );
+}
