@@ -1,290 +1,34 @@
 //! The iterative solver: linearise every level, take a prioritized step, enforce joint
 //! limits, repeat until converged, stalled or out of budget; report per-level residuals.
 
+//!
+//! The settings live in the submodule `settings`, the report types in `report`.
+
+mod report;
+mod settings;
+
 use std::collections::BTreeMap;
 
 use nalgebra::{DMatrix, DVector};
-use serde::Serialize;
+
+pub use report::{AnalyticRestart, LevelReport, SolveReport, SolveStatus};
+#[cfg(not(all(target_arch = "wasm32", target_os = "unknown")))]
+pub use settings::SystemClock;
+use settings::validate_damping;
+pub use settings::{Backend, Clock, Iteration, SolverSettings};
 
 use crate::kernel::prioritized_step;
 use crate::limb::{Limb, LimbGoal};
 use crate::posture::clamp_and_wrap;
-use crate::priority::{Damping, LevelSystem, StepParams, StepWorkspace, prioritized_step_nalgebra};
+use crate::priority::{Damping, LevelSystem, StepWorkspace, prioritized_step_nalgebra};
 use crate::task::StepLimits;
 use crate::{Frames, IkError, Posture, Skeleton, Task, TaskKind};
 
-/// A source of time in seconds, for the wall-clock budget. The solver never reads a clock by
-/// itself on `wasm32-unknown-unknown` (where `std::time::Instant` panics): pass one built on
-/// `performance.now()` there.
-pub trait Clock {
-    /// Monotonic time in seconds (any origin).
-    fn now_secs(&self) -> f64;
-}
-
-impl<F: Fn() -> f64> Clock for F {
-    fn now_secs(&self) -> f64 {
-        self()
-    }
-}
-
-/// `std::time::Instant`, on targets where it works.
-#[cfg(not(all(target_arch = "wasm32", target_os = "unknown")))]
-#[derive(Debug, Clone, Copy)]
-pub struct SystemClock {
-    origin: std::time::Instant,
-}
-
-#[cfg(not(all(target_arch = "wasm32", target_os = "unknown")))]
-impl Default for SystemClock {
-    fn default() -> Self {
-        Self {
-            origin: std::time::Instant::now(),
-        }
-    }
-}
-
-#[cfg(not(all(target_arch = "wasm32", target_os = "unknown")))]
-impl Clock for SystemClock {
-    fn now_secs(&self) -> f64 {
-        self.origin.elapsed().as_secs_f64()
-    }
-}
-
-/// Plain, documented solver settings with defaults.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SolverSettings {
-    /// Iteration budget (default 200).
-    pub max_iterations: usize,
-    /// A level is met when the norm of its residuals is at most this (m / rad; default 1e-6).
-    pub tolerance: f64,
-    /// Stalled when no DOF moves more than this in an iteration (default 1e-10).
-    pub stall_step: f64,
-    /// Stalled when for `stall_window` iterations in a row the residuals (in priority order,
-    /// met levels aside) beat the best so far by no more than this (m / rad, default 1e-10) or
-    /// 1e-4 of themselves.
-    pub stall_improvement: f64,
-    /// How each iteration is taken (default [`Iteration::Guarded`]).
-    pub iteration: Iteration,
-    /// Stalled when this many iterations in a row bring no meaningful improvement in priority
-    /// order (default 5; the multi-start's textbook run uses 40: the plain recursion wanders
-    /// for a while before it settles).
-    pub stall_window: usize,
-    /// Wall-clock budget in seconds (needs a [`Clock`]; default none).
-    pub time_budget_secs: Option<f64>,
-    /// Damping of every level without its own (default constant 0.002; see
-    /// [`Solver::level_damping`]).
-    pub damping: Damping,
-    /// Relative rank threshold of the projector (default 1e-9).
-    pub rank_tolerance: f64,
-    /// Largest position / centre-of-mass change asked of a task per iteration (m, default 0.1).
-    pub max_linear_step: f64,
-    /// Largest orientation / gaze / posture change asked per iteration (rad, default 0.3).
-    pub max_angular_step: f64,
-    /// Largest DOF change per guarded iteration, shared by the levels in priority order
-    /// (default 0.2; the textbook iteration has none).
-    pub max_dof_step: f64,
-    /// Enforce the joint limits by clamping (default true).
-    pub enforce_limits: bool,
-    /// Linear-algebra implementation of the step (default: the slice kernel).
-    pub backend: Backend,
-    /// When a solve stalls with a level unmet (and at least half the time budget is left),
-    /// solve once more from the start posture with [`Iteration::Textbook`] (within what is
-    /// left of the iteration budget) and keep the better result in priority order (default
-    /// true).
-    pub restarts: bool,
-}
-
-/// How the solver takes an iteration.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Iteration {
-    /// The prioritized step with safeguards for strict priority through the non-linearity:
-    /// the levels share `max_dof_step` in priority order, the levels below the first unmet
-    /// level wait while it still makes real progress (the cascade), and a step that leaves a
-    /// level clearly worse is halved, then loses its lowest levels (see
-    /// `Solver::guarded_iteration`). Every iteration's posture keeps the higher levels: what
-    /// an interactive editor shows frame by frame.
-    #[default]
-    Guarded,
-    /// The textbook recursion: every level's step at once, joint-limit clamping, nothing
-    /// else. Converges on multi-level problems where the safeguards stop lower levels short,
-    /// but its first steps may throw higher levels far off on the way.
-    Textbook,
-}
-
-/// Which implementation computes the prioritized step (same mathematics; kept selectable for
-/// the benchmark comparison).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Backend {
-    /// [`crate::prioritized_step`]: contiguous slices, no allocation per call.
-    #[default]
-    Kernel,
-    /// [`crate::prioritized_step_nalgebra`]: nalgebra dynamic matrices.
-    Nalgebra,
-}
-
-impl Default for SolverSettings {
-    fn default() -> Self {
-        Self {
-            max_iterations: 200,
-            tolerance: 1e-6,
-            stall_step: 1e-10,
-            stall_improvement: 1e-10,
-            iteration: Iteration::Guarded,
-            stall_window: STALL_WINDOW,
-            time_budget_secs: None,
-            damping: Damping::default(),
-            rank_tolerance: 1e-9,
-            max_linear_step: 0.1,
-            max_angular_step: 0.3,
-            max_dof_step: 0.2,
-            enforce_limits: true,
-            backend: Backend::Kernel,
-            restarts: true,
-        }
-    }
-}
-
-impl SolverSettings {
-    /// Checks every field.
-    pub fn validate(&self) -> Result<(), IkError> {
-        let pos = |v: f64| v.is_finite() && v > 0.0;
-        if !(self.tolerance.is_finite() && self.tolerance >= 0.0) {
-            return Err(IkError::BadSetting("tolerance"));
-        }
-        if !(self.stall_step.is_finite() && self.stall_step >= 0.0) {
-            return Err(IkError::BadSetting("stall_step"));
-        }
-        if !(self.stall_improvement.is_finite() && self.stall_improvement >= 0.0) {
-            return Err(IkError::BadSetting("stall_improvement"));
-        }
-        if let Some(t) = self.time_budget_secs
-            && !(t.is_finite() && t >= 0.0)
-        {
-            return Err(IkError::BadSetting("time_budget_secs"));
-        }
-        validate_damping(self.damping)?;
-        if !(self.rank_tolerance.is_finite() && self.rank_tolerance > 0.0) {
-            return Err(IkError::BadSetting("rank_tolerance"));
-        }
-        if !pos(self.max_linear_step) {
-            return Err(IkError::BadSetting("max_linear_step"));
-        }
-        if !pos(self.max_angular_step) {
-            return Err(IkError::BadSetting("max_angular_step"));
-        }
-        if !pos(self.max_dof_step) {
-            return Err(IkError::BadSetting("max_dof_step"));
-        }
-        Ok(())
-    }
-
-    fn step_params(&self) -> StepParams {
-        StepParams {
-            damping: self.damping,
-            rank_tolerance: self.rank_tolerance,
-            max_dof_step: match self.iteration {
-                Iteration::Guarded => self.max_dof_step,
-                Iteration::Textbook => f64::INFINITY,
-            },
-        }
-    }
-}
-
-/// Checks a damping's parameters.
-fn validate_damping(damping: Damping) -> Result<(), IkError> {
-    match damping {
-        Damping::Constant { lambda } if !(lambda.is_finite() && lambda >= 0.0) => {
-            Err(IkError::BadSetting("damping.lambda"))
-        }
-        Damping::Adaptive {
-            lambda_max,
-            epsilon,
-        } if !(epsilon.is_finite()
-            && epsilon > 0.0
-            && lambda_max.is_finite()
-            && lambda_max >= 0.0) =>
-        {
-            Err(IkError::BadSetting("damping"))
-        }
-        _ => Ok(()),
-    }
-}
-
 /// Relative decrease below which an unmet level counts as not progressing.
 const STALL_RELATIVE: f64 = 1e-4;
-/// Iterations without a meaningful new best (in priority order) before "stalled".
-const STALL_WINDOW: usize = 5;
 /// The stall window of the textbook run: the plain recursion wanders for a while before it
 /// settles.
 const TEXTBOOK_STALL_WINDOW: usize = 40;
-
-/// Why the solver stopped.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum SolveStatus {
-    /// Every level (posture attraction aside) is within the tolerance.
-    Converged,
-    /// The step became negligible before every level was met (conflict or unreachable goal).
-    Stalled,
-    /// `max_iterations` spent.
-    IterationBudget,
-    /// `time_budget_secs` spent.
-    TimeBudget,
-}
-
-/// Residuals of one priority level.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct LevelReport {
-    /// The level number.
-    pub level: u32,
-    /// Active tasks in the level.
-    pub tasks: usize,
-    /// Rows of the level's Jacobian.
-    pub rows: usize,
-    /// Norm of the residuals at the start (m / rad).
-    pub residual_before: f64,
-    /// Norm of the residuals at the end.
-    pub residual_after: f64,
-    /// `residual_after <= tolerance`.
-    pub met: bool,
-    /// Whether the level holds only posture attraction (never required to be met).
-    pub posture_only: bool,
-}
-
-/// The outcome of a solve. Not converging is a normal outcome, reported here.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct SolveReport {
-    /// Why it stopped.
-    pub status: SolveStatus,
-    /// Steps taken.
-    pub iterations: usize,
-    /// One entry per level, highest priority first.
-    pub levels: Vec<LevelReport>,
-    /// The highest-priority level (posture-only levels aside) left unmet: the level that gave
-    /// way to the ones above it (or to an unreachable goal).
-    pub gave_way: Option<u32>,
-    /// DOF that sat on a joint limit in the last step.
-    pub clamped_dofs: usize,
-    /// Seconds spent, when a clock was available.
-    pub elapsed_secs: Option<f64>,
-    /// Hybrid restarts: where the solver stalled and restarted a limb from its closed-form
-    /// solution (see `Solver::limbs`); empty when it never did.
-    pub analytic_restarts: Vec<AnalyticRestart>,
-}
-
-/// One hybrid restart: a stalled solve put a limb in its closed-form posture and went on.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct AnalyticRestart {
-    /// The limb's joints (upper, middle, end).
-    pub joints: [String; 3],
-    /// Iterations taken before the restart.
-    pub iteration: usize,
-    /// The level whose unmet task on the limb's end joint set the goal.
-    pub level: u32,
-    /// Swivel angle of the restart posture (radians): the feasible one nearest to the stalled
-    /// posture's swivel.
-    pub swivel_angle: f64,
-}
 
 /// Cached per-solve task layout.
 #[derive(Debug, Clone, Default)]
@@ -418,7 +162,6 @@ impl Solver {
         let initial = values.to_vec();
         let before = self.linearize(skeleton, tasks, values);
         let mut run = self.run(skeleton, tasks, values, clock, start);
-        let tol = self.settings.tolerance;
         // Multi-start: the guarded iteration stops lower levels short on some multi-level
         // problems, the textbook recursion on others (its first steps near a singularity can
         // throw a problem into another basin); a stalled solve runs once more from the start
@@ -463,20 +206,7 @@ impl Solver {
             clamped_dofs,
             analytic_restarts,
         } = run;
-        let levels: Vec<LevelReport> = self
-            .layout
-            .iter()
-            .zip(before.iter().zip(&self.residual_sq))
-            .map(|(l, (b, a))| LevelReport {
-                level: l.level,
-                tasks: l.tasks.len(),
-                rows: l.rows,
-                residual_before: b.sqrt(),
-                residual_after: a.sqrt(),
-                met: a.sqrt() <= tol,
-                posture_only: l.posture_only,
-            })
-            .collect();
+        let levels = self.level_reports(&before);
         let gave_way = levels
             .iter()
             .find(|l| !l.posture_only && !l.met)
@@ -493,6 +223,24 @@ impl Solver {
             },
             analytic_restarts,
         })
+    }
+
+    /// One report per level: its residuals `before` (squared) and now.
+    fn level_reports(&self, before: &[f64]) -> Vec<LevelReport> {
+        let tol = self.settings.tolerance;
+        self.layout
+            .iter()
+            .zip(before.iter().zip(&self.residual_sq))
+            .map(|(l, (b, a))| LevelReport {
+                level: l.level,
+                tasks: l.tasks.len(),
+                rows: l.rows,
+                residual_before: b.sqrt(),
+                residual_after: a.sqrt(),
+                met: a.sqrt() <= tol,
+                posture_only: l.posture_only,
+            })
+            .collect()
     }
 
     /// Iterates from `values` (linearised) until converged, stalled or out of budget, and
