@@ -44,9 +44,11 @@ cargo clippy --target wasm32-unknown-unknown "${web_args[@]}" --lib --quiet -- -
 
 step "native tests"
 # No doc tests: the crates have none, and each would cost a rustdoc run.
-cargo test --workspace --quiet --lib --bins --tests -- --skip scenario_timings
-# The S2..S5 timings, printed (the same test prints them in the browser below).
+cargo test --workspace --quiet --lib --bins --tests -- --skip scenario_timings --skip frame_cost
+# The S2..S5 timings, printed (the same test prints them in the browser below), and the
+# editor's CPU per frame with the shared avatar and Table 1 while pulling.
 cargo test --quiet -p stance_ik --test timing -- --nocapture
+cargo test --quiet -p stance_editor --test frame_cost -- --nocapture
 
 # wasm-pack runs each crate's wasm-bindgen tests in headless Chromium (Debian's chromedriver);
 # `stance_asset` builds for wasm32 too (the page imports avatars with it).
