@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Runs every layer of Stance's tests and its quality gates; stops at the first failure.
-#   1. gates: rustfmt, clippy (native and wasm32, -D warnings), purity of the core crates
+#   1. gates: rustfmt, purity of the core crates; clippy (-D warnings) runs inside every build
+#      below (scripts/clippy-env.sh): natively for all targets, for wasm32 in wasm-pack's
+#      builds and the site build
 #   2. native `cargo test --workspace` (includes the lavapipe offscreen render)
 #   3. the pure crates' and stance_asset's tests in headless Chromium (wasm-pack test)
 #   4. the built site in headless Chromium, WebGL2 and WebGPU (Playwright), and the npm
@@ -11,13 +13,14 @@ cd "$(dirname "$0")/.."
 export CARGO_TERM_COLOR="${CARGO_TERM_COLOR:-always}"
 # CI builds from a fresh clone once: incremental compilation only adds work there.
 if [ -n "${CI:-}" ]; then export CARGO_INCREMENTAL=0; fi
+# shellcheck source=scripts/clippy-env.sh
+source scripts/clippy-env.sh
 started=$SECONDS
 step() { printf '\n\033[1;34m[test %3ds]\033[0m %s\n' "$((SECONDS - started))" "$*"; }
 
 PURE_CRATES=(stance_hanim stance_ik stance_mocap)
 # Crates added later join the pure list once they exist (stance_document: the share-link codec).
 [ -d crates/stance_document ] && PURE_CRATES+=(stance_document)
-WASM_ONLY_LIB_CRATES=(stance_render stance_editor stance_web stance_js)
 
 step "rustfmt"
 cargo fmt --all --check
@@ -32,18 +35,10 @@ for crate in "${PURE_CRATES[@]}"; do
   fi
 done
 
-step "clippy (native)"
-cargo clippy --workspace --all-targets --quiet -- -D warnings
-
-step "clippy (wasm32)"
-pure_args=(); for crate in "${PURE_CRATES[@]}"; do pure_args+=(-p "$crate"); done
-web_args=(); for crate in "${WASM_ONLY_LIB_CRATES[@]}"; do web_args+=(-p "$crate"); done
-# Their tests are linted natively above and compiled for wasm32 by wasm-pack below.
-cargo clippy --target wasm32-unknown-unknown "${pure_args[@]}" --lib --quiet -- -D warnings
-cargo clippy --target wasm32-unknown-unknown "${web_args[@]}" --lib --quiet -- -D warnings
-
-step "native tests"
-# No doc tests: the crates have none, and each would cost a rustdoc run.
+step "native build (with clippy) and tests"
+# Every target is built (benches too, as `cargo clippy --all-targets` checked them); no doc
+# tests: the crates have none, and each would cost a rustdoc run.
+cargo test --workspace --quiet --all-targets --no-run
 cargo test --workspace --quiet --lib --bins --tests -- --skip scenario_timings --skip frame_cost
 # The S2..S5 timings, printed (the same test prints them in the browser below), and the
 # editor's CPU per frame with the shared avatar and Table 1 while pulling.

@@ -320,11 +320,7 @@ impl SensorHub {
                     Err(error) => SensorOutcome::Warn(format!("Calibration failed: {error}.")),
                 }
             }
-            SensorCommand::ReleaseJoints => {
-                self.release();
-                session.hold_joints(&[]);
-                SensorOutcome::Quiet
-            }
+            SensorCommand::ReleaseJoints => self.release_joints(session),
             SensorCommand::ResetHeading => {
                 if self.reset_heading() {
                     SensorOutcome::Inform(
@@ -352,15 +348,11 @@ impl SensorHub {
             SensorCommand::SaveRecording => self.save_recording(hooks),
             SensorCommand::ApplyPreset(preset) => {
                 self.apply_preset(preset, session.skeleton());
-                self.release();
-                session.hold_joints(&[]);
-                SensorOutcome::Quiet
+                self.release_joints(session)
             }
             SensorCommand::Assign { sensor, assignment } => {
                 self.assign(sensor, assignment);
-                self.release();
-                session.hold_joints(&[]);
-                SensorOutcome::Quiet
+                self.release_joints(session)
             }
             other => self.apply_stream(other, now_secs),
         }
@@ -395,6 +387,13 @@ impl SensorHub {
             // Device and rig commands are carried out above.
             _ => SensorOutcome::Quiet,
         }
+    }
+
+    /// The sensors stop driving their joints; the solver takes them back.
+    fn release_joints(&mut self, session: &mut PosingSession) -> SensorOutcome {
+        self.release();
+        session.hold_joints(&[]);
+        SensorOutcome::Quiet
     }
 
     /// Asks the page to open the device chosen in the settings.

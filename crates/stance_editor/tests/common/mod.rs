@@ -84,21 +84,26 @@ pub fn drag_right_forearm_up(harness: &mut Harness<'static, StanceApp>) -> (Pos2
     let outward = egui::vec2((wrist.x - pelvis.x).signum() * 3.0, 0.0);
     let start = elbow + (wrist - elbow) * 0.6 + outward;
     let end = start + egui::vec2(-60.0, -120.0);
-    harness.event(egui::Event::PointerMoved(start));
-    harness.step();
-    harness.event(egui::Event::PointerButton {
-        pos: start,
-        button: PointerButton::Primary,
-        pressed: true,
-        modifiers: Modifiers::NONE,
-    });
-    harness.step();
+    press_at(harness, start);
     for step in 1..=20 {
         let t = step as f32 / 20.0;
         harness.event(egui::Event::PointerMoved(start + (end - start) * t));
         harness.step();
     }
     (start, end)
+}
+
+/// Moves the pointer to `pos` and presses the primary button there (a drag starts).
+pub fn press_at(harness: &mut Harness<'static, StanceApp>, pos: Pos2) {
+    harness.event(egui::Event::PointerMoved(pos));
+    harness.step();
+    harness.event(egui::Event::PointerButton {
+        pos,
+        button: PointerButton::Primary,
+        pressed: true,
+        modifiers: Modifiers::NONE,
+    });
+    harness.step();
 }
 
 /// Releases the primary button at `pos`.
