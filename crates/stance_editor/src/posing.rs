@@ -449,7 +449,10 @@ impl PosingSession {
             && target_world.is_finite()
         {
             grab.target_world = target_world;
-            self.wake();
+            // Only the goal moved: the posture, its frames and the tasks' statuses are as
+            // they were until the next frame's solve (which refreshes them once).
+            self.settled = false;
+            self.revision = self.revision.wrapping_add(1);
         }
     }
 
