@@ -4,9 +4,6 @@
 # the workspace's. wasm-pack finds the pinned wasm-bindgen CLI that setup.sh installs.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-# Clippy lints the workspace crates as they compile (the same setting as the tests).
-# shellcheck source=scripts/clippy-env.sh
-source scripts/clippy-env.sh
 say() { printf '\033[1;34m[package]\033[0m %s\n' "$*"; }
 
 workspace=$(sed -n '/^\[workspace.package\]/,/^\[/s/^version = "\(.*\)"/\1/p' Cargo.toml)

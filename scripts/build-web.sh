@@ -4,9 +4,6 @@
 # Cargo and wasm-bindgen only redo work when their inputs changed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-# Clippy lints the workspace crates as they compile (the same setting as the tests).
-# shellcheck source=scripts/clippy-env.sh
-source scripts/clippy-env.sh
 say() { printf '\033[1;34m[build]\033[0m %s\n' "$*"; }
 
 say "compiling stance_web for wasm32 (release)"

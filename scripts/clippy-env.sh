@@ -1,7 +1,7 @@
-# Sourced by the build and test scripts: every workspace crate is compiled by clippy-driver, so
-# that one build both lints (clippy, -D warnings) and compiles it. Dependencies are compiled by
-# plain rustc. The same setting everywhere keeps cargo's fingerprints, so `npm test` and
-# `npm start` reuse each other's builds.
+# Sourced by scripts/test.sh for its test builds: every workspace crate is compiled by
+# clippy-driver, so that one build both lints (clippy, -D warnings) and compiles it.
+# Dependencies are compiled by plain rustc. Not for what ships: clippy-driver turns MIR
+# optimisations off, so the site and the npm package are built by plain rustc (without this).
 driver=$(command -v clippy-driver || rustup which clippy-driver 2>/dev/null || true)
 if [ -z "$driver" ]; then
   echo "clippy-driver is missing: rustup component add clippy" >&2

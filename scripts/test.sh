@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Runs every layer of Stance's tests and its quality gates; stops at the first failure.
-#   1. gates: rustfmt, purity of the core crates; clippy (-D warnings) runs inside every build
-#      below (scripts/clippy-env.sh): natively for all targets, for wasm32 in wasm-pack's
-#      builds and the site build
+#   1. gates: rustfmt, purity of the core crates; clippy (-D warnings) runs inside the test
+#      builds below (scripts/clippy-env.sh): natively for all targets, for wasm32 in
+#      wasm-pack's builds; stance_js's wasm32-only code is linted on its own
 #   2. native `cargo test --workspace` (includes the lavapipe offscreen render)
 #   3. the pure crates' and stance_asset's tests in headless Chromium (wasm-pack test)
 #   4. the built site in headless Chromium, WebGL2 and WebGPU (Playwright), and the npm
@@ -54,8 +54,13 @@ for crate in "${PURE_CRATES[@]}" stance_asset; do
   wasm-pack test --headless --chrome --chromedriver "$(command -v chromedriver)" "crates/$crate" "${show[@]}"
 done
 
+step "clippy (wasm32): stance_js, the npm package's bindings"
+env -u RUSTC_WORKSPACE_WRAPPER -u CLIPPY_ARGS \
+  cargo clippy --quiet --target wasm32-unknown-unknown -p stance_js --lib -- -D warnings
+
 step "site build (and the stance-ik package with its three.js example)"
-bash scripts/build-web.sh
+# What ships is compiled by plain rustc (see scripts/clippy-env.sh).
+env -u RUSTC_WORKSPACE_WRAPPER -u CLIPPY_ARGS bash scripts/build-web.sh
 
 step "end to end in headless Chromium (WebGL2 and WebGPU)"
 node --test --test-concurrency=1 tests/
