@@ -5,7 +5,7 @@
 use stance_hanim::{mirror_name, readable_name};
 use stance_ik::Axes;
 
-use crate::{PostureValues, TaskKindSpec, TaskSpec};
+use crate::{DEFAULT_BALANCE_MARGIN, PostureValues, TaskKindSpec, TaskSpec};
 
 /// A point or direction reflected in the sagittal plane (x -> -x).
 fn reflect(v: [f64; 3]) -> [f64; 3] {
@@ -32,6 +32,17 @@ impl TaskSpec {
             axes: Axes::new(true, true, true),
             target: position,
         })
+    }
+
+    /// Balance at level 2: the centre of mass over the support polygon of the parts pinned
+    /// on the floor, `DEFAULT_BALANCE_MARGIN` inside its edges.
+    pub fn balance() -> TaskSpec {
+        let mut balance = TaskSpec::new(TaskKindSpec::Balance {
+            support: None,
+            margin: DEFAULT_BALANCE_MARGIN,
+        });
+        balance.level = 2;
+        balance
     }
 
     /// Comfort: a light attraction of every joint toward the rest posture, at level 10.

@@ -135,6 +135,8 @@ impl PoseLibrary {
 pub struct Autosave {
     saved: Option<Document>,
     last_secs: f64,
+    /// The last save failed (the failure was said once).
+    failing: bool,
 }
 
 impl Default for Autosave {
@@ -142,6 +144,7 @@ impl Default for Autosave {
         Self {
             saved: None,
             last_secs: f64::NEG_INFINITY,
+            failing: false,
         }
     }
 }
@@ -159,28 +162,29 @@ impl Autosave {
         self.saved = Some(document);
     }
 
-    /// Saves `document` at `now_secs` when it changed and the interval has passed. Returns
-    /// the host's error the first time saving fails (then stays quiet until it works again).
+    /// Saves the document at `now_secs` when the interval has passed and it changed (it is
+    /// only made then: `document` runs at most once a second). Returns the host's error the
+    /// first time saving fails (then stays quiet until it works again).
     pub fn tick(
         &mut self,
         now_secs: f64,
-        document: Document,
+        document: impl FnOnce() -> Document,
         hooks: &dyn HostHooks,
     ) -> Option<String> {
-        if now_secs - self.last_secs < AUTOSAVE_INTERVAL_SECS
-            || self.saved.as_ref() == Some(&document)
-        {
+        if now_secs - self.last_secs < AUTOSAVE_INTERVAL_SECS {
+            return None;
+        }
+        let document = document();
+        if self.saved.as_ref() == Some(&document) {
             return None;
         }
         self.last_secs = now_secs;
         let result = hooks.save_text(AUTOSAVE_KEY, &document.to_json(false));
-        let first_failure = self.saved.is_some();
+        // A document that cannot be saved is not tried again until it changes.
         self.saved = Some(document);
-        match result {
-            Ok(()) => None,
-            Err(error) if first_failure => Some(error),
-            Err(_) => None,
-        }
+        let first_failure = result.is_err() && !self.failing;
+        self.failing = result.is_err();
+        result.err().filter(|_| first_failure)
     }
 }
 

@@ -67,6 +67,8 @@ pub struct EditorModel {
     bones: Vec<MannequinBone>,
     /// Whether the last step put sensor readings in the posture.
     sensors_drove: bool,
+    /// The session revision the bones were built for.
+    bones_revision: Option<u64>,
     /// CPU time of the last step's solve (ms).
     pub(crate) solver_ms: f64,
     /// How many times the session was replaced (views keep per-session state by it).
@@ -107,6 +109,7 @@ impl EditorModel {
             autosave: Autosave::default(),
             now_secs: 0.0,
             bones: Vec::new(),
+            bones_revision: None,
             sensors_drove: false,
             solver_ms: 0.0,
             session_generation: 0,
@@ -193,11 +196,6 @@ impl EditorModel {
         self.session_generation
     }
 
-    /// Whether the last step put new sensor readings in the posture.
-    pub fn sensors_drove(&self) -> bool {
-        self.sensors_drove
-    }
-
     /// Seconds since the editor started, as of the last step.
     pub fn now_secs(&self) -> f64 {
         self.now_secs
@@ -205,11 +203,7 @@ impl EditorModel {
 
     /// The document: the session's posture and tasks, and the avatar they are for.
     pub fn document(&self) -> Document {
-        let mut document = self.session.document();
-        if let Some(url) = &self.avatar_url {
-            document.avatar = AvatarReference::Url(url.clone());
-        }
-        document
+        document_of(&self.session, self.avatar_url.as_deref())
     }
 
     /// Whether anything still moves: the solver has not settled, a gesture or a replay goes
@@ -257,8 +251,14 @@ impl EditorModel {
         }
     }
 
+    /// The bones follow the posture: rebuilt when the session's revision moved (or the
+    /// session was replaced), not every frame.
     fn refresh_bones(&mut self) {
-        self.bones = bones::posed_bones(&self.session);
+        let revision = Some(self.session.revision());
+        if revision != self.bones_revision {
+            self.bones = bones::posed_bones(&self.session);
+            self.bones_revision = revision;
+        }
     }
 
     fn expire_notice(&mut self) {
@@ -436,19 +436,19 @@ impl EditorModel {
     }
 
     pub(crate) fn inform(&mut self, text: impl Into<String>) {
-        self.notice = Some(Notice {
-            text: text.into(),
-            is_error: false,
-            since_secs: self.now_secs,
-        });
+        self.notify(text.into(), false);
     }
 
     pub(crate) fn warn(&mut self, text: impl Into<String>) {
         let text = text.into();
         log::warn!("{text}");
+        self.notify(text, true);
+    }
+
+    fn notify(&mut self, text: String, is_error: bool) {
         self.notice = Some(Notice {
             text,
-            is_error: true,
+            is_error,
             since_secs: self.now_secs,
         });
     }
@@ -469,7 +469,7 @@ impl EditorModel {
     }
 
     fn undo(&mut self) {
-        self.drop_gesture();
+        self.end_gesture();
         let current = self.session.document();
         match self.history.undo(&current) {
             Some(previous) => self.restore(&previous, "undo"),
@@ -478,7 +478,7 @@ impl EditorModel {
     }
 
     fn redo(&mut self) {
-        self.drop_gesture();
+        self.end_gesture();
         let current = self.session.document();
         match self.history.redo(&current) {
             Some(next) => self.restore(&next, "redo"),
@@ -525,7 +525,7 @@ impl EditorModel {
     // Gestures
 
     fn begin_pull(&mut self, joint: usize, point_world: DVec3) {
-        self.drop_gesture();
+        self.end_gesture();
         let document_before = Box::new(self.session.document());
         self.record(EditKind::Command);
         self.history.break_coalescing();
@@ -545,7 +545,7 @@ impl EditorModel {
         if matches!(gesture, Gesture::Pull { .. }) {
             return;
         }
-        self.drop_gesture();
+        self.end_gesture();
         self.record(EditKind::Command);
         self.history.break_coalescing();
         if let Gesture::Swivel { limb, .. } = &gesture {
@@ -584,11 +584,6 @@ impl EditorModel {
         }
     }
 
-    /// Ends any gesture without a word (undo, redo, a new session).
-    fn drop_gesture(&mut self) {
-        self.end_gesture();
-    }
-
     // -----------------------------------------------------------------------------------------
     // Sessions: one way to replace the posing session.
 
@@ -606,6 +601,7 @@ impl EditorModel {
             self.history = History::default();
         }
         self.session_generation += 1;
+        self.bones_revision = None;
         self.refresh_bones();
     }
 
@@ -977,7 +973,8 @@ impl EditorModel {
         if self.is_pulling() {
             return;
         }
-        let document = self.document();
+        let (session, avatar_url) = (&self.session, &self.avatar_url);
+        let document = || document_of(session, avatar_url.as_deref());
         if let Some(error) = self
             .autosave
             .tick(self.now_secs, document, self.hooks.as_ref())
@@ -985,4 +982,13 @@ impl EditorModel {
             self.warn(format!("Autosave failed: {error}"));
         }
     }
+}
+
+/// The session's document, for the avatar at `avatar_url` (`None`: the built-in one).
+fn document_of(session: &PosingSession, avatar_url: Option<&str>) -> Document {
+    let mut document = session.document();
+    if let Some(url) = avatar_url {
+        document.avatar = AvatarReference::Url(url.to_owned());
+    }
+    document
 }

@@ -3,9 +3,7 @@
 //! every frame within a time budget. No egui here: everything is tested natively.
 
 use glam::{DQuat, DVec3};
-use stance_document::{
-    DEFAULT_BALANCE_MARGIN, Document, LimbName, PostureValues, TaskKindSpec, TaskSpec,
-};
+use stance_document::{Document, LimbName, PostureValues, TaskKindSpec, TaskSpec};
 use stance_hanim::{
     HumanoidSkeleton, LevelOfArticulation, SkeletonOptions, default_skeleton, mirror_name,
 };
@@ -154,12 +152,7 @@ impl PosingSession {
         }
         // Balance as the support polygon of the pinned feet (an inequality): the body leans
         // freely as long as its centre of mass stays over them.
-        let mut balance = TaskSpec::new(TaskKindSpec::Balance {
-            support: None,
-            margin: DEFAULT_BALANCE_MARGIN,
-        });
-        balance.level = 2;
-        tasks.push(balance);
+        tasks.push(TaskSpec::balance());
         tasks.push(TaskSpec::comfort());
         tasks
     }

@@ -3,7 +3,7 @@
 //! paper's Table 1.
 
 use glam::{DQuat, DVec3};
-use stance_document::{DEFAULT_BALANCE_MARGIN, LimbName, TaskKindSpec, TaskSpec};
+use stance_document::{LimbName, TaskKindSpec, TaskSpec};
 use stance_ik::Axes;
 
 use crate::posing::{PosingSession, joint_rotation};
@@ -87,13 +87,7 @@ pub fn make_task(session: &PosingSession, what: NewTask) -> Result<TaskSpec, Str
         }
         NewTask::Gaze => (gaze_ahead(session)?, next_level(session)),
         NewTask::Limb(limb) => (limb_as_it_stands(session, limb)?, next_level(session)),
-        NewTask::Balance => {
-            let kind = TaskKindSpec::Balance {
-                support: None,
-                margin: DEFAULT_BALANCE_MARGIN,
-            };
-            (kind, 2)
-        }
+        NewTask::Balance => return Ok(TaskSpec::balance()),
         NewTask::CentreOfMass => {
             let com = frames.center_of_mass();
             let kind = TaskKindSpec::Com {
@@ -146,34 +140,8 @@ fn limb_as_it_stands(session: &PosingSession, limb: LimbName) -> Result<TaskKind
 /// (level 3); comfort.
 pub fn table1_example(session: &PosingSession) -> Vec<TaskSpec> {
     let position = |name: &str| session.joint_position(name).unwrap_or_default();
-    let ankle = position("l_talocrural");
     let sphere = [-0.3, 1.15, 0.4];
     let bar = [0.35, 1.0, 0.2];
-    let mut tasks = Vec::new();
-    let mut foot = TaskSpec::new(TaskKindSpec::Position {
-        joint: "l_talocrural".to_owned(),
-        point: [0.0; 3],
-        axes: Axes::XYZ,
-        target: ankle.to_array(),
-    });
-    foot.level = 1;
-    tasks.push(foot);
-    tasks.push(TaskSpec::new(TaskKindSpec::Orientation {
-        joint: "l_talocrural".to_owned(),
-        target: DQuat::IDENTITY.to_array(),
-    }));
-    tasks.push(TaskSpec::new(TaskKindSpec::Gaze {
-        joint: "skullbase".to_owned(),
-        axis: [0.0, 0.0, 1.0],
-        point: [0.0; 3],
-        target: sphere,
-    }));
-    tasks.push(TaskSpec::new(TaskKindSpec::Position {
-        joint: "r_radiocarpal".to_owned(),
-        point: [0.0; 3],
-        axes: Axes::XYZ,
-        target: sphere,
-    }));
     let left = position("l_talocrural");
     let right = position("r_talocrural");
     let between = (left + right) * 0.5;
@@ -183,7 +151,6 @@ pub fn table1_example(session: &PosingSession) -> Vec<TaskSpec> {
         target: [com_goal.x, 0.0, com_goal.z],
     });
     balance.level = 2;
-    tasks.push(balance);
     let mut bar_task = TaskSpec::new(TaskKindSpec::Position {
         joint: "l_radiocarpal".to_owned(),
         point: [0.0; 3],
@@ -191,9 +158,23 @@ pub fn table1_example(session: &PosingSession) -> Vec<TaskSpec> {
         target: bar,
     });
     bar_task.level = 3;
-    tasks.push(bar_task);
-    tasks.push(TaskSpec::comfort());
-    tasks
+    vec![
+        TaskSpec::pin("l_talocrural", left.to_array()),
+        TaskSpec::new(TaskKindSpec::Orientation {
+            joint: "l_talocrural".to_owned(),
+            target: DQuat::IDENTITY.to_array(),
+        }),
+        TaskSpec::new(TaskKindSpec::Gaze {
+            joint: "skullbase".to_owned(),
+            axis: [0.0, 0.0, 1.0],
+            point: [0.0; 3],
+            target: sphere,
+        }),
+        TaskSpec::pin("r_radiocarpal", sphere),
+        balance,
+        bar_task,
+        TaskSpec::comfort(),
+    ]
 }
 
 #[cfg(test)]
