@@ -3,7 +3,6 @@
 //! per-task statuses, the notice, the handles on screen, the sensors, the frame's timings and
 //! the rectangles of the main buttons.
 
-use glam::Vec2;
 use serde_json::{Map, Value, json};
 
 use super::viewport_panel::ViewportPanel;
@@ -72,6 +71,7 @@ impl PageState<'_> {
         let session = self.model.session();
         let frames = session.frames();
         let rect = self.viewport.rect;
+        let lens = self.viewport.lens();
         let mut joints = Map::new();
         let mut screen = Map::new();
         for (index, joint) in session.skeleton().joints().iter().enumerate() {
@@ -83,15 +83,9 @@ impl PageState<'_> {
                 json!([position.x, position.y, position.z]),
             );
             if rect.is_positive()
-                && let Some(pixel) = self
-                    .viewport
-                    .camera
-                    .project(position.as_vec3(), Vec2::new(rect.width(), rect.height()))
+                && let Some(pixel) = lens.screen_point(*position)
             {
-                screen.insert(
-                    joint.name.clone(),
-                    json!([rect.min.x + pixel.x, rect.min.y + pixel.y]),
-                );
+                screen.insert(joint.name.clone(), json!([pixel.x, pixel.y]));
             }
         }
         (joints, screen)
