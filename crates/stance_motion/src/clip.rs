@@ -1,0 +1,169 @@
+//! A motion clip on its own skeleton.
+
+use glam::{DQuat, DVec3};
+use stance_hanim::{Mapping, SourceJoint};
+
+/// One joint of a clip's skeleton.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ClipJoint {
+    /// The name in the source file.
+    pub name: String,
+    /// Index of the parent (always smaller than this joint's); `None` for the root.
+    pub parent: Option<usize>,
+    /// Rest offset from the parent joint (metres, H-Anim frame; for the root its rest
+    /// position in the world).
+    pub offset: DVec3,
+}
+
+/// One frame: a local transform per joint, in joint order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ClipFrame {
+    /// Local translation of each joint from its parent (metres; equal to the joint's
+    /// offset unless the joint has position channels; for the root, its world position).
+    pub translations: Vec<DVec3>,
+    /// Local rotation of each joint (`parent_from_joint`, relative to the rest frame, which
+    /// is parallel to the world).
+    pub rotations: Vec<DQuat>,
+}
+
+/// A motion clip: frames at a fixed rate on the clip's skeleton, mapped onto H-Anim.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Clip {
+    /// A name (the file's stem).
+    pub name: String,
+    /// Seconds per frame (BVH `Frame Time`), > 0.
+    pub frame_time: f64,
+    /// The skeleton, parents before children.
+    pub joints: Vec<ClipJoint>,
+    /// The frames.
+    pub frames: Vec<ClipFrame>,
+    /// Which joint is which H-Anim joint (source joint index = clip joint index).
+    pub mapping: Mapping,
+    /// What the reader noticed and did (units detected, frame count corrected...).
+    pub notes: Vec<String>,
+}
+
+/// Errors of clip operations.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ClipError {
+    /// A frame's joint count differs from the skeleton's.
+    #[error("frame {frame} has {got} joints, the skeleton {expected}")]
+    FrameSize {
+        /// Frame index.
+        frame: usize,
+        /// Joints in the skeleton.
+        expected: usize,
+        /// Joints in the frame.
+        got: usize,
+    },
+    /// A parent index is not before its child.
+    #[error("joint {0} ('{1}') has a parent that does not come before it")]
+    Parent(usize, String),
+    /// A number is not finite.
+    #[error("{0} is not finite")]
+    NotFinite(String),
+    /// The frame time is not positive.
+    #[error("the frame time must be positive and finite, got {0}")]
+    FrameTime(f64),
+}
+
+impl Clip {
+    /// Number of frames.
+    pub fn frame_count(&self) -> usize {
+        self.frames.len()
+    }
+
+    /// Frames per second.
+    pub fn fps(&self) -> f64 {
+        1.0 / self.frame_time
+    }
+
+    /// Duration in seconds (`frame_count * frame_time`, BVH's convention).
+    pub fn duration(&self) -> f64 {
+        self.frames.len() as f64 * self.frame_time
+    }
+
+    /// Checks the structure: parents first, frame sizes, finite numbers, frame time.
+    pub fn validate(&self) -> Result<(), ClipError> {
+        if !(self.frame_time.is_finite() && self.frame_time > 0.0) {
+            return Err(ClipError::FrameTime(self.frame_time));
+        }
+        for (i, j) in self.joints.iter().enumerate() {
+            if j.parent.is_some_and(|p| p >= i) || (i > 0 && j.parent.is_none()) {
+                return Err(ClipError::Parent(i, j.name.clone()));
+            }
+            if !j.offset.is_finite() {
+                return Err(ClipError::NotFinite(format!("the offset of '{}'", j.name)));
+            }
+        }
+        let n = self.joints.len();
+        for (f, frame) in self.frames.iter().enumerate() {
+            for got in [frame.translations.len(), frame.rotations.len()] {
+                if got != n {
+                    return Err(ClipError::FrameSize {
+                        frame: f,
+                        expected: n,
+                        got,
+                    });
+                }
+            }
+            if !frame.translations.iter().all(|t| t.is_finite())
+                || !frame.rotations.iter().all(|q| q.is_finite())
+            {
+                return Err(ClipError::NotFinite(format!("frame {f}")));
+            }
+        }
+        Ok(())
+    }
+
+    /// The rest frame: offsets and identity rotations.
+    pub fn rest_frame(&self) -> ClipFrame {
+        ClipFrame {
+            translations: self.joints.iter().map(|j| j.offset).collect(),
+            rotations: vec![DQuat::IDENTITY; self.joints.len()],
+        }
+    }
+
+    /// World rotation and position of every joint in `frame` (forward kinematics).
+    pub fn world(&self, frame: &ClipFrame) -> Vec<(DQuat, DVec3)> {
+        let mut out: Vec<(DQuat, DVec3)> = Vec::with_capacity(self.joints.len());
+        for (i, j) in self.joints.iter().enumerate() {
+            let t = frame.translations.get(i).copied().unwrap_or(j.offset);
+            let r = frame.rotations.get(i).copied().unwrap_or(DQuat::IDENTITY);
+            let w = match j.parent.and_then(|p| out.get(p)) {
+                Some(&(pr, pp)) => ((pr * r).normalize(), pp + pr * t),
+                None => (r.normalize(), t),
+            };
+            out.push(w);
+        }
+        out
+    }
+
+    /// World positions of every joint at rest.
+    pub fn rest_positions(&self) -> Vec<DVec3> {
+        self.world(&self.rest_frame())
+            .into_iter()
+            .map(|(_, p)| p)
+            .collect()
+    }
+
+    /// The joints as the H-Anim mapper sees them (rest positions).
+    pub fn source_joints(&self) -> Vec<SourceJoint> {
+        self.joints
+            .iter()
+            .zip(self.rest_positions())
+            .map(|(j, position)| SourceJoint {
+                name: j.name.clone(),
+                parent: j.parent,
+                position,
+            })
+            .collect()
+    }
+
+    /// Index of the clip joint mapped to an H-Anim joint.
+    pub fn joint_of(&self, hanim: &str) -> Option<usize> {
+        self.mapping
+            .source_of(hanim)
+            .filter(|&i| i < self.joints.len())
+    }
+}

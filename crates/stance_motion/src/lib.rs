@@ -1,0 +1,18 @@
+//! Motion: clips of a humanoid over time and their re-use on other bodies (Boulic &
+//! Baerlocher, section 2.2: the motion adapted to other characters and other levels of
+//! articulation through constraints active over time windows, with priorities among them).
+//!
+//! - [`Clip`]: frames of local joint transforms on the clip's own skeleton, in the H-Anim
+//!   frame (metres, +Y up, +Z front, +X the body's left), with the skeleton's mapping onto
+//!   H-Anim 2.0 names.
+//! - [`bvh`]: BVH in (with the dialect quirks of real files) and out.
+//!
+//! Like `stance_ik`, joint frames are parallel to the world at rest (BVH's convention too):
+//! `world_from_joint = world_from_parent * T(translation) * R(rotation)`, the rest pose
+//! having every translation equal to the joint's offset and every rotation the identity.
+
+#![warn(missing_docs)]
+
+pub mod clip;
+
+pub use clip::{Clip, ClipError, ClipFrame, ClipJoint};
