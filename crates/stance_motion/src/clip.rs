@@ -1,7 +1,8 @@
 //! A motion clip on its own skeleton.
 
 use glam::{DQuat, DVec3};
-use stance_hanim::{Mapping, SourceJoint};
+use stance_hanim::{HumanoidSkeleton, Mapping, SourceJoint};
+use stance_ik::Posture;
 
 /// One joint of a clip's skeleton.
 #[derive(Debug, Clone, PartialEq)]
@@ -68,6 +69,45 @@ pub enum ClipError {
 }
 
 impl Clip {
+    /// A clip of postures of a solver skeleton (a sensor recording, keyframes baked, a
+    /// retargeted clip): joints with their H-Anim names, frames from the postures.
+    pub fn from_postures(
+        name: &str,
+        skeleton: &HumanoidSkeleton,
+        postures: &[Posture],
+        frame_time: f64,
+    ) -> Self {
+        let s = &skeleton.skeleton;
+        let joints: Vec<ClipJoint> = s
+            .joints()
+            .iter()
+            .map(|j| ClipJoint {
+                name: j.name.clone(),
+                parent: j.parent,
+                offset: j.offset,
+            })
+            .collect();
+        let frames = postures
+            .iter()
+            .map(|p| ClipFrame {
+                translations: (0..joints.len())
+                    .map(|k| joints[k].offset + p.translation(s, k))
+                    .collect(),
+                rotations: (0..joints.len()).map(|k| p.local_rotation(s, k)).collect(),
+            })
+            .collect();
+        let mut clip = Self {
+            name: name.to_owned(),
+            frame_time,
+            joints,
+            frames,
+            mapping: Mapping::empty(0),
+            notes: Vec::new(),
+        };
+        clip.mapping = Mapping::auto(&clip.source_joints(), &[], false);
+        clip
+    }
+
     /// Number of frames.
     pub fn frame_count(&self) -> usize {
         self.frames.len()

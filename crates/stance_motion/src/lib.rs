@@ -16,3 +16,8 @@
 pub mod clip;
 
 pub use clip::{Clip, ClipError, ClipFrame, ClipJoint};
+pub mod contacts;
+pub mod retarget;
+
+pub use contacts::{Contact, ContactSettings};
+pub use retarget::{MotionError, RestMatch, RetargetOptions, Retargeted, retarget};

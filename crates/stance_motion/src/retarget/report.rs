@@ -1,0 +1,104 @@
+//! What a retargeting run is judged by: contact drift and sinking, smoothness at constraint
+//! boundaries.
+
+use glam::{DQuat, DVec3};
+use serde::{Deserialize, Serialize};
+use stance_ik::{Posture, Skeleton};
+
+use crate::contacts::Contact;
+
+/// How firmly contacts held.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct ContactMetrics {
+    /// Largest horizontal distance of a foot from where its contact began (m).
+    pub max_drift: f64,
+    /// Mean of that distance over the contact frames (m).
+    pub mean_drift: f64,
+    /// Deepest the foot went below its height standing on the floor (m, 0 if never).
+    pub max_sink: f64,
+    /// Contact frames measured.
+    pub frames: usize,
+}
+
+/// Contact metrics of foot tracks: `track(joint_name, frame)` gives the foot's world
+/// position; `floor_height` the foot joint's height when standing on the floor.
+pub fn contact_metrics(
+    contacts: &[Contact],
+    floor_height: f64,
+    track: impl Fn(&str, usize) -> Option<DVec3>,
+) -> ContactMetrics {
+    let mut m = ContactMetrics::default();
+    let mut sum = 0.0;
+    for c in contacts {
+        let Some(first) = track(&c.joint, c.start) else {
+            continue;
+        };
+        for f in c.start..=c.end {
+            let Some(p) = track(&c.joint, f) else {
+                continue;
+            };
+            let d = DVec3::new(p.x - first.x, 0.0, p.z - first.z).length();
+            m.max_drift = m.max_drift.max(d);
+            m.max_sink = m.max_sink.max(floor_height - p.y);
+            sum += d;
+            m.frames += 1;
+        }
+    }
+    m.mean_drift = if m.frames > 0 {
+        sum / m.frames as f64
+    } else {
+        0.0
+    };
+    m
+}
+
+/// Frame-to-frame joint motion.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Smoothness {
+    /// Largest change of any joint's local rotation between two frames next to a
+    /// constraint boundary (rad).
+    pub worst_boundary_jump: f64,
+    /// Largest change of any joint's local rotation between two frames of the reference
+    /// (the clip's own motion, rad).
+    pub clip_max_jump: f64,
+}
+
+fn max_jump(skeleton: &Skeleton, a: &Posture, b: &Posture) -> f64 {
+    (0..skeleton.joint_count())
+        .map(|j| {
+            let qa: DQuat = a.local_rotation(skeleton, j);
+            let qb: DQuat = b.local_rotation(skeleton, j);
+            qa.angle_between(qb)
+        })
+        .fold(0.0, f64::max)
+}
+
+/// Smoothness of `postures` at the contacts' boundaries (within `ease` frames of a start or
+/// an end) against the frame-to-frame motion of `reference`.
+pub fn smoothness(
+    skeleton: &Skeleton,
+    postures: &[Posture],
+    reference: &[Posture],
+    contacts: &[Contact],
+    ease: usize,
+) -> Smoothness {
+    let near = |f: usize| {
+        contacts.iter().any(|c| {
+            [c.start, c.end]
+                .iter()
+                .any(|&b| f + ease + 1 >= b && f <= b + ease + 1)
+        })
+    };
+    let mut s = Smoothness::default();
+    for f in 1..postures.len().min(reference.len()) {
+        s.clip_max_jump = s
+            .clip_max_jump
+            .max(max_jump(skeleton, &reference[f - 1], &reference[f]));
+        if near(f) {
+            s.worst_boundary_jump =
+                s.worst_boundary_jump
+                    .max(max_jump(skeleton, &postures[f - 1], &postures[f]));
+        }
+    }
+    s
+}

@@ -1,0 +1,266 @@
+//! Retargeting against hand-made oracles: the same body gets its motion back exactly, a
+//! scaled body gets the motion scaled, a T-pose body gets an A-pose clip's bone directions,
+//! and foot contacts hold where the plain copy slides.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use glam::{DQuat, DVec3};
+use stance_hanim::{
+    HumanoidSkeleton, LevelOfArticulation, Mapping, SkeletonOptions, SourceJoint, build_skeleton,
+    default_skeleton,
+};
+use stance_ik::{Frames, Posture};
+use stance_motion::retarget::{ContactMetrics, contact_metrics, joint_positions};
+use stance_motion::{Clip, ContactSettings, RestMatch, RetargetOptions, retarget};
+
+fn body(loa: LevelOfArticulation) -> HumanoidSkeleton {
+    default_skeleton(&SkeletonOptions {
+        loa,
+        ..Default::default()
+    })
+    .unwrap()
+}
+
+/// A body from the default one with each rest position moved by `f`.
+fn reshaped(loa: LevelOfArticulation, f: impl Fn(&str, DVec3) -> DVec3) -> HumanoidSkeleton {
+    let base = body(loa);
+    let rest = Frames::new(&base.skeleton, &Posture::rest(&base.skeleton)).joint_position;
+    let joints: Vec<SourceJoint> = base
+        .skeleton
+        .joints()
+        .iter()
+        .zip(&rest)
+        .map(|(j, p)| SourceJoint {
+            name: j.name.clone(),
+            parent: j.parent,
+            position: f(&j.name, *p),
+        })
+        .collect();
+    let mapping = Mapping::auto(&joints, &[], false);
+    let positions: Vec<DVec3> = joints.iter().map(|j| j.position).collect();
+    build_skeleton(
+        &mapping,
+        &positions,
+        &SkeletonOptions {
+            loa,
+            ..Default::default()
+        },
+    )
+    .unwrap()
+}
+
+/// A posture with every DOF moved a little (within limits), varying with `t`.
+fn moving(s: &HumanoidSkeleton, t: f64) -> Posture {
+    let sk = &s.skeleton;
+    let mut p = Posture::rest(sk);
+    for d in 0..sk.dof_count() {
+        let (lo, hi) = (sk.lower_limits()[d], sk.upper_limits()[d]);
+        let v = 0.3 * ((d as f64 * 1.7 + t * 3.0).sin());
+        p.values_mut()[d] = if sk.dof_kinds()[d].is_rotation() {
+            v.clamp(lo.max(-1.0), hi.min(1.0))
+        } else {
+            0.2 * v
+        };
+    }
+    p
+}
+
+fn world(s: &HumanoidSkeleton, p: &Posture, name: &str) -> DVec3 {
+    let j = s.skeleton.joint_index(name).unwrap();
+    Frames::new(&s.skeleton, p).joint_position[j]
+}
+
+#[test]
+fn the_same_body_gets_its_motion_back() {
+    let s = body(LevelOfArticulation::Loa2);
+    let postures: Vec<Posture> = (0..5).map(|f| moving(&s, f as f64 * 0.1)).collect();
+    let clip = Clip::from_postures("m", &s, &postures, 1.0 / 30.0);
+    let options = RetargetOptions {
+        rest_match: RestMatch::Same,
+        contacts: None,
+        ..Default::default()
+    };
+    let r = retarget(&clip, &s, &options).unwrap();
+    assert_eq!(r.postures.len(), 5);
+    assert!((r.root_scale - 1.0).abs() < 1e-12);
+    // The floor offset: the clip's lowest ankle lands at the rest ankle height.
+    let shift = r.copy[0].values()[1] - postures[0].values()[1];
+    for (a, b) in postures.iter().zip(&r.postures) {
+        for name in ["l_radiocarpal", "r_talocrural", "skullbase", "l_knee"] {
+            let d = world(&s, b, name) - world(&s, a, name) - DVec3::Y * shift;
+            assert!(d.length() < 1e-9, "{name}: {d}");
+        }
+    }
+}
+
+#[test]
+fn a_body_of_other_proportions_gets_the_motion_scaled_by_hip_height() {
+    let s = body(LevelOfArticulation::Loa1);
+    let small = reshaped(LevelOfArticulation::Loa1, |_, p| p * 0.8);
+    let postures: Vec<Posture> = (0..4).map(|f| moving(&s, f as f64 * 0.2)).collect();
+    let clip = Clip::from_postures("m", &s, &postures, 0.04);
+    let r = retarget(
+        &clip,
+        &small,
+        &RetargetOptions {
+            contacts: None,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!((r.root_scale - 0.8).abs() < 1e-9, "{}", r.root_scale);
+    // Every joint where the source's is, scaled by 0.8 (up to the floor's vertical shift).
+    let shift =
+        world(&small, &r.postures[0], "skullbase").y - 0.8 * world(&s, &postures[0], "skullbase").y;
+    for (a, b) in postures.iter().zip(&r.postures) {
+        for name in ["l_radiocarpal", "r_talocrural", "skullbase", "r_elbow"] {
+            let want = world(&s, a, name) * 0.8 + DVec3::Y * shift;
+            let d = world(&small, b, name) - want;
+            assert!(d.length() < 1e-6, "{name}: {d}");
+        }
+    }
+}
+
+#[test]
+fn a_t_pose_body_takes_the_bone_directions_of_an_arms_down_clip() {
+    let s = body(LevelOfArticulation::Loa1);
+    // The target's arms raised to horizontal at rest (a T-pose), about each shoulder.
+    let rest = Frames::new(&s.skeleton, &Posture::rest(&s.skeleton)).joint_position;
+    let shoulder = |side: &str| rest[s.skeleton.joint_index(&format!("{side}_shoulder")).unwrap()];
+    let t_pose = reshaped(LevelOfArticulation::Loa1, |name, p| {
+        for (side, sign) in [("l", 1.0), ("r", -1.0)] {
+            if ["elbow", "radiocarpal"]
+                .iter()
+                .any(|j| name == format!("{side}_{j}"))
+            {
+                let o = shoulder(side);
+                let d = p - o;
+                return o + DVec3::new(sign * d.length(), 0.0, 0.0);
+            }
+        }
+        p
+    });
+    let postures: Vec<Posture> = (0..3).map(|f| moving(&s, f as f64 * 0.3)).collect();
+    let clip = Clip::from_postures("m", &s, &postures, 0.04);
+    let options = RetargetOptions {
+        contacts: None,
+        ..Default::default()
+    };
+    let r = retarget(&clip, &t_pose, &options).unwrap();
+    let dir = |b: &HumanoidSkeleton, p: &Posture, from: &str, to: &str| {
+        (world(b, p, to) - world(b, p, from)).normalize()
+    };
+    for (a, b) in postures.iter().zip(&r.postures) {
+        let want = dir(&s, a, "l_shoulder", "l_elbow");
+        let got = dir(&t_pose, b, "l_shoulder", "l_elbow");
+        assert!(want.angle_between(got) < 1e-6, "{want} {got}");
+    }
+    // Without the rest match the arm would point 80-90 degrees off.
+    let same = retarget(
+        &clip,
+        &t_pose,
+        &RetargetOptions {
+            rest_match: RestMatch::Same,
+            ..options
+        },
+    )
+    .unwrap();
+    let off = dir(&s, &postures[0], "l_shoulder", "l_elbow").angle_between(dir(
+        &t_pose,
+        &same.postures[0],
+        "l_shoulder",
+        "l_elbow",
+    ));
+    assert!(off > 1.2, "{off}");
+}
+
+#[test]
+fn a_clip_made_at_loa2_plays_on_an_loa1_body() {
+    let s2 = body(LevelOfArticulation::Loa2);
+    let s1 = body(LevelOfArticulation::Loa1);
+    let postures: Vec<Posture> = (0..3).map(|f| moving(&s2, f as f64 * 0.3)).collect();
+    let clip = Clip::from_postures("m", &s2, &postures, 0.04);
+    let r = retarget(
+        &clip,
+        &s1,
+        &RetargetOptions {
+            contacts: None,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    // The LOA1 upper arm points where the LOA2 one does.
+    for (a, b) in postures.iter().zip(&r.postures) {
+        let want = (world(&s2, a, "l_elbow") - world(&s2, a, "l_shoulder")).normalize();
+        let got = (world(&s1, b, "l_elbow") - world(&s1, b, "l_shoulder")).normalize();
+        assert!(want.angle_between(got) < 1e-6);
+    }
+}
+
+/// A stepping clip: the left foot planted for frames 10..30 (the body swaying over it,
+/// jittering 6 mm), the leg swinging smoothly in and out.
+fn stepping(s: &HumanoidSkeleton) -> Vec<Posture> {
+    let sk = &s.skeleton;
+    let hip = sk.joint_index("l_hip").unwrap();
+    let knee = sk.joint_index("l_knee").unwrap();
+    let dof = |j: usize, axis: usize| sk.joints()[j].rotation_dof[axis].unwrap();
+    (0..40usize)
+        .map(|f| {
+            let mut p = Posture::rest(sk);
+            let t = f as f64 / 40.0;
+            // The root sways; the left leg swings in and out of the stance.
+            p.values_mut()[0] = 0.03 * (t * 6.0).sin() + 0.006 * (f as f64 * 2.1).sin();
+            p.values_mut()[2] = 0.006 * (f as f64 * 1.3).cos();
+            let outside = if f < 10 { 10 - f } else { f.saturating_sub(29) };
+            let lift = (outside as f64 / 8.0).min(1.0);
+            p.values_mut()[dof(hip, 0)] = -0.4 * lift;
+            // The knee bends the way its range allows, lifting the foot off the floor.
+            let k = dof(knee, 0);
+            let bend = if sk.upper_limits()[k] > 0.5 {
+                1.2
+            } else {
+                -1.2
+            };
+            p.values_mut()[k] = bend * lift;
+            p
+        })
+        .collect()
+}
+
+#[test]
+fn a_planted_foot_stays_put_where_the_copy_slides() {
+    let s = body(LevelOfArticulation::Loa2);
+    let small = reshaped(LevelOfArticulation::Loa2, |_, p| p * 0.85);
+    let clip = Clip::from_postures("step", &s, &stepping(&s), 1.0 / 30.0);
+    let r = retarget(&clip, &small, &RetargetOptions::default()).unwrap();
+    let left: Vec<_> = r
+        .contacts
+        .iter()
+        .filter(|c| c.joint == "l_talocrural")
+        .collect();
+    assert_eq!(left.len(), 1, "{:?}", r.contacts);
+    assert!(left[0].start <= 12 && left[0].end >= 27, "{:?}", left[0]);
+    let measure = |postures: &[Posture]| -> ContactMetrics {
+        let feet = ["l_talocrural", "r_talocrural"].map(|n| small.skeleton.joint_index(n).unwrap());
+        let tracks = joint_positions(&small, postures, &feet);
+        contact_metrics(&r.contacts, r.ankle_height, |joint, f| {
+            let i = if joint == "l_talocrural" { 0 } else { 1 };
+            tracks.get(f).map(|t| t[i])
+        })
+    };
+    let copy = measure(&r.copy);
+    let held = measure(&r.postures);
+    assert!(copy.max_drift > 0.005, "the copy slides: {copy:?}");
+    assert!(
+        held.max_drift < 0.002 && held.mean_drift < 0.0005,
+        "{held:?}"
+    );
+    assert!(held.max_sink < 0.002, "{held:?}");
+    // The levels below still follow the clip: inside the contact, where the foot only
+    // jitters, the head stays within 5 mm of where the copy puts it.
+    for f in left[0].start + 3..=left[0].end - 3 {
+        let d = world(&small, &r.copy[f], "skullbase") - world(&small, &r.postures[f], "skullbase");
+        assert!(d.length() < 0.005, "frame {f}: {d}");
+    }
+    let _ = ContactSettings::default();
+    let _ = DQuat::IDENTITY;
+}
