@@ -35,7 +35,8 @@ pub struct MakeAvatarArgs {
     pub out: PathBuf,
 }
 
-fn load(path: &Path, options: &LoadOptions) -> Result<Avatar> {
+/// Loads an avatar file (external resources next to it only).
+pub fn load(path: &Path, options: &LoadOptions) -> Result<Avatar> {
     let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let mut resolve = |uri: &str| -> Option<Vec<u8>> {

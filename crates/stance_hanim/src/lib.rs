@@ -72,6 +72,11 @@ impl LevelOfArticulation {
     pub fn number(self) -> u8 {
         self as u8
     }
+
+    /// The level of a number, 1 to 4.
+    pub fn from_number(n: u8) -> Option<Self> {
+        Self::ALL.into_iter().find(|l| l.number() == n)
+    }
 }
 
 /// All 146 H-Anim 2.0 joints in X3DUOM index order: a depth-first order, parents first.

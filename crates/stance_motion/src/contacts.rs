@@ -30,6 +30,18 @@ impl Default for ContactSettings {
     }
 }
 
+impl ContactSettings {
+    /// The ease time in frames at `frame_time` seconds per frame.
+    pub fn ease_frames(&self, frame_time: f64) -> usize {
+        let frames = self.ease / frame_time;
+        if frames.is_finite() && frames > 0.0 {
+            frames.round().min(1e6) as usize
+        } else {
+            0
+        }
+    }
+}
+
 /// One contact of a joint with the floor over a window of frames.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Contact {

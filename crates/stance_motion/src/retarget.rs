@@ -25,8 +25,8 @@ use stance_ik::{Frames, IkError, Iteration, Posture, Solver, SolverSettings, Tas
 
 use crate::clip::{Clip, ClipError};
 use crate::contacts::{Contact, ContactSettings, contact_weight, detect_contacts};
-pub use copy::{RestMatch, RotationCopy};
-pub use report::{ContactMetrics, Smoothness, contact_metrics, smoothness};
+pub use copy::{Placement, RestMatch, RotationCopy};
+pub use report::{ContactMetrics, Metrics, Smoothness, contact_metrics, metrics, smoothness};
 
 /// The H-Anim feet held by contacts.
 pub const CONTACT_JOINTS: [&str; 2] = ["l_talocrural", "r_talocrural"];
@@ -105,10 +105,8 @@ pub struct Retargeted {
     pub iterations: usize,
     /// Seconds per frame (the clip's).
     pub frame_time: f64,
-    /// Root motion scale used.
-    pub root_scale: f64,
-    /// Ankle height of the target standing at rest (m): the floor contact height.
-    pub ankle_height: f64,
+    /// Where clip positions land on the target (root scale, floor).
+    pub placement: Placement,
     /// What was noticed (joints the clip lacks...).
     pub notes: Vec<String>,
 }
@@ -158,7 +156,7 @@ pub fn retarget(
                     detect_contacts(
                         name,
                         &track,
-                        copier.ankle_height,
+                        copier.placement.ankle_height,
                         clip.frame_time,
                         &settings,
                     )
@@ -175,8 +173,7 @@ pub fn retarget(
         residuals: Vec::new(),
         iterations: 0,
         frame_time: clip.frame_time,
-        root_scale: copier.root_scale,
-        ankle_height: copier.ankle_height,
+        placement: copier.placement,
         notes: copier.notes.clone(),
     };
     if options.contacts.is_none() {
@@ -186,7 +183,7 @@ pub fn retarget(
     }
     let ease = options
         .contacts
-        .map_or(0, |s| (s.ease / clip.frame_time).round() as usize);
+        .map_or(0, |s| s.ease_frames(clip.frame_time));
     solve_frames(target, &mut out, ease, options.max_iterations)?;
     Ok(out)
 }

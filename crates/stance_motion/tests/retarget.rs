@@ -81,7 +81,7 @@ fn the_same_body_gets_its_motion_back() {
     };
     let r = retarget(&clip, &s, &options).unwrap();
     assert_eq!(r.postures.len(), 5);
-    assert!((r.root_scale - 1.0).abs() < 1e-12);
+    assert!((r.placement.root_scale - 1.0).abs() < 1e-12);
     // The floor offset: the clip's lowest ankle lands at the rest ankle height.
     let shift = r.copy[0].values()[1] - postures[0].values()[1];
     for (a, b) in postures.iter().zip(&r.postures) {
@@ -107,7 +107,11 @@ fn a_body_of_other_proportions_gets_the_motion_scaled_by_hip_height() {
         },
     )
     .unwrap();
-    assert!((r.root_scale - 0.8).abs() < 1e-9, "{}", r.root_scale);
+    assert!(
+        (r.placement.root_scale - 0.8).abs() < 1e-9,
+        "{}",
+        r.placement.root_scale
+    );
     // Every joint where the source's is, scaled by 0.8 (up to the floor's vertical shift).
     let shift =
         world(&small, &r.postures[0], "skullbase").y - 0.8 * world(&s, &postures[0], "skullbase").y;
@@ -242,7 +246,7 @@ fn a_planted_foot_stays_put_where_the_copy_slides() {
     let measure = |postures: &[Posture]| -> ContactMetrics {
         let feet = ["l_talocrural", "r_talocrural"].map(|n| small.skeleton.joint_index(n).unwrap());
         let tracks = joint_positions(&small, postures, &feet);
-        contact_metrics(&r.contacts, r.ankle_height, |joint, f| {
+        contact_metrics(&r.contacts, r.placement.ankle_height, |joint, f| {
             let i = if joint == "l_talocrural" { 0 } else { 1 };
             tracks.get(f).map(|t| t[i])
         })

@@ -34,14 +34,33 @@ pub struct RotationCopy {
     hips: Option<[usize; 2]>,
     /// Target joints of the hips.
     target_hips: Option<[usize; 2]>,
-    /// Lowest ankle height of the clip over all frames (m).
-    lowest_ankle: f64,
-    /// Root motion scale.
-    pub root_scale: f64,
-    /// The target's ankle height standing at rest (m).
-    pub ankle_height: f64,
+    /// Where clip positions land in the target's space.
+    pub placement: Placement,
     /// What was noticed.
     pub notes: Vec<String>,
+}
+
+/// Where clip positions land in the target's space: scaled about the vertical through the
+/// origin by hip height, the clip's lowest ankle at the target's ankle height.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Placement {
+    /// Root motion scale (target hip height over the clip's).
+    pub root_scale: f64,
+    /// Lowest ankle height of the clip over all frames (clip metres).
+    pub lowest_ankle: f64,
+    /// The target's ankle height standing at rest (m): the floor contact height.
+    pub ankle_height: f64,
+}
+
+impl Placement {
+    /// A clip position in the target's space.
+    pub fn place(&self, p: DVec3) -> DVec3 {
+        DVec3::new(
+            self.root_scale * p.x,
+            self.ankle_height + self.root_scale * (p.y - self.lowest_ankle),
+            self.root_scale * p.z,
+        )
+    }
 }
 
 /// Per target joint, its children.
@@ -216,21 +235,13 @@ impl RotationCopy {
             matched,
             hips,
             target_hips,
-            lowest_ankle,
-            root_scale,
-            ankle_height: ankle_t,
+            placement: Placement {
+                root_scale,
+                lowest_ankle,
+                ankle_height: ankle_t,
+            },
             notes,
         })
-    }
-
-    /// A clip position in the target's space: scaled about the vertical through the origin,
-    /// the clip's lowest ankle at the target's ankle height.
-    pub fn place(&self, p: DVec3) -> DVec3 {
-        DVec3::new(
-            self.root_scale * p.x,
-            self.ankle_height + self.root_scale * (p.y - self.lowest_ankle),
-            self.root_scale * p.z,
-        )
     }
 
     /// The copy of frame `f` as a posture of the target.
@@ -277,7 +288,7 @@ impl RotationCopy {
         let skeleton = &target.skeleton;
         let goal = match self.hips {
             Some([l, r]) => match (world.get(l), world.get(r)) {
-                (Some(a), Some(b)) => self.place((a.1 + b.1) * 0.5),
+                (Some(a), Some(b)) => self.placement.place((a.1 + b.1) * 0.5),
                 _ => return,
             },
             None => match self
@@ -287,7 +298,7 @@ impl RotationCopy {
                 .flatten()
                 .and_then(|s| world.get(s))
             {
-                Some(w) => self.place(w.1),
+                Some(w) => self.placement.place(w.1),
                 None => return,
             },
         };

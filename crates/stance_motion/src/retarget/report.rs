@@ -102,3 +102,56 @@ pub fn smoothness(
     }
     s
 }
+
+/// Everything a retargeting run is judged by, side by side: the contacts as the clip itself
+/// moves its feet (placed on the target), as the plain rotation copy does, and as the
+/// retargeted result does; smoothness at the contacts' boundaries.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Metrics {
+    /// The clip's own feet, placed on the target.
+    pub source: ContactMetrics,
+    /// The plain rotation copy.
+    pub copy: ContactMetrics,
+    /// The retargeted result.
+    pub output: ContactMetrics,
+    /// Smoothness of the result against the copy's own frame-to-frame motion.
+    pub smoothness: Smoothness,
+}
+
+/// The metrics of `result`, retargeted from `clip` onto `target`; `ease`: the ease frames.
+pub fn metrics(
+    clip: &crate::Clip,
+    target: &stance_hanim::HumanoidSkeleton,
+    result: &super::Retargeted,
+    ease: usize,
+) -> Metrics {
+    let skeleton = &target.skeleton;
+    let floor = result.placement.ankle_height;
+    let on_target = |postures: &[Posture]| {
+        contact_metrics(&result.contacts, floor, |joint, f| {
+            let j = skeleton.joint_index(joint)?;
+            let p = postures.get(f)?;
+            stance_ik::Frames::new(skeleton, p)
+                .joint_position
+                .get(j)
+                .copied()
+        })
+    };
+    let source = contact_metrics(&result.contacts, floor, |joint, f| {
+        let j = clip.joint_of(joint)?;
+        let w = clip.world(clip.frames.get(f)?);
+        w.get(j).map(|x| result.placement.place(x.1))
+    });
+    Metrics {
+        source,
+        copy: on_target(&result.copy),
+        output: on_target(&result.postures),
+        smoothness: smoothness(
+            skeleton,
+            &result.postures,
+            &result.copy,
+            &result.contacts,
+            ease,
+        ),
+    }
+}
