@@ -203,8 +203,25 @@ fn tokens(name: &str) -> Vec<String> {
     out
 }
 
+/// Body-part stems that CMU's ASF skeleton writes glued to a one-letter side (`lfemur`,
+/// `rclavicle`); a glued `l`/`r` is only split off before these.
+const GLUED_SIDE_STEMS: &[&str] = &[
+    "femur", "tibia", "foot", "toes", "clavicle", "humerus", "radius", "wrist", "hand",
+    "thigh", "shin", "shldr", "collar", "forearm",
+];
+
 /// Side from tokens; removes the side tokens.
 fn take_side(tokens: &mut Vec<String>) -> Option<char> {
+    for t in tokens.iter_mut() {
+        if let Some(stem) = t.strip_prefix(['l', 'r'])
+            && GLUED_SIDE_STEMS.contains(&stem)
+        {
+            let side = t.get(..1).unwrap_or_default().to_owned();
+            *t = stem.to_owned();
+            tokens.insert(0, side);
+            break;
+        }
+    }
     let mut side = None;
     tokens.retain(|t| {
         let s = match t.as_str() {
@@ -227,7 +244,7 @@ fn take_side(tokens: &mut Vec<String>) -> Option<char> {
 fn sided_part(words: &str) -> Option<&'static str> {
     Some(match words {
         "shoulder" | "clavicle" | "collar" | "collarbone" | "clav" => "sternoclavicular",
-        "arm" | "upperarm" | "uparm" | "humerus" => "shoulder",
+        "arm" | "upperarm" | "uparm" | "humerus" | "shldr" => "shoulder",
         "forearm" | "lowerarm" | "elbow" | "radius" | "loarm" => "elbow",
         "hand" | "wrist" => "radiocarpal",
         "upleg" | "upperleg" | "thigh" | "hip" | "femur" => "hip",
@@ -273,8 +290,13 @@ fn match_name(name: &str) -> Option<(&'static str, MatchMethod)> {
         !matches!(
             t.as_str(),
             "bip" | "bip01" | "def" | "org" | "mch" | "j" | "bn" | "bone" | "c" | "joint" | "jnt"
+                | "character" | "bend"
         )
     });
+    // Twist helpers (Daz `lShldrTwist`, Unreal `upperarm_twist_01_l`) carry no joint.
+    if toks.iter().any(|t| t == "twist") {
+        return None;
+    }
     let words: String = toks.concat();
     let known = if had_prefix {
         MatchMethod::KnownName
@@ -286,17 +308,29 @@ fn match_name(name: &str) -> Option<(&'static str, MatchMethod)> {
         None => {
             let hanim = match (words.as_str(), number) {
                 ("hips" | "pelvis" | "hip", _) => "humanoid_root",
-                ("spine", None | Some(0)) | ("abdomen" | "lowerspine", _) => "vl5",
-                ("spine", Some(1)) | ("chest", None) => "vt10",
-                ("spine", Some(2)) | ("upperchest", _) => "vt1",
-                ("neck", _) => "vc4",
+                ("spine", None | Some(0))
+                | ("abdomen" | "lowerspine" | "lowerback" | "abdomenlower", _) => "vl5",
+                ("spine", Some(1)) | ("chest", None | Some(1)) | ("upperback", _) => "vt10",
+                ("spine", Some(2)) | ("upperchest" | "thorax", _) | ("chest", Some(2)) => "vt1",
+                ("lowerneck", _) => "vc7",
+                ("neck" | "upperneck", _) => "vc4",
                 ("head", None) => "skullbase",
                 ("jaw", _) => "temporomandibular",
                 _ => return None,
             };
             let method = if matches!(
                 words.as_str(),
-                "hips" | "spine" | "neck" | "head" | "chest" | "upperchest"
+                "hips"
+                    | "spine"
+                    | "neck"
+                    | "head"
+                    | "chest"
+                    | "upperchest"
+                    | "lowerback"
+                    | "upperback"
+                    | "thorax"
+                    | "lowerneck"
+                    | "upperneck"
             ) {
                 MatchMethod::KnownName
             } else {
@@ -430,6 +464,7 @@ impl Mapping {
                 continue;
             }
             if let Some((h, method)) = match_name(&joint.name) {
+                let h = m.resolve_taken(h, i, joints);
                 // With a VRM extension only fill what it left out.
                 if vrm_used && method != MatchMethod::HAnimName && m.source_of(h).is_some() {
                     continue;
@@ -444,6 +479,37 @@ impl Mapping {
         m.imply_sacroiliac();
         m.sort();
         m
+    }
+
+    /// Where a name's joint is already taken by an ancestor: a `shoulder` under a `collar`
+    /// or `clavicle` (Daz, 3ds Max-friendly CMU: `LeftCollar` > `LeftShoulder`) is the upper
+    /// arm; a `pelvis` under the `hip` root (Daz Genesis) is the sacroiliac.
+    fn resolve_taken(&self, h: &'static str, i: usize, joints: &[SourceJoint]) -> &'static str {
+        let Some(taken) = self.source_of(h) else {
+            return h;
+        };
+        let mut ancestor = joints.get(i).and_then(|j| j.parent);
+        let mut steps = 0;
+        while let Some(a) = ancestor {
+            if a == taken {
+                let next = match h {
+                    "l_sternoclavicular" => "l_shoulder",
+                    "r_sternoclavicular" => "r_shoulder",
+                    "humanoid_root" => "sacroiliac",
+                    _ => return h,
+                };
+                let free = self
+                    .get(next)
+                    .is_none_or(|m| m.method == MatchMethod::Implied);
+                return if free { next } else { h };
+            }
+            steps += 1;
+            if steps > joints.len() {
+                break;
+            }
+            ancestor = joints.get(a).and_then(|j| j.parent);
+        }
+        h
     }
 
     fn insert(&mut self, hanim: &'static str, source: usize, method: MatchMethod) {
@@ -473,7 +539,7 @@ impl Mapping {
     /// Spine joints found by name keep their order; when the rig has a chain of spine joints
     /// between the hips and the shoulders' parent, they are spread over vl5..vt1 in order.
     fn fix_spine_by_hierarchy(&mut self, joints: &[SourceJoint]) {
-        let (Some(hips), Some(top)) = (
+        let (Some(hips), Some(mut top)) = (
             self.source_of("humanoid_root"),
             self.source_of("l_sternoclavicular")
                 .or_else(|| self.source_of("l_shoulder"))
@@ -481,6 +547,17 @@ impl Mapping {
         ) else {
             return;
         };
+        // 3ds Max Biped hangs the clavicles from the neck: the spine ends below it.
+        let mut steps = 0;
+        while matches!(self.hanim_of(top), Some("vc4" | "vc7" | "skullbase"))
+            && steps <= joints.len()
+        {
+            let Some(p) = joints.get(top).and_then(|j| j.parent) else {
+                return;
+            };
+            top = p;
+            steps += 1;
+        }
         // Chain from `top` up to (excluding) the hips.
         let mut chain = Vec::new();
         let mut j = Some(top);
@@ -801,6 +878,71 @@ mod tests {
         assert_eq!(m("l_ankle"), Some("l_talocrural"));
         assert_eq!(m("LeftHandIndex4"), None);
         assert_eq!(m("Camera"), None);
+    }
+
+    #[test]
+    fn names_of_motion_capture_rigs() {
+        // CMU's ASF names (one word, side glued on).
+        assert_eq!(m("lfemur"), Some("l_hip"));
+        assert_eq!(m("rtibia"), Some("r_knee"));
+        assert_eq!(m("lfoot"), Some("l_talocrural"));
+        assert_eq!(m("ltoes"), Some("l_metatarsophalangeal_2"));
+        assert_eq!(m("lclavicle"), Some("l_sternoclavicular"));
+        assert_eq!(m("rhumerus"), Some("r_shoulder"));
+        assert_eq!(m("lradius"), Some("l_elbow"));
+        assert_eq!(m("lwrist"), Some("l_radiocarpal"));
+        assert_eq!(m("lowerback"), Some("vl5"));
+        assert_eq!(m("upperback"), Some("vt10"));
+        assert_eq!(m("thorax"), Some("vt1"));
+        assert_eq!(m("lowerneck"), Some("vc7"));
+        assert_eq!(m("upperneck"), Some("vc4"));
+        assert_eq!(m("lhipjoint"), None);
+        assert_eq!(m("LHipJoint"), None);
+        assert_eq!(m("root"), None);
+        // MotionBuilder's Character1_ prefix.
+        assert_eq!(m("Character1_LeftUpLeg"), Some("l_hip"));
+        assert_eq!(m("Character1_Hips"), Some("humanoid_root"));
+        assert_eq!(m("Character1_Spine1"), Some("vt10"));
+        assert_eq!(m("Character1_RightForeArm"), Some("r_elbow"));
+        // Daz (Poser-style and Genesis).
+        assert_eq!(m("lShldr"), Some("l_shoulder"));
+        assert_eq!(m("lShldrBend"), Some("l_shoulder"));
+        assert_eq!(m("lShldrTwist"), None);
+        assert_eq!(m("rForearmBend"), Some("r_elbow"));
+        assert_eq!(m("lThighBend"), Some("l_hip"));
+        assert_eq!(m("lShin"), Some("l_knee"));
+        assert_eq!(m("lCollar"), Some("l_sternoclavicular"));
+        // 3ds Max Biped.
+        assert_eq!(m("Bip01 Pelvis"), Some("humanoid_root"));
+        assert_eq!(m("Bip01 L Calf"), Some("l_knee"));
+        assert_eq!(m("Bip01 R UpperArm"), Some("r_shoulder"));
+        assert_eq!(m("Bip01 L Toe0"), Some("l_metatarsophalangeal_2"));
+        assert_eq!(m("Bip01"), None);
+    }
+
+    /// A shoulder under a collar is the upper arm; a pelvis under the hip root the
+    /// sacroiliac.
+    #[test]
+    fn shoulder_under_collar_and_pelvis_under_hip() {
+        let names = [
+            ("hip", None),
+            ("pelvis", Some(0)),
+            ("LeftCollar", Some(0)),
+            ("LeftShoulder", Some(2)),
+        ];
+        let joints: Vec<SourceJoint> = names
+            .iter()
+            .map(|(n, p)| SourceJoint {
+                name: (*n).into(),
+                parent: *p,
+                position: DVec3::ZERO,
+            })
+            .collect();
+        let mapping = Mapping::auto(&joints, &[], false);
+        assert_eq!(mapping.source_of("humanoid_root"), Some(0));
+        assert_eq!(mapping.source_of("sacroiliac"), Some(1));
+        assert_eq!(mapping.source_of("l_sternoclavicular"), Some(2));
+        assert_eq!(mapping.source_of("l_shoulder"), Some(3));
     }
 
     #[test]

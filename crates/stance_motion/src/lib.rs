@@ -13,8 +13,10 @@
 
 #![warn(missing_docs)]
 
+pub mod bvh;
 pub mod clip;
 
+pub use bvh::{BvhError, BvhLimits, BvhWriteOptions, EulerOrder, read_bvh, write_bvh};
 pub use clip::{Clip, ClipError, ClipFrame, ClipJoint};
 pub mod contacts;
 pub mod retarget;
