@@ -225,7 +225,10 @@ impl AnimationChannel {
             return Err(format!("key time {k} is not finite"));
         }
         if self.times[0] < 0.0 {
-            return Err(format!("the first key time is negative ({})", self.times[0]));
+            return Err(format!(
+                "the first key time is negative ({})",
+                self.times[0]
+            ));
         }
         if let Some(k) = self.times.windows(2).position(|w| w[1] <= w[0]) {
             return Err(format!(
@@ -380,12 +383,15 @@ pub fn clip_from_animation(
     animation: usize,
     fps: f64,
 ) -> Result<Clip, AssetError> {
-    let anim = avatar.animations.get(animation).ok_or(AssetError::BadIndex {
-        what: "clip_from_animation".into(),
-        kind: "animation",
-        index: animation,
-        count: avatar.animations.len(),
-    })?;
+    let anim = avatar
+        .animations
+        .get(animation)
+        .ok_or(AssetError::BadIndex {
+            what: "clip_from_animation".into(),
+            kind: "animation",
+            index: animation,
+            count: avatar.animations.len(),
+        })?;
     let fail = |reason: String| AssetError::Animation {
         animation: format!("{} `{}`", anim.index, anim.name),
         reason,

@@ -21,7 +21,12 @@ pub(crate) struct Bin {
 
 impl Bin {
     /// Appends a buffer view (4-byte aligned) holding `bytes`; returns its index.
-    pub(crate) fn view(&mut self, bytes: &[u8], target: Option<u32>, stride: Option<usize>) -> usize {
+    pub(crate) fn view(
+        &mut self,
+        bytes: &[u8],
+        target: Option<u32>,
+        stride: Option<usize>,
+    ) -> usize {
         while !self.data.len().is_multiple_of(4) {
             self.data.push(0);
         }

@@ -46,7 +46,9 @@ pub fn export_glb_animation(
         reason,
     };
     if postures.is_empty() {
-        return Err(fail("no postures: an animation needs at least one key".into()));
+        return Err(fail(
+            "no postures: an animation needs at least one key".into(),
+        ));
     }
     if !(frame_time.is_finite() && frame_time > 0.0) {
         return Err(fail(format!(

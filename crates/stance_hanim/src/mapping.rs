@@ -772,7 +772,10 @@ impl Mapping {
                         .copied()
                         .flatten()
                         .filter(|&n| n < source_count)?;
-                    Some(JointMatch { source, ..m.clone() })
+                    Some(JointMatch {
+                        source,
+                        ..m.clone()
+                    })
                 })
                 .collect(),
             source_count,

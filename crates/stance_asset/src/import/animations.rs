@@ -161,7 +161,11 @@ fn read(
 ) -> Result<Vec<f32>, AssetError> {
     match ctx.read(index, what) {
         Ok((v, _)) => Ok(v),
-        Err(AssetError::TooLarge { what: w, size, limit }) => Err(AssetError::TooLarge {
+        Err(AssetError::TooLarge {
+            what: w,
+            size,
+            limit,
+        }) => Err(AssetError::TooLarge {
             what: format!("{what}: {w}"),
             size,
             limit,
@@ -185,7 +189,9 @@ fn check_accessor(
         .get(index)
         .ok_or_else(|| format!("accessor {index} does not exist (the file has {count})"))?;
     let (Checked::Valid(ct), Checked::Valid(ty)) = (acc.component_type, acc.type_) else {
-        return Err(format!("accessor {index} has an invalid componentType or type"));
+        return Err(format!(
+            "accessor {index} has an invalid componentType or type"
+        ));
     };
     if ty != expected {
         return Err(format!("accessor {index} is {ty:?}, expected {expected:?}"));
