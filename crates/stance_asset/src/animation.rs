@@ -405,7 +405,7 @@ pub fn clip_from_animation(
         return Err(fail(format!("duration {} is not finite", anim.duration)));
     };
     let frames_f = (duration * fps).round() + 1.0;
-    if !(frames_f <= MAX_CLIP_FRAMES as f64) {
+    if !frames_f.is_finite() || frames_f > MAX_CLIP_FRAMES as f64 {
         return Err(AssetError::TooLarge {
             what: format!("clip of animation `{}` (frames)", anim.name),
             size: if frames_f.is_finite() {

@@ -599,3 +599,99 @@ fn exporting_bad_sequences_fails_clearly() {
     assert_eq!(back.animations[0].channels.len(), 1);
     assert_eq!(back.animations[0].channels[0].times.len(), 2);
 }
+
+#[cfg(not(target_arch = "wasm32"))]
+mod fuzz {
+    use proptest::prelude::*;
+
+    use super::*;
+
+    /// One edit of the arm file: a JSON field of the animations or accessors, or a byte of
+    /// the buffer.
+    #[derive(Debug, Clone)]
+    enum Edit {
+        Field(usize, usize, Value),
+        Byte(prop::sample::Index, u8),
+    }
+
+    fn value() -> impl Strategy<Value = Value> {
+        prop_oneof![
+            (0u64..12).prop_map(|v| json!(v)),
+            any::<i64>().prop_map(|v| json!(v)),
+            Just(json!("CUBICSPLINE")),
+            Just(json!("STEP")),
+            Just(json!("weights")),
+            Just(json!("scale")),
+            Just(json!(5121)),
+            Just(json!(5122)),
+            Just(json!("VEC2")),
+            Just(json!(null)),
+        ]
+    }
+
+    fn edit() -> impl Strategy<Value = Edit> {
+        prop_oneof![
+            (0usize..5, 0usize..9, value()).prop_map(|(a, f, v)| Edit::Field(a, f, v)),
+            (any::<prop::sample::Index>(), any::<u8>()).prop_map(|(i, b)| Edit::Byte(i, b)),
+        ]
+    }
+
+    fn apply(j: &mut Value, edit: &Edit) {
+        match edit {
+            Edit::Field(a, f, v) => {
+                let anim = &mut j["animations"][*a];
+                let acc = *a * 2 % 10;
+                match f {
+                    0 => anim["channels"][0]["target"]["node"] = v.clone(),
+                    1 => anim["channels"][0]["target"]["path"] = v.clone(),
+                    2 => anim["channels"][0]["sampler"] = v.clone(),
+                    3 => anim["samplers"][0]["input"] = v.clone(),
+                    4 => anim["samplers"][0]["output"] = v.clone(),
+                    5 => anim["samplers"][0]["interpolation"] = v.clone(),
+                    6 => j["accessors"][acc]["count"] = v.clone(),
+                    7 => j["accessors"][acc]["componentType"] = v.clone(),
+                    _ => j["accessors"][acc]["byteOffset"] = v.clone(),
+                }
+            }
+            Edit::Byte(i, b) => {
+                let uri = j["buffers"][0]["uri"].as_str().unwrap().to_owned();
+                let (head, data) = uri.split_once(',').unwrap();
+                let mut bytes = base64::engine::general_purpose::STANDARD
+                    .decode(data)
+                    .unwrap();
+                let at = i.index(bytes.len());
+                bytes[at] = *b;
+                let data = base64::engine::general_purpose::STANDARD.encode(&bytes);
+                j["buffers"][0]["uri"] = json!(format!("{head},{data}"));
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+        /// Random edits of the animations: an avatar (with the readable animations, which
+        /// sample to finite values and convert to clips) or an error, never a panic.
+        #[test]
+        fn mutated_animations_never_panic(edits in prop::collection::vec(edit(), 1..6)) {
+            let (mut j, _) = arm();
+            for e in &edits {
+                apply(&mut j, e);
+            }
+            if let Ok(a) = load(&j) {
+                for (i, anim) in a.animations.iter().enumerate() {
+                    for c in &anim.channels {
+                        prop_assert!(c.validate().is_ok());
+                        for t in [0.0, 0.3, 1.0, 1.7, anim.duration, 1e9] {
+                            prop_assert!(c.sample(t).unwrap().is_finite());
+                        }
+                    }
+                    if anim.duration < 100.0 {
+                        let clip = clip_from_animation(&a, i, 10.0).unwrap();
+                        prop_assert!(clip.validate().is_ok());
+                    }
+                }
+            }
+        }
+    }
+}
