@@ -85,6 +85,14 @@ pub enum AssetError {
     /// A posture does not fit the avatar.
     #[error("posture: {0}")]
     Posture(String),
+    /// An animation is malformed, or cannot be sampled or written as asked.
+    #[error("animation {animation}: {reason}")]
+    Animation {
+        /// The animation: its index in the file and name.
+        animation: String,
+        /// What is wrong, naming the channel where there is one.
+        reason: String,
+    },
     /// Writing failed.
     #[error("export: {0}")]
     Export(String),

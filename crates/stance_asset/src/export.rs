@@ -2,20 +2,31 @@
 //! the current node transforms (the pose), meshes as float attributes, textures as PNG.
 //! The output passes the Khronos glTF-Validator with no errors (tested in
 //! `tests/avatar-export.test.mjs`).
+//!
+//! [`export_with`] writes the document and the GLB container; [`export_glb`] and
+//! `export_animation::export_glb_animation` (which adds an animation through the same
+//! [`Bin`]) call it.
 
 use serde_json::{Map, Value, json};
 
 use crate::AssetError;
 use crate::model::{AlphaMode, Avatar, Trs, Wrap};
 
-struct Bin {
+/// The binary chunk being written, with its buffer views and accessors.
+pub(crate) struct Bin {
     data: Vec<u8>,
     views: Vec<Value>,
     accessors: Vec<Value>,
 }
 
 impl Bin {
-    fn view(&mut self, bytes: &[u8], target: Option<u32>, stride: Option<usize>) -> usize {
+    /// Appends a buffer view (4-byte aligned) holding `bytes`; returns its index.
+    pub(crate) fn view(
+        &mut self,
+        bytes: &[u8],
+        target: Option<u32>,
+        stride: Option<usize>,
+    ) -> usize {
         while !self.data.len().is_multiple_of(4) {
             self.data.push(0);
         }
@@ -34,7 +45,8 @@ impl Bin {
         self.views.len() - 1
     }
 
-    fn accessor(
+    /// Appends a buffer view holding `bytes` and an accessor over it; returns the accessor.
+    pub(crate) fn accessor(
         &mut self,
         bytes: &[u8],
         target: Option<u32>,
@@ -58,13 +70,13 @@ impl Bin {
     }
 }
 
-const FLOAT: u32 = 5126;
+pub(crate) const FLOAT: u32 = 5126;
 const UNSIGNED_SHORT: u32 = 5123;
 const UNSIGNED_INT: u32 = 5125;
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 
-fn f32s<const N: usize>(v: &[[f32; N]]) -> Vec<u8> {
+pub(crate) fn f32s<const N: usize>(v: &[[f32; N]]) -> Vec<u8> {
     let mut out = Vec::with_capacity(v.len() * N * 4);
     for e in v {
         for x in e {
@@ -138,6 +150,15 @@ fn encode_png(width: u32, height: u32, rgba: &[u8]) -> Result<Vec<u8>, AssetErro
 
 /// Writes the avatar as GLB with its nodes' current transforms (`Node::pose`).
 pub fn export_glb(avatar: &Avatar) -> Result<Vec<u8>, AssetError> {
+    export_with(avatar, |_| Ok(Vec::new()))
+}
+
+/// Writes the avatar as GLB; `animations` adds its data to the binary chunk and returns the
+/// document's `animations` array (left out when empty).
+pub(crate) fn export_with(
+    avatar: &Avatar,
+    animations: impl FnOnce(&mut Bin) -> Result<Vec<Value>, AssetError>,
+) -> Result<Vec<u8>, AssetError> {
     let mut bin = Bin {
         data: Vec::new(),
         views: Vec::new(),
@@ -337,6 +358,7 @@ pub fn export_glb(avatar: &Avatar) -> Result<Vec<u8>, AssetError> {
             Value::Object(o)
         })
         .collect();
+    let animations = animations(&mut bin)?;
     while !bin.data.len().is_multiple_of(4) {
         bin.data.push(0);
     }
@@ -355,6 +377,7 @@ pub fn export_glb(avatar: &Avatar) -> Result<Vec<u8>, AssetError> {
     };
     put("meshes", meshes);
     put("skins", skins);
+    put("animations", animations);
     put("materials", materials);
     put("textures", textures);
     put("samplers", samplers);

@@ -346,6 +346,7 @@ pub fn make_default_avatar() -> Result<Avatar, AssetError> {
         textures: Vec::new(),
         hanim_from_file: DMat4::IDENTITY,
         mapping: Mapping::empty(0),
+        animations: Vec::new(),
         extensions: Vec::new(),
         warnings: Vec::new(),
     };

@@ -2,12 +2,14 @@
 //!
 //! This module holds the container (GLB chunks, JSON), the import context, nodes and skins, and
 //! the top-level [`import`]; buffers and accessors are read in `buffers`, textures and
-//! materials in `materials`, meshes in `meshes`.
+//! materials in `materials`, meshes in `meshes`, animations in `animations`.
 
+mod animations;
 mod buffers;
 mod materials;
 mod meshes;
 
+use animations::import_animations;
 use materials::{import_materials, import_textures};
 pub(crate) use meshes::compute_normals;
 use meshes::import_meshes;
@@ -375,12 +377,7 @@ pub fn import(
         ctx.warnings
             .push("morph targets are ignored (the rest shape is drawn)".into());
     }
-    if !ctx.root.animations.is_empty() {
-        ctx.warnings.push(format!(
-            "{} animation(s) ignored",
-            ctx.root.animations.len()
-        ));
-    }
+    let animations = import_animations(&mut ctx, nodes.len())?;
 
     let mut avatar = Avatar {
         format,
@@ -392,6 +389,7 @@ pub fn import(
         textures,
         hanim_from_file: DMat4::IDENTITY,
         mapping: Mapping::empty(0),
+        animations,
         extensions: ctx.root.extensions_used.clone(),
         warnings: std::mem::take(&mut ctx.warnings),
     };

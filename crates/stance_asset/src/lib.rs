@@ -12,7 +12,9 @@
 //!   to RGBA8;
 //! - any up axis, facing and unit normalised to the H-Anim frame through
 //!   [`Avatar::hanim_from_file`] (metres, +Y up, +Z front, +X the body's left, soles on y=0);
-//! - bone mapping onto H-Anim 2.0 in [`Avatar::mapping`] (see `stance_hanim::mapping`).
+//! - bone mapping onto H-Anim 2.0 in [`Avatar::mapping`] (see `stance_hanim::mapping`);
+//! - animations on node transforms in [`Avatar::animations`] (LINEAR, STEP, CUBICSPLINE),
+//!   turned into motion clips by [`clip_from_animation`].
 //!
 //! Hostile files: every size and count is checked against [`Limits`] before memory is
 //! allocated; every index is checked; errors ([`AssetError`]) say what is wrong; nothing
@@ -23,20 +25,27 @@
 //! [`Avatar::posed_locals`] / [`Avatar::apply_posture`] turn a solved posture into node
 //! transforms; [`Avatar::skinning_matrices`] gives the renderer its joint matrices;
 //! [`export_glb`] writes the posed avatar; importing that file and calling
-//! [`Avatar::current_posture`] gives the posture back.
+//! [`Avatar::current_posture`] gives the posture back. [`export_glb_animation`] writes the
+//! avatar with a sequence of postures as one glTF animation.
 
 #![warn(missing_docs)]
 
+pub mod animation;
 mod error;
 mod export;
+mod export_animation;
 mod generate;
 mod import;
 mod meshopt;
 mod model;
 mod normalize;
 
+pub use animation::{
+    Animation, AnimationChannel, AnimationPath, Interpolation, clip_from_animation,
+};
 pub use error::AssetError;
 pub use export::export_glb;
+pub use export_animation::export_glb_animation;
 pub use generate::make_default_avatar;
 pub use import::{Resolver, SUPPORTED_EXTENSIONS};
 pub use model::{
@@ -78,6 +87,11 @@ pub struct Limits {
     pub max_joints_per_skin: usize,
     /// Width or height of one texture (default 8 192).
     pub max_texture_side: u32,
+    /// Animations (default 1 024).
+    pub max_animations: usize,
+    /// Channels, and samplers, over all animations (default 100 000). Keys are bounded by
+    /// `max_accessor_count` per accessor and `max_decoded_bytes` in all.
+    pub max_animation_channels: usize,
 }
 
 impl Default for Limits {
@@ -97,6 +111,8 @@ impl Default for Limits {
             max_materials: 4_096,
             max_joints_per_skin: 1_024,
             max_texture_side: 8_192,
+            max_animations: 1_024,
+            max_animation_channels: 100_000,
         }
     }
 }

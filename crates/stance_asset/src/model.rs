@@ -7,6 +7,7 @@ use stance_hanim::{HumanoidSkeleton, Mapping, SkeletonOptions, SourceJoint};
 use stance_ik::{Frames, Posture};
 
 use crate::AssetError;
+use crate::animation::Animation;
 
 /// Where an avatar came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -225,6 +226,9 @@ pub struct Avatar {
     pub hanim_from_file: DMat4,
     /// The H-Anim mapping of the nodes (source joint index = node index).
     pub mapping: Mapping,
+    /// The file's animations on node transforms (see [`crate::animation`]); malformed ones
+    /// are skipped with a warning.
+    pub animations: Vec<Animation>,
     /// `extensionsUsed` of the file.
     pub extensions: Vec<String>,
     /// Non-fatal problems (skipped primitives, ignored extensions...).

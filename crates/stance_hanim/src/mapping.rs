@@ -833,6 +833,32 @@ impl Mapping {
         before != self.matches.len()
     }
 
+    /// The same mapping over a renumbered (or reduced) list of source joints:
+    /// `new_index_of_source[s]` is the new index of old source joint `s`, `None` where it is
+    /// dropped. Matches whose joint is dropped, has no entry, or whose new index is not below
+    /// `source_count` are left out; the others keep their H-Anim joint, method and
+    /// confidence (and the table order).
+    pub fn remapped(&self, new_index_of_source: &[Option<usize>], source_count: usize) -> Mapping {
+        Mapping {
+            matches: self
+                .matches
+                .iter()
+                .filter_map(|m| {
+                    let source = new_index_of_source
+                        .get(m.source)
+                        .copied()
+                        .flatten()
+                        .filter(|&n| n < source_count)?;
+                    Some(JointMatch {
+                        source,
+                        ..m.clone()
+                    })
+                })
+                .collect(),
+            source_count,
+        }
+    }
+
     /// The joints of `loa` that are not mapped (by name).
     pub fn missing(&self, loa: LevelOfArticulation) -> Vec<&'static str> {
         humanoid_joints(loa)
@@ -1027,5 +1053,37 @@ mod tests {
         assert!(mapping.set("vl5", 9).is_err());
         assert!(mapping.remove("vl5"));
         assert_eq!(mapping.hanim_of(1), None);
+    }
+    #[test]
+    fn remapped_renumbers_and_drops() {
+        let joints: Vec<SourceJoint> = ["Armature", "Hips", "Spine", "Foo"]
+            .iter()
+            .enumerate()
+            .map(|(i, n)| SourceJoint {
+                name: (*n).into(),
+                parent: i.checked_sub(1),
+                position: DVec3::new(0.0, i as f64, 0.0),
+            })
+            .collect();
+        let mut mapping = Mapping::auto(&joints, &[], false);
+        mapping.set("vl1", 3).unwrap();
+        assert_eq!(mapping.source_of("humanoid_root"), Some(1));
+        // Armature dropped, the others reversed.
+        let r = mapping.remapped(&[None, Some(2), Some(1), Some(0)], 3);
+        assert_eq!(r.source_count(), 3);
+        assert_eq!(r.source_of("humanoid_root"), Some(2));
+        assert_eq!(r.source_of("vl1"), Some(0));
+        for m in r.matches() {
+            let old = mapping.get(m.hanim).unwrap();
+            assert_eq!((m.method, m.confidence), (old.method, old.confidence));
+        }
+        assert_eq!(r.matches().len(), mapping.matches().len());
+        // Dropping a mapped joint (or a short table, or an index past the count) unmaps it.
+        let r = mapping.remapped(&[None, Some(0), Some(1)], 2);
+        assert_eq!(r.source_of("vl1"), None);
+        assert_eq!(r.source_of("humanoid_root"), Some(0));
+        let r = mapping.remapped(&[None, Some(5), Some(1), Some(0)], 2);
+        assert_eq!(r.source_of("humanoid_root"), None);
+        assert!(r.matches().iter().all(|m| m.source < 2));
     }
 }
