@@ -109,3 +109,26 @@ export interface Solution {
  * Solves a problem (object or JSON text); throws an Error naming the offending field.
  */
 export function solve(problem: Problem | string): Solution;
+
+/** A clip retargeted onto a skeleton: one posture per source frame. */
+export interface RetargetedClip {
+  /** Seconds per frame (the source's). */
+  frameTime: number;
+  /** Frames (the source's). */
+  frameCount: number;
+  /** `frameCount * skeleton.dofCount` DOF values, frame after frame. */
+  values: Float64Array;
+  /** Foot contacts held, in frames (inclusive). */
+  contacts: { joint: string; start: number; end: number }[];
+  /** Solver iterations over the clip. */
+  iterations: number;
+  /** What the reader and retargeting noticed (units, unmapped joints...). */
+  notes: string[];
+}
+
+/** Retargets a BVH clip (text) onto an H-Anim skeleton; foot contacts held unless `contacts: false`. */
+export function retarget(
+  skeleton: import('./pkg/stance_ik.js').Skeleton,
+  bvh: string,
+  options?: { contacts?: boolean },
+): RetargetedClip;

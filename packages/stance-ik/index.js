@@ -1,7 +1,7 @@
 // stance-ik: Stance's prioritized IK solver, one ES module for browsers and Node 20+.
 // Importing it instantiates the WebAssembly module once (top-level await): in Node from the
 // file next to this one, in a browser with fetch.
-import init, { initSync, solve as solveProblem, Skeleton, Solver } from './pkg/stance_ik.js';
+import init, { initSync, solve as solveProblem, retargetBvh, Skeleton, Solver } from './pkg/stance_ik.js';
 
 const wasmUrl = new URL('./pkg/stance_ik_bg.wasm', import.meta.url);
 if (typeof process !== 'undefined' && process.versions && process.versions.node) {
@@ -20,6 +20,17 @@ if (typeof process !== 'undefined' && process.versions && process.versions.node)
  */
 export function solve(problem) {
   return solveProblem(problem);
+}
+
+/**
+ * Retargets a BVH clip (its text) onto an H-Anim `skeleton` (`Skeleton.hanim(loa)` or
+ * `Skeleton.fromSkin(...)`): any naming (CMU, MotionBuilder, Mixamo, Daz, Biped...) and
+ * proportions, foot contacts detected and held unless `options.contacts === false`. Returns
+ * `{frameTime, frameCount, values, contacts, iterations, notes}`: `values` holds one posture
+ * (`skeleton.dofCount` DOF values, `skeleton.dofNames` order) per frame of the source.
+ */
+export function retarget(skeleton, bvh, options = {}) {
+  return retargetBvh(skeleton, bvh, options.contacts !== false);
 }
 
 export { Skeleton, Solver };

@@ -6,6 +6,7 @@ mod avatar;
 mod bench;
 mod decode;
 mod link;
+mod retarget;
 mod simulate;
 mod solve;
 
@@ -39,6 +40,8 @@ enum Command {
     MakeAvatar(avatar::MakeAvatarArgs),
     /// Encode a document into a posture link, or decode a link into a document.
     Link(link::LinkArgs),
+    /// Retargets clips (BVH, glTF animations) onto an avatar, holding foot contacts.
+    Retarget(retarget::RetargetArgs),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -52,5 +55,6 @@ fn main() -> anyhow::Result<()> {
         Command::ExportPosed(args) => avatar::export_posed(args),
         Command::MakeAvatar(args) => avatar::make_avatar(args),
         Command::Link(args) => link::run(args),
+        Command::Retarget(args) => retarget::run(args),
     }
 }

@@ -220,8 +220,12 @@ fn write_clip(out: &Path, clip: &Clip, target: &Target, result: &Retargeted) -> 
         )
         .context("writing the animation")?,
         "bvh" => {
-            let baked =
-                Clip::from_postures(&clip.name, &target.skeleton, &result.postures, clip.frame_time);
+            let baked = Clip::from_postures(
+                &clip.name,
+                &target.skeleton,
+                &result.postures,
+                clip.frame_time,
+            );
             write_bvh(&baked, &BvhWriteOptions::default()).into_bytes()
         }
         _ => bail!("{}: the output is .glb or .bvh", out.display()),
@@ -235,7 +239,10 @@ fn joints_json(target: &Target, result: &Retargeted) -> Value {
     let joints: Vec<usize> = (0..target.skeleton.joints.len())
         .filter(|&k| target.skeleton.joints[k].source.is_some())
         .collect();
-    let names: Vec<&str> = joints.iter().map(|&k| target.skeleton.joints[k].hanim).collect();
+    let names: Vec<&str> = joints
+        .iter()
+        .map(|&k| target.skeleton.joints[k].hanim)
+        .collect();
     let frames: Vec<Vec<[f64; 3]>> = joint_positions(&target.skeleton, &result.postures, &joints)
         .into_iter()
         .map(|f| f.into_iter().map(|p| p.to_array()).collect())
@@ -296,9 +303,13 @@ pub fn run(args: RetargetArgs) -> Result<()> {
     }
     let shard = args.shard.as_deref().map(parse_shard).transpose()?;
     let clips = clips_in(&args.clip, shard)?;
-    for dir in [Some(&args.out), args.report.as_ref(), args.joints_out.as_ref()]
-        .into_iter()
-        .flatten()
+    for dir in [
+        Some(&args.out),
+        args.report.as_ref(),
+        args.joints_out.as_ref(),
+    ]
+    .into_iter()
+    .flatten()
     {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
@@ -327,7 +338,10 @@ pub fn run(args: RetargetArgs) -> Result<()> {
                         let stem = stem.unwrap_or_else(|| format!("clip{k}"));
                         let out = args.out.join(format!("{stem}.{ext}"));
                         let report = args.report.as_ref().map(|d| d.join(format!("{stem}.json")));
-                        let joints = args.joints_out.as_ref().map(|d| d.join(format!("{stem}.json")));
+                        let joints = args
+                            .joints_out
+                            .as_ref()
+                            .map(|d| d.join(format!("{stem}.json")));
                         let outputs = Outputs {
                             out: &out,
                             report: report.as_deref(),
@@ -366,7 +380,13 @@ fn summary(report: &Value) -> String {
         report["frames"],
         report["contacts"].as_array().map_or(0, Vec::len),
         report["frames_per_second"].as_f64().unwrap_or(0.0),
-        report["metrics"]["output"]["max_drift"].as_f64().unwrap_or(0.0) * 1e3,
-        report["metrics"]["copy"]["max_drift"].as_f64().unwrap_or(0.0) * 1e3,
+        report["metrics"]["output"]["max_drift"]
+            .as_f64()
+            .unwrap_or(0.0)
+            * 1e3,
+        report["metrics"]["copy"]["max_drift"]
+            .as_f64()
+            .unwrap_or(0.0)
+            * 1e3,
     )
 }

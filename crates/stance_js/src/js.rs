@@ -112,6 +112,27 @@ impl JsSkeleton {
     }
 }
 
+/// A BVH clip (text) retargeted onto an H-Anim `skeleton` (`Skeleton.hanim` or
+/// `Skeleton.fromSkin`), foot contacts held unless `contacts` is false: `{frameTime,
+/// frameCount, values: Float64Array (frameCount * dofCount), contacts, iterations, notes}`.
+#[wasm_bindgen(js_name = retargetBvh)]
+pub fn retarget_bvh(skeleton: &JsSkeleton, bvh: &str, contacts: bool) -> Result<JsValue, JsError> {
+    let r = crate::retarget_bvh(&skeleton.body, bvh, contacts).map_err(error)?;
+    let out = parsed(&r.report.to_string())?;
+    let set = |key: &str, value: JsValue| {
+        js_sys::Reflect::set(&out, &key.into(), &value)
+            .map(|_| ())
+            .map_err(|_| JsError::new("internal: could not build the result"))
+    };
+    set("frameTime", r.frame_time.into())?;
+    set("frameCount", (r.frame_count as f64).into())?;
+    set(
+        "values",
+        js_sys::Float64Array::from(r.values.as_slice()).into(),
+    )?;
+    Ok(out)
+}
+
 /// Tasks by level on a skeleton, solved every frame into a reused `Float64Array`.
 #[wasm_bindgen(js_name = Solver)]
 pub struct JsSolver {

@@ -8,6 +8,8 @@
 //!   problem file's joints, or a skin's joints mapped onto H-Anim).
 //! - [`PoseSolver`]: tasks by level set once, solved every frame into a caller's array of DOF
 //!   values; world joint transforms; the closed-form limb and its swivel angle.
+//! - [`retarget_bvh`]: a BVH clip onto an H-Anim body (foot contacts kept), one posture per
+//!   frame.
 
 #![warn(missing_docs)]
 
@@ -18,7 +20,8 @@ use glam::{DQuat, DVec3};
 use serde_json::Value;
 use stance_document::{LimbName, Problem, ProblemSettings, TaskSpec, parse_skeleton, solver_tasks};
 use stance_hanim::{
-    LevelOfArticulation, Mapping, SkeletonOptions, SourceJoint, build_skeleton, default_skeleton,
+    HumanoidSkeleton, LevelOfArticulation, Mapping, SkeletonOptions, SourceJoint, build_skeleton,
+    default_skeleton,
 };
 use stance_ik::{Clock, Frames, Limb, LimbGoal, Posture, Skeleton, SolveReport, Solver, Task};
 
@@ -37,9 +40,7 @@ pub fn solve_json(problem: &str) -> JsResult<String> {
 }
 
 fn level_of_articulation(loa: u8) -> JsResult<LevelOfArticulation> {
-    LevelOfArticulation::ALL
-        .into_iter()
-        .find(|l| l.number() == loa)
+    LevelOfArticulation::from_number(loa)
         .ok_or_else(|| format!("loa: {loa} is not a level of articulation (1 to 4)"))
 }
 
@@ -50,6 +51,9 @@ pub struct Body {
     pub skeleton: Skeleton,
     /// Per skeleton joint, the skin joint index it was built from (`-1`: none).
     pub source: Vec<i32>,
+    /// The H-Anim skeleton it was built as (H-Anim and skin bodies; `None` for a problem
+    /// file's joints): what retargeting needs.
+    pub humanoid: Option<HumanoidSkeleton>,
 }
 
 impl Body {
@@ -62,8 +66,9 @@ impl Body {
         .map_err(|e| e.to_string())?;
         let source = vec![-1; body.skeleton.joint_count()];
         Ok(Self {
-            skeleton: body.skeleton,
+            skeleton: body.skeleton.clone(),
             source,
+            humanoid: Some(body),
         })
     }
 
@@ -71,7 +76,11 @@ impl Body {
     pub fn from_joints(skeleton: &str) -> JsResult<Self> {
         let skeleton = parse_skeleton(&json(skeleton)?).map_err(|e| e.to_string())?;
         let source = vec![-1; skeleton.joint_count()];
-        Ok(Self { skeleton, source })
+        Ok(Self {
+            skeleton,
+            source,
+            humanoid: None,
+        })
     }
 
     /// A skin's joints (glTF `skin.joints` order): names, parent indices (`-1` for a root) and
@@ -117,8 +126,9 @@ impl Body {
             .map(|j| j.source.map_or(-1, |s| s as i32))
             .collect();
         Ok(Self {
-            skeleton: body.skeleton,
+            skeleton: body.skeleton.clone(),
             source,
+            humanoid: Some(body),
         })
     }
 
@@ -308,4 +318,57 @@ fn limb(skeleton: &Skeleton, name: &str) -> JsResult<Limb> {
         })?
         .on(skeleton)
         .map_err(|e| e.to_string())
+}
+
+/// A clip retargeted onto a body: one posture (DOF values) per frame of the source.
+#[derive(Debug, Clone)]
+pub struct RetargetedClip {
+    /// Seconds per frame (the source's).
+    pub frame_time: f64,
+    /// Number of frames (the source's).
+    pub frame_count: usize,
+    /// DOF values, frame after frame (`frame_count * dof_count`).
+    pub values: Vec<f64>,
+    /// The contacts held and the run's figures (JSON: `contacts` as `{joint, start, end}`,
+    /// `iterations`, `notes`).
+    pub report: Value,
+}
+
+/// Retargets a BVH clip (text) onto an H-Anim body, holding foot contacts (`contacts`) or
+/// copying rotations only.
+pub fn retarget_bvh(body: &Body, bvh: &str, contacts: bool) -> JsResult<RetargetedClip> {
+    let humanoid = body
+        .humanoid
+        .as_ref()
+        .ok_or("retarget: the skeleton must be an H-Anim body (hanim or fromSkin)")?;
+    let clip = stance_motion::bvh::read_bvh(
+        bvh.as_bytes(),
+        "clip",
+        &stance_motion::bvh::BvhLimits::default(),
+    )
+    .map_err(|e| format!("bvh: {e}"))?;
+    let options = stance_motion::RetargetOptions {
+        contacts: contacts.then(stance_motion::ContactSettings::default),
+        ..Default::default()
+    };
+    let result =
+        stance_motion::retarget(&clip, humanoid, &options).map_err(|e| format!("retarget: {e}"))?;
+    let values = result
+        .postures
+        .iter()
+        .flat_map(|p| p.values().iter().copied())
+        .collect();
+    let report = serde_json::json!({
+        "contacts": result.contacts.iter().map(|c| serde_json::json!({
+            "joint": c.joint, "start": c.start, "end": c.end,
+        })).collect::<Vec<_>>(),
+        "iterations": result.iterations,
+        "notes": clip.notes.iter().chain(&result.notes).collect::<Vec<_>>(),
+    });
+    Ok(RetargetedClip {
+        frame_time: clip.frame_time,
+        frame_count: clip.frame_count(),
+        values,
+        report,
+    })
 }

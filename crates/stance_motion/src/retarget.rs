@@ -26,7 +26,9 @@ use stance_ik::{Frames, IkError, Iteration, Posture, Solver, SolverSettings, Tas
 use crate::clip::{Clip, ClipError};
 use crate::contacts::{Contact, ContactSettings, contact_weight, detect_contacts};
 pub use copy::{Placement, RestMatch, RotationCopy};
-pub use report::{ContactMetrics, Metrics, Smoothness, contact_metrics, metrics, smoothness};
+pub use report::{
+    ContactMetrics, Deviation, Metrics, Smoothness, contact_metrics, deviation, metrics, smoothness,
+};
 
 /// The H-Anim feet held by contacts.
 pub const CONTACT_JOINTS: [&str; 2] = ["l_talocrural", "r_talocrural"];
@@ -141,28 +143,8 @@ pub fn retarget(
         .map(|f| copier.frame(clip, target, f))
         .collect::<Result<_, _>>()?;
     let skeleton = &target.skeleton;
-    let feet: Vec<usize> = CONTACT_JOINTS
-        .iter()
-        .filter_map(|n| skeleton.joint_index(n))
-        .collect();
     let contacts = match options.contacts {
-        Some(settings) => {
-            let tracks = joint_positions(target, &copy, &feet);
-            feet.iter()
-                .enumerate()
-                .flat_map(|(i, &j)| {
-                    let track: Vec<DVec3> = tracks.iter().map(|t| t[i]).collect();
-                    let name = &skeleton.joints()[j].name;
-                    detect_contacts(
-                        name,
-                        &track,
-                        copier.placement.ankle_height,
-                        clip.frame_time,
-                        &settings,
-                    )
-                })
-                .collect()
-        }
+        Some(settings) => held_contacts(clip, target, &copy, &copier.placement, &settings),
         None => Vec::new(),
     };
     let mut out = Retargeted {
@@ -186,6 +168,44 @@ pub fn retarget(
         .map_or(0, |s| s.ease_frames(clip.frame_time));
     solve_frames(target, &mut out, ease, options.max_iterations)?;
     Ok(out)
+}
+
+/// The contacts of the clip's own feet (detected on the clip, so that every target gets the
+/// same ones: low and slow as the clip moves), each held where the copy puts that foot on
+/// average over the contact, never below the target's ankle height.
+fn held_contacts(
+    clip: &Clip,
+    target: &HumanoidSkeleton,
+    copy: &[Posture],
+    placement: &Placement,
+    settings: &ContactSettings,
+) -> Vec<Contact> {
+    let skeleton = &target.skeleton;
+    let worlds: Vec<_> = clip.frames.iter().map(|f| clip.world(f)).collect();
+    let mut contacts = Vec::new();
+    for foot in CONTACT_JOINTS {
+        let (Some(source), Some(joint)) = (clip.joint_of(foot), skeleton.joint_index(foot)) else {
+            continue;
+        };
+        let track: Vec<DVec3> = worlds
+            .iter()
+            .map(|w| w.get(source).map_or(DVec3::ZERO, |x| x.1))
+            .collect();
+        let on_target = joint_positions(target, copy, &[joint]);
+        for mut c in detect_contacts(
+            foot,
+            &track,
+            placement.lowest_ankle,
+            clip.frame_time,
+            settings,
+        ) {
+            let run = &on_target[c.start..=c.end.min(on_target.len() - 1)];
+            let mean = run.iter().map(|p| p[0]).sum::<DVec3>() / run.len().max(1) as f64;
+            c.position = DVec3::new(mean.x, mean.y.max(placement.ankle_height), mean.z);
+            contacts.push(c);
+        }
+    }
+    contacts
 }
 
 /// The tasks of one frame.

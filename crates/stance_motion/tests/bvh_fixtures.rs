@@ -25,11 +25,21 @@ fn names(clip: &Clip) -> Vec<(String, &'static str)> {
 fn debug_print() {
     for f in ["walk", "run"] {
         let c = fixture(f);
-        println!("{f}: {} frames, {} fps, notes {:#?}", c.frame_count(), c.fps(), c.notes);
+        println!(
+            "{f}: {} frames, {} fps, notes {:#?}",
+            c.frame_count(),
+            c.fps(),
+            c.notes
+        );
         println!("{:?}", names(&c));
         println!("missing {:?}", c.mapping.missing(LevelOfArticulation::Loa1));
         let w = c.world(&c.frames[0]);
-        for h in ["skullbase", "l_talocrural", "l_radiocarpal", "humanoid_root"] {
+        for h in [
+            "skullbase",
+            "l_talocrural",
+            "l_radiocarpal",
+            "humanoid_root",
+        ] {
             println!("{h} {:?}", c.joint_of(h).map(|i| w[i].1));
         }
     }

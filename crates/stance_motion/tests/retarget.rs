@@ -268,3 +268,106 @@ fn a_planted_foot_stays_put_where_the_copy_slides() {
     let _ = ContactSettings::default();
     let _ = DQuat::IDENTITY;
 }
+
+/// The default body with its legs scaled by `legs` about the hips, lowered or raised so
+/// that the ankles stand where they did.
+fn legs_scaled(legs: f64) -> HumanoidSkeleton {
+    let base = body(LevelOfArticulation::Loa2);
+    let rest = Frames::new(&base.skeleton, &Posture::rest(&base.skeleton)).joint_position;
+    let at = |n: &str| rest[base.skeleton.joint_index(n).unwrap()];
+    let ankle_y = at("l_talocrural").y;
+    let leg_joint = |name: &str| {
+        [
+            "hip",
+            "knee",
+            "talocrural",
+            "tarsal",
+            "subtalar",
+            "midtarsal",
+            "metatars",
+            "tarsometa",
+        ]
+        .iter()
+        .any(|k| name.contains(k))
+            && (name.starts_with("l_") || name.starts_with("r_"))
+    };
+    let scaled = |name: &str, p: DVec3| {
+        if leg_joint(name) && !name.ends_with("_hip") {
+            let hip = at(if name.starts_with("l_") {
+                "l_hip"
+            } else {
+                "r_hip"
+            });
+            hip + (p - hip) * legs
+        } else {
+            p
+        }
+    };
+    let drop = scaled("l_talocrural", at("l_talocrural")).y - ankle_y;
+    reshaped(LevelOfArticulation::Loa2, |name, p| {
+        scaled(name, p) - DVec3::Y * drop
+    })
+}
+
+#[test]
+fn cmu_walk_and_run_keep_their_contacts_on_legs_from_0_7_to_1_3_times() {
+    use stance_motion::bvh::{BvhLimits, read_bvh};
+    use stance_motion::retarget::metrics;
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/fixtures/motion/");
+    println!(
+        "clip  legs  contacts  drift max/mean (mm): source | copy | Stance   sink max (mm): \
+         copy | Stance   boundary jump / excess / clip's own (rad)  deviation mean (mm)"
+    );
+    for name in ["walk", "run"] {
+        let bytes = std::fs::read(format!("{root}{name}.bvh")).unwrap();
+        let clip = read_bvh(&bytes, name, &BvhLimits::default()).unwrap();
+        for legs in [0.7, 1.0, 1.3] {
+            let target = legs_scaled(legs);
+            let options = RetargetOptions::default();
+            let r = retarget(&clip, &target, &options).unwrap();
+            assert_eq!(r.postures.len(), clip.frame_count());
+            let ease = options.contacts.unwrap().ease_frames(clip.frame_time);
+            let m = metrics(&clip, &target, &r, ease);
+            let mm = |x: f64| x * 1e3;
+            println!(
+                "{name:5} {legs:4.1} {:9} {:6.2}/{:5.2} | {:6.2}/{:5.2} | {:5.3}/{:5.3}   {:5.2} | {:5.3}   {:.3} / {:.3} / {:.3}   {:.1}",
+                r.contacts.len(),
+                mm(m.source.max_drift),
+                mm(m.source.mean_drift),
+                mm(m.copy.max_drift),
+                mm(m.copy.mean_drift),
+                mm(m.output.max_drift),
+                mm(m.output.mean_drift),
+                mm(m.copy.max_sink),
+                mm(m.output.max_sink),
+                m.smoothness.worst_boundary_jump,
+                m.smoothness.worst_boundary_excess,
+                m.smoothness.clip_max_jump,
+                mm(m.deviation.mean),
+            );
+            // Both feet touch the floor in both clips.
+            for foot in ["l_talocrural", "r_talocrural"] {
+                assert!(
+                    r.contacts.iter().any(|c| c.joint == foot),
+                    "{name} {legs}: {foot}"
+                );
+            }
+            assert!(m.output.max_drift <= 0.002, "{name} {legs}: {:?}", m.output);
+            assert!(
+                m.output.mean_drift <= 0.0005,
+                "{name} {legs}: {:?}",
+                m.output
+            );
+            assert!(m.output.max_sink <= 0.002, "{name} {legs}: {:?}", m.output);
+            assert!(
+                m.smoothness.worst_boundary_jump <= m.smoothness.clip_max_jump,
+                "{name} {legs}: {:?}",
+                m.smoothness
+            );
+            // The plain copy slides where the legs differ (the clip's own feet move less).
+            if legs != 1.0 {
+                assert!(m.copy.max_drift > m.output.max_drift * 10.0, "{:?}", m.copy);
+            }
+        }
+    }
+}

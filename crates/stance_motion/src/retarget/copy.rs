@@ -191,10 +191,12 @@ impl RotationCopy {
             .map(|(j, _)| j.hanim)
             .collect();
         if !unmapped.is_empty() {
+            let shown = unmapped.len().min(8);
             notes.push(format!(
-                "{} target joint(s) not in the clip move with their parent: {}",
+                "{} target joint(s) not in the clip move with their parent: {}{}",
                 unmapped.len(),
-                unmapped.join(", ")
+                unmapped[..shown].join(", "),
+                if unmapped.len() > shown { ", ..." } else { "" }
             ));
         }
         let by_name = |pos: &[DVec3], idx: &dyn Fn(&str) -> Option<usize>, n: &str| {

@@ -61,16 +61,21 @@ pub struct Smoothness {
     /// Largest change of any joint's local rotation between two frames of the reference
     /// (the clip's own motion, rad).
     pub clip_max_jump: f64,
+    /// Largest amount by which a joint's change between two frames next to a boundary
+    /// exceeds the reference's own change of that joint there (rad; 0: the constraints
+    /// added no jump).
+    pub worst_boundary_excess: f64,
 }
 
-fn max_jump(skeleton: &Skeleton, a: &Posture, b: &Posture) -> f64 {
+/// Per joint, the change of local rotation from `a` to `b` (rad).
+fn jumps(skeleton: &Skeleton, a: &Posture, b: &Posture) -> Vec<f64> {
     (0..skeleton.joint_count())
         .map(|j| {
             let qa: DQuat = a.local_rotation(skeleton, j);
             let qb: DQuat = b.local_rotation(skeleton, j);
             qa.angle_between(qb)
         })
-        .fold(0.0, f64::max)
+        .collect()
 }
 
 /// Smoothness of `postures` at the contacts' boundaries (within `ease` frames of a start or
@@ -91,13 +96,14 @@ pub fn smoothness(
     };
     let mut s = Smoothness::default();
     for f in 1..postures.len().min(reference.len()) {
-        s.clip_max_jump = s
-            .clip_max_jump
-            .max(max_jump(skeleton, &reference[f - 1], &reference[f]));
+        let own = jumps(skeleton, &reference[f - 1], &reference[f]);
+        s.clip_max_jump = own.iter().copied().fold(s.clip_max_jump, f64::max);
         if near(f) {
-            s.worst_boundary_jump =
-                s.worst_boundary_jump
-                    .max(max_jump(skeleton, &postures[f - 1], &postures[f]));
+            let out = jumps(skeleton, &postures[f - 1], &postures[f]);
+            for (o, r) in out.iter().zip(&own) {
+                s.worst_boundary_jump = s.worst_boundary_jump.max(*o);
+                s.worst_boundary_excess = s.worst_boundary_excess.max(o - r);
+            }
         }
     }
     s
@@ -116,6 +122,40 @@ pub struct Metrics {
     pub output: ContactMetrics,
     /// Smoothness of the result against the copy's own frame-to-frame motion.
     pub smoothness: Smoothness,
+    /// How far the tasks moved the joints from the plain copy (m): what the constraints
+    /// changed in the motion.
+    pub deviation: Deviation,
+}
+
+/// Distances of the joints of a result from those of a reference, over all frames.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Deviation {
+    /// Largest distance of any joint (m).
+    pub max: f64,
+    /// Mean over joints and frames (m).
+    pub mean: f64,
+}
+
+/// How far `postures` put the joints of `skeleton` from where `reference` puts them.
+pub fn deviation(skeleton: &Skeleton, postures: &[Posture], reference: &[Posture]) -> Deviation {
+    let mut d = Deviation::default();
+    let mut n = 0usize;
+    for (a, b) in postures.iter().zip(reference) {
+        let (fa, fb) = (
+            stance_ik::Frames::new(skeleton, a),
+            stance_ik::Frames::new(skeleton, b),
+        );
+        for (pa, pb) in fa.joint_position.iter().zip(&fb.joint_position) {
+            let x = (*pa - *pb).length();
+            d.max = d.max.max(x);
+            d.mean += x;
+            n += 1;
+        }
+    }
+    if n > 0 {
+        d.mean /= n as f64;
+    }
+    d
 }
 
 /// The metrics of `result`, retargeted from `clip` onto `target`; `ease`: the ease frames.
@@ -153,5 +193,6 @@ pub fn metrics(
             &result.contacts,
             ease,
         ),
+        deviation: deviation(skeleton, &result.postures, &result.copy),
     }
 }

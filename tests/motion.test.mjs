@@ -1,0 +1,198 @@
+// Motion through the `stance` CLI and in Chromium: the CMU walk retargeted onto the default
+// avatar (`stance retarget --contacts auto`) keeps its frame count, holds its foot contacts
+// (drift and sinking printed beside the source and the plain rotation copy), writes a GLB
+// that passes the Khronos glTF-Validator and that three.js plays with the joints where
+// Stance put them (`--joints-out`, within 1 mm), and the stance-ik package retargets the
+// same clip in the page (wasm) with the same contacts, printing frames per second beside the
+// native figure. A malformed BVH fails naming the line and field; a directory is processed
+// in shards.
+import { after, before, describe, test } from "node:test";
+import assert from "node:assert/strict";
+import { execFileSync, spawnSync } from "node:child_process";
+import { mkdirSync, mkdtempSync, readFileSync, readdirSync, writeFileSync, copyFileSync } from "node:fs";
+import { tmpdir } from "node:os";
+import { dirname, join } from "node:path";
+import { fileURLToPath } from "node:url";
+import validator from "gltf-validator";
+import { CONFIGURATIONS, launch, serve } from "./browser.mjs";
+
+const root = join(dirname(fileURLToPath(import.meta.url)), "..");
+const walk = join(root, "tests", "fixtures", "motion", "walk.bvh");
+const run = join(root, "tests", "fixtures", "motion", "run.bvh");
+let stance;
+let work;
+let served;
+let context;
+
+before(async () => {
+  stance = process.env.STANCE_BIN;
+  if (!stance) {
+    execFileSync("cargo", ["build", "--quiet", "-p", "stance_cli", "--bin", "stance"], {
+      cwd: root,
+      stdio: "inherit",
+    });
+    stance = join(root, "target", "debug", "stance");
+  }
+  work = mkdtempSync(join(tmpdir(), "stance-motion-"));
+  served = await serve();
+  context = await launch(CONFIGURATIONS.webgl2);
+});
+
+after(async () => {
+  await context?.close();
+  served?.server.close();
+});
+
+function cli(...args) {
+  return spawnSync(stance, args, { cwd: root, encoding: "utf8" });
+}
+
+/** Rows of the MOTION section of a BVH file. */
+function bvhRows(file) {
+  const lines = readFileSync(file, "utf8").split(/\r?\n/);
+  const at = lines.findIndex((l) => /^\s*Frame Time/i.test(l));
+  return lines.slice(at + 1).filter((l) => l.trim() !== "").length;
+}
+
+const mm = (m) => (m * 1000).toFixed(2);
+const distance = (a, b) => Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+
+describe("motion", () => {
+  let report;
+  let joints;
+  const glb = () => join(work, "walk.glb");
+
+  test("the CMU walk retargets onto the default avatar with its contacts held", async () => {
+    const r = cli("retarget", walk, "--to", "default", "--out", glb(),
+      "--report", join(work, "walk.json"), "--joints-out", join(work, "joints.json"));
+    assert.equal(r.status, 0, r.stderr);
+    report = JSON.parse(readFileSync(join(work, "walk.json"), "utf8"));
+    joints = JSON.parse(readFileSync(join(work, "joints.json"), "utf8"));
+    assert.equal(report.frames, bvhRows(walk), "frame count kept");
+    assert.equal(joints.frames.length, report.frames);
+    assert.ok(Math.abs(joints.fps - 120) < 0.01, `fps ${joints.fps}`);
+    const feet = new Set(report.contacts.map((c) => c.joint));
+    assert.deepEqual([...feet].sort(), ["l_talocrural", "r_talocrural"]);
+    const { source, copy, output, smoothness } = report.metrics;
+    console.log(`# walk on the default avatar (root scale ${report.root_scale.toFixed(3)}), ` +
+      `${report.contacts.length} contacts over ${output.frames} foot-frames: ` +
+      `drift max/mean, sink max (mm): source ${mm(source.max_drift)}/${mm(source.mean_drift)}, ` +
+      `${mm(source.max_sink)}; plain copy ${mm(copy.max_drift)}/${mm(copy.mean_drift)}, ` +
+      `${mm(copy.max_sink)}; Stance ${mm(output.max_drift)}/${mm(output.mean_drift)}, ` +
+      `${mm(output.max_sink)}; worst joint jump at a boundary ` +
+      `${smoothness.worst_boundary_jump.toFixed(4)} rad (clip's own ${smoothness.clip_max_jump.toFixed(4)}); ` +
+      `${report.frames_per_second.toFixed(0)} frames/s (debug build)`);
+    assert.ok(output.max_drift <= 0.002 && output.mean_drift <= 0.0005, JSON.stringify(output));
+    assert.ok(output.max_sink <= 0.002, JSON.stringify(output));
+    assert.ok(smoothness.worst_boundary_jump <= smoothness.clip_max_jump, JSON.stringify(smoothness));
+    // Every level's residual is reported per frame.
+    assert.equal(report.residuals.length, report.frames);
+    assert.deepEqual(report.levels, [1, 2, 3, 4]);
+  });
+
+  test("the GLB passes the glTF-Validator", async () => {
+    const result = await validator.validateBytes(new Uint8Array(readFileSync(glb())), {
+      maxIssues: 50,
+      externalResourceFunction: () => Promise.reject(new Error("no external resources")),
+    });
+    const errors = result.issues.messages.filter((m) => m.severity === 0);
+    assert.equal(result.issues.numErrors, 0, JSON.stringify(errors, null, 1));
+    assert.equal(result.info.animationCount, 1);
+  });
+
+  test("three.js plays the GLB with the joints where Stance put them", async () => {
+    const page = await context.newPage();
+    await page.goto(`${served.url}examples/three/`);
+    const bytes = readFileSync(glb()).toString("base64");
+    const frames = [0, Math.floor(report.frames / 2), report.frames - 1];
+    const got = await page.evaluate(async ([b64, names, frames, fps]) => {
+      const THREE = await import("three");
+      const { GLTFLoader } = await import("three/addons/loaders/GLTFLoader.js");
+      const data = Uint8Array.from(atob(b64), (c) => c.charCodeAt(0)).buffer;
+      const gltf = await new GLTFLoader().parseAsync(data, "");
+      const mixer = new THREE.AnimationMixer(gltf.scene);
+      mixer.clipAction(gltf.animations[0]).play();
+      const out = { duration: gltf.animations[0].duration, frames: [] };
+      for (const f of frames) {
+        mixer.setTime(f / fps);
+        gltf.scene.updateMatrixWorld(true);
+        out.frames.push(names.map((n) => {
+          const node = gltf.scene.getObjectByName(n);
+          if (!node) return null;
+          const p = new THREE.Vector3();
+          node.getWorldPosition(p);
+          return [p.x, p.y, p.z];
+        }));
+      }
+      return out;
+    }, [bytes, joints.joints, frames, joints.fps]);
+    await page.close();
+    assert.ok(Math.abs(got.duration - (report.frames - 1) / joints.fps) < 1e-4,
+      `duration ${got.duration}`);
+    let worst = 0;
+    frames.forEach((f, k) => {
+      joints.joints.forEach((name, j) => {
+        assert.ok(got.frames[k][j], `three.js finds node ${name}`);
+        worst = Math.max(worst, distance(got.frames[k][j], joints.frames[f][j]));
+      });
+    });
+    console.log(`# three.js AnimationMixer vs Stance: worst joint distance ${mm(worst)} mm ` +
+      `over ${joints.joints.length} joints x ${frames.length} frames`);
+    assert.ok(worst < 0.001, `${worst} m`);
+  });
+
+  test("the stance-ik package retargets the clip in the page (wasm) with the same contacts", async () => {
+    const page = await context.newPage();
+    await page.goto(`${served.url}examples/three/`);
+    const text = readFileSync(walk, "utf8");
+    const r = await page.evaluate(async (text) => {
+      const ik = await import("stance-ik");
+      const body = ik.Skeleton.hanim(2);
+      ik.retarget(body, text); // warm-up
+      const runs = [];
+      let result;
+      for (let i = 0; i < 3; i++) {
+        const t0 = performance.now();
+        result = ik.retarget(body, text);
+        runs.push(performance.now() - t0);
+      }
+      runs.sort((a, b) => a - b);
+      return { ms: runs[1], frames: result.frameCount, contacts: result.contacts.length,
+        values: result.values.length, dofs: body.dofCount };
+    }, text);
+    await page.close();
+    assert.equal(r.frames, report.frames);
+    assert.equal(r.values, r.frames * r.dofs);
+    assert.ok(r.contacts >= 2, `${r.contacts} contacts`);
+    const native = cli("retarget", walk, "--to", "default", "--out", join(work, "w.bvh"),
+      "--report", join(work, "w.json"));
+    assert.equal(native.status, 0, native.stderr);
+    console.log(`# retargeting the walk with contacts (4 levels, H-Anim LOA2 body): ` +
+      `${(r.frames / (r.ms / 1000)).toFixed(0)} frames/s in Chromium (wasm, release), ` +
+      `${report.frames_per_second.toFixed(0)} frames/s native (debug build of the CLI)`);
+  });
+
+  test("a malformed BVH fails naming the line and the field", () => {
+    const bad = join(work, "bad.bvh");
+    writeFileSync(bad, readFileSync(walk, "utf8").replace(/CHANNELS 3 Zrotation Yrotation Xrotation/, "CHANNELS 3 Zrotation Yrotation Wrotation"));
+    const r = cli("retarget", bad, "--to", "default", "--out", join(work, "bad.glb"));
+    assert.notEqual(r.status, 0);
+    assert.match(r.stderr, /line 9/);
+    assert.match(r.stderr, /CHANNELS/i);
+  });
+
+  test("a directory of clips is processed in shards, each clip once", () => {
+    const dir = join(work, "library");
+    mkdirSync(dir);
+    copyFileSync(walk, join(dir, "a_walk.bvh"));
+    copyFileSync(run, join(dir, "b_run.bvh"));
+    const outs = [0, 1].map((i) => {
+      const out = join(work, `out${i}`);
+      const r = cli("retarget", dir, "--to", "default", "--out", out, "--format", "bvh",
+        "--shard", `${i}/2`, "--contacts", "none");
+      assert.equal(r.status, 0, r.stderr);
+      return readdirSync(out);
+    });
+    assert.deepEqual(outs, [["a_walk.bvh"], ["b_run.bvh"]]);
+  });
+});
