@@ -75,7 +75,10 @@ pub fn write_bvh(clip: &Clip, options: &BvhWriteOptions) -> String {
             .any(|f| (translation(f, i) - clip.joints[i].offset).abs().max_element() > 1e-9)
     };
     let rotates = |i: usize| {
-        (0..clip.frames.len()).any(|f| rotation(f, i).angle_between(DQuat::IDENTITY) > 1e-12)
+        (0..clip.frames.len()).any(|f| {
+            let q = rotation(f, i);
+            DVec3::new(q.x, q.y, q.z).length() > 1e-12
+        })
     };
 
     // Names.
