@@ -126,3 +126,17 @@ fn the_frame_time_is_written_to_round_trip_exactly() {
         assert_eq!(back.frame_time.to_bits(), t.to_bits());
     }
 }
+
+#[test]
+fn the_fuzz_seeds_are_valid_and_small() {
+    let dir = format!("{}/fuzz/corpus/bvh", env!("CARGO_MANIFEST_DIR"));
+    let mut count = 0;
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let bytes = std::fs::read(entry.unwrap().path()).unwrap();
+        assert!(bytes.len() < 4096);
+        let clip = read_bvh(&bytes, "seed", &BvhLimits::default()).unwrap();
+        assert!(clip.frame_count() >= 1);
+        count += 1;
+    }
+    assert!(count >= 4);
+}
