@@ -206,8 +206,8 @@ fn tokens(name: &str) -> Vec<String> {
 /// Body-part stems that CMU's ASF skeleton writes glued to a one-letter side (`lfemur`,
 /// `rclavicle`); a glued `l`/`r` is only split off before these.
 const GLUED_SIDE_STEMS: &[&str] = &[
-    "femur", "tibia", "foot", "toes", "clavicle", "humerus", "radius", "wrist", "hand",
-    "thigh", "shin", "shldr", "collar", "forearm",
+    "femur", "tibia", "foot", "toes", "clavicle", "humerus", "radius", "wrist", "hand", "thigh",
+    "shin", "shldr", "collar", "forearm",
 ];
 
 /// Side from tokens; removes the side tokens.
@@ -289,8 +289,19 @@ fn match_name(name: &str) -> Option<(&'static str, MatchMethod)> {
     toks.retain(|t| {
         !matches!(
             t.as_str(),
-            "bip" | "bip01" | "def" | "org" | "mch" | "j" | "bn" | "bone" | "c" | "joint" | "jnt"
-                | "character" | "bend"
+            "bip"
+                | "bip01"
+                | "def"
+                | "org"
+                | "mch"
+                | "j"
+                | "bn"
+                | "bone"
+                | "c"
+                | "joint"
+                | "jnt"
+                | "character"
+                | "bend"
         )
     });
     // Twist helpers (Daz `lShldrTwist`, Unreal `upperarm_twist_01_l`) carry no joint.

@@ -45,17 +45,28 @@ fn the_walk_is_read_in_cmu_units_and_fully_mapped() {
     // The hips' OFFSET is 0 and the channels hold the position (CMU units).
     let hips = c.frames[0].translations[0];
     let unit = 0.0254 / 0.45;
-    assert!((hips - DVec3::new(4.2881, 16.4558, -23.9549) * unit).length() < 1e-12, "{hips}");
+    assert!(
+        (hips - DVec3::new(4.2881, 16.4558, -23.9549) * unit).length() < 1e-12,
+        "{hips}"
+    );
     // Walking forward (+Z, the body's front) about 2 m.
     let last = c.frames[259].translations[0];
-    assert!(last.z - hips.z > 1.5 && last.z - hips.z < 2.5, "{}", last.z - hips.z);
+    assert!(
+        last.z - hips.z > 1.5 && last.z - hips.z < 2.5,
+        "{}",
+        last.z - hips.z
+    );
 }
 
 #[test]
 fn the_run_with_cmu_asf_names_is_read_and_fully_mapped() {
     let c = fixture("run");
     assert_eq!(c.frame_count(), 173);
-    assert!(c.notes[0].starts_with("units: CMU units (1/0.45 inch)"), "{:?}", c.notes);
+    assert!(
+        c.notes[0].starts_with("units: CMU units (1/0.45 inch)"),
+        "{:?}",
+        c.notes
+    );
     assert!(c.mapping.missing(LevelOfArticulation::Loa1).is_empty());
     let name = |h: &str| c.joints[c.joint_of(h).unwrap()].name.as_str();
     assert_eq!(name("l_hip"), "lfemur");
@@ -66,7 +77,10 @@ fn the_run_with_cmu_asf_names_is_read_and_fully_mapped() {
     // Feet below the head in every frame.
     for f in &c.frames {
         let w = c.world(f);
-        assert!(w[c.joint_of("skullbase").unwrap()].1.y > w[c.joint_of("l_talocrural").unwrap()].1.y + 0.8);
+        assert!(
+            w[c.joint_of("skullbase").unwrap()].1.y
+                > w[c.joint_of("l_talocrural").unwrap()].1.y + 0.8
+        );
     }
 }
 
@@ -76,7 +90,11 @@ fn fixtures_written_and_read_again_keep_every_world_position() {
         let c = fixture(name);
         for options in [
             BvhWriteOptions::default(),
-            BvhWriteOptions { order: EulerOrder::Zyx, metres_per_unit: 0.01, hanim_names: true },
+            BvhWriteOptions {
+                order: EulerOrder::Zyx,
+                metres_per_unit: 0.01,
+                hanim_names: true,
+            },
         ] {
             let back = reread(&c, &options);
             assert_eq!(back.frame_count(), c.frame_count());
@@ -98,14 +116,21 @@ fn all_six_euler_orders_round_trip_through_export_and_import() {
     let c = fixture("run");
     // The unit must read back as metres: written in metres, the run's body is human-sized.
     for order in EulerOrder::ALL {
-        let options = BvhWriteOptions { order, ..BvhWriteOptions::default() };
+        let options = BvhWriteOptions {
+            order,
+            ..BvhWriteOptions::default()
+        };
         let text = write_bvh(&c, &options);
         let rot = order.channel_names().join(" ");
         assert!(text.contains(&format!("CHANNELS 3 {rot}")), "{order:?}");
         assert!(text.contains("ROOT humanoid_root"));
         assert!(text.contains("JOINT l_hip"));
         let back = read_bvh(text.as_bytes(), "r", &BvhLimits::default()).unwrap();
-        assert!(back.notes[0].starts_with("units: metres"), "{:?}", back.notes);
+        assert!(
+            back.notes[0].starts_with("units: metres"),
+            "{:?}",
+            back.notes
+        );
         assert_eq!(back.frame_count(), 173);
         assert_eq!(back.frame_time.to_bits(), c.frame_time.to_bits());
         for (fa, fb) in c.frames.iter().zip(&back.frames) {

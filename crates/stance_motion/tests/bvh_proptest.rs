@@ -11,7 +11,11 @@ use stance_motion::{
 const SEED: &str = "HIERARCHY\nROOT Hips\n{\n\tOFFSET 0 1 0\n\tCHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n\tJOINT LeftArm\n\t{\n\t\tOFFSET 0.2 0.0-1e-3 0\n\t\tCHANNELS 3 Yrotation Xrotation Zrotation\n\t\tEnd Site\n\t\t{\n\t\t\tOFFSET 0.3 0 0\n\t\t}\n\t}\n}\nMOTION\nFrames: 2\nFrame Time: 0.04\n0 1 0 10 20 30 1.5e1 -5 2\n0 1.1 0 -10 20 -30 15 5 -2\n";
 
 fn limits() -> BvhLimits {
-    BvhLimits { max_frames: 1000, max_values: 100_000, ..BvhLimits::default() }
+    BvhLimits {
+        max_frames: 1000,
+        max_values: 100_000,
+        ..BvhLimits::default()
+    }
 }
 
 proptest! {
@@ -60,11 +64,33 @@ fn random_clip(offsets: &[(f64, f64, f64)], angles: &[Vec<(f64, f64, f64)>]) -> 
     let frames = angles
         .iter()
         .map(|frame| ClipFrame {
-            translations: joints.iter().enumerate().map(|(i, j)| if i == 0 { j.offset + DVec3::new(frame[0].0, 0.0, 0.0) } else { j.offset }).collect(),
-            rotations: (0..n).map(|i| { let (a, b, c) = frame[i % frame.len()]; EulerOrder::Yxz.to_quat([a, b, c]) }).collect(),
+            translations: joints
+                .iter()
+                .enumerate()
+                .map(|(i, j)| {
+                    if i == 0 {
+                        j.offset + DVec3::new(frame[0].0, 0.0, 0.0)
+                    } else {
+                        j.offset
+                    }
+                })
+                .collect(),
+            rotations: (0..n)
+                .map(|i| {
+                    let (a, b, c) = frame[i % frame.len()];
+                    EulerOrder::Yxz.to_quat([a, b, c])
+                })
+                .collect(),
         })
         .collect();
-    Clip { name: "r".into(), frame_time: 1.0 / 60.0, joints, frames, mapping: Mapping::empty(n), notes: Vec::new() }
+    Clip {
+        name: "r".into(),
+        frame_time: 1.0 / 60.0,
+        joints,
+        frames,
+        mapping: Mapping::empty(n),
+        notes: Vec::new(),
+    }
 }
 
 fn angle(a: DQuat, b: DQuat) -> f64 {
@@ -102,4 +128,3 @@ proptest! {
         }
     }
 }
-

@@ -53,7 +53,8 @@ impl EulerOrder {
 
     /// The BVH channel names of the rotation channels, in order.
     pub fn channel_names(self) -> [&'static str; 3] {
-        self.axes().map(|a| ["Xrotation", "Yrotation", "Zrotation"][a])
+        self.axes()
+            .map(|a| ["Xrotation", "Yrotation", "Zrotation"][a])
     }
 
     /// The rotation of the angles (radians), `angles[i]` about the `i`-th axis of the order.

@@ -169,7 +169,11 @@ pub fn read_bvh(bytes: &[u8], name: &str, limits: &BvhLimits) -> Result<Clip, Bv
         });
     }
     let mut frames = Vec::with_capacity(raw.rows);
-    for row in raw.values.chunks_exact(raw.channel_count.max(1)).take(raw.rows) {
+    for row in raw
+        .values
+        .chunks_exact(raw.channel_count.max(1))
+        .take(raw.rows)
+    {
         let mut translations = Vec::with_capacity(raw.joints.len());
         let mut rotations = Vec::with_capacity(raw.joints.len());
         for (i, j) in raw.joints.iter().enumerate() {
@@ -230,9 +234,7 @@ pub fn read_bvh(bytes: &[u8], name: &str, limits: &BvhLimits) -> Result<Clip, Bv
             body.height_file
         ));
     } else {
-        head.push(
-            "units: unknown (no head or ankles mapped); read as metres".to_owned(),
-        );
+        head.push("units: unknown (no head or ankles mapped); read as metres".to_owned());
     }
     if let Some(w) = warning {
         head.push(w);

@@ -178,7 +178,10 @@ pub(crate) fn parse(bytes: &[u8], limits: &BvhLimits) -> Result<RawBvh, BvhError
     }
     let text = String::from_utf8_lossy(bytes);
     let lines = lines(&text);
-    let mut it = lines.iter().filter(|(_, l)| !l.trim().is_empty()).peekable();
+    let mut it = lines
+        .iter()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .peekable();
     let last_line = lines.last().map_or(1, |(n, _)| *n);
 
     // HIERARCHY
@@ -240,9 +243,7 @@ pub(crate) fn parse(bytes: &[u8], limits: &BvhLimits) -> Result<RawBvh, BvhError
                     }
                     let parent = stack.last().copied();
                     let name = if kw == "end" {
-                        if !rest
-                            .first()
-                            .is_some_and(|s| s.eq_ignore_ascii_case("site"))
+                        if !rest.first().is_some_and(|s| s.eq_ignore_ascii_case("site"))
                             || rest.len() != 1
                         {
                             return Err(err(n, "End Site", "expected 'End Site'"));
@@ -488,7 +489,11 @@ pub(crate) fn parse(bytes: &[u8], limits: &BvhLimits) -> Result<RawBvh, BvhError
             return Err(err(last_line, "{", "expected '{', got the end of the file"));
         }
         if joints.is_empty() {
-            return Err(err(last_line, "ROOT", "expected ROOT, got the end of the file"));
+            return Err(err(
+                last_line,
+                "ROOT",
+                "expected ROOT, got the end of the file",
+            ));
         }
         return Err(err(
             last_line,
@@ -526,10 +531,7 @@ pub(crate) fn parse(bytes: &[u8], limits: &BvhLimits) -> Result<RawBvh, BvhError
             limit(
                 frames_line,
                 "Frames:",
-                format!(
-                    "{declared} frames, over the limit of {}",
-                    limits.max_frames
-                ),
+                format!("{declared} frames, over the limit of {}", limits.max_frames),
             )
         })?;
 

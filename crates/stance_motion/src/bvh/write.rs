@@ -71,8 +71,12 @@ pub fn write_bvh(clip: &Clip, options: &BvhWriteOptions) -> String {
             .unwrap_or(DQuat::IDENTITY)
     };
     let moves = |i: usize| {
-        (0..clip.frames.len())
-            .any(|f| (translation(f, i) - clip.joints[i].offset).abs().max_element() > 1e-9)
+        (0..clip.frames.len()).any(|f| {
+            (translation(f, i) - clip.joints[i].offset)
+                .abs()
+                .max_element()
+                > 1e-9
+        })
     };
     let rotates = |i: usize| {
         (0..clip.frames.len()).any(|f| {

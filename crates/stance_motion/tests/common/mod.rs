@@ -66,8 +66,11 @@ pub fn humanoid(names: &Names, unit: f64, z_up: bool, frames: usize) -> String {
             channels += 3;
         }
     };
-    let end = |out: &mut String, o: String| out.push_str(&format!("End Site\n{{\nOFFSET {o}\n}}\n"));
-    let leg = |out: &mut String, open: &mut dyn FnMut(&mut String, &str, &str, String, bool), s: usize| {
+    let end =
+        |out: &mut String, o: String| out.push_str(&format!("End Site\n{{\nOFFSET {o}\n}}\n"));
+    let leg = |out: &mut String,
+               open: &mut dyn FnMut(&mut String, &str, &str, String, bool),
+               s: usize| {
         let x = if s == 0 { 0.1 } else { -0.1 };
         open(out, "JOINT", &fix(names.up_leg, s), v(x, -0.05, 0.0), false);
         open(out, "JOINT", &fix(names.leg, s), v(0.0, -0.42, 0.0), false);
@@ -76,12 +79,38 @@ pub fn humanoid(names: &Names, unit: f64, z_up: bool, frames: usize) -> String {
         end(out, v(0.0, 0.0, 0.05));
         out.push_str("}\n}\n}\n}\n");
     };
-    let arm = |out: &mut String, open: &mut dyn FnMut(&mut String, &str, &str, String, bool), s: usize| {
+    let arm = |out: &mut String,
+               open: &mut dyn FnMut(&mut String, &str, &str, String, bool),
+               s: usize| {
         let x = if s == 0 { 1.0 } else { -1.0 };
-        open(out, "JOINT", &fix(names.collar, s), v(0.02 * x, 0.1, 0.0), false);
-        open(out, "JOINT", &fix(names.arm, s), v(0.15 * x, 0.0, 0.0), false);
-        open(out, "JOINT", &fix(names.fore_arm, s), v(0.28 * x, 0.0, 0.0), false);
-        open(out, "JOINT", &fix(names.hand, s), v(0.25 * x, 0.0, 0.0), false);
+        open(
+            out,
+            "JOINT",
+            &fix(names.collar, s),
+            v(0.02 * x, 0.1, 0.0),
+            false,
+        );
+        open(
+            out,
+            "JOINT",
+            &fix(names.arm, s),
+            v(0.15 * x, 0.0, 0.0),
+            false,
+        );
+        open(
+            out,
+            "JOINT",
+            &fix(names.fore_arm, s),
+            v(0.28 * x, 0.0, 0.0),
+            false,
+        );
+        open(
+            out,
+            "JOINT",
+            &fix(names.hand, s),
+            v(0.25 * x, 0.0, 0.0),
+            false,
+        );
         end(out, v(0.08 * x, 0.0, 0.0));
         out.push_str("}\n}\n}\n}\n");
     };
@@ -117,10 +146,16 @@ pub fn humanoid(names: &Names, unit: f64, z_up: bool, frames: usize) -> String {
         out.push_str("}\n");
     }
     out.push_str("}\n");
-    out.push_str(&format!("MOTION\nFrames: {frames}\nFrame Time: 0.0333333\n"));
+    out.push_str(&format!(
+        "MOTION\nFrames: {frames}\nFrame Time: 0.0333333\n"
+    ));
     for f in 0..frames {
         let mut row = Vec::with_capacity(channels);
-        let (x, y, z) = if z_up { (0.0, -0.01 * f as f64, 0.95) } else { (0.0, 0.95, 0.01 * f as f64) };
+        let (x, y, z) = if z_up {
+            (0.0, -0.01 * f as f64, 0.95)
+        } else {
+            (0.0, 0.95, 0.01 * f as f64)
+        };
         row.extend([x / unit, y / unit, z / unit]);
         for k in 3..channels {
             row.push(((k * 7 + f * 3) % 23) as f64 - 11.0);
