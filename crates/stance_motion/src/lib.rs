@@ -5,7 +5,10 @@
 //! - [`Clip`]: frames of local joint transforms on the clip's own skeleton, in the H-Anim
 //!   frame (metres, +Y up, +Z front, +X the body's left), with the skeleton's mapping onto
 //!   H-Anim 2.0 names.
-//! - [`bvh`]: BVH in (with the dialect quirks of real files) and out.
+//! - [`bvh`]: BVH in ([`read_bvh`]: the dialect quirks of real files, units and axes found
+//!   from the skeleton, names mapped onto H-Anim, errors naming the line and field, sizes
+//!   bounded by [`BvhLimits`]) and out ([`write_bvh`]: H-Anim names, any [`EulerOrder`],
+//!   any unit). See `docs/motion-formats.md`.
 //!
 //! Like `stance_ik`, joint frames are parallel to the world at rest (BVH's convention too):
 //! `world_from_joint = world_from_parent * T(translation) * R(rotation)`, the rest pose

@@ -79,7 +79,10 @@ pub fn write_bvh(clip: &Clip, options: &BvhWriteOptions) -> String {
         })
     };
     let rotates = |i: usize| {
-        (0..clip.frames.len()).any(|f| rotation(f, i).angle_between(DQuat::IDENTITY) > 1e-12)
+        (0..clip.frames.len()).any(|f| {
+            let q = rotation(f, i);
+            DVec3::new(q.x, q.y, q.z).length() > 1e-12
+        })
     };
 
     // Names.
