@@ -86,7 +86,7 @@ pub struct Animation {
 /// Relative tolerance under which a sample time is a key time (times are stored as `f32`
 /// in files, relative error under 6e-8): a frame that falls on a key takes the key's value
 /// exactly.
-pub(crate) const KEY_TIME_TOLERANCE: f64 = 1e-6;
+pub const KEY_TIME_TOLERANCE: f64 = 1e-6;
 
 /// Most frames [`clip_from_animation`] makes (over 9 hours at 30 fps).
 pub const MAX_CLIP_FRAMES: usize = 1 << 20;

@@ -581,6 +581,53 @@ fn exported_postures_come_back_as_the_same_motion() {
     assert!(first[wrist].1.distance(last[wrist].1) > 0.05);
 }
 
+/// The same animation in a Z-up centimetre file facing -X (a new root above everything)
+/// gives the same clip in the H-Anim frame: positions and world rotations of every mapped
+/// joint, the file's unit scale and axes removed by `hanim_from_file`.
+#[test]
+fn clips_do_not_depend_on_the_files_axes_and_unit() {
+    let avatar = make_default_avatar().unwrap();
+    let body = avatar.skeleton(&SkeletonOptions::default()).unwrap();
+    let postures: Vec<Posture> = (0..3)
+        .map(|k| {
+            let mut p = Posture::rest(&body.skeleton);
+            for (i, v) in p.values_mut().iter_mut().enumerate() {
+                *v = 0.3 * ((i as f64) * 1.3 + k as f64).cos();
+            }
+            p
+        })
+        .collect();
+    let glb = export_glb_animation(&avatar, &body, &postures, 0.5, "turns").unwrap();
+    let reference = load_avatar(&glb, &LoadOptions::default()).unwrap();
+    let (mut j, bin) = common::split(&glb);
+    let q = DQuat::from_rotation_z(-std::f64::consts::FRAC_PI_2)
+        * DQuat::from_rotation_x(std::f64::consts::FRAC_PI_2);
+    let old_roots = j["scenes"][0]["nodes"].clone();
+    let nodes = j["nodes"].as_array_mut().unwrap();
+    nodes.push(json!({"name": "Armature", "children": old_roots,
+        "rotation": [q.x, q.y, q.z, q.w], "scale": [100.0, 100.0, 100.0],
+        "translation": [12.0, -3.0, 40.0]}));
+    let armature = nodes.len() - 1;
+    j["scenes"][0]["nodes"] = json!([armature]);
+    let moved = load_avatar(&common::join(&j, &bin), &LoadOptions::default()).unwrap();
+    let a = clip_from_animation(&reference, 0, 2.0).unwrap();
+    let b = clip_from_animation(&moved, 0, 2.0).unwrap();
+    assert_eq!(b.joints[0].name, "Armature");
+    assert_eq!((a.frames.len(), b.frames.len()), (3, 3));
+    for k in 0..3 {
+        let (wa, wb) = (a.world(&a.frames[k]), b.world(&b.frames[k]));
+        for m in reference.mapping.matches() {
+            let (ja, jb) = (a.joint_of(m.hanim).unwrap(), b.joint_of(m.hanim).unwrap());
+            assert!(wa[ja].1.distance(wb[jb].1) < 1e-4, "frame {k} {}", m.hanim);
+            assert!(
+                wa[ja].0.angle_between(wb[jb].0) < 1e-5,
+                "frame {k} {}",
+                m.hanim
+            );
+        }
+    }
+}
+
 #[test]
 fn exporting_bad_sequences_fails_clearly() {
     let avatar = make_default_avatar().unwrap();
