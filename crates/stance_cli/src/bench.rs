@@ -42,6 +42,11 @@ pub struct BenchArgs {
     /// Iterations per timed run for `us_per_iteration`.
     #[arg(long, default_value_t = 10)]
     pub iterations: usize,
+    /// Time retargeting this clip (.bvh, .glb) onto the H-Anim default body at LOA2 (50
+    /// DOF): the plain rotation copy and the four-level problem with contacts, frames per
+    /// second on one core.
+    #[arg(long)]
+    pub clip: Option<PathBuf>,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -77,6 +82,9 @@ pub fn run(args: BenchArgs) -> Result<()> {
     let budget = std::time::Duration::from_millis(args.millis);
     if let Some(dir) = &args.suite {
         return run_suite(dir, &args);
+    }
+    if let Some(path) = &args.clip {
+        return bench_clip(path, budget, args.json);
     }
     if let Some(path) = &args.problem {
         let r = bench_file(path, budget, args.iterations)?;
@@ -182,6 +190,66 @@ pub fn run(args: BenchArgs) -> Result<()> {
     }
     if args.json {
         println!("{}", serde_json::Value::Object(results));
+    }
+    Ok(())
+}
+
+/// Frames per second of retargeting `path` onto the H-Anim default body (one core), with
+/// and without contacts; the target is 2,000 frames per second with contacts.
+fn bench_clip(path: &std::path::Path, budget: std::time::Duration, json: bool) -> Result<()> {
+    use stance_hanim::{LevelOfArticulation, SkeletonOptions, default_skeleton};
+    use stance_motion::{ContactSettings, RetargetOptions, retarget};
+    let clip = crate::retarget::load_clip(path)?;
+    let mut figures = serde_json::Map::new();
+    for loa in [LevelOfArticulation::Loa1, LevelOfArticulation::Loa2] {
+        let body = default_skeleton(&SkeletonOptions {
+            loa,
+            ..SkeletonOptions::default()
+        })?;
+        for (name, contacts) in [
+            ("copy", None),
+            ("contacts", Some(ContactSettings::default())),
+        ] {
+            let options = RetargetOptions {
+                contacts,
+                ..RetargetOptions::default()
+            };
+            let mut runs = Vec::new();
+            let started = Instant::now();
+            let mut iterations = 0;
+            while runs.is_empty() || started.elapsed() < budget {
+                let t = Instant::now();
+                let r = retarget(&clip, &body, &options)?;
+                runs.push(t.elapsed().as_secs_f64());
+                iterations = r.iterations;
+            }
+            let fps = clip.frame_count() as f64 / median(runs);
+            let key = format!("loa{}_{name}", loa.number());
+            figures.insert(
+                key,
+                serde_json::json!({"frames_per_second": fps, "iterations": iterations,
+                    "dof": body.skeleton.dof_count()}),
+            );
+            if !json {
+                let verdict = match contacts {
+                    Some(_) if fps >= 2000.0 => "  (target >= 2000: ok)",
+                    Some(_) => "  (target >= 2000: MISS)",
+                    None => "",
+                };
+                println!(
+                    "{}: {} frames onto the H-Anim LOA{} body ({} DOF), {name}: {fps:.0} frames/s \
+                     on one core, {:.2} iterations/frame{verdict}",
+                    path.display(),
+                    clip.frame_count(),
+                    loa.number(),
+                    body.skeleton.dof_count(),
+                    iterations as f64 / clip.frame_count() as f64,
+                );
+            }
+        }
+    }
+    if json {
+        println!("{}", serde_json::Value::Object(figures));
     }
     Ok(())
 }

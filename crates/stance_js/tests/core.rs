@@ -229,3 +229,29 @@ fn table1_on_the_hanim_body_is_solved_and_timed() {
         report["iterations"]
     );
 }
+
+#[test]
+fn a_bvh_clip_is_retargeted_onto_an_hanim_body() {
+    let walk = include_str!("../../../tests/fixtures/motion/walk.bvh");
+    let body = Body::hanim(2).unwrap();
+    let r = stance_js::retarget_bvh(&body, walk, true).unwrap();
+    assert_eq!(r.frame_count, 260);
+    assert!((r.frame_time - 0.0083333).abs() < 1e-12);
+    assert_eq!(r.values.len(), 260 * body.skeleton.dof_count());
+    let contacts = r.report["contacts"].as_array().unwrap();
+    for foot in ["l_talocrural", "r_talocrural"] {
+        assert!(contacts.iter().any(|c| c["joint"] == foot), "{contacts:?}");
+    }
+    // The plain copy moves differently from the held one.
+    let copy = stance_js::retarget_bvh(&body, walk, false).unwrap();
+    assert_eq!(copy.values.len(), r.values.len());
+    assert!(copy.report["contacts"].as_array().unwrap().is_empty());
+    assert_ne!(copy.values, r.values);
+    // Bodies without H-Anim names and malformed clips say why.
+    let joints =
+        Body::from_joints(r#"{"joints":[{"name":"a","parent":null,"offset":[0,0,0]}]}"#).unwrap();
+    let e = stance_js::retarget_bvh(&joints, walk, true).unwrap_err();
+    assert!(e.contains("H-Anim body"), "{e}");
+    let e = stance_js::retarget_bvh(&body, "HIERARCHY\nROOT Hips\n{\n", true).unwrap_err();
+    assert!(e.starts_with("bvh: line"), "{e}");
+}

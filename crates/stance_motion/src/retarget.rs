@@ -142,7 +142,6 @@ pub fn retarget(
     let copy: Vec<Posture> = (0..clip.frame_count())
         .map(|f| copier.frame(clip, target, f))
         .collect::<Result<_, _>>()?;
-    let skeleton = &target.skeleton;
     let contacts = match options.contacts {
         Some(settings) => held_contacts(clip, target, &copy, &copier.placement, &settings),
         None => Vec::new(),
@@ -240,10 +239,20 @@ fn frame_tasks(
             tasks.push(Task::position(j, DVec3::ZERO, goal).at_level(WRIST_LEVEL));
         }
     }
-    // Every rotation, the root's included: the body keeps the clip's attitude.
-    let dofs = (0..skeleton.dof_count())
+    // The rotations that the tasks above move, the root's included (the body keeps the
+    // clip's attitude); the others (fingers, the head...) keep the copy's values, which the
+    // step cannot change.
+    let mut dofs: Vec<usize> = tasks
+        .iter()
+        .filter_map(|t| match &t.kind {
+            stance_ik::TaskKind::Position { effector, .. } => Some(effector.joint),
+            _ => None,
+        })
+        .flat_map(|j| skeleton.chain_dofs(j))
         .filter(|&d| skeleton.dof_kinds()[d].is_rotation())
         .collect();
+    dofs.sort_unstable();
+    dofs.dedup();
     tasks.push(Task::posture(copy.values().to_vec(), dofs).at_level(POSTURE_LEVEL));
     tasks
 }

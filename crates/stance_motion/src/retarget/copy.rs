@@ -263,6 +263,7 @@ impl RotationCopy {
         let mut rotation = vec![DQuat::IDENTITY; joints.len()];
         let mut posture = Posture::rest(skeleton);
         let (lo, hi) = (skeleton.lower_limits(), skeleton.upper_limits());
+        let unlimited = DVec3::splat(f64::INFINITY);
         for (k, joint) in joints.iter().enumerate() {
             let parent = joint.parent.map_or(DQuat::IDENTITY, |p| rotation[p]);
             rotation[k] = match self.source[k].and_then(|s| world.get(s)) {
@@ -270,14 +271,13 @@ impl RotationCopy {
                 None => parent,
             };
             let local = parent.inverse() * rotation[k];
+            // The rotation's projection onto the joint's DOF (the twist about a hinge's
+            // axis), then each DOF clamped into its range as the solver clamps.
             let dofs = joint.rotation_dof.map(|d| d.is_some());
-            let bound = |b: &[f64], axis: usize| joint.rotation_dof[axis].map_or(0.0, |d| b[d]);
-            let lower = DVec3::new(bound(lo, 0), bound(lo, 1), bound(lo, 2));
-            let upper = DVec3::new(bound(hi, 0), bound(hi, 1), bound(hi, 2));
-            let r = nearest_rotation_vector(local, dofs, lower, upper);
+            let r = nearest_rotation_vector(local, dofs, unlimited, unlimited);
             for axis in 0..3 {
                 if let Some(d) = joint.rotation_dof[axis] {
-                    posture.values_mut()[d] = r[axis];
+                    posture.values_mut()[d] = r[axis].clamp(lo[d], hi[d]);
                 }
             }
         }
