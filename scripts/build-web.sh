@@ -8,7 +8,7 @@ say() { printf '\033[1;34m[build]\033[0m %s\n' "$*"; }
 
 say "compiling stance_web for wasm32 (release)"
 cargo build --release -p stance_web --target wasm32-unknown-unknown
-wasm=target/wasm32-unknown-unknown/release/stance_web.wasm
+wasm=${CARGO_TARGET_DIR:-target}/wasm32-unknown-unknown/release/stance_web.wasm
 mkdir -p dist/pkg
 if [ ! -f dist/pkg/stance_web_bg.wasm ] || [ "$wasm" -nt dist/pkg/stance_web_bg.wasm ]; then
   say "wasm-bindgen"
