@@ -321,56 +321,70 @@ fn a_pull_while_paused_on_a_clip_frame_becomes_a_key_there_and_undo_takes_it_bac
     assert!(editor.model.key_frames().is_empty());
 }
 
-#[test]
-fn a_task_interval_eases_its_goal_in_from_the_frame_without_a_pop() {
-    let mut editor = Clocked::new();
-    open_clip(&mut editor, 50, 0.05);
-    let interval = TaskInterval {
-        start: 1.0,
-        end: 2.0,
-        ease_in: 0.5,
-        ease_out: 0.5,
-    };
-    assert_eq!(interval.weight(0.4), 0.0);
-    assert!((interval.weight(0.75) - 0.5).abs() < 1e-12);
-    assert_eq!(interval.weight(1.5), 1.0);
+const INTERVAL: TaskInterval = TaskInterval {
+    start: 1.0,
+    end: 2.0,
+    ease_in: 0.5,
+    ease_out: 0.5,
+};
+
+/// The right wrist's position at `frame` of the timeline (without the tasks).
+fn own_wrist(editor: &Clocked, frame: usize) -> DVec3 {
     let wrist = editor.joint("r_radiocarpal");
-    let own_at = |editor: &Clocked, frame: usize| {
-        let posture = editor.model.frame_posture(frame);
-        Frames::new(editor.model.session().skeleton(), &posture).joint_position[wrist]
-    };
-    let goal = own_at(&editor, 15) + DVec3::new(0.1, 0.1, 0.1);
+    let posture = editor.model.frame_posture(frame);
+    Frames::new(editor.model.session().skeleton(), &posture).joint_position[wrist]
+}
+
+/// A 2.5 s clip at 20 fps with a right-hand goal 17 cm from where the clip has the hand at
+/// 0.75 s, active over [1 s, 2 s] with 0.5 s of ease on both sides. Returns the goal.
+fn hand_goal_over_time(editor: &mut Clocked) -> DVec3 {
+    open_clip(editor, 50, 0.05);
+    let goal = own_wrist(editor, 15) + DVec3::new(0.1, 0.1, 0.1);
     editor.apply(Command::SetTasks {
         kind: stance_editor::history::EditKind::Command,
         tasks: vec![TaskSpec::pin("r_radiocarpal", goal.to_array())],
     });
     editor.motion(MotionCommand::SetInterval {
         task: 0,
-        interval: Some(interval),
+        interval: Some(INTERVAL),
     });
-    assert_eq!(editor.model.session().tasks()[0].interval, Some(interval));
+    assert_eq!(editor.model.session().tasks()[0].interval, Some(INTERVAL));
+    goal
+}
 
+fn timed_target(editor: &Clocked) -> DVec3 {
+    let timed = editor.model.session().timed_tasks();
+    let TaskKindSpec::Position { target, .. } = &timed[0].kind else {
+        panic!("{timed:?}");
+    };
+    DVec3::from_array(*target)
+}
+
+#[test]
+fn a_task_interval_weighs_the_goal_between_the_frame_and_the_task() {
+    assert_eq!(INTERVAL.weight(0.4), 0.0);
+    assert!((INTERVAL.weight(0.75) - 0.5).abs() < 1e-12);
+    assert_eq!(INTERVAL.weight(1.5), 1.0);
+    let mut editor = Clocked::new();
+    let goal = hand_goal_over_time(&mut editor);
     editor.motion(MotionCommand::Seek(8));
     assert!(
         editor.model.session().timed_tasks().is_empty(),
         "weight 0 at 0.4 s"
     );
     editor.motion(MotionCommand::Seek(15));
-    let timed = editor.model.session().timed_tasks();
-    let TaskKindSpec::Position { target, .. } = &timed[0].kind else {
-        panic!("{timed:?}");
-    };
-    let halfway = (own_at(&editor, 15) + goal) / 2.0;
-    assert!((DVec3::from_array(*target) - halfway).length() < 1e-6);
+    let halfway = (own_wrist(&editor, 15) + goal) / 2.0;
+    assert!((timed_target(&editor) - halfway).length() < 1e-6);
     editor.motion(MotionCommand::Seek(30));
-    let timed = editor.model.session().timed_tasks();
-    let TaskKindSpec::Position { target, .. } = &timed[0].kind else {
-        panic!("{timed:?}");
-    };
-    assert_eq!(DVec3::from_array(*target), goal);
+    assert_eq!(timed_target(&editor), goal);
+}
 
+#[test]
+fn a_task_interval_eases_the_hand_in_without_a_pop_and_its_ends_drag() {
+    let mut editor = Clocked::new();
+    let goal = hand_goal_over_time(&mut editor);
     // Solved frame by frame across the ramp: no jump bigger than the ramp's steepest step.
-    let distance = (goal - own_at(&editor, 15)).length();
+    let distance = (goal - own_wrist(&editor, 15)).length();
     let mut last: Option<DVec3> = None;
     for frame in 6..=24 {
         editor.motion(MotionCommand::Seek(frame));
@@ -378,7 +392,7 @@ fn a_task_interval_eases_its_goal_in_from_the_frame_without_a_pop() {
         let hand = editor.position("r_radiocarpal");
         if frame <= 10 {
             assert!(
-                (hand - own_at(&editor, frame)).length() < 1e-6,
+                (hand - own_wrist(&editor, frame)).length() < 1e-6,
                 "frame {frame}"
             );
         }
@@ -391,7 +405,6 @@ fn a_task_interval_eases_its_goal_in_from_the_frame_without_a_pop() {
         }
         last = Some(hand);
     }
-
     // A drag a while later is an undo step of its own.
     editor.frames(60);
     editor.motion(MotionCommand::DragInterval {
@@ -407,7 +420,7 @@ fn a_task_interval_eases_its_goal_in_from_the_frame_without_a_pop() {
     let dragged = editor.model.session().tasks()[0].interval.unwrap();
     assert_eq!((dragged.start, dragged.end), (2.3, 2.3));
     editor.apply(Command::Undo);
-    assert_eq!(editor.model.session().tasks()[0].interval, Some(interval));
+    assert_eq!(editor.model.session().tasks()[0].interval, Some(INTERVAL));
 }
 
 #[test]
