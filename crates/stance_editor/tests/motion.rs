@@ -477,3 +477,25 @@ fn the_trajectory_follows_the_selected_joint_over_every_frame() {
         "the head does not move"
     );
 }
+
+#[test]
+fn a_new_level_of_articulation_retargets_the_clip_and_keeps_the_keys() {
+    let mut editor = Clocked::new();
+    open_clip(&mut editor, 24, 0.04);
+    editor.motion(MotionCommand::Seek(6));
+    editor.motion(MotionCommand::SetKey);
+    let joints = editor.model.session().skeleton().joint_count();
+    editor.apply(Command::SetLevelOfArticulation(
+        stance_hanim::LevelOfArticulation::Loa1,
+    ));
+    editor.frames(1);
+    assert!(editor.model.session().skeleton().joint_count() < joints);
+    assert!(editor.model.timeline().has_clip());
+    assert_eq!(editor.model.frame_count(), 24);
+    assert_eq!(editor.model.frame_time(), 0.04);
+    assert_eq!(editor.model.key_frames(), vec![6]);
+    assert_eq!(editor.model.timeline().frame(), 6);
+    editor.motion(MotionCommand::CloseClip);
+    assert!(!editor.model.timeline().has_clip());
+    assert!(editor.model.has_timeline(), "the key stays");
+}
