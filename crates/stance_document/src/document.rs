@@ -11,6 +11,7 @@ use stance_ik::{Axes, Dof};
 
 use crate::DocumentError;
 use crate::json::{arr, field, number, numbers, obj, string, vec3};
+use crate::motion::{MotionSection, TaskInterval};
 
 /// The version written in the `version` field of a document's JSON; newer versions are refused.
 pub const DOCUMENT_VERSION: u32 = 1;
@@ -24,6 +25,8 @@ pub struct Document {
     pub posture: PostureValues,
     /// The task set, in the editor's order.
     pub tasks: Vec<TaskSpec>,
+    /// The timeline and its keyframes; `None` for a single posture.
+    pub motion: Option<MotionSection>,
 }
 
 /// The avatar a document is posed on.
@@ -149,6 +152,8 @@ pub struct TaskSpec {
     pub active: bool,
     /// What the task controls.
     pub kind: TaskKindSpec,
+    /// When the task acts on a timeline; `None`: always.
+    pub interval: Option<TaskInterval>,
 }
 
 impl TaskSpec {
@@ -159,6 +164,7 @@ impl TaskSpec {
             weight: 1.0,
             active: true,
             kind,
+            interval: None,
         }
     }
 }
@@ -296,6 +302,9 @@ impl TaskSpec {
                 "must be a finite number >= 0",
             ));
         }
+        if let Some(interval) = &self.interval {
+            interval.validate()?;
+        }
         match &self.kind {
             TaskKindSpec::Position { point, target, .. } => {
                 finite_all(point, "point")?;
@@ -400,6 +409,9 @@ impl Document {
         for (i, t) in self.tasks.iter().enumerate() {
             t.validate().map_err(|e| e.within(&format!("tasks[{i}]")))?;
         }
+        if let Some(motion) = &self.motion {
+            motion.validate()?;
+        }
         Ok(())
     }
 
@@ -449,10 +461,15 @@ impl Document {
             None | Some(Value::Null) => Vec::new(),
             Some(t) => TaskSpec::list_from_json_value(t, "tasks")?,
         };
+        let motion = match o.get("motion") {
+            None | Some(Value::Null) => None,
+            Some(m) => Some(MotionSection::from_json_value(m)?),
+        };
         let doc = Document {
             avatar,
             posture,
             tasks,
+            motion,
         };
         doc.validate()?;
         Ok(doc)
@@ -753,11 +770,16 @@ impl TaskSpec {
                 ));
             }
         };
+        let interval = match opt("interval") {
+            None => None,
+            Some(i) => Some(TaskInterval::from_json_value(i, &here("interval"))?),
+        };
         Ok(TaskSpec {
             level,
             weight,
             active,
             kind,
+            interval,
         })
     }
 }
@@ -801,6 +823,9 @@ impl Serialize for Document {
         st.serialize_field("avatar", &self.avatar)?;
         st.serialize_field("posture", &self.posture)?;
         st.serialize_field("tasks", &self.tasks)?;
+        if let Some(motion) = &self.motion {
+            st.serialize_field("motion", motion)?;
+        }
         st.end()
     }
 }
@@ -888,6 +913,9 @@ impl Serialize for TaskSpec {
         }
         m.serialize_entry("weight", &self.weight)?;
         m.serialize_entry("active", &self.active)?;
+        if let Some(interval) = &self.interval {
+            m.serialize_entry("interval", interval)?;
+        }
         m.end()
     }
 }

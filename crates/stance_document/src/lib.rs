@@ -17,6 +17,7 @@ mod document;
 mod error;
 mod json;
 pub mod link;
+pub mod motion;
 mod problem;
 mod range_coder;
 mod words;
@@ -30,4 +31,5 @@ pub use document::{
 };
 pub use error::DocumentError;
 pub use link::LinkError;
+pub use motion::{MotionKey, MotionSection, TaskInterval};
 pub use problem::{LimbStart, Problem, ProblemSettings, parse_skeleton};

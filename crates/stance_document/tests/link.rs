@@ -43,6 +43,7 @@ fn all_kinds() -> Document {
         weight,
         active,
         kind,
+        interval: None,
     };
     Document {
         avatar: AvatarReference::Url("https://example.org/models/Jin.glb?x=1#frag".to_owned()),
@@ -131,6 +132,7 @@ fn all_kinds() -> Document {
                 },
             ),
         ],
+        motion: None,
     }
 }
 
@@ -184,6 +186,7 @@ fn a_full_loa2_posture_with_six_tasks_fits_in_600_characters() {
             avatar: AvatarReference::Default,
             posture: loa2_posture(&mut r, 0.6),
             tasks: table1_tasks(&mut r),
+            motion: None,
         };
         assert_eq!(d.posture.joints.len(), 71);
         let text = link::encode(&d);
@@ -195,6 +198,7 @@ fn a_full_loa2_posture_with_six_tasks_fits_in_600_characters() {
         avatar: AvatarReference::Default,
         posture: loa2_posture(&mut r, 0.6),
         tasks: vec![],
+        motion: None,
     };
     let d1 = Document {
         tasks: table1_tasks(&mut r),
@@ -223,6 +227,7 @@ fn report_link_lengths_and_the_general_compressors() {
         avatar: AvatarReference::Default,
         posture: PostureValues::from_posture(&body, &standing),
         tasks: table1_tasks(&mut r),
+        motion: None,
     };
     let text = link::encode(&table1);
     round_trip(&table1);
@@ -236,6 +241,7 @@ fn report_link_lengths_and_the_general_compressors() {
             avatar: AvatarReference::Default,
             posture: loa2_posture(&mut r, spread),
             tasks: table1_tasks(&mut r),
+            motion: None,
         };
         let text = link::encode(&d);
         // The same values as 16-bit little-endian integers (the usual fixed-width packing),

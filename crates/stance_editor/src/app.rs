@@ -10,6 +10,7 @@ mod sensors_panel;
 mod side_panel;
 mod state;
 mod tasks_panel;
+mod timeline_panel;
 mod viewport_panel;
 
 use std::sync::mpsc::Receiver;
@@ -24,9 +25,10 @@ use self::sensors_panel::SensorsWindow;
 use self::side_panel::SidePanel;
 use self::state::PageState;
 use self::tasks_panel::TasksPanel;
+use self::timeline_panel::TimelinePanel;
 use self::viewport_panel::ViewportPanel;
 use crate::host::{BackendSummary, HostHooks, HostMessage};
-use crate::model::{Command, EditorModel};
+use crate::model::{Command, EditorModel, MotionCommand};
 use crate::posing::PosingError;
 use crate::viewport::ViewportRenderer;
 
@@ -58,6 +60,8 @@ pub(crate) struct Windows {
     pub help: bool,
     pub sensors: bool,
     pub mapping: bool,
+    /// The timeline panel: `None` shows it when a clip or keys exist.
+    pub timeline: Option<bool>,
 }
 
 impl std::fmt::Debug for StanceApp {
@@ -175,6 +179,9 @@ impl StanceApp {
         }
         if ctx.input_mut(|input| input.consume_shortcut(&plain(Key::T))) {
             self.viewport.show_trace = !self.viewport.show_trace;
+        }
+        if ctx.input_mut(|input| input.consume_shortcut(&plain(Key::K))) {
+            self.model.apply(Command::Motion(MotionCommand::SetKey));
         }
         if ctx.input_mut(|input| input.consume_shortcut(&plain(Key::S))) {
             self.windows.sensors = !self.windows.sensors;
@@ -306,6 +313,10 @@ impl StanceApp {
     fn view_menu(&mut self, ui: &mut egui::Ui) {
         ui.checkbox(&mut self.viewport.show_floor, "Floor grid");
         ui.checkbox(&mut self.viewport.show_trace, "Effector trace (T)");
+        let mut timeline = self.timeline_shown();
+        if ui.checkbox(&mut timeline, "Timeline").changed() {
+            self.windows.timeline = Some(timeline);
+        }
         if ui.button("Frame the body (F)").clicked() {
             self.viewport.camera = OrbitCamera::default();
             ui.close();
@@ -321,6 +332,14 @@ impl StanceApp {
                 self.model.apply(Command::SetLevelOfArticulation(loa));
             }
         }
+    }
+
+    /// Whether the timeline panel shows: as set in the View menu, else when a clip or keys
+    /// exist.
+    fn timeline_shown(&self) -> bool {
+        self.windows
+            .timeline
+            .unwrap_or_else(|| self.model.has_timeline())
     }
 
     fn status_bar(&self, ui: &mut egui::Ui, frame: &eframe::Frame) {
@@ -445,6 +464,17 @@ impl StanceApp {
         }
         egui::Panel::top("menu_bar").show(ui, |ui| self.menu_bar(ui));
         egui::Panel::bottom("status_bar").show(ui, |ui| self.status_bar(ui, frame));
+        if self.timeline_shown() {
+            egui::Panel::bottom("timeline_panel").show(ui, |ui| {
+                let mut panel = TimelinePanel {
+                    model: &mut self.model,
+                    buttons: &mut self.button_rects,
+                };
+                egui::ScrollArea::vertical()
+                    .max_height(220.0)
+                    .show(ui, |ui| panel.show(ui));
+            });
+        }
         egui::Panel::left("side_panel")
             .resizable(true)
             .default_size(230.0)
@@ -498,10 +528,7 @@ fn copy_link(ctx: &egui::Context, model: &mut EditorModel) {
     let fragment = link::encode(&model.document());
     let url = model.hooks.share_link(&fragment);
     ctx.copy_text(url);
-    model.apply(Command::Inform(format!(
-        "Link copied to the clipboard ({} characters): opening it shows exactly this posture and these tasks.",
-        fragment.len()
-    )));
+    model.link_shared(fragment.len());
 }
 
 /// The help window's rows: gesture or key, and what it does.
@@ -545,6 +572,10 @@ const HELP_ROWS: &[(&str, &str)] = &[
     ("R", "reset to the rest pose (tasks kept)"),
     ("L", "copy the posture link"),
     ("T", "show or hide the effector trace"),
+    (
+        "K",
+        "set a key at the timeline's frame (a pull or edit while paused keys too)",
+    ),
     (
         "S",
         "motion-capture sensors: connect, assign, calibrate, record, replay",

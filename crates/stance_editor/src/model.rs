@@ -12,6 +12,8 @@
 mod bones;
 mod command;
 mod mapping;
+mod motion;
+mod storage;
 mod tasks;
 
 use glam::DVec3;
@@ -25,6 +27,7 @@ use self::command::goals_moved;
 pub use self::command::{Command, Gesture, Notice, SessionChange};
 use self::mapping::MappingCorrections;
 pub use self::mapping::{Correction, carry_posture};
+pub use self::motion::{IntervalEdge, MotionCommand, SPEED_RANGE, Timeline};
 pub use self::tasks::{NewTask, make_task, table1_example};
 use crate::avatar::LoadedAvatar;
 use crate::history::{EditKind, History};
@@ -73,6 +76,8 @@ pub struct EditorModel {
     pub(crate) solver_ms: f64,
     /// How many times the session was replaced (views keep per-session state by it).
     session_generation: u64,
+    /// The clip, the playhead and the trajectory (the keys are in the document).
+    pub(crate) timeline: Timeline,
 }
 
 impl std::fmt::Debug for EditorModel {
@@ -113,6 +118,7 @@ impl EditorModel {
             sensors_drove: false,
             solver_ms: 0.0,
             session_generation: 0,
+            timeline: Timeline::default(),
         };
         model.load_library();
         if let Some(settings) = SensorSettings::load(model.hooks.as_ref()) {
@@ -212,6 +218,7 @@ impl EditorModel {
         !self.session.is_settled()
             || self.gesture.is_some()
             || self.sensors.replay_progress().is_some()
+            || self.timeline.is_playing()
     }
 
     // -----------------------------------------------------------------------------------------
@@ -227,10 +234,12 @@ impl EditorModel {
         if let Some(message) = self.sensors.tick(now_secs) {
             self.inform(message);
         }
+        self.motion_before_solve(now_secs);
         self.sensors_drove = self.sensors.drive(&mut self.session);
         let started = web_time::Instant::now();
         self.session.solve_frame(clock);
         self.solver_ms = started.elapsed().as_secs_f64() * 1000.0;
+        self.motion_after_solve();
         if let Some(point) = self.session.grabbed_point_world() {
             let moved = self
                 .trace
@@ -275,6 +284,20 @@ impl EditorModel {
 
     /// Carries out one command of the UI.
     pub fn apply(&mut self, command: Command) {
+        let posture_edit = matches!(
+            command,
+            Command::SetDof { .. }
+                | Command::SetSwivel { .. }
+                | Command::ResetToRest
+                | Command::Mirror
+        );
+        self.apply_command(command);
+        if posture_edit {
+            self.motion_posture_edited();
+        }
+    }
+
+    fn apply_command(&mut self, command: Command) {
         match command {
             Command::Select(joint) => self.selected_joint = joint,
             Command::Hover(joint) => self.hovered_joint = joint,
@@ -418,6 +441,7 @@ impl EditorModel {
             Command::Inform(text) => self.inform(text),
             Command::Warn(text) => self.warn(text),
             Command::DismissNotice => self.notice = None,
+            Command::Motion(command) => self.apply_motion(command),
             // The gestures and edits are carried out above.
             _ => {}
         }
@@ -487,6 +511,7 @@ impl EditorModel {
     }
 
     fn restore(&mut self, document: &Document, what: &str) {
+        self.motion_restored();
         if let Err(error) = self.session.restore_document(document) {
             self.warn(format!("Could not {what}: {error}"));
         }
@@ -555,6 +580,9 @@ impl EditorModel {
     }
 
     fn end_gesture(&mut self) {
+        if self.gesture.is_some() {
+            self.motion_posture_edited();
+        }
         match self.gesture.take() {
             Some(Gesture::Pull { .. }) => self.session.end_grab(),
             Some(Gesture::Swivel { .. }) => {
@@ -592,6 +620,7 @@ impl EditorModel {
     /// starts again.
     pub(crate) fn replace_session(&mut self, session: PosingSession, change: SessionChange) {
         self.gesture = None;
+        let motion = self.session.motion().cloned();
         self.session = session;
         self.sensors.release();
         self.selected_joint = None;
@@ -601,6 +630,7 @@ impl EditorModel {
             self.history = History::default();
         }
         self.session_generation += 1;
+        self.motion_session_replaced(motion);
         self.bones_revision = None;
         self.refresh_bones();
     }
@@ -895,91 +925,6 @@ impl EditorModel {
                 Err(error) => self.warn(format!("{name} does not fit the humanoid: {error}")),
             },
             Err(error) => self.warn(format!("{name} is not a Stance document: {error}")),
-        }
-    }
-
-    // -----------------------------------------------------------------------------------------
-    // The pose library and the autosave
-
-    fn import_library(&mut self, name: &str, text: &str) {
-        match self.library.import(text) {
-            Ok((added, warnings)) => {
-                self.store_library();
-                if warnings.is_empty() {
-                    self.inform(format!("Imported {added} poses from {name}."));
-                } else {
-                    self.warn(format!(
-                        "Imported {added} poses from {name}; skipped: {}",
-                        warnings.join("; ")
-                    ));
-                }
-            }
-            Err(error) => self.warn(format!("{name}: {error}")),
-        }
-    }
-
-    fn load_library(&mut self) {
-        match PoseLibrary::load(self.hooks.as_ref()) {
-            Some(Ok((library, warnings))) => {
-                self.library = library;
-                if !warnings.is_empty() {
-                    self.warn(format!(
-                        "Some saved poses could not be read: {}",
-                        warnings.join("; ")
-                    ));
-                }
-            }
-            Some(Err(error)) => self.warn(format!("The pose library could not be read: {error}")),
-            None => {}
-        }
-    }
-
-    fn store_library(&mut self) {
-        if let Err(error) = self.library.store(self.hooks.as_ref()) {
-            self.warn(format!("The pose library could not be saved: {error}"));
-        }
-    }
-
-    fn save_to_library(&mut self, name: &str) {
-        match self.library.save(name, self.session.document()) {
-            Ok(()) => {
-                self.store_library();
-                self.inform(format!("Saved the pose \"{}\".", name.trim()));
-            }
-            Err(error) => self.warn(error),
-        }
-    }
-
-    fn load_from_library(&mut self, index: usize) {
-        let Some(entry) = self.library.entries().get(index).cloned() else {
-            return;
-        };
-        match self.open_document(&entry.document) {
-            Ok(()) => self.inform(format!("Loaded the pose \"{}\".", entry.name)),
-            Err(error) => self.warn(format!(
-                "The pose \"{}\" does not fit the humanoid: {error}",
-                entry.name
-            )),
-        }
-    }
-
-    fn delete_from_library(&mut self, index: usize) {
-        if self.library.remove(index).is_some() {
-            self.store_library();
-        }
-    }
-
-    fn autosave(&mut self) {
-        if self.is_pulling() {
-            return;
-        }
-        let (session, avatar_url) = (&self.session, &self.avatar_url);
-        let document = || document_of(session, avatar_url.as_deref());
-        if let Some(error) = self
-            .autosave
-            .tick(self.now_secs, document, self.hooks.as_ref())
-        {
-            self.warn(format!("Autosave failed: {error}"));
         }
     }
 }

@@ -3,7 +3,9 @@
 //! every frame within a time budget. No egui here: everything is tested natively.
 
 use glam::{DQuat, DVec3};
-use stance_document::{Document, LimbName, PostureValues, TaskKindSpec, TaskSpec};
+mod timed;
+
+use stance_document::{Document, LimbName, MotionSection, PostureValues, TaskKindSpec, TaskSpec};
 use stance_hanim::{
     HumanoidSkeleton, LevelOfArticulation, SkeletonOptions, default_skeleton, mirror_name,
 };
@@ -12,6 +14,8 @@ use stance_ik::{
     Clock, Frames, Limb, LimbGoal, Posture, Skeleton, SolveReport, SolveStatus, Solver,
     SolverSettings, SwivelInterval, Task,
 };
+
+pub use self::timed::{TimedFrame, blended, timed_tasks};
 
 /// The temporary lowest-priority task of grab-and-pull: a point of a segment, pulled along.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -58,6 +62,10 @@ pub struct PosingSession {
     statuses: Vec<TaskStatus>,
     settled: bool,
     revision: u64,
+    /// The document's timeline and keys.
+    motion: Option<MotionSection>,
+    /// The timeline frame shown, if any: the tasks act with their interval weights.
+    timed: Option<TimedFrame>,
 }
 
 impl std::fmt::Debug for PosingSession {
@@ -136,6 +144,8 @@ impl PosingSession {
             statuses: Vec::new(),
             settled: false,
             revision: 0,
+            motion: None,
+            timed: None,
         };
         session.tasks = session.default_tasks();
         session.refresh();
@@ -300,6 +310,7 @@ impl PosingSession {
         Document {
             posture: PostureValues::from_posture(self.skeleton(), &self.posture),
             tasks: self.tasks.clone(),
+            motion: self.motion.clone(),
             ..Document::default()
         }
     }
@@ -315,6 +326,7 @@ impl PosingSession {
         let posture = document.posture.to_posture(self.skeleton())?;
         self.posture = posture;
         self.tasks = document.tasks.clone();
+        self.motion = document.motion.clone();
         self.grab = None;
         self.report = None;
         self.settled = true;
@@ -409,11 +421,40 @@ impl PosingSession {
         self.set_posture(posture);
     }
 
+    /// The document's timeline and keys, if any.
+    pub fn motion(&self) -> Option<&MotionSection> {
+        self.motion.as_ref()
+    }
+
+    /// Replaces the timeline and keys (the posture stays).
+    pub fn set_motion(&mut self, motion: Option<MotionSection>) {
+        self.motion = motion;
+        self.revision = self.revision.wrapping_add(1);
+    }
+
+    /// Shows a timeline frame: its posture at `time` seconds, the tasks acting with their
+    /// interval weights from there; `None` leaves the timeline (every task acts fully).
+    pub fn show_timed(&mut self, frame: Option<(Posture, f64)>) {
+        self.timed = frame.map(|(posture, time)| {
+            let frames = Frames::new(&self.humanoid.skeleton, &posture);
+            self.posture = posture;
+            TimedFrame { time, frames }
+        });
+        self.grab = None;
+        self.wake();
+    }
+
+    /// The tasks as the solver takes them now (see [`timed_tasks`]).
+    pub fn timed_tasks(&self) -> Vec<TaskSpec> {
+        timed_tasks(&self.tasks, self.skeleton(), self.timed.as_ref())
+    }
+
     /// Loads a document; on error the session stays as it was.
     pub fn load_document(&mut self, document: &Document) -> Result<(), PosingError> {
         let posture = document.posture.to_posture(self.skeleton())?;
         self.posture = posture;
         self.tasks = document.tasks.clone();
+        self.motion = document.motion.clone();
         self.grab = None;
         self.wake();
         Ok(())
@@ -521,8 +562,9 @@ impl PosingSession {
             return false;
         }
         let mut tasks = Vec::with_capacity(self.tasks.len() + 1);
-        for spec in &self.tasks {
-            if let Ok(converted) = spec.to_solver_tasks(self.skeleton(), &self.tasks) {
+        let specs = self.timed_tasks();
+        for spec in &specs {
+            if let Ok(converted) = spec.to_solver_tasks(self.skeleton(), &specs) {
                 tasks.extend(converted);
             }
         }

@@ -776,3 +776,25 @@ fn a_level_dragged_by_its_title_takes_the_place_of_another_and_undo_restores_the
     settle(&mut harness);
     assert_eq!(document(&harness).tasks, before.tasks);
 }
+
+#[test]
+fn a_key_shows_the_timeline_and_its_play_button_toggles_playing() {
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    assert!(
+        harness.query_by_label("Set key (K)").is_none(),
+        "no timeline yet"
+    );
+    harness.key_press(Key::K);
+    harness.run_steps(2);
+    let motion = state(&harness)["motion"].clone();
+    assert_eq!(motion["keys"], serde_json::json!([0]));
+    assert_eq!(motion["playing"], false);
+    harness.get_by_label("Set key (K)");
+    harness.get_by_label("Play").click();
+    harness.run_steps(2);
+    assert_eq!(state(&harness)["motion"]["playing"], true);
+    harness.get_by_label("Pause").click();
+    harness.run_steps(2);
+    assert_eq!(state(&harness)["motion"]["playing"], false);
+}

@@ -317,6 +317,7 @@ impl Reader<'_> {
             weight,
             active,
             kind,
+            interval: None,
         })
     }
 }
@@ -342,5 +343,6 @@ pub(super) fn decode_payload(bytes: &[u8]) -> R<Document> {
         avatar,
         posture,
         tasks,
+        motion: None,
     })
 }

@@ -212,6 +212,7 @@ pub fn random_task(r: &mut StdRng) -> TaskSpec {
         },
         active: r.random_bool(0.8),
         kind,
+        interval: None,
     }
 }
 
@@ -236,6 +237,7 @@ pub fn random_document(r: &mut StdRng) -> Document {
         },
         posture: random_posture(r),
         tasks: (0..r.random_range(0..10)).map(|_| random_task(r)).collect(),
+        motion: None,
     }
 }
 

@@ -15,6 +15,7 @@ const GOAL_INACTIVE: Color32 = Color32::from_gray(140);
 const PULL_COLOR: Color32 = Color32::from_rgb(250, 230, 80);
 const COM_COLOR: Color32 = Color32::from_rgb(120, 200, 255);
 const TRACE_COLOR: Color32 = Color32::from_rgba_premultiplied(200, 120, 250, 200);
+const TRAJECTORY_COLOR: Color32 = Color32::from_rgb(90, 220, 230);
 
 /// What is drawn over the 3D picture, from the model, through the viewport's lens.
 #[derive(Debug, Clone, Copy)]
@@ -31,6 +32,7 @@ impl Overlay<'_> {
         if self.show_trace {
             self.draw_trace(&painter);
         }
+        self.draw_trajectory(&painter);
         if let Some(polygon) = self.draw_goals(&painter) {
             self.draw_balance(&painter, &polygon);
         }
@@ -47,6 +49,28 @@ impl Overlay<'_> {
                 .filter_map(|point| self.lens.screen_point(*point))
                 .collect();
             painter.add(egui::Shape::line(points, Stroke::new(2.0, TRACE_COLOR)));
+        }
+    }
+
+    /// The timeline's trajectory joint over every frame, with a dot at the playhead.
+    fn draw_trajectory(&self, painter: &egui::Painter) {
+        let timeline = self.model.timeline();
+        let trajectory = timeline.trajectory();
+        if trajectory.len() > 1 {
+            let points: Vec<Pos2> = trajectory
+                .iter()
+                .filter_map(|point| self.lens.screen_point(*point))
+                .collect();
+            painter.add(egui::Shape::line(
+                points,
+                Stroke::new(1.5, TRAJECTORY_COLOR),
+            ));
+        }
+        if let Some(here) = trajectory
+            .get(timeline.frame())
+            .and_then(|point| self.lens.screen_point(*point))
+        {
+            painter.circle_filled(here, 4.0, TRAJECTORY_COLOR);
         }
     }
 

@@ -62,6 +62,7 @@ impl PageState<'_> {
             "rings": self.rings(),
             "sensors": self.sensors(),
             "swivel": self.viewport.handles(model).swivel_state(),
+            "motion": self.motion(),
         })
         .to_string()
     }
@@ -157,6 +158,23 @@ impl PageState<'_> {
                 }))
             })
             .collect()
+    }
+
+    /// The timeline: frames, playhead, playback, keys and the clip's contacts.
+    fn motion(&self) -> Value {
+        let model = self.model;
+        let timeline = model.timeline();
+        json!({
+            "frames": model.frame_count(),
+            "frame": timeline.frame(),
+            "fps": 1.0 / model.frame_time(),
+            "playing": timeline.is_playing(),
+            "looping": timeline.is_looping(),
+            "speed": timeline.speed(),
+            "keys": model.key_frames(),
+            "contacts": timeline.contacts().len(),
+            "clip": timeline.clip_name(),
+        })
     }
 
     /// The sensors' state, with the local and world rotation of every joint they drive.

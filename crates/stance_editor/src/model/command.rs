@@ -6,6 +6,7 @@ use stance_document::{Document, LimbName, TaskKindSpec, TaskSpec};
 use stance_hanim::{LevelOfArticulation, Mapping};
 
 use super::mapping::Correction;
+use super::motion::MotionCommand;
 use super::tasks::NewTask;
 use crate::history::EditKind;
 use crate::host::HostMessage;
@@ -216,6 +217,8 @@ pub enum Command {
     Warn(String),
     /// Close the notice shown above the viewport.
     DismissNotice,
+    /// A command for the timeline (clip, playhead, keys, intervals, trajectory).
+    Motion(MotionCommand),
 }
 
 /// Why a session is replaced: what carries over.

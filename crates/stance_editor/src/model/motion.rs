@@ -1,0 +1,647 @@
+//! The timeline, without egui: an optional motion clip retargeted onto the current body
+//! (with its foot contacts), the playhead (play, pause, scrub, step, loop, speed), the
+//! keyframes (an additive layer over the clip, kept in the document's `motion` section so
+//! that undo, autosave and files carry them), the tasks' active intervals, and the
+//! trajectory of one joint over every frame.
+//!
+//! Playback puts each new frame's posture into the session without an undo record; the
+//! tasks then act on it with their interval weights (`posing::timed_tasks`). A gesture or a
+//! posture edit made while paused on a timeline becomes a key at the current frame once the
+//! body settles (covered by the edit's own undo record).
+
+mod layer;
+
+use glam::DVec3;
+use stance_document::motion::{DEFAULT_FRAME_COUNT, DEFAULT_FRAME_TIME};
+use stance_document::{MotionKey, MotionSection, PostureValues, TaskInterval};
+use stance_hanim::resolve_joint;
+use stance_ik::{Frames, Posture};
+use stance_motion::{Clip, Contact, RetargetOptions, Retargeted, retarget};
+
+use self::layer::{KeyDelta, apply_delta, delta_at, key_delta, key_deltas};
+use super::EditorModel;
+use crate::history::EditKind;
+
+/// Slowest and fastest playback.
+pub const SPEED_RANGE: (f64, f64) = (0.1, 4.0);
+
+/// What the timeline is asked to do.
+#[derive(Debug, Clone)]
+pub enum MotionCommand {
+    /// Retarget a clip onto the body (with its foot contacts) and put it on the timeline.
+    OpenClip(Box<Clip>),
+    /// Take the clip off the timeline (the keys stay).
+    CloseClip,
+    /// Start playing from the playhead.
+    Play,
+    /// Stop where the playhead is.
+    Pause,
+    /// Play or pause.
+    TogglePlay,
+    /// Move the playhead to a frame (scrub).
+    Seek(usize),
+    /// Move the playhead by a number of frames (±1: step).
+    StepFrames(i64),
+    /// Loop at the end, or stop there.
+    SetLooping(bool),
+    /// Playback speed (clamped to [`SPEED_RANGE`]).
+    SetSpeed(f64),
+    /// Frames of a timeline without a clip.
+    SetFrameCount(usize),
+    /// A key at the playhead from the current posture.
+    SetKey,
+    /// Delete the key at a frame.
+    DeleteKey(usize),
+    /// Move the key at `from` to `to` (its change over the clip moves with it).
+    MoveKey {
+        /// The key's frame.
+        from: usize,
+        /// Where it goes.
+        to: usize,
+    },
+    /// Copy the key at `from` to `to`.
+    CopyKey {
+        /// The key's frame.
+        from: usize,
+        /// Where the copy goes.
+        to: usize,
+    },
+    /// Set (or clear) a task's active interval.
+    SetInterval {
+        /// The task (index in the task list).
+        task: usize,
+        /// The interval; `None`: always active.
+        interval: Option<TaskInterval>,
+    },
+    /// Drag one end of a task's interval to `secs`.
+    DragInterval {
+        /// The task (index in the task list).
+        task: usize,
+        /// Which end.
+        edge: IntervalEdge,
+        /// Where it goes (s).
+        secs: f64,
+    },
+    /// The joint whose trajectory is drawn (H-Anim name); `None`: the selected joint.
+    SetTrajectory(Option<String>),
+}
+
+/// One end of an active interval.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum IntervalEdge {
+    /// The start of full effect.
+    Start,
+    /// The end of full effect.
+    End,
+}
+
+/// The timeline's state (the keys are in the session's document).
+#[derive(Debug)]
+pub struct Timeline {
+    clip: Option<Box<Clip>>,
+    retargeted: Option<Retargeted>,
+    playing: bool,
+    looping: bool,
+    speed: f64,
+    /// The playhead (s).
+    position: f64,
+    frame: usize,
+    last_now: f64,
+    /// The frame whose posture the session shows.
+    shown: Option<usize>,
+    pending_key: bool,
+    trajectory_joint: Option<String>,
+    trajectory: Vec<DVec3>,
+    trajectory_for: Option<(usize, u64, u64, Option<MotionSection>)>,
+    /// Changes when the clip or its retargeting changes.
+    base_revision: u64,
+}
+
+impl Default for Timeline {
+    fn default() -> Self {
+        Self {
+            clip: None,
+            retargeted: None,
+            playing: false,
+            looping: true,
+            speed: 1.0,
+            position: 0.0,
+            frame: 0,
+            last_now: 0.0,
+            shown: None,
+            pending_key: false,
+            trajectory_joint: None,
+            trajectory: Vec::new(),
+            trajectory_for: None,
+            base_revision: 0,
+        }
+    }
+}
+
+impl Timeline {
+    /// The clip's name, when one is open.
+    pub fn clip_name(&self) -> Option<&str> {
+        self.clip.as_ref().map(|clip| clip.name.as_str())
+    }
+
+    /// Whether a clip is open.
+    pub fn has_clip(&self) -> bool {
+        self.retargeted.is_some()
+    }
+
+    /// Whether the playhead moves.
+    pub fn is_playing(&self) -> bool {
+        self.playing
+    }
+
+    /// Whether playback loops at the end.
+    pub fn is_looping(&self) -> bool {
+        self.looping
+    }
+
+    /// Playback speed (1 = real time).
+    pub fn speed(&self) -> f64 {
+        self.speed
+    }
+
+    /// The playhead's frame.
+    pub fn frame(&self) -> usize {
+        self.frame
+    }
+
+    /// The playhead's time (s).
+    pub fn time_secs(&self) -> f64 {
+        self.position
+    }
+
+    /// The clip's foot contacts on this body (frames, inclusive).
+    pub fn contacts(&self) -> &[Contact] {
+        self.retargeted
+            .as_ref()
+            .map_or(&[], |retargeted| retargeted.contacts.as_slice())
+    }
+
+    /// World positions of the trajectory joint at every frame (empty without a timeline or
+    /// a joint).
+    pub fn trajectory(&self) -> &[DVec3] {
+        &self.trajectory
+    }
+
+    /// The retargeted clip's postures.
+    fn base_postures(&self) -> Option<&[Posture]> {
+        self.retargeted
+            .as_ref()
+            .map(|retargeted| retargeted.postures.as_slice())
+    }
+}
+
+impl EditorModel {
+    /// The timeline: clip, playhead, contacts, trajectory.
+    pub fn timeline(&self) -> &Timeline {
+        &self.timeline
+    }
+
+    /// Whether there is a timeline to show: a clip or keys.
+    pub fn has_timeline(&self) -> bool {
+        self.timeline.has_clip() || !self.key_frames().is_empty()
+    }
+
+    /// Frames of the timeline: the clip's, else the document's (60 by default).
+    pub fn frame_count(&self) -> usize {
+        match (self.timeline.base_postures(), self.session.motion()) {
+            (Some(postures), _) => postures.len().max(1),
+            (None, Some(motion)) => motion.frame_count.max(1),
+            (None, None) => DEFAULT_FRAME_COUNT,
+        }
+    }
+
+    /// Seconds per frame: the clip's, else the document's (30 fps by default).
+    pub fn frame_time(&self) -> f64 {
+        match (&self.timeline.retargeted, self.session.motion()) {
+            (Some(retargeted), _) => retargeted.frame_time,
+            (None, Some(motion)) => motion.frame_time,
+            (None, None) => DEFAULT_FRAME_TIME,
+        }
+    }
+
+    /// The frames that have a key, in order.
+    pub fn key_frames(&self) -> Vec<usize> {
+        self.session
+            .motion()
+            .map(|motion| motion.keys.iter().map(|key| key.frame).collect())
+            .unwrap_or_default()
+    }
+
+    /// The posture of `frame`: the clip's (or the rest posture) with the keys' layer.
+    pub fn frame_posture(&self, frame: usize) -> Posture {
+        let deltas = self.key_layer();
+        self.layered_posture(&deltas, frame)
+    }
+
+    fn base_posture(&self, frame: usize) -> Posture {
+        let skeleton = self.session.skeleton();
+        match self.timeline.base_postures() {
+            Some(postures) if !postures.is_empty() => {
+                postures[frame.min(postures.len() - 1)].clone()
+            }
+            _ => Posture::rest(skeleton),
+        }
+    }
+
+    fn key_layer(&self) -> Vec<KeyDelta> {
+        let keys = self.session.motion().map_or(&[][..], |m| m.keys.as_slice());
+        key_deltas(self.session.skeleton(), keys, |frame| {
+            self.base_posture(frame)
+        })
+    }
+
+    fn layered_posture(&self, deltas: &[KeyDelta], frame: usize) -> Posture {
+        let base = self.base_posture(frame);
+        match delta_at(deltas, frame) {
+            Some((rotations, translation)) => {
+                apply_delta(self.session.skeleton(), &base, &rotations, translation)
+            }
+            None => base,
+        }
+    }
+
+    /// Carries out a timeline command.
+    pub(crate) fn apply_motion(&mut self, command: MotionCommand) {
+        match command {
+            MotionCommand::OpenClip(clip) => self.open_clip(clip),
+            MotionCommand::CloseClip => {
+                self.timeline.clip = None;
+                self.timeline.retargeted = None;
+                self.timeline.playing = false;
+                self.timeline.base_revision += 1;
+                self.timeline.shown = None;
+                self.session.show_timed(None);
+            }
+            MotionCommand::Play => self.play(true),
+            MotionCommand::Pause => self.play(false),
+            MotionCommand::TogglePlay => self.play(!self.timeline.playing),
+            MotionCommand::Seek(frame) => self.seek(frame),
+            MotionCommand::StepFrames(by) => {
+                self.timeline.playing = false;
+                let frame = self.timeline.frame as i64 + by;
+                self.seek(frame.max(0) as usize);
+            }
+            MotionCommand::SetLooping(looping) => self.timeline.looping = looping,
+            MotionCommand::SetSpeed(speed) => {
+                if speed.is_finite() {
+                    self.timeline.speed = speed.clamp(SPEED_RANGE.0, SPEED_RANGE.1);
+                }
+            }
+            MotionCommand::SetFrameCount(count) => self.set_frame_count(count),
+            MotionCommand::SetKey => self.set_key_here(true),
+            MotionCommand::DeleteKey(frame) => self.edit_keys(|keys, _| {
+                keys.retain(|key| key.frame != frame);
+            }),
+            MotionCommand::MoveKey { from, to } => self.move_key(from, to, false),
+            MotionCommand::CopyKey { from, to } => self.move_key(from, to, true),
+            MotionCommand::SetInterval { task, interval } => self.set_interval(task, interval),
+            MotionCommand::DragInterval { task, edge, secs } => {
+                self.drag_interval(task, edge, secs);
+            }
+            MotionCommand::SetTrajectory(joint) => {
+                self.timeline.trajectory_joint = joint;
+                self.refresh_trajectory();
+            }
+        }
+    }
+
+    fn open_clip(&mut self, clip: Box<Clip>) {
+        let options = RetargetOptions::default();
+        let retargeted = match retarget(&clip, self.session.humanoid(), &options) {
+            Ok(retargeted) => retargeted,
+            Err(error) => {
+                self.warn(format!(
+                    "The clip {} could not be put on this body: {error}.",
+                    clip.name
+                ));
+                return;
+            }
+        };
+        let (frames, fps) = (retargeted.postures.len(), 1.0 / retargeted.frame_time);
+        let contacts = retargeted.contacts.len();
+        let name = clip.name.clone();
+        self.timeline.clip = Some(clip);
+        self.timeline.retargeted = Some(retargeted);
+        self.timeline.base_revision += 1;
+        self.timeline.playing = false;
+        let set_aside = self.set_aside_standing_tasks();
+        let mut text = format!(
+            "Opened the clip {name}: {frames} frames at {fps:.3} fps, {contacts} foot contact(s) held."
+        );
+        if set_aside > 0 {
+            text.push_str(&format!(
+                " {set_aside} task(s) without an active interval were set aside: they would hold the body as it stands against the clip (undo brings them back)."
+            ));
+        }
+        self.inform(text);
+        self.seek(0);
+    }
+
+    /// Removes the tasks without an interval (the standing pins, balance, comfort) as one
+    /// undoable edit. Returns how many.
+    fn set_aside_standing_tasks(&mut self) -> usize {
+        let tasks: Vec<_> = self
+            .session
+            .tasks()
+            .iter()
+            .filter(|task| task.interval.is_some())
+            .cloned()
+            .collect();
+        let removed = self.session.tasks().len() - tasks.len();
+        self.commit_tasks(EditKind::Command, tasks);
+        removed
+    }
+
+    fn play(&mut self, playing: bool) {
+        self.flush_pending_key();
+        if playing && self.timeline.frame + 1 >= self.frame_count() && !self.timeline.looping {
+            self.timeline.frame = 0;
+            self.timeline.position = 0.0;
+        }
+        self.timeline.playing = playing;
+        self.timeline.last_now = self.now_secs;
+    }
+
+    fn seek(&mut self, frame: usize) {
+        self.flush_pending_key();
+        let frame = frame.min(self.frame_count() - 1);
+        self.timeline.frame = frame;
+        self.timeline.position = frame as f64 * self.frame_time();
+        self.show_frame(frame);
+    }
+
+    /// Puts the posture of `frame` in the session (no undo record).
+    fn show_frame(&mut self, frame: usize) {
+        let posture = self.frame_posture(frame);
+        let time = frame as f64 * self.frame_time();
+        self.session.show_timed(Some((posture, time)));
+        self.timeline.shown = Some(frame);
+    }
+
+    /// The playhead advances while playing (real time × speed), and a new frame is shown.
+    pub(super) fn motion_before_solve(&mut self, now: f64) {
+        let elapsed = (now - self.timeline.last_now).max(0.0);
+        self.timeline.last_now = now;
+        if !self.timeline.playing {
+            return;
+        }
+        let (count, frame_time) = (self.frame_count(), self.frame_time());
+        let duration = count as f64 * frame_time;
+        let mut position = self.timeline.position + elapsed * self.timeline.speed;
+        let mut frame = (position / frame_time + 1e-9).floor() as usize;
+        if frame >= count {
+            if self.timeline.looping && duration > 0.0 {
+                position %= duration;
+                frame = ((position / frame_time + 1e-9).floor() as usize).min(count - 1);
+            } else {
+                frame = count - 1;
+                position = frame as f64 * frame_time;
+                self.timeline.playing = false;
+            }
+        }
+        self.timeline.position = position;
+        self.timeline.frame = frame;
+        if self.timeline.shown != Some(frame) {
+            self.show_frame(frame);
+        }
+    }
+
+    /// A pending key is set once the body settles; the trajectory follows the keys.
+    pub(super) fn motion_after_solve(&mut self) {
+        if self.timeline.pending_key && self.gesture.is_none() && self.session.is_settled() {
+            self.flush_pending_key();
+        }
+        self.refresh_trajectory();
+    }
+
+    /// A gesture ended or a posture edit landed: paused on a timeline, it becomes a key.
+    pub(super) fn motion_posture_edited(&mut self) {
+        if self.has_timeline() && !self.timeline.playing {
+            self.timeline.pending_key = true;
+        }
+    }
+
+    /// Undo or redo put a document back: no key is pending any more.
+    pub(super) fn motion_restored(&mut self) {
+        self.timeline.pending_key = false;
+    }
+
+    /// The session was replaced (another body, LOA or mapping): the keys carry over by
+    /// joint name, the clip is retargeted onto the new body and the frame shown again.
+    pub(super) fn motion_session_replaced(&mut self, motion: Option<MotionSection>) {
+        self.timeline.pending_key = false;
+        self.timeline.shown = None;
+        if self.session.motion().is_none() && motion.is_some() {
+            self.session.set_motion(motion);
+        }
+        if let Some(clip) = &self.timeline.clip {
+            match retarget(clip, self.session.humanoid(), &RetargetOptions::default()) {
+                Ok(retargeted) => self.timeline.retargeted = Some(retargeted),
+                Err(error) => {
+                    let text = format!("The clip does not fit the new body: {error}.");
+                    self.timeline.clip = None;
+                    self.timeline.retargeted = None;
+                    self.warn(text);
+                }
+            }
+            self.timeline.base_revision += 1;
+        }
+        self.timeline.playing = false;
+        if self.has_timeline() {
+            let frame = self.timeline.frame.min(self.frame_count() - 1);
+            self.seek(frame);
+        }
+    }
+
+    fn flush_pending_key(&mut self) {
+        if std::mem::take(&mut self.timeline.pending_key) {
+            self.set_key_here(false);
+        }
+    }
+
+    /// The document's motion section, made for this timeline when missing.
+    fn motion_section(&self) -> MotionSection {
+        let mut motion = self.session.motion().cloned().unwrap_or_default();
+        if let Some(retargeted) = &self.timeline.retargeted {
+            motion.frame_time = retargeted.frame_time;
+            motion.frame_count = retargeted.postures.len().max(1);
+        }
+        motion
+    }
+
+    /// A key at the playhead from the current posture; `record`: as its own undo step
+    /// (otherwise the gesture's or edit's record covers it).
+    fn set_key_here(&mut self, record: bool) {
+        let frame = self.timeline.frame;
+        let posture = PostureValues::from_posture(self.session.skeleton(), self.session.posture());
+        let mut motion = self.motion_section();
+        motion.keys.retain(|key| key.frame != frame);
+        let at = motion.keys.partition_point(|key| key.frame < frame);
+        motion.keys.insert(at, MotionKey { frame, posture });
+        if record {
+            self.record(EditKind::Command);
+        }
+        self.session.set_motion(Some(motion));
+        self.timeline.shown = Some(frame);
+    }
+
+    /// One undoable change of the keys; the playhead's frame is shown again.
+    fn edit_keys(&mut self, change: impl FnOnce(&mut Vec<MotionKey>, &Self)) {
+        let mut motion = self.motion_section();
+        change(&mut motion.keys, self);
+        if Some(&motion) == self.session.motion() {
+            return;
+        }
+        self.record(EditKind::Command);
+        self.session.set_motion(Some(motion));
+        if self.has_timeline() {
+            self.show_frame(self.timeline.frame);
+        }
+    }
+
+    /// Moves (or copies) the key at `from` to `to`: its change over the clip goes along.
+    fn move_key(&mut self, from: usize, to: usize, copy: bool) {
+        let to = to.min(self.frame_count() - 1);
+        if from == to {
+            return;
+        }
+        self.edit_keys(|keys, model| {
+            let Some(index) = keys.iter().position(|key| key.frame == from) else {
+                return;
+            };
+            let skeleton = model.session.skeleton();
+            let key = layer::lenient_posture(skeleton, &keys[index].posture);
+            let delta = key_delta(skeleton, from, &key, &model.base_posture(from));
+            let moved = apply_delta(
+                skeleton,
+                &model.base_posture(to),
+                &delta.rotations,
+                delta.translation,
+            );
+            if !copy {
+                keys.remove(index);
+            }
+            keys.retain(|key| key.frame != to);
+            let at = keys.partition_point(|key| key.frame < to);
+            let posture = PostureValues::from_posture(skeleton, &moved);
+            keys.insert(at, MotionKey { frame: to, posture });
+        });
+    }
+
+    fn set_frame_count(&mut self, count: usize) {
+        if self.timeline.has_clip() || count == 0 {
+            return;
+        }
+        let mut motion = self.motion_section();
+        if motion.frame_count == count {
+            return;
+        }
+        motion.frame_count = count;
+        self.record(EditKind::Command);
+        self.session.set_motion(Some(motion));
+        if self.timeline.frame >= count {
+            self.seek(count - 1);
+        }
+    }
+
+    fn set_interval(&mut self, task: usize, interval: Option<TaskInterval>) {
+        if interval.is_some_and(|interval| interval.validate().is_err()) {
+            self.warn("An interval needs finite times, its end after its start and eases >= 0.");
+            return;
+        }
+        let mut tasks = self.session.tasks().to_vec();
+        let Some(spec) = tasks.get_mut(task) else {
+            return;
+        };
+        spec.interval = interval;
+        self.commit_tasks(EditKind::TaskField(task, "interval"), tasks);
+    }
+
+    fn drag_interval(&mut self, task: usize, edge: IntervalEdge, secs: f64) {
+        let Some(mut interval) = self
+            .session
+            .tasks()
+            .get(task)
+            .and_then(|spec| spec.interval)
+        else {
+            return;
+        };
+        if !secs.is_finite() {
+            return;
+        }
+        match edge {
+            IntervalEdge::Start => interval.start = secs.min(interval.end),
+            IntervalEdge::End => interval.end = secs.max(interval.start),
+        }
+        self.set_interval(task, Some(interval));
+    }
+
+    /// The trajectory joint's world positions over every frame, when the keys, the clip,
+    /// the body or the joint changed.
+    fn refresh_trajectory(&mut self) {
+        let skeleton = self.session.skeleton();
+        let joint = match &self.timeline.trajectory_joint {
+            Some(name) => resolve_joint(skeleton, name),
+            None => self.selected_joint,
+        };
+        let Some(joint) = joint.filter(|_| self.has_timeline()) else {
+            self.timeline.trajectory.clear();
+            self.timeline.trajectory_for = None;
+            return;
+        };
+        let fresh =
+            self.timeline
+                .trajectory_for
+                .as_ref()
+                .is_some_and(|(j, base, generation, motion)| {
+                    *j == joint
+                        && *base == self.timeline.base_revision
+                        && *generation == self.session_generation
+                        && motion.as_ref() == self.session.motion()
+                });
+        if fresh {
+            return;
+        }
+        let deltas = self.key_layer();
+        let trajectory = (0..self.frame_count())
+            .filter_map(|frame| {
+                let posture = self.layered_posture(&deltas, frame);
+                Frames::new(skeleton, &posture)
+                    .joint_position
+                    .get(joint)
+                    .copied()
+            })
+            .collect();
+        self.timeline.trajectory = trajectory;
+        self.timeline.trajectory_for = Some((
+            joint,
+            self.timeline.base_revision,
+            self.session_generation,
+            self.session.motion().cloned(),
+        ));
+    }
+
+    /// The page shared a posture link of the document (`characters` long): says so, and
+    /// that the keys and the tasks' intervals are not in it.
+    pub fn link_shared(&mut self, characters: usize) {
+        let mut text = format!(
+            "Link copied to the clipboard ({characters} characters): opening it shows exactly this posture and these tasks."
+        );
+        let intervals = self
+            .session
+            .tasks()
+            .iter()
+            .any(|task| task.interval.is_some());
+        if !self.key_frames().is_empty() || intervals {
+            text.push_str(
+                " The keyframes and the tasks' active intervals are not in the link: export the document (JSON) to keep them.",
+            );
+        }
+        self.inform(text);
+    }
+}

@@ -1,0 +1,88 @@
+//! The pose library and the autosave of the model.
+
+use super::{EditorModel, document_of};
+use crate::library::PoseLibrary;
+
+impl EditorModel {
+    pub(super) fn import_library(&mut self, name: &str, text: &str) {
+        match self.library.import(text) {
+            Ok((added, warnings)) => {
+                self.store_library();
+                if warnings.is_empty() {
+                    self.inform(format!("Imported {added} poses from {name}."));
+                } else {
+                    self.warn(format!(
+                        "Imported {added} poses from {name}; skipped: {}",
+                        warnings.join("; ")
+                    ));
+                }
+            }
+            Err(error) => self.warn(format!("{name}: {error}")),
+        }
+    }
+
+    pub(super) fn load_library(&mut self) {
+        match PoseLibrary::load(self.hooks.as_ref()) {
+            Some(Ok((library, warnings))) => {
+                self.library = library;
+                if !warnings.is_empty() {
+                    self.warn(format!(
+                        "Some saved poses could not be read: {}",
+                        warnings.join("; ")
+                    ));
+                }
+            }
+            Some(Err(error)) => self.warn(format!("The pose library could not be read: {error}")),
+            None => {}
+        }
+    }
+
+    pub(super) fn store_library(&mut self) {
+        if let Err(error) = self.library.store(self.hooks.as_ref()) {
+            self.warn(format!("The pose library could not be saved: {error}"));
+        }
+    }
+
+    pub(super) fn save_to_library(&mut self, name: &str) {
+        match self.library.save(name, self.session.document()) {
+            Ok(()) => {
+                self.store_library();
+                self.inform(format!("Saved the pose \"{}\".", name.trim()));
+            }
+            Err(error) => self.warn(error),
+        }
+    }
+
+    pub(super) fn load_from_library(&mut self, index: usize) {
+        let Some(entry) = self.library.entries().get(index).cloned() else {
+            return;
+        };
+        match self.open_document(&entry.document) {
+            Ok(()) => self.inform(format!("Loaded the pose \"{}\".", entry.name)),
+            Err(error) => self.warn(format!(
+                "The pose \"{}\" does not fit the humanoid: {error}",
+                entry.name
+            )),
+        }
+    }
+
+    pub(super) fn delete_from_library(&mut self, index: usize) {
+        if self.library.remove(index).is_some() {
+            self.store_library();
+        }
+    }
+
+    pub(super) fn autosave(&mut self) {
+        if self.is_pulling() {
+            return;
+        }
+        let (session, avatar_url) = (&self.session, &self.avatar_url);
+        let document = || document_of(session, avatar_url.as_deref());
+        if let Some(error) = self
+            .autosave
+            .tick(self.now_secs, document, self.hooks.as_ref())
+        {
+            self.warn(format!("Autosave failed: {error}"));
+        }
+    }
+}
