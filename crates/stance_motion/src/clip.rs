@@ -108,6 +108,53 @@ impl Clip {
         clip
     }
 
+    /// A clip at a fixed rate from postures sampled at irregular times (a sensor recording,
+    /// a live session captured frame by frame): `samples` as `(seconds, posture)` in time
+    /// order, resampled every `frame_time` from the first sample to the last, each joint's
+    /// rotation interpolated by slerp and the root's translation linearly.
+    pub fn from_samples(
+        name: &str,
+        skeleton: &HumanoidSkeleton,
+        samples: &[(f64, Posture)],
+        frame_time: f64,
+    ) -> Result<Self, ClipError> {
+        if !(frame_time.is_finite() && frame_time > 0.0) {
+            return Err(ClipError::FrameTime(frame_time));
+        }
+        let (Some(first), Some(last)) = (samples.first(), samples.last()) else {
+            return Ok(Self::from_postures(name, skeleton, &[], frame_time));
+        };
+        let span = last.0 - first.0;
+        if !span.is_finite() || span < 0.0 {
+            return Err(ClipError::NotFinite("the sample times".into()));
+        }
+        let count = (span / frame_time + 1e-9).floor() as usize + 1;
+        let s = &skeleton.skeleton;
+        let mut postures = Vec::with_capacity(count);
+        let mut k = 0;
+        for f in 0..count {
+            let t = first.0 + f as f64 * frame_time;
+            while k + 2 < samples.len() + 1 && k + 1 < samples.len() && samples[k + 1].0 < t {
+                k += 1;
+            }
+            let a = &samples[k];
+            let b = samples.get(k + 1).unwrap_or(a);
+            let u = if b.0 > a.0 {
+                ((t - a.0) / (b.0 - a.0)).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let rotations: Vec<_> = (0..s.joint_count())
+                .map(|j| a.1.local_rotation(s, j).slerp(b.1.local_rotation(s, j), u))
+                .collect();
+            let root = a.1.translation(s, 0).lerp(b.1.translation(s, 0), u);
+            let posture = Posture::from_rotations(s, root, &rotations)
+                .map_err(|e| ClipError::NotFinite(format!("frame {f}: {e}")))?;
+            postures.push(posture);
+        }
+        Ok(Self::from_postures(name, skeleton, &postures, frame_time))
+    }
+
     /// Number of frames.
     pub fn frame_count(&self) -> usize {
         self.frames.len()

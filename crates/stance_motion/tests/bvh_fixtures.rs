@@ -1,6 +1,11 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 //! The real CMU clips in `tests/fixtures/motion`, and export round trips.
 
+#[cfg(target_arch = "wasm32")]
+use wasm_bindgen_test::wasm_bindgen_test as test;
+#[cfg(target_arch = "wasm32")]
+wasm_bindgen_test::wasm_bindgen_test_configure!(run_in_browser);
+
 mod common;
 
 use glam::{DQuat, DVec3};
@@ -8,12 +13,12 @@ use stance_hanim::LevelOfArticulation;
 use stance_motion::{BvhLimits, BvhWriteOptions, Clip, EulerOrder, read_bvh, write_bvh};
 
 fn fixture(name: &str) -> Clip {
-    let path = format!(
-        "{}/../../tests/fixtures/motion/{name}.bvh",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let bytes = std::fs::read(&path).unwrap();
-    read_bvh(&bytes, name, &BvhLimits::default()).unwrap()
+    let bytes: &[u8] = match name {
+        "walk" => include_bytes!("../../../tests/fixtures/motion/walk.bvh"),
+        "run" => include_bytes!("../../../tests/fixtures/motion/run.bvh"),
+        _ => panic!("no fixture {name}"),
+    };
+    read_bvh(bytes, name, &BvhLimits::default()).unwrap()
 }
 
 fn reread(clip: &Clip, options: &BvhWriteOptions) -> Clip {
@@ -152,6 +157,7 @@ fn the_frame_time_is_written_to_round_trip_exactly() {
     }
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 #[test]
 fn the_fuzz_seeds_are_valid_and_small() {
     let dir = format!("{}/fuzz/corpus/bvh", env!("CARGO_MANIFEST_DIR"));

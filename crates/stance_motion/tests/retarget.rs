@@ -3,6 +3,11 @@
 //! and foot contacts hold where the plain copy slides.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+#[cfg(target_arch = "wasm32")]
+use wasm_bindgen_test::wasm_bindgen_test as test;
+#[cfg(target_arch = "wasm32")]
+wasm_bindgen_test::wasm_bindgen_test_configure!(run_in_browser);
+
 use glam::{DQuat, DVec3};
 use stance_hanim::{
     HumanoidSkeleton, LevelOfArticulation, Mapping, SkeletonOptions, SourceJoint, build_skeleton,
@@ -313,14 +318,22 @@ fn legs_scaled(legs: f64) -> HumanoidSkeleton {
 fn cmu_walk_and_run_keep_their_contacts_on_legs_from_0_7_to_1_3_times() {
     use stance_motion::bvh::{BvhLimits, read_bvh};
     use stance_motion::retarget::metrics;
-    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/fixtures/motion/");
     println!(
         "clip  legs  contacts  drift max/mean (mm): source | copy | Stance   sink max (mm): \
          copy | Stance   boundary jump / excess / clip's own (rad)  deviation mean (mm)"
     );
-    for name in ["walk", "run"] {
-        let bytes = std::fs::read(format!("{root}{name}.bvh")).unwrap();
-        let clip = read_bvh(&bytes, name, &BvhLimits::default()).unwrap();
+    let clips: [(&str, &[u8]); 2] = [
+        (
+            "walk",
+            include_bytes!("../../../tests/fixtures/motion/walk.bvh"),
+        ),
+        (
+            "run",
+            include_bytes!("../../../tests/fixtures/motion/run.bvh"),
+        ),
+    ];
+    for (name, bytes) in clips {
+        let clip = read_bvh(bytes, name, &BvhLimits::default()).unwrap();
         for legs in [0.7, 1.0, 1.3] {
             let target = legs_scaled(legs);
             let options = RetargetOptions::default();
@@ -370,4 +383,41 @@ fn cmu_walk_and_run_keep_their_contacts_on_legs_from_0_7_to_1_3_times() {
             }
         }
     }
+}
+
+#[test]
+fn irregular_samples_become_a_clip_at_a_fixed_rate() {
+    let s = body(LevelOfArticulation::Loa1);
+    let elbow = s.skeleton.joint_index("l_elbow").unwrap();
+    let dof = s.skeleton.joints()[elbow].dof_start;
+    let at = |v: f64, x: f64| {
+        let mut p = Posture::rest(&s.skeleton);
+        p.values_mut()[dof] = v;
+        p.values_mut()[0] = x;
+        p
+    };
+    // Samples at 0, 0.013 and 0.05 s (a display's irregular frames): elbow 0 -> 0.9 -> 1.2.
+    let samples = vec![
+        (0.0, at(0.0, 0.0)),
+        (0.013, at(0.9, 0.13)),
+        (0.05, at(1.2, 0.5)),
+    ];
+    let clip = Clip::from_samples("rec", &s, &samples, 0.01).unwrap();
+    assert_eq!(clip.frame_count(), 6);
+    let angle = |f: usize| clip.frames[f].rotations[elbow].angle_between(DQuat::IDENTITY);
+    // 0.01 s: 10/13 of the way to 0.9 rad; 0.03 s: 17/37 of the way from 0.9 to 1.2.
+    assert!((angle(1) - 0.9 * 10.0 / 13.0).abs() < 1e-9, "{}", angle(1));
+    assert!(
+        (angle(3) - (0.9 + 0.3 * 17.0 / 37.0)).abs() < 1e-9,
+        "{}",
+        angle(3)
+    );
+    assert!((angle(5) - 1.2).abs() < 1e-9);
+    let root_x = |f: usize| clip.frames[f].translations[0].x - clip.joints[0].offset.x;
+    assert!(
+        (root_x(3) - (0.13 + 0.37 * 17.0 / 37.0)).abs() < 1e-9,
+        "{}",
+        root_x(3)
+    );
+    assert!(Clip::from_samples("x", &s, &samples, 0.0).is_err());
 }
