@@ -211,6 +211,14 @@ impl StanceApp {
             ui.menu_button("Avatar", |ui| self.avatar_menu(ui));
             ui.menu_button("Edit", |ui| self.edit_menu(ui));
             ui.menu_button("View", |ui| self.view_menu(ui));
+            ui.menu_button("Motion", |ui| {
+                let before = self.timeline_shown();
+                let mut shown = before;
+                timeline_panel::motion_menu(&mut self.model, ui, &mut shown);
+                if shown != before {
+                    self.windows.timeline = Some(shown);
+                }
+            });
             ui.menu_button("Sensors", |ui| {
                 if ui.button("Motion-capture sensors… (S)").clicked() {
                     self.windows.sensors = true;

@@ -10,6 +10,7 @@
 //! `EditorModel::replace_session`, which resets what belonged to the old one.
 
 mod bones;
+mod clips;
 mod command;
 mod mapping;
 mod motion;
@@ -23,6 +24,7 @@ use stance_hanim::{LevelOfArticulation, Mapping, readable_name};
 use stance_ik::Clock;
 use stance_render::MannequinBone;
 
+pub use self::clips::{AnimationFormat, CLIP_FPS, PickPurpose, is_clip_file, read_clip};
 use self::command::goals_moved;
 pub use self::command::{Command, Gesture, Notice, SessionChange};
 use self::mapping::MappingCorrections;
@@ -61,7 +63,8 @@ pub struct EditorModel {
     pub(crate) library: PoseLibrary,
     pub(crate) sensors: SensorHub,
     /// The next picked file is a sensor recording to replay.
-    replay_pick_pending: bool,
+    /// What the next picked file is for, when the user asked for one.
+    pending_pick: Option<PickPurpose>,
     pub(crate) hooks: Box<dyn HostHooks>,
     autosave: Autosave,
     /// Seconds since the editor started, as of the last step.
@@ -109,7 +112,7 @@ impl EditorModel {
             notice: None,
             library: PoseLibrary::default(),
             sensors: SensorHub::default(),
-            replay_pick_pending: false,
+            pending_pick: None,
             hooks,
             autosave: Autosave::default(),
             now_secs: 0.0,
@@ -240,6 +243,7 @@ impl EditorModel {
         self.session.solve_frame(clock);
         self.solver_ms = started.elapsed().as_secs_f64() * 1000.0;
         self.motion_after_solve();
+        self.capture_frame(now_secs);
         if let Some(point) = self.session.grabbed_point_world() {
             let moved = self
                 .trace
@@ -418,9 +422,14 @@ impl EditorModel {
             }
             Command::ExportPosedAvatar => self.export_posed_avatar(),
             Command::PickRecording => match self.hooks.pick_file() {
-                Ok(()) => self.replay_pick_pending = true,
+                Ok(()) => self.pending_pick = Some(PickPurpose::Recording),
                 Err(error) => self.warn(format!("Sensors: {error}")),
             },
+            Command::PickClip => match self.hooks.pick_file() {
+                Ok(()) => self.pending_pick = Some(PickPurpose::Clip),
+                Err(error) => self.warn(format!("Motion: {error}")),
+            },
+            Command::ExportAnimation(format) => self.export_animation(format),
             Command::Sensors(command) => {
                 let outcome = self.sensors.apply(
                     command,
@@ -435,7 +444,7 @@ impl EditorModel {
                 }
             }
             Command::HostFailed(reason) => {
-                self.replay_pick_pending = false;
+                self.pending_pick = None;
                 self.warn(reason);
             }
             Command::Inform(text) => self.inform(text),
@@ -896,13 +905,25 @@ impl EditorModel {
         true
     }
 
-    /// Opens a file: an avatar, a document (posture and tasks) or a pose library; a sensor
-    /// recording when one was asked for.
+    /// Opens a file: an avatar, a motion clip (BVH), a document (posture and tasks) or a
+    /// pose library; a sensor recording or a clip (a glTF file's animation) when one was
+    /// asked for.
     fn open_file(&mut self, name: &str, bytes: Vec<u8>) {
-        if std::mem::take(&mut self.replay_pick_pending) {
-            let name = name.to_owned();
-            self.apply(Command::Sensors(SensorCommand::Replay { name, bytes }));
-            return;
+        match self.pending_pick.take() {
+            Some(PickPurpose::Recording) => {
+                let name = name.to_owned();
+                self.apply(Command::Sensors(SensorCommand::Replay { name, bytes }));
+                return;
+            }
+            Some(PickPurpose::Clip) => {
+                self.open_clip_file(name, &bytes);
+                return;
+            }
+            None if is_clip_file(name) => {
+                self.open_clip_file(name, &bytes);
+                return;
+            }
+            None => {}
         }
         if crate::avatar::is_avatar_file(name, &bytes) {
             self.load_avatar(name, &bytes);

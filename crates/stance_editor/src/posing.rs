@@ -15,7 +15,7 @@ use stance_ik::{
     SolverSettings, SwivelInterval, Task,
 };
 
-pub use self::timed::{TimedFrame, blended, timed_tasks};
+pub use self::timed::{TimedFrame, blended, timed_tasks, timed_tasks_at};
 
 /// The temporary lowest-priority task of grab-and-pull: a point of a segment, pulled along.
 #[derive(Debug, Clone, Copy, PartialEq)]

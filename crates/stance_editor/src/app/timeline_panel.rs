@@ -6,8 +6,12 @@
 use egui::{Color32, Pos2, Rect, Sense, Stroke, pos2, vec2};
 use stance_document::TaskInterval;
 
+use stance_motion::RestMatch;
+
 use super::ButtonRects;
-use crate::model::{Command, EditorModel, IntervalEdge, MotionCommand, SPEED_RANGE};
+use crate::model::{
+    AnimationFormat, Command, EditorModel, IntervalEdge, MotionCommand, SPEED_RANGE,
+};
 
 const KEY_COLOR: Color32 = Color32::from_rgb(250, 200, 80);
 const PLAYHEAD_COLOR: Color32 = Color32::from_rgb(240, 90, 90);
@@ -63,6 +67,9 @@ impl TimelinePanel<'_> {
     /// The panel's contents.
     pub(super) fn show(&mut self, ui: &mut egui::Ui) {
         self.transport(ui);
+        if self.model.timeline().has_clip() {
+            self.clip_settings(ui);
+        }
         let track = self.key_track(ui);
         self.interval_rows(ui, track);
         self.contact_row(ui, track);
@@ -122,6 +129,61 @@ impl TimelinePanel<'_> {
                 ui.label(format!("clip: {name}"));
             }
         });
+    }
+
+    /// How the clip is put on the body: the rest match and the foot contacts' thresholds
+    /// (a change retargets the clip).
+    fn clip_settings(&mut self, ui: &mut egui::Ui) {
+        let options = self.model.timeline().retarget_options().clone();
+        let mut changed = options.clone();
+        ui.horizontal(|ui| {
+            ui.label("Rest match:");
+            for (value, label, hint) in [
+                (
+                    RestMatch::Directions,
+                    "bone directions",
+                    "T-pose and A-pose bodies match",
+                ),
+                (
+                    RestMatch::Same,
+                    "same rest",
+                    "both rest poses are the same pose",
+                ),
+                (
+                    RestMatch::FirstFrame,
+                    "first frame",
+                    "the clip's first frame is the rest",
+                ),
+            ] {
+                ui.radio_value(&mut changed.rest_match, value, label)
+                    .on_hover_text(hint);
+            }
+            ui.separator();
+            let mut held = changed.contacts.is_some();
+            ui.checkbox(&mut held, "Foot contacts")
+                .on_hover_text("detected on the clip, held by level-1 tasks");
+            let mut settings = changed.contacts.unwrap_or_default();
+            ui.add_enabled_ui(held, |ui| {
+                ui.label("height");
+                ui.add(
+                    egui::DragValue::new(&mut settings.height)
+                        .range(0.0..=0.5)
+                        .speed(0.002)
+                        .suffix(" m"),
+                );
+                ui.label("speed");
+                ui.add(
+                    egui::DragValue::new(&mut settings.speed)
+                        .range(0.0..=5.0)
+                        .speed(0.01)
+                        .suffix(" m/s"),
+                );
+            });
+            changed.contacts = held.then_some(settings);
+        });
+        if changed != options {
+            self.command(MotionCommand::SetRetargetOptions(Box::new(changed)));
+        }
     }
 
     /// A row: its label, and the track's rectangle to its right.
@@ -347,4 +409,65 @@ fn diamond(painter: &egui::Painter, centre: Pos2, radius: f32) {
         KEY_COLOR,
         Stroke::new(1.0, Color32::BLACK),
     ));
+}
+
+/// The Motion menu: clips in (a file, the avatar's own animations, a recording of the body),
+/// the timeline out (GLB on the avatar, BVH), the panel.
+pub(super) fn motion_menu(model: &mut EditorModel, ui: &mut egui::Ui, shown: &mut bool) {
+    let mut command = None;
+    if ui.button("Open clip (BVH, glTF animation)…").clicked() {
+        command = Some(Command::PickClip);
+    }
+    let animations: Vec<String> = model
+        .avatar()
+        .map(|loaded| {
+            loaded
+                .avatar
+                .animations
+                .iter()
+                .map(|a| a.name.clone())
+                .collect()
+        })
+        .unwrap_or_default();
+    for (index, name) in animations.iter().enumerate() {
+        let label = format!("Play the avatar's animation: {name}");
+        if ui.button(label).clicked() {
+            command = Some(Command::Motion(MotionCommand::OpenAvatarAnimation(index)));
+        }
+    }
+    let recording = model.timeline().is_recording();
+    let record = if recording {
+        "Stop recording (the recording becomes a clip)"
+    } else {
+        "Record the body (sensors, replay or posing)"
+    };
+    if ui.button(record).clicked() {
+        command = Some(Command::Motion(MotionCommand::Record(!recording)));
+    }
+    if model.timeline().has_clip() && ui.button("Close clip").clicked() {
+        command = Some(Command::Motion(MotionCommand::CloseClip));
+    }
+    ui.separator();
+    let has_timeline = model.has_timeline();
+    let glb = ui
+        .add_enabled(
+            has_timeline && model.avatar().is_some(),
+            egui::Button::new("Export animation on the avatar (GLB)…"),
+        )
+        .on_disabled_hover_text("open a clip or set keys, on a loaded avatar");
+    if glb.clicked() {
+        command = Some(Command::ExportAnimation(AnimationFormat::Glb));
+    }
+    let bvh = ui
+        .add_enabled(has_timeline, egui::Button::new("Export animation (BVH)…"))
+        .on_disabled_hover_text("open a clip or set keys first");
+    if bvh.clicked() {
+        command = Some(Command::ExportAnimation(AnimationFormat::Bvh));
+    }
+    ui.separator();
+    ui.checkbox(shown, "Show the timeline");
+    if let Some(command) = command {
+        model.apply(command);
+        ui.close();
+    }
 }

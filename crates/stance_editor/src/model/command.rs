@@ -5,6 +5,7 @@ use glam::DVec3;
 use stance_document::{Document, LimbName, TaskKindSpec, TaskSpec};
 use stance_hanim::{LevelOfArticulation, Mapping};
 
+use super::clips::AnimationFormat;
 use super::mapping::Correction;
 use super::motion::MotionCommand;
 use super::tasks::NewTask;
@@ -207,6 +208,10 @@ pub enum Command {
     ExportPosedAvatar,
     /// Ask the page for a sensor recording to replay.
     PickRecording,
+    /// Ask the page for a motion clip (BVH, or a glTF file's animation).
+    PickClip,
+    /// Offer the timeline (clip, keys and timed tasks, baked) as a download.
+    ExportAnimation(AnimationFormat),
     /// A command for the sensors.
     Sensors(SensorCommand),
     /// The host failed to do what the editor asked (reading a file...).

@@ -84,6 +84,13 @@ pub enum MotionCommand {
     },
     /// The joint whose trajectory is drawn (H-Anim name); `None`: the selected joint.
     SetTrajectory(Option<String>),
+    /// Put the loaded avatar's glTF animation `index` on the timeline.
+    OpenAvatarAnimation(usize),
+    /// Start (true) or stop (false) recording the body every frame; stopping puts the
+    /// recording on the timeline as a clip.
+    Record(bool),
+    /// Retarget the clip again with these settings (rest match, contact thresholds).
+    SetRetargetOptions(Box<RetargetOptions>),
 }
 
 /// One end of an active interval.
@@ -115,6 +122,10 @@ pub struct Timeline {
     trajectory_for: Option<(usize, u64, u64, Option<MotionSection>)>,
     /// Changes when the clip or its retargeting changes.
     base_revision: u64,
+    /// How clips are put on the body (rest match, contacts).
+    pub(super) options: RetargetOptions,
+    /// The body captured every frame while recording: `(seconds, posture)`.
+    pub(super) recording: Option<Vec<(f64, Posture)>>,
 }
 
 impl Default for Timeline {
@@ -134,6 +145,8 @@ impl Default for Timeline {
             trajectory: Vec::new(),
             trajectory_for: None,
             base_revision: 0,
+            options: RetargetOptions::default(),
+            recording: None,
         }
     }
 }
@@ -142,6 +155,16 @@ impl Timeline {
     /// The clip's name, when one is open.
     pub fn clip_name(&self) -> Option<&str> {
         self.clip.as_ref().map(|clip| clip.name.as_str())
+    }
+
+    /// How clips are put on the body (rest match, contact thresholds).
+    pub fn retarget_options(&self) -> &RetargetOptions {
+        &self.options
+    }
+
+    /// Whether the body is being recorded.
+    pub fn is_recording(&self) -> bool {
+        self.recording.is_some()
     }
 
     /// Whether a clip is open.
@@ -307,12 +330,14 @@ impl EditorModel {
                 self.timeline.trajectory_joint = joint;
                 self.refresh_trajectory();
             }
+            MotionCommand::OpenAvatarAnimation(index) => self.open_avatar_animation(index),
+            MotionCommand::Record(on) => self.record_motion(on),
+            MotionCommand::SetRetargetOptions(options) => self.set_retarget_options(*options),
         }
     }
 
     fn open_clip(&mut self, clip: Box<Clip>) {
-        let options = RetargetOptions::default();
-        let retargeted = match retarget(&clip, self.session.humanoid(), &options) {
+        let retargeted = match retarget(&clip, self.session.humanoid(), &self.timeline.options) {
             Ok(retargeted) => retargeted,
             Err(error) => {
                 self.warn(format!(
@@ -439,19 +464,32 @@ impl EditorModel {
         if self.session.motion().is_none() && motion.is_some() {
             self.session.set_motion(motion);
         }
-        if let Some(clip) = &self.timeline.clip {
-            match retarget(clip, self.session.humanoid(), &RetargetOptions::default()) {
-                Ok(retargeted) => self.timeline.retargeted = Some(retargeted),
-                Err(error) => {
-                    let text = format!("The clip does not fit the new body: {error}.");
-                    self.timeline.clip = None;
-                    self.timeline.retargeted = None;
-                    self.warn(text);
-                }
-            }
-            self.timeline.base_revision += 1;
-        }
+        self.retarget_clip();
         self.timeline.playing = false;
+        self.show_playhead();
+    }
+
+    /// Puts the clip on the current body again (after a change of body or of settings); a
+    /// clip that does not fit is closed with a notice.
+    pub(super) fn retarget_clip(&mut self) {
+        let Some(clip) = &self.timeline.clip else {
+            return;
+        };
+        match retarget(clip, self.session.humanoid(), &self.timeline.options) {
+            Ok(retargeted) => self.timeline.retargeted = Some(retargeted),
+            Err(error) => {
+                let text = format!("The clip does not fit the body: {error}.");
+                self.timeline.clip = None;
+                self.timeline.retargeted = None;
+                self.warn(text);
+            }
+        }
+        self.timeline.base_revision += 1;
+        self.timeline.shown = None;
+    }
+
+    /// Shows the playhead's frame again (after the clip or the body changed).
+    pub(super) fn show_playhead(&mut self) {
         if self.has_timeline() {
             let frame = self.timeline.frame.min(self.frame_count() - 1);
             self.seek(frame);

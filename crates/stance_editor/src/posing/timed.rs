@@ -45,6 +45,21 @@ pub fn timed_tasks(
         .collect()
 }
 
+/// `tasks` as the solver takes them at `time` seconds of a timeline whose frame there has
+/// `posture` (see [`timed_tasks`]).
+pub fn timed_tasks_at(
+    tasks: &[TaskSpec],
+    skeleton: &Skeleton,
+    posture: &stance_ik::Posture,
+    time: f64,
+) -> Vec<TaskSpec> {
+    let timed = TimedFrame {
+        time,
+        frames: Frames::new(skeleton, posture),
+    };
+    timed_tasks(tasks, skeleton, Some(&timed))
+}
+
 /// `spec` at `weight` in (0, 1): its goal that fraction of the way from where `frames` has
 /// the effector to the task's goal; a balance or posture task has its weight scaled.
 pub fn blended(spec: &TaskSpec, weight: f64, skeleton: &Skeleton, frames: &Frames) -> TaskSpec {

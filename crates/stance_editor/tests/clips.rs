@@ -1,0 +1,205 @@
+//! Clips in and out of the editor, driven by commands: a dropped BVH goes on the timeline
+//! (a broken one says where and keeps what was there), the retargeting settings take
+//! effect, the body recorded frame by frame becomes a clip, and the timeline is exported as
+//! BVH and as a GLB animation on the avatar that reads back with the same frames.
+
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use glam::DQuat;
+use stance_asset::{LoadOptions, export_glb, load_avatar, make_default_avatar};
+use stance_editor::model::{AnimationFormat, MotionCommand};
+use stance_editor::{Command, EditorModel, MemoryHost};
+use stance_ik::Frames;
+use stance_motion::{BvhLimits, ContactSettings, RestMatch, RetargetOptions, read_bvh};
+
+const WALK: &[u8] = include_bytes!("../../../tests/fixtures/motion/walk.bvh");
+
+fn editor() -> (EditorModel, MemoryHost, f64) {
+    let host = MemoryHost::default();
+    let mut model = EditorModel::new(Box::new(host.clone())).unwrap();
+    model.step(0.0, None);
+    (model, host, 0.0)
+}
+
+fn open(model: &mut EditorModel, name: &str, bytes: &[u8]) {
+    model.apply(Command::OpenFile {
+        name: name.into(),
+        bytes: bytes.to_vec(),
+    });
+}
+
+#[test]
+fn a_dropped_bvh_goes_on_the_timeline_and_a_broken_one_keeps_it() {
+    let (mut model, _, _) = editor();
+    open(&mut model, "walk.bvh", WALK);
+    assert_eq!(model.frame_count(), 260);
+    assert!((model.frame_time() - 0.0083333).abs() < 1e-12);
+    assert_eq!(model.timeline().clip_name(), Some("walk"));
+    assert!(model.timeline().contacts().len() >= 4);
+    let broken = String::from_utf8_lossy(WALK).replacen("CHANNELS 3", "CHANNELS 4", 1);
+    open(&mut model, "broken.bvh", broken.as_bytes());
+    let notice = model.notice().unwrap();
+    assert!(notice.is_error);
+    assert!(
+        notice.text.contains("broken.bvh") && notice.text.contains("line 9"),
+        "{}",
+        notice.text
+    );
+    assert_eq!(model.timeline().clip_name(), Some("walk"));
+    assert_eq!(model.frame_count(), 260);
+}
+
+#[test]
+fn retargeting_settings_change_the_contacts_and_the_rest_match() {
+    let (mut model, _, _) = editor();
+    open(&mut model, "walk.bvh", WALK);
+    let held = model.timeline().contacts().len();
+    let set = |model: &mut EditorModel, options: RetargetOptions| {
+        model.apply(Command::Motion(MotionCommand::SetRetargetOptions(
+            Box::new(options),
+        )));
+    };
+    set(
+        &mut model,
+        RetargetOptions {
+            contacts: None,
+            ..Default::default()
+        },
+    );
+    assert_eq!(model.timeline().contacts().len(), 0);
+    // A stricter speed threshold finds fewer (or shorter) contacts.
+    let strict = ContactSettings {
+        speed: 0.05,
+        ..Default::default()
+    };
+    set(
+        &mut model,
+        RetargetOptions {
+            contacts: Some(strict),
+            ..Default::default()
+        },
+    );
+    let frames = |model: &EditorModel| -> usize {
+        model
+            .timeline()
+            .contacts()
+            .iter()
+            .map(|c| c.end + 1 - c.start)
+            .sum()
+    };
+    assert!(model.timeline().contacts().len() <= held);
+    let strict_frames = frames(&model);
+    set(&mut model, RetargetOptions::default());
+    assert!(frames(&model) > strict_frames);
+    // The clip's first frame as the rest: frame 0 is the rest posture (root aside).
+    set(
+        &mut model,
+        RetargetOptions {
+            rest_match: RestMatch::FirstFrame,
+            contacts: None,
+            ..Default::default()
+        },
+    );
+    let skeleton = model.session().skeleton().clone();
+    let first = model.frame_posture(0);
+    for j in 1..skeleton.joint_count() {
+        let angle = first
+            .local_rotation(&skeleton, j)
+            .angle_between(DQuat::IDENTITY);
+        assert!(angle < 1e-6, "{}: {angle}", skeleton.joints()[j].name);
+    }
+}
+
+#[test]
+fn the_body_recorded_frame_by_frame_becomes_a_clip() {
+    let (mut model, _, _) = editor();
+    let elbow = model.session().skeleton().joint_index("l_elbow").unwrap();
+    let dof = model.session().skeleton().joints()[elbow].dof_start;
+    model.apply(Command::Motion(MotionCommand::Record(true)));
+    assert!(model.timeline().is_recording());
+    // One second at an irregular display rate, the elbow bending at 1 rad/s.
+    let mut t: f64 = 0.0;
+    while t < 1.0 {
+        t += if ((t * 100.0) as usize).is_multiple_of(2) {
+            0.013
+        } else {
+            0.021
+        };
+        let now = t.min(1.0);
+        model.apply(Command::SetDof { dof, value: -now });
+        model.step(now, None);
+    }
+    model.apply(Command::Motion(MotionCommand::Record(false)));
+    assert!(!model.timeline().is_recording());
+    assert_eq!(model.timeline().clip_name(), Some("recording"));
+    // From the first captured frame to the last, at 30 fps.
+    let count = model.frame_count();
+    assert!((29..=31).contains(&count), "{count}");
+    let skeleton = model.session().skeleton().clone();
+    let bend = |f: usize| {
+        model
+            .frame_posture(f)
+            .local_rotation(&skeleton, elbow)
+            .angle_between(DQuat::IDENTITY)
+    };
+    // The bend grows by 1/30 rad per frame, as it did in real time.
+    for f in 1..count - 1 {
+        let step = bend(f + 1) - bend(f);
+        assert!((step - 1.0 / 30.0).abs() < 2e-3, "frame {f}: {step}");
+    }
+}
+
+#[test]
+fn the_timeline_exports_as_bvh_and_as_a_glb_animation_on_the_avatar() {
+    let (mut model, host, _) = editor();
+    let glb = export_glb(&make_default_avatar().unwrap()).unwrap();
+    model.apply(Command::LoadAvatar {
+        name: "default.glb".into(),
+        bytes: glb,
+    });
+    open(&mut model, "walk.bvh", WALK);
+    let baked = model.baked_postures();
+    assert_eq!(baked.len(), 260);
+    model.apply(Command::ExportAnimation(AnimationFormat::Bvh));
+    let (name, text) = host.inner.borrow().downloads.last().cloned().unwrap();
+    assert_eq!(name, "walk.bvh");
+    let clip = read_bvh(text.as_bytes(), "walk", &BvhLimits::default()).unwrap();
+    assert_eq!(clip.frame_count(), 260);
+    assert_eq!(clip.frame_time, model.frame_time());
+    // The BVH's joints are where the baked postures put them.
+    let skeleton = model.session().skeleton().clone();
+    for f in [0, 130, 259] {
+        let frames = Frames::new(&skeleton, &baked[f]);
+        let world = clip.world(&clip.frames[f]);
+        for name in ["l_talocrural", "r_radiocarpal", "skullbase"] {
+            let a = frames.joint_position[skeleton.joint_index(name).unwrap()];
+            let b = world[clip.joint_of(name).unwrap()].1;
+            assert!((a - b).length() < 1e-5, "{name} frame {f}: {a} {b}");
+        }
+    }
+    model.apply(Command::ExportAnimation(AnimationFormat::Glb));
+    let (name, bytes) = host
+        .inner
+        .borrow()
+        .binary_downloads
+        .last()
+        .cloned()
+        .unwrap();
+    assert_eq!(name, "walk.glb");
+    let avatar = load_avatar(&bytes, &LoadOptions::default()).unwrap();
+    assert_eq!(avatar.animations.len(), 1);
+    let duration = avatar.animations[0].duration;
+    assert!(
+        (duration - 259.0 * model.frame_time()).abs() < 1e-4,
+        "{duration}"
+    );
+    // Its own animation plays on the timeline again with the same frame count.
+    model.apply(Command::LoadAvatar {
+        name: "walk.glb".into(),
+        bytes,
+    });
+    model.apply(Command::Motion(MotionCommand::CloseClip));
+    model.apply(Command::Motion(MotionCommand::OpenAvatarAnimation(0)));
+    assert_eq!(model.timeline().clip_name(), Some("walk"));
+    assert!(model.frame_count() >= 64, "{}", model.frame_count());
+}
