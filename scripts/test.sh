@@ -18,7 +18,7 @@ source scripts/clippy-env.sh
 started=$SECONDS
 step() { printf '\n\033[1;34m[test %3ds]\033[0m %s\n' "$((SECONDS - started))" "$*"; }
 
-PURE_CRATES=(stance_hanim stance_ik stance_mocap)
+PURE_CRATES=(stance_hanim stance_ik stance_mocap stance_motion)
 # Crates added later join the pure list once they exist (stance_document: the share-link codec).
 [ -d crates/stance_document ] && PURE_CRATES+=(stance_document)
 
