@@ -4,8 +4,9 @@
 // that passes the Khronos glTF-Validator and that three.js plays with the joints where
 // Stance put them (`--joints-out`, within 1 mm), and the stance-ik package retargets the
 // same clip in the page (wasm) with the same contacts, printing frames per second beside the
-// native figure. A malformed BVH fails naming the line and field; a directory is processed
-// in shards.
+// native figure. In the editor, the picked BVH goes on the timeline (frames, contacts shown
+// as bars) and plays when Play is clicked. A malformed BVH fails naming the line and field;
+// a directory is processed in shards.
 import { after, before, describe, test } from "node:test";
 import assert from "node:assert/strict";
 import { execFileSync, spawnSync } from "node:child_process";
@@ -14,7 +15,7 @@ import { tmpdir } from "node:os";
 import { dirname, join } from "node:path";
 import { fileURLToPath } from "node:url";
 import validator from "gltf-validator";
-import { CONFIGURATIONS, launch, serve } from "./browser.mjs";
+import { CONFIGURATIONS, decodePng, launch, openEditor, saveArtifact, serve } from "./browser.mjs";
 
 const root = join(dirname(fileURLToPath(import.meta.url)), "..");
 const walk = join(root, "tests", "fixtures", "motion", "walk.bvh");
@@ -170,6 +171,45 @@ describe("motion", () => {
     console.log(`# retargeting the walk with contacts (4 levels, H-Anim LOA2 body): ` +
       `${(r.frames / (r.ms / 1000)).toFixed(0)} frames/s in Chromium (wasm, release), ` +
       `${report.frames_per_second.toFixed(0)} frames/s native (debug build of the CLI)`);
+  });
+
+  test("the editor opens the walk on its timeline and plays it", async () => {
+    const page = await context.newPage();
+    const { errors } = await openEditor(context, served.url, page);
+    const state = async () => JSON.parse(await page.evaluate(() => window.stance.state_json()));
+    await page.setInputFiles("input[type=file]", walk);
+    await page.waitForFunction(() => JSON.parse(window.stance.state_json()).motion?.frames === 260,
+      null, { timeout: 30_000 });
+    let s = await state();
+    assert.equal(s.motion.clip, "walk");
+    assert.ok(s.motion.contacts >= 4, `${s.motion.contacts} contacts`);
+    assert.equal(s.notice?.error, false, s.notice?.text);
+    // The timeline panel is drawn: its contact bars (green) below the viewport.
+    await page.waitForFunction(() => Boolean(JSON.parse(window.stance.state_json()).buttons.timeline_play));
+    s = await state();
+    const png = await page.screenshot();
+    saveArtifact("motion-timeline-webgl2.png", png);
+    const image = decodePng(png);
+    const [, vy, , vh] = s.viewport;
+    let green = 0;
+    for (let y = Math.floor(vy + vh); y < image.height; y += 1) {
+      for (let x = 0; x < image.width; x += 2) {
+        const [r, g, b] = image.at(x, y);
+        if (Math.abs(r - 120) < 12 && Math.abs(g - 200) < 12 && Math.abs(b - 130) < 12) green += 1;
+      }
+    }
+    assert.ok(green > 100, `${green} contact-bar pixels under the viewport`);
+    const ankleBefore = s.joints.l_talocrural;
+    const [x, y, width, height] = s.buttons.timeline_play;
+    await page.mouse.click(x + width / 2, y + height / 2);
+    await page.waitForFunction(() => {
+      const m = JSON.parse(window.stance.state_json()).motion;
+      return m.playing && m.frame > 20;
+    }, null, { timeout: 30_000 });
+    s = await state();
+    assert.ok(distance(s.joints.l_talocrural, ankleBefore) > 0.01, "the body walks");
+    assert.deepEqual(errors, []);
+    await page.close();
   });
 
   test("a malformed BVH fails naming the line and the field", () => {

@@ -24,7 +24,7 @@ function showError(message) {
 // The browser services the editor asks for (see crates/stance_web/src/web.rs).
 const fileInput = document.createElement("input");
 fileInput.type = "file";
-fileInput.accept = ".json,application/json,.glb,.gltf,.vrm,.bin,.fob,.txt,.log";
+fileInput.accept = ".json,application/json,.glb,.gltf,.vrm,.bvh,.bin,.fob,.txt,.log";
 fileInput.hidden = true;
 document.body.append(fileInput);
 

@@ -473,15 +473,15 @@ impl StanceApp {
         egui::Panel::top("menu_bar").show(ui, |ui| self.menu_bar(ui));
         egui::Panel::bottom("status_bar").show(ui, |ui| self.status_bar(ui, frame));
         if self.timeline_shown() {
-            egui::Panel::bottom("timeline_panel").show(ui, |ui| {
-                let mut panel = TimelinePanel {
-                    model: &mut self.model,
-                    buttons: &mut self.button_rects,
-                };
-                egui::ScrollArea::vertical()
-                    .max_height(220.0)
-                    .show(ui, |ui| panel.show(ui));
-            });
+            egui::Panel::bottom("timeline_panel")
+                .exact_size(TimelinePanel::height(&self.model))
+                .show(ui, |ui| {
+                    let mut panel = TimelinePanel {
+                        model: &mut self.model,
+                        buttons: &mut self.button_rects,
+                    };
+                    egui::ScrollArea::vertical().show(ui, |ui| panel.show(ui));
+                });
         }
         egui::Panel::left("side_panel")
             .resizable(true)

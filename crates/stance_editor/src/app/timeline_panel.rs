@@ -60,6 +60,18 @@ impl Track {
 }
 
 impl TimelinePanel<'_> {
+    /// The panel's height (points) for what it shows: the transport, the clip's settings,
+    /// the key track, a row per task and the contacts' row (at most 12 rows; the rest
+    /// scrolls).
+    pub(super) fn height(model: &EditorModel) -> f32 {
+        let clip = model.timeline().has_clip();
+        let rows = 1
+            + model.session().tasks().len()
+            + usize::from(!model.timeline().contacts().is_empty());
+        let lines = 1 + usize::from(clip);
+        lines as f32 * 26.0 + rows.min(12) as f32 * (ROW_HEIGHT + 4.0) + 12.0
+    }
+
     fn command(&mut self, command: MotionCommand) {
         self.model.apply(Command::Motion(command));
     }
@@ -86,6 +98,7 @@ impl TimelinePanel<'_> {
         let mut frame = timeline.frame();
         let (frames, frame_time) = (self.model.frame_count(), self.model.frame_time());
         ui.horizontal(|ui| {
+            ui.spacing_mut().slider_width = 280.0;
             let play = ui.button(if playing { "Pause" } else { "Play" });
             self.buttons.push(("timeline_play", play.rect));
             if play.clicked() {
