@@ -21,6 +21,7 @@ use stance_hanim::LevelOfArticulation;
 use stance_render::OrbitCamera;
 
 use self::avatar_panel::MappingEditor;
+use self::avatar_panel::SubjectKind;
 use self::sensors_panel::SensorsWindow;
 use self::side_panel::SidePanel;
 use self::state::PageState;
@@ -60,6 +61,8 @@ pub(crate) struct Windows {
     pub help: bool,
     pub sensors: bool,
     pub mapping: bool,
+    /// Whose mapping the mapping window shows (the avatar's or the clip's).
+    pub mapping_subject: SubjectKind,
     /// The timeline panel: `None` shows it when a clip or keys exist.
     pub timeline: Option<bool>,
 }
@@ -214,7 +217,10 @@ impl StanceApp {
             ui.menu_button("Motion", |ui| {
                 let before = self.timeline_shown();
                 let mut shown = before;
-                timeline_panel::motion_menu(&mut self.model, ui, &mut shown);
+                if timeline_panel::motion_menu(&mut self.model, ui, &mut shown) {
+                    self.windows.mapping = true;
+                    self.windows.mapping_subject = SubjectKind::Clip;
+                }
                 if shown != before {
                     self.windows.timeline = Some(shown);
                 }
@@ -522,7 +528,7 @@ impl StanceApp {
         self.mapping_editor.show(
             &ctx,
             &mut self.model,
-            &mut self.windows.mapping,
+            (&mut self.windows.mapping, self.windows.mapping_subject),
             &mut self.button_rects,
         );
         if let Some(cpu_seconds) = frame.info().cpu_usage {

@@ -203,3 +203,46 @@ fn the_timeline_exports_as_bvh_and_as_a_glb_animation_on_the_avatar() {
     assert_eq!(model.timeline().clip_name(), Some("walk"));
     assert!(model.frame_count() >= 64, "{}", model.frame_count());
 }
+
+#[test]
+fn a_corrected_clip_mapping_retargets_the_clip() {
+    let (mut model, _, _) = editor();
+    open(&mut model, "walk.bvh", WALK);
+    let skeleton = model.session().skeleton().clone();
+    let elbow = skeleton.joint_index("l_elbow").unwrap();
+    let bend = |model: &EditorModel, f: usize| {
+        model
+            .frame_posture(f)
+            .local_rotation(&skeleton, elbow)
+            .angle_between(DQuat::IDENTITY)
+    };
+    let most = |model: &EditorModel| (0..260).map(|f| bend(model, f)).fold(0.0, f64::max);
+    let before = most(&model);
+    assert!(before > 0.05, "the walk bends the left elbow: {before}");
+    // The user says the clip has no left elbow: it moves with the upper arm from then on
+    // in the copy.
+    let mut mapping = model.timeline().clip().unwrap().mapping.clone();
+    assert!(mapping.remove("l_elbow"));
+    model.apply(Command::Motion(MotionCommand::SetClipMapping(Box::new(
+        mapping,
+    ))));
+    assert!(
+        !model
+            .timeline()
+            .clip()
+            .unwrap()
+            .mapping
+            .get("l_elbow")
+            .is_some()
+    );
+    // (The wrist task at level 3 may still bend it a little.)
+    let after = most(&model);
+    assert!(after < 0.1 * before, "{after} vs {before}");
+    // A mapping of another clip is refused and changes nothing.
+    let other = stance_hanim::Mapping::empty(3);
+    model.apply(Command::Motion(MotionCommand::SetClipMapping(Box::new(
+        other,
+    ))));
+    assert!(model.notice().unwrap().is_error);
+    assert_eq!(model.frame_count(), 260);
+}

@@ -798,3 +798,23 @@ fn a_key_shows_the_timeline_and_its_play_button_toggles_playing() {
     harness.run_steps(2);
     assert_eq!(state(&harness)["motion"]["playing"], false);
 }
+
+#[test]
+fn the_motion_menu_opens_the_clip_mapping_window_with_the_clip_joints() {
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    harness.state_mut().apply(Command::OpenFile {
+        name: "walk.bvh".into(),
+        bytes: include_bytes!("../../../tests/fixtures/motion/walk.bvh").to_vec(),
+    });
+    harness.run_steps(2);
+    assert!(harness.state().model().timeline().has_clip());
+    harness.get_by_label("Motion").click();
+    harness.run_steps(2);
+    harness.get_by_label("Clip mapping…").click();
+    harness.run_steps(2);
+    // The clip's own joint names, each with its H-Anim joint.
+    harness.get_by_label("LeftKnee");
+    harness.get_by_label("Apply");
+    assert!(harness.query_by_label("Revert last correction").is_none());
+}

@@ -1,6 +1,7 @@
 //! The mapping window, where the user checks and corrects which H-Anim joint each joint of
 //! the avatar's file drives (the model rebuilds the skeleton and the posing session from the
-//! corrected mapping).
+//! corrected mapping), or each joint of the open motion clip (the model retargets the clip
+//! with the corrected mapping).
 
 use egui::{Color32, RichText};
 use stance_hanim::{
@@ -9,8 +10,7 @@ use stance_hanim::{
 };
 
 use super::ButtonRects;
-use crate::avatar::LoadedAvatar;
-use crate::model::{Command, Correction, EditorModel};
+use crate::model::{Command, Correction, EditorModel, MotionCommand};
 
 /// Matches less sure than this are guesses the user should check (name patterns, geometry).
 pub(super) const LOW_CONFIDENCE: f32 = 0.8;
@@ -21,10 +21,75 @@ const MISSING_COLOR: Color32 = Color32::from_rgb(240, 90, 90);
 /// What an unmapped row shows.
 const UNMAPPED: &str = "none";
 
+/// Whose mapping the window edits.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub(crate) enum SubjectKind {
+    /// The loaded avatar's.
+    #[default]
+    Avatar,
+    /// The open motion clip's.
+    Clip,
+}
+
+/// What the window shows of its subject: its name, the joints listed, every joint's name (by
+/// source index) and the mapping as it is now.
+struct Subject {
+    kind: SubjectKind,
+    title: String,
+    joints: Vec<usize>,
+    names: Vec<String>,
+    original: Mapping,
+    can_revert: bool,
+}
+
+impl Subject {
+    fn of(model: &EditorModel, kind: SubjectKind) -> Option<Self> {
+        match kind {
+            SubjectKind::Avatar => {
+                let avatar = model.avatar()?;
+                Some(Self {
+                    kind,
+                    title: avatar.name.clone(),
+                    joints: avatar.joint_nodes(),
+                    names: avatar.avatar.nodes.iter().map(|n| n.name.clone()).collect(),
+                    original: avatar.avatar.mapping.clone(),
+                    can_revert: model
+                        .mapping_corrections
+                        .before_last(&avatar.name)
+                        .is_some(),
+                })
+            }
+            SubjectKind::Clip => {
+                let clip = model.timeline().clip()?;
+                Some(Self {
+                    kind,
+                    title: format!("the clip {}", clip.name),
+                    joints: (0..clip.joints.len())
+                        .filter(|&j| !clip.joints[j].name.ends_with("_End"))
+                        .collect(),
+                    names: clip.joints.iter().map(|j| j.name.clone()).collect(),
+                    original: clip.mapping.clone(),
+                    can_revert: false,
+                })
+            }
+        }
+    }
+
+    /// The name of joint `source`.
+    fn name(&self, source: usize) -> String {
+        self.names
+            .get(source)
+            .cloned()
+            .unwrap_or_else(|| format!("joint {source}"))
+    }
+}
+
 /// The mapping window's state (the corrections kept for the session are the model's).
 #[derive(Debug, Default)]
 pub(super) struct MappingEditor {
-    /// The mapping being edited; `None` until the window shows an avatar.
+    /// Whose mapping is edited.
+    kind: SubjectKind,
+    /// The mapping being edited; `None` until the window shows its subject.
     draft: Option<Mapping>,
     /// The corrections made in the draft and not applied yet.
     staged: Vec<Correction>,
@@ -62,39 +127,44 @@ impl MappingEditor {
         &mut self,
         ctx: &egui::Context,
         model: &mut EditorModel,
-        open: &mut bool,
+        (open, kind): (&mut bool, SubjectKind),
         buttons: &mut ButtonRects,
     ) {
         if !*open {
             return;
         }
-        let Some(avatar) = model.avatar() else {
+        if kind != self.kind {
+            self.kind = kind;
+            self.restart();
+        }
+        let Some(subject) = Subject::of(model, self.kind) else {
             *open = false;
             self.restart();
             return;
         };
-        let can_revert = model
-            .mapping_corrections
-            .before_last(&avatar.name)
-            .is_some();
         let MappingEditor {
+            kind: _,
             draft,
             staged,
             filter,
             only_guesses,
         } = self;
-        let draft: &Mapping = draft.get_or_insert_with(|| avatar.avatar.mapping.clone());
-        let table = MappingTable::new(avatar, draft, model.level_of_articulation());
+        let draft: &Mapping = draft.get_or_insert_with(|| subject.original.clone());
+        let table = MappingTable::new(&subject, draft, model.level_of_articulation());
         let staged_count = staged.len();
         let mut action = None;
-        egui::Window::new("Avatar mapping")
+        let title = match subject.kind {
+            SubjectKind::Avatar => "Avatar mapping",
+            SubjectKind::Clip => "Clip mapping",
+        };
+        egui::Window::new(title)
             .open(open)
             .default_width(560.0)
             .resizable(true)
             .show(ctx, |ui| {
                 ui.label(format!(
                     "Which H-Anim joint each joint of {} drives. Orange rows are guesses (confidence below {:.0} %): check them, pick another H-Anim joint or none, then Apply.",
-                    avatar.name,
+                    subject.title,
                     LOW_CONFIDENCE * 100.0
                 ));
                 ui.horizontal(|ui| {
@@ -112,7 +182,13 @@ impl MappingEditor {
                 }
                 table.notes(ui, staged_count);
                 let ready = staged_count > 0 && table.needed.is_empty();
-                if let Some(pressed) = footer(ui, ready, staged_count > 0, can_revert, buttons) {
+                let footer = Footer {
+                    ready,
+                    changed: staged_count > 0,
+                    can_revert: subject.can_revert,
+                    kind: subject.kind,
+                };
+                if let Some(pressed) = footer.show(ui, buttons) {
                     action = Some(pressed);
                 }
             });
@@ -139,11 +215,15 @@ impl MappingEditor {
             MappingAction::Apply => {
                 let draft = self.draft.take();
                 let corrections = std::mem::take(&mut self.staged);
-                if let Some(mapping) = draft {
-                    model.apply(Command::ApplyMapping {
+                match (draft, self.kind) {
+                    (Some(mapping), SubjectKind::Avatar) => model.apply(Command::ApplyMapping {
                         mapping: Box::new(mapping),
                         corrections,
-                    });
+                    }),
+                    (Some(mapping), SubjectKind::Clip) => model.apply(Command::Motion(
+                        MotionCommand::SetClipMapping(Box::new(mapping)),
+                    )),
+                    (None, _) => {}
                 }
             }
             MappingAction::Discard => {
@@ -160,9 +240,9 @@ impl MappingEditor {
     }
 }
 
-/// The rows of the mapping window for one avatar and draft.
+/// The rows of the mapping window for one subject and draft.
 struct MappingTable<'a> {
-    avatar: &'a LoadedAvatar,
+    subject: &'a Subject,
     draft: &'a Mapping,
     loa: LevelOfArticulation,
     rows: Vec<MappingRow>,
@@ -173,25 +253,25 @@ struct MappingTable<'a> {
 }
 
 impl<'a> MappingTable<'a> {
-    fn new(avatar: &'a LoadedAvatar, draft: &'a Mapping, loa: LevelOfArticulation) -> Self {
-        let rows = avatar
-            .joint_nodes()
-            .into_iter()
-            .map(|source| {
+    fn new(subject: &'a Subject, draft: &'a Mapping, loa: LevelOfArticulation) -> Self {
+        let rows = subject
+            .joints
+            .iter()
+            .map(|&source| {
                 let hanim = draft.hanim_of(source);
                 let found = hanim.and_then(|hanim| draft.get(hanim));
                 MappingRow {
                     source,
-                    name: node_name(avatar, source),
+                    name: subject.name(source),
                     hanim,
                     method: found.map(|found| found.method),
                     confidence: found.map(|found| found.confidence),
-                    changed: hanim != avatar.avatar.mapping.hanim_of(source),
+                    changed: hanim != subject.original.hanim_of(source),
                 }
             })
             .collect();
         Self {
-            avatar,
+            subject,
             draft,
             loa,
             rows,
@@ -231,7 +311,7 @@ impl<'a> MappingTable<'a> {
                                 continue;
                             }
                             let suggested = suggestions(row.hanim, &self.needed, &self.missing);
-                            let node_name = |source| node_name(self.avatar, source);
+                            let node_name = |source| self.subject.name(source);
                             if let Some(pick) =
                                 mapping_row(ui, row, self.draft, &suggested, &node_name)
                             {
@@ -269,48 +349,49 @@ impl<'a> MappingTable<'a> {
     }
 }
 
-/// Apply, discard and revert; returns the button pressed.
-fn footer(
-    ui: &mut egui::Ui,
+/// The window's buttons.
+struct Footer {
     ready: bool,
     changed: bool,
     can_revert: bool,
-    buttons: &mut ButtonRects,
-) -> Option<MappingAction> {
-    let mut action = None;
-    ui.horizontal(|ui| {
-        let apply = ui.add_enabled(ready, egui::Button::new("Apply"));
-        buttons.push(("mapping_apply", apply.rect));
-        if apply.clicked() {
-            action = Some(MappingAction::Apply);
-        }
-        let discard = ui.add_enabled(changed, egui::Button::new("Discard changes"));
-        buttons.push(("mapping_discard", discard.rect));
-        if discard.clicked() {
-            action = Some(MappingAction::Discard);
-        }
-        let revert = ui.add_enabled(can_revert, egui::Button::new("Revert last correction"));
-        buttons.push(("mapping_revert", revert.rect));
-        if revert.clicked() {
-            action = Some(MappingAction::Revert);
-        }
-    });
-    ui.label(
-        RichText::new(
-            "Applying rebuilds the skeleton; the posture and the tasks that still fit carry over. Ctrl+Z does not undo a mapping change: Revert last correction does.",
-        )
-        .small(),
-    );
-    action
+    kind: SubjectKind,
 }
 
-/// The name of the file's joint `source`.
-fn node_name(avatar: &LoadedAvatar, source: usize) -> String {
-    avatar
-        .avatar
-        .nodes
-        .get(source)
-        .map_or_else(|| format!("node {source}"), |node| node.name.clone())
+impl Footer {
+    /// Apply, discard and revert; returns the button pressed.
+    fn show(&self, ui: &mut egui::Ui, buttons: &mut ButtonRects) -> Option<MappingAction> {
+        let mut action = None;
+        ui.horizontal(|ui| {
+            let apply = ui.add_enabled(self.ready, egui::Button::new("Apply"));
+            buttons.push(("mapping_apply", apply.rect));
+            if apply.clicked() {
+                action = Some(MappingAction::Apply);
+            }
+            let discard = ui.add_enabled(self.changed, egui::Button::new("Discard changes"));
+            buttons.push(("mapping_discard", discard.rect));
+            if discard.clicked() {
+                action = Some(MappingAction::Discard);
+            }
+            if self.kind == SubjectKind::Avatar {
+                let revert =
+                    ui.add_enabled(self.can_revert, egui::Button::new("Revert last correction"));
+                buttons.push(("mapping_revert", revert.rect));
+                if revert.clicked() {
+                    action = Some(MappingAction::Revert);
+                }
+            }
+        });
+        let text = match self.kind {
+            SubjectKind::Avatar => {
+                "Applying rebuilds the skeleton; the posture and the tasks that still fit carry over. Ctrl+Z does not undo a mapping change: Revert last correction does."
+            }
+            SubjectKind::Clip => {
+                "Applying retargets the clip with this mapping (the keys stay); reopening the file starts from the guessed mapping again."
+            }
+        };
+        ui.label(RichText::new(text).small());
+        action
+    }
 }
 
 /// One row: the file's joint (orange when guessed, bold when changed), the H-Anim joint to

@@ -284,6 +284,7 @@ impl SidePanel<'_> {
         self.buttons.push(("mapping_open", button.rect));
         if button.clicked() {
             self.windows.mapping = !self.windows.mapping;
+            self.windows.mapping_subject = super::avatar_panel::SubjectKind::Avatar;
         }
     }
 }

@@ -425,9 +425,11 @@ fn diamond(painter: &egui::Painter, centre: Pos2, radius: f32) {
 }
 
 /// The Motion menu: clips in (a file, the avatar's own animations, a recording of the body),
-/// the timeline out (GLB on the avatar, BVH), the panel.
-pub(super) fn motion_menu(model: &mut EditorModel, ui: &mut egui::Ui, shown: &mut bool) {
+/// the clip's mapping, the timeline out (GLB on the avatar, BVH), the panel. Returns true
+/// when the clip's mapping window was asked for.
+pub(super) fn motion_menu(model: &mut EditorModel, ui: &mut egui::Ui, shown: &mut bool) -> bool {
     let mut command = None;
+    let mut mapping = false;
     if ui.button("Open clip (BVH, glTF animation)…").clicked() {
         command = Some(Command::PickClip);
     }
@@ -457,8 +459,14 @@ pub(super) fn motion_menu(model: &mut EditorModel, ui: &mut egui::Ui, shown: &mu
     if ui.button(record).clicked() {
         command = Some(Command::Motion(MotionCommand::Record(!recording)));
     }
-    if model.timeline().has_clip() && ui.button("Close clip").clicked() {
-        command = Some(Command::Motion(MotionCommand::CloseClip));
+    if model.timeline().has_clip() {
+        if ui.button("Clip mapping…").clicked() {
+            mapping = true;
+            ui.close();
+        }
+        if ui.button("Close clip").clicked() {
+            command = Some(Command::Motion(MotionCommand::CloseClip));
+        }
     }
     ui.separator();
     let has_timeline = model.has_timeline();
@@ -483,4 +491,5 @@ pub(super) fn motion_menu(model: &mut EditorModel, ui: &mut egui::Ui, shown: &mu
         model.apply(command);
         ui.close();
     }
+    mapping
 }

@@ -118,6 +118,27 @@ impl EditorModel {
         self.show_playhead();
     }
 
+    /// The clip's mapping corrected: the clip is put on the body again with it.
+    pub(super) fn set_clip_mapping(&mut self, mapping: stance_hanim::Mapping) {
+        let Some(clip) = self.timeline.clip.as_mut() else {
+            self.warn("No clip is open: nothing to map.");
+            return;
+        };
+        if mapping.source_count() != clip.joints.len() {
+            self.warn("That mapping is for another clip.");
+            return;
+        }
+        clip.mapping = mapping;
+        let name = clip.name.clone();
+        self.retarget_clip();
+        self.show_playhead();
+        if self.timeline.has_clip() {
+            self.inform(format!(
+                "The clip {name} is retargeted with the corrected mapping."
+            ));
+        }
+    }
+
     /// Every frame of the timeline as shown: the clip and keys, then the tasks with their
     /// interval weights at that frame's time.
     pub fn baked_postures(&self) -> Vec<Posture> {

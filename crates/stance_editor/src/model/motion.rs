@@ -91,6 +91,9 @@ pub enum MotionCommand {
     Record(bool),
     /// Retarget the clip again with these settings (rest match, contact thresholds).
     SetRetargetOptions(Box<RetargetOptions>),
+    /// The clip's joints mapped onto H-Anim this way (the mapping window's corrections):
+    /// the clip is retargeted with it.
+    SetClipMapping(Box<stance_hanim::Mapping>),
 }
 
 /// One end of an active interval.
@@ -105,7 +108,7 @@ pub enum IntervalEdge {
 /// The timeline's state (the keys are in the session's document).
 #[derive(Debug)]
 pub struct Timeline {
-    clip: Option<Box<Clip>>,
+    pub(super) clip: Option<Box<Clip>>,
     retargeted: Option<Retargeted>,
     playing: bool,
     looping: bool,
@@ -165,6 +168,11 @@ impl Timeline {
     /// Whether the body is being recorded.
     pub fn is_recording(&self) -> bool {
         self.recording.is_some()
+    }
+
+    /// The open clip, as read (its mapping as corrected).
+    pub fn clip(&self) -> Option<&Clip> {
+        self.clip.as_deref()
     }
 
     /// Whether a clip is open.
@@ -333,6 +341,7 @@ impl EditorModel {
             MotionCommand::OpenAvatarAnimation(index) => self.open_avatar_animation(index),
             MotionCommand::Record(on) => self.record_motion(on),
             MotionCommand::SetRetargetOptions(options) => self.set_retarget_options(*options),
+            MotionCommand::SetClipMapping(mapping) => self.set_clip_mapping(*mapping),
         }
     }
 
