@@ -32,8 +32,13 @@ use write::encode_payload;
 
 use crate::document::Document;
 
-/// The link format this version writes and reads.
-pub const LINK_FORMAT: u8 = 1;
+/// The newest link format this version writes and reads: 2 adds the tasks' active intervals
+/// and the timeline (frame rate, length, keys). A document without them is written in
+/// format 1, which older versions read too.
+pub const LINK_FORMAT: u8 = 2;
+/// Longest link [`encode_for_sharing`] makes with the timeline in it, in characters: beyond,
+/// the keys are left out (a link is pasted into chats and mails).
+pub const MAX_SHARE_CHARS: usize = 8 * 1024;
 /// Quantisation step of rotation DOF and task angles: 0.005 degrees in radians.
 pub const ROTATION_STEP_RAD: f64 = 0.005 * std::f64::consts::PI / 180.0;
 /// Quantisation step of positions and translations: 0.1 mm.
@@ -109,15 +114,48 @@ fn engine() -> GeneralPurpose {
 
 /// The URL fragment (without `#`) that carries `document`. Values are quantised (see the module
 /// documentation); non-finite numbers, which a validated document never holds, are written as 0.
+/// Format 1 when the document has no timeline and no task interval, else format 2.
 pub fn encode(document: &Document) -> String {
-    let payload = encode_payload(document);
+    let timed = document.motion.is_some() || document.tasks.iter().any(|t| t.interval.is_some());
+    let format = if timed { 2 } else { 1 };
+    let payload = encode_payload(document, format);
     let mut frame = Vec::with_capacity(payload.len() + 8);
-    frame.push(LINK_FORMAT);
+    frame.push(format);
     write_leb128(&mut frame, payload.len() as u64);
     frame.extend_from_slice(&payload);
     let crc = crc32fast::hash(&frame);
     frame.extend_from_slice(&crc.to_le_bytes());
     engine().encode(frame)
+}
+
+/// A link to share: the fragment, and whether the timeline's keys had to be left out.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SharedLink {
+    /// The URL fragment (without `#`).
+    pub fragment: String,
+    /// The keys would have made the link longer than [`MAX_SHARE_CHARS`] (this many
+    /// characters): the link carries the posture, the tasks and their intervals only.
+    pub keys_left_out: Option<usize>,
+}
+
+/// `document` as a link to share: with its timeline when the link stays within
+/// [`MAX_SHARE_CHARS`], else without the keys (say so to the user).
+pub fn encode_for_sharing(document: &Document) -> SharedLink {
+    let fragment = encode(document);
+    if fragment.len() <= MAX_SHARE_CHARS || document.motion.is_none() {
+        return SharedLink {
+            fragment,
+            keys_left_out: None,
+        };
+    }
+    let without = Document {
+        motion: None,
+        ..document.clone()
+    };
+    SharedLink {
+        fragment: encode(&without),
+        keys_left_out: Some(fragment.len()),
+    }
 }
 
 /// The document in a link: a bare fragment, `#fragment`, or a whole URL containing `#`.
@@ -194,7 +232,7 @@ pub fn decode(link: &str) -> Result<Document, LinkError> {
             payload.len()
         )));
     }
-    let document = decode_payload(payload).map_err(LinkError::Malformed)?;
+    let document = decode_payload(payload, format).map_err(LinkError::Malformed)?;
     document
         .validate()
         .map_err(|e| LinkError::Malformed(e.to_string()))?;

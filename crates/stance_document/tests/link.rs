@@ -319,7 +319,7 @@ fn broken_links_give_distinct_clear_errors() {
     );
     assert_eq!(
         e.to_string(),
-        "this link was made by a newer version of Stance (format 3); this version reads format 1"
+        "this link was made by a newer version of Stance (format 3); this version reads format 2"
     );
     // Valid checksum, nonsense inside.
     let e = link::decode(&reframe(vec![1, 3, 0xFF, 0xFF, 0xFF])).unwrap_err();
@@ -446,4 +446,72 @@ fn quantisation_steps_are_well_under_a_hundredth_of_a_degree() {
     let back = link::decode(&link::encode(&d)).unwrap();
     let y = back.posture.get("l_shoulder", Dof::Rx).unwrap();
     assert!((x - y).abs().to_degrees() <= 0.0025 + 1e-12);
+}
+
+/// A document with a timeline: `keys` keys of random LOA2 postures, and a task with an
+/// active interval.
+fn timed_document(keys: usize) -> Document {
+    let mut r = rng(77);
+    let mut d = all_kinds();
+    d.tasks[0].interval = Some(stance_document::TaskInterval {
+        start: 0.25,
+        end: 1.0 / 3.0 + 1.0,
+        ease_in: 0.1,
+        ease_out: 0.4,
+    });
+    d.motion = Some(stance_document::MotionSection {
+        frame_time: 1.0 / 120.0,
+        frame_count: 4 * keys + 1,
+        keys: (0..keys)
+            .map(|k| stance_document::MotionKey {
+                frame: 4 * k,
+                posture: loa2_posture(&mut r, 0.6),
+            })
+            .collect(),
+    });
+    d
+}
+
+#[test]
+fn keys_and_intervals_travel_in_a_format_2_link() {
+    let d = timed_document(3);
+    let text = link::encode(&d);
+    assert_eq!(URL_SAFE_NO_PAD.decode(&text).unwrap()[0], 2, "format 2");
+    let back = link::decode(&text).unwrap();
+    document_close(&d, &back).unwrap();
+    // Intervals and the frame time exactly; key postures on the quantisation grid.
+    assert_eq!(back.tasks[0].interval, d.tasks[0].interval);
+    assert!(back.tasks[1..].iter().all(|t| t.interval.is_none()));
+    let (m, n) = (d.motion.as_ref().unwrap(), back.motion.as_ref().unwrap());
+    assert_eq!(n.frame_time.to_bits(), m.frame_time.to_bits());
+    assert_eq!(n.frame_count, m.frame_count);
+    assert_eq!(n.keys.len(), 3);
+    for (a, b) in m.keys.iter().zip(&n.keys) {
+        assert_eq!(a.frame, b.frame);
+        posture_close(&a.posture, &b.posture).unwrap();
+    }
+    // Without a timeline the link stays format 1, as older versions read it.
+    let plain = all_kinds();
+    assert_eq!(URL_SAFE_NO_PAD.decode(link::encode(&plain)).unwrap()[0], 1);
+    println!(
+        "a link with 3 LOA2 keys and an interval: {} characters (without them {})",
+        text.len(),
+        link::encode(&plain).len()
+    );
+}
+
+#[test]
+fn a_long_timeline_is_left_out_of_a_shared_link_and_says_how_long_it_would_be() {
+    let short = link::encode_for_sharing(&timed_document(3));
+    assert_eq!(short.keys_left_out, None);
+    assert!(link::decode(&short.fragment).unwrap().motion.is_some());
+    let long = timed_document(200);
+    let shared = link::encode_for_sharing(&long);
+    let would_be = shared.keys_left_out.expect("200 LOA2 keys do not fit");
+    assert!(would_be > link::MAX_SHARE_CHARS);
+    assert!(shared.fragment.len() <= link::MAX_SHARE_CHARS);
+    let back = link::decode(&shared.fragment).unwrap();
+    assert!(back.motion.is_none());
+    // The intervals stay: they are small.
+    assert_eq!(back.tasks[0].interval, long.tasks[0].interval);
 }

@@ -539,10 +539,10 @@ impl StanceApp {
 
 /// Encodes the document into the address bar and the clipboard.
 fn copy_link(ctx: &egui::Context, model: &mut EditorModel) {
-    let fragment = link::encode(&model.document());
-    let url = model.hooks.share_link(&fragment);
+    let shared = link::encode_for_sharing(&model.document());
+    let url = model.hooks.share_link(&shared.fragment);
     ctx.copy_text(url);
-    model.link_shared(fragment.len());
+    model.link_shared(shared.fragment.len(), shared.keys_left_out);
 }
 
 /// The help window's rows: gesture or key, and what it does.

@@ -258,7 +258,7 @@ fn keys_interpolate_with_ease_and_move_copy_delete_and_undo_change_that() {
 }
 
 #[test]
-fn a_key_set_by_hand_is_the_posture_and_the_link_says_keys_are_not_in_it() {
+fn a_key_set_by_hand_is_the_posture_and_short_timelines_travel_in_links() {
     let mut editor = Clocked::new();
     editor.apply(Command::SetTasks {
         kind: stance_editor::history::EditKind::Command,
@@ -282,9 +282,20 @@ fn a_key_set_by_hand_is_the_posture_and_the_link_says_keys_are_not_in_it() {
             .get("l_elbow", Dof::Rx),
         Some(-1.0)
     );
-    editor.model.link_shared(100);
+    // A short timeline travels in the link; a long one is left out, and the notice says so.
+    let shared = stance_document::link::encode_for_sharing(&editor.model.document());
+    assert_eq!(shared.keys_left_out, None);
+    let back = stance_document::link::decode(&shared.fragment).unwrap();
+    assert_eq!(back.motion.unwrap().keys.len(), 2);
+    editor.model.link_shared(shared.fragment.len(), None);
     let notice = editor.model.notice().unwrap().text.clone();
-    assert!(notice.contains("not in the link"), "{notice}");
+    assert!(notice.contains("with the timeline's keys"), "{notice}");
+    editor.model.link_shared(900, Some(12_000));
+    let notice = editor.model.notice().unwrap().text.clone();
+    assert!(
+        notice.contains("The 2 keys are not in it") && notice.contains("12000 characters"),
+        "{notice}"
+    );
 }
 
 #[test]

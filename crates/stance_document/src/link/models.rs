@@ -23,7 +23,7 @@ pub(super) const ANGLE_PRIOR: [u32; 8] = [15, 16, 14, 15, 16, 13, 15, 14];
 /// Adaptive contexts, one per kind of value; the encoder and the decoder evolve them alike.
 #[derive(Debug)]
 pub(super) struct Models {
-    pub(super) flags: [Bit; 16],
+    pub(super) flags: [Bit; 18],
     pub(super) rotation: UintModel,
     pub(super) translation: UintModel,
     pub(super) position: UintModel,
@@ -83,6 +83,9 @@ pub(super) const HANIM_JOINT: usize = 12;
 pub(super) const WEIGHT_DECIMAL: usize = 13;
 pub(super) const HAS_ORIENTATION: usize = 14;
 pub(super) const AXIS_Y: usize = 15;
+// Format 2.
+pub(super) const HAS_INTERVAL: usize = 16;
+pub(super) const HAS_MOTION: usize = 17;
 
 /// `m / 10^k`, correctly rounded (both are exact in f64 for the ranges used).
 pub(super) fn from_decimal(m: u64, k: i32) -> f64 {

@@ -5,9 +5,10 @@ use glam::{DQuat, DVec3};
 use stance_ik::{Axes, Dof};
 
 use super::models::{
-    ACTIVE, AVATAR_URL, AXES_XYZ, AXIS_Y, AXIS_Z, HANIM_JOINT, HAS_JOINTS, HAS_LIMB,
-    HAS_ORIENTATION, HAS_REFERENCE, HAS_SWIVEL, JOINT_MASK_DEFAULT, KINDS, MASKS_DEFAULT, Models,
-    POINT_ZERO, WEIGHT_DECIMAL, WEIGHT_ONE, default_mask, dequantise, from_decimal, in_loa_base,
+    ACTIVE, AVATAR_URL, AXES_XYZ, AXIS_Y, AXIS_Z, HANIM_JOINT, HAS_INTERVAL, HAS_JOINTS, HAS_LIMB,
+    HAS_MOTION, HAS_ORIENTATION, HAS_REFERENCE, HAS_SWIVEL, JOINT_MASK_DEFAULT, KINDS,
+    MASKS_DEFAULT, Models, POINT_ZERO, WEIGHT_DECIMAL, WEIGHT_ONE, default_mask, dequantise,
+    from_decimal, in_loa_base,
 };
 use super::{
     DIRECTION_STEP, MAX_COUNT, MAX_OVERRUN, MAX_STRING_BYTES, POSITION_STEP_M, ROTATION_STEP_RAD,
@@ -15,6 +16,10 @@ use super::{
 use crate::document::{
     AvatarReference, Document, DofValues, LimbName, PostureValues, TaskKindSpec, TaskSpec, dof_slot,
 };
+use crate::motion::{MotionKey, MotionSection, TaskInterval};
+
+/// Most frames a linked timeline may declare.
+const MAX_FRAMES: u64 = 10_000_000;
 use crate::range_coder::{Decoder, UintModel};
 
 struct Reader<'a> {
@@ -322,7 +327,53 @@ impl Reader<'_> {
     }
 }
 
-pub(super) fn decode_payload(bytes: &[u8]) -> R<Document> {
+/// Format 2's part after the tasks: each task's active interval, then the timeline.
+fn motion(r: &mut Reader, tasks: &mut [TaskSpec]) -> R<Option<MotionSection>> {
+    for task in tasks.iter_mut() {
+        if r.flag(HAS_INTERVAL) {
+            let mut v = [0.0; 4];
+            for x in &mut v {
+                *x = f64::from_bits(r.d.direct(64));
+            }
+            task.interval = Some(TaskInterval {
+                start: v[0],
+                end: v[1],
+                ease_in: v[2],
+                ease_out: v[3],
+            });
+        }
+    }
+    if !r.flag(HAS_MOTION) {
+        return Ok(None);
+    }
+    let frame_time = f64::from_bits(r.d.direct(64));
+    let frame_count = r.d.direct(32);
+    if frame_count > MAX_FRAMES {
+        return Err(format!("a timeline of {frame_count} frames"));
+    }
+    let n = r.count("keys")?;
+    let mut keys = Vec::with_capacity(n);
+    for _ in 0..n {
+        let frame = r.d.direct(32);
+        if frame >= frame_count {
+            return Err(format!("a key at frame {frame} of {frame_count}"));
+        }
+        let posture = r.posture()?;
+        keys.push(MotionKey {
+            frame: frame as usize,
+            posture,
+        });
+        r.check()?;
+    }
+    Ok(Some(MotionSection {
+        frame_time,
+        frame_count: frame_count as usize,
+        keys,
+    }))
+}
+
+/// The document in a payload of `format`.
+pub(super) fn decode_payload(bytes: &[u8], format: u8) -> R<Document> {
     let mut r = Reader {
         d: Decoder::new(bytes),
         m: Models::default(),
@@ -338,11 +389,16 @@ pub(super) fn decode_payload(bytes: &[u8]) -> R<Document> {
     for _ in 0..n {
         tasks.push(r.task()?);
     }
+    let motion = if format >= 2 {
+        motion(&mut r, &mut tasks)?
+    } else {
+        None
+    };
     r.check()?;
     Ok(Document {
         avatar,
         posture,
         tasks,
-        motion: None,
+        motion,
     })
 }

@@ -4,10 +4,10 @@ use glam::{DQuat, DVec3};
 use stance_ik::Axes;
 
 use super::models::{
-    ACTIVE, AVATAR_URL, AXES_XYZ, AXIS_Y, AXIS_Z, HANIM_JOINT, HAS_JOINTS, HAS_LIMB,
-    HAS_ORIENTATION, HAS_REFERENCE, HAS_SWIVEL, JOINT_MASK_DEFAULT, KINDS, MASKS_DEFAULT, Models,
-    POINT_ZERO, WEIGHT_DECIMAL, WEIGHT_ONE, default_mask, hanim_index, in_loa_base, mask_of,
-    quantise, short_decimal, unit,
+    ACTIVE, AVATAR_URL, AXES_XYZ, AXIS_Y, AXIS_Z, HANIM_JOINT, HAS_INTERVAL, HAS_JOINTS, HAS_LIMB,
+    HAS_MOTION, HAS_ORIENTATION, HAS_REFERENCE, HAS_SWIVEL, JOINT_MASK_DEFAULT, KINDS,
+    MASKS_DEFAULT, Models, POINT_ZERO, WEIGHT_DECIMAL, WEIGHT_ONE, default_mask, hanim_index,
+    in_loa_base, mask_of, quantise, short_decimal, unit,
 };
 use super::{DIRECTION_STEP, POSITION_STEP_M, ROTATION_STEP_RAD};
 use crate::document::{
@@ -302,7 +302,30 @@ impl Writer {
     }
 }
 
-pub(super) fn encode_payload(d: &Document) -> Vec<u8> {
+/// Format 2's part after the tasks: each task's active interval, then the timeline.
+fn motion(w: &mut Writer, d: &Document) {
+    for t in &d.tasks {
+        w.flag(HAS_INTERVAL, t.interval.is_some());
+        if let Some(i) = &t.interval {
+            for x in [i.start, i.end, i.ease_in, i.ease_out] {
+                w.e.direct(x.to_bits(), 64);
+            }
+        }
+    }
+    w.flag(HAS_MOTION, d.motion.is_some());
+    if let Some(m) = &d.motion {
+        w.e.direct(m.frame_time.to_bits(), 64);
+        w.e.direct(m.frame_count as u64, 32);
+        w.count(m.keys.len());
+        for key in &m.keys {
+            w.e.direct(key.frame as u64, 32);
+            w.posture(&key.posture);
+        }
+    }
+}
+
+/// The payload of `format` (1: posture and tasks; 2: also the intervals and the timeline).
+pub(super) fn encode_payload(d: &Document, format: u8) -> Vec<u8> {
     let mut w = Writer {
         e: Encoder::new(),
         m: Models::default(),
@@ -318,6 +341,9 @@ pub(super) fn encode_payload(d: &Document) -> Vec<u8> {
     w.count(d.tasks.len());
     for t in &d.tasks {
         w.task(t);
+    }
+    if format >= 2 {
+        motion(&mut w, d);
     }
     w.e.finish()
 }

@@ -673,21 +673,32 @@ impl EditorModel {
         ));
     }
 
-    /// The page shared a posture link of the document (`characters` long): says so, and
-    /// that the keys and the tasks' intervals are not in it.
-    pub fn link_shared(&mut self, characters: usize) {
+    /// The page shared a posture link of the document (`characters` long): says so, what of
+    /// the timeline it carries (the keys and intervals fit in short links; `keys_left_out`:
+    /// the length they would have made), and that a clip is never in it.
+    pub fn link_shared(&mut self, characters: usize, keys_left_out: Option<usize>) {
         let mut text = format!(
-            "Link copied to the clipboard ({characters} characters): opening it shows exactly this posture and these tasks."
+            "Link copied to the clipboard ({characters} characters): opening it shows exactly this posture and these tasks"
         );
         let intervals = self
             .session
             .tasks()
             .iter()
             .any(|task| task.interval.is_some());
-        if !self.key_frames().is_empty() || intervals {
-            text.push_str(
-                " The keyframes and the tasks' active intervals are not in the link: export the document (JSON) to keep them.",
-            );
+        let keys = self.key_frames().len();
+        match keys_left_out {
+            Some(would_be) => text.push_str(&format!(
+                ". The {keys} keys are not in it: with them the link would be {would_be} characters, longer than a link should be (export the document as JSON to keep them)."
+            )),
+            None if keys > 0 || intervals => {
+                text.push_str(", with the timeline's keys and the tasks' active intervals.");
+            }
+            None => text.push('.'),
+        }
+        if let Some(name) = self.timeline.clip_name() {
+            text.push_str(&format!(
+                " The clip {name} itself is not in the link: open the same file after the link."
+            ));
         }
         self.inform(text);
     }
