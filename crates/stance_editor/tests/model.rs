@@ -3,76 +3,20 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+mod clocked;
+use clocked::Clocked;
+
 use std::f64::consts::FRAC_PI_4;
 
 use glam::DVec3;
 use stance_document::{Document, TaskKindSpec, TaskSpec};
-use stance_editor::{Command, EditorModel, Gesture, MemoryHost};
+use stance_editor::{Command, Gesture, MemoryHost};
 use stance_hanim::{LevelOfArticulation, LimbName};
-
-/// Seconds between two frames.
-const FRAME: f64 = 1.0 / 60.0;
-
-struct Clocked {
-    model: EditorModel,
-    now: f64,
-}
-
-impl Clocked {
-    fn new() -> Self {
-        Self::with_host(MemoryHost::default())
-    }
-
-    fn with_host(host: MemoryHost) -> Self {
-        let Ok(model) = EditorModel::new(Box::new(host)) else {
-            panic!("the model starts on the mannequin");
-        };
-        let mut clocked = Self { model, now: 0.0 };
-        clocked.frames(1);
-        clocked
-    }
-
-    fn frames(&mut self, count: usize) {
-        for _ in 0..count {
-            self.now += FRAME;
-            self.model.step(self.now, None);
-        }
-    }
-
-    /// Steps until the solver settles (at most `limit` frames).
-    fn settle(&mut self, limit: usize) {
-        for _ in 0..limit {
-            self.frames(1);
-            if self.model.session().is_settled() {
-                return;
-            }
-        }
-    }
-
-    fn apply(&mut self, command: Command) {
-        self.model.apply(command);
-    }
-
-    fn joint(&self, name: &str) -> usize {
-        self.model
-            .session()
-            .skeleton()
-            .joint_index(name)
-            .unwrap_or_else(|| panic!("{name} is in the body"))
-    }
-
-    fn position(&self, name: &str) -> DVec3 {
-        self.model
-            .session()
-            .joint_position(name)
-            .unwrap_or_else(|| panic!("{name} has a position"))
-    }
-}
 
 #[test]
 fn a_pull_moves_the_hand_while_the_pinned_feet_hold_and_undo_restores_the_document() {
     let mut editor = Clocked::new();
-    editor.settle(200);
+    editor.settle_within(200);
     let before = editor.model.document();
     let foot = editor.position("l_talocrural");
     let wrist = editor.joint("r_radiocarpal");
@@ -91,7 +35,7 @@ fn a_pull_moves_the_hand_while_the_pinned_feet_hold_and_undo_restores_the_docume
         });
         editor.frames(1);
     }
-    editor.settle(300);
+    editor.settle_within(300);
     let reached = editor.position("r_radiocarpal");
     assert!(
         (reached - target).length() < 0.01,
@@ -113,7 +57,7 @@ fn a_pull_moves_the_hand_while_the_pinned_feet_hold_and_undo_restores_the_docume
 #[test]
 fn escape_during_a_pull_puts_the_body_back() {
     let mut editor = Clocked::new();
-    editor.settle(200);
+    editor.settle_within(200);
     let before = editor.model.document();
     let wrist = editor.joint("l_radiocarpal");
     let start = editor.position("l_radiocarpal");
@@ -201,12 +145,12 @@ fn a_ring_turns_its_dof_by_the_pointer_angle() {
 #[test]
 fn a_swivel_drag_turns_the_elbow_around_the_arm_and_holds_the_hand() {
     let mut editor = Clocked::new();
-    editor.settle(200);
+    editor.settle_within(200);
     // Bend the elbow so that the arm has a swivel circle.
     let elbow = editor.joint("r_elbow");
     let dof = editor.model.session().skeleton().joints()[elbow].dof_start;
     editor.apply(Command::SetDof { dof, value: -1.2 });
-    editor.settle(200);
+    editor.settle_within(200);
     let limb = LimbName::RightArm;
     let Some((swivel, feasible)) = editor.model.session().limb_swivel(limb) else {
         panic!("the right arm has a swivel angle");
@@ -422,7 +366,7 @@ fn a_limb_task_with_an_orientation_holds_the_hand_turned_as_in_the_cli() {
         bytes: document.as_bytes().to_vec(),
     });
     assert!(editor.model.notice().is_some_and(|notice| !notice.is_error));
-    editor.settle(600);
+    editor.settle_within(600);
     let wrist = editor.joint("r_radiocarpal");
     let frames = editor.model.session().frames();
     let want = glam::DQuat::from_xyzw(0.0, 0.0, 0.382_683_4, 0.923_879_5).normalize();

@@ -3,6 +3,9 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+mod clocked;
+use clocked::Clocked;
+
 use std::f64::consts::FRAC_PI_2;
 
 use glam::DVec3;
@@ -10,58 +13,10 @@ use stance_document::motion::smoothstep;
 use stance_document::{
     Document, MotionKey, MotionSection, PostureValues, TaskInterval, TaskKindSpec, TaskSpec,
 };
+use stance_editor::Command;
 use stance_editor::model::{IntervalEdge, MotionCommand};
-use stance_editor::{Command, EditorModel, MemoryHost};
 use stance_ik::{Dof, Frames, Posture};
 use stance_motion::Clip;
-
-const FRAME: f64 = 1.0 / 60.0;
-
-struct Clocked {
-    model: EditorModel,
-    now: f64,
-}
-
-impl Clocked {
-    fn new() -> Self {
-        let model = EditorModel::new(Box::new(MemoryHost::default())).unwrap();
-        let mut clocked = Self { model, now: 0.0 };
-        clocked.frames(1);
-        clocked
-    }
-
-    fn frames(&mut self, count: usize) {
-        for _ in 0..count {
-            self.now += FRAME;
-            self.model.step(self.now, None);
-        }
-    }
-
-    fn settle(&mut self) {
-        for _ in 0..300 {
-            self.frames(1);
-            if self.model.session().is_settled() {
-                return;
-            }
-        }
-    }
-
-    fn apply(&mut self, command: Command) {
-        self.model.apply(command);
-    }
-
-    fn motion(&mut self, command: MotionCommand) {
-        self.model.apply(Command::Motion(command));
-    }
-
-    fn joint(&self, name: &str) -> usize {
-        self.model.session().skeleton().joint_index(name).unwrap()
-    }
-
-    fn position(&self, name: &str) -> DVec3 {
-        self.model.session().joint_position(name).unwrap()
-    }
-}
 
 /// `count` postures of the session's body: the left arm raises and the right elbow bends
 /// slowly; the feet stay where they stand (so the clip's contacts change nothing).

@@ -268,8 +268,9 @@ fn build(
                 .parent
                 .filter(|&p| aligned(inputs[p].class))
                 .map_or(DQuat::IDENTITY, |p| alignment[p]);
-            let snapped = snap(frame_alignment, 25.0).or_else(|| {
-                let loose = snap(frame_alignment, 45.0);
+            let frame_matrix = DMat3::from_quat(frame_alignment);
+            let snapped = snap_to_axes(frame_matrix, 25.0).or_else(|| {
+                let loose = snap_to_axes(frame_matrix, 45.0);
                 if loose.is_some() {
                     notes.push(format!(
                         "{}: segment above far from the default direction, nearest axes used",
@@ -396,9 +397,9 @@ fn build(
     })
 }
 
-/// The signed permutation matrix nearest to `q`, when `q` is within `max_degrees` of it.
-fn snap(q: DQuat, max_degrees: f64) -> Option<DMat3> {
-    let m = DMat3::from_quat(q);
+/// The signed permutation matrix (a rotation) nearest to the rotation `m`, when `m` is within
+/// `max_degrees` of it.
+pub(crate) fn snap_to_axes(m: DMat3, max_degrees: f64) -> Option<DMat3> {
     let mut cols = [DVec3::ZERO; 3];
     let mut used = [false; 3];
     for (k, col) in cols.iter_mut().enumerate() {
@@ -413,10 +414,10 @@ fn snap(q: DQuat, max_degrees: f64) -> Option<DMat3> {
         *col = e;
     }
     let p = DMat3::from_cols(cols[0], cols[1], cols[2]);
-    if p.determinant() < 0.0 {
+    if p.determinant() < 0.0 || m.determinant() < 0.0 {
         return None;
     }
-    let angle = DQuat::from_mat3(&p).angle_between(q);
+    let angle = DQuat::from_mat3(&p).angle_between(DQuat::from_mat3(&m));
     (angle < max_degrees.to_radians()).then_some(p)
 }
 

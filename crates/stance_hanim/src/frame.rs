@@ -13,7 +13,9 @@
 //! size. When no standard unit gives a plausible human, as for a model exported at 2.5 times
 //! its size, the scale is whatever makes `h` equal to the H-Anim default's, with a warning.
 
-use glam::{DMat3, DQuat, DVec3};
+use glam::{DMat3, DVec3};
+
+use crate::builder::snap_to_axes;
 
 /// Height of the H-Anim default skullbase above the ankles (m).
 pub const SKULLBASE_ABOVE_ANKLES: f64 = 1.6209 - 0.068;
@@ -87,7 +89,7 @@ pub fn body_frame(position: impl Fn(&str) -> Option<DVec3>) -> BodyFrame {
         _ => 0.0,
     };
     BodyFrame {
-        hanim_from_file: snap(body).unwrap_or(body),
+        hanim_from_file: snap_to_axes(body, 30.0).unwrap_or(body),
         height_file,
         ankles,
     }
@@ -129,29 +131,6 @@ pub fn unit_scale(height_file: f64, units: &[(f64, &str)]) -> (f64, Option<Strin
 /// The name of a unit of `units` (metres per unit), if it is one of them.
 pub fn unit_name(scale: f64, units: &[(f64, &'static str)]) -> Option<&'static str> {
     units.iter().find(|(u, _)| *u == scale).map(|(_, n)| *n)
-}
-
-/// Signed permutation nearest to `m` when within 30 degrees.
-fn snap(m: DMat3) -> Option<DMat3> {
-    let mut cols = [DVec3::ZERO; 3];
-    let mut used = [false; 3];
-    for (k, col) in cols.iter_mut().enumerate() {
-        let v = m.col(k);
-        let a = v.abs().max_position();
-        if used[a] {
-            return None;
-        }
-        used[a] = true;
-        let mut e = DVec3::ZERO;
-        e[a] = v[a].signum();
-        *col = e;
-    }
-    let p = DMat3::from_cols(cols[0], cols[1], cols[2]);
-    if p.determinant() < 0.0 || m.determinant() < 0.0 {
-        return None;
-    }
-    let angle = DQuat::from_mat3(&p).angle_between(DQuat::from_mat3(&m));
-    (angle < 30f64.to_radians()).then_some(p)
 }
 
 #[cfg(test)]
