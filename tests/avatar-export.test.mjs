@@ -3,12 +3,13 @@
 // `stance inspect` prints its JSON summary, and fails with a reason on a bad file.
 import { before, describe, test } from "node:test";
 import assert from "node:assert/strict";
-import { execFileSync, spawnSync } from "node:child_process";
+import { spawnSync } from "node:child_process";
 import { mkdtempSync, readFileSync, writeFileSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { dirname, join } from "node:path";
 import { fileURLToPath } from "node:url";
 import validator from "gltf-validator";
+import { stanceBinary } from "./browser.mjs";
 
 const root = join(dirname(fileURLToPath(import.meta.url)), "..");
 const sharedAvatar = join(root, "tests", "fixtures", "avatars", "Black_F_2_Casual.glb");
@@ -16,14 +17,7 @@ let stance;
 let work;
 
 before(() => {
-  stance = process.env.STANCE_BIN;
-  if (!stance) {
-    execFileSync("cargo", ["build", "--quiet", "-p", "stance_cli", "--bin", "stance"], {
-      cwd: root,
-      stdio: "inherit",
-    });
-    stance = join(root, "target", "debug", "stance");
-  }
+  stance = stanceBinary();
   work = mkdtempSync(join(tmpdir(), "stance-avatar-"));
 });
 

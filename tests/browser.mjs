@@ -1,11 +1,24 @@
 // Shared helpers of the end-to-end tests: the two Chromium configurations (WebGL2 and
-// WebGPU), the static server, PNG pixels.
+// WebGPU), the static server, PNG pixels, the `stance` CLI.
 import { chromium } from "playwright-core";
+import { execFileSync } from "node:child_process";
 import { mkdtempSync, mkdirSync, writeFileSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { join } from "node:path";
 import { PNG } from "pngjs";
 import { startServer } from "../scripts/serve.mjs";
+
+const ROOT = new URL("..", import.meta.url).pathname;
+
+/** The `stance` CLI: `$STANCE_BIN`, else the debug build, built when it is missing or old. */
+export function stanceBinary() {
+  if (process.env.STANCE_BIN) return process.env.STANCE_BIN;
+  execFileSync("cargo", ["build", "--quiet", "-p", "stance_cli", "--bin", "stance"], {
+    cwd: ROOT,
+    stdio: "inherit",
+  });
+  return join(process.env.CARGO_TARGET_DIR ?? join(ROOT, "target"), "debug", "stance");
+}
 
 export const CHROMIUM = process.env.CHROMIUM_PATH ?? "/usr/bin/chromium";
 export const ARTIFACTS = new URL("../artifacts/", import.meta.url).pathname;

@@ -9,13 +9,15 @@
 // a directory is processed in shards.
 import { after, before, describe, test } from "node:test";
 import assert from "node:assert/strict";
-import { execFileSync, spawnSync } from "node:child_process";
+import { spawnSync } from "node:child_process";
 import { mkdirSync, mkdtempSync, readFileSync, readdirSync, writeFileSync, copyFileSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { dirname, join } from "node:path";
 import { fileURLToPath } from "node:url";
 import validator from "gltf-validator";
-import { CONFIGURATIONS, decodePng, launch, openEditor, saveArtifact, serve } from "./browser.mjs";
+import {
+  CONFIGURATIONS, decodePng, launch, openEditor, saveArtifact, serve, stanceBinary,
+} from "./browser.mjs";
 
 const root = join(dirname(fileURLToPath(import.meta.url)), "..");
 const walk = join(root, "tests", "fixtures", "motion", "walk.bvh");
@@ -26,14 +28,7 @@ let served;
 let context;
 
 before(async () => {
-  stance = process.env.STANCE_BIN;
-  if (!stance) {
-    execFileSync("cargo", ["build", "--quiet", "-p", "stance_cli", "--bin", "stance"], {
-      cwd: root,
-      stdio: "inherit",
-    });
-    stance = join(root, "target", "debug", "stance");
-  }
+  stance = stanceBinary();
   work = mkdtempSync(join(tmpdir(), "stance-motion-"));
   served = await serve();
   context = await launch(CONFIGURATIONS.webgl2);

@@ -11,6 +11,7 @@ import { existsSync, mkdtempSync, readFileSync, writeFileSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { dirname, join } from "node:path";
 import { fileURLToPath, pathToFileURL } from "node:url";
+import { stanceBinary } from "./browser.mjs";
 
 const root = join(dirname(fileURLToPath(import.meta.url)), "..");
 const packageDir = join(root, "packages", "stance-ik");
@@ -37,13 +38,7 @@ before(async () => {
     execFileSync("bash", ["scripts/build-package.sh"], { cwd: root, stdio: "inherit" });
   }
   ik = await import(pathToFileURL(join(packageDir, "index.js")).href);
-  stance = process.env.STANCE_BIN ?? join(root, "target", "debug", "stance");
-  if (!existsSync(stance)) {
-    execFileSync("cargo", ["build", "--quiet", "-p", "stance_cli", "--bin", "stance"], {
-      cwd: root,
-      stdio: "inherit",
-    });
-  }
+  stance = stanceBinary();
 });
 
 describe("stance-ik", () => {

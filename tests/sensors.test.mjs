@@ -9,7 +9,9 @@ import { mkdtempSync, readFileSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { dirname, join } from "node:path";
 import { fileURLToPath } from "node:url";
-import { CONFIGURATIONS, freshStoragePerTab, launch, openEditor, serve } from "./browser.mjs";
+import {
+  CONFIGURATIONS, freshStoragePerTab, launch, openEditor, serve, stanceBinary,
+} from "./browser.mjs";
 
 const root = join(dirname(fileURLToPath(import.meta.url)), "..");
 const RATE_HZ = 50;
@@ -18,15 +20,6 @@ let context;
 let work;
 let fob; // { frames: [[byte]], truth: [[sample]] } one entry per frame (4 sensors)
 let slime; // { reports: [[id, [byte]]], truth }
-
-function stanceBinary() {
-  if (process.env.STANCE_BIN) return process.env.STANCE_BIN;
-  execFileSync("cargo", ["build", "--quiet", "-p", "stance_cli", "--bin", "stance"], {
-    cwd: root,
-    stdio: "inherit",
-  });
-  return join(root, "target", "debug", "stance");
-}
 
 function simulate(stance, protocolArgs, name) {
   const out = join(work, `${name}.bin`);
