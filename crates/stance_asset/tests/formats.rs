@@ -10,7 +10,7 @@ wasm_bindgen_test::wasm_bindgen_test_configure!(run_in_browser);
 
 mod common;
 
-use glam::{DQuat, DVec3};
+use glam::DVec3;
 use serde_json::json;
 use stance_asset::{LoadOptions, export_glb, load_avatar};
 
@@ -89,18 +89,11 @@ fn unlit_and_png_jpeg_textures() {
 fn z_up_centimetres_facing_minus_x_is_normalised() {
     let reference = load_avatar(&common::default_glb(), &LoadOptions::default()).unwrap();
     let expected = reference.hanim_rest_positions();
-    let (mut j, bin) = common::split(&common::default_glb());
-    // A new root: Z up (Y -> Z), scaled to centimetres, turned to face -X.
-    let q = DQuat::from_rotation_z(-std::f64::consts::FRAC_PI_2)
-        * DQuat::from_rotation_x(std::f64::consts::FRAC_PI_2);
-    let old_roots = j["scenes"][0]["nodes"].clone();
-    let nodes = j["nodes"].as_array_mut().unwrap();
-    nodes.push(json!({"name": "Armature", "children": old_roots,
-        "rotation": [q.x, q.y, q.z, q.w], "scale": [100.0, 100.0, 100.0],
-        "translation": [12.0, -3.0, 40.0]}));
-    let armature = nodes.len() - 1;
-    j["scenes"][0]["nodes"] = json!([armature]);
-    let avatar = load_avatar(&common::join(&j, &bin), &LoadOptions::default()).unwrap();
+    let avatar = load_avatar(
+        &common::z_up_centimetres_facing_minus_x(&common::default_glb()),
+        &LoadOptions::default(),
+    )
+    .unwrap();
     let got = avatar.hanim_rest_positions();
     for (h, e) in expected.iter().enumerate() {
         assert!((got[h] - *e).length() < 1e-4, "node {h}: {} vs {e}", got[h]);

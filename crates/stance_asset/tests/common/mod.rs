@@ -60,3 +60,23 @@ pub fn status_kb(key: &str) -> u64 {
         })
         .unwrap_or(0)
 }
+
+/// The same GLB under a new root node that makes it Z up (Y -> Z), in centimetres, facing -X
+/// and moved off the origin: what any importer must normalise back.
+pub fn z_up_centimetres_facing_minus_x(glb: &[u8]) -> Vec<u8> {
+    let (mut j, bin) = split(glb);
+    let q = glam::DQuat::from_rotation_z(-std::f64::consts::FRAC_PI_2)
+        * glam::DQuat::from_rotation_x(std::f64::consts::FRAC_PI_2);
+    let old_roots = j["scenes"][0]["nodes"].clone();
+    let Some(nodes) = j["nodes"].as_array_mut() else {
+        panic!("a GLB with nodes");
+    };
+    nodes.push(
+        serde_json::json!({"name": "Armature", "children": old_roots,
+        "rotation": [q.x, q.y, q.z, q.w], "scale": [100.0, 100.0, 100.0],
+        "translation": [12.0, -3.0, 40.0]}),
+    );
+    let armature = nodes.len() - 1;
+    j["scenes"][0]["nodes"] = serde_json::json!([armature]);
+    join(&j, &bin)
+}
