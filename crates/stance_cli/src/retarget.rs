@@ -35,6 +35,10 @@ pub struct RetargetArgs {
     /// How the rest poses are matched.
     #[arg(long, value_enum, default_value = "directions")]
     pub rest_match: RestMatchArg,
+    /// Raise (+) or lower (-) both arms' rest match by this many degrees (an A-pose clip on
+    /// a T-pose avatar, or the reverse, when the bone directions are not enough).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub arms: f64,
     /// Level of articulation of the target's solver skeleton (1 to 4).
     #[arg(long, default_value_t = 2)]
     pub loa: u8,
@@ -152,6 +156,7 @@ fn options(args: &RetargetArgs) -> RetargetOptions {
         contacts: (args.contacts == ContactsArg::Auto).then(ContactSettings::default),
         ..RetargetOptions::default()
     }
+    .with_arm_lift(args.arms)
 }
 
 /// What one clip produced.

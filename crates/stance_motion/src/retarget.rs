@@ -89,6 +89,36 @@ impl Default for RetargetOptions {
     }
 }
 
+impl RetargetOptions {
+    /// The same options with both arms' rest match turned outward (abduction, about the
+    /// body's front axis) by `degrees`: raise them for a clip whose arms hang lower at rest
+    /// than the body's (an A-pose clip on a T-pose body), lower them with a negative angle.
+    /// Replaces any shoulder adjustment.
+    pub fn with_arm_lift(mut self, degrees: f64) -> Self {
+        self.adjustments
+            .retain(|(joint, _)| joint != "l_shoulder" && joint != "r_shoulder");
+        if degrees.is_finite() && degrees != 0.0 {
+            let a = degrees.to_radians();
+            self.adjustments
+                .push(("l_shoulder".into(), glam::DQuat::from_rotation_z(a)));
+            self.adjustments
+                .push(("r_shoulder".into(), glam::DQuat::from_rotation_z(-a)));
+        }
+        self
+    }
+
+    /// The arms' lift set by [`RetargetOptions::with_arm_lift`] (degrees; 0 without one).
+    pub fn arm_lift(&self) -> f64 {
+        self.adjustments
+            .iter()
+            .find(|(joint, _)| joint == "l_shoulder")
+            .map_or(0.0, |(_, q)| {
+                let (axis, angle) = q.to_axis_angle();
+                (angle * axis.z.signum()).to_degrees()
+            })
+    }
+}
+
 /// A retargeted clip.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Retargeted {

@@ -421,3 +421,62 @@ fn irregular_samples_become_a_clip_at_a_fixed_rate() {
     );
     assert!(Clip::from_samples("x", &s, &samples, 0.0).is_err());
 }
+
+#[test]
+fn a_rest_match_adjustment_turns_that_bone_on_every_frame() {
+    let s = body(LevelOfArticulation::Loa1);
+    let postures = vec![Posture::rest(&s.skeleton), moving(&s, 0.4)];
+    let clip = Clip::from_postures("m", &s, &postures, 0.04);
+    let turn = DQuat::from_rotation_z(20f64.to_radians());
+    let options = RetargetOptions {
+        rest_match: RestMatch::Same,
+        adjustments: vec![("l_shoulder".into(), turn)],
+        contacts: None,
+        ..Default::default()
+    };
+    let r = retarget(&clip, &s, &options).unwrap();
+    let arm = |p: &Posture| (world(&s, p, "l_elbow") - world(&s, p, "l_shoulder")).normalize();
+    // On the rest frame the upper arm is turned by exactly the adjustment.
+    let (src, out) = (arm(&postures[0]), arm(&r.postures[0]));
+    assert!((turn * src - out).length() < 1e-9, "{src} {out}");
+    // On a moving frame by the same angle (the turn is applied before the clip's rotation).
+    let angle = arm(&postures[1]).angle_between(arm(&r.postures[1]));
+    assert!((angle - 20f64.to_radians()).abs() < 0.2, "{angle}");
+    // The other arm is untouched.
+    let right = |p: &Posture| (world(&s, p, "r_elbow") - world(&s, p, "r_shoulder")).normalize();
+    assert!(right(&postures[1]).angle_between(right(&r.postures[1])) < 1e-9);
+}
+
+#[test]
+fn lifting_the_arms_raises_both_upper_arms_outward() {
+    let s = body(LevelOfArticulation::Loa1);
+    let clip = Clip::from_postures("m", &s, &[Posture::rest(&s.skeleton)], 0.04);
+    let options = RetargetOptions {
+        contacts: None,
+        ..Default::default()
+    }
+    .with_arm_lift(15.0);
+    assert!((options.arm_lift() - 15.0).abs() < 1e-9);
+    assert!(options.clone().with_arm_lift(0.0).adjustments.is_empty());
+    let r = retarget(&clip, &s, &options).unwrap();
+    let p = &r.postures[0];
+    let rest = Posture::rest(&s.skeleton);
+
+    for (side, outward) in [("l", 1.0), ("r", -1.0)] {
+        let arm = |q: &Posture| {
+            world(&s, q, &format!("{side}_elbow")) - world(&s, q, &format!("{side}_shoulder"))
+        };
+        let (before, after) = (arm(&rest).normalize(), arm(p).normalize());
+        // Turned by 15 degrees about the body's front axis, outward.
+        let turn = DQuat::from_rotation_z(outward * 15f64.to_radians());
+        assert!(
+            (turn * before - after).length() < 1e-9,
+            "{side}: {before} {after}"
+        );
+        // Outward (away from the body's midline) and up.
+        assert!(
+            after.x * outward > before.x * outward && after.y > before.y,
+            "{side}"
+        );
+    }
+}

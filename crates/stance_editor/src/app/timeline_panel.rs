@@ -171,6 +171,19 @@ impl TimelinePanel<'_> {
                 ui.radio_value(&mut changed.rest_match, value, label)
                     .on_hover_text(hint);
             }
+            let mut lift = options.arm_lift();
+            let arms = egui::DragValue::new(&mut lift)
+                .range(-60.0..=60.0)
+                .speed(0.5)
+                .suffix("°");
+            ui.label("arms");
+            if ui
+                .add(arms)
+                .on_hover_text("raise (+) or lower (-) both arms' rest match")
+                .changed()
+            {
+                changed = std::mem::take(&mut changed).with_arm_lift(lift);
+            }
             ui.separator();
             let mut held = changed.contacts.is_some();
             ui.checkbox(&mut held, "Foot contacts")
