@@ -10,6 +10,7 @@ use serde_json::Value;
 use stance_ik::{Axes, Dof};
 
 use crate::DocumentError;
+use crate::camera::CameraSpec;
 use crate::json::{arr, field, number, numbers, obj, string, vec3};
 use crate::motion::{MotionSection, TaskInterval};
 
@@ -27,6 +28,8 @@ pub struct Document {
     pub tasks: Vec<TaskSpec>,
     /// The timeline and its keyframes; `None` for a single posture.
     pub motion: Option<MotionSection>,
+    /// The camera saved with the document; `None`: the viewer's own.
+    pub camera: Option<CameraSpec>,
 }
 
 /// The avatar a document is posed on.
@@ -412,6 +415,9 @@ impl Document {
         if let Some(motion) = &self.motion {
             motion.validate()?;
         }
+        if let Some(camera) = &self.camera {
+            camera.validate()?;
+        }
         Ok(())
     }
 
@@ -465,11 +471,16 @@ impl Document {
             None | Some(Value::Null) => None,
             Some(m) => Some(MotionSection::from_json_value(m)?),
         };
+        let camera = match o.get("camera") {
+            None | Some(Value::Null) => None,
+            Some(c) => Some(CameraSpec::from_json_value(c)?),
+        };
         let doc = Document {
             avatar,
             posture,
             tasks,
             motion,
+            camera,
         };
         doc.validate()?;
         Ok(doc)
@@ -825,6 +836,9 @@ impl Serialize for Document {
         st.serialize_field("tasks", &self.tasks)?;
         if let Some(motion) = &self.motion {
             st.serialize_field("motion", motion)?;
+        }
+        if let Some(camera) = &self.camera {
+            st.serialize_field("camera", camera)?;
         }
         st.end()
     }

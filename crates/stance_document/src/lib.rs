@@ -12,6 +12,7 @@
 
 #![warn(missing_docs)]
 
+pub mod camera;
 mod convert;
 mod document;
 mod error;
@@ -22,6 +23,7 @@ mod problem;
 mod range_coder;
 mod words;
 
+pub use camera::CameraSpec;
 pub use convert::{
     LimbStartSpec, limb_joint_indices, pinned_contacts, resolve_joint, solver_tasks,
 };

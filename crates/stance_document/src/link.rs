@@ -150,6 +150,7 @@ pub fn encode_for_sharing(document: &Document) -> SharedLink {
     }
     let without = Document {
         motion: None,
+        camera: None,
         ..document.clone()
     };
     SharedLink {

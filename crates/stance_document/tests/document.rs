@@ -381,3 +381,40 @@ fn direction_and_balance_errors_name_the_field() {
         "{e}"
     );
 }
+
+#[test]
+fn a_saved_camera_round_trips_and_a_bad_one_is_named() {
+    let text = r#"{"version": 1, "camera": {"target": [0.1, 1.2, -0.3], "yaw": 1.5707963267948966,
+        "pitch": 0.2, "distance": 2.5, "orthographic": true}}"#;
+    let d = Document::from_json(text).unwrap();
+    let camera = d.camera.unwrap();
+    assert_eq!(camera.target, [0.1, 1.2, -0.3]);
+    assert!(camera.orthographic && camera.distance == 2.5);
+    let back = Document::from_json(&d.to_json(false)).unwrap();
+    assert_eq!(back, d);
+    // Without one, none is written.
+    assert!(!Document::default().to_json(false).contains("camera"));
+    let with = |camera: &str| format!(r#"{{"version": 1, "camera": {camera}}}"#);
+    let good = r#""target": [0, 1, 0], "yaw": 0, "pitch": 0.1, "distance": 3"#;
+    assert!(Document::from_json(&with(&format!("{{{good}}}"))).is_ok());
+    for (bad, field) in [
+        (r#""pitch": 2.0"#, "camera.pitch"),
+        (r#""distance": -1"#, "camera.distance"),
+        (r#""orthographic": 3"#, "camera.orthographic"),
+        (r#""target": [0, "a", 0]"#, "camera.target"),
+    ] {
+        let key = bad.split(':').next().unwrap();
+        let kept: Vec<&str> = [
+            r#""target": [0, 1, 0]"#,
+            r#""yaw": 0"#,
+            r#""pitch": 0.1"#,
+            r#""distance": 3"#,
+        ]
+        .into_iter()
+        .filter(|part| !part.starts_with(key))
+        .collect();
+        let camera = format!("{{{}, {bad}}}", kept.join(", "));
+        let e = err(&with(&camera));
+        assert!(e.contains(field), "{camera}: {e}");
+    }
+}

@@ -133,6 +133,7 @@ fn all_kinds() -> Document {
             ),
         ],
         motion: None,
+        camera: None,
     }
 }
 
@@ -187,6 +188,7 @@ fn a_full_loa2_posture_with_six_tasks_fits_in_600_characters() {
             posture: loa2_posture(&mut r, 0.6),
             tasks: table1_tasks(&mut r),
             motion: None,
+            camera: None,
         };
         assert_eq!(d.posture.joints.len(), 71);
         let text = link::encode(&d);
@@ -199,6 +201,7 @@ fn a_full_loa2_posture_with_six_tasks_fits_in_600_characters() {
         posture: loa2_posture(&mut r, 0.6),
         tasks: vec![],
         motion: None,
+        camera: None,
     };
     let d1 = Document {
         tasks: table1_tasks(&mut r),
@@ -228,6 +231,7 @@ fn report_link_lengths_and_the_general_compressors() {
         posture: PostureValues::from_posture(&body, &standing),
         tasks: table1_tasks(&mut r),
         motion: None,
+        camera: None,
     };
     let text = link::encode(&table1);
     round_trip(&table1);
@@ -242,6 +246,7 @@ fn report_link_lengths_and_the_general_compressors() {
             posture: loa2_posture(&mut r, spread),
             tasks: table1_tasks(&mut r),
             motion: None,
+            camera: None,
         };
         let text = link::encode(&d);
         // The same values as 16-bit little-endian integers (the usual fixed-width packing),

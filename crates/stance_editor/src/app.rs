@@ -18,7 +18,7 @@ use std::sync::mpsc::Receiver;
 use egui::{Color32, Key, KeyboardShortcut, Modifiers, RichText};
 use stance_document::link;
 use stance_hanim::LevelOfArticulation;
-use stance_render::OrbitCamera;
+use stance_render::{OrbitCamera, ViewPreset};
 
 use self::avatar_panel::MappingEditor;
 use self::avatar_panel::SubjectKind;
@@ -175,8 +175,9 @@ impl StanceApp {
             self.model.apply(Command::ResetToRest);
         }
         if ctx.input_mut(|input| input.consume_shortcut(&plain(Key::F))) {
-            self.viewport.camera = OrbitCamera::default();
+            self.viewport.frame(&self.model, false);
         }
+        self.view_keys(ctx);
         if ctx.input_mut(|input| input.consume_shortcut(&plain(Key::L))) {
             copy_link(ctx, &mut self.model);
         }
@@ -324,6 +325,83 @@ impl StanceApp {
         }
     }
 
+    /// Blender's numpad views: 1 front, 3 right side, 7 top (with Ctrl or Alt: the opposite
+    /// side), 9 the opposite view, 5 orthographic or perspective, . (period) frames the
+    /// selection.
+    fn view_keys(&mut self, ctx: &egui::Context) {
+        let pressed = |modifiers, key| {
+            ctx.input_mut(|input| input.consume_shortcut(&KeyboardShortcut::new(modifiers, key)))
+        };
+        for modifiers in [Modifiers::CTRL, Modifiers::ALT] {
+            if pressed(modifiers, Key::Num1) {
+                self.viewport.set_view(ViewPreset::Back);
+            }
+            if pressed(modifiers, Key::Num3) {
+                self.viewport.set_view(ViewPreset::Left);
+            }
+        }
+        let plain = Modifiers::NONE;
+        if pressed(plain, Key::Num1) {
+            self.viewport.set_view(ViewPreset::Front);
+        }
+        if pressed(plain, Key::Num3) {
+            self.viewport.set_view(ViewPreset::Right);
+        }
+        if pressed(plain, Key::Num7) {
+            self.viewport.set_view(ViewPreset::Top);
+        }
+        if pressed(plain, Key::Num9) {
+            self.viewport.opposite_view();
+        }
+        if pressed(plain, Key::Num5) {
+            self.viewport.camera.orthographic = !self.viewport.camera.orthographic;
+        }
+        if pressed(plain, Key::Period) {
+            self.viewport.frame(&self.model, true);
+        }
+    }
+
+    fn camera_menu(&mut self, ui: &mut egui::Ui) {
+        for (preset, key) in [
+            (ViewPreset::Front, "1"),
+            (ViewPreset::Back, "Ctrl+1"),
+            (ViewPreset::Right, "3"),
+            (ViewPreset::Left, "Ctrl+3"),
+            (ViewPreset::Top, "7"),
+            (ViewPreset::ThreeQuarter, ""),
+        ] {
+            let label = if key.is_empty() {
+                preset.label().to_owned()
+            } else {
+                format!("{} ({key})", preset.label())
+            };
+            if ui.button(label).clicked() {
+                self.viewport.set_view(preset);
+                ui.close();
+            }
+        }
+        ui.checkbox(&mut self.viewport.camera.orthographic, "Orthographic (5)");
+        if ui.button("Frame the selection (.)").clicked() {
+            self.viewport.frame(&self.model, true);
+            ui.close();
+        }
+        if ui.button("Frame the body (F)").clicked() {
+            self.viewport.frame(&self.model, false);
+            ui.close();
+        }
+        ui.separator();
+        if ui.button("Save this view with the document").clicked() {
+            self.viewport.save_camera(&mut self.model);
+            ui.close();
+        }
+        if self.model.session().camera().is_some()
+            && ui.button("Forget the document's view").clicked()
+        {
+            self.model.apply(Command::SaveCamera(None));
+            ui.close();
+        }
+    }
+
     fn view_menu(&mut self, ui: &mut egui::Ui) {
         ui.checkbox(&mut self.viewport.show_floor, "Floor grid");
         ui.checkbox(&mut self.viewport.show_trace, "Effector trace (T)");
@@ -331,10 +409,7 @@ impl StanceApp {
         if ui.checkbox(&mut timeline, "Timeline").changed() {
             self.windows.timeline = Some(timeline);
         }
-        if ui.button("Frame the body (F)").clicked() {
-            self.viewport.camera = OrbitCamera::default();
-            ui.close();
-        }
+        ui.menu_button("Camera", |ui| self.camera_menu(ui));
         ui.separator();
         ui.label("Level of articulation");
         let current = self.model.level_of_articulation();
@@ -516,6 +591,7 @@ impl StanceApp {
             .frame(egui::Frame::NONE)
             .show(ui, |ui| {
                 self.notice_strip(ui);
+                self.viewport.follow_document_camera(&self.model);
                 self.viewport.show(ui, frame, &mut self.model);
             });
         self.help_window(&ctx);
@@ -578,7 +654,13 @@ const HELP_ROWS: &[(&str, &str)] = &[
         "pan",
     ),
     ("Wheel / pinch / Ctrl + wheel", "zoom"),
-    ("Double click, F", "frame the body again"),
+    ("Double click", "the default view again"),
+    ("F / . (period)", "frame the body / the selected part"),
+    (
+        "1, 3, 7 (Ctrl or Alt: the other side), 9",
+        "front, right side, top view (back, left side), the opposite view",
+    ),
+    ("5", "orthographic or perspective"),
     ("Ctrl+Z", "undo"),
     ("Ctrl+Shift+Z, Ctrl+Y", "redo"),
     ("P", "pin the selected part"),

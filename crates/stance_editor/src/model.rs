@@ -65,6 +65,9 @@ pub struct EditorModel {
     /// The next picked file is a sensor recording to replay.
     /// What the next picked file is for, when the user asked for one.
     pending_pick: Option<PickPurpose>,
+    /// Counts the times the document's saved view should be shown (a document with one was
+    /// opened, or undo and redo changed it): the viewport follows each new count.
+    view_requests: u64,
     pub(crate) hooks: Box<dyn HostHooks>,
     autosave: Autosave,
     /// Seconds since the editor started, as of the last step.
@@ -113,6 +116,7 @@ impl EditorModel {
             library: PoseLibrary::default(),
             sensors: SensorHub::default(),
             pending_pick: None,
+            view_requests: 0,
             hooks,
             autosave: Autosave::default(),
             now_secs: 0.0,
@@ -386,6 +390,14 @@ impl EditorModel {
                 self.record(EditKind::Command);
                 self.session.mirror();
             }
+            Command::SaveCamera(camera) => {
+                self.record(EditKind::Command);
+                self.session.set_camera(camera);
+                self.inform(match camera {
+                    Some(_) => "The view is saved with the document: opening it shows this view.",
+                    None => "The document no longer has a view of its own.",
+                });
+            }
             other => self.apply_outside(other),
         }
     }
@@ -521,9 +533,19 @@ impl EditorModel {
 
     fn restore(&mut self, document: &Document, what: &str) {
         self.motion_restored();
+        let camera = self.session.camera();
         if let Err(error) = self.session.restore_document(document) {
             self.warn(format!("Could not {what}: {error}"));
         }
+        if self.session.camera() != camera {
+            self.view_requests += 1;
+        }
+    }
+
+    /// Changes when the document's saved view should be shown (see
+    /// [`PosingSession::camera`]): a document with one was opened, or undo or redo changed it.
+    pub fn view_request(&self) -> u64 {
+        self.view_requests
     }
 
     /// Opens `document` in the session as one undoable edit; `Err` says why it does not fit.
@@ -538,6 +560,9 @@ impl EditorModel {
         }
         self.history
             .record(&current, EditKind::Command, self.now_secs);
+        if document.camera.is_some() {
+            self.view_requests += 1;
+        }
         Ok(())
     }
 
@@ -863,6 +888,7 @@ impl EditorModel {
                 if let Err(error) = self.session.restore_document(&document) {
                     self.warn(format!("The autosaved work could not be restored: {error}"));
                 } else {
+                    self.view_requests += u64::from(document.camera.is_some());
                     self.autosave.saved(document);
                 }
             }

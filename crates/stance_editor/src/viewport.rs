@@ -123,7 +123,12 @@ pub(crate) fn apply_gestures(
             CameraGesture::Orbit(delta) => camera.orbit(delta),
             CameraGesture::Pan(delta) => camera.pan(delta, viewport_height_px),
             CameraGesture::Zoom(factor) => camera.zoom(factor),
-            CameraGesture::Reset => *camera = OrbitCamera::default(),
+            CameraGesture::Reset => {
+                *camera = OrbitCamera {
+                    orthographic: camera.orthographic,
+                    ..OrbitCamera::default()
+                }
+            }
         }
     }
     !gestures.is_empty()

@@ -818,3 +818,74 @@ fn the_motion_menu_opens_the_clip_mapping_window_with_the_clip_joints() {
     harness.get_by_label("Apply");
     assert!(harness.query_by_label("Revert last correction").is_none());
 }
+
+#[test]
+fn numpad_views_orthographic_framing_and_a_view_saved_with_the_document() {
+    use stance_render::{OrbitCamera, ViewPreset};
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    let eye = |harness: &Harness<'static, StanceApp>| {
+        let c = harness.state().camera();
+        (c.eye_world() - c.target_world).normalize()
+    };
+    harness.key_press(Key::Num1);
+    harness.run_steps(1);
+    assert!((eye(&harness) - glam::Vec3::Z).length() < 1e-4, "front");
+    harness.key_press_modifiers(Modifiers::CTRL, Key::Num3);
+    harness.run_steps(1);
+    assert!(
+        (eye(&harness) - glam::Vec3::X).length() < 1e-4,
+        "the body's left side"
+    );
+    harness.key_press(Key::Num7);
+    harness.run_steps(1);
+    assert!(eye(&harness).y > 0.99, "top");
+    harness.key_press(Key::Num5);
+    harness.run_steps(1);
+    assert!(harness.state().camera().orthographic);
+    // Frame the selected left hand: it comes to the middle, close up.
+    let hand = harness
+        .state()
+        .model()
+        .session()
+        .skeleton()
+        .joint_index("l_radiocarpal")
+        .unwrap();
+    harness.state_mut().apply(Command::Select(Some(hand)));
+    harness.key_press(Key::Period);
+    harness.run_steps(1);
+    let camera = *harness.state().camera();
+    let hand_at = harness.state().model().session().frames().joint_position[hand].as_vec3();
+    assert!(
+        (camera.target_world - hand_at).length() < 0.15,
+        "{}",
+        camera.target_world
+    );
+    assert!(camera.distance_m < OrbitCamera::default().distance_m * 0.5);
+    // Save the view with the document, move away, then open the saved document: the view
+    // comes back.
+    harness.get_by_label("View").click();
+    harness.run_steps(2);
+    harness.get_by_label("Camera").hover();
+    harness.run_steps(2);
+    harness
+        .get_by_label("Save this view with the document")
+        .click();
+    harness.run_steps(2);
+    let document = harness.state().model().session().document();
+    assert!(document.camera.unwrap().orthographic);
+    harness.key_press(Key::Num1);
+    harness.key_press(Key::Num5);
+    harness.run_steps(1);
+    assert!(!harness.state().camera().orthographic);
+    harness.state_mut().apply(Command::OpenFile {
+        name: "saved.json".into(),
+        bytes: document.to_json(true).into_bytes(),
+    });
+    harness.state_mut().apply(Command::SaveCamera(None));
+    harness.state_mut().apply(Command::Undo);
+    harness.run_steps(2);
+    let back = harness.state().camera();
+    assert!(back.orthographic && (back.target_world - camera.target_world).length() < 1e-4);
+    let _ = ViewPreset::ALL;
+}

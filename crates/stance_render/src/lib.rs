@@ -16,7 +16,7 @@ pub use body::{
     BODY_COLOR_LINEAR, MannequinBone, MannequinJoint, mannequin_bones, mannequin_capsules,
     rest_pose_capsules,
 };
-pub use camera::OrbitCamera;
+pub use camera::{OrbitCamera, ViewPreset};
 #[cfg(not(target_arch = "wasm32"))]
 pub use capture::{CaptureError, Pixels, read_pixels};
 pub use pick::{CapsuleHit, pick_capsule};

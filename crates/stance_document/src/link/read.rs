@@ -400,5 +400,6 @@ pub(super) fn decode_payload(bytes: &[u8], format: u8) -> R<Document> {
         posture,
         tasks,
         motion,
+        camera: None,
     })
 }

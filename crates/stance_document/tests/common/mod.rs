@@ -238,6 +238,7 @@ pub fn random_document(r: &mut StdRng) -> Document {
         posture: random_posture(r),
         tasks: (0..r.random_range(0..10)).map(|_| random_task(r)).collect(),
         motion: None,
+        camera: None,
     }
 }
 

@@ -3,8 +3,9 @@
 
 use egui::{Color32, RichText, Sense};
 use glam::DVec3;
+use stance_document::CameraSpec;
 use stance_hanim::{LimbName, readable_name};
-use stance_render::{BODY_COLOR_LINEAR, OrbitCamera, Scene, pick_capsule};
+use stance_render::{BODY_COLOR_LINEAR, OrbitCamera, Scene, ViewPreset, pick_capsule};
 
 use super::handles::Handles;
 use super::lens::Lens;
@@ -39,6 +40,8 @@ pub(super) struct ViewportPanel {
     pub scene_ms: f64,
     /// CPU time of recording and submitting this frame's 3D draw (uploads included).
     pub render_ms: f64,
+    /// The model's view request last followed (see `EditorModel::view_request`).
+    view_request: u64,
 }
 
 impl ViewportPanel {
@@ -58,7 +61,77 @@ impl ViewportPanel {
             first_frame_reported: false,
             scene_ms: 0.0,
             render_ms: 0.0,
+            view_request: 0,
         }
+    }
+
+    /// Turns to a standard view.
+    pub(super) fn set_view(&mut self, preset: ViewPreset) {
+        self.camera.set_view(preset);
+    }
+
+    /// Looks from the other side (Blender's numpad 9).
+    pub(super) fn opposite_view(&mut self) {
+        self.camera.yaw =
+            (self.camera.yaw + std::f32::consts::PI).rem_euclid(std::f32::consts::TAU);
+        self.camera.pitch = -self.camera.pitch;
+    }
+
+    /// Frames the joints of the whole body, or of the selected part and what it carries.
+    pub(super) fn frame(&mut self, model: &EditorModel, selection_only: bool) {
+        let session = model.session();
+        let skeleton = session.skeleton();
+        let positions = &session.frames().joint_position;
+        let chosen = model.selected_joint().filter(|_| selection_only);
+        let points: Vec<DVec3> = (0..skeleton.joint_count())
+            .filter(|&j| chosen.is_none_or(|s| skeleton.is_ancestor_or_self(s, j)))
+            .filter_map(|j| positions.get(j).copied())
+            .collect();
+        let (Some(first), false) = (points.first(), points.is_empty()) else {
+            return;
+        };
+        let (lo, hi) = points
+            .iter()
+            .fold((*first, *first), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+        let centre = (lo + hi) * 0.5;
+        let radius = ((hi - lo).length() * 0.5).max(0.08);
+        self.camera.frame(centre.as_vec3(), radius as f32);
+    }
+
+    /// The camera as a document saves it.
+    pub(super) fn camera_spec(&self) -> CameraSpec {
+        let c = &self.camera;
+        CameraSpec {
+            target: c.target_world.as_dvec3().to_array(),
+            yaw: f64::from(c.yaw),
+            pitch: f64::from(c.pitch),
+            distance: f64::from(c.distance_m),
+            orthographic: c.orthographic,
+        }
+    }
+
+    /// A document's saved camera is shown when the model asks (a document with one was
+    /// opened, or undo or redo changed it); otherwise the user moves the view freely.
+    pub(super) fn follow_document_camera(&mut self, model: &EditorModel) {
+        if model.view_request() == self.view_request {
+            return;
+        }
+        self.view_request = model.view_request();
+        if let Some(spec) = model.session().camera() {
+            self.camera = OrbitCamera {
+                target_world: DVec3::from_array(spec.target).as_vec3(),
+                yaw: spec.yaw as f32,
+                pitch: spec.pitch as f32,
+                distance_m: spec.distance as f32,
+                orthographic: spec.orthographic,
+                ..OrbitCamera::default()
+            };
+        }
+    }
+
+    /// The current view saved with the document (undoable).
+    pub(super) fn save_camera(&self, model: &mut EditorModel) {
+        model.apply(Command::SaveCamera(Some(self.camera_spec())));
     }
 
     /// The camera looking through this frame's rectangle.

@@ -210,6 +210,8 @@ pub enum Command {
     PickRecording,
     /// Ask the page for a motion clip (BVH, or a glTF file's animation).
     PickClip,
+    /// Save this camera with the document (`None`: forget it); undoable.
+    SaveCamera(Option<stance_document::CameraSpec>),
     /// Offer the timeline (clip, keys and timed tasks, baked) as a download.
     ExportAnimation(AnimationFormat),
     /// A command for the sensors.
