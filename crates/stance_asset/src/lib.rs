@@ -31,6 +31,7 @@
 #![warn(missing_docs)]
 
 pub mod animation;
+mod clip_file;
 mod error;
 mod export;
 mod export_animation;
@@ -43,6 +44,7 @@ mod normalize;
 pub use animation::{
     Animation, AnimationChannel, AnimationPath, Interpolation, clip_from_animation,
 };
+pub use clip_file::{ANIMATION_SAMPLE_FPS, ClipFileError, is_bvh_file, read_clip};
 pub use error::AssetError;
 pub use export::export_glb;
 pub use export_animation::export_glb_animation;

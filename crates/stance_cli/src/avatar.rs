@@ -35,18 +35,21 @@ pub struct MakeAvatarArgs {
     pub out: PathBuf,
 }
 
-/// Loads an avatar file (external resources next to it only).
-pub fn load(path: &Path, options: &LoadOptions) -> Result<Avatar> {
-    let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
+/// A resolver of a `.gltf`'s external resources: relative paths next to `path` only.
+pub fn resolver_next_to(path: &Path) -> impl FnMut(&str) -> Option<Vec<u8>> {
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let mut resolve = |uri: &str| -> Option<Vec<u8>> {
-        // Relative paths next to the file only.
+    move |uri: &str| {
         if uri.contains("://") || uri.starts_with('/') || uri.contains("..") {
             return None;
         }
         std::fs::read(dir.join(uri)).ok()
-    };
-    load_avatar_with(&bytes, options, &mut resolve)
+    }
+}
+
+/// Loads an avatar file (external resources next to it only).
+pub fn load(path: &Path, options: &LoadOptions) -> Result<Avatar> {
+    let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
+    load_avatar_with(&bytes, options, &mut resolver_next_to(path))
         .with_context(|| format!("loading {}", path.display()))
 }
 

@@ -7,9 +7,9 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow, bail};
 use serde_json::{Value, json};
-use stance_asset::{Avatar, LoadOptions};
+use stance_asset::{Avatar, LoadOptions, read_clip};
 use stance_hanim::{HumanoidSkeleton, LevelOfArticulation, SkeletonOptions};
-use stance_motion::bvh::{BvhLimits, BvhWriteOptions, read_bvh, write_bvh};
+use stance_motion::bvh::{BvhWriteOptions, write_bvh};
 use stance_motion::retarget::{joint_positions, metrics};
 use stance_motion::{Clip, ContactSettings, RestMatch, RetargetOptions, Retargeted, retarget};
 
@@ -117,27 +117,13 @@ fn load_target(to: &str, loa: u8) -> Result<Target> {
     })
 }
 
-/// Reads a clip: BVH, or the first animation of a glTF/GLB at its own key rate (30 fps when
-/// it has none).
+/// Reads a clip: BVH, or the first animation of a glTF/GLB/VRM (`stance_asset::read_clip`).
 pub fn load_clip(path: &Path) -> Result<Clip> {
     let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
-    let name = path
-        .file_stem()
-        .map_or_else(|| "clip".to_owned(), |s| s.to_string_lossy().into_owned());
-    let ext = extension(path);
-    match ext.as_str() {
-        "bvh" => read_bvh(&bytes, &name, &BvhLimits::default())
-            .with_context(|| format!("reading {}", path.display())),
-        "glb" | "gltf" | "vrm" => {
-            let avatar = crate::avatar::load(path, &LoadOptions::default())?;
-            if avatar.animations.is_empty() {
-                bail!("{} has no animation", path.display());
-            }
-            stance_asset::clip_from_animation(&avatar, 0, 30.0)
-                .with_context(|| format!("reading the animation of {}", path.display()))
-        }
-        _ => bail!("{}: a clip is .bvh, .glb or .gltf", path.display()),
-    }
+    let name = path.to_string_lossy();
+    let mut resolve = crate::avatar::resolver_next_to(path);
+    read_clip(&name, &bytes, &LoadOptions::default(), &mut resolve)
+        .with_context(|| format!("reading the clip {}", path.display()))
 }
 
 fn extension(path: &Path) -> String {

@@ -24,7 +24,7 @@ use stance_hanim::{LevelOfArticulation, Mapping, readable_name};
 use stance_ik::Clock;
 use stance_render::MannequinBone;
 
-pub use self::clips::{AnimationFormat, CLIP_FPS, PickPurpose, is_clip_file, read_clip};
+pub use self::clips::{AnimationFormat, CLIP_FPS, PickPurpose};
 use self::command::goals_moved;
 pub use self::command::{Command, Gesture, Notice, SessionChange};
 use self::mapping::MappingCorrections;
@@ -945,7 +945,7 @@ impl EditorModel {
                 self.open_clip_file(name, &bytes);
                 return;
             }
-            None if is_clip_file(name) => {
+            None if stance_asset::is_bvh_file(name) => {
                 self.open_clip_file(name, &bytes);
                 return;
             }

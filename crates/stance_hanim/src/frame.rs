@@ -32,15 +32,18 @@ pub const MODEL_UNITS: [(f64, &str); 5] = [
     (0.1, "dm"),
 ];
 
-/// Units of motion files: the model units and the CMU motion-capture database's unit
-/// (its ASF `length 0.45`: one unit is 1/0.45 inch), which its BVH conversions keep.
+/// The CMU motion-capture database's unit (its ASF `length 0.45`: one unit is 1/0.45 inch),
+/// which its BVH conversions keep.
+pub const CMU_UNIT: (f64, &str) = (0.0254 / 0.45, "CMU unit (1/0.45 inch)");
+
+/// Units of motion files: the model units and the CMU unit.
 pub const MOTION_UNITS: [(f64, &str); 6] = [
-    (1.0, "m"),
-    (0.01, "cm"),
-    (0.001, "mm"),
-    (0.0254, "inch"),
-    (0.1, "dm"),
-    (0.0254 / 0.45, "CMU unit (1/0.45 inch)"),
+    MODEL_UNITS[0],
+    MODEL_UNITS[1],
+    MODEL_UNITS[2],
+    MODEL_UNITS[3],
+    MODEL_UNITS[4],
+    CMU_UNIT,
 ];
 
 /// How a humanoid in file space maps onto the H-Anim frame.

@@ -210,17 +210,27 @@ fn held_contacts(
     settings: &ContactSettings,
 ) -> Vec<Contact> {
     let skeleton = &target.skeleton;
-    let worlds: Vec<_> = clip.frames.iter().map(|f| clip.world(f)).collect();
+    let feet: Vec<(&str, usize, usize)> = CONTACT_JOINTS
+        .iter()
+        .filter_map(|&foot| Some((foot, clip.joint_of(foot)?, skeleton.joint_index(foot)?)))
+        .collect();
+    // Both feet's tracks in one pass: on the clip (for the detection) and on the target's
+    // copy (where each contact is held).
+    let on_clip: Vec<Vec<DVec3>> = clip
+        .frames
+        .iter()
+        .map(|f| {
+            let world = clip.world(f);
+            feet.iter()
+                .map(|&(_, s, _)| world.get(s).map_or(DVec3::ZERO, |x| x.1))
+                .collect()
+        })
+        .collect();
+    let joints: Vec<usize> = feet.iter().map(|&(_, _, j)| j).collect();
+    let on_target = joint_positions(target, copy, &joints);
     let mut contacts = Vec::new();
-    for foot in CONTACT_JOINTS {
-        let (Some(source), Some(joint)) = (clip.joint_of(foot), skeleton.joint_index(foot)) else {
-            continue;
-        };
-        let track: Vec<DVec3> = worlds
-            .iter()
-            .map(|w| w.get(source).map_or(DVec3::ZERO, |x| x.1))
-            .collect();
-        let on_target = joint_positions(target, copy, &[joint]);
+    for (i, &(foot, _, _)) in feet.iter().enumerate() {
+        let track: Vec<DVec3> = on_clip.iter().map(|f| f[i]).collect();
         for mut c in detect_contacts(
             foot,
             &track,
@@ -229,7 +239,7 @@ fn held_contacts(
             settings,
         ) {
             let run = &on_target[c.start..=c.end.min(on_target.len() - 1)];
-            let mean = run.iter().map(|p| p[0]).sum::<DVec3>() / run.len().max(1) as f64;
+            let mean = run.iter().map(|p| p[i]).sum::<DVec3>() / run.len().max(1) as f64;
             c.position = DVec3::new(mean.x, mean.y.max(placement.ankle_height), mean.z);
             contacts.push(c);
         }
@@ -237,13 +247,30 @@ fn held_contacts(
     contacts
 }
 
+/// The rotations the tasks above the posture level can move (the feet's, the root's and the
+/// wrists' chains, the root's rotation included: the body keeps the clip's attitude); the
+/// others (fingers, the head...) keep the copy's values, which the step cannot change.
+fn posture_dofs(skeleton: &stance_ik::Skeleton) -> Vec<usize> {
+    let mut dofs: Vec<usize> = CONTACT_JOINTS
+        .iter()
+        .chain(&WRISTS)
+        .filter_map(|name| skeleton.joint_index(name))
+        .chain([0])
+        .flat_map(|j| skeleton.chain_dofs(j))
+        .filter(|&d| skeleton.dof_kinds()[d].is_rotation())
+        .collect();
+    dofs.sort_unstable();
+    dofs.dedup();
+    dofs
+}
+
 /// The tasks of one frame.
 fn frame_tasks(
     target: &HumanoidSkeleton,
     copy: &Posture,
     contacts: &[Contact],
-    frame: usize,
-    ease: usize,
+    (frame, ease): (usize, usize),
+    dofs: &[usize],
 ) -> Vec<Task> {
     let skeleton = &target.skeleton;
     let frames = Frames::new(skeleton, copy);
@@ -269,21 +296,7 @@ fn frame_tasks(
             tasks.push(Task::position(j, DVec3::ZERO, goal).at_level(WRIST_LEVEL));
         }
     }
-    // The rotations that the tasks above move, the root's included (the body keeps the
-    // clip's attitude); the others (fingers, the head...) keep the copy's values, which the
-    // step cannot change.
-    let mut dofs: Vec<usize> = tasks
-        .iter()
-        .filter_map(|t| match &t.kind {
-            stance_ik::TaskKind::Position { effector, .. } => Some(effector.joint),
-            _ => None,
-        })
-        .flat_map(|j| skeleton.chain_dofs(j))
-        .filter(|&d| skeleton.dof_kinds()[d].is_rotation())
-        .collect();
-    dofs.sort_unstable();
-    dofs.dedup();
-    tasks.push(Task::posture(copy.values().to_vec(), dofs).at_level(POSTURE_LEVEL));
+    tasks.push(Task::posture(copy.values().to_vec(), dofs.to_vec()).at_level(POSTURE_LEVEL));
     tasks
 }
 
@@ -303,9 +316,10 @@ fn solve_frames(
         stall_window: 2,
         ..SolverSettings::default()
     })?;
+    let dofs = posture_dofs(skeleton);
     let mut correction = vec![0.0; skeleton.dof_count()];
     for (f, copy) in out.copy.iter().enumerate() {
-        let tasks = frame_tasks(target, copy, &out.contacts, f, ease);
+        let tasks = frame_tasks(target, copy, &out.contacts, (f, ease), &dofs);
         let start: Vec<f64> = copy
             .values()
             .iter()

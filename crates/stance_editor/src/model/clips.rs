@@ -3,14 +3,16 @@
 //! driving it, a replay, or hand posing), the retargeting settings (rest match, contact
 //! thresholds), and the timeline baked out as a glTF animation on the avatar or as BVH.
 
-use stance_asset::{LoadOptions, clip_from_animation, export_glb_animation, load_avatar};
+use stance_asset::{
+    ANIMATION_SAMPLE_FPS, LoadOptions, clip_from_animation, export_glb_animation, read_clip,
+};
 use stance_ik::{Posture, Solver, SolverSettings};
-use stance_motion::{BvhLimits, BvhWriteOptions, Clip, RetargetOptions, read_bvh, write_bvh};
+use stance_motion::{BvhWriteOptions, Clip, RetargetOptions, write_bvh};
 
 use super::EditorModel;
 use super::motion::MotionCommand;
 
-/// Frames per second of a recorded clip and of a glTF animation read as a clip.
+/// Frames per second of a recorded clip.
 pub const CLIP_FPS: f64 = 30.0;
 
 /// What the next picked file is for.
@@ -31,29 +33,11 @@ pub enum AnimationFormat {
     Bvh,
 }
 
-/// True for a motion file the editor opens as a clip without being asked (BVH).
-pub fn is_clip_file(name: &str) -> bool {
-    name.to_ascii_lowercase().ends_with(".bvh")
-}
-
-/// A clip from a file: BVH, or the first animation of a glTF, GLB or VRM file.
-pub fn read_clip(name: &str, bytes: &[u8]) -> Result<Clip, String> {
-    let stem = name.rsplit_once('.').map_or(name, |(stem, _)| stem);
-    if is_clip_file(name) {
-        return read_bvh(bytes, stem, &BvhLimits::default()).map_err(|e| e.to_string());
-    }
-    let avatar = load_avatar(bytes, &LoadOptions::default()).map_err(|e| e.to_string())?;
-    if avatar.animations.is_empty() {
-        return Err("it has no animation".into());
-    }
-    clip_from_animation(&avatar, 0, CLIP_FPS).map_err(|e| e.to_string())
-}
-
 impl EditorModel {
     /// Opens a picked or dropped clip file; a file that cannot be read says why and the
     /// timeline stays as it was.
     pub(super) fn open_clip_file(&mut self, name: &str, bytes: &[u8]) {
-        match read_clip(name, bytes) {
+        match read_clip(name, bytes, &LoadOptions::default(), &mut |_| None) {
             Ok(clip) => self.apply_motion(MotionCommand::OpenClip(Box::new(clip))),
             Err(error) => self.warn(format!("{name} could not be opened as a clip: {error}.")),
         }
@@ -63,7 +47,8 @@ impl EditorModel {
     pub(super) fn open_avatar_animation(&mut self, index: usize) {
         let clip = match self.avatar.as_ref() {
             Some(loaded) if index < loaded.avatar.animations.len() => {
-                clip_from_animation(&loaded.avatar, index, CLIP_FPS).map_err(|e| e.to_string())
+                clip_from_animation(&loaded.avatar, index, ANIMATION_SAMPLE_FPS)
+                    .map_err(|e| e.to_string())
             }
             Some(_) => Err(format!("the avatar has no animation {index}")),
             None => Err("no avatar is loaded".into()),
