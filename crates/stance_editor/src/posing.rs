@@ -66,6 +66,8 @@ pub struct PosingSession {
     revision: u64,
     /// The document's timeline and keys.
     motion: Option<MotionSection>,
+    /// Changes whenever `motion` is replaced.
+    motion_revision: u64,
     /// The camera saved with the document.
     camera: Option<CameraSpec>,
     /// The timeline frame shown, if any: the tasks act with their interval weights.
@@ -149,6 +151,7 @@ impl PosingSession {
             settled: false,
             revision: 0,
             motion: None,
+            motion_revision: 0,
             camera: None,
             timed: None,
         };
@@ -344,6 +347,7 @@ impl PosingSession {
         self.posture = posture;
         self.tasks = document.tasks.clone();
         self.motion = document.motion.clone();
+        self.motion_revision = self.motion_revision.wrapping_add(1);
         self.camera = document.camera;
         self.grab = None;
         self.report = None;
@@ -444,9 +448,16 @@ impl PosingSession {
         self.motion.as_ref()
     }
 
+    /// Changes whenever the timeline and keys are replaced (an edit, undo, an opened
+    /// document).
+    pub fn motion_revision(&self) -> u64 {
+        self.motion_revision
+    }
+
     /// Replaces the timeline and keys (the posture stays).
     pub fn set_motion(&mut self, motion: Option<MotionSection>) {
         self.motion = motion;
+        self.motion_revision = self.motion_revision.wrapping_add(1);
         self.revision = self.revision.wrapping_add(1);
     }
 
@@ -473,6 +484,7 @@ impl PosingSession {
         self.posture = posture;
         self.tasks = document.tasks.clone();
         self.motion = document.motion.clone();
+        self.motion_revision = self.motion_revision.wrapping_add(1);
         self.camera = document.camera;
         self.grab = None;
         self.wake();

@@ -122,7 +122,9 @@ pub struct Timeline {
     pending_key: bool,
     trajectory_joint: Option<String>,
     trajectory: Vec<DVec3>,
-    trajectory_for: Option<(usize, u64, u64, Option<MotionSection>)>,
+    /// What the trajectory was computed for: joint, clip revision, session generation,
+    /// keys revision.
+    trajectory_for: Option<(usize, u64, u64, u64)>,
     /// Changes when the clip or its retargeting changes.
     base_revision: u64,
     /// How clips are put on the body (rest match, contacts).
@@ -645,11 +647,11 @@ impl EditorModel {
             self.timeline
                 .trajectory_for
                 .as_ref()
-                .is_some_and(|(j, base, generation, motion)| {
-                    *j == joint
-                        && *base == self.timeline.base_revision
-                        && *generation == self.session_generation
-                        && motion.as_ref() == self.session.motion()
+                .is_some_and(|&(j, base, generation, keys)| {
+                    j == joint
+                        && base == self.timeline.base_revision
+                        && generation == self.session_generation
+                        && keys == self.session.motion_revision()
                 });
         if fresh {
             return;
@@ -669,7 +671,7 @@ impl EditorModel {
             joint,
             self.timeline.base_revision,
             self.session_generation,
-            self.session.motion().cloned(),
+            self.session.motion_revision(),
         ));
     }
 
