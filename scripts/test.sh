@@ -4,7 +4,7 @@
 #      builds below (scripts/clippy-env.sh): natively for all targets, for wasm32 in
 #      wasm-pack's builds; stance_js's wasm32-only code is linted on its own
 #   2. native `cargo test --workspace` (includes the lavapipe offscreen render)
-#   3. the pure crates' and stance_asset's tests in headless Chromium (wasm-pack test)
+#   3. the pure crates' tests in headless Chromium (wasm-pack test)
 #   4. the built site in headless Chromium, WebGL2 and WebGPU (Playwright), and the npm
 #      package stance-ik from Node (tests/package.test.mjs)
 # Expects scripts/setup.sh --test to have run (npm test does both).
@@ -45,9 +45,11 @@ cargo test --workspace --quiet --lib --bins --tests -- --skip scenario_timings -
 cargo test --quiet -p stance_ik --test timing -- --nocapture
 cargo test --quiet -p stance_editor --test frame_cost -- --nocapture
 
-# wasm-pack runs each crate's wasm-bindgen tests in headless Chromium (Debian's chromedriver);
-# `stance_asset` builds for wasm32 too (the page imports avatars with it).
-for crate in "${PURE_CRATES[@]}" stance_asset; do
+# wasm-pack runs each pure crate's wasm-bindgen tests in headless Chromium (Debian's
+# chromedriver). `stance_asset` (the importer) is tested natively; in the browser it runs in
+# the release wasm of the page's end-to-end avatar tests (picked and broken files), which
+# saves CI about a minute of wasm32 debug builds.
+for crate in "${PURE_CRATES[@]}"; do
   step "$crate in headless Chromium (wasm-pack test)"
   # stance_ik's console output carries its S2..S5 timings.
   show=(); [ "$crate" = stance_ik ] && show=(-- --nocapture)
