@@ -389,6 +389,15 @@ fn parse_settings(v: &Value) -> Result<Settings, DocumentError> {
         }
         s.max_iterations = n as usize;
     }
+    if let Some(n) = num("stall_window")? {
+        if n < 1.0 || n.fract() != 0.0 {
+            return Err(DocumentError::field(
+                "settings.stall_window",
+                "expected a positive integer",
+            ));
+        }
+        s.stall_window = n as usize;
+    }
     let set = |k: &str, slot: &mut f64| -> Result<(), DocumentError> {
         if let Some(n) = num(k)? {
             *slot = n;
@@ -402,6 +411,7 @@ fn parse_settings(v: &Value) -> Result<Settings, DocumentError> {
     set("max_linear_step", &mut s.max_linear_step)?;
     set("max_angular_step", &mut s.max_angular_step)?;
     set("max_dof_step", &mut s.max_dof_step)?;
+    set("trust_region", &mut s.trust_region)?;
     if let Some(n) = num("time_budget_ms")? {
         s.time_budget_secs = Some(n / 1000.0);
     }

@@ -13,7 +13,7 @@ use stance_hanim::{
 };
 use stance_ik::conflict::Unmet;
 use stance_ik::{
-    Clock, Frames, Limb, LimbGoal, Posture, Skeleton, SolveReport, SolveStatus, Solver,
+    Clock, Frames, Iteration, Limb, LimbGoal, Posture, Skeleton, SolveReport, SolveStatus, Solver,
     SolverSettings, SwivelInterval, Task,
 };
 
@@ -48,6 +48,8 @@ pub const MET_TOLERANCE: f64 = 1e-3;
 /// bounds a frame; the count is enough for the Table 1 example to converge in one frame
 /// (33 iterations, about 1.7 ms natively) and a pull converges in 2 or 3 a frame.
 const ITERATIONS_PER_FRAME: usize = 40;
+/// Guarded iterations without a meaningful gain before a frame's solve stalls.
+const GUARDED_STALL_WINDOW: usize = 5;
 const FRAME_BUDGET_SECS: f64 = 0.008;
 
 /// A humanoid being posed.
@@ -118,7 +120,10 @@ impl PosingSession {
             max_iterations: ITERATIONS_PER_FRAME,
             time_budget_secs: Some(FRAME_BUDGET_SECS),
             // Every frame is shown and starts where the last one ended: the guarded
-            // iteration only, no restart from the frame's start posture.
+            // iteration only (each iteration keeps the higher levels), no restart from the
+            // frame's start posture.
+            iteration: Iteration::Guarded,
+            stall_window: GUARDED_STALL_WINDOW,
             restarts: false,
             ..SolverSettings::default()
         };

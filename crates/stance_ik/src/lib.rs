@@ -10,10 +10,11 @@
 //! - [`Task`]: position, orientation, direction (partial orientation), gaze, centre of mass,
 //!   balance (the centre of mass inside the support polygon, an inequality), posture
 //!   attraction; each with a level, a weight and an active flag.
-//! - [`Solver`]: iterates prioritized steps (joint-limit clamping, shared step budget, line
-//!   search, cascade; per-level damping), and when it stalls runs once more as the textbook
-//!   recursion ([`Iteration`]), keeping the better result in priority order; returns a
-//!   [`SolveReport`]; time budget through an injectable [`Clock`].
+//! - [`Solver`]: iterates prioritized steps with joint-limit clamping and per-level damping:
+//!   textbook iterations in a trust region for a whole solve, or guarded ones (shared step
+//!   budget, line search, cascade) for an editor that shows every iteration ([`Iteration`]);
+//!   a stalled solve runs once more as the plain recursion, keeping the better result in
+//!   priority order; returns a [`SolveReport`]; time budget through an injectable [`Clock`].
 //! - [`prioritized_step`]: one step of [BAE 98] on contiguous slices (the default);
 //!   [`prioritized_step_nalgebra`]: the same on nalgebra matrices (kept for the comparison).
 //! - [`Limb`]: closed-form IK of a shoulder-elbow-wrist / hip-knee-ankle limb with the swivel

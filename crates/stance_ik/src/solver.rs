@@ -26,9 +26,19 @@ use crate::{Frames, IkError, Posture, Skeleton, Task, TaskKind};
 
 /// Relative decrease below which an unmet level counts as not progressing.
 const STALL_RELATIVE: f64 = 1e-4;
-/// The stall window of the textbook run: the plain recursion wanders for a while before it
-/// settles.
-const TEXTBOOK_STALL_WINDOW: usize = 40;
+/// The stall window of the multi-start's plain recursion from the start posture.
+const RESTART_STALL_WINDOW: usize = 20;
+/// The stall window of the multi-start's guarded run.
+const GUARDED_STALL_WINDOW: usize = 5;
+
+/// One run of a multi-start after the first.
+struct RestartStage {
+    iteration: Iteration,
+    trust_region: f64,
+    stall_window: usize,
+    /// From the start posture (else from the best posture so far).
+    from_start: bool,
+}
 
 /// Cached per-solve task layout.
 #[derive(Debug, Clone, Default)]
@@ -162,37 +172,40 @@ impl Solver {
         let initial = values.to_vec();
         let before = self.linearize(skeleton, tasks, values);
         let mut run = self.run(skeleton, tasks, values, clock, start);
-        // Multi-start: the guarded iteration stops lower levels short on some multi-level
-        // problems, the textbook recursion on others (its first steps near a singularity can
-        // throw a problem into another basin); a stalled solve runs once more from the start
-        // along the textbook path, and the better of the two in priority order is returned.
-        let time_left = match (clock, start, self.settings.time_budget_secs) {
-            (Some(c), Some(s), Some(budget)) => c.now_secs() - s < 0.5 * budget,
-            _ => true,
-        };
-        let iterations_left = self.settings.max_iterations.saturating_sub(run.iterations);
-        if self.settings.restarts
-            && run.status == SolveStatus::Stalled
-            && iterations_left > 0
-            && time_left
-        {
+        // Multi-start: the trust region, the guarded safeguards and the plain recursion stop
+        // short on different problems (a step's length decides which basin a problem falls
+        // into; an inequality that switches on and off makes whole steps oscillate). A stalled
+        // solve goes on with the other kinds of run in turn, each kept only if better in
+        // priority order.
+        for stage in self.restart_stages() {
+            let time_left = match (clock, start, self.settings.time_budget_secs) {
+                (Some(c), Some(s), Some(budget)) => c.now_secs() - s < 0.5 * budget,
+                _ => true,
+            };
+            let iterations_left = self.settings.max_iterations.saturating_sub(run.iterations);
+            if !(run.status == SolveStatus::Stalled && iterations_left > 0 && time_left) {
+                break;
+            }
             let first_values = values.to_vec();
             let first_residuals = self.residual_sq.clone();
             let saved = self.settings;
-            self.settings.iteration = Iteration::Textbook;
-            self.settings.stall_window = TEXTBOOK_STALL_WINDOW;
+            self.settings.iteration = stage.iteration;
+            self.settings.trust_region = stage.trust_region;
+            self.settings.stall_window = stage.stall_window;
             self.settings.max_iterations = iterations_left;
-            values.copy_from_slice(&initial);
+            if stage.from_start {
+                values.copy_from_slice(&initial);
+            }
             self.linearize(skeleton, tasks, values);
-            let second = self.run(skeleton, tasks, values, clock, start);
+            let next = self.run(skeleton, tasks, values, clock, start);
             self.settings = saved;
-            let iterations = run.iterations + second.iterations;
+            let iterations = run.iterations + next.iterations;
             if self.lexicographically_better(&self.residual_sq, &first_residuals) {
                 let mut restarts = run.analytic_restarts;
-                restarts.extend(second.analytic_restarts);
+                restarts.extend(next.analytic_restarts);
                 run = RunOutcome {
                     analytic_restarts: restarts,
-                    ..second
+                    ..next
                 };
             } else {
                 values.copy_from_slice(&first_values);
@@ -223,6 +236,33 @@ impl Solver {
             },
             analytic_restarts,
         })
+    }
+
+    /// The runs a stalled solve goes on with, in order (none without `settings.restarts`):
+    /// after textbook iterations, guarded ones from the best posture so far (their line
+    /// search settles what whole steps leave oscillating), then the plain recursion from the
+    /// start posture; after guarded ones, the plain recursion.
+    fn restart_stages(&self) -> Vec<RestartStage> {
+        if !self.settings.restarts {
+            return Vec::new();
+        }
+        let guarded = RestartStage {
+            iteration: Iteration::Guarded,
+            trust_region: self.settings.trust_region,
+            stall_window: GUARDED_STALL_WINDOW,
+            from_start: false,
+        };
+        let plain = RestartStage {
+            iteration: Iteration::Textbook,
+            trust_region: f64::INFINITY,
+            stall_window: RESTART_STALL_WINDOW,
+            from_start: true,
+        };
+        match self.settings.iteration {
+            Iteration::Guarded => vec![plain],
+            Iteration::Textbook if self.settings.trust_region == f64::INFINITY => vec![guarded],
+            Iteration::Textbook => vec![guarded, plain],
+        }
     }
 
     /// One report per level: its residuals `before` (squared) and now.
@@ -576,7 +616,8 @@ impl Solver {
 
     /// One iteration as the textbook recursion takes it: the prioritized step of every level
     /// at once (each task's error clamped by the linearisation) with the joint-limit clamping
-    /// loop, nothing else (no cascade, no step control, no shared budget). Leaves the systems
+    /// loop, scaled into the trust region, nothing else (no cascade, no line search, no
+    /// shared budget). Leaves the systems
     /// linearised at the new `values`. Returns (largest DOF change, clamped DOF count).
     fn textbook_iteration(
         &mut self,
@@ -584,7 +625,13 @@ impl Solver {
         tasks: &[Task],
         values: &mut [f64],
     ) -> (f64, usize) {
-        let (step, clamped) = self.compute_step(skeleton, values, self.layout.len());
+        let (mut step, clamped) = self.compute_step(skeleton, values, self.layout.len());
+        // The trust region: the whole step scaled, its direction kept (`values + step` stays
+        // inside the limits: both ends are).
+        let longest = step.amax();
+        if longest > self.settings.trust_region {
+            step *= self.settings.trust_region / longest;
+        }
         let mut moved: f64 = 0.0;
         for (v, d) in values.iter_mut().zip(step.iter()) {
             *v += d;

@@ -299,3 +299,217 @@ fn gaze_turns_toward_the_exact_antipode() {
     );
     assert!(after < 1e-6, "exact antipode: {before} rad -> {after} rad");
 }
+
+/// The issue's speed target on the feasible suite: time per solve of Stance against the
+/// textbook recursion (`plain_recursion`: explicit `N x N` nalgebra matrices), both from the
+/// same start, in one run. A measurement, not a check: run it in release with
+/// `cargo test --release -p stance_ik --test convergence -- --ignored --nocapture`
+/// (`STANCE_CASES` cases, default 200).
+#[cfg(not(target_arch = "wasm32"))]
+#[test]
+#[ignore = "a measurement: run in release"]
+fn feasible_suite_time_per_solve_against_the_oracle() {
+    use std::time::Instant;
+    let skeleton = humanoid50().unwrap();
+    let n = std::env::var("STANCE_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(200u64);
+    let (mut ours_s, mut oracle_s) = (0.0, 0.0);
+    let (mut ours_it, mut oracle_it) = (0usize, 0usize);
+    let (mut ours_met, mut oracle_met) = (0, 0);
+    let mut solver = Solver::new(SolverSettings::default()).unwrap();
+    let mut hist = std::collections::BTreeMap::<String, (usize, usize, f64)>::new();
+    for seed in 0..n {
+        let c = case(&skeleton, Suite::Feasible, seed);
+        let mut posture = c.start.clone();
+        let t = Instant::now();
+        let report = solver.solve(&skeleton, &c.tasks, &mut posture).unwrap();
+        let dt = t.elapsed().as_secs_f64();
+        ours_s += dt;
+        ours_it += report.iterations;
+        let e = hist.entry(format!("{:?}", report.status)).or_default();
+        e.0 += 1;
+        e.1 += report.iterations;
+        e.2 += dt;
+        ours_met += usize::from(
+            level_residuals(&skeleton, &c.tasks, &posture)
+                .iter()
+                .all(|&r| r <= MET),
+        );
+        let t = Instant::now();
+        let (oracle, it) = plain_recursion(&skeleton, &c.tasks, &c.start, 100);
+        oracle_s += t.elapsed().as_secs_f64();
+        oracle_it += it;
+        oracle_met += usize::from(
+            level_residuals(&skeleton, &c.tasks, &oracle)
+                .iter()
+                .all(|&r| r <= MET),
+        );
+    }
+    let per = |s: f64| s / n as f64 * 1e3;
+    println!(
+        "feasible suite, {n} cases: Stance {:.3} ms/solve, {:.1} iterations, met {ours_met}; \
+         plain recursion {:.3} ms/solve, {:.1} iterations, met {oracle_met}; ratio {:.2}x",
+        per(ours_s),
+        ours_it as f64 / n as f64,
+        per(oracle_s),
+        oracle_it as f64 / n as f64,
+        oracle_s / ours_s
+    );
+    for (status, (count, it, s)) in hist {
+        println!(
+            "  {status}: {count} solves, {:.1} iterations, {:.3} ms each",
+            it as f64 / count as f64,
+            s / count as f64 * 1e3
+        );
+    }
+}
+
+/// Writes the first `STANCE_CASES` (default 200) cases of the feasible suite as problem files
+/// (`docs/problem-format.md`) into the folder `STANCE_SUITE_OUT`, for `stance bench --suite`
+/// and for peers measured side by side on the same problems (`bench/placo/`). Run with
+/// `STANCE_SUITE_OUT=DIR cargo test -p stance_ik --test convergence -- --ignored export`.
+#[cfg(not(target_arch = "wasm32"))]
+#[test]
+#[ignore = "writes files: run on request"]
+fn export_feasible_suite_as_problem_files() {
+    let Ok(dir) = std::env::var("STANCE_SUITE_OUT") else {
+        println!("STANCE_SUITE_OUT is not set: nothing written");
+        return;
+    };
+    let n = std::env::var("STANCE_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(200u64);
+    std::fs::create_dir_all(&dir).unwrap();
+    let skeleton = humanoid50().unwrap();
+    let skeleton_json = problem_skeleton_json(&skeleton);
+    for seed in 0..n {
+        let c = case(&skeleton, Suite::Feasible, seed);
+        let tasks: Vec<String> = c
+            .tasks
+            .iter()
+            .map(|t| problem_task_json(&skeleton, t))
+            .collect();
+        let mut posture = Vec::new();
+        for joint in skeleton.joints() {
+            let dofs: Vec<String> = joint
+                .dof_range()
+                .map(|d| {
+                    let kind = skeleton.dof_kinds()[d].name();
+                    format!("\"{kind}\": {:e}", c.start.values()[d])
+                })
+                .collect();
+            if !dofs.is_empty() {
+                posture.push(format!("\"{}\": {{{}}}", joint.name, dofs.join(", ")));
+            }
+        }
+        let text = format!(
+            "{{\"skeleton\": {skeleton_json},\n \"tasks\": [\n  {}\n ],\n \"posture\": {{{}}}}}\n",
+            tasks.join(",\n  "),
+            posture.join(", ")
+        );
+        std::fs::write(format!("{dir}/feasible-{seed:04}.json"), text).unwrap();
+    }
+    println!("wrote {n} problem files to {dir}");
+}
+
+fn json_vec(v: DVec3) -> String {
+    format!("[{:e}, {:e}, {:e}]", v.x, v.y, v.z)
+}
+
+fn problem_skeleton_json(skeleton: &Skeleton) -> String {
+    let (lo, hi) = (skeleton.lower_limits(), skeleton.upper_limits());
+    let joints: Vec<String> = skeleton
+        .joints()
+        .iter()
+        .map(|j| {
+            let parent = j.parent.map_or("null".to_owned(), |p| {
+                format!("\"{}\"", skeleton.joints()[p].name)
+            });
+            let dofs: Vec<String> = j.dofs.iter().map(|d| format!("\"{}\"", d.name())).collect();
+            let limits: Vec<String> = j
+                .dof_range()
+                .filter(|&d| lo[d].is_finite() || hi[d].is_finite())
+                .map(|d| {
+                    let bound = |v: f64| {
+                        if v.is_finite() {
+                            format!("{v:e}")
+                        } else {
+                            "null".into()
+                        }
+                    };
+                    format!(
+                        "\"{}\": [{}, {}]",
+                        skeleton.dof_kinds()[d].name(),
+                        bound(lo[d]),
+                        bound(hi[d])
+                    )
+                })
+                .collect();
+            format!(
+                "{{\"name\": \"{}\", \"parent\": {parent}, \"offset\": {}, \"dofs\": [{}], \
+                 \"limits\": {{{}}}, \"mass\": {:e}, \"com\": {}}}",
+                j.name,
+                json_vec(j.offset),
+                dofs.join(", "),
+                limits.join(", "),
+                j.mass,
+                json_vec(j.com)
+            )
+        })
+        .collect();
+    format!("{{\"joints\": [\n  {}]}}", joints.join(",\n  "))
+}
+
+fn problem_task_json(skeleton: &Skeleton, t: &Task) -> String {
+    let name = |j: usize| &skeleton.joints()[j].name;
+    let axes = |a: Axes| {
+        ["x", "y", "z"]
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| a.has(*i))
+            .map(|(_, s)| *s)
+            .collect::<String>()
+    };
+    let head = format!("\"level\": {}, \"weight\": {:e}", t.level, t.weight);
+    match &t.kind {
+        TaskKind::Position {
+            effector,
+            axes: a,
+            target,
+        } => format!(
+            "{{{head}, \"kind\": \"position\", \"joint\": \"{}\", \"point\": {}, \"axes\": \"{}\", \"target\": {}}}",
+            name(effector.joint),
+            json_vec(effector.point),
+            axes(*a),
+            json_vec(*target)
+        ),
+        TaskKind::Orientation { joint, target } => format!(
+            "{{{head}, \"kind\": \"orientation\", \"joint\": \"{}\", \"target\": [{:e}, {:e}, {:e}, {:e}]}}",
+            name(*joint),
+            target.x,
+            target.y,
+            target.z,
+            target.w
+        ),
+        TaskKind::Gaze {
+            effector,
+            axis,
+            target,
+        } => format!(
+            "{{{head}, \"kind\": \"gaze\", \"joint\": \"{}\", \"point\": {}, \"axis\": {}, \"target\": {}}}",
+            name(effector.joint),
+            json_vec(effector.point),
+            json_vec(*axis),
+            json_vec(*target)
+        ),
+        TaskKind::CenterOfMass { axes: a, target } => format!(
+            "{{{head}, \"kind\": \"com\", \"axes\": \"{}\", \"target\": {}}}",
+            axes(*a),
+            json_vec(*target)
+        ),
+        other => panic!("the feasible suite has no {other:?} task"),
+    }
+}

@@ -55,12 +55,19 @@ pub struct SolverSettings {
     /// met levels aside) beat the best so far by no more than this (m / rad, default 1e-10) or
     /// 1e-4 of themselves.
     pub stall_improvement: f64,
-    /// How each iteration is taken (default [`Iteration::Guarded`]).
+    /// How each iteration is taken (default [`Iteration::Textbook`]; an interactive editor
+    /// that shows every iteration takes [`Iteration::Guarded`]).
     pub iteration: Iteration,
     /// Stalled when this many iterations in a row bring no meaningful improvement in priority
-    /// order (default 5; the multi-start's textbook run uses 40: the plain recursion wanders
-    /// for a while before it settles).
+    /// order (default 40: the textbook recursion wanders for a while before it settles; 5
+    /// suits guarded iterations; the multi-start's run from the start posture takes 20).
     pub stall_window: usize,
+    /// Largest DOF change of a textbook iteration (rad or m, default 0.5): a longer step is
+    /// scaled down as a whole, its direction kept. A trust region: the plain recursion's first
+    /// steps near a singularity swing DOF by several radians onto their limits and throw the
+    /// problem into another basin. Infinity gives the plain recursion. Guarded iterations use
+    /// `max_dof_step` instead.
+    pub trust_region: f64,
     /// Wall-clock budget in seconds (needs a [`Clock`]; default none).
     pub time_budget_secs: Option<f64>,
     /// Damping of every level without its own (default constant 0.002; see
@@ -80,9 +87,9 @@ pub struct SolverSettings {
     /// Linear-algebra implementation of the step (default: the slice kernel).
     pub backend: Backend,
     /// When a solve stalls with a level unmet (and at least half the time budget is left),
-    /// solve once more from the start posture with [`Iteration::Textbook`] (within what is
-    /// left of the iteration budget) and keep the better result in priority order (default
-    /// true).
+    /// solve once more from the start posture as the plain textbook recursion (no trust
+    /// region; within what is left of the iteration budget) and keep the better result in
+    /// priority order (default true).
     pub restarts: bool,
 }
 
@@ -95,11 +102,13 @@ pub enum Iteration {
     /// level clearly worse is halved, then loses its lowest levels (see
     /// `Solver::guarded_iteration`). Every iteration's posture keeps the higher levels: what
     /// an interactive editor shows frame by frame.
-    #[default]
     Guarded,
-    /// The textbook recursion: every level's step at once, joint-limit clamping, nothing
-    /// else. Converges on multi-level problems where the safeguards stop lower levels short,
-    /// but its first steps may throw higher levels far off on the way.
+    /// The textbook recursion: every level's step at once, joint-limit clamping, the whole
+    /// step scaled into [`SolverSettings::trust_region`], nothing else. Converges on
+    /// multi-level problems where the guarded safeguards stop lower levels short (in about
+    /// 13 iterations on the feasible suite, against 40 guarded), but an iteration may leave a
+    /// higher level worse on the way: a solve returns the best posture met in priority order.
+    #[default]
     Textbook,
 }
 
@@ -121,8 +130,9 @@ impl Default for SolverSettings {
             tolerance: 1e-6,
             stall_step: 1e-10,
             stall_improvement: 1e-10,
-            iteration: Iteration::Guarded,
+            iteration: Iteration::Textbook,
             stall_window: STALL_WINDOW,
+            trust_region: 0.5,
             time_budget_secs: None,
             damping: Damping::default(),
             rank_tolerance: 1e-9,
@@ -167,6 +177,9 @@ impl SolverSettings {
         if !pos(self.max_dof_step) {
             return Err(IkError::BadSetting("max_dof_step"));
         }
+        if self.trust_region.is_nan() || self.trust_region <= 0.0 {
+            return Err(IkError::BadSetting("trust_region"));
+        }
         Ok(())
     }
 
@@ -203,4 +216,4 @@ pub(super) fn validate_damping(damping: Damping) -> Result<(), IkError> {
 }
 
 /// Iterations without a meaningful new best (in priority order) before "stalled".
-const STALL_WINDOW: usize = 5;
+const STALL_WINDOW: usize = 40;
