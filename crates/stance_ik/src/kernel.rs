@@ -397,11 +397,17 @@ fn level_step(
             kn.g[a * m + b] = v;
         }
     }
-    // y = (G + lambda^2 I)^-1 e, or the filtered eigen-solution.
+    // y = (G + lambda^2 I)^-1 e, or the filtered eigen-solution; for a projection level
+    // (cost gradients) y = dx: the rows projected, scaled, not inverted.
     kn.y.clear();
     let mut solved = false;
+    if level.projection {
+        kn.y.extend_from_slice(level.dx.as_slice());
+        solved = true;
+    }
     let damping = level.damping.unwrap_or(params.damping);
-    if let Damping::Constant { lambda } = damping
+    if !solved
+        && let Damping::Constant { lambda } = damping
         && lambda > 0.0
     {
         kn.y.extend_from_slice(&kn.e);

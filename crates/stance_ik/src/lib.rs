@@ -27,6 +27,7 @@
 
 #![warn(missing_docs)]
 
+pub mod comfort;
 pub mod conflict;
 mod error;
 mod joint_rotation;

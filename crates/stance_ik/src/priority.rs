@@ -52,6 +52,11 @@ pub struct LevelSystem {
     pub support: Vec<usize>,
     /// This level's damping (`None`: the step's `StepParams::damping`).
     pub damping: Option<Damping>,
+    /// The rows are cost gradients (the comfort task): the level's step is its rows projected
+    /// into what the levels above leave, times `dx` (`P_{k-1} z`, the null-space term of the
+    /// paper's formula), with no least-squares inverse: a direction the levels above block
+    /// gives less motion, never more.
+    pub projection: bool,
 }
 
 /// Parameters of one prioritized step.
@@ -221,7 +226,11 @@ pub fn prioritized_step_nalgebra(
             ws.jts.tr_mul(&ws.jts)
         };
         ws.all_rows = all;
-        let y = damped_solve(&g, &e, level.damping.unwrap_or(params.damping), tol);
+        let y = if level.projection {
+            level.dx.clone()
+        } else {
+            damped_solve(&g, &e, level.damping.unwrap_or(params.damping), tol)
+        };
         let mut step = &ws.jht * y;
         let max = step.amax();
         let left = budget.max(0.0);

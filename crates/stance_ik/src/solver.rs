@@ -30,6 +30,9 @@ const STALL_RELATIVE: f64 = 1e-4;
 const RESTART_STALL_WINDOW: usize = 20;
 /// The stall window of the multi-start's guarded run.
 const GUARDED_STALL_WINDOW: usize = 5;
+/// Iterations without a meaningful fall of a comfort level's cost, every other level met,
+/// before the solve has converged.
+const COMFORT_STALL_WINDOW: usize = 3;
 
 /// One run of a multi-start after the first.
 struct RestartStage {
@@ -46,7 +49,11 @@ struct LevelLayout {
     level: u32,
     tasks: Vec<usize>,
     rows: usize,
+    /// Never "met" (posture attraction, comfort): not in the convergence test.
     posture_only: bool,
+    /// A comfort level: never met, but compared in priority order (its residual is the
+    /// cost), so that the solve goes on while the cost falls.
+    comfort: bool,
 }
 
 /// How one run of iterations ended.
@@ -301,8 +308,10 @@ impl Solver {
         let mut flat_iterations = 0;
         let mut analytic_restarts = Vec::new();
         let tol = self.settings.tolerance;
+        let comfort = self.layout.iter().any(|l| l.comfort);
         let status = loop {
-            if self.all_met(tol) {
+            // With a comfort level, "met" is not the end: the cost falls while it can.
+            if self.all_met(tol) && (!comfort || flat_iterations >= COMFORT_STALL_WINDOW) {
                 break SolveStatus::Converged;
             }
             if iterations >= self.settings.max_iterations {
@@ -510,10 +519,24 @@ impl Solver {
                     level,
                     rows: members.iter().map(|&i| tasks[i].rows()).sum(),
                     posture_only: members.iter().all(|&i| tasks[i].is_posture()),
+                    comfort: members.iter().any(|&i| tasks[i].is_comfort()),
                     tasks: members,
                 }
             })
             .collect();
+        for layout in &self.layout {
+            if layout.comfort
+                && let Some(&other) = layout.tasks.iter().find(|&&i| !tasks[i].is_comfort())
+            {
+                return Err(IkError::BadTask {
+                    index: other,
+                    reason: format!(
+                        "level {} holds a comfort task: it cannot share it with other kinds",
+                        layout.level
+                    ),
+                });
+            }
+        }
         self.supports = tasks.iter().map(|t| t.support(skeleton)).collect();
         let n = skeleton.dof_count();
         self.systems.resize_with(self.layout.len(), || LevelSystem {
@@ -522,10 +545,12 @@ impl Solver {
             dx: DVector::zeros(0),
             support: Vec::new(),
             damping: None,
+            projection: false,
         });
         for (sys, l) in self.systems.iter_mut().zip(&self.layout) {
             sys.level = l.level;
             sys.damping = self.level_damping.get(&l.level).copied();
+            sys.projection = l.comfort;
             let mut support: Vec<usize> = l
                 .tasks
                 .iter()
@@ -562,6 +587,8 @@ impl Solver {
             linear: self.settings.max_linear_step,
             angular: self.settings.max_angular_step,
         };
+        let tol2 = self.settings.tolerance * self.settings.tolerance;
+        let mut above_met = true;
         for (((layout, sys), res), wres) in self
             .layout
             .iter()
@@ -581,7 +608,7 @@ impl Solver {
                 *res += r * r;
                 *wres += task.weight * r * r;
                 let jt = &mut sys.jacobian_t.as_mut_slice()[row * n..(row + rows) * n];
-                task.jacobian_t(skeleton, &self.frames, &self.supports[ti], jt, n);
+                task.jacobian_t(skeleton, &self.frames, values, &self.supports[ti], jt, n);
                 let w = task.weight.sqrt();
                 if w != 1.0 {
                     err.iter_mut().for_each(|v| *v *= w);
@@ -589,6 +616,13 @@ impl Solver {
                 }
                 row += rows;
             }
+            if layout.comfort && !above_met {
+                // A comfort level waits until every level above it is met: its steps would
+                // keep disturbing them through the non-linearity; once they are met it moves
+                // along the surface they leave, and the next iterations pull back the drift.
+                sys.dx.fill(0.0);
+            }
+            above_met &= layout.posture_only || *res <= tol2;
         }
         self.residual_sq.clone()
     }
@@ -732,7 +766,7 @@ impl Solver {
         let tol = 10.0 * self.settings.tolerance;
         for ((layout, &a), &b) in self.layout.iter().zip(a).zip(b) {
             let (a, b) = (a.sqrt(), b.sqrt());
-            if layout.posture_only || (a <= tol && b <= tol) {
+            if (layout.posture_only && !layout.comfort) || (a <= tol && b <= tol) {
                 continue;
             }
             let margin = self.settings.stall_improvement.max(STALL_RELATIVE * b);
@@ -750,7 +784,7 @@ impl Solver {
     fn lexicographically_better(&self, a: &[f64], b: &[f64]) -> bool {
         let tol2 = self.settings.tolerance * self.settings.tolerance;
         for ((layout, &a), &b) in self.layout.iter().zip(a).zip(b) {
-            if layout.posture_only || (a <= tol2 && b <= tol2) {
+            if (layout.posture_only && !layout.comfort) || (a <= tol2 && b <= tol2) {
                 continue;
             }
             if a < b {

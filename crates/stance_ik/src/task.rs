@@ -12,6 +12,9 @@ pub use balance::BALANCE_BAND;
 use balance::{BalanceGeometry, convex_hull, floor_points};
 use gaze::{GazeGeometry, direction_error};
 
+use std::sync::Arc;
+
+use crate::comfort::ComfortModel;
 use crate::{Frames, IkError, Skeleton};
 
 /// A subset of the world axes x, y, z.
@@ -144,6 +147,15 @@ pub enum TaskKind {
         /// Distance kept from the polygon's edges (m), >= 0.
         margin: f64,
     },
+    /// Comfort (the paper's open question): the cost of a [`ComfortModel`] (effort against
+    /// gravity, joint-range discomfort, angle bands) lowered along its gradient projected into
+    /// what the levels above leave (the null-space term `z` of the paper's formula). One row,
+    /// the unit gradient; never "met": the solve goes on while the cost falls. A comfort task
+    /// shares its level with no other kind of task.
+    Comfort {
+        /// The cost.
+        model: Arc<ComfortModel>,
+    },
     /// Attraction of the chosen DOF toward a reference posture (Jacobian = identity rows).
     PostureAttraction {
         /// Reference value for every DOF of the skeleton.
@@ -270,14 +282,29 @@ impl Task {
             TaskKind::Position { axes, .. } | TaskKind::CenterOfMass { axes, .. } => axes.count(),
             TaskKind::Orientation { .. } => 3,
             TaskKind::Gaze { .. } | TaskKind::Direction { .. } => 2,
-            TaskKind::Balance { .. } => 1,
+            TaskKind::Balance { .. } | TaskKind::Comfort { .. } => 1,
             TaskKind::PostureAttraction { dofs, .. } => dofs.len(),
         }
     }
 
-    /// Whether the task is the (never "met") posture attraction.
+    /// Whether the task is never "met": the posture attraction, or comfort.
     pub fn is_posture(&self) -> bool {
-        matches!(self.kind, TaskKind::PostureAttraction { .. })
+        matches!(
+            self.kind,
+            TaskKind::PostureAttraction { .. } | TaskKind::Comfort { .. }
+        )
+    }
+
+    /// Whether the task is a comfort task (its level goes on while its cost falls).
+    pub fn is_comfort(&self) -> bool {
+        matches!(self.kind, TaskKind::Comfort { .. })
+    }
+
+    /// A comfort task lowering `model`'s cost.
+    pub fn comfort(model: ComfortModel) -> Self {
+        Self::new(TaskKind::Comfort {
+            model: Arc::new(model),
+        })
     }
 
     /// Checks the task against a skeleton. `index` is used in the error.
@@ -366,6 +393,9 @@ impl Task {
                     return Err(bad("balance task on a skeleton without mass".into()));
                 }
             }
+            TaskKind::Comfort { model } => {
+                model.validate(skeleton).map_err(bad)?;
+            }
             TaskKind::PostureAttraction { reference, dofs } => {
                 if reference.len() != skeleton.dof_count() {
                     return Err(bad(format!(
@@ -399,6 +429,9 @@ impl Task {
             TaskKind::CenterOfMass { .. } | TaskKind::Balance { .. } => {
                 (0..skeleton.dof_count()).collect()
             }
+            TaskKind::Comfort { .. } => (0..skeleton.dof_count())
+                .filter(|&d| skeleton.dof_kinds()[d].is_rotation())
+                .collect(),
             TaskKind::PostureAttraction { dofs, .. } => {
                 let mut d = dofs.clone();
                 d.sort_unstable();
@@ -465,7 +498,6 @@ pub(crate) fn log_rotation(q: DQuat) -> DVec3 {
 impl Task {
     /// The measured feature (see [`TaskFeature`]).
     pub fn feature(&self, skeleton: &Skeleton, frames: &Frames, values: &[f64]) -> TaskFeature {
-        let _ = skeleton;
         match &self.kind {
             TaskKind::Position { effector, axes, .. } => {
                 let p = frames.point(effector.joint, effector.point);
@@ -500,6 +532,9 @@ impl Task {
                     .filter(BalanceGeometry::active)
                     .map_or(-BALANCE_BAND, |g| g.violation);
                 TaskFeature::Vector(vec![x])
+            }
+            TaskKind::Comfort { model } => {
+                TaskFeature::Vector(vec![model.terms(skeleton, frames, values).total])
             }
             TaskKind::PostureAttraction { dofs, .. } => TaskFeature::Vector(
                 dofs.iter()
@@ -546,7 +581,6 @@ impl Task {
         err: &mut [f64],
         limits: Option<StepLimits>,
     ) -> f64 {
-        let _ = skeleton;
         let clamp_vec = |e: &mut [f64], max: Option<f64>| {
             let norm = e.iter().map(|v| v * v).sum::<f64>().sqrt();
             if let Some(max) = max
@@ -599,6 +633,15 @@ impl Task {
                 err[0] = -violation;
                 clamp_vec(err, limits.map(|l| l.linear))
             }
+            TaskKind::Comfort { model } => {
+                // A gradient step of the cost, as far as a tenth of a radian.
+                let mut gradient = vec![0.0; skeleton.dof_count()];
+                let terms = model.gradient(skeleton, frames, values, &mut gradient);
+                let slope = gradient.iter().map(|g| g * g).sum::<f64>().sqrt();
+                let most = limits.map_or(COMFORT_MAX_STEP, |l| l.angular.min(COMFORT_MAX_STEP));
+                err[0] = -(COMFORT_STEP_GAIN * slope).min(most);
+                terms.total
+            }
             TaskKind::PostureAttraction { reference, dofs } => {
                 for (e, &d) in err.iter_mut().zip(dofs) {
                     let v = values.get(d).copied().unwrap_or(0.0);
@@ -620,6 +663,7 @@ impl Task {
         &self,
         skeleton: &Skeleton,
         frames: &Frames,
+        values: &[f64],
         support: &[usize],
         jac_t: &mut [f64],
         n: usize,
@@ -722,9 +766,26 @@ impl Task {
                     jac_t[row * n + d] = 1.0;
                 }
             }
+            TaskKind::Comfort { model } => {
+                // The unit gradient: the step is the projected gradient times the error.
+                let mut gradient = vec![0.0; n];
+                model.gradient(skeleton, frames, values, &mut gradient);
+                let slope = gradient.iter().map(|g| g * g).sum::<f64>().sqrt();
+                if slope > 0.0 && slope.is_finite() {
+                    for &d in support {
+                        jac_t[d] = gradient[d] / slope;
+                    }
+                }
+            }
         }
     }
 }
+
+/// The comfort task's gradient step: `gain * |grad|` radians (a plain gradient descent with
+/// this rate where the levels above leave the gradient free) ...
+const COMFORT_STEP_GAIN: f64 = 0.05;
+/// ... as far as this (rad) per iteration.
+const COMFORT_MAX_STEP: f64 = 0.1;
 
 fn fill_axes(err: &mut [f64], d: DVec3, axes: Axes) {
     let mut k = 0;

@@ -1,0 +1,424 @@
+//! Comfort of a posture, from the skeleton alone: the static joint loads due to gravity (as a
+//! share of each DOF's maximal voluntary torque), the discomfort of DOF near the ends of their
+//! ranges, and smooth penalties on the angles between segments; their weighted sum is the cost
+//! of the comfort task ([`crate::TaskKind::Comfort`]), whose analytic gradient is the
+//! null-space term `z` of the paper's formula (`dtheta = J+ dx + (I - J+ J) z`).
+//!
+//! What the DOF and segments mean (which strength belongs to a knee, which angle RULA reads)
+//! is the caller's: `stance_hanim::comfort` builds a [`ComfortModel`] for an H-Anim body.
+//!
+//! The gradient costs O(N): every load is `tau_j = (m_j - M_j p_j) x g` from the subtree mass
+//! `M_j` and moment `m_j` that forward kinematics already keeps, and its derivatives sum over
+//! the tree in one pass down and one up.
+
+use glam::DVec3;
+
+use crate::{Frames, Skeleton};
+
+/// Gravity (m/s^2), along world -Y (H-Anim's up is +Y).
+pub const GRAVITY: DVec3 = DVec3::new(0.0, -9.81, 0.0);
+
+/// Maximal voluntary torque of one rotation DOF (N m), as the muscles produce it about the
+/// DOF's +axis and about its -axis (e.g. flexion and extension).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DofStrength {
+    /// About the joint frame's +axis (N m, > 0).
+    pub positive: f64,
+    /// About its -axis (N m, > 0).
+    pub negative: f64,
+}
+
+impl DofStrength {
+    /// The same strength both ways.
+    pub fn symmetric(torque: f64) -> Self {
+        Self {
+            positive: torque,
+            negative: torque,
+        }
+    }
+
+    /// The strength that holds a gravity torque `tau` about the axis (the muscles produce
+    /// `-tau`).
+    fn holding(&self, tau: f64) -> f64 {
+        if tau > 0.0 {
+            self.negative
+        } else {
+            self.positive
+        }
+    }
+}
+
+/// Where an [`AngleBand`] measures its angle from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum AngleReference {
+    /// A fixed world direction (unit), e.g. down.
+    World(DVec3),
+    /// An axis (joint frame, unit) of another segment, e.g. the trunk's down axis.
+    Segment {
+        /// The segment's joint.
+        joint: usize,
+        /// The axis in its frame.
+        axis: DVec3,
+    },
+}
+
+/// A smooth stand-in for a score that steps up with an angle (RULA's bands): the angle between
+/// a segment axis and a reference, and `sum step_k * s((angle - edge_k) / width)` with the
+/// logistic `s`; the exact score is a step function and gives a solver no direction.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AngleBand {
+    /// Name for reports (e.g. `"r_upper_arm"`).
+    pub name: String,
+    /// The segment's joint.
+    pub joint: usize,
+    /// The segment axis in its joint frame (unit).
+    pub axis: DVec3,
+    /// What the angle is measured from.
+    pub reference: AngleReference,
+    /// `(edge in rad, score step)` pairs.
+    pub edges: Vec<(f64, f64)>,
+    /// Smoothing width (rad, > 0).
+    pub width: f64,
+}
+
+/// The cost of the comfort task: weighted effort, range discomfort and angle bands.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ComfortModel {
+    /// Weight of the effort: `sum_d (tau_d / strength_d)^2` over the DOF with a strength.
+    pub effort_weight: f64,
+    /// Per DOF (`None`: not counted): the strength that holds its gravity torque.
+    pub strength: Vec<Option<DofStrength>>,
+    /// Weight of the joint-range discomfort (Marler et al. 2005) of the rotation DOF with
+    /// finite limits.
+    pub range_weight: f64,
+    /// Weight of the angle bands.
+    pub band_weight: f64,
+    /// The angle bands.
+    pub bands: Vec<AngleBand>,
+}
+
+/// The comfort of a posture, term by term (each unweighted) and the weighted total.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ComfortTerms {
+    /// `sum_d (tau_d / strength_d)^2`.
+    pub effort: f64,
+    /// Joint-range discomfort, summed over the limited rotation DOF.
+    pub range: f64,
+    /// Sum of the smooth band scores.
+    pub bands: f64,
+    /// `effort_weight * effort + range_weight * range + band_weight * bands`.
+    pub total: f64,
+}
+
+/// Static torque at every joint due to the weight of the segments it carries (N m, world):
+/// `sum over the subtree of (c_s - p_j) x m_s g`; the muscles across the joint hold `-tau`.
+pub fn gravity_torques(frames: &Frames) -> Vec<DVec3> {
+    frames
+        .joint_position
+        .iter()
+        .zip(frames.subtree_moment.iter().zip(&frames.subtree_mass))
+        .map(|(&p, (&moment, &mass))| (moment - mass * p).cross(GRAVITY))
+        .collect()
+}
+
+/// The gravity torque about each rotation DOF's joint-frame axis (N m; 0 for translations).
+pub fn dof_torques(skeleton: &Skeleton, frames: &Frames) -> Vec<f64> {
+    let torques = gravity_torques(frames);
+    skeleton
+        .dof_kinds()
+        .iter()
+        .enumerate()
+        .map(|(d, kind)| {
+            if !kind.is_rotation() {
+                return 0.0;
+            }
+            let j = skeleton.dof_joint(d);
+            torques[j].dot(frames.world_from_joint_rotation[j].col(kind.axis_index()))
+        })
+        .collect()
+}
+
+/// Marler et al. (2005)'s penalty of a DOF at normalised distance `x = (upper - q) / range`
+/// from one end of its range: `(0.5 sin(5 x + 1.571) + 0.5)^100`, 1 at the end, below 1e-2
+/// from 7 % of the range inward; and its derivative in `x`.
+fn range_wall(x: f64) -> (f64, f64) {
+    const FREQUENCY: f64 = 5.0;
+    const PHASE: f64 = 1.571;
+    const POWER: i32 = 100;
+    // The sine peaks (value 1) just past the end, at 5 x + 1.571 = pi / 2; flat beyond.
+    if FREQUENCY * x + PHASE <= std::f64::consts::FRAC_PI_2 {
+        return (1.0, 0.0);
+    }
+    if FREQUENCY * x > std::f64::consts::PI {
+        return (0.0, 0.0);
+    }
+    let base = 0.5 * (FREQUENCY * x + PHASE).sin() + 0.5;
+    let value = base.powi(POWER);
+    let slope =
+        f64::from(POWER) * base.powi(POWER - 1) * 0.5 * FREQUENCY * (FREQUENCY * x + PHASE).cos();
+    (value, slope)
+}
+
+/// The logistic step of an angle band and its derivative.
+fn logistic(x: f64) -> (f64, f64) {
+    let s = 1.0 / (1.0 + (-x).exp());
+    (s, s * (1.0 - s))
+}
+
+impl ComfortModel {
+    /// Checks the model against a skeleton: one strength or none per DOF (or none at all),
+    /// finite non-negative weights, positive strengths, joints in range, positive band widths.
+    pub fn validate(&self, skeleton: &Skeleton) -> Result<(), String> {
+        let weights = [self.effort_weight, self.range_weight, self.band_weight];
+        if weights.iter().any(|w| !(w.is_finite() && *w >= 0.0)) {
+            return Err("comfort weights must be finite and >= 0".into());
+        }
+        if !self.strength.is_empty() && self.strength.len() != skeleton.dof_count() {
+            return Err(format!(
+                "comfort strengths cover {} DOF, the skeleton has {}",
+                self.strength.len(),
+                skeleton.dof_count()
+            ));
+        }
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        if let Some(d) = self
+            .strength
+            .iter()
+            .position(|s| s.is_some_and(|s| !(positive(s.positive) && positive(s.negative))))
+        {
+            return Err(format!("strength of DOF {d} must be positive and finite"));
+        }
+        for band in &self.bands {
+            let joint_ok = |j: usize| j < skeleton.joint_count();
+            let reference_ok = match band.reference {
+                AngleReference::World(v) => v.is_finite() && v.length() > 1e-9,
+                AngleReference::Segment { joint, axis } => {
+                    joint_ok(joint) && axis.is_finite() && axis.length() > 1e-9
+                }
+            };
+            if !(joint_ok(band.joint)
+                && reference_ok
+                && band.axis.is_finite()
+                && band.axis.length() > 1e-9
+                && positive(band.width)
+                && band
+                    .edges
+                    .iter()
+                    .all(|(e, s)| e.is_finite() && s.is_finite()))
+            {
+                return Err(format!("angle band `{}` is malformed", band.name));
+            }
+        }
+        Ok(())
+    }
+
+    /// The terms at `frames` (forward kinematics of `values`).
+    pub fn terms(&self, skeleton: &Skeleton, frames: &Frames, values: &[f64]) -> ComfortTerms {
+        self.evaluate(skeleton, frames, values, None)
+    }
+
+    /// The terms, and the gradient of the weighted total with respect to every DOF in
+    /// `gradient` (length `skeleton.dof_count()`).
+    pub fn gradient(
+        &self,
+        skeleton: &Skeleton,
+        frames: &Frames,
+        values: &[f64],
+        gradient: &mut [f64],
+    ) -> ComfortTerms {
+        gradient.fill(0.0);
+        self.evaluate(skeleton, frames, values, Some(gradient))
+    }
+
+    fn evaluate(
+        &self,
+        skeleton: &Skeleton,
+        frames: &Frames,
+        values: &[f64],
+        mut gradient: Option<&mut [f64]>,
+    ) -> ComfortTerms {
+        let effort = if self.effort_weight > 0.0 {
+            self.effort(skeleton, frames, gradient.as_deref_mut())
+        } else {
+            0.0
+        };
+        let range = if self.range_weight > 0.0 {
+            self.range(skeleton, values, gradient.as_deref_mut())
+        } else {
+            0.0
+        };
+        let bands = if self.band_weight > 0.0 {
+            self.bands(skeleton, frames, gradient)
+        } else {
+            0.0
+        };
+        ComfortTerms {
+            effort,
+            range,
+            bands,
+            total: self.effort_weight * effort
+                + self.range_weight * range
+                + self.band_weight * bands,
+        }
+    }
+
+    /// `sum_d (tau_d / S_d)^2`, and `effort_weight` times its gradient added to `gradient`.
+    ///
+    /// With `r_j = m_j - M_j p_j`, `tau_j = r_j x g` and `tau_d = tau_j . e_d` (`e_d` the
+    /// joint-frame axis of DOF d in the world), a rotation DOF `i` of joint `a` with world axis
+    /// `w_i` moves:
+    /// - every joint `j` below `a` rigidly: `d r_j = w_i x r_j`, `d e_d = w_i x e_d`;
+    /// - the joints `j` at or above `a`: `d r_j = w_i x (m_a - M_a o_a)` (`o_a = p_a`), and
+    ///   `d e_d = w_i x e_d` for `j = a` only.
+    ///
+    /// With `G_j = dE/d tau_j` and the identity `G . ((w x r) x g) = w . (g (G . r) - G (r . g))`,
+    /// every term is `w_i` dotted with a vector summed over the subtree below `a` or the chain
+    /// above it: O(N) in all.
+    fn effort(&self, skeleton: &Skeleton, frames: &Frames, gradient: Option<&mut [f64]>) -> f64 {
+        let joints = skeleton.joints();
+        let kinds = skeleton.dof_kinds();
+        let nj = joints.len();
+        let mut cost = 0.0;
+        // Per joint: dE/d tau_j (G) and the axis term sum_d e_d x (dE/d e_d).
+        let mut g_tau = vec![DVec3::ZERO; nj];
+        let mut axis_term = vec![DVec3::ZERO; nj];
+        let mut r = vec![DVec3::ZERO; nj];
+        for (j, joint) in joints.iter().enumerate() {
+            r[j] = frames.subtree_moment[j] - frames.subtree_mass[j] * frames.joint_position[j];
+            let tau = r[j].cross(GRAVITY);
+            for d in joint.dof_range() {
+                let Some(Some(strength)) = self.strength.get(d) else {
+                    continue;
+                };
+                if !kinds[d].is_rotation() {
+                    continue;
+                }
+                let e = frames.world_from_joint_rotation[j].col(kinds[d].axis_index());
+                let t = tau.dot(e);
+                let s = strength.holding(t);
+                if !(s > 0.0 && s.is_finite()) {
+                    continue;
+                }
+                let share = t / s;
+                cost += share * share;
+                // d(share^2) = 2 share / s (d tau . e + tau . d e).
+                let k = 2.0 * share / s;
+                g_tau[j] += k * e;
+                axis_term[j] += e.cross(k * tau);
+            }
+        }
+        let Some(gradient) = gradient else {
+            return cost;
+        };
+        let w = self.effort_weight;
+        // Down the tree: the sum of G_j over the chain from the root to each joint (inclusive).
+        let mut chain_g = vec![DVec3::ZERO; nj];
+        for (j, joint) in joints.iter().enumerate() {
+            chain_g[j] = g_tau[j] + joint.parent.map_or(DVec3::ZERO, |p| chain_g[p]);
+        }
+        // Up the tree: the sum over the strict subtree of the rigid-motion vectors
+        // U_j = g (G_j . r_j) - G_j (r_j . g) + axis_term_j.
+        let mut below = vec![DVec3::ZERO; nj];
+        for j in (0..nj).rev() {
+            if let Some(p) = joints[j].parent {
+                let own =
+                    GRAVITY * g_tau[j].dot(r[j]) - g_tau[j] * r[j].dot(GRAVITY) + axis_term[j];
+                let carried = below[j] + own;
+                below[p] += carried;
+            }
+        }
+        for (a, joint) in joints.iter().enumerate() {
+            // Joints at or above `a`: their torque changes with the subtree of `a` moved.
+            let q = r[a];
+            let chain = chain_g[a];
+            let above = GRAVITY * chain.dot(q) - chain * q.dot(GRAVITY);
+            let v = above + below[a] + axis_term[a];
+            for d in joint.dof_range() {
+                if kinds[d].is_rotation() {
+                    gradient[d] += w * frames.dof_axis[d].dot(v);
+                }
+            }
+        }
+        cost
+    }
+
+    /// Marler et al. (2005)'s joint-range discomfort over the rotation DOF with finite limits
+    /// (both walls), and `range_weight` times its gradient added to `gradient`.
+    fn range(&self, skeleton: &Skeleton, values: &[f64], mut gradient: Option<&mut [f64]>) -> f64 {
+        let (lo, hi) = (skeleton.lower_limits(), skeleton.upper_limits());
+        let mut cost = 0.0;
+        for (d, kind) in skeleton.dof_kinds().iter().enumerate() {
+            let span = hi[d] - lo[d];
+            if !kind.is_rotation() || !span.is_finite() || span <= 0.0 {
+                continue;
+            }
+            let q = values.get(d).copied().unwrap_or(0.0);
+            let (upper, d_upper) = range_wall((hi[d] - q) / span);
+            let (lower, d_lower) = range_wall((q - lo[d]) / span);
+            cost += upper + lower;
+            if let Some(g) = gradient.as_deref_mut() {
+                g[d] += self.range_weight * (d_lower - d_upper) / span;
+            }
+        }
+        cost
+    }
+
+    /// The smooth band scores, and `band_weight` times their gradient added to `gradient`.
+    ///
+    /// For unit `u` (the segment axis) and `v` (the reference) at angle `phi` with the unit
+    /// normal `n = u x v / |u x v|`, a rotation DOF with world axis `w` moves the angle by
+    /// `-w . n` when it carries `u`, by `+w . n` when it carries `v` (both: no change).
+    fn bands(&self, skeleton: &Skeleton, frames: &Frames, mut gradient: Option<&mut [f64]>) -> f64 {
+        let mut cost = 0.0;
+        let kinds = skeleton.dof_kinds();
+        for band in &self.bands {
+            let Some(rotation) = frames.world_from_joint_rotation.get(band.joint) else {
+                continue;
+            };
+            let u = (*rotation * band.axis).normalize_or_zero();
+            let (v, reference_joint) = match band.reference {
+                AngleReference::World(v) => (v.normalize_or_zero(), None),
+                AngleReference::Segment { joint, axis } => {
+                    match frames.world_from_joint_rotation.get(joint) {
+                        Some(r) => ((*r * axis).normalize_or_zero(), Some(joint)),
+                        None => continue,
+                    }
+                }
+            };
+            let cross = u.cross(v);
+            let phi = cross.length().atan2(u.dot(v));
+            let width = band.width.max(1e-6);
+            let mut slope = 0.0;
+            for &(edge, step) in &band.edges {
+                let (s, ds) = logistic((phi - edge) / width);
+                cost += step * s;
+                slope += step * ds / width;
+            }
+            let Some(g) = gradient.as_deref_mut() else {
+                continue;
+            };
+            let sin = cross.length();
+            if sin < 1e-9 || slope == 0.0 {
+                continue;
+            }
+            let n = cross / sin;
+            let k = self.band_weight * slope;
+            for (d, kind) in kinds.iter().enumerate() {
+                if !kind.is_rotation() {
+                    continue;
+                }
+                let owner = skeleton.dof_joint(d);
+                let moves_u = skeleton.is_ancestor_or_self(owner, band.joint);
+                let moves_v =
+                    reference_joint.is_some_and(|b| skeleton.is_ancestor_or_self(owner, b));
+                let sign = match (moves_u, moves_v) {
+                    (true, false) => -1.0,
+                    (false, true) => 1.0,
+                    _ => continue,
+                };
+                g[d] += k * sign * frames.dof_axis[d].dot(n);
+            }
+        }
+        cost
+    }
+}
