@@ -51,6 +51,14 @@ pub enum IkError {
         /// The DOF.
         dof: String,
     },
+    /// A stiffness is outside [0, 1), or names a DOF the joint lacks (or a translation).
+    #[error("joint `{joint}`: stiffness of `{dof}` must be a rotation DOF's, in [0, 1)")]
+    BadStiffness {
+        /// The joint.
+        joint: String,
+        /// The DOF.
+        dof: String,
+    },
     /// A number that must be finite is NaN or infinite.
     #[error("{what} is not finite")]
     NotFinite {

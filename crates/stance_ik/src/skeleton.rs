@@ -83,6 +83,9 @@ pub struct JointDef {
     pub mass: f64,
     /// Centre of mass of that segment in the joint frame (relative to the joint centre, m).
     pub com: DVec3,
+    /// Optional stiffness `(dof, s)` of rotation DOF, H-Anim's `stiffness`: 0 (default) moves
+    /// freely, toward 1 the DOF resists motion (the solver weighs it by `1 / (1 - s)`).
+    pub stiffness: Vec<(Dof, f64)>,
 }
 
 impl JointDef {
@@ -96,7 +99,15 @@ impl JointDef {
             limits: Vec::new(),
             mass: 0.0,
             com: DVec3::ZERO,
+            stiffness: Vec::new(),
         }
+    }
+
+    /// Sets a DOF's stiffness (builder style).
+    pub fn with_stiffness(mut self, dof: Dof, stiffness: f64) -> Self {
+        self.stiffness.retain(|(d, _)| *d != dof);
+        self.stiffness.push((dof, stiffness));
+        self
     }
 
     /// Adds a limit (builder style).
@@ -162,7 +173,13 @@ pub struct Skeleton {
     dof_kind: Vec<Dof>,
     lower: Vec<f64>,
     upper: Vec<f64>,
+    stiffness: Vec<f64>,
     total_mass: f64,
+}
+
+/// A stiffness is a number in [0, 1).
+fn valid_stiffness(value: f64) -> bool {
+    (0.0..1.0).contains(&value)
 }
 
 impl Skeleton {
@@ -242,6 +259,7 @@ impl Skeleton {
         let mut dof_kind = Vec::new();
         let mut lower = Vec::new();
         let mut upper = Vec::new();
+        let mut stiffness = Vec::new();
         let mut total_mass = 0.0;
         for (new, &old) in order.iter().enumerate() {
             let d = &defs[old];
@@ -287,6 +305,22 @@ impl Skeleton {
                 lower[dof_start + k] = lo;
                 upper[dof_start + k] = hi;
             }
+            stiffness.resize(dof_kind.len(), 0.0);
+            for &(dof, value) in &d.stiffness {
+                let Some(k) = d.dofs.iter().position(|&x| x == dof) else {
+                    return Err(IkError::BadStiffness {
+                        joint: d.name.clone(),
+                        dof: dof.name().to_owned(),
+                    });
+                };
+                if !dof.is_rotation() || !valid_stiffness(value) {
+                    return Err(IkError::BadStiffness {
+                        joint: d.name.clone(),
+                        dof: dof.name().to_owned(),
+                    });
+                }
+                stiffness[dof_start + k] = value;
+            }
             total_mass += d.mass;
             by_name.insert(d.name.clone(), new);
             joints.push(Joint {
@@ -308,8 +342,32 @@ impl Skeleton {
             dof_kind,
             lower,
             upper,
+            stiffness,
             total_mass,
         })
+    }
+
+    /// Per DOF: its stiffness in [0, 1) (H-Anim's `stiffness`; 0 for translations).
+    pub fn stiffness(&self) -> &[f64] {
+        &self.stiffness
+    }
+
+    /// Sets the stiffness of rotation DOF `dof` (in [0, 1)).
+    pub fn set_stiffness(&mut self, dof: usize, value: f64) -> Result<(), IkError> {
+        let rotation = self.dof_kind.get(dof).is_some_and(|k| k.is_rotation());
+        if !rotation || !valid_stiffness(value) {
+            let joint = self
+                .dof_joint
+                .get(dof)
+                .and_then(|&j| self.joints.get(j))
+                .map_or_else(|| format!("DOF {dof}"), |j| j.name.clone());
+            return Err(IkError::BadStiffness {
+                joint,
+                dof: self.dof_kind.get(dof).map_or("?", |k| k.name()).to_owned(),
+            });
+        }
+        self.stiffness[dof] = value;
+        Ok(())
     }
 
     /// The joints, parents first.

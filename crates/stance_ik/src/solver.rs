@@ -91,6 +91,8 @@ pub struct Solver {
     fixed: DVector<f64>,
     weighted_sq: Vec<f64>,
     scratch: Vec<f64>,
+    /// The level systems in the stiffness-weighted coordinates (see `compute_step`).
+    weighted: Vec<LevelSystem>,
 }
 
 impl Solver {
@@ -859,6 +861,25 @@ impl Solver {
         fixed.resize_vertically_mut(n, 0.0);
         fixed.fill(0.0);
         let mut any_clamped = clamped.iter().any(|&c| c);
+        // Stiffness: the weighted pseudo-inverse `W^-1 J^T (J W^-1 J^T)^-1` (and its
+        // projector) is the plain one in the coordinates `theta' = W^(1/2) theta`: the
+        // Jacobian's DOF rows scaled by `sqrt(1 - stiffness)`, the step scaled back.
+        let scale: Option<Vec<f64>> = skeleton.stiffness().iter().any(|&s| s > 0.0).then(|| {
+            skeleton
+                .stiffness()
+                .iter()
+                .map(|s| (1.0 - s).sqrt())
+                .collect()
+        });
+        let used = levels.min(self.systems.len());
+        if let Some(scale) = &scale {
+            self.weighted.clone_from(&self.systems);
+            for sys in &mut self.weighted[..used] {
+                for mut column in sys.jacobian_t.column_iter_mut() {
+                    column.component_mul_assign(&DVector::from_column_slice(scale));
+                }
+            }
+        }
         let mut total;
         let mut passes = 0;
         loop {
@@ -866,15 +887,27 @@ impl Solver {
                 Backend::Kernel => prioritized_step,
                 Backend::Nalgebra => prioritized_step_nalgebra,
             };
-            let step = step_fn(
-                &self.systems[..levels.min(self.systems.len())],
+            let systems = if scale.is_some() {
+                &self.weighted[..used]
+            } else {
+                &self.systems[..used]
+            };
+            // The moves already fixed, in the weighted coordinates.
+            let fixed_weighted = scale
+                .as_ref()
+                .map(|scale| DVector::from_fn(n, |i, _| fixed[i] / scale[i]));
+            let mut step = step_fn(
+                systems,
                 n,
                 &params,
                 any_clamped.then_some(clamped.as_slice()),
-                any_clamped.then_some(&fixed),
+                any_clamped.then_some(fixed_weighted.as_ref().unwrap_or(&fixed)),
                 &mut self.workspace,
                 None,
             );
+            if let Some(scale) = &scale {
+                step.component_mul_assign(&DVector::from_column_slice(scale));
+            }
             total = step + &fixed;
             if !has_limits {
                 break;

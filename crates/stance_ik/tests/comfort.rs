@@ -300,3 +300,76 @@ fn a_comfort_task_cannot_share_its_level() {
         .unwrap_err();
     assert!(error.to_string().contains("comfort"), "{error}");
 }
+
+#[test]
+fn stiffness_weights_the_pseudo_inverse() {
+    use nalgebra::{DMatrix, DVector};
+    let mut s = humanoid50().unwrap();
+    // A stiff spine: every vertebra and the pelvis at 0.8.
+    for name in ["sacroiliac", "vl5", "vt6", "vt1"] {
+        if let Some(j) = s.joint_index(name) {
+            for d in s.joints()[j].dof_range() {
+                s.set_stiffness(d, 0.8).unwrap();
+            }
+        }
+    }
+    assert!(
+        s.set_stiffness(0, 0.5).is_err(),
+        "a translation has no stiffness"
+    );
+    assert!(
+        s.set_stiffness(4, 1.0).is_err(),
+        "1 would be rigid: out of range"
+    );
+    let start = standing_posture(&s);
+    let wrist = s.require_joint("r_radiocarpal").unwrap();
+    let goal = Frames::new(&s, &start).joint_position[wrist] + DVec3::new(0.05, 0.05, 0.08);
+    let tasks = [Task::position(wrist, DVec3::ZERO, goal)];
+    let settings = SolverSettings {
+        iteration: stance_ik::Iteration::Textbook,
+        trust_region: f64::INFINITY,
+        enforce_limits: false,
+        restarts: false,
+        ..SolverSettings::default()
+    };
+    let mut solver = Solver::new(settings).unwrap();
+    let system = solver.linear_systems(&s, &tasks, &start).unwrap().remove(0);
+    let mut posture = start.clone();
+    solver.iterate(&s, &tasks, &mut posture).unwrap();
+    let taken =
+        DVector::from_column_slice(posture.values()) - DVector::from_column_slice(start.values());
+    // The textbook weighted, damped pseudo-inverse: W^-1 J^T (J W^-1 J^T + lambda^2 I)^-1 e.
+    let j = system.jacobian_t.transpose();
+    let w_inv = DMatrix::from_diagonal(&DVector::from_iterator(
+        s.dof_count(),
+        s.stiffness().iter().map(|k| 1.0 - k),
+    ));
+    let g = &j * &w_inv * j.transpose() + DMatrix::identity(3, 3) * (0.002 * 0.002);
+    let expected = &w_inv * j.transpose() * g.try_inverse().unwrap() * &system.dx;
+    assert!(
+        (&taken - &expected).amax() < 1e-9,
+        "weighted step off by {}",
+        (&taken - &expected).amax()
+    );
+    // And the stiff DOF move less than with no stiffness.
+    let plain = humanoid50().unwrap();
+    let mut free = start.clone();
+    Solver::new(settings)
+        .unwrap()
+        .iterate(&plain, &tasks, &mut free)
+        .unwrap();
+    let spine = |p: &Posture| -> f64 {
+        ["vl5", "vt6", "vt1"]
+            .iter()
+            .filter_map(|n| s.joint_index(n))
+            .flat_map(|j| s.joints()[j].dof_range())
+            .map(|d| (p.values()[d] - start.values()[d]).abs())
+            .sum()
+    };
+    assert!(
+        spine(&posture) < 0.5 * spine(&free),
+        "{} vs {}",
+        spine(&posture),
+        spine(&free)
+    );
+}
