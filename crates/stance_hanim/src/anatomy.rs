@@ -195,6 +195,29 @@ pub fn limits(name: &str, share: usize) -> Vec<(Dof, f64, f64)> {
         .collect()
 }
 
+/// The default stiffness (H-Anim's `stiffness`, in [0, 1)) of the rotation DOF of a joint of
+/// this class, when `share` joints of its region are present (the spine and the neck).
+///
+/// The solver weighs a DOF by `w = 1 / (1 - stiffness)` in its weighted pseudo-inverse, so a
+/// chain of `k` joints of weight `w` bends like one joint of weight `w / k`: a region's weight
+/// is multiplied by the joints sharing it, and the trunk resists as much at LOA 4 (17 thoracic
+/// and lumbar vertebrae) as at LOA 1 (one). Region weights, a modelling choice from anatomy
+/// rather than a measured constant: the trunk (pelvis, lumbar and thoracic spine) 4 and the
+/// shoulder girdle 3 (large masses, ligament-bound, moving little in a reach: most of a reach
+/// is the shoulder and elbow; Kapandji vol. 1 and 3), the neck 2, the hip 1.5; the limbs 1
+/// (stiffness 0). A user sets any DOF's own value in documents and problem files.
+pub fn stiffness(class: JointClass, share: usize) -> f64 {
+    let region = match class {
+        JointClass::Pelvis | JointClass::Spine => 4.0,
+        JointClass::Clavicle | JointClass::Acromion => 3.0,
+        JointClass::Neck => 2.0,
+        JointClass::Hip => 1.5,
+        _ => return 0.0,
+    };
+    let weight = region * share.max(1) as f64;
+    1.0 - 1.0 / weight
+}
+
 /// A body segment of de Leva (1996).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Segment {
@@ -356,6 +379,82 @@ mod tests {
     use wasm_bindgen_test::wasm_bindgen_test as test;
 
     use super::*;
+
+    /// The issue's case: the right arm raised sideways, the hand pulled 20 cm up and out with
+    /// the feet pinned. With the default stiffness the shoulder does most of it; without, the
+    /// trunk bends sideways. Angles: the trunk's bend is the rotation between the pelvis and
+    /// the top of the thoracic spine, the shoulder's the change of its joint rotation.
+    #[test]
+    fn a_hand_pull_moves_the_spine_less_than_the_shoulder() {
+        use stance_ik::{Solver, Task};
+
+        use crate::{LevelOfArticulation, SkeletonOptions, default_skeleton};
+        for loa in [LevelOfArticulation::Loa1, LevelOfArticulation::Loa2] {
+            let body = default_skeleton(&SkeletonOptions {
+                loa,
+                ..SkeletonOptions::default()
+            })
+            .unwrap_or_else(|e| panic!("{e}"));
+            let stiff = body.skeleton.clone();
+            let mut free = stiff.clone();
+            for d in 0..free.dof_count() {
+                if free.dof_kinds()[d].is_rotation() {
+                    free.set_stiffness(d, 0.0).unwrap_or_else(|e| panic!("{e}"));
+                }
+            }
+            let j = |name: &str| stiff.joint_index(name).unwrap_or_else(|| panic!("{name}"));
+            let shoulder = j("r_shoulder");
+            let mut start = Posture::rest(&stiff);
+            // Right arm abducted by 70 degrees (-rz abducts a right limb).
+            start.values_mut()[stiff.joints()[shoulder].rotation_dof[2].unwrap_or(0)] = -1.2;
+            let frames = Frames::new(&stiff, &start);
+            let wrist = j("r_radiocarpal");
+            let goal = frames.joint_position[wrist] + DVec3::new(-0.1, 0.2, 0.0);
+            let mut tasks = Vec::new();
+            for foot in ["l_talocrural", "r_talocrural"] {
+                let f = j(foot);
+                tasks.push(Task::position(f, DVec3::ZERO, frames.joint_position[f]));
+                tasks.push(Task::orientation(f, frames.rotation(f)));
+            }
+            tasks.push(Task::position(wrist, DVec3::ZERO, goal).at_level(2));
+            let top = ["vt1", "vt6", "vl1", "vl5"]
+                .iter()
+                .find_map(|n| stiff.joint_index(n))
+                .unwrap_or_else(|| panic!("a thoracic joint"));
+            let pelvis = j("sacroiliac");
+            let measure = |skeleton: &Skeleton| {
+                let mut posture = start.clone();
+                let report = Solver::default()
+                    .solve(skeleton, &tasks, &mut posture)
+                    .unwrap_or_else(|e| panic!("{e}"));
+                assert!(report.levels.iter().all(|l| l.met), "{report:?}");
+                let f = Frames::new(skeleton, &posture);
+                let bend = (f.rotation(pelvis).inverse() * f.rotation(top))
+                    .angle_between(frames.rotation(pelvis).inverse() * frames.rotation(top));
+                let arm = posture
+                    .local_rotation(skeleton, shoulder)
+                    .angle_between(start.local_rotation(skeleton, shoulder));
+                (bend, arm)
+            };
+            let (bend, arm) = measure(&stiff);
+            let (free_bend, free_arm) = measure(&free);
+            assert!(
+                bend < arm,
+                "{loa:?}: trunk {:.1} deg, shoulder {:.1} deg",
+                bend.to_degrees(),
+                arm.to_degrees()
+            );
+            assert!(
+                bend < 0.7 * free_bend,
+                "{loa:?}: stiffness cuts the trunk's bend: {:.1} vs {:.1} deg (shoulder \
+                 {:.1} vs {:.1})",
+                bend.to_degrees(),
+                free_bend.to_degrees(),
+                arm.to_degrees(),
+                free_arm.to_degrees()
+            );
+        }
+    }
 
     #[test]
     fn soles_are_foot_sized_at_every_level_of_articulation() {

@@ -373,6 +373,19 @@ fn build(
         };
         let mut def = JointDef::new(input.hanim, parent_name, offset, &dofs).with_mass(m, com);
         def.limits = limits;
+        let share = match input.class {
+            JointClass::Spine => spine_share,
+            JointClass::Neck => neck_share,
+            _ => 1,
+        };
+        let stiffness = anatomy::stiffness(input.class, share);
+        if stiffness > 0.0 && input.class != JointClass::Root {
+            def.stiffness = dofs
+                .iter()
+                .filter(|d| d.is_rotation())
+                .map(|&d| (d, stiffness))
+                .collect();
+        }
         defs.push(def);
     }
     let skeleton = Skeleton::new(defs)?;
