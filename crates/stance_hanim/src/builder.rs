@@ -36,6 +36,19 @@ impl Default for SkeletonOptions {
     }
 }
 
+/// Which anatomical axis a built rotation DOF stands for: the anatomical ranges, strengths
+/// and sign conventions of [`crate::anatomy`] are given about the H-Anim rest frame's axes; an
+/// avatar's joint frame may have its axes permuted or reversed relative to it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AnatomicalAxis {
+    /// The built DOF.
+    pub dof: Dof,
+    /// The anatomical DOF it carries (in the conventions of [`crate::anatomy`]).
+    pub anatomical: Dof,
+    /// +1 when a positive built value is a positive anatomical value, else -1.
+    pub sign: f64,
+}
+
 /// One joint of a built skeleton (same index as in [`HumanoidSkeleton::skeleton`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct BuiltJoint {
@@ -45,6 +58,9 @@ pub struct BuiltJoint {
     pub source: Option<usize>,
     /// False for implied joints (no DOF of their own).
     pub has_dofs: bool,
+    /// The anatomical axis of each rotation DOF (empty: unknown, e.g. a joint far from any
+    /// axis-aligned frame given envelope ranges).
+    pub axes: Vec<AnatomicalAxis>,
 }
 
 /// A built skeleton and how its joints relate to the avatar.
@@ -248,15 +264,16 @@ fn build(
     };
     let mut notes = Vec::new();
     let mut defs = Vec::with_capacity(inputs.len());
+    let mut axes_by_joint = Vec::with_capacity(inputs.len());
     for (i, input) in inputs.iter().enumerate() {
         let parent_pos = input.parent.map(|p| inputs[p].position);
         let offset = input.position - parent_pos.unwrap_or(DVec3::ZERO);
         let parent_name = input.parent.map(|p| inputs[p].hanim);
         // DOF and limits.
-        let (dofs, limits) = if input.class == JointClass::Root {
-            (anatomy::dofs(JointClass::Root), Vec::new())
+        let (dofs, limits, anatomical_axes) = if input.class == JointClass::Root {
+            (anatomy::dofs(JointClass::Root), Vec::new(), Vec::new())
         } else if input.implied {
-            (Vec::new(), Vec::new())
+            (Vec::new(), Vec::new(), Vec::new())
         } else {
             let share = match input.class {
                 JointClass::Spine => spine_share,
@@ -291,6 +308,7 @@ fn build(
                     let shift = relative.to_scaled_axis();
                     let mut dofs = Vec::new();
                     let mut limits = Vec::new();
+                    let mut axes = Vec::new();
                     for (dof, lo, hi) in anatomical {
                         let k = dof.axis_index();
                         let (lo, hi) = ((lo - shift[k]).min(0.0), (hi - shift[k]).max(0.0));
@@ -300,8 +318,13 @@ fn build(
                         let world = [Dof::Rx, Dof::Ry, Dof::Rz][m];
                         dofs.push(world);
                         limits.push((world, lo, hi));
+                        axes.push(AnatomicalAxis {
+                            dof: world,
+                            anatomical: dof,
+                            sign: if v[m] > 0.0 { 1.0 } else { -1.0 },
+                        });
                     }
-                    (dofs, limits)
+                    (dofs, limits, axes)
                 }
                 None => {
                     notes.push(format!(
@@ -314,7 +337,7 @@ fn build(
                         .fold(0.0, f64::max);
                     let dofs = vec![Dof::Rx, Dof::Ry, Dof::Rz];
                     let limits = dofs.iter().map(|&d| (d, -reach, reach)).collect();
-                    (dofs, limits)
+                    (dofs, limits, Vec::new())
                 }
             }
         };
@@ -387,6 +410,7 @@ fn build(
                 .collect();
         }
         defs.push(def);
+        axes_by_joint.push(anatomical_axes);
     }
     let skeleton = Skeleton::new(defs)?;
     // Skeleton::new keeps the given parents-first order; map back by name to be safe.
@@ -394,11 +418,15 @@ fn build(
         .joints()
         .iter()
         .map(|j| {
-            let input = inputs.iter().find(|i| i.hanim == j.name);
+            let at = inputs.iter().position(|i| i.hanim == j.name);
+            let input = at.map(|k| &inputs[k]);
             BuiltJoint {
                 hanim: input.map_or("", |i| i.hanim),
                 source: input.and_then(|i| i.source),
                 has_dofs: !j.dofs.is_empty(),
+                axes: at
+                    .and_then(|k| axes_by_joint.get(k).cloned())
+                    .unwrap_or_default(),
             }
         })
         .collect();

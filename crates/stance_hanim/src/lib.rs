@@ -20,7 +20,8 @@ pub mod names;
 pub mod scenarios;
 
 pub use builder::{
-    BuildError, BuiltJoint, HumanoidSkeleton, SkeletonOptions, build_skeleton, default_skeleton,
+    AnatomicalAxis, BuildError, BuiltJoint, HumanoidSkeleton, SkeletonOptions, build_skeleton,
+    default_skeleton,
 };
 pub use mapping::{JointMatch, Mapping, MappingError, MatchMethod, SourceJoint, vrm_bone_to_hanim};
 pub use names::{LimbName, Side, mirror_name, readable_name, resolve_joint};

@@ -19,32 +19,97 @@ use crate::{Frames, Skeleton};
 pub const GRAVITY: DVec3 = DVec3::new(0.0, -9.81, 0.0);
 
 /// Maximal voluntary torque of one rotation DOF (N m), as the muscles produce it about the
-/// DOF's +axis and about its -axis (e.g. flexion and extension).
+/// DOF's +axis and about its -axis (e.g. extension and flexion).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DofStrength {
-    /// About the joint frame's +axis (N m, > 0).
-    pub positive: f64,
-    /// About its -axis (N m, > 0).
-    pub negative: f64,
+    /// About the joint frame's +axis.
+    pub positive: StrengthCurve,
+    /// About its -axis.
+    pub negative: StrengthCurve,
 }
 
 impl DofStrength {
-    /// The same strength both ways.
+    /// The same constant strength both ways (N m).
     pub fn symmetric(torque: f64) -> Self {
         Self {
-            positive: torque,
-            negative: torque,
+            positive: StrengthCurve::constant(torque),
+            negative: StrengthCurve::constant(torque),
         }
     }
 
-    /// The strength that holds a gravity torque `tau` about the axis (the muscles produce
-    /// `-tau`).
-    fn holding(&self, tau: f64) -> f64 {
-        if tau > 0.0 {
-            self.negative
-        } else {
-            self.positive
+    /// Constant strengths about the +axis and the -axis (N m).
+    pub fn constant(positive: f64, negative: f64) -> Self {
+        Self {
+            positive: StrengthCurve::constant(positive),
+            negative: StrengthCurve::constant(negative),
         }
+    }
+
+    /// The curve that holds a gravity torque `tau` about the axis (the muscles produce
+    /// `-tau`).
+    fn holding(&self, tau: f64) -> &StrengthCurve {
+        if tau > 0.0 {
+            &self.negative
+        } else {
+            &self.positive
+        }
+    }
+
+    fn is_valid(&self) -> bool {
+        self.positive.is_valid() && self.negative.is_valid()
+    }
+}
+
+/// A maximal voluntary torque as a function of the DOF's value `q`: Anderson et al. (2007)'s
+/// isometric angle curve `peak * cos(width * (sign * q - centre))`, never below `floor` times
+/// the peak (the model's cosine reaches zero outside the tested range of motion). `width = 0`
+/// gives a constant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StrengthCurve {
+    /// The torque at the peak angle (N m, > 0).
+    pub peak: f64,
+    /// Anderson's `C2` (1/rad): the curve's angular frequency; 0 for a constant.
+    pub width: f64,
+    /// Anderson's `C3` (rad): the anatomical angle of the peak.
+    pub centre: f64,
+    /// The anatomical angle is `sign * q` (+1 or -1): e.g. hip flexion is `-rx`.
+    pub sign: f64,
+    /// The least share of the peak the curve keeps (default 0.1).
+    pub floor: f64,
+}
+
+impl StrengthCurve {
+    /// A constant strength (N m).
+    pub fn constant(peak: f64) -> Self {
+        Self {
+            peak,
+            width: 0.0,
+            centre: 0.0,
+            sign: 1.0,
+            floor: 0.1,
+        }
+    }
+
+    /// The strength at DOF value `q` and its derivative in `q`.
+    pub fn at(&self, q: f64) -> (f64, f64) {
+        let phase = self.width * (self.sign * q - self.centre);
+        let value = self.peak * phase.cos();
+        let least = self.floor * self.peak;
+        if phase.abs() >= std::f64::consts::FRAC_PI_2 || value <= least {
+            return (least, 0.0);
+        }
+        (value, -self.peak * phase.sin() * self.width * self.sign)
+    }
+
+    fn is_valid(&self) -> bool {
+        self.peak.is_finite()
+            && self.peak > 0.0
+            && self.width.is_finite()
+            && self.centre.is_finite()
+            && self.sign.is_finite()
+            && self.floor.is_finite()
+            && self.floor > 0.0
+            && self.floor <= 1.0
     }
 }
 
@@ -184,7 +249,7 @@ impl ComfortModel {
         if let Some(d) = self
             .strength
             .iter()
-            .position(|s| s.is_some_and(|s| !(positive(s.positive) && positive(s.negative))))
+            .position(|s| s.is_some_and(|s| !s.is_valid()))
         {
             return Err(format!("strength of DOF {d} must be positive and finite"));
         }
@@ -238,7 +303,7 @@ impl ComfortModel {
         mut gradient: Option<&mut [f64]>,
     ) -> ComfortTerms {
         let effort = if self.effort_weight > 0.0 {
-            self.effort(skeleton, frames, gradient.as_deref_mut())
+            self.effort(skeleton, frames, values, gradient.as_deref_mut())
         } else {
             0.0
         };
@@ -274,7 +339,13 @@ impl ComfortModel {
     /// With `G_j = dE/d tau_j` and the identity `G . ((w x r) x g) = w . (g (G . r) - G (r . g))`,
     /// every term is `w_i` dotted with a vector summed over the subtree below `a` or the chain
     /// above it: O(N) in all.
-    fn effort(&self, skeleton: &Skeleton, frames: &Frames, gradient: Option<&mut [f64]>) -> f64 {
+    fn effort(
+        &self,
+        skeleton: &Skeleton,
+        frames: &Frames,
+        values: &[f64],
+        gradient: Option<&mut [f64]>,
+    ) -> f64 {
         let joints = skeleton.joints();
         let kinds = skeleton.dof_kinds();
         let nj = joints.len();
@@ -283,6 +354,8 @@ impl ComfortModel {
         let mut g_tau = vec![DVec3::ZERO; nj];
         let mut axis_term = vec![DVec3::ZERO; nj];
         let mut r = vec![DVec3::ZERO; nj];
+        // Per DOF: d(share^2)/dq through the strength's angle curve.
+        let mut own = Vec::new();
         for (j, joint) in joints.iter().enumerate() {
             r[j] = frames.subtree_moment[j] - frames.subtree_mass[j] * frames.joint_position[j];
             let tau = r[j].cross(GRAVITY);
@@ -295,12 +368,17 @@ impl ComfortModel {
                 }
                 let e = frames.world_from_joint_rotation[j].col(kinds[d].axis_index());
                 let t = tau.dot(e);
-                let s = strength.holding(t);
+                let (s, slope) = strength
+                    .holding(t)
+                    .at(values.get(d).copied().unwrap_or(0.0));
                 if !(s > 0.0 && s.is_finite()) {
                     continue;
                 }
                 let share = t / s;
                 cost += share * share;
+                if slope != 0.0 {
+                    own.push((d, -2.0 * share * share / s * slope));
+                }
                 // d(share^2) = 2 share / s (d tau . e + tau . d e).
                 let k = 2.0 * share / s;
                 g_tau[j] += k * e;
@@ -338,6 +416,9 @@ impl ComfortModel {
                     gradient[d] += w * frames.dof_axis[d].dot(v);
                 }
             }
+        }
+        for (d, g) in own {
+            gradient[d] += w * g;
         }
         cost
     }

@@ -15,7 +15,8 @@ use common::*;
 use glam::DVec3;
 use stance_hanim::scenarios::{humanoid50, standing_posture};
 use stance_ik::comfort::{
-    AngleBand, AngleReference, ComfortModel, DofStrength, GRAVITY, dof_torques, gravity_torques,
+    AngleBand, AngleReference, ComfortModel, DofStrength, GRAVITY, StrengthCurve, dof_torques,
+    gravity_torques,
 };
 use stance_ik::{Dof, Frames, JointDef, Posture, Skeleton, Solver, SolverSettings, Task};
 
@@ -120,8 +121,15 @@ fn full_model(s: &Skeleton) -> ComfortModel {
         .enumerate()
         .map(|(d, k)| {
             k.is_rotation().then_some(DofStrength {
-                positive: 40.0 + d as f64,
-                negative: 60.0 + 0.5 * d as f64,
+                positive: StrengthCurve::constant(40.0 + d as f64),
+                // An angle curve on the negative side (Anderson's form), to check its term.
+                negative: StrengthCurve {
+                    peak: 60.0 + 0.5 * d as f64,
+                    width: 0.9,
+                    centre: 0.3,
+                    sign: if d % 2 == 0 { 1.0 } else { -1.0 },
+                    floor: 0.1,
+                },
             })
         })
         .collect();
