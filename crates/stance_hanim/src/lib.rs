@@ -18,6 +18,7 @@ mod joint_table;
 pub mod mapping;
 pub mod names;
 pub mod scenarios;
+pub mod strength;
 
 pub use builder::{
     AnatomicalAxis, BuildError, BuiltJoint, HumanoidSkeleton, SkeletonOptions, build_skeleton,
