@@ -4,6 +4,7 @@ use clap::{Parser, Subcommand};
 
 mod avatar;
 mod bench;
+mod comfort;
 mod decode;
 mod link;
 mod retarget;
@@ -25,6 +26,9 @@ struct Cli {
 enum Command {
     /// Solve an IK problem file and print the solved posture as JSON.
     Solve(solve::SolveArgs),
+    /// Measure the comfort of a posture (RULA, joint loads, effort) of a problem file or a
+    /// document.
+    Comfort(comfort::ComfortArgs),
     /// Benchmark the solver scenarios (or one problem file).
     Bench(bench::BenchArgs),
     /// Decode a recorded sensor byte stream into JSON lines.
@@ -48,6 +52,7 @@ fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
     match cli.command {
         Command::Solve(args) => solve::run(args),
+        Command::Comfort(args) => comfort::run(args),
         Command::Bench(args) => bench::run(args),
         Command::Decode(args) => decode::run(args),
         Command::SimulateSensors(args) => simulate::run(args),

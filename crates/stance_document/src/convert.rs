@@ -1,6 +1,10 @@
 //! From document specs to solver types (`stance_ik::Task`, `stance_ik::Posture`) and back.
 
+use std::sync::Arc;
+
 use glam::{DQuat, DVec3};
+use stance_hanim::comfort::{ComfortSettings, comfort_model};
+use stance_hanim::strength::aligned_axes;
 use stance_ik::{Axes, Effector, Limb, LimbGoal, Posture, Skeleton, Task, TaskKind};
 
 use crate::DocumentError;
@@ -247,6 +251,21 @@ impl TaskSpec {
                 TaskKind::PostureAttraction {
                     reference: reference.values().to_vec(),
                     dofs,
+                }
+            }
+            TaskKindSpec::Comfort {
+                effort,
+                range,
+                rula,
+            } => {
+                let settings = ComfortSettings {
+                    effort: *effort,
+                    range: *range,
+                    rula: *rula,
+                    ..ComfortSettings::default()
+                };
+                TaskKind::Comfort {
+                    model: Arc::new(comfort_model(skeleton, &aligned_axes(skeleton), &settings)),
                 }
             }
             TaskKindSpec::Limb { target, .. } => {

@@ -140,6 +140,9 @@ pub use stance_hanim::LimbName;
 /// Default `margin` of a balance task (m).
 pub const DEFAULT_BALANCE_MARGIN: f64 = 0.02;
 
+/// A comfort task's default weights: effort, range, RULA's stand-in.
+pub const DEFAULT_COMFORT: (f64, f64, f64) = (1.0, 0.1, 0.5);
+
 /// A pinned part whose target is at most this high above the floor (y = 0) touches it and
 /// supports the body (m): an ankle stands about 8 cm high, a hand or knee on the floor less.
 pub const CONTACT_HEIGHT: f64 = 0.15;
@@ -237,6 +240,16 @@ pub enum TaskKindSpec {
         /// Reference posture; `None` = the rest posture.
         reference: Option<PostureValues>,
     },
+    /// `"comfort"`: the posture's discomfort lowered along its gradient, projected into what
+    /// the levels above leave (the paper's null-space term); alone at its level.
+    Comfort {
+        /// Weight of the effort against gravity (sum of squared shares of joint strength).
+        effort: f64,
+        /// Weight of the joint-range discomfort.
+        range: f64,
+        /// Weight of the smooth stand-in for RULA.
+        rula: f64,
+    },
     /// `"limb"`: the analytic arm/leg task (wrist/ankle goal plus swivel angle).
     Limb {
         /// The limb by name (`"l_arm"`...); either this or `joints`.
@@ -264,6 +277,7 @@ impl TaskKindSpec {
             TaskKindSpec::Balance { .. } => "balance",
             TaskKindSpec::Com { .. } => "com",
             TaskKindSpec::Posture { .. } => "posture",
+            TaskKindSpec::Comfort { .. } => "comfort",
             TaskKindSpec::Limb { .. } => "limb",
         }
     }
@@ -357,6 +371,23 @@ impl TaskSpec {
             TaskKindSpec::Posture { reference, .. } => {
                 if let Some(r) = reference {
                     r.validate_at("reference")?;
+                }
+            }
+            TaskKindSpec::Comfort {
+                effort,
+                range,
+                rula,
+            } => {
+                for (name, w) in [("effort", effort), ("range", range), ("rula", rula)] {
+                    if !(w.is_finite() && *w >= 0.0) {
+                        return Err(DocumentError::field(name, "must be a finite number >= 0"));
+                    }
+                }
+                if *effort + *range + *rula <= 0.0 {
+                    return Err(DocumentError::field(
+                        "effort",
+                        "a comfort task needs a weight above 0 on effort, range or rula",
+                    ));
                 }
             }
             TaskKindSpec::Limb {
@@ -665,6 +696,19 @@ impl TaskSpec {
                 };
                 TaskKindSpec::Posture { joints, reference }
             }
+            "comfort" => {
+                let weight = |name: &str, default: f64| -> Result<f64, DocumentError> {
+                    match opt(name) {
+                        None => Ok(default),
+                        Some(v) => number(v, &here(name)),
+                    }
+                };
+                TaskKindSpec::Comfort {
+                    effort: weight("effort", DEFAULT_COMFORT.0)?,
+                    range: weight("range", DEFAULT_COMFORT.1)?,
+                    rula: weight("rula", DEFAULT_COMFORT.2)?,
+                }
+            }
             "limb" => {
                 let limb = match opt("limb") {
                     None => None,
@@ -743,7 +787,7 @@ impl TaskSpec {
                 return Err(DocumentError::field(
                     here("kind"),
                     format!(
-                        "unknown kind `{other}` (expected position, orientation, direction, gaze, com, balance, posture or limb)"
+                        "unknown kind `{other}` (expected position, orientation, direction, gaze, com, balance, posture, comfort or limb)"
                     ),
                 ));
             }
@@ -902,6 +946,15 @@ impl Serialize for TaskSpec {
                 if let Some(r) = reference {
                     m.serialize_entry("reference", r)?;
                 }
+            }
+            TaskKindSpec::Comfort {
+                effort,
+                range,
+                rula,
+            } => {
+                m.serialize_entry("effort", effort)?;
+                m.serialize_entry("range", range)?;
+                m.serialize_entry("rula", rula)?;
             }
             TaskKindSpec::Limb {
                 limb,

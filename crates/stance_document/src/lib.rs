@@ -13,6 +13,7 @@
 #![warn(missing_docs)]
 
 pub mod camera;
+pub mod comfort;
 mod convert;
 mod document;
 mod error;
@@ -28,8 +29,8 @@ pub use convert::{
     LimbStartSpec, limb_joint_indices, pinned_contacts, resolve_joint, solver_tasks,
 };
 pub use document::{
-    AvatarReference, CONTACT_HEIGHT, DEFAULT_BALANCE_MARGIN, DOCUMENT_VERSION, Document, DofValues,
-    LimbName, PostureValues, TaskKindSpec, TaskSpec,
+    AvatarReference, CONTACT_HEIGHT, DEFAULT_BALANCE_MARGIN, DEFAULT_COMFORT, DOCUMENT_VERSION,
+    Document, DofValues, LimbName, PostureValues, TaskKindSpec, TaskSpec,
 };
 pub use error::DocumentError;
 pub use link::LinkError;

@@ -30,12 +30,12 @@ pub(crate) use models::ROTATION_PRIOR;
 use read::decode_payload;
 use write::encode_payload;
 
-use crate::document::Document;
+use crate::document::{Document, TaskKindSpec};
 
 /// The newest link format this version writes and reads: 2 adds the tasks' active intervals
-/// and the timeline (frame rate, length, keys). A document without them is written in
-/// format 1, which older versions read too.
-pub const LINK_FORMAT: u8 = 2;
+/// and the timeline (frame rate, length, keys), 3 the comfort task (a 16-symbol model of the
+/// task kinds). A document is written in the oldest format that holds it.
+pub const LINK_FORMAT: u8 = 3;
 /// Longest link [`encode_for_sharing`] makes with the timeline in it, in characters: beyond,
 /// the keys are left out (a link is pasted into chats and mails).
 pub const MAX_SHARE_CHARS: usize = 8 * 1024;
@@ -114,10 +114,21 @@ fn engine() -> GeneralPurpose {
 
 /// The URL fragment (without `#`) that carries `document`. Values are quantised (see the module
 /// documentation); non-finite numbers, which a validated document never holds, are written as 0.
-/// Format 1 when the document has no timeline and no task interval, else format 2.
+/// Format 3 when a task is a comfort task, else 2 when the document has a timeline or a task
+/// interval, else 1 (the oldest format that holds it, for older readers).
 pub fn encode(document: &Document) -> String {
     let timed = document.motion.is_some() || document.tasks.iter().any(|t| t.interval.is_some());
-    let format = if timed { 2 } else { 1 };
+    let comfort = document
+        .tasks
+        .iter()
+        .any(|t| matches!(t.kind, TaskKindSpec::Comfort { .. }));
+    let format = if comfort {
+        3
+    } else if timed {
+        2
+    } else {
+        1
+    };
     let payload = encode_payload(document, format);
     let mut frame = Vec::with_capacity(payload.len() + 8);
     frame.push(format);

@@ -12,6 +12,9 @@ use stance_ik::{
     Solver, SolverSettings, Task,
 };
 
+use stance_hanim::comfort::ComfortSettings;
+
+use crate::comfort::{comfort_json, parse_comfort_settings};
 use crate::convert::LimbStartSpec;
 use crate::convert::solver_tasks;
 use crate::json::{arr, field, number, obj, string, vec3};
@@ -37,6 +40,8 @@ pub struct Problem {
     /// Limbs for the solver's hybrid restart: those of the limb tasks, plus every H-Anim limb
     /// of the skeleton with `settings.hybrid`.
     pub hybrid_limbs: Vec<Limb>,
+    /// RULA's inputs and the strength profile for the comfort report (the file's `comfort`).
+    pub comfort: ComfortSettings,
 }
 
 /// What the closed form did for one limb task.
@@ -86,7 +91,11 @@ impl Problem {
                 PostureValues::from_json_value(v, "posture")?.to_posture_at(&skeleton, "posture")?
             }
         };
-        Self::build(skeleton, specs, start, settings, level_damping, hybrid)
+        let mut problem = Self::build(skeleton, specs, start, settings, level_damping, hybrid)?;
+        if let Some(v) = root.get("comfort").filter(|v| !v.is_null()) {
+            problem.comfort = parse_comfort_settings(v, "comfort")?;
+        }
+        Ok(problem)
     }
 
     fn build(
@@ -124,6 +133,7 @@ impl Problem {
             start,
             limb_starts,
             hybrid_limbs,
+            comfort: ComfortSettings::default(),
         })
     }
 
@@ -178,10 +188,17 @@ impl Problem {
                 (joint.name.clone(), json!([p.x, p.y, p.z]))
             })
             .collect();
+        let mut report = serde_json::to_value(report).unwrap_or(Value::Null);
+        if let Some(o) = report.as_object_mut() {
+            o.insert(
+                "comfort".to_owned(),
+                comfort_json(&self.skeleton, posture, &self.comfort),
+            );
+        }
         let mut out = json!({
             "joints": joints,
             "posture": PostureValues::from_posture(&self.skeleton, posture),
-            "report": serde_json::to_value(report).unwrap_or(Value::Null),
+            "report": report,
         });
         if !self.limb_starts.is_empty()
             && let Some(o) = out.as_object_mut()
@@ -259,6 +276,19 @@ pub fn parse_skeleton(v: &Value) -> Result<Skeleton, DocumentError> {
                     return Err(DocumentError::field(here, "expected [lower, upper]"));
                 }
                 def = def.with_limit(d, number(&r[0], &here)?, number(&r[1], &here)?);
+            }
+        }
+        if let Some(l) = o.get("stiffness").filter(|l| !l.is_null()) {
+            for (key, value) in obj(l, &format!("{at}.stiffness"))? {
+                let here = format!("{at}.stiffness.{key}");
+                let d = Dof::from_name(key)
+                    .filter(|d| d.is_rotation())
+                    .ok_or_else(|| DocumentError::field(&here, "expected rx, ry or rz"))?;
+                let value = number(value, &here)?;
+                if !(0.0..1.0).contains(&value) {
+                    return Err(DocumentError::field(here, "expected a number in [0, 1)"));
+                }
+                def = def.with_stiffness(d, value);
             }
         }
         if let Some(m) = o.get("mass").filter(|m| !m.is_null()) {

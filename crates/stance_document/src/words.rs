@@ -5,7 +5,7 @@
 use stance_hanim::{mirror_name, readable_name};
 use stance_ik::Axes;
 
-use crate::{DEFAULT_BALANCE_MARGIN, PostureValues, TaskKindSpec, TaskSpec};
+use crate::{DEFAULT_BALANCE_MARGIN, DEFAULT_COMFORT, PostureValues, TaskKindSpec, TaskSpec};
 
 /// A point or direction reflected in the sagittal plane (x -> -x).
 fn reflect(v: [f64; 3]) -> [f64; 3] {
@@ -45,14 +45,27 @@ impl TaskSpec {
         balance
     }
 
-    /// Comfort: a light attraction of every joint toward the rest posture, at level 10.
-    pub fn comfort() -> TaskSpec {
-        let mut comfort = TaskSpec::new(TaskKindSpec::Posture {
+    /// A light attraction of every joint toward the rest posture, at level 10.
+    pub fn rest_attraction() -> TaskSpec {
+        let mut rest = TaskSpec::new(TaskKindSpec::Posture {
             joints: None,
             reference: None,
         });
+        rest.level = 10;
+        rest.weight = 0.05;
+        rest
+    }
+
+    /// Comfort (effort against gravity, joint ranges, RULA's stand-in) at level 10, the
+    /// lowest: it takes whatever freedom every other task leaves.
+    pub fn comfort() -> TaskSpec {
+        let (effort, range, rula) = DEFAULT_COMFORT;
+        let mut comfort = TaskSpec::new(TaskKindSpec::Comfort {
+            effort,
+            range,
+            rula,
+        });
         comfort.level = 10;
-        comfort.weight = 0.05;
         comfort
     }
 
@@ -105,6 +118,7 @@ impl TaskSpec {
                 axes: *axes,
                 target: reflect(*target),
             },
+            TaskKindSpec::Comfort { .. } => self.kind.clone(),
             TaskKindSpec::Posture { joints, reference } => TaskKindSpec::Posture {
                 joints: joints.as_deref().map(mirror_names),
                 reference: reference.as_ref().map(PostureValues::mirrored),
@@ -165,7 +179,8 @@ impl TaskSpec {
                     format!("centre of mass ({})", axes.to_letters())
                 }
             }
-            TaskKindSpec::Posture { .. } => "comfort (toward the rest posture)".to_owned(),
+            TaskKindSpec::Posture { .. } => "rest posture".to_owned(),
+            TaskKindSpec::Comfort { .. } => "comfort (effort, ranges, RULA)".to_owned(),
             TaskKindSpec::Limb { limb, joints, .. } => match (limb, joints) {
                 (Some(limb), _) => format!("{} reach", limb.name().replace('_', " ")),
                 (None, Some(joints)) => format!("{} limb", readable_name(&joints[2])),

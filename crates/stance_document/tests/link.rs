@@ -131,6 +131,16 @@ fn all_kinds() -> Document {
                     orientation: None,
                 },
             ),
+            t(
+                9,
+                1.0,
+                true,
+                TaskKindSpec::Comfort {
+                    effort: 1.0,
+                    range: 0.125,
+                    rula: 0.3,
+                },
+            ),
         ],
         motion: None,
         camera: None,
@@ -143,10 +153,16 @@ fn every_task_kind_and_the_avatar_url_round_trip() {
     d.validate().unwrap();
     let back = round_trip(&d);
     assert_eq!(back.avatar, d.avatar);
-    assert_eq!(back.tasks.len(), 8);
+    assert_eq!(back.tasks.len(), 9);
     for (a, b) in d.tasks.iter().zip(&back.tasks) {
         assert_eq!(a.kind.name(), b.kind.name());
     }
+    // The comfort task's weights exactly, in a format 3 link; without it, format 1.
+    assert_eq!(back.tasks[8], d.tasks[8]);
+    assert_eq!(frame_of(&d)[0], 3);
+    let mut older = d.clone();
+    older.tasks.pop();
+    assert_eq!(frame_of(&older)[0], 1);
     // The default avatar and an empty document too.
     round_trip(&Document::default());
     let empty = link::encode(&Document::default());
@@ -313,18 +329,18 @@ fn broken_links_give_distinct_clear_errors() {
     // A link from the future, with a valid checksum.
     let mut body = frame_of(&d);
     body.truncate(body.len() - 4);
-    body[0] = 3;
+    body[0] = LINK_FORMAT + 1;
     let e = link::decode(&reframe(body)).unwrap_err();
     assert_eq!(
         e,
         LinkError::FutureVersion {
-            found: 3,
+            found: LINK_FORMAT + 1,
             supported: LINK_FORMAT
         }
     );
     assert_eq!(
         e.to_string(),
-        "this link was made by a newer version of Stance (format 3); this version reads format 2"
+        "this link was made by a newer version of Stance (format 4); this version reads format 3"
     );
     // Valid checksum, nonsense inside.
     let e = link::decode(&reframe(vec![1, 3, 0xFF, 0xFF, 0xFF])).unwrap_err();
@@ -458,6 +474,9 @@ fn quantisation_steps_are_well_under_a_hundredth_of_a_degree() {
 fn timed_document(keys: usize) -> Document {
     let mut r = rng(77);
     let mut d = all_kinds();
+    // Format 2's content only (a comfort task takes a link to format 3).
+    d.tasks
+        .retain(|t| !matches!(t.kind, TaskKindSpec::Comfort { .. }));
     d.tasks[0].interval = Some(stance_document::TaskInterval {
         start: 0.25,
         end: 1.0 / 3.0 + 1.0,
@@ -495,8 +514,12 @@ fn keys_and_intervals_travel_in_a_format_2_link() {
         assert_eq!(a.frame, b.frame);
         posture_close(&a.posture, &b.posture).unwrap();
     }
-    // Without a timeline the link stays format 1, as older versions read it.
-    let plain = all_kinds();
+    // Without a timeline (and a comfort task) the link stays format 1, as older versions read
+    // it.
+    let mut plain = all_kinds();
+    plain
+        .tasks
+        .retain(|t| !matches!(t.kind, TaskKindSpec::Comfort { .. }));
     assert_eq!(URL_SAFE_NO_PAD.decode(link::encode(&plain)).unwrap()[0], 1);
     println!(
         "a link with 3 LOA2 keys and an interval: {} characters (without them {})",

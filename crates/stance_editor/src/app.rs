@@ -3,6 +3,7 @@
 //! history; the document autosaves; posture links open and copy.
 
 mod avatar_panel;
+mod comfort_panel;
 mod handles;
 mod lens;
 mod overlay;

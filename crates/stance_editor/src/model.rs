@@ -11,6 +11,7 @@
 
 mod bones;
 mod clips;
+mod comfort;
 mod command;
 mod mapping;
 mod motion;
@@ -25,6 +26,7 @@ use stance_ik::Clock;
 use stance_render::MannequinBone;
 
 pub use self::clips::{AnimationFormat, CLIP_FPS, PickPurpose};
+pub use self::comfort::{ComfortView, heat_color};
 use self::command::goals_moved;
 pub use self::command::{Command, Gesture, Notice, SessionChange};
 use self::mapping::MappingCorrections;
@@ -84,6 +86,8 @@ pub struct EditorModel {
     session_generation: u64,
     /// The clip, the playhead and the trajectory (the keys are in the document).
     pub(crate) timeline: Timeline,
+    /// The comfort panel: report and heat map.
+    pub(crate) comfort: ComfortView,
 }
 
 impl std::fmt::Debug for EditorModel {
@@ -126,6 +130,7 @@ impl EditorModel {
             solver_ms: 0.0,
             session_generation: 0,
             timeline: Timeline::default(),
+            comfort: ComfortView::default(),
         };
         model.load_library();
         if let Some(settings) = SensorSettings::load(model.hooks.as_ref()) {
@@ -207,6 +212,11 @@ impl EditorModel {
     /// How many times the session was replaced (a new body, LOA or mapping).
     pub fn session_generation(&self) -> u64 {
         self.session_generation
+    }
+
+    /// The comfort of the current posture (measured once per posture).
+    pub fn comfort_report(&mut self) -> &stance_hanim::comfort::ComfortReport {
+        self.comfort.report(&self.session, self.session_generation)
     }
 
     /// Seconds since the editor started, as of the last step.

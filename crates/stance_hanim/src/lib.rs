@@ -13,6 +13,7 @@
 pub mod anatomy;
 pub mod builder;
 pub mod chains;
+pub mod comfort;
 pub mod frame;
 mod joint_table;
 pub mod mapping;

@@ -38,9 +38,11 @@
 use stance_ik::Dof::{self, Rx, Ry, Rz};
 use stance_ik::comfort::{DofStrength, StrengthCurve};
 
-use crate::HumanoidSkeleton;
+use stance_ik::Skeleton;
+
 use crate::anatomy::JointClass;
 use crate::names::Side;
+use crate::{AnatomicalAxis, HumanoidSkeleton};
 
 /// The body mass the constants are given for (kg).
 const REFERENCE_MASS: f64 = 70.0;
@@ -182,12 +184,39 @@ fn reversed(strength: DofStrength) -> DofStrength {
     }
 }
 
-/// Per DOF of `body`'s skeleton, its strength (`None`: no source, or a translation).
+/// The anatomical axis of every rotation DOF of a skeleton whose joint frames are the H-Anim
+/// body frame at rest (a problem file's skeleton, the default body): each DOF is its own
+/// anatomical axis.
+pub fn aligned_axes(skeleton: &Skeleton) -> Vec<Vec<AnatomicalAxis>> {
+    skeleton
+        .joints()
+        .iter()
+        .map(|j| {
+            j.dofs
+                .iter()
+                .filter(|d| d.is_rotation())
+                .map(|&dof| AnatomicalAxis {
+                    dof,
+                    anatomical: dof,
+                    sign: 1.0,
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The anatomical axes of a built body's joints.
+pub fn built_axes(body: &HumanoidSkeleton) -> Vec<Vec<AnatomicalAxis>> {
+    body.joints.iter().map(|j| j.axes.clone()).collect()
+}
+
+/// Per DOF of `skeleton` (H-Anim joint names; `axes` per joint, see [`built_axes`] and
+/// [`aligned_axes`]), its strength (`None`: no source, or a translation).
 pub fn dof_strengths(
-    body: &HumanoidSkeleton,
+    skeleton: &Skeleton,
+    axes: &[Vec<AnatomicalAxis>],
     profile: &StrengthProfile,
 ) -> Vec<Option<DofStrength>> {
-    let skeleton = &body.skeleton;
     let mut out = vec![None; skeleton.dof_count()];
     // The lowest joint of the lumbar spine and of the neck present carry the region's load.
     let lowest = |class: JointClass| {
@@ -197,11 +226,11 @@ pub fn dof_strengths(
             .position(|j| !j.dofs.is_empty() && JointClass::of(&j.name) == class)
     };
     let (lowest_spine, lowest_neck) = (lowest(JointClass::Spine), lowest(JointClass::Neck));
-    for (j, (joint, built)) in skeleton.joints().iter().zip(&body.joints).enumerate() {
+    for (j, (joint, joint_axes)) in skeleton.joints().iter().zip(axes).enumerate() {
         let class = JointClass::of(&joint.name);
         let side = Side::of(&joint.name);
         let lowest_of_region = Some(j) == lowest_spine || Some(j) == lowest_neck;
-        for axis in &built.axes {
+        for axis in joint_axes {
             let Some(strength) =
                 anatomical_strength(class, axis.anatomical, profile, lowest_of_region)
             else {
@@ -213,13 +242,12 @@ pub fn dof_strengths(
             } else {
                 strength
             };
-            let Some(slot) = joint
+            if let Some(slot) = joint
                 .dof_range()
                 .find(|&d| skeleton.dof_kinds()[d] == axis.dof)
-            else {
-                continue;
-            };
-            out[slot] = Some(strength);
+            {
+                out[slot] = Some(strength);
+            }
         }
     }
     out

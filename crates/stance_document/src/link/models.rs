@@ -36,6 +36,7 @@ pub(super) struct Models {
     pub(super) string_len: UintModel,
     pub(super) loa: SymbolModel<8>,
     pub(super) kind: SymbolModel<8>,
+    pub(super) kind16: SymbolModel<16>,
     pub(super) limb: SymbolModel<4>,
     pub(super) mask: SymbolModel<64>,
     pub(super) joint: SymbolModel<256>,
@@ -58,6 +59,7 @@ impl Default for Models {
             string_len: UintModel::default(),
             loa: Default::default(),
             kind: Default::default(),
+            kind16: Default::default(),
             limb: Default::default(),
             mask: Default::default(),
             joint: Default::default(),
@@ -105,7 +107,9 @@ pub(super) fn short_decimal(w: f64) -> Option<(u64, u8)> {
     })
 }
 
-pub(super) const KINDS: [&str; 8] = [
+/// Task kinds by symbol: formats 1 and 2 code the first eight (an 8-symbol model), format 3
+/// all (a 16-symbol model).
+pub(super) const KINDS: [&str; 9] = [
     "position",
     "orientation",
     "gaze",
@@ -114,6 +118,7 @@ pub(super) const KINDS: [&str; 8] = [
     "limb",
     "direction",
     "balance",
+    "comfort",
 ];
 
 pub(super) fn quantise(x: f64, step: f64) -> i64 {

@@ -25,6 +25,7 @@ use crate::range_coder::{Decoder, UintModel};
 struct Reader<'a> {
     d: Decoder<'a>,
     m: Models,
+    format: u8,
 }
 
 type R<T> = Result<T, String>;
@@ -211,15 +212,9 @@ impl Reader<'_> {
         Ok(p)
     }
 
-    fn task(&mut self) -> R<TaskSpec> {
-        let kind = self.m.kind.decode(&mut self.d);
-        let level = self.m.level.decode(&mut self.d).ok_or("bad level")?;
-        let level = level
-            .checked_add(1)
-            .and_then(|l| u32::try_from(l).ok())
-            .ok_or("level out of range")?;
-        let active = self.flag(ACTIVE);
-        let weight = if self.flag(WEIGHT_ONE) {
+    /// A weight (see the writer).
+    fn weight(&mut self) -> R<f64> {
+        Ok(if self.flag(WEIGHT_ONE) {
             1.0
         } else if self.flag(WEIGHT_DECIMAL) {
             let m = self.m.weight.decode(&mut self.d).ok_or("bad weight")?;
@@ -227,7 +222,22 @@ impl Reader<'_> {
             from_decimal(m, k)
         } else {
             f64::from_bits(self.d.direct(64))
+        })
+    }
+
+    fn task(&mut self) -> R<TaskSpec> {
+        let kind = if self.format >= 3 {
+            self.m.kind16.decode(&mut self.d)
+        } else {
+            self.m.kind.decode(&mut self.d)
         };
+        let level = self.m.level.decode(&mut self.d).ok_or("bad level")?;
+        let level = level
+            .checked_add(1)
+            .and_then(|l| u32::try_from(l).ok())
+            .ok_or("level out of range")?;
+        let active = self.flag(ACTIVE);
+        let weight = self.weight()?;
         let kind = match KINDS.get(kind).copied() {
             Some("position") => TaskKindSpec::Position {
                 joint: self.joint()?,
@@ -274,6 +284,11 @@ impl Reader<'_> {
             Some("com") => TaskKindSpec::Com {
                 axes: self.axes()?,
                 target: self.position()?,
+            },
+            Some("comfort") => TaskKindSpec::Comfort {
+                effort: self.weight()?,
+                range: self.weight()?,
+                rula: self.weight()?,
             },
             Some("posture") => {
                 let joints = self.joint_list("posture joints")?;
@@ -377,6 +392,7 @@ pub(super) fn decode_payload(bytes: &[u8], format: u8) -> R<Document> {
     let mut r = Reader {
         d: Decoder::new(bytes),
         m: Models::default(),
+        format,
     };
     let avatar = if r.flag(AVATAR_URL) {
         AvatarReference::Url(r.string()?)

@@ -18,6 +18,7 @@ use crate::range_coder::Encoder;
 struct Writer {
     e: Encoder,
     m: Models,
+    format: u8,
 }
 
 impl Writer {
@@ -144,17 +145,12 @@ impl Writer {
         }
     }
 
-    fn task(&mut self, t: &TaskSpec) {
-        let kind = KINDS.iter().position(|k| *k == t.kind.name()).unwrap_or(0);
-        self.m.kind.encode(&mut self.e, kind);
-        self.m
-            .level
-            .encode(&mut self.e, u64::from(t.level.saturating_sub(1)));
-        self.flag(ACTIVE, t.active);
-        let one = t.weight == 1.0;
+    /// A weight: 1 in one flag, a short decimal exactly, else its bits.
+    fn weight(&mut self, weight: f64) {
+        let one = weight == 1.0;
         self.flag(WEIGHT_ONE, one);
         if !one {
-            match short_decimal(t.weight) {
+            match short_decimal(weight) {
                 Some((m, k)) => {
                     self.flag(WEIGHT_DECIMAL, true);
                     self.m.weight.encode(&mut self.e, m);
@@ -162,10 +158,24 @@ impl Writer {
                 }
                 None => {
                     self.flag(WEIGHT_DECIMAL, false);
-                    self.e.direct(t.weight.to_bits(), 64);
+                    self.e.direct(weight.to_bits(), 64);
                 }
             }
         }
+    }
+
+    fn task(&mut self, t: &TaskSpec) {
+        let kind = KINDS.iter().position(|k| *k == t.kind.name()).unwrap_or(0);
+        if self.format >= 3 {
+            self.m.kind16.encode(&mut self.e, kind);
+        } else {
+            self.m.kind.encode(&mut self.e, kind);
+        }
+        self.m
+            .level
+            .encode(&mut self.e, u64::from(t.level.saturating_sub(1)));
+        self.flag(ACTIVE, t.active);
+        self.weight(t.weight);
         match &t.kind {
             TaskKindSpec::Position {
                 joint,
@@ -221,6 +231,15 @@ impl Writer {
             TaskKindSpec::Com { axes, target } => {
                 self.axes(*axes);
                 self.position(*target);
+            }
+            TaskKindSpec::Comfort {
+                effort,
+                range,
+                rula,
+            } => {
+                for w in [effort, range, rula] {
+                    self.weight(*w);
+                }
             }
             TaskKindSpec::Posture { joints, reference } => {
                 self.joint_list(joints.as_deref());
@@ -324,11 +343,13 @@ fn motion(w: &mut Writer, d: &Document) {
     }
 }
 
-/// The payload of `format` (1: posture and tasks; 2: also the intervals and the timeline).
+/// The payload of `format` (1: posture and tasks; 2: also the intervals and the timeline; 3:
+/// the task kinds in a 16-symbol model, comfort among them).
 pub(super) fn encode_payload(d: &Document, format: u8) -> Vec<u8> {
     let mut w = Writer {
         e: Encoder::new(),
         m: Models::default(),
+        format,
     };
     match &d.avatar {
         AvatarReference::Default => w.flag(AVATAR_URL, false),

@@ -459,6 +459,7 @@ pub fn document_close(a: &Document, b: &Document) -> Result<(), String> {
                     target: t2,
                 },
             ) => a1 == a2 && close3(*t1, *t2, POSITION_STEP_M),
+            (a @ TaskKindSpec::Comfort { .. }, b @ TaskKindSpec::Comfort { .. }) => a == b,
             (
                 TaskKindSpec::Posture {
                     joints: j1,

@@ -98,6 +98,8 @@ impl SidePanel<'_> {
         ui.separator();
         self.selection_section(ui);
         ui.separator();
+        super::comfort_panel::show(ui, self.model);
+        ui.separator();
         self.library_section(ui);
     }
 

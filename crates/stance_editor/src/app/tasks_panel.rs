@@ -331,9 +331,14 @@ fn add_task_menu(ui: &mut egui::Ui, model: &EditorModel) -> Option<NewTask> {
             NewTask::CentreOfMass,
         ),
         (
-            "Posture attraction (comfort)",
-            "draws the joints toward the rest posture at the lowest level",
+            "Comfort (effort, joint ranges, RULA)",
+            "lowers the joint loads against gravity, the joints near the ends of their ranges and the RULA score, at the lowest level, with whatever freedom the other tasks leave",
             NewTask::Comfort,
+        ),
+        (
+            "Posture attraction (rest)",
+            "draws the joints toward the rest posture at the lowest level",
+            NewTask::RestPosture,
         ),
     ];
     for (what, hover, task) in whole_body {
@@ -577,6 +582,27 @@ impl FieldRows<'_> {
         );
     }
 
+    fn comfort(&mut self, effort: &mut f64, range: &mut f64, rula: &mut f64) {
+        self.row(
+            "effort",
+            "weight of the joint loads against gravity, as shares of each joint's strength",
+            "effort",
+            |ui, _| comfort_weight_editor(ui, effort),
+        );
+        self.row(
+            "joint ranges",
+            "weight of the discomfort of joints near the ends of their ranges",
+            "range",
+            |ui, _| comfort_weight_editor(ui, range),
+        );
+        self.row(
+            "RULA",
+            "weight of a smooth stand-in for the RULA score (upper arm, lower arm, wrist, neck, trunk)",
+            "rula",
+            |ui, _| comfort_weight_editor(ui, rula),
+        );
+    }
+
     fn axes_and_goal(&mut self, axes: &mut Axes, target: &mut [f64; 3]) {
         if let Some(changed) = axes_and_goal_rows(self.ui, self.index, axes, target) {
             self.edit = Some(changed);
@@ -643,8 +669,24 @@ fn kind_fields(
         } => rows.direction(joint, axis, target),
         TaskKindSpec::Balance { support, margin } => rows.balance(support.as_deref(), margin),
         TaskKindSpec::Posture { .. } => {}
+        TaskKindSpec::Comfort {
+            effort,
+            range,
+            rula,
+        } => rows.comfort(effort, range, rula),
     }
     rows.edit
+}
+
+/// A comfort term's weight (0 turns it off).
+fn comfort_weight_editor(ui: &mut egui::Ui, weight: &mut f64) -> bool {
+    ui.add(
+        egui::DragValue::new(weight)
+            .range(0.0..=10.0)
+            .speed(0.01)
+            .max_decimals(3),
+    )
+    .changed()
 }
 
 /// A limb's swivel angle: kept as it is, or set (degrees).

@@ -11,7 +11,7 @@ use super::handles::Handles;
 use super::lens::Lens;
 use super::overlay::Overlay;
 use crate::host::BackendSummary;
-use crate::model::{Command, EditorModel, NewTask};
+use crate::model::{Command, EditorModel, NewTask, heat_color};
 use crate::viewport::{ViewportInput, ViewportRenderer, apply_gestures};
 
 /// Colour of the selected body part (linear RGB).
@@ -330,6 +330,7 @@ impl ViewportPanel {
     fn scene(&self, model: &EditorModel) -> Scene {
         let show_avatar = model.avatar().is_some() && self.avatar_uploaded;
         // With an avatar the mannequin is hidden; the skeleton overlay shows the bones.
+        let heat = model.comfort.heat_shares(model.session().skeleton());
         let capsules = if show_avatar {
             Vec::new()
         } else {
@@ -342,6 +343,8 @@ impl ViewportPanel {
                         SELECTED_COLOR_LINEAR
                     } else if Some(bone.owner) == model.hovered_joint() {
                         HOVERED_COLOR_LINEAR
+                    } else if let Some(share) = heat.as_ref().and_then(|h| h.get(bone.owner)) {
+                        heat_color(*share, BODY_COLOR_LINEAR)
                     } else {
                         BODY_COLOR_LINEAR
                     };

@@ -28,16 +28,23 @@ pub enum NewTask {
     Balance,
     /// The centre of mass over the floor point under it now (level 2).
     CentreOfMass,
-    /// The attraction to the rest posture, at the lowest level.
+    /// Comfort (effort, joint ranges, RULA), at the lowest level.
     Comfort,
+    /// The attraction to the rest posture, at the lowest level.
+    RestPosture,
 }
 
-/// The level for a new task: below every task but the posture attraction.
+/// The level for a new task: below every task but the posture attraction and comfort.
 fn next_level(session: &PosingSession) -> u32 {
     session
         .tasks()
         .iter()
-        .filter(|task| !matches!(task.kind, TaskKindSpec::Posture { .. }))
+        .filter(|task| {
+            !matches!(
+                task.kind,
+                TaskKindSpec::Posture { .. } | TaskKindSpec::Comfort { .. }
+            )
+        })
         .map(|task| task.level)
         .max()
         .unwrap_or(0)
@@ -97,6 +104,7 @@ pub fn make_task(session: &PosingSession, what: NewTask) -> Result<TaskSpec, Str
             (kind, 2)
         }
         NewTask::Comfort => return Ok(TaskSpec::comfort()),
+        NewTask::RestPosture => return Ok(TaskSpec::rest_attraction()),
     };
     let mut task = TaskSpec::new(kind);
     task.level = level;
@@ -137,7 +145,7 @@ fn limb_as_it_stands(session: &PosingSession, limb: LimbName) -> Result<TaskKind
 
 /// The paper's Table 1: left foot on the floor, gaze and right hand on a sphere (level 1);
 /// the centre of mass over a point between the feet (level 2); left hand on a vertical bar
-/// (level 3); comfort.
+/// (level 3); the rest-posture attraction.
 pub fn table1_example(session: &PosingSession) -> Vec<TaskSpec> {
     let position = |name: &str| session.joint_position(name).unwrap_or_default();
     let sphere = [-0.3, 1.15, 0.4];
@@ -173,7 +181,7 @@ pub fn table1_example(session: &PosingSession) -> Vec<TaskSpec> {
         TaskSpec::pin("r_radiocarpal", sphere),
         balance,
         bar_task,
-        TaskSpec::comfort(),
+        TaskSpec::rest_attraction(),
     ]
 }
 

@@ -135,7 +135,9 @@ pub fn blended(spec: &TaskSpec, weight: f64, skeleton: &Skeleton, frames: &Frame
             }
         }
         TaskKindSpec::Com { target, .. } => lerp(frames.center_of_mass(), target),
-        TaskKindSpec::Balance { .. } | TaskKindSpec::Posture { .. } => out.weight *= weight,
+        TaskKindSpec::Balance { .. }
+        | TaskKindSpec::Posture { .. }
+        | TaskKindSpec::Comfort { .. } => out.weight *= weight,
     }
     out
 }

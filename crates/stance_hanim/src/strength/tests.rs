@@ -48,7 +48,7 @@ fn anderson_peaks_match_the_published_coefficients() {
 #[test]
 fn every_sourced_dof_has_a_strength_and_the_right_side_mirrors_the_left() {
     let b = body(LevelOfArticulation::Loa2);
-    let strengths = dof_strengths(&b, &StrengthProfile::default());
+    let strengths = dof_strengths(&b.skeleton, &built_axes(&b), &StrengthProfile::default());
     let at = |joint: &str, kind: Dof| strengths[dof(&b, joint, kind)];
     for joint in [
         "l_hip",
@@ -88,13 +88,23 @@ fn every_sourced_dof_has_a_strength_and_the_right_side_mirrors_the_left() {
 fn strengths_scale_with_the_body() {
     let b = body(LevelOfArticulation::Loa1);
     let light = dof_strengths(
-        &b,
+        &b.skeleton,
+        &built_axes(&b),
         &StrengthProfile {
             mass_kg: 35.0,
             ..StrengthProfile::default()
         },
     );
-    let normal = dof_strengths(&b, &StrengthProfile::default());
+    let normal = dof_strengths(&b.skeleton, &built_axes(&b), &StrengthProfile::default());
+    // The default body's frames are the H-Anim frame: its built axes are the aligned ones.
+    assert_eq!(
+        dof_strengths(
+            &b.skeleton,
+            &aligned_axes(&b.skeleton),
+            &StrengthProfile::default()
+        ),
+        normal
+    );
     let d = dof(&b, "l_elbow", Rx);
     let ratio = light[d].unwrap().negative.peak / normal[d].unwrap().negative.peak;
     assert!((ratio - 0.5).abs() < 1e-12);

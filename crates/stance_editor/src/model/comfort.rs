@@ -1,0 +1,91 @@
+//! The comfort panel's model: the posture's comfort report (RULA with its parts, the joint
+//! loads against gravity), measured once per posture, and the heat map's colours.
+
+use stance_hanim::comfort::{ComfortReport, ComfortSettings, comfort_report};
+use stance_hanim::strength::built_axes;
+
+use crate::posing::PosingSession;
+
+/// The comfort of the session's posture, cached by session revision.
+#[derive(Debug, Default)]
+pub struct ComfortView {
+    /// Colour the body by joint load (the heat map).
+    pub heat_map: bool,
+    /// RULA's inputs that a posture does not show, and the weights.
+    pub settings: ComfortSettings,
+    report: Option<((u64, u64), ComfortReport)>,
+}
+
+impl ComfortView {
+    /// The report for the session's posture (`generation` tells sessions apart).
+    pub fn report(&mut self, session: &PosingSession, generation: u64) -> &ComfortReport {
+        let key = (generation, session.revision());
+        if self.report.as_ref().is_some_and(|(k, _)| *k != key) {
+            self.report = None;
+        }
+        let settings = &self.settings;
+        &self
+            .report
+            .get_or_insert_with(|| {
+                let report = comfort_report(
+                    session.skeleton(),
+                    &built_axes(session.humanoid()),
+                    session.posture(),
+                    settings,
+                );
+                (key, report)
+            })
+            .1
+    }
+
+    /// The last report measured, if any (the viewport's heat map reads it).
+    pub fn cached(&self) -> Option<&ComfortReport> {
+        self.report.as_ref().map(|(_, report)| report)
+    }
+
+    /// Per joint of `skeleton`, its load share for the heat map (0 where unknown); `None`
+    /// while the heat map is off or nothing was measured yet.
+    pub fn heat_shares(&self, skeleton: &stance_ik::Skeleton) -> Option<Vec<f64>> {
+        if !self.heat_map {
+            return None;
+        }
+        let report = self.cached()?;
+        Some(
+            skeleton
+                .joints()
+                .iter()
+                .map(|joint| {
+                    report
+                        .loads
+                        .iter()
+                        .find(|load| load.joint == joint.name)
+                        .and_then(|load| load.share)
+                        .unwrap_or(0.0)
+                })
+                .collect(),
+        )
+    }
+
+    /// Forgets the cached report (the settings changed).
+    pub fn invalidate(&mut self) {
+        self.report = None;
+    }
+}
+
+/// The heat map's colour of a load share (linear RGBA): the body's colour up to 5 %, then
+/// through amber to red at 30 % of the joint's strength and above.
+pub fn heat_color(share: f64, body: [f32; 4]) -> [f32; 4] {
+    const AMBER: [f32; 4] = [0.9, 0.55, 0.05, 1.0];
+    const RED: [f32; 4] = [0.85, 0.05, 0.03, 1.0];
+    let mix = |a: [f32; 4], b: [f32; 4], t: f64| {
+        let t = t.clamp(0.0, 1.0) as f32;
+        [0, 1, 2, 3].map(|i| a[i] + (b[i] - a[i]) * t)
+    };
+    if share <= 0.05 {
+        body
+    } else if share <= 0.15 {
+        mix(body, AMBER, (share - 0.05) / 0.10)
+    } else {
+        mix(AMBER, RED, (share - 0.15) / 0.15)
+    }
+}
