@@ -42,6 +42,10 @@ pub struct BenchArgs {
     /// Iterations per timed run for `us_per_iteration`.
     #[arg(long, default_value_t = 10)]
     pub iterations: usize,
+    /// Comfort on N reach problems (feet pinned, balance, right hand): RULA and the shoulder
+    /// and lower-back loads without and with a comfort level, and its cost per iteration.
+    #[arg(long, value_name = "N", num_args = 0..=1, default_missing_value = "40")]
+    pub comfort: Option<usize>,
     /// Time retargeting this clip (.bvh, .glb) onto the H-Anim default body at LOA2 (50
     /// DOF): the plain rotation copy and the four-level problem with contacts, frames per
     /// second on one core.
@@ -82,6 +86,9 @@ pub fn run(args: BenchArgs) -> Result<()> {
     let budget = std::time::Duration::from_millis(args.millis);
     if let Some(dir) = &args.suite {
         return run_suite(dir, &args);
+    }
+    if let Some(cases) = args.comfort {
+        return crate::bench_comfort::run(cases, args.json);
     }
     if let Some(path) = &args.clip {
         return bench_clip(path, budget, args.json);

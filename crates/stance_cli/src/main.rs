@@ -4,6 +4,7 @@ use clap::{Parser, Subcommand};
 
 mod avatar;
 mod bench;
+mod bench_comfort;
 mod comfort;
 mod decode;
 mod link;

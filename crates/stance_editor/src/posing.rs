@@ -176,7 +176,9 @@ impl PosingSession {
         // Balance as the support polygon of the pinned feet (an inequality): the body leans
         // freely as long as its centre of mass stays over them.
         tasks.push(TaskSpec::balance());
-        tasks.push(TaskSpec::comfort());
+        // The rest-posture attraction, not yet the comfort task: with comfort a pull runs past
+        // one frame's budget while the cost still falls (see docs/comfort.md).
+        tasks.push(TaskSpec::rest_attraction());
         tasks
     }
 

@@ -144,6 +144,10 @@ pub struct AngleBand {
     pub edges: Vec<(f64, f64)>,
     /// Smoothing width (rad, > 0).
     pub width: f64,
+    /// Past each edge, on its costly side, the cost keeps rising by `ramp * |step|` per width
+    /// (a softplus): a posture deep inside a costly band is pushed toward its edge, where the
+    /// logistic alone would be flat. 0: steps only.
+    pub ramp: f64,
 }
 
 /// The cost of the comfort task: weighted effort, range discomfort and angle bands.
@@ -222,6 +226,12 @@ fn range_wall(x: f64) -> (f64, f64) {
     let slope =
         f64::from(POWER) * base.powi(POWER - 1) * 0.5 * FREQUENCY * (FREQUENCY * x + PHASE).cos();
     (value, slope)
+}
+
+/// `ln(1 + e^x)` and its derivative (the logistic), without overflow.
+fn softplus(x: f64) -> (f64, f64) {
+    let value = if x > 30.0 { x } else { x.exp().ln_1p() };
+    (value, logistic(x).0)
 }
 
 /// The logistic step of an angle band and its derivative.
@@ -471,9 +481,17 @@ impl ComfortModel {
             let width = band.width.max(1e-6);
             let mut slope = 0.0;
             for &(edge, step) in &band.edges {
-                let (s, ds) = logistic((phi - edge) / width);
+                let x = (phi - edge) / width;
+                let (s, ds) = logistic(x);
                 cost += step * s;
                 slope += step * ds / width;
+                if band.ramp > 0.0 {
+                    // The costly side: above a rising edge, below a falling one.
+                    let side = step.signum();
+                    let (soft, dsoft) = softplus(side * x);
+                    cost += band.ramp * step.abs() * soft;
+                    slope += band.ramp * step.abs() * dsoft * side / width;
+                }
             }
             let Some(g) = gradient.as_deref_mut() else {
                 continue;
@@ -484,20 +502,19 @@ impl ComfortModel {
             }
             let n = cross / sin;
             let k = self.band_weight * slope;
-            for (d, kind) in kinds.iter().enumerate() {
-                if !kind.is_rotation() {
-                    continue;
+            // The DOF above the segment turn `u`, those above the reference turn `v`; those
+            // above both turn the two together (no change).
+            let carry_u = skeleton.chain_dofs(band.joint);
+            let carry_v = reference_joint.map_or_else(Vec::new, |b| skeleton.chain_dofs(b));
+            for &d in &carry_u {
+                if kinds[d].is_rotation() && !carry_v.contains(&d) {
+                    g[d] -= k * frames.dof_axis[d].dot(n);
                 }
-                let owner = skeleton.dof_joint(d);
-                let moves_u = skeleton.is_ancestor_or_self(owner, band.joint);
-                let moves_v =
-                    reference_joint.is_some_and(|b| skeleton.is_ancestor_or_self(owner, b));
-                let sign = match (moves_u, moves_v) {
-                    (true, false) => -1.0,
-                    (false, true) => 1.0,
-                    _ => continue,
-                };
-                g[d] += k * sign * frames.dof_axis[d].dot(n);
+            }
+            for &d in &carry_v {
+                if kinds[d].is_rotation() && !carry_u.contains(&d) {
+                    g[d] += k * frames.dof_axis[d].dot(n);
+                }
             }
         }
         cost

@@ -33,6 +33,12 @@ const GUARDED_STALL_WINDOW: usize = 5;
 /// Iterations without a meaningful fall of a comfort level's cost, every other level met,
 /// before the solve has converged.
 const COMFORT_STALL_WINDOW: usize = 3;
+/// The comfort step's gain grows by this after a step that lowered the cost...
+const COMFORT_GAIN_UP: f64 = 1.5;
+/// ... up to this...
+const COMFORT_GAIN_MAX: f64 = 20.0;
+/// ... and halves after a step that did not, down to this.
+const COMFORT_GAIN_MIN: f64 = 0.05;
 
 /// One run of a multi-start after the first.
 struct RestartStage {
@@ -93,6 +99,10 @@ pub struct Solver {
     scratch: Vec<f64>,
     /// The level systems in the stiffness-weighted coordinates (see `compute_step`).
     weighted: Vec<LevelSystem>,
+    /// Gain of the comfort levels' gradient step, adapted along a run (see `run`).
+    comfort_gain: f64,
+    /// Whether the last linearisation let a comfort level step.
+    comfort_stepping: bool,
 }
 
 impl Solver {
@@ -324,7 +334,18 @@ impl Solver {
             {
                 break SolveStatus::TimeBudget;
             }
+            let stepping = comfort && self.comfort_stepping;
+            let cost_before = self.comfort_cost();
             let (moved, clamped) = self.iteration(skeleton, tasks, values);
+            if stepping {
+                // A gradient step with an adaptive length: longer while the cost falls, half
+                // as long when it rose.
+                self.comfort_gain = if self.comfort_cost() < cost_before {
+                    (self.comfort_gain * COMFORT_GAIN_UP).min(COMFORT_GAIN_MAX)
+                } else {
+                    (self.comfort_gain * 0.5).max(COMFORT_GAIN_MIN)
+                };
+            }
             clamped_dofs = clamped;
             iterations += 1;
             if self.meaningfully_better(&self.residual_sq, &best_residuals) {
@@ -568,6 +589,7 @@ impl Solver {
         }
         self.residual_sq = vec![0.0; self.layout.len()];
         self.weighted_sq = vec![0.0; self.layout.len()];
+        self.comfort_gain = 1.0;
         Ok(())
     }
 
@@ -591,6 +613,7 @@ impl Solver {
         };
         let tol2 = self.settings.tolerance * self.settings.tolerance;
         let mut above_met = true;
+        let mut comfort_stepping = false;
         for (((layout, sys), res), wres) in self
             .layout
             .iter()
@@ -606,11 +629,26 @@ impl Solver {
                 let task = &tasks[ti];
                 let rows = task.rows();
                 let err = &mut sys.dx.as_mut_slice()[row..row + rows];
-                let r = task.error(skeleton, &self.frames, values, err, Some(limits));
+                let jt = &mut sys.jacobian_t.as_mut_slice()[row * n..(row + rows) * n];
+                let support = &self.supports[ti];
+                let r = match task.comfort_system(
+                    skeleton,
+                    &self.frames,
+                    values,
+                    support,
+                    err,
+                    jt,
+                    Some(limits),
+                ) {
+                    Some(cost) => cost,
+                    None => {
+                        let r = task.error(skeleton, &self.frames, values, err, Some(limits));
+                        task.jacobian_t(skeleton, &self.frames, values, support, jt, n);
+                        r
+                    }
+                };
                 *res += r * r;
                 *wres += task.weight * r * r;
-                let jt = &mut sys.jacobian_t.as_mut_slice()[row * n..(row + rows) * n];
-                task.jacobian_t(skeleton, &self.frames, values, &self.supports[ti], jt, n);
                 let w = task.weight.sqrt();
                 if w != 1.0 {
                     err.iter_mut().for_each(|v| *v *= w);
@@ -618,14 +656,25 @@ impl Solver {
                 }
                 row += rows;
             }
-            if layout.comfort && !above_met {
-                // A comfort level waits until every level above it is met: its steps would
-                // keep disturbing them through the non-linearity; once they are met it moves
-                // along the surface they leave, and the next iterations pull back the drift.
-                sys.dx.fill(0.0);
+            if layout.comfort {
+                if above_met {
+                    // The adaptive gain of the comfort's gradient step (see `run`).
+                    let most = self.settings.max_angular_step;
+                    sys.dx
+                        .iter_mut()
+                        .for_each(|v| *v = (*v * self.comfort_gain).clamp(-most, most));
+                    comfort_stepping = true;
+                } else {
+                    // A comfort level waits until every level above it is met: its steps would
+                    // keep disturbing them through the non-linearity; once they are met it
+                    // moves along the surface they leave, and the next iterations pull back
+                    // the drift.
+                    sys.dx.fill(0.0);
+                }
             }
             above_met &= layout.posture_only || *res <= tol2;
         }
+        self.comfort_stepping = comfort_stepping;
         self.residual_sq.clone()
     }
 
@@ -759,6 +808,16 @@ impl Solver {
         // The last candidate evaluated is `values`: `self.frames` holds its kinematics.
         self.linearize_at_frames(skeleton, tasks, values);
         (moved, clamped)
+    }
+
+    /// The summed cost of the comfort levels (their residuals), 0 without one.
+    fn comfort_cost(&self) -> f64 {
+        self.layout
+            .iter()
+            .zip(&self.residual_sq)
+            .filter(|(l, _)| l.comfort)
+            .map(|(_, r)| r.sqrt())
+            .sum()
     }
 
     /// Whether `a` beats `b` in priority order by a margin worth iterating for.

@@ -634,12 +634,9 @@ impl Task {
                 clamp_vec(err, limits.map(|l| l.linear))
             }
             TaskKind::Comfort { model } => {
-                // A gradient step of the cost, as far as a tenth of a radian.
                 let mut gradient = vec![0.0; skeleton.dof_count()];
                 let terms = model.gradient(skeleton, frames, values, &mut gradient);
-                let slope = gradient.iter().map(|g| g * g).sum::<f64>().sqrt();
-                let most = limits.map_or(COMFORT_MAX_STEP, |l| l.angular.min(COMFORT_MAX_STEP));
-                err[0] = -(COMFORT_STEP_GAIN * slope).min(most);
+                err[0] = comfort_step(&gradient, limits);
                 terms.total
             }
             TaskKind::PostureAttraction { reference, dofs } => {
@@ -767,16 +764,61 @@ impl Task {
                 }
             }
             TaskKind::Comfort { model } => {
-                // The unit gradient: the step is the projected gradient times the error.
                 let mut gradient = vec![0.0; n];
                 model.gradient(skeleton, frames, values, &mut gradient);
-                let slope = gradient.iter().map(|g| g * g).sum::<f64>().sqrt();
-                if slope > 0.0 && slope.is_finite() {
-                    for &d in support {
-                        jac_t[d] = gradient[d] / slope;
-                    }
-                }
+                unit_gradient_row(&gradient, support, jac_t);
             }
+        }
+    }
+
+    /// A comfort task's row and error at once (one gradient): `err[0]` and `jac_t` as
+    /// [`Task::error`] and [`Task::jacobian_t`] write them; returns the cost. `None` for
+    /// other kinds.
+    pub(crate) fn comfort_system(
+        &self,
+        skeleton: &Skeleton,
+        frames: &Frames,
+        values: &[f64],
+        support: &[usize],
+        err: &mut [f64],
+        jac_t: &mut [f64],
+        limits: Option<StepLimits>,
+    ) -> Option<f64> {
+        let TaskKind::Comfort { model } = &self.kind else {
+            return None;
+        };
+        let mut gradient = vec![0.0; skeleton.dof_count()];
+        let terms = model.gradient(skeleton, frames, values, &mut gradient);
+        // The gradient projected onto the joint ranges: a DOF on a limit that the descent
+        // would push further out stays out of the row (else every step would clamp it again,
+        // a whole prioritized step per clamping pass).
+        let (lo, hi) = (skeleton.lower_limits(), skeleton.upper_limits());
+        for (d, g) in gradient.iter_mut().enumerate() {
+            let q = values.get(d).copied().unwrap_or(0.0);
+            if (q >= hi[d] && *g < 0.0) || (q <= lo[d] && *g > 0.0) {
+                *g = 0.0;
+            }
+        }
+        err[0] = comfort_step(&gradient, limits);
+        unit_gradient_row(&gradient, support, jac_t);
+        Some(terms.total)
+    }
+}
+
+/// The comfort row's error: a gradient step of `gain * |grad|` radians, at most
+/// [`COMFORT_MAX_STEP`] (and the angular step limit).
+fn comfort_step(gradient: &[f64], limits: Option<StepLimits>) -> f64 {
+    let slope = gradient.iter().map(|g| g * g).sum::<f64>().sqrt();
+    let most = limits.map_or(COMFORT_MAX_STEP, |l| l.angular.min(COMFORT_MAX_STEP));
+    -(COMFORT_STEP_GAIN * slope).min(most)
+}
+
+/// The comfort row: the unit gradient (the step is the projected gradient times the error).
+fn unit_gradient_row(gradient: &[f64], support: &[usize], jac_t: &mut [f64]) {
+    let slope = gradient.iter().map(|g| g * g).sum::<f64>().sqrt();
+    if slope > 0.0 && slope.is_finite() {
+        for &d in support {
+            jac_t[d] = gradient[d] / slope;
         }
     }
 }

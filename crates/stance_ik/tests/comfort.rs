@@ -150,14 +150,16 @@ fn full_model(s: &Skeleton) -> ComfortModel {
                 },
                 edges: vec![(0.35, 1.0), (0.79, 1.0), (1.57, 1.0)],
                 width: 0.05,
+                ramp: 0.2,
             },
             AngleBand {
                 name: "neck".into(),
                 joint: j("skullbase"),
                 axis: DVec3::Y,
                 reference: AngleReference::World(DVec3::Y),
-                edges: vec![(0.17, 1.0), (0.35, 1.0)],
+                edges: vec![(0.17, 1.0), (0.35, -1.0)],
                 width: 0.05,
+                ramp: 0.2,
             },
         ],
     }

@@ -141,8 +141,13 @@ pub const FEET_LEVEL_M: f64 = 0.03;
 /// The centre of mass must lie between this share and `1 - share` of the way from one ankle
 /// to the other for the weight to count as balanced.
 pub const BALANCED_SHARE: f64 = 0.25;
-/// Width of the logistic steps of [`rula_bands`] (degrees).
-pub const BAND_WIDTH_DEG: f64 = 3.0;
+/// Width of the logistic steps of [`rula_bands`] (degrees). Chosen by measurement with
+/// `stance bench --comfort` (80 reach problems): 3 deg lowered RULA in 14, 5 deg with the
+/// ramp below in 37, 10 deg in 35.
+pub const BAND_WIDTH_DEG: f64 = 5.0;
+/// The bands' ramp past each edge (see [`stance_ik::comfort::AngleBand::ramp`]): without it a
+/// posture deep inside a costly band (a straight elbow, far below 60 deg) feels no pull.
+pub const BAND_RAMP: f64 = 0.5;
 
 /// Table A: `[upper arm 1-6][lower arm 1-3][2 * (wrist - 1) + wrist twist - 1]`.
 const TABLE_A: [[[u8; 8]; 3]; 6] = [
@@ -632,6 +637,7 @@ pub fn rula_bands(skeleton: &Skeleton, variant: RulaVariant) -> Vec<AngleBand> {
         return Vec::new();
     };
     let width = BAND_WIDTH_DEG.to_radians();
+    let ramp = BAND_RAMP;
     let steps = |edges: &[(f64, f64)]| -> Vec<(f64, f64)> {
         edges
             .iter()
@@ -651,6 +657,7 @@ pub fn rula_bands(skeleton: &Skeleton, variant: RulaVariant) -> Vec<AngleBand> {
             },
             edges: steps(&[(e1, 1.0), (e2, 1.0), (e3, 1.0)]),
             width,
+            ramp,
         });
         bands.push(AngleBand {
             name: format!("{prefix}_lower_arm"),
@@ -662,6 +669,7 @@ pub fn rula_bands(skeleton: &Skeleton, variant: RulaVariant) -> Vec<AngleBand> {
             },
             edges: steps(&[(60.0, -1.0), (100.0, 1.0)]),
             width,
+            ramp,
         });
         bands.push(AngleBand {
             name: format!("{prefix}_wrist"),
@@ -673,6 +681,7 @@ pub fn rula_bands(skeleton: &Skeleton, variant: RulaVariant) -> Vec<AngleBand> {
             },
             edges: steps(&[(WRIST_NEUTRAL_DEG, 1.0), (15.0, 1.0)]),
             width,
+            ramp,
         });
     }
     bands.push(AngleBand {
@@ -685,6 +694,7 @@ pub fn rula_bands(skeleton: &Skeleton, variant: RulaVariant) -> Vec<AngleBand> {
         },
         edges: steps(&[(10.0, 1.0), (20.0, 1.0)]),
         width,
+        ramp,
     });
     // The head's up axis against the trunk's back axis: 90 degrees when not extended, less
     // in extension; the score steps from 1 to 4 there.
@@ -698,6 +708,7 @@ pub fn rula_bands(skeleton: &Skeleton, variant: RulaVariant) -> Vec<AngleBand> {
         },
         edges: steps(&[(90.0 - NECK_EXTENSION_DEG, -3.0)]),
         width,
+        ramp,
     });
     bands.push(AngleBand {
         name: "trunk".into(),
@@ -706,6 +717,7 @@ pub fn rula_bands(skeleton: &Skeleton, variant: RulaVariant) -> Vec<AngleBand> {
         reference: AngleReference::World(DVec3::Y),
         edges: steps(&[(TRUNK_UPRIGHT_DEG, 1.0), (20.0, 1.0), (60.0, 1.0)]),
         width,
+        ramp,
     });
     bands
 }

@@ -1222,9 +1222,23 @@ fn band_costs_rise_through_each_edge() {
         true,
     );
     // At rest the hand is at its neutral (angle 0): only the tails of the steps at 5 and 15.
-    let tails = 1.0 / (1.0 + (5.0f64 / 3.0).exp()) + 1.0 / (1.0 + 5.0f64.exp());
+    let tails = smooth(0.0, &[(5.0, 1.0), (15.0, 1.0)]);
     let rest = band_cost(&s2, find(&bands2, "l_wrist"), &[]);
     assert!((rest - tails).abs() < 1e-6, "{rest} {tails}");
+}
+
+/// A band's cost at `angle` (degrees) written out from its definition: per edge the logistic
+/// step and, on the costly side, the ramp's softplus (width and ramp: the module's constants).
+fn smooth(angle: f64, edges: &[(f64, f64)]) -> f64 {
+    let logistic = |x: f64| 1.0 / (1.0 + (-x).exp());
+    let softplus = |x: f64| (1.0 + x.exp()).ln();
+    edges
+        .iter()
+        .map(|&(edge, step)| {
+            let x = (angle - edge) / BAND_WIDTH_DEG;
+            step * logistic(x) + BAND_RAMP * step.abs() * softplus(step.signum() * x)
+        })
+        .sum()
 }
 
 #[test]
@@ -1235,10 +1249,13 @@ fn bands_read_the_measured_angles() {
     let s = body(LevelOfArticulation::Loa1);
     let bands = rula_bands(&s, RulaVariant::Paper);
     let upper = find(&bands, "l_upper_arm");
-    assert!(band_cost(&s, upper, &[]) < 0.01);
+    let edges = [(20.0, 1.0), (45.0, 1.0), (90.0, 1.0)];
+    let at_rest = band_cost(&s, upper, &[]);
+    assert!((at_rest - smooth(0.0, &edges)).abs() < 1e-3, "{at_rest}");
     let at_45 = band_cost(&s, upper, &[("l_shoulder", Rx, -45.0)]);
-    assert!((at_45 - 1.5).abs() < 0.01, "{at_45}");
+    assert!((at_45 - smooth(45.0, &edges)).abs() < 0.01, "{at_45}");
     let lower = find(&bands, "l_lower_arm");
     let at_60 = band_cost(&s, lower, &[("l_elbow", Rx, -60.0)]);
-    assert!((at_60 + 0.5).abs() < 0.01, "{at_60}");
+    let expected = smooth(60.0, &[(60.0, -1.0), (100.0, 1.0)]);
+    assert!((at_60 - expected).abs() < 0.01, "{at_60} {expected}");
 }

@@ -1,0 +1,223 @@
+//! `stance bench --comfort [N]`: issue 17's targets on reach problems of the H-Anim default body
+//! (LOA 2): both feet pinned (level 1), balance inside their support polygon (level 2), the
+//! right wrist on a goal it can reach (level 3, taken from a random posture of the right arm
+//! and a little of the trunk), solved from the rest posture without and with a comfort level
+//! (level 4). Prints how often the comfort level lowers the RULA score by at least 1, the change
+//! of the summed gravity torque at the shoulders and the lower back, whether the levels above
+//! stay met, and the cost of the comfort level per iteration.
+
+use std::time::Instant;
+
+use anyhow::Result;
+use glam::DVec3;
+use rand::rngs::StdRng;
+use rand::{RngExt, SeedableRng};
+use stance_hanim::comfort::{ComfortSettings, comfort_model, comfort_report};
+use stance_hanim::strength::built_axes;
+use stance_hanim::{HumanoidSkeleton, LevelOfArticulation, SkeletonOptions, default_skeleton};
+use stance_ik::comfort::gravity_torques;
+use stance_ik::{Effector, Frames, Posture, Solver, SolverSettings, Task};
+
+/// One reach problem's outcome.
+struct Outcome {
+    rula: (u8, u8),
+    load: (f64, f64),
+    met: bool,
+}
+
+/// The joints whose gravity torque the target sums: both shoulders and the lower back.
+const LOADED: [&str; 3] = ["l_shoulder", "r_shoulder", "vl5"];
+
+fn reach_tasks(body: &HumanoidSkeleton, goal: DVec3) -> Result<Vec<Task>> {
+    let s = &body.skeleton;
+    let rest = Posture::rest(s);
+    let frames = Frames::new(s, &rest);
+    let mut tasks = Vec::new();
+    let mut support = Vec::new();
+    for foot in ["l_talocrural", "r_talocrural"] {
+        let j = s.require_joint(foot)?;
+        tasks.push(Task::position(j, DVec3::ZERO, frames.joint_position[j]));
+        tasks.push(Task::orientation(j, frames.rotation(j)));
+        for corner in stance_hanim::anatomy::sole(s, j) {
+            support.push(Effector {
+                joint: j,
+                point: corner,
+            });
+        }
+    }
+    tasks.push(Task::balance(support, 0.02).at_level(2));
+    let wrist = s.require_joint("r_radiocarpal")?;
+    tasks.push(Task::position(wrist, DVec3::ZERO, goal).at_level(3));
+    Ok(tasks)
+}
+
+/// A reachable goal: the right wrist where a random posture of the right arm, the spine and
+/// the hips (within their limits) puts it.
+fn random_goal(body: &HumanoidSkeleton, r: &mut StdRng) -> DVec3 {
+    let s = &body.skeleton;
+    let mut p = Posture::rest(s);
+    let (lo, hi) = (s.lower_limits(), s.upper_limits());
+    for (j, joint) in s.joints().iter().enumerate() {
+        let moved = match joint.name.as_str() {
+            "r_shoulder" | "r_elbow" | "r_radiocarpal" => 0.8,
+            "vl5" | "vt6" | "vt1" | "sacroiliac" | "l_hip" | "r_hip" => 0.2,
+            _ => 0.0,
+        };
+        if moved == 0.0 {
+            continue;
+        }
+        for d in s.joints()[j].dof_range() {
+            let span = (hi[d] - lo[d]).min(2.0 * std::f64::consts::PI);
+            let v: f64 = r.random_range(-0.5..0.5);
+            p.values_mut()[d] = (v * span * moved).clamp(lo[d], hi[d]);
+        }
+    }
+    let frames = Frames::new(s, &p);
+    s.joint_index("r_radiocarpal")
+        .map_or(DVec3::ZERO, |w| frames.joint_position[w])
+}
+
+fn shoulder_and_back_torque(body: &HumanoidSkeleton, posture: &Posture) -> f64 {
+    let s = &body.skeleton;
+    let torques = gravity_torques(&Frames::new(s, posture));
+    LOADED
+        .iter()
+        .filter_map(|n| s.joint_index(n))
+        .map(|j| torques[j].length())
+        .sum()
+}
+
+pub fn run(cases: usize, json: bool) -> Result<()> {
+    let body = default_skeleton(&SkeletonOptions {
+        loa: LevelOfArticulation::Loa2,
+        ..SkeletonOptions::default()
+    })?;
+    let s = &body.skeleton;
+    let settings = ComfortSettings::default();
+    let model = comfort_model(s, &built_axes(&body), &settings);
+    let mut r = StdRng::seed_from_u64(17);
+    let mut outcomes = Vec::new();
+    let (mut iteration_plain, mut iteration_comfort) = (0.0, 0.0);
+    for _ in 0..cases {
+        let tasks = reach_tasks(&body, random_goal(&body, &mut r))?;
+        let mut with = tasks.clone();
+        with.push(Task::comfort(model.clone()).at_level(4));
+        let mut plain = Posture::rest(s);
+        let plain_report = Solver::default().solve(s, &tasks, &mut plain)?;
+        let mut comfy = Posture::rest(s);
+        let comfy_report = Solver::default().solve(s, &with, &mut comfy)?;
+        let rula = |p: &Posture| {
+            comfort_report(s, &built_axes(&body), p, &settings)
+                .rula
+                .map_or(0, |r| r.score)
+        };
+        let met = |report: &stance_ik::SolveReport| {
+            report
+                .levels
+                .iter()
+                .take(3)
+                .all(|l| l.met || l.posture_only)
+        };
+        if !met(&plain_report) {
+            continue;
+        }
+        outcomes.push(Outcome {
+            rula: (rula(&plain), rula(&comfy)),
+            load: (
+                shoulder_and_back_torque(&body, &plain),
+                shoulder_and_back_torque(&body, &comfy),
+            ),
+            met: met(&comfy_report),
+        });
+        // The cost of one iteration with and without the comfort level, at the solved
+        // posture (every level above met: the comfort level takes its step).
+        let time = |tasks: &[Task]| -> Result<f64> {
+            // A run of iterations that never ends early (tolerance 0, no stall), from the
+            // solved posture: one linearisation per iteration, as in a solve.
+            let iterations = 50;
+            let mut solver = Solver::new(SolverSettings {
+                max_iterations: iterations,
+                tolerance: 0.0,
+                stall_step: 0.0,
+                stall_improvement: 0.0,
+                stall_window: usize::MAX,
+                restarts: false,
+                ..SolverSettings::default()
+            })?;
+            let runs = 5;
+            let start = Instant::now();
+            for _ in 0..runs {
+                let mut p = comfy.clone();
+                solver.solve_with_clock(s, tasks, &mut p, None)?;
+            }
+            Ok(start.elapsed().as_secs_f64() / f64::from(runs * iterations as u32))
+        };
+        iteration_plain += time(&tasks)?;
+        iteration_comfort += time(&with)?;
+    }
+    let gradient_us = {
+        let rest = Posture::rest(s);
+        let frames = Frames::new(s, &rest);
+        let mut g = vec![0.0; s.dof_count()];
+        let runs = 2000;
+        let start = Instant::now();
+        for _ in 0..runs {
+            model.gradient(s, &frames, rest.values(), &mut g);
+        }
+        1e6 * start.elapsed().as_secs_f64() / f64::from(runs)
+    };
+    let n = outcomes.len();
+    let lowered = outcomes.iter().filter(|o| o.rula.1 < o.rula.0).count();
+    let raised = outcomes.iter().filter(|o| o.rula.1 > o.rula.0).count();
+    let met = outcomes.iter().filter(|o| o.met).count();
+    let (before, after): (f64, f64) = outcomes
+        .iter()
+        .fold((0.0, 0.0), |(a, b), o| (a + o.load.0, b + o.load.1));
+    let torque_change = if before > 0.0 {
+        after / before - 1.0
+    } else {
+        0.0
+    };
+    let rula_mean = |f: fn(&Outcome) -> u8| {
+        outcomes.iter().map(|o| f64::from(f(o))).sum::<f64>() / n.max(1) as f64
+    };
+    let overhead = iteration_comfort / iteration_plain.max(f64::MIN_POSITIVE) - 1.0;
+    if json {
+        println!(
+            "{}",
+            serde_json::json!({
+                "cases": n,
+                "rula_lowered_by_1": lowered,
+                "rula_raised": raised,
+                "rula_mean": [rula_mean(|o| o.rula.0), rula_mean(|o| o.rula.1)],
+                "shoulder_and_back_torque_change": torque_change,
+                "levels_above_met": met,
+                "comfort_level_share_of_iteration": overhead,
+                "gradient_us": gradient_us,
+            })
+        );
+    } else {
+        println!(
+            "reach problems (feet pinned, balance, right hand; LOA 2): {n} solved without comfort"
+        );
+        println!(
+            "  comfort level lowers RULA by >= 1 in {lowered}/{n}, raises it in {raised}; mean \
+             {:.2} -> {:.2}",
+            rula_mean(|o| o.rula.0),
+            rula_mean(|o| o.rula.1)
+        );
+        println!(
+            "  shoulders + lower back gravity torque: {:+.1} % (summed over the cases)",
+            100.0 * torque_change
+        );
+        println!("  levels 1-3 still met with the comfort level: {met}/{n}");
+        println!("  the comfort cost's gradient: {gradient_us:.1} us");
+        println!(
+            "  comfort level: {:+.1} % of an iteration ({:.1} us -> {:.1} us)",
+            100.0 * overhead,
+            1e6 * iteration_plain / n.max(1) as f64,
+            1e6 * iteration_comfort / n.max(1) as f64
+        );
+    }
+    Ok(())
+}
