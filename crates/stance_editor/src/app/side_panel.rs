@@ -98,9 +98,9 @@ impl SidePanel<'_> {
         ui.separator();
         self.selection_section(ui);
         ui.separator();
-        super::comfort_panel::show(ui, self.model);
-        ui.separator();
         self.library_section(ui);
+        ui.separator();
+        super::comfort_panel::show(ui, self.model);
     }
 
     fn selection_section(&mut self, ui: &mut egui::Ui) {
