@@ -415,10 +415,12 @@ fn export_feasible_suite_as_problem_files() {
     println!("wrote {n} problem files to {dir}");
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 fn json_vec(v: DVec3) -> String {
     format!("[{:e}, {:e}, {:e}]", v.x, v.y, v.z)
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 fn problem_skeleton_json(skeleton: &Skeleton) -> String {
     let (lo, hi) = (skeleton.lower_limits(), skeleton.upper_limits());
     let joints: Vec<String> = skeleton
@@ -463,6 +465,7 @@ fn problem_skeleton_json(skeleton: &Skeleton) -> String {
     format!("{{\"joints\": [\n  {}]}}", joints.join(",\n  "))
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 fn problem_task_json(skeleton: &Skeleton, t: &Task) -> String {
     let name = |j: usize| &skeleton.joints()[j].name;
     let axes = |a: Axes| {
