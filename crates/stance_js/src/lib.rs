@@ -23,7 +23,12 @@ use stance_hanim::{
     HumanoidSkeleton, LevelOfArticulation, Mapping, SkeletonOptions, SourceJoint, build_skeleton,
     default_skeleton,
 };
-use stance_ik::{Clock, Frames, Limb, LimbGoal, Posture, Skeleton, SolveReport, Solver, Task};
+use stance_ik::{
+    Clock, Frames, Iteration, Limb, LimbGoal, Posture, Skeleton, SolveReport, Solver, Task,
+};
+
+/// Guarded iterations without a meaningful gain before a frame's solve ends.
+const PER_FRAME_STALL_WINDOW: usize = 5;
 
 /// An error for JavaScript: the message names the field where there is one.
 pub type JsResult<T> = Result<T, String>;
@@ -167,12 +172,22 @@ pub struct PoseSolver {
 
 impl PoseSolver {
     /// A solver on `body` with a problem file's `settings` (JSON text; empty: defaults).
+    /// Solved every frame, it takes guarded iterations unless `settings.iteration` says
+    /// otherwise (each frame shows a posture that keeps the higher levels; 5 iterations
+    /// without a gain end a frame's solve unless `stall_window` is given).
     pub fn new(body: &Body, settings: &str) -> JsResult<Self> {
-        let settings = if settings.trim().is_empty() {
-            ProblemSettings::default()
+        let given = if settings.trim().is_empty() {
+            Value::Object(serde_json::Map::new())
         } else {
-            ProblemSettings::from_json_value(&json(settings)?).map_err(|e| e.to_string())?
+            json(settings)?
         };
+        let mut settings = ProblemSettings::from_json_value(&given).map_err(|e| e.to_string())?;
+        if given.get("iteration").is_none() {
+            settings.solver.iteration = Iteration::Guarded;
+            if given.get("stall_window").is_none() {
+                settings.solver.stall_window = PER_FRAME_STALL_WINDOW;
+            }
+        }
         let mut solver = Solver::new(settings.solver).map_err(|e| format!("settings: {e}"))?;
         solver.level_damping = settings.level_damping;
         if settings.hybrid {
