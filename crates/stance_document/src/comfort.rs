@@ -9,7 +9,46 @@ use stance_hanim::strength::{Sex, aligned_axes};
 use stance_ik::{Posture, Skeleton};
 
 use crate::DocumentError;
-use crate::json::{number, obj, string};
+use crate::json::{number, obj, optional_bool, string};
+
+/// The file's names of RULA's variants, loads and the strength profile's sexes.
+const VARIANTS: &[(&str, RulaVariant)] = &[
+    ("paper", RulaVariant::Paper),
+    ("worksheet", RulaVariant::Worksheet),
+];
+const LOADS: &[(&str, RulaLoad)] = &[
+    ("none", RulaLoad::None),
+    ("intermittent_2_10", RulaLoad::Intermittent2To10),
+    ("static_2_10", RulaLoad::Static2To10),
+    ("intermittent_10", RulaLoad::Intermittent10Plus),
+    ("static_10", RulaLoad::Static10Plus),
+    ("shock", RulaLoad::Shock),
+];
+const SEXES: &[(&str, Sex)] = &[("male", Sex::Male), ("female", Sex::Female)];
+
+/// The value named by the string field `name` of `o` among `choices` (`None`: absent).
+fn choice<T: Copy>(
+    o: &Map<String, Value>,
+    at: &str,
+    name: &str,
+    choices: &[(&str, T)],
+) -> Result<Option<T>, DocumentError> {
+    let Some(v) = o.get(name).filter(|v| !v.is_null()) else {
+        return Ok(None);
+    };
+    let here = format!("{at}.{name}");
+    let given = string(v, &here)?;
+    match choices.iter().find(|(key, _)| *key == given) {
+        Some((_, value)) => Ok(Some(*value)),
+        None => {
+            let names: Vec<&str> = choices.iter().map(|(key, _)| *key).collect();
+            Err(DocumentError::field(
+                here,
+                format!("`{given}` (expected one of {})", names.join(", ")),
+            ))
+        }
+    }
+}
 
 /// Parses `{"variant": "paper" | "worksheet", "load": "none" | "intermittent_2_10" |
 /// "static_2_10" | "intermittent_10" | "static_10" | "shock", "muscle_use": bool,
@@ -19,43 +58,12 @@ pub fn parse_comfort_settings(v: &Value, at: &str) -> Result<ComfortSettings, Do
     let o = obj(v, at)?;
     let mut s = ComfortSettings::default();
     let here = |name: &str| format!("{at}.{name}");
-    let flag = |name: &str| -> Result<Option<bool>, DocumentError> {
-        match o.get(name) {
-            None | Some(Value::Null) => Ok(None),
-            Some(Value::Bool(b)) => Ok(Some(*b)),
-            Some(_) => Err(DocumentError::field(here(name), "expected true or false")),
-        }
-    };
-    if let Some(v) = o.get("variant").filter(|v| !v.is_null()) {
-        s.rula_settings.variant = match string(v, &here("variant"))? {
-            "paper" => RulaVariant::Paper,
-            "worksheet" => RulaVariant::Worksheet,
-            other => {
-                return Err(DocumentError::field(
-                    here("variant"),
-                    format!("`{other}` (expected paper or worksheet)"),
-                ));
-            }
-        };
+    let flag = |name: &str| optional_bool(o, at, name);
+    if let Some(variant) = choice(o, at, "variant", VARIANTS)? {
+        s.rula_settings.variant = variant;
     }
-    if let Some(v) = o.get("load").filter(|v| !v.is_null()) {
-        s.rula_settings.load = match string(v, &here("load"))? {
-            "none" => RulaLoad::None,
-            "intermittent_2_10" => RulaLoad::Intermittent2To10,
-            "static_2_10" => RulaLoad::Static2To10,
-            "intermittent_10" => RulaLoad::Intermittent10Plus,
-            "static_10" => RulaLoad::Static10Plus,
-            "shock" => RulaLoad::Shock,
-            other => {
-                return Err(DocumentError::field(
-                    here("load"),
-                    format!(
-                        "`{other}` (expected none, intermittent_2_10, static_2_10, \
-                         intermittent_10, static_10 or shock)"
-                    ),
-                ));
-            }
-        };
+    if let Some(load) = choice(o, at, "load", LOADS)? {
+        s.rula_settings.load = load;
     }
     if let Some(b) = flag("muscle_use")? {
         s.rula_settings.muscle_use = b;
@@ -69,17 +77,8 @@ pub fn parse_comfort_settings(v: &Value, at: &str) -> Result<ComfortSettings, Do
     if let Some(b) = flag("seated_supported")? {
         s.rula_settings.seated_supported = b;
     }
-    if let Some(v) = o.get("sex").filter(|v| !v.is_null()) {
-        s.profile.sex = match string(v, &here("sex"))? {
-            "male" => Sex::Male,
-            "female" => Sex::Female,
-            other => {
-                return Err(DocumentError::field(
-                    here("sex"),
-                    format!("`{other}` (expected male or female)"),
-                ));
-            }
-        };
+    if let Some(sex) = choice(o, at, "sex", SEXES)? {
+        s.profile.sex = sex;
     }
     for (name, slot) in [
         ("mass", &mut s.profile.mass_kg),

@@ -35,6 +35,22 @@ pub(crate) fn string<'a>(v: &'a Value, at: &str) -> Result<&'a str, DocumentErro
         .ok_or_else(|| DocumentError::field(at, "expected a string"))
 }
 
+/// The boolean field `name` of `o` (`None`: absent or null); errors at `{at}.{name}`.
+pub(crate) fn optional_bool(
+    o: &Map<String, Value>,
+    at: &str,
+    name: &str,
+) -> Result<Option<bool>, DocumentError> {
+    match o.get(name) {
+        None | Some(Value::Null) => Ok(None),
+        Some(Value::Bool(b)) => Ok(Some(*b)),
+        Some(_) => Err(DocumentError::field(
+            format!("{at}.{name}"),
+            "expected true or false",
+        )),
+    }
+}
+
 pub(crate) fn number(v: &Value, at: &str) -> Result<f64, DocumentError> {
     let n = v
         .as_f64()

@@ -17,7 +17,7 @@ use stance_hanim::comfort::ComfortSettings;
 use crate::comfort::{comfort_json, parse_comfort_settings};
 use crate::convert::LimbStartSpec;
 use crate::convert::solver_tasks;
-use crate::json::{arr, field, number, obj, string, vec3};
+use crate::json::{arr, field, number, obj, optional_bool, string, vec3};
 use crate::{Document, DocumentError, LimbName, PostureValues, TaskSpec};
 
 /// A solver problem (see the module documentation).
@@ -400,33 +400,22 @@ fn parse_settings(v: &Value) -> Result<Settings, DocumentError> {
             Some(v) => number(v, &format!("settings.{k}")).map(Some),
         }
     };
-    let flag = |k: &str| -> Result<Option<bool>, DocumentError> {
-        match o.get(k) {
-            None | Some(Value::Null) => Ok(None),
-            Some(Value::Bool(b)) => Ok(Some(*b)),
-            Some(_) => Err(DocumentError::field(
-                format!("settings.{k}"),
-                "expected true or false",
-            )),
+    let flag = |k: &str| optional_bool(o, "settings", k);
+    // A whole number of at least `least`.
+    let count = |k: &str, least: f64, expected: &str| -> Result<Option<usize>, DocumentError> {
+        match num(k)? {
+            Some(n) if n < least || n.fract() != 0.0 => {
+                Err(DocumentError::field(format!("settings.{k}"), expected))
+            }
+            Some(n) => Ok(Some(n as usize)),
+            None => Ok(None),
         }
     };
-    if let Some(n) = num("max_iterations")? {
-        if n < 0.0 || n.fract() != 0.0 {
-            return Err(DocumentError::field(
-                "settings.max_iterations",
-                "expected a non-negative integer",
-            ));
-        }
-        s.max_iterations = n as usize;
+    if let Some(n) = count("max_iterations", 0.0, "expected a non-negative integer")? {
+        s.max_iterations = n;
     }
-    if let Some(n) = num("stall_window")? {
-        if n < 1.0 || n.fract() != 0.0 {
-            return Err(DocumentError::field(
-                "settings.stall_window",
-                "expected a positive integer",
-            ));
-        }
-        s.stall_window = n as usize;
+    if let Some(n) = count("stall_window", 1.0, "expected a positive integer")? {
+        s.stall_window = n;
     }
     let set = |k: &str, slot: &mut f64| -> Result<(), DocumentError> {
         if let Some(n) = num(k)? {

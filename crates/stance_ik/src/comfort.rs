@@ -47,7 +47,7 @@ impl DofStrength {
 
     /// The curve that holds a gravity torque `tau` about the axis (the muscles produce
     /// `-tau`).
-    fn holding(&self, tau: f64) -> &StrengthCurve {
+    pub fn holding(&self, tau: f64) -> &StrengthCurve {
         if tau > 0.0 {
             &self.negative
         } else {

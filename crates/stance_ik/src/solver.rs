@@ -334,8 +334,9 @@ impl Solver {
             {
                 break SolveStatus::TimeBudget;
             }
-            let stepping = comfort && self.comfort_stepping;
-            let cost_before = self.comfort_cost();
+            // Whether this iteration's comfort level steps (see `linearize_at_frames`).
+            let stepping = self.comfort_stepping;
+            let cost_before = if stepping { self.comfort_cost() } else { 0.0 };
             let (moved, clamped) = self.iteration(skeleton, tasks, values);
             if stepping {
                 // A gradient step with an adaptive length: longer while the cost falls, half

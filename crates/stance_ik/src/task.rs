@@ -634,10 +634,9 @@ impl Task {
                 clamp_vec(err, limits.map(|l| l.linear))
             }
             TaskKind::Comfort { model } => {
-                let mut gradient = vec![0.0; skeleton.dof_count()];
-                let terms = model.gradient(skeleton, frames, values, &mut gradient);
+                let (cost, gradient) = comfort_gradient(model, skeleton, frames, values);
                 err[0] = comfort_step(&gradient, limits);
-                terms.total
+                cost
             }
             TaskKind::PostureAttraction { reference, dofs } => {
                 for (e, &d) in err.iter_mut().zip(dofs) {
@@ -764,8 +763,7 @@ impl Task {
                 }
             }
             TaskKind::Comfort { model } => {
-                let mut gradient = vec![0.0; n];
-                model.gradient(skeleton, frames, values, &mut gradient);
+                let (_, gradient) = comfort_gradient(model, skeleton, frames, values);
                 unit_gradient_row(&gradient, support, jac_t);
             }
         }
@@ -787,22 +785,32 @@ impl Task {
         let TaskKind::Comfort { model } = &self.kind else {
             return None;
         };
-        let mut gradient = vec![0.0; skeleton.dof_count()];
-        let terms = model.gradient(skeleton, frames, values, &mut gradient);
-        // The gradient projected onto the joint ranges: a DOF on a limit that the descent
-        // would push further out stays out of the row (else every step would clamp it again,
-        // a whole prioritized step per clamping pass).
-        let (lo, hi) = (skeleton.lower_limits(), skeleton.upper_limits());
-        for (d, g) in gradient.iter_mut().enumerate() {
-            let q = values.get(d).copied().unwrap_or(0.0);
-            if (q >= hi[d] && *g < 0.0) || (q <= lo[d] && *g > 0.0) {
-                *g = 0.0;
-            }
-        }
+        let (cost, gradient) = comfort_gradient(model, skeleton, frames, values);
         err[0] = comfort_step(&gradient, limits);
         unit_gradient_row(&gradient, support, jac_t);
-        Some(terms.total)
+        Some(cost)
     }
+}
+
+/// The comfort cost and its gradient, projected onto the joint ranges: a DOF on a limit that
+/// the descent would push further out stays out of the row (else every step would clamp it
+/// again, a whole prioritized step per clamping pass).
+fn comfort_gradient(
+    model: &ComfortModel,
+    skeleton: &Skeleton,
+    frames: &Frames,
+    values: &[f64],
+) -> (f64, Vec<f64>) {
+    let mut gradient = vec![0.0; skeleton.dof_count()];
+    let terms = model.gradient(skeleton, frames, values, &mut gradient);
+    let (lo, hi) = (skeleton.lower_limits(), skeleton.upper_limits());
+    for (d, g) in gradient.iter_mut().enumerate() {
+        let q = values.get(d).copied().unwrap_or(0.0);
+        if (q >= hi[d] && *g < 0.0) || (q <= lo[d] && *g > 0.0) {
+            *g = 0.0;
+        }
+    }
+    (terms.total, gradient)
 }
 
 /// The comfort row's error: a gradient step of `gain * |grad|` radians, at most

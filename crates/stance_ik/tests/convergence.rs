@@ -468,14 +468,7 @@ fn problem_skeleton_json(skeleton: &Skeleton) -> String {
 #[cfg(not(target_arch = "wasm32"))]
 fn problem_task_json(skeleton: &Skeleton, t: &Task) -> String {
     let name = |j: usize| &skeleton.joints()[j].name;
-    let axes = |a: Axes| {
-        ["x", "y", "z"]
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| a.has(*i))
-            .map(|(_, s)| *s)
-            .collect::<String>()
-    };
+    let axes = |a: Axes| a.to_letters();
     let head = format!("\"level\": {}, \"weight\": {:e}", t.level, t.weight);
     match &t.kind {
         TaskKind::Position {

@@ -116,12 +116,7 @@ pub fn comfort_report(
                 let t = torques[d];
                 sum_sq += t * t;
                 if let Some(Some(strength)) = model.strength.get(d) {
-                    let curve = if t > 0.0 {
-                        &strength.negative
-                    } else {
-                        &strength.positive
-                    };
-                    let (s, _) = curve.at(posture.values()[d]);
+                    let (s, _) = strength.holding(t).at(posture.values()[d]);
                     let this = t.abs() / s;
                     share = Some(share.map_or(this, |v| v.max(this)));
                 }
