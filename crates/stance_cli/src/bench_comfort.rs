@@ -15,7 +15,7 @@ use rand::{RngExt, SeedableRng};
 use stance_hanim::comfort::{ComfortSettings, comfort_model, comfort_report};
 use stance_hanim::strength::built_axes;
 use stance_hanim::{HumanoidSkeleton, LevelOfArticulation, SkeletonOptions, default_skeleton};
-use stance_ik::comfort::gravity_torques;
+use stance_ik::comfort::{ComfortModel, gravity_torques};
 use stance_ik::{Effector, Frames, Posture, Solver, SolverSettings, Task};
 
 /// One reach problem's outcome.
@@ -155,17 +155,30 @@ pub fn run(cases: usize, json: bool) -> Result<()> {
         iteration_plain += time(&tasks)?;
         iteration_comfort += time(&with)?;
     }
-    let gradient_us = {
+    // The gradient's time, whole and term by term (the other weights set to 0).
+    let gradient_time = |model: &ComfortModel| {
         let rest = Posture::rest(s);
         let frames = Frames::new(s, &rest);
         let mut g = vec![0.0; s.dof_count()];
-        let runs = 2000;
+        let runs = 20_000;
         let start = Instant::now();
         for _ in 0..runs {
             model.gradient(s, &frames, rest.values(), &mut g);
         }
         1e6 * start.elapsed().as_secs_f64() / f64::from(runs)
     };
+    let gradient_us = gradient_time(&model);
+    let only = |effort: f64, range: f64, band: f64| ComfortModel {
+        effort_weight: effort * model.effort_weight,
+        range_weight: range * model.range_weight,
+        band_weight: band * model.band_weight,
+        ..model.clone()
+    };
+    let term_us = [
+        gradient_time(&only(1.0, 0.0, 0.0)),
+        gradient_time(&only(0.0, 1.0, 0.0)),
+        gradient_time(&only(0.0, 0.0, 1.0)),
+    ];
     let n = outcomes.len();
     let lowered = outcomes.iter().filter(|o| o.rula.1 < o.rula.0).count();
     let raised = outcomes.iter().filter(|o| o.rula.1 > o.rula.0).count();
@@ -194,6 +207,7 @@ pub fn run(cases: usize, json: bool) -> Result<()> {
                 "levels_above_met": met,
                 "comfort_level_share_of_iteration": overhead,
                 "gradient_us": gradient_us,
+                "gradient_us_by_term": {"effort": term_us[0], "range": term_us[1], "bands": term_us[2]},
             })
         );
     } else {
@@ -211,7 +225,11 @@ pub fn run(cases: usize, json: bool) -> Result<()> {
             100.0 * torque_change
         );
         println!("  levels 1-3 still met with the comfort level: {met}/{n}");
-        println!("  the comfort cost's gradient: {gradient_us:.1} us");
+        println!(
+            "  the comfort cost's gradient: {gradient_us:.1} us (effort {:.1}, range {:.1}, \
+             bands {:.1})",
+            term_us[0], term_us[1], term_us[2]
+        );
         println!(
             "  comfort level: {:+.1} % of an iteration ({:.1} us -> {:.1} us)",
             100.0 * overhead,
