@@ -3,8 +3,9 @@
 use std::sync::Arc;
 
 use glam::{DQuat, DVec3};
+use stance_hanim::HumanoidSkeleton;
 use stance_hanim::comfort::{ComfortSettings, comfort_model};
-use stance_hanim::strength::aligned_axes;
+use stance_hanim::strength::{aligned_axes, built_axes};
 use stance_ik::{Axes, Effector, Limb, LimbGoal, Posture, Skeleton, Task, TaskKind};
 
 use crate::DocumentError;
@@ -144,7 +145,27 @@ impl TaskSpec {
         skeleton: &Skeleton,
         problem: &[TaskSpec],
     ) -> Result<Vec<Task>, DocumentError> {
-        let task = self.to_task(skeleton, problem)?;
+        self.solver_tasks_with(skeleton, None, problem)
+    }
+
+    /// [`TaskSpec::to_solver_tasks`] on a built body: its comfort tasks read the body's own
+    /// anatomical axes ([`built_axes`]), right for an avatar whose joint frames are not the
+    /// H-Anim rest frame (a T-pose, permuted or reversed axes).
+    pub fn to_solver_tasks_on(
+        &self,
+        body: &HumanoidSkeleton,
+        problem: &[TaskSpec],
+    ) -> Result<Vec<Task>, DocumentError> {
+        self.solver_tasks_with(&body.skeleton, Some(body), problem)
+    }
+
+    fn solver_tasks_with(
+        &self,
+        skeleton: &Skeleton,
+        body: Option<&HumanoidSkeleton>,
+        problem: &[TaskSpec],
+    ) -> Result<Vec<Task>, DocumentError> {
+        let task = self.task_with(skeleton, body, problem)?;
         let mut out = vec![task.clone()];
         if let TaskKindSpec::Limb {
             orientation: Some(q),
@@ -178,6 +199,26 @@ impl TaskSpec {
     pub fn to_task(
         &self,
         skeleton: &Skeleton,
+        problem: &[TaskSpec],
+    ) -> Result<Task, DocumentError> {
+        self.task_with(skeleton, None, problem)
+    }
+
+    /// [`TaskSpec::to_task`] on a built body (see [`TaskSpec::to_solver_tasks_on`]).
+    pub fn to_task_on(
+        &self,
+        body: &HumanoidSkeleton,
+        problem: &[TaskSpec],
+    ) -> Result<Task, DocumentError> {
+        self.task_with(&body.skeleton, Some(body), problem)
+    }
+
+    /// The solver task; a comfort task's anatomical axes are `body`'s, or without one those
+    /// of a skeleton whose joint frames are the H-Anim rest frame ([`aligned_axes`]).
+    fn task_with(
+        &self,
+        skeleton: &Skeleton,
+        body: Option<&HumanoidSkeleton>,
         problem: &[TaskSpec],
     ) -> Result<Task, DocumentError> {
         self.validate()?;
@@ -264,8 +305,9 @@ impl TaskSpec {
                     rula: *rula,
                     ..ComfortSettings::default()
                 };
+                let axes = body.map_or_else(|| aligned_axes(skeleton), built_axes);
                 TaskKind::Comfort {
-                    model: Arc::new(comfort_model(skeleton, &aligned_axes(skeleton), &settings)),
+                    model: Arc::new(comfort_model(skeleton, &axes, &settings)),
                 }
             }
             TaskKindSpec::Limb { target, .. } => {

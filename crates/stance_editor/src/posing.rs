@@ -602,7 +602,7 @@ impl PosingSession {
         let mut tasks = Vec::with_capacity(self.tasks.len() + 1);
         let specs = self.timed_tasks();
         for spec in &specs {
-            if let Ok(converted) = spec.to_solver_tasks(self.skeleton(), &specs) {
+            if let Ok(converted) = spec.to_solver_tasks_on(&self.humanoid, &specs) {
                 tasks.extend(converted);
             }
         }
@@ -657,16 +657,18 @@ impl PosingSession {
         let evaluated: Vec<(Option<f64>, Option<String>)> = self
             .tasks
             .iter()
-            .map(|spec| match spec.to_solver_tasks(skeleton, &self.tasks) {
-                Ok(converted) => {
-                    let squares: f64 = converted
-                        .iter()
-                        .map(|task| task.residual(skeleton, &self.frames, values).powi(2))
-                        .sum();
-                    (Some(squares.sqrt()), None)
-                }
-                Err(error) => (None, Some(error.to_string())),
-            })
+            .map(
+                |spec| match spec.to_solver_tasks_on(&self.humanoid, &self.tasks) {
+                    Ok(converted) => {
+                        let squares: f64 = converted
+                            .iter()
+                            .map(|task| task.residual(skeleton, &self.frames, values).powi(2))
+                            .sum();
+                        (Some(squares.sqrt()), None)
+                    }
+                    Err(error) => (None, Some(error.to_string())),
+                },
+            )
             .collect();
         let statuses = self
             .tasks
@@ -695,7 +697,7 @@ impl PosingSession {
             return "still moving".to_owned();
         }
         let skeleton = self.skeleton();
-        let Ok(task) = spec.to_task(skeleton, &self.tasks) else {
+        let Ok(task) = spec.to_task_on(&self.humanoid, &self.tasks) else {
             return "out of reach".to_owned();
         };
         let higher: Vec<(&TaskSpec, Task)> = self
@@ -708,7 +710,9 @@ impl PosingSession {
                     && !matches!(other.kind, TaskKindSpec::Posture { .. })
                     && residual.is_some()
             })
-            .filter_map(|(other, _)| Some((other, other.to_task(skeleton, &self.tasks).ok()?)))
+            .filter_map(|(other, _)| {
+                Some((other, other.to_task_on(&self.humanoid, &self.tasks).ok()?))
+            })
             .collect();
         let solver_tasks: Vec<Task> = higher.iter().map(|(_, task)| task.clone()).collect();
         match stance_ik::conflict::diagnose(skeleton, &self.posture, &task, &solver_tasks) {

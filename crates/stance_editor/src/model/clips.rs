@@ -141,7 +141,7 @@ impl EditorModel {
                 );
                 let tasks: Vec<_> = specs
                     .iter()
-                    .filter_map(|spec| spec.to_solver_tasks(&humanoid.skeleton, &specs).ok())
+                    .filter_map(|spec| spec.to_solver_tasks_on(humanoid, &specs).ok())
                     .flatten()
                     .collect();
                 if !tasks.is_empty() {
