@@ -75,5 +75,8 @@ fn a_comfort_task_on_a_t_pose_body_gives_the_elbow_its_flexors() {
     let flexors = peak(&on_body.kind);
     assert!(flexors > 40.0, "{flexors} N m");
     let as_rest_frame = spec.to_task(s, &[]).unwrap();
-    assert!(peak(&as_rest_frame.kind) < 20.0, "the skeleton alone cannot know its axes");
+    assert!(
+        peak(&as_rest_frame.kind) < 20.0,
+        "the skeleton alone cannot know its axes"
+    );
 }
