@@ -15,7 +15,7 @@ use crate::document::{
 
 pub use stance_hanim::resolve_joint;
 
-fn joint_at(skeleton: &Skeleton, name: &str, at: &str) -> Result<usize, DocumentError> {
+pub(crate) fn joint_at(skeleton: &Skeleton, name: &str, at: &str) -> Result<usize, DocumentError> {
     resolve_joint(skeleton, name)
         .ok_or_else(|| DocumentError::field(at, format!("unknown joint `{name}`")))
 }

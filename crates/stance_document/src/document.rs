@@ -13,6 +13,7 @@ use crate::DocumentError;
 use crate::camera::CameraSpec;
 use crate::json::{arr, field, number, numbers, obj, string, vec3};
 use crate::motion::{MotionSection, TaskInterval};
+use crate::stiffness::{StiffnessValues, validate_stiffness};
 
 /// The version written in the `version` field of a document's JSON; newer versions are refused.
 pub const DOCUMENT_VERSION: u32 = 1;
@@ -30,6 +31,9 @@ pub struct Document {
     pub motion: Option<MotionSection>,
     /// The camera saved with the document; `None`: the viewer's own.
     pub camera: Option<CameraSpec>,
+    /// Joint stiffness that replaces the body's anatomical defaults (see
+    /// [`crate::stiffness`]); empty: the defaults.
+    pub stiffness: StiffnessValues,
 }
 
 /// The avatar a document is posed on.
@@ -449,6 +453,7 @@ impl Document {
         if let Some(camera) = &self.camera {
             camera.validate()?;
         }
+        validate_stiffness(&self.stiffness, "stiffness")?;
         Ok(())
     }
 
@@ -506,12 +511,17 @@ impl Document {
             None | Some(Value::Null) => None,
             Some(c) => Some(CameraSpec::from_json_value(c)?),
         };
+        let stiffness = match o.get("stiffness") {
+            None | Some(Value::Null) => StiffnessValues::default(),
+            Some(p) => PostureValues::from_json_value(p, "stiffness")?,
+        };
         let doc = Document {
             avatar,
             posture,
             tasks,
             motion,
             camera,
+            stiffness,
         };
         doc.validate()?;
         Ok(doc)
@@ -883,6 +893,9 @@ impl Serialize for Document {
         }
         if let Some(camera) = &self.camera {
             st.serialize_field("camera", camera)?;
+        }
+        if !self.stiffness.joints.is_empty() {
+            st.serialize_field("stiffness", &self.stiffness)?;
         }
         st.end()
     }

@@ -22,6 +22,7 @@ pub mod link;
 pub mod motion;
 mod problem;
 mod range_coder;
+pub mod stiffness;
 mod words;
 
 pub use camera::CameraSpec;
@@ -36,3 +37,4 @@ pub use error::DocumentError;
 pub use link::LinkError;
 pub use motion::{MotionKey, MotionSection, TaskInterval};
 pub use problem::{LimbStart, Problem, ProblemSettings, parse_skeleton};
+pub use stiffness::{StiffnessValues, apply_stiffness};

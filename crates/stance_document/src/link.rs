@@ -34,8 +34,9 @@ use crate::document::{Document, TaskKindSpec};
 
 /// The newest link format this version writes and reads: 2 adds the tasks' active intervals
 /// and the timeline (frame rate, length, keys), 3 the comfort task (a 16-symbol model of the
-/// task kinds). A document is written in the oldest format that holds it.
-pub const LINK_FORMAT: u8 = 3;
+/// task kinds), 4 the joint stiffness. A document is written in the oldest format that holds
+/// it.
+pub const LINK_FORMAT: u8 = 4;
 /// Longest link [`encode_for_sharing`] makes with the timeline in it, in characters: beyond,
 /// the keys are left out (a link is pasted into chats and mails).
 pub const MAX_SHARE_CHARS: usize = 8 * 1024;
@@ -114,7 +115,8 @@ fn engine() -> GeneralPurpose {
 
 /// The URL fragment (without `#`) that carries `document`. Values are quantised (see the module
 /// documentation); non-finite numbers, which a validated document never holds, are written as 0.
-/// Format 3 when a task is a comfort task, else 2 when the document has a timeline or a task
+/// Format 4 when the document sets a joint stiffness, else 3 when a task is a comfort task, else 2
+/// when the document has a timeline or a task
 /// interval, else 1 (the oldest format that holds it, for older readers).
 pub fn encode(document: &Document) -> String {
     let timed = document.motion.is_some() || document.tasks.iter().any(|t| t.interval.is_some());
@@ -122,7 +124,9 @@ pub fn encode(document: &Document) -> String {
         .tasks
         .iter()
         .any(|t| matches!(t.kind, TaskKindSpec::Comfort { .. }));
-    let format = if comfort {
+    let format = if !document.stiffness.joints.is_empty() {
+        4
+    } else if comfort {
         3
     } else if timed {
         2

@@ -58,8 +58,9 @@ pub struct LimbStart {
 }
 
 impl Problem {
-    /// A document's tasks and posture on `skeleton`, with default settings.
+    /// A document's tasks, posture and joint stiffness on `skeleton`, with default settings.
     pub fn from_document(document: &Document, skeleton: Skeleton) -> Result<Self, DocumentError> {
+        let skeleton = crate::apply_stiffness(&document.stiffness, &skeleton)?;
         let start = document.to_posture(&skeleton)?;
         Self::build(
             skeleton,

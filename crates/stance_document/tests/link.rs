@@ -144,6 +144,7 @@ fn all_kinds() -> Document {
         ],
         motion: None,
         camera: None,
+        stiffness: Default::default(),
     }
 }
 
@@ -205,6 +206,7 @@ fn a_full_loa2_posture_with_six_tasks_fits_in_600_characters() {
             tasks: table1_tasks(&mut r),
             motion: None,
             camera: None,
+            stiffness: Default::default(),
         };
         assert_eq!(d.posture.joints.len(), 71);
         let text = link::encode(&d);
@@ -218,6 +220,7 @@ fn a_full_loa2_posture_with_six_tasks_fits_in_600_characters() {
         tasks: vec![],
         motion: None,
         camera: None,
+        stiffness: Default::default(),
     };
     let d1 = Document {
         tasks: table1_tasks(&mut r),
@@ -248,6 +251,7 @@ fn report_link_lengths_and_the_general_compressors() {
         tasks: table1_tasks(&mut r),
         motion: None,
         camera: None,
+        stiffness: Default::default(),
     };
     let text = link::encode(&table1);
     round_trip(&table1);
@@ -263,6 +267,7 @@ fn report_link_lengths_and_the_general_compressors() {
             tasks: table1_tasks(&mut r),
             motion: None,
             camera: None,
+            stiffness: Default::default(),
         };
         let text = link::encode(&d);
         // The same values as 16-bit little-endian integers (the usual fixed-width packing),
@@ -340,7 +345,7 @@ fn broken_links_give_distinct_clear_errors() {
     );
     assert_eq!(
         e.to_string(),
-        "this link was made by a newer version of Stance (format 4); this version reads format 3"
+        "this link was made by a newer version of Stance (format 5); this version reads format 4"
     );
     // Valid checksum, nonsense inside.
     let e = link::decode(&reframe(vec![1, 3, 0xFF, 0xFF, 0xFF])).unwrap_err();

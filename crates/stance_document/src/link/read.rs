@@ -17,6 +17,7 @@ use crate::document::{
     AvatarReference, Document, DofValues, LimbName, PostureValues, TaskKindSpec, TaskSpec, dof_slot,
 };
 use crate::motion::{MotionKey, MotionSection, TaskInterval};
+use crate::stiffness::StiffnessValues;
 
 /// Most frames a linked timeline may declare.
 const MAX_FRAMES: u64 = 10_000_000;
@@ -410,6 +411,13 @@ pub(super) fn decode_payload(bytes: &[u8], format: u8) -> R<Document> {
     } else {
         None
     };
+    let stiffness = if format >= 4 {
+        // Below 1 once quantised (1 is not a multiple of the step); a crafted value at or
+        // above it fails the document's validation.
+        r.posture()?
+    } else {
+        StiffnessValues::default()
+    };
     r.check()?;
     Ok(Document {
         avatar,
@@ -417,5 +425,6 @@ pub(super) fn decode_payload(bytes: &[u8], format: u8) -> R<Document> {
         tasks,
         motion,
         camera: None,
+        stiffness,
     })
 }

@@ -344,7 +344,8 @@ fn motion(w: &mut Writer, d: &Document) {
 }
 
 /// The payload of `format` (1: posture and tasks; 2: also the intervals and the timeline; 3:
-/// the task kinds in a 16-symbol model, comfort among them).
+/// the task kinds in a 16-symbol model, comfort among them; 4: also the joint stiffness, in
+/// the shape and quantisation of a posture).
 pub(super) fn encode_payload(d: &Document, format: u8) -> Vec<u8> {
     let mut w = Writer {
         e: Encoder::new(),
@@ -365,6 +366,9 @@ pub(super) fn encode_payload(d: &Document, format: u8) -> Vec<u8> {
     }
     if format >= 2 {
         motion(&mut w, d);
+    }
+    if format >= 4 {
+        w.posture(&d.stiffness);
     }
     w.e.finish()
 }

@@ -239,7 +239,32 @@ pub fn random_document(r: &mut StdRng) -> Document {
         tasks: (0..r.random_range(0..10)).map(|_| random_task(r)).collect(),
         motion: None,
         camera: None,
+        stiffness: if r.random_bool(0.3) {
+            random_stiffness(r)
+        } else {
+            PostureValues::default()
+        },
     }
+}
+
+/// Stiffness of a few joints (any name of the H-Anim table), rotation DOF only, in [0, 1).
+pub fn random_stiffness(r: &mut StdRng) -> PostureValues {
+    let mut p = PostureValues::default();
+    let table = all_joints();
+    for _ in 0..r.random_range(1..6) {
+        let name = table[r.random_range(0..table.len())].name;
+        for dof in [Dof::Rx, Dof::Ry, Dof::Rz] {
+            if r.random_bool(0.6) {
+                let v = match r.random_range(0..3) {
+                    0 => 0.0,
+                    1 => uniform(r, 0.0, 1.0).min(0.999_999),
+                    _ => 0.999_999,
+                };
+                p.set(name, dof, v);
+            }
+        }
+    }
+    p
 }
 
 /// A full LOA2 posture: every LOA2 joint with 3 non-zero rotation DOF drawn uniformly in
@@ -360,6 +385,7 @@ pub fn document_close(a: &Document, b: &Document) -> Result<(), String> {
         return Err(format!("avatar {:?} vs {:?}", a.avatar, b.avatar));
     }
     posture_close(&a.posture, &b.posture).map_err(|e| format!("posture: {e}"))?;
+    posture_close(&a.stiffness, &b.stiffness).map_err(|e| format!("stiffness: {e}"))?;
     if a.tasks.len() != b.tasks.len() {
         return Err("task count".into());
     }
