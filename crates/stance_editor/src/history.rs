@@ -19,6 +19,8 @@ pub enum EditKind {
     TaskField(usize, &'static str),
     /// A DOF of a joint edited directly.
     Joint(usize),
+    /// The stiffness of a DOF.
+    Stiffness(usize),
     /// A grab-and-pull gesture.
     Pull,
     /// The swivel angle of a limb.

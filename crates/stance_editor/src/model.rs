@@ -385,6 +385,7 @@ impl EditorModel {
                 self.record(EditKind::Joint(dof));
                 self.session.set_dof(dof, value);
             }
+            Command::SetStiffness { dof, value } => self.set_stiffness(dof, value),
             Command::SetSwivel { limb, swivel_angle } => {
                 self.record(EditKind::Swivel(limb as usize));
                 self.session.set_limb_swivel(limb, swivel_angle);

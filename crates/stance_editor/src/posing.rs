@@ -3,10 +3,12 @@
 //! every frame within a time budget. No egui here: everything is tested natively.
 
 use glam::{DQuat, DVec3};
+mod stiffness;
 mod timed;
 
 use stance_document::{
-    CameraSpec, Document, LimbName, MotionSection, PostureValues, TaskKindSpec, TaskSpec,
+    CameraSpec, Document, LimbName, MotionSection, PostureValues, StiffnessValues, TaskKindSpec,
+    TaskSpec,
 };
 use stance_hanim::{
     HumanoidSkeleton, LevelOfArticulation, SkeletonOptions, default_skeleton, mirror_name,
@@ -74,6 +76,10 @@ pub struct PosingSession {
     camera: Option<CameraSpec>,
     /// The timeline frame shown, if any: the tasks act with their interval weights.
     timed: Option<TimedFrame>,
+    /// The body's stiffness as built (the anatomical defaults), per DOF.
+    anatomical_stiffness: Vec<f64>,
+    /// The document's stiffness overrides, applied to `humanoid.skeleton`.
+    stiffness: StiffnessValues,
 }
 
 impl std::fmt::Debug for PosingSession {
@@ -143,6 +149,7 @@ impl PosingSession {
             Limb::from_names(&humanoid.skeleton, [upper, middle, end]).ok()
         })
         .collect();
+        let anatomical_stiffness = humanoid.skeleton.stiffness().to_vec();
         let mut session = Self {
             humanoid,
             posture,
@@ -159,6 +166,8 @@ impl PosingSession {
             motion_revision: 0,
             camera: None,
             timed: None,
+            anatomical_stiffness,
+            stiffness: StiffnessValues::default(),
         };
         session.tasks = session.default_tasks();
         session.refresh();
@@ -327,6 +336,7 @@ impl PosingSession {
             tasks: self.tasks.clone(),
             motion: self.motion.clone(),
             camera: self.camera,
+            stiffness: self.stiffness.clone(),
             ..Document::default()
         }
     }
@@ -351,6 +361,7 @@ impl PosingSession {
     /// link or a saved pose show that very posture. On error the session stays as it was.
     pub fn restore_document(&mut self, document: &Document) -> Result<(), PosingError> {
         let posture = document.posture.to_posture(self.skeleton())?;
+        self.apply_stiffness_overrides(&document.stiffness)?;
         self.posture = posture;
         self.tasks = document.tasks.clone();
         self.motion = document.motion.clone();
@@ -488,6 +499,7 @@ impl PosingSession {
     /// Loads a document; on error the session stays as it was.
     pub fn load_document(&mut self, document: &Document) -> Result<(), PosingError> {
         let posture = document.posture.to_posture(self.skeleton())?;
+        self.apply_stiffness_overrides(&document.stiffness)?;
         self.posture = posture;
         self.tasks = document.tasks.clone();
         self.motion = document.motion.clone();

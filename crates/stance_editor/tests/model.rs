@@ -381,3 +381,72 @@ fn a_limb_task_with_an_orientation_holds_the_hand_turned_as_in_the_cli() {
         "the hand is at {reached}"
     );
 }
+
+/// The same pull (right wrist 20 cm up and out, the feet pinned) with the right shoulder at
+/// its default stiffness and made stiff: the stiff shoulder turns less, the goal is reached
+/// either way; the stiffness is in the document, one undo step, and undo brings back the
+/// default.
+#[test]
+fn a_stiffer_shoulder_turns_less_in_a_pull_and_the_change_is_one_undo_step() {
+    let pull = |stiffness: Option<f64>| {
+        let mut editor = Clocked::new();
+        editor.settle_within(200);
+        let shoulder = editor.joint("r_shoulder");
+        let start = editor.model.session().skeleton().joints()[shoulder].dof_start;
+        if let Some(value) = stiffness {
+            for dof in start..start + 3 {
+                editor.apply(Command::SetStiffness {
+                    dof,
+                    value: Some(value),
+                });
+            }
+        }
+        let wrist = editor.joint("r_radiocarpal");
+        let from = editor.position("r_radiocarpal");
+        editor.apply(Command::BeginPull {
+            joint: wrist,
+            point_world: from,
+        });
+        let target = from + DVec3::new(-0.1, 0.2, 0.1);
+        editor.apply(Command::MoveGrab {
+            target_world: target,
+        });
+        editor.settle_within(300);
+        editor.apply(Command::EndGesture);
+        let reached = editor.position("r_radiocarpal").distance(target);
+        let values = editor.model.session().posture().values()[start..start + 3].to_vec();
+        let turned: f64 = values.iter().map(|v| v.abs()).sum();
+        (editor, turned, reached)
+    };
+    let (_, free, reached_free) = pull(None);
+    let (mut editor, stiff, reached_stiff) = pull(Some(0.9));
+    assert!(
+        reached_free < 0.01 && reached_stiff < 0.01,
+        "{reached_free} {reached_stiff}"
+    );
+    assert!(
+        stiff < 0.6 * free,
+        "shoulder turned {free} rad, stiff {stiff} rad"
+    );
+    // In the document, and undone: the pull first, then the three stiffness edits (one step,
+    // they coalesce per DOF: three steps).
+    let shoulder = editor.joint("r_shoulder");
+    let start = editor.model.session().skeleton().joints()[shoulder].dof_start;
+    let document = editor.model.document();
+    assert_eq!(
+        document.stiffness.get("r_shoulder", stance_ik::Dof::Rx),
+        Some(0.9)
+    );
+    for _ in 0..4 {
+        editor.apply(Command::Undo);
+    }
+    let session = editor.model.session();
+    for dof in start..start + 3 {
+        assert_eq!(
+            session.skeleton().stiffness()[dof],
+            session.default_stiffness(dof),
+            "undo brings back the anatomical default"
+        );
+    }
+    assert!(editor.model.document().stiffness.joints.is_empty());
+}

@@ -176,8 +176,65 @@ impl SidePanel<'_> {
         if let Some((dof, value)) = edit {
             self.model.apply(Command::SetDof { dof, value });
         }
+        self.stiffness_section(ui, &joint);
         if let Some(limb) = LimbName::of_joint(&joint.name) {
             self.swivel_section(ui, limb);
+        }
+    }
+
+    /// Each rotation DOF's stiffness (H-Anim's `stiffness`): how much less it moves than a
+    /// free DOF for the same task; its anatomical default until changed.
+    fn stiffness_section(&mut self, ui: &mut egui::Ui, joint: &stance_ik::Joint) {
+        let session = &self.model.session;
+        let stiffness = session.skeleton().stiffness().to_vec();
+        let rotations: Vec<(usize, stance_ik::Dof)> = joint
+            .dofs
+            .iter()
+            .enumerate()
+            .filter(|(_, dof)| dof.is_rotation())
+            .map(|(offset, &dof)| (joint.dof_start + offset, dof))
+            .collect();
+        if rotations.is_empty() {
+            return;
+        }
+        let mut edit: Option<(usize, Option<f64>)> = None;
+        ui.label(RichText::new("Stiffness").strong()).on_hover_text(
+            "0: moves freely; near 1: moves little, the rest of the body takes over",
+        );
+        egui::Grid::new("joint_stiffness")
+            .num_columns(3)
+            .show(ui, |ui| {
+                for (index, dof) in rotations {
+                    let Some(&value) = stiffness.get(index) else {
+                        continue;
+                    };
+                    let default = session.default_stiffness(index);
+                    ui.label(dof.name());
+                    let mut v = value;
+                    if ui
+                        .add(
+                            egui::DragValue::new(&mut v)
+                                .range(0.0..=0.95)
+                                .speed(0.01)
+                                .max_decimals(2),
+                        )
+                        .changed()
+                    {
+                        edit = Some((index, Some(v)));
+                    }
+                    let changed = (value - default).abs() > 1e-12;
+                    if ui
+                        .add_enabled(changed, egui::Button::new("default").small())
+                        .on_hover_text(format!("the anatomical default, {default:.2}"))
+                        .clicked()
+                    {
+                        edit = Some((index, None));
+                    }
+                    ui.end_row();
+                }
+            });
+        if let Some((dof, value)) = edit {
+            self.model.apply(Command::SetStiffness { dof, value });
         }
     }
 

@@ -89,3 +89,21 @@ pub fn heat_color(share: f64, body: [f32; 4]) -> [f32; 4] {
         mix(AMBER, RED, (share - 0.15) / 0.15)
     }
 }
+
+impl super::EditorModel {
+    /// Sets a DOF's stiffness (`None`: its anatomical default) as one undoable edit; a value
+    /// the body refuses is named and changes nothing.
+    pub(super) fn set_stiffness(&mut self, dof: usize, value: Option<f64>) {
+        let before = self.session.document();
+        match self.session.set_stiffness(dof, value) {
+            Ok(()) => {
+                self.history.record(
+                    &before,
+                    crate::history::EditKind::Stiffness(dof),
+                    self.now_secs,
+                );
+            }
+            Err(error) => self.warn(format!("The stiffness was not changed: {error}")),
+        }
+    }
+}

@@ -144,6 +144,14 @@ pub enum Command {
         /// Its new value (rad; m for a translation of the root).
         value: f64,
     },
+    /// Set a rotation DOF's stiffness in [0, 1) (`None`: back to the anatomical default), as
+    /// one edit of `EditKind::Stiffness`.
+    SetStiffness {
+        /// The DOF (index in the posture's values).
+        dof: usize,
+        /// Its stiffness, or `None` for the body's default.
+        value: Option<f64>,
+    },
     /// Set a limb's swivel angle (rad).
     SetSwivel {
         /// The arm or leg.
