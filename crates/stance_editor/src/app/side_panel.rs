@@ -1,5 +1,6 @@
 //! The side panel: the body (avatar or mannequin, its mapping, the level of articulation),
-//! undo and the posing commands, the selection (joint angles, swivel) and the pose library.
+//! undo and the posing commands, the selection (joint angles, swivel), the hands and the pose
+//! library.
 
 use egui::RichText;
 use stance_document::LimbName;
@@ -97,6 +98,7 @@ impl SidePanel<'_> {
         }
         ui.separator();
         self.selection_section(ui);
+        super::hands_panel::show(ui, self.model);
         ui.separator();
         self.library_section(ui);
         ui.separator();
