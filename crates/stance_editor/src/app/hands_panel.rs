@@ -13,7 +13,7 @@ pub(super) fn show(ui: &mut egui::Ui, model: &mut EditorModel) {
     ui.separator();
     ui.heading("Hands");
     // Which hands the buttons and sliders pose: kept by the panel across frames.
-    let id = egui::Id::new("stance_hands_target");
+    let id = egui::Id::unique("stance_hands_target");
     let mut hands = ui.data_mut(|data| *data.get_temp_mut_or(id, Hands::Both));
     ui.horizontal(|ui| {
         for choice in Hands::ALL {
