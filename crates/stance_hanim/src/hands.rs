@@ -28,6 +28,12 @@ use crate::names::{Side, resolve_joint};
 const MIN_ALIGNMENT: f64 = 0.2;
 /// The reach of a motion whose DOF has no finite limit in that direction (rad).
 const UNLIMITED_REACH: f64 = std::f64::consts::FRAC_PI_2;
+/// How far apart the thumb and index tips stay in a pinch (m): the two finger pads.
+const PINCH_GAP_M: f64 = 0.012;
+/// The pinch search's first step, smallest step and most rounds (rad, rad, count).
+const PINCH_FIRST_STEP: f64 = 0.2;
+const PINCH_LAST_STEP: f64 = 1e-3;
+const PINCH_MAX_ROUNDS: usize = 400;
 /// The distal phalanx's length over the middle phalanx's: the fingertip is this far beyond the
 /// last joint, along the segment before it (the H-Anim skeleton has no fingertip joint).
 const TIP_RATIO: f64 = 0.8;
@@ -156,7 +162,8 @@ pub enum HandPreset {
     Open,
     /// The index straight, the other fingers closed, the thumb over them.
     Point,
-    /// Thumb and index flexed toward each other, the other fingers at ease.
+    /// Thumb and index flexed toward each other, their tips meeting where the thumb's limits
+    /// allow; the other fingers at ease.
     Pinch,
     /// Fingers wrapped around a handle, the thumb across.
     Grip,
@@ -198,7 +205,7 @@ impl HandPreset {
         const CLOSED: [f64; 4] = [1.0, 1.0, 1.0, 0.75];
         match self {
             HandPreset::Relaxed => [
-                ([0.3, 0.2, 0.2, 0.0], 0.3),
+                ([0.3, 0.2, 0.2, 0.0], 0.0),
                 ([0.0, 0.15, 0.25, 0.15], 0.1),
                 ([0.0, 0.2, 0.3, 0.2], 0.0),
                 ([0.2, 0.25, 0.35, 0.2], 0.1),
@@ -212,7 +219,7 @@ impl HandPreset {
                 (CLOSED, 0.0),
             ],
             HandPreset::Open => [
-                ([0.0; 4], 1.0),
+                ([0.0; 4], 0.5),
                 ([0.0; 4], 0.8),
                 ([0.0; 4], 0.0),
                 ([0.0; 4], 0.8),
@@ -226,14 +233,14 @@ impl HandPreset {
                 (CLOSED, 0.0),
             ],
             HandPreset::Pinch => [
-                ([1.0, 0.4, 0.3, 0.0], 0.5),
+                ([1.0, 0.4, 0.3, 0.0], 0.0),
                 ([0.0, 0.45, 0.5, 0.35], 0.0),
                 ([0.0, 0.25, 0.35, 0.2], 0.0),
                 ([0.2, 0.3, 0.4, 0.25], 0.1),
                 ([0.3, 0.35, 0.45, 0.3], 0.15),
             ],
             HandPreset::Grip => [
-                ([0.7, 0.3, 0.3, 0.0], 0.4),
+                ([0.7, 0.3, 0.3, 0.0], 0.0),
                 ([0.0, 0.55, 0.65, 0.45], 0.0),
                 ([0.0, 0.55, 0.65, 0.45], 0.0),
                 ([0.3, 0.55, 0.65, 0.45], 0.0),
@@ -542,7 +549,84 @@ impl HandRig {
                 );
             }
         }
+        if preset == HandPreset::Pinch {
+            self.meet_thumb_and_index(skeleton, &mut values);
+        }
         values
+    }
+
+    /// The pinch: the thumb's and the index's DOF (within their limits, from the preset's
+    /// values) bring the two tips to [`PINCH_GAP_M`] of each other, or as near as the limits
+    /// allow (a thumb that rests far from the index, as H-Anim's default one, stops short).
+    /// A pattern search:
+    /// each DOF tries a step both ways and keeps the better, the step halves when none helps
+    /// (both ways are compared so that mirror-image hands take mirror-image steps).
+    fn meet_thumb_and_index(&self, skeleton: &Skeleton, values: &mut [(usize, f64)]) {
+        let (Some(thumb), Some(index)) = (self.finger(Finger::Thumb), self.finger(Finger::Index))
+        else {
+            return;
+        };
+        let dofs: Vec<usize> = thumb
+            .joints
+            .iter()
+            .chain(&index.joints)
+            .filter_map(|joint| skeleton.joints().get(joint.joint))
+            .flat_map(|joint| joint.rotation_dof.iter().flatten().copied())
+            .collect();
+        let mut posture = Posture::rest(skeleton);
+        for &(dof, value) in values.iter() {
+            if let Some(slot) = posture.values_mut().get_mut(dof) {
+                *slot = value;
+            }
+        }
+        let mut frames = Frames::new(skeleton, &posture);
+        let mut miss = |posture: &Posture| {
+            frames.update(skeleton, posture.values());
+            match (
+                self.fingertip(skeleton, &frames, Finger::Thumb),
+                self.fingertip(skeleton, &frames, Finger::Index),
+            ) {
+                (Some(thumb), Some(index)) => ((thumb - index).length() - PINCH_GAP_M).max(0.0),
+                _ => 0.0,
+            }
+        };
+        let mut best = miss(&posture);
+        let mut step = PINCH_FIRST_STEP;
+        for _ in 0..PINCH_MAX_ROUNDS {
+            if step < PINCH_LAST_STEP || best <= 0.0 {
+                break;
+            }
+            let mut improved = false;
+            for &dof in &dofs {
+                let Some(&start) = posture.values().get(dof) else {
+                    continue;
+                };
+                let mut tries = [1.0, -1.0].map(|direction| {
+                    let value = clamp_to_limits(skeleton, dof, start + direction * step);
+                    posture.values_mut()[dof] = value;
+                    (miss(&posture), value)
+                });
+                tries.sort_by(|a, b| a.0.total_cmp(&b.0));
+                let (reached, value) = tries[0];
+                if reached < best - 1e-12 {
+                    best = reached;
+                    improved = true;
+                    posture.values_mut()[dof] = value;
+                } else {
+                    posture.values_mut()[dof] = start;
+                }
+            }
+            if !improved {
+                step /= 2.0;
+            }
+        }
+        for (dof, value) in values.iter_mut() {
+            if dofs.contains(dof)
+                && let Some(&searched) = posture.values().get(*dof)
+            {
+                *value = searched;
+            }
+        }
     }
 
     /// The DOF values (index, value) that curl `finger` (every digit for `None`) by `curl`

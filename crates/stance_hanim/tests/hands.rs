@@ -356,6 +356,16 @@ fn presets_differ_where_they_should() {
         gap(&pinch),
         gap(&open)
     );
+    // The tips come together as far as the thumb's ranges allow: the H-Anim default thumb
+    // rests 70 degrees from the index and the anatomical table gives its base 15 degrees of
+    // flexion, so on this body they stop about 6 cm apart (the relaxed hand: about 14 cm).
+    let relaxed = Frames::new(s, &posed(s, &rig.preset(s, HandPreset::Relaxed)));
+    assert!(
+        gap(&pinch) < 0.6 * gap(&relaxed),
+        "the pinch leaves {} m, the relaxed hand {} m",
+        gap(&pinch),
+        gap(&relaxed)
+    );
     // Relaxed sits between open and fist, finger by finger; grip too.
     for finger in &Finger::ALL[1..] {
         let relaxed = curl(HandPreset::Relaxed, *finger).unwrap();
