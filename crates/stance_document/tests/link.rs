@@ -548,3 +548,49 @@ fn a_long_timeline_is_left_out_of_a_shared_link_and_says_how_long_it_would_be() 
     // The intervals stay: they are small.
     assert_eq!(back.tasks[0].interval, long.tasks[0].interval);
 }
+
+/// Fingers posed by the hand presets (every finger DOF away from 0) come back from a link
+/// within half a quantisation step, on the LOA 2 and LOA 4 bodies.
+#[test]
+fn posed_fingers_round_trip_within_the_quantisation() {
+    use stance_hanim::hands::{HandPreset, HandRig};
+    use stance_hanim::{LevelOfArticulation, Side, SkeletonOptions, default_skeleton};
+    for loa in [LevelOfArticulation::Loa2, LevelOfArticulation::Loa4] {
+        let body = default_skeleton(&SkeletonOptions {
+            loa,
+            ..SkeletonOptions::default()
+        })
+        .unwrap();
+        let s = &body.skeleton;
+        let mut posture = stance_ik::Posture::rest(s);
+        let mut finger_dofs = Vec::new();
+        for (side, preset) in [
+            (Side::Left, HandPreset::Fist),
+            (Side::Right, HandPreset::Pinch),
+        ] {
+            let rig = HandRig::new(s, side).unwrap();
+            for (dof, value) in rig.preset(s, preset) {
+                posture.values_mut()[dof] = value;
+                finger_dofs.push(dof);
+            }
+        }
+        let flexed = finger_dofs
+            .iter()
+            .filter(|&&dof| posture.values()[dof].abs() > 0.1)
+            .count();
+        assert!(flexed >= 25, "{flexed} finger DOF flexed");
+        let document = Document {
+            posture: PostureValues::from_posture(s, &posture),
+            ..Document::default()
+        };
+        let back = round_trip(&document).posture.to_posture(s).unwrap();
+        for dof in finger_dofs {
+            let (sent, got) = (posture.values()[dof], back.values()[dof]);
+            assert!(
+                (sent - got).abs() <= ROTATION_STEP_RAD / 2.0 + 1e-12,
+                "{loa:?} {}: {sent} sent, {got} read",
+                s.dof_name(dof)
+            );
+        }
+    }
+}

@@ -5,6 +5,7 @@
 mod avatar_panel;
 mod comfort_panel;
 mod handles;
+mod hands_panel;
 mod lens;
 mod overlay;
 mod sensors_panel;

@@ -4,6 +4,9 @@
 //! edits with the same [`EditKind`] that follow each other within [`COALESCE_SECS`] merge.
 
 use stance_document::Document;
+use stance_hanim::hands::Finger;
+
+use crate::model::Hands;
 
 /// How far back undo goes.
 pub const MAX_UNDO_STEPS: usize = 200;
@@ -25,6 +28,8 @@ pub enum EditKind {
     Pull,
     /// The swivel angle of a limb.
     Swivel(usize),
+    /// The curl of a finger (the whole hand for `None`) of some hands.
+    HandCurl(Hands, Option<Finger>),
 }
 
 /// The undo and redo stacks.

@@ -13,6 +13,7 @@ mod bones;
 mod clips;
 mod comfort;
 mod command;
+mod hands;
 mod mapping;
 mod motion;
 mod storage;
@@ -29,6 +30,7 @@ pub use self::clips::{AnimationFormat, CLIP_FPS, PickPurpose};
 pub use self::comfort::{ComfortView, heat_color};
 use self::command::goals_moved;
 pub use self::command::{Command, Gesture, Notice, SessionChange};
+pub use self::hands::{HandCommand, Hands};
 use self::mapping::MappingCorrections;
 pub use self::mapping::{Correction, carry_posture};
 pub use self::motion::{IntervalEdge, MotionCommand, SPEED_RANGE, Timeline};
@@ -401,6 +403,7 @@ impl EditorModel {
                 self.record(EditKind::Command);
                 self.session.mirror();
             }
+            Command::Hands(command) => self.apply_hands(command),
             Command::SaveCamera(camera) => {
                 self.record(EditKind::Command);
                 self.session.set_camera(camera);

@@ -10,8 +10,9 @@ use stance_document::{
     CameraSpec, Document, LimbName, MotionSection, PostureValues, StiffnessValues, TaskKindSpec,
     TaskSpec,
 };
+use stance_hanim::hands::{HandError, HandRig};
 use stance_hanim::{
-    HumanoidSkeleton, LevelOfArticulation, SkeletonOptions, default_skeleton, mirror_name,
+    HumanoidSkeleton, LevelOfArticulation, Side, SkeletonOptions, default_skeleton, mirror_name,
 };
 use stance_ik::conflict::Unmet;
 use stance_ik::{
@@ -80,6 +81,8 @@ pub struct PosingSession {
     anatomical_stiffness: Vec<f64>,
     /// The document's stiffness overrides, applied to `humanoid.skeleton`.
     stiffness: StiffnessValues,
+    /// The left and right hands' finger joints (or why they cannot be posed).
+    hands: [Result<HandRig, HandError>; 2],
 }
 
 impl std::fmt::Debug for PosingSession {
@@ -150,7 +153,9 @@ impl PosingSession {
         })
         .collect();
         let anatomical_stiffness = humanoid.skeleton.stiffness().to_vec();
+        let hands = [Side::Left, Side::Right].map(|side| HandRig::new(&humanoid.skeleton, side));
         let mut session = Self {
+            hands,
             humanoid,
             posture,
             tasks: Vec::new(),
@@ -204,6 +209,16 @@ impl PosingSession {
     /// The body's H-Anim level of articulation.
     pub fn level_of_articulation(&self) -> LevelOfArticulation {
         self.humanoid.loa
+    }
+
+    /// The `side` hand's finger joints, ready for presets and curl; why not, when the body
+    /// has no fingers there.
+    pub fn hand(&self, side: Side) -> Result<&HandRig, &HandError> {
+        match side {
+            Side::Left => self.hands[0].as_ref(),
+            Side::Right => self.hands[1].as_ref(),
+            Side::Centre => Err(&HandError::NotASide),
+        }
     }
 
     /// The current posture: every DOF's value (rad; m for the root's translation).
@@ -396,6 +411,29 @@ impl PosingSession {
             *slot = clamped;
             self.wake();
         }
+    }
+
+    /// Sets several DOF at once (a hand preset), each clamped into its limits as by
+    /// [`Self::set_dof`]; the solver runs again once.
+    pub fn set_dofs(&mut self, values: &[(usize, f64)]) {
+        let skeleton = &self.humanoid.skeleton;
+        let (lower, upper) = (skeleton.lower_limits(), skeleton.upper_limits());
+        let posture = self.posture.values_mut();
+        for &(dof, value) in values {
+            let (Some(&low), Some(&high), Some(slot)) =
+                (lower.get(dof), upper.get(dof), posture.get_mut(dof))
+            else {
+                continue;
+            };
+            if value.is_finite() {
+                *slot = if low <= high {
+                    value.clamp(low, high)
+                } else {
+                    value
+                };
+            }
+        }
+        self.wake();
     }
 
     /// The swivel angle of a limb in the current posture and the swivel intervals that keep

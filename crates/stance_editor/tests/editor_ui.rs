@@ -889,3 +889,21 @@ fn numpad_views_orthographic_framing_and_a_view_saved_with_the_document() {
     assert!(back.orthographic && (back.target_world - camera.target_world).length() < 1e-4);
     let _ = ViewPreset::ALL;
 }
+
+#[test]
+fn the_hands_section_poses_both_hands_with_a_click_and_is_gone_without_fingers() {
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    harness.get_by_label("fist").click();
+    settle(&mut harness);
+    let model = harness.state().model();
+    let closed = model.hand_curl(stance_editor::model::Hands::Both, None);
+    assert!(closed.unwrap() > 0.8, "{closed:?}");
+    assert!(model.history().can_undo());
+    harness.state_mut().apply(Command::SetLevelOfArticulation(
+        stance_hanim::LevelOfArticulation::Loa1,
+    ));
+    settle(&mut harness);
+    assert!(harness.query_by_label("fist").is_none());
+    assert!(harness.query_by_label("Hands").is_none());
+}

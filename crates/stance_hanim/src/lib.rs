@@ -4,7 +4,8 @@
 //! Also: per-joint DOF and anatomical ranges of motion ([`anatomy`], AAOS / Kapandji), segment
 //! masses (de Leva 1996), bone-name mapping of avatars onto H-Anim ([`mapping`]) and the
 //! builder of `stance_ik` skeletons at a chosen LOA ([`builder`]), and joint chains that act
-//! together, such as the spine an upper-back sensor drives ([`chains`]).
+//! together, such as the spine an upper-back sensor drives ([`chains`]), and hand poses: presets
+//! and finger curl ([`hands`]).
 //!
 //! Frame: +Y up, +Z the front of the body, +X the body's left; metres.
 
@@ -15,6 +16,7 @@ pub mod builder;
 pub mod chains;
 pub mod comfort;
 pub mod frame;
+pub mod hands;
 mod joint_table;
 pub mod mapping;
 pub mod names;

@@ -1,5 +1,6 @@
 //! The side panel: the body (avatar or mannequin, its mapping, the level of articulation),
-//! undo and the posing commands, the selection (joint angles, swivel) and the pose library.
+//! undo and the posing commands, the selection (joint angles, swivel), the hands and the pose
+//! library.
 
 use egui::RichText;
 use stance_document::LimbName;
@@ -96,11 +97,17 @@ impl SidePanel<'_> {
             self.windows.sensors = !self.windows.sensors;
         }
         ui.separator();
-        self.selection_section(ui);
+        self.selection_and_hands(ui);
         ui.separator();
         self.library_section(ui);
         ui.separator();
         super::comfort_panel::show(ui, self.model);
+    }
+
+    /// The selection and, on a body with fingers, the hands.
+    fn selection_and_hands(&mut self, ui: &mut egui::Ui) {
+        self.selection_section(ui);
+        super::hands_panel::show(ui, self.model);
     }
 
     fn selection_section(&mut self, ui: &mut egui::Ui) {

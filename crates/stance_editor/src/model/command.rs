@@ -6,6 +6,7 @@ use stance_document::{Document, LimbName, TaskKindSpec, TaskSpec};
 use stance_hanim::{LevelOfArticulation, Mapping};
 
 use super::clips::AnimationFormat;
+use super::hands::HandCommand;
 use super::mapping::Correction;
 use super::motion::MotionCommand;
 use super::tasks::NewTask;
@@ -168,6 +169,8 @@ pub enum Command {
     /// Swap left and right: the posture and the tasks with it, reflected in the body's
     /// sagittal plane.
     Mirror,
+    /// A hand preset or a finger curl (bodies with fingers).
+    Hands(HandCommand),
     /// Rebuild the body at another level of articulation: the posture carries over by joint
     /// name, and the tasks whose joints remain stay.
     SetLevelOfArticulation(LevelOfArticulation),
