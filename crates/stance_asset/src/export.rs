@@ -387,8 +387,19 @@ pub(crate) fn export_with(
     if !bin.data.is_empty() {
         root.insert("buffers".into(), json!([{"byteLength": bin.data.len()}]));
     }
+    let mut used = Vec::new();
     if any_unlit {
-        root.insert("extensionsUsed".into(), json!(["KHR_materials_unlit"]));
+        used.push("KHR_materials_unlit".to_owned());
+    }
+    if let Some(vrm) = &avatar.vrm {
+        root.insert(
+            "extensions".into(),
+            json!({ vrm.name.clone(): vrm_for_export(vrm, avatar.textures.len()) }),
+        );
+        used.push(vrm.name.clone());
+    }
+    if !used.is_empty() {
+        root.insert("extensionsUsed".into(), json!(used));
     }
     let mut json_bytes =
         serde_json::to_vec(&Value::Object(root)).map_err(|e| AssetError::Export(e.to_string()))?;
@@ -416,4 +427,54 @@ pub(crate) fn export_with(
         out.extend_from_slice(&bin.data);
     }
     Ok(out)
+}
+
+/// The VRM extension as written back. Nodes, meshes and materials keep their file order on
+/// export, so the humanoid's bones, the first-person settings and VRM 0.x's material
+/// properties stay valid as they are. Morph targets are not kept (the importer reads the rest
+/// shape only): the expressions keep their names and material binds, without morph-target
+/// binds; a thumbnail outside the written images is left out.
+fn vrm_for_export(vrm: &crate::VrmExtension, images: usize) -> Value {
+    let mut value = vrm.value.clone();
+    let clear = |bind: &mut Value, key: &str| {
+        if let Some(binds) = bind.get_mut(key) {
+            *binds = json!([]);
+        }
+    };
+    if vrm.name == "VRM" {
+        if let Some(groups) = value
+            .pointer_mut("/blendShapeMaster/blendShapeGroups")
+            .and_then(Value::as_array_mut)
+        {
+            for group in groups {
+                clear(group, "binds");
+            }
+        }
+        let texture = value.pointer("/meta/texture").and_then(Value::as_u64);
+        if texture.is_some_and(|t| t as usize >= images)
+            && let Some(meta) = value.get_mut("meta").and_then(Value::as_object_mut)
+        {
+            meta.remove("texture");
+        }
+    } else {
+        for kind in ["preset", "custom"] {
+            if let Some(expressions) = value
+                .pointer_mut(&format!("/expressions/{kind}"))
+                .and_then(Value::as_object_mut)
+            {
+                for expression in expressions.values_mut() {
+                    clear(expression, "morphTargetBinds");
+                }
+            }
+        }
+        let thumbnail = value
+            .pointer("/meta/thumbnailImage")
+            .and_then(Value::as_u64);
+        if thumbnail.is_some_and(|t| t as usize >= images)
+            && let Some(meta) = value.get_mut("meta").and_then(Value::as_object_mut)
+        {
+            meta.remove("thumbnailImage");
+        }
+    }
+    value
 }

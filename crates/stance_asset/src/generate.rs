@@ -348,6 +348,7 @@ pub fn make_default_avatar() -> Result<Avatar, AssetError> {
         mapping: Mapping::empty(0),
         animations: Vec::new(),
         extensions: Vec::new(),
+        vrm: None,
         warnings: Vec::new(),
     };
     avatar.mapping = Mapping::auto(&avatar.source_joints(), &[], false);

@@ -22,7 +22,7 @@ use gltf::json;
 use serde_json::Value;
 use stance_hanim::{LevelOfArticulation, Mapping};
 
-use crate::model::{Avatar, Node, Skin, SourceFormat, Trs};
+use crate::model::{Avatar, Node, Skin, SourceFormat, Trs, VrmExtension};
 use crate::{AssetError, Limits, LoadOptions};
 
 const GLB_MAGIC: &[u8; 4] = b"glTF";
@@ -323,6 +323,12 @@ pub fn import(
     // VRM humanoid bones.
     let ext = ctx.root.extensions.as_ref().map(|e| &e.others);
     let mut vrm_bones: Vec<(String, usize)> = Vec::new();
+    let vrm = ["VRMC_vrm", "VRM"].iter().find_map(|name| {
+        ext.and_then(|e| e.get(*name)).map(|value| VrmExtension {
+            name: (*name).to_owned(),
+            value: value.clone(),
+        })
+    });
     let mut format = if is_glb {
         SourceFormat::Glb
     } else {
@@ -391,6 +397,7 @@ pub fn import(
         mapping: Mapping::empty(0),
         animations,
         extensions: ctx.root.extensions_used.clone(),
+        vrm,
         warnings: std::mem::take(&mut ctx.warnings),
     };
     let vrm0 = format == SourceFormat::Vrm0;

@@ -51,7 +51,8 @@ pub use export_animation::export_glb_animation;
 pub use generate::make_default_avatar;
 pub use import::{Resolver, SUPPORTED_EXTENSIONS};
 pub use model::{
-    AlphaMode, Avatar, Material, Mesh, Node, Primitive, Skin, SourceFormat, Texture, Trs, Wrap,
+    AlphaMode, Avatar, Material, Mesh, Node, Primitive, Skin, SourceFormat, Texture, Trs,
+    VrmExtension, Wrap,
 };
 
 /// Limits against hostile files. The defaults fit real avatars (tens of MB) with room.

@@ -204,6 +204,16 @@ pub struct Mesh {
     pub primitives: Vec<Primitive>,
 }
 
+/// A VRM file's humanoid extension: its name and JSON (meta with the licence, humanoid bones
+/// by node index, expressions, first person...).
+#[derive(Debug, Clone, PartialEq)]
+pub struct VrmExtension {
+    /// `VRM` (0.x) or `VRMC_vrm` (1.0).
+    pub name: String,
+    /// The extension object.
+    pub value: serde_json::Value,
+}
+
 /// A loaded avatar. All transforms are in file units; [`Avatar::hanim_from_file`] takes the
 /// file's world space to the H-Anim frame (metres, +Y up, +Z front, +X the body's left).
 #[derive(Debug, Clone, PartialEq)]
@@ -231,6 +241,9 @@ pub struct Avatar {
     pub animations: Vec<Animation>,
     /// `extensionsUsed` of the file.
     pub extensions: Vec<String>,
+    /// The file's VRM extension (`VRM` for 0.x, `VRMC_vrm` for 1.0) as it was read: written
+    /// back on export so that the file stays a VRM (see `export`).
+    pub vrm: Option<VrmExtension>,
     /// Non-fatal problems (skipped primitives, ignored extensions...).
     pub warnings: Vec<String>,
 }

@@ -83,6 +83,9 @@ fn vrm_file(version: u8) -> Vec<u8> {
             .map(|(_, b0, h)| json!({"bone": b0, "node": index[*h], "useDefaultValues": true}))
             .collect();
         j["extensions"] = json!({"VRM": {"exporterVersion": "test", "humanoid": {"humanBones": bones},
+            "meta": {"title": "test", "licenseName": "CC_BY"},
+            "blendShapeMaster": {"blendShapeGroups": [{"name": "Joy", "presetName": "joy",
+                "binds": [{"mesh": 0, "index": 0, "weight": 100}]}]},
             "materialProperties": [{"name": "skin", "shader": "VRM/MToon", "textureProperties": {},
                 "vectorProperties": {"_Color": [0.5, 0.4, 0.3, 1.0]}}]}});
         j["extensionsUsed"] = json!(["VRM"]);
@@ -91,8 +94,10 @@ fn vrm_file(version: u8) -> Vec<u8> {
         for (b1, _, h) in BONES {
             bones.insert((*b1).into(), json!({"node": index[*h]}));
         }
-        j["extensions"] = json!({"VRMC_vrm": {"specVersion": "1.0", "meta": {"name": "test"},
-            "humanoid": {"humanBones": bones}}});
+        j["extensions"] = json!({"VRMC_vrm": {"specVersion": "1.0",
+            "meta": {"name": "test", "licenseUrl": "https://vrm.dev/licenses/1.0/"},
+            "humanoid": {"humanBones": bones},
+            "expressions": {"preset": {"happy": {"morphTargetBinds": [{"node": 0, "index": 0, "weight": 1.0}]}}}}});
         j["materials"][0]["extensions"] = json!({"VRMC_materials_mtoon": {"specVersion": "1.0"}});
         j["extensionsUsed"] = json!(["VRMC_vrm", "VRMC_materials_mtoon"]);
     }
@@ -136,4 +141,74 @@ fn vrm1_maps_through_the_extension() {
 #[test]
 fn vrm0_maps_through_the_extension_and_faces_forward() {
     check(0);
+}
+
+/// Exported (posed, as `stance export-posed` and the editor write it), a VRM is still a VRM:
+/// the same version, its meta (licence) kept, and a re-import maps the scrambled joints through
+/// the humanoid extension alone; expressions lose their morph-target binds (morph targets are
+/// not kept).
+fn exported_stays_vrm(version: u8) {
+    let mut avatar = load_avatar(&vrm_file(version), &LoadOptions::default()).unwrap();
+    let body = avatar.skeleton(&Default::default()).unwrap();
+    let mut posture = stance_ik::Posture::rest(&body.skeleton);
+    let elbow = body.skeleton.joint_index("l_elbow").unwrap();
+    posture.values_mut()[body.skeleton.joints()[elbow].dof_start] = -1.0;
+    avatar.apply_posture(&body, &posture).unwrap();
+    let bytes = stance_asset::export_glb(&avatar).unwrap();
+    let (json, _) = common::split(&bytes);
+    let (name, meta_key) = if version == 0 {
+        ("VRM", "title")
+    } else {
+        ("VRMC_vrm", "name")
+    };
+    assert!(
+        json["extensionsUsed"]
+            .as_array()
+            .unwrap()
+            .contains(&json!(name))
+    );
+    assert_eq!(json["extensions"][name]["meta"][meta_key], json!("test"));
+    if version == 0 {
+        assert_eq!(
+            json["extensions"]["VRM"]["meta"]["licenseName"],
+            json!("CC_BY")
+        );
+        let group = &json["extensions"]["VRM"]["blendShapeMaster"]["blendShapeGroups"][0];
+        assert_eq!(group["name"], json!("Joy"));
+        assert_eq!(group["binds"], json!([]));
+    } else {
+        let happy = &json["extensions"]["VRMC_vrm"]["expressions"]["preset"]["happy"];
+        assert_eq!(happy["morphTargetBinds"], json!([]));
+    }
+    let again = load_avatar(&bytes, &LoadOptions::default()).unwrap();
+    assert_eq!(again.format, avatar.format);
+    for (_, _, h) in BONES {
+        let m = again
+            .mapping
+            .get(h)
+            .unwrap_or_else(|| panic!("{h} not mapped"));
+        assert_eq!(m.method, MatchMethod::Vrm, "{h}");
+        assert_eq!(Some(m.source), avatar.mapping.source_of(h), "{h}");
+    }
+    // The posture is in the file: the elbow's node turned away from its rest rotation (kept
+    // in the node's extras for Stance).
+    let node = &json["nodes"][avatar.mapping.source_of("l_elbow").unwrap()];
+    let turned: Vec<f64> = serde_json::from_value(node["rotation"].clone()).unwrap();
+    let rest: Vec<f64> =
+        serde_json::from_value(node["extras"]["stance_rest"]["rotation"].clone()).unwrap();
+    let dot: f64 = turned.iter().zip(&rest).map(|(a, b)| a * b).sum();
+    assert!(
+        dot.abs() < 0.95,
+        "the elbow is bent in the file: {turned:?} vs {rest:?}"
+    );
+}
+
+#[test]
+fn vrm1_exported_is_still_vrm1() {
+    exported_stays_vrm(1);
+}
+
+#[test]
+fn vrm0_exported_is_still_vrm0() {
+    exported_stays_vrm(0);
 }

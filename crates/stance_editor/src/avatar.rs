@@ -303,13 +303,20 @@ fn skinned_primitive(primitive: &Primitive, palette: usize, skinned: bool) -> Sk
     }
 }
 
-/// `Avatars/Jane.vrm?x=1` -> `Jane-posed.glb`.
+/// `Avatars/Jane.vrm?x=1` -> `Jane-posed.vrm` (a VRM stays a VRM: its extension is written
+/// back), `Bob.gltf` -> `Bob-posed.glb`.
 pub fn posed_file_name(name: &str) -> String {
     let path = name.split(['?', '#']).next().unwrap_or(name);
     let base = path.rsplit(['/', '\\']).next().unwrap_or(path);
-    let stem = base.rsplit_once('.').map_or(base, |(stem, _)| stem).trim();
+    let (stem, extension) = base.rsplit_once('.').unwrap_or((base, ""));
+    let stem = stem.trim();
     let stem = if stem.is_empty() { "avatar" } else { stem };
-    format!("{stem}-posed.glb")
+    let extension = if extension.eq_ignore_ascii_case("vrm") {
+        "vrm"
+    } else {
+        "glb"
+    };
+    format!("{stem}-posed.{extension}")
 }
 
 /// Whether an avatar's name is where it can be fetched again (links and autosave name it).
@@ -360,7 +367,8 @@ mod tests {
 
     #[test]
     fn the_posed_file_is_named_after_the_avatar() {
-        assert_eq!(posed_file_name("Jane.vrm"), "Jane-posed.glb");
+        assert_eq!(posed_file_name("Jane.vrm"), "Jane-posed.vrm");
+        assert_eq!(posed_file_name("Avatars/Jane.VRM?x=1"), "Jane-posed.vrm");
         assert_eq!(
             posed_file_name("https://example.org/a/Bob.glb?v=2#top"),
             "Bob-posed.glb"
