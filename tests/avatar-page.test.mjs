@@ -4,7 +4,7 @@
 import { after, before, describe, test } from "node:test";
 import assert from "node:assert/strict";
 import { fileURLToPath } from "node:url";
-import { writeFileSync, mkdtempSync } from "node:fs";
+import { readFileSync, writeFileSync, mkdtempSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { join } from "node:path";
 import { BACKGROUND, CONFIGURATIONS, decodePng, launch, openEditor, saveArtifact, freshStoragePerTab, serve } from "./browser.mjs";
@@ -124,6 +124,31 @@ describe("avatars in the page", () => {
     const image = decodePng(await page.screenshot());
     saveArtifact("avatar-default-webgl2.png", await page.screenshot());
     assert.ok(avatarPixels(image, shown.viewport) > 800);
+    await page.close();
+  });
+
+  test("a .gltf picked with its .bin opens; alone, it names the missing .bin", async () => {
+    // public/default-avatar.glb split into mannequin.gltf + mannequin.bin.
+    const glb = readFileSync(fileURLToPath(new URL("../public/default-avatar.glb", import.meta.url)));
+    const jsonLength = glb.readUInt32LE(12);
+    const json = JSON.parse(glb.subarray(20, 20 + jsonLength).toString("utf8"));
+    const bin = glb.subarray(20 + jsonLength + 8);
+    json.buffers = [{ byteLength: bin.length, uri: "mannequin.bin" }];
+    const dir = mkdtempSync(join(tmpdir(), "stance-gltf-"));
+    writeFileSync(join(dir, "mannequin.gltf"), JSON.stringify(json));
+    writeFileSync(join(dir, "mannequin.bin"), bin);
+    const page = await context.newPage();
+    const { errors } = await openEditor(context, site.url, page);
+    await page.setInputFiles("input[type=file]", join(dir, "mannequin.gltf"));
+    await page.waitForFunction(() => JSON.parse(window.stance.state_json()).notice?.error);
+    const alone = await state(page);
+    assert.match(alone.notice.text, /mannequin\.bin/);
+    assert.equal(alone.avatar, null, "the mannequin stays");
+    await page.setInputFiles("input[type=file]", [join(dir, "mannequin.gltf"), join(dir, "mannequin.bin")]);
+    const shown = await avatarShown(page);
+    assert.equal(shown.avatar.name, "mannequin.gltf");
+    assert.ok(avatarPixels(decodePng(await page.screenshot()), shown.viewport) > 800);
+    assert.deepEqual(errors, [], `console errors: ${errors.join(" / ")}`);
     await page.close();
   });
 });

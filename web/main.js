@@ -26,6 +26,8 @@ const fileInput = document.createElement("input");
 fileInput.type = "file";
 fileInput.accept = ".json,application/json,.glb,.gltf,.vrm,.bvh,.bin,.fob,.txt,.log";
 fileInput.hidden = true;
+// A .gltf is picked together with its .bin and images.
+fileInput.multiple = true;
 document.body.append(fileInput);
 
 window.stanceHost = {
@@ -118,23 +120,69 @@ async function fetchWithProgress(url) {
 }
 let ignoreNextHashChange = null;
 
+// Files picked or dropped: one opens as it is; several together (a .gltf with its .bin and
+// images, a folder) go to the editor as one set, so that the .gltf finds its resources.
 async function openFiles(handle, files) {
-  for (const file of files) {
+  const read = [];
+  for (const { file, path } of files) {
     try {
-      const bytes = new Uint8Array(await file.arrayBuffer());
-      handle.open_file(file.name, bytes);
+      read.push({ name: path || file.name, bytes: new Uint8Array(await file.arrayBuffer()) });
     } catch (error) {
       handle.report_failure(`${file.name} could not be read: ${describe(error)}`);
     }
   }
+  if (read.length === 1) {
+    handle.open_file(read[0].name, read[0].bytes);
+  } else if (read.length > 1) {
+    const total = read.reduce((sum, f) => sum + f.bytes.length, 0);
+    const all = new Uint8Array(total);
+    let offset = 0;
+    for (const f of read) {
+      all.set(f.bytes, offset);
+      offset += f.bytes.length;
+    }
+    handle.open_files(read.map((f) => f.name), new Uint32Array(read.map((f) => f.bytes.length)), all);
+  }
+}
+
+// The files of a drop, folders walked (their files named with their path in the folder).
+async function droppedFiles(dataTransfer) {
+  const entries = [...(dataTransfer.items || [])]
+    .map((item) => item.webkitGetAsEntry?.())
+    .filter(Boolean);
+  if (!entries.some((entry) => entry.isDirectory)) {
+    return [...dataTransfer.files].map((file) => ({ file, path: null }));
+  }
+  const out = [];
+  const walk = async (entry) => {
+    if (entry.isFile) {
+      const file = await new Promise((resolve, reject) => entry.file(resolve, reject));
+      out.push({ file, path: entry.fullPath.replace(/^\//, "") });
+    } else if (entry.isDirectory) {
+      const reader = entry.createReader();
+      for (;;) {
+        const batch = await new Promise((resolve, reject) => reader.readEntries(resolve, reject));
+        if (!batch.length) break;
+        for (const child of batch) await walk(child);
+      }
+    }
+  };
+  for (const entry of entries) await walk(entry);
+  return out;
 }
 
 function connectPage(handle) {
-  fileInput.addEventListener("change", () => openFiles(handle, fileInput.files));
+  fileInput.addEventListener("change", () =>
+    openFiles(handle, [...fileInput.files].map((file) => ({ file, path: null }))));
   window.addEventListener("dragover", (event) => event.preventDefault());
   window.addEventListener("drop", (event) => {
     event.preventDefault();
-    if (event.dataTransfer?.files?.length) openFiles(handle, event.dataTransfer.files);
+    if (!event.dataTransfer?.files?.length) return;
+    // The entries must be taken before the event returns.
+    droppedFiles(event.dataTransfer).then(
+      (files) => openFiles(handle, files),
+      (error) => handle.report_failure(`the dropped files could not be read: ${describe(error)}`),
+    );
   });
   // A posture link pasted into the address bar of an open editor.
   window.addEventListener("hashchange", () => {

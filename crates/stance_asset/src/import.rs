@@ -302,7 +302,7 @@ pub fn import(
         .iter()
         .filter_map(|m| m.base_color_texture)
         .collect();
-    let textures = import_textures(&mut ctx, options.decode_textures, &used)?;
+    let textures = import_textures(&mut ctx, options.decode_textures, &used, resolve)?;
     let meshes = import_meshes(&mut ctx, &nodes, &skins)?;
 
     let scene_roots = {

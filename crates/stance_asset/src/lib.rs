@@ -40,6 +40,7 @@ mod import;
 mod meshopt;
 mod model;
 mod normalize;
+mod resources;
 
 pub use animation::{
     Animation, AnimationChannel, AnimationPath, Interpolation, clip_from_animation,
@@ -54,6 +55,7 @@ pub use model::{
     AlphaMode, Avatar, Material, Mesh, Node, Primitive, Skin, SourceFormat, Texture, Trs,
     VrmExtension, Wrap,
 };
+pub use resources::{find_resource, relative_path};
 
 /// Limits against hostile files. The defaults fit real avatars (tens of MB) with room.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -38,12 +38,7 @@ pub struct MakeAvatarArgs {
 /// A resolver of a `.gltf`'s external resources: relative paths next to `path` only.
 pub fn resolver_next_to(path: &Path) -> impl FnMut(&str) -> Option<Vec<u8>> {
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    move |uri: &str| {
-        if uri.contains("://") || uri.starts_with('/') || uri.contains("..") {
-            return None;
-        }
-        std::fs::read(dir.join(uri)).ok()
-    }
+    move |uri: &str| std::fs::read(dir.join(stance_asset::relative_path(uri)?)).ok()
 }
 
 /// Loads an avatar file (external resources next to it only).

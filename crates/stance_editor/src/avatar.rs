@@ -2,7 +2,9 @@
 //! GPU model (vertices, materials, textures) with the palettes that pose it every frame.
 
 use glam::{Mat4, Vec3};
-use stance_asset::{AlphaMode, Avatar, LoadOptions, Primitive, Wrap, export_glb, load_avatar};
+use stance_asset::{
+    AlphaMode, Avatar, LoadOptions, Primitive, Wrap, export_glb, find_resource, load_avatar_with,
+};
 use stance_hanim::{
     HumanoidSkeleton, LevelOfArticulation, Mapping, SkeletonOptions, build_skeleton,
 };
@@ -52,8 +54,20 @@ impl LoadedAvatar {
         bytes: &[u8],
         loa: LevelOfArticulation,
     ) -> Result<(Self, HumanoidSkeleton), String> {
-        let avatar =
-            load_avatar(bytes, &LoadOptions::default()).map_err(|error| error.to_string())?;
+        Self::load_with(name, bytes, &[], loa)
+    }
+
+    /// [`LoadedAvatar::load`] for a `.gltf` given with its files (`.bin` buffers, images),
+    /// found by the URIs the file uses; a missing one is named.
+    pub fn load_with(
+        name: &str,
+        bytes: &[u8],
+        resources: &[(String, Vec<u8>)],
+        loa: LevelOfArticulation,
+    ) -> Result<(Self, HumanoidSkeleton), String> {
+        let mut resolve = |uri: &str| find_resource(resources, uri).map(<[u8]>::to_vec);
+        let avatar = load_avatar_with(bytes, &LoadOptions::default(), &mut resolve)
+            .map_err(|error| error.to_string())?;
         let humanoid = avatar
             .skeleton(&SkeletonOptions {
                 loa,

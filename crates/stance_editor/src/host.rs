@@ -105,6 +105,9 @@ pub enum HostMessage {
         /// The file's contents.
         bytes: Vec<u8>,
     },
+    /// Files picked or dropped together (name, contents), e.g. a `.gltf` with its `.bin`
+    /// and images.
+    OpenFiles(Vec<(String, Vec<u8>)>),
     /// The host failed to do what the editor asked (reading a file...).
     Failed(String),
     /// The sensor device is open.

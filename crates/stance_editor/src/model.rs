@@ -9,6 +9,7 @@
 //! Every change of the posing session (avatar, LOA, mannequin, mapping) goes through
 //! `EditorModel::replace_session`, which resets what belonged to the old one.
 
+mod avatars;
 mod bones;
 mod clips;
 mod comfort;
@@ -420,7 +421,7 @@ impl EditorModel {
     fn apply_outside(&mut self, command: Command) {
         match command {
             Command::SetLevelOfArticulation(loa) => self.set_level_of_articulation(loa),
-            Command::LoadAvatar { name, bytes } => self.load_avatar(&name, &bytes),
+            Command::LoadAvatar { name, bytes } => self.load_avatar(&name, &bytes, &[]),
             Command::FetchAvatar(url) => self.fetch_avatar(&url),
             Command::UseMannequin => self.use_mannequin(),
             Command::ApplyMapping {
@@ -432,6 +433,7 @@ impl EditorModel {
                 self.open_link(&text);
             }
             Command::OpenFile { name, bytes } => self.open_file(&name, bytes),
+            Command::OpenFiles(files) => self.open_files(files),
             Command::SaveToLibrary(name) => self.save_to_library(&name),
             Command::LoadFromLibrary(index) => self.load_from_library(index),
             Command::DeleteFromLibrary(index) => self.delete_from_library(index),
@@ -713,18 +715,21 @@ impl EditorModel {
         }
     }
 
-    /// Loads an avatar file; on failure says why and keeps the current one.
-    fn load_avatar(&mut self, name: &str, bytes: &[u8]) {
+    /// Loads an avatar file (a `.gltf` with its `resources`); on failure says why and keeps
+    /// the current one.
+    fn load_avatar(&mut self, name: &str, bytes: &[u8], resources: &[(String, Vec<u8>)]) {
         let loa = self.session.level_of_articulation();
         let mut mapping_note = None;
-        let loaded = LoadedAvatar::load(name, bytes, loa).and_then(|(mut avatar, mut humanoid)| {
-            mapping_note = self
-                .mapping_corrections
-                .reapply(&mut avatar, loa, &mut humanoid);
-            let session =
-                PosingSession::with_humanoid(humanoid).map_err(|error| error.to_string())?;
-            Ok((avatar, session))
-        });
+        let loaded = LoadedAvatar::load_with(name, bytes, resources, loa).and_then(
+            |(mut avatar, mut humanoid)| {
+                mapping_note = self
+                    .mapping_corrections
+                    .reapply(&mut avatar, loa, &mut humanoid);
+                let session =
+                    PosingSession::with_humanoid(humanoid).map_err(|error| error.to_string())?;
+                Ok((avatar, session))
+            },
+        );
         match loaded {
             Ok((avatar, session)) => {
                 let (mapped, unmapped) = avatar.mapping_summary();
@@ -755,31 +760,6 @@ impl EditorModel {
                     "{name} could not be opened as an avatar: {error}. The previous avatar stays."
                 ));
             }
-        }
-    }
-
-    /// Back to the built-in mannequin (the posture carries over by joint name).
-    fn use_mannequin(&mut self) {
-        let document = self.session.document();
-        match PosingSession::new(self.session.level_of_articulation()) {
-            Ok(mut session) => {
-                let fits = session.restore_document(&document).is_ok();
-                self.replace_session(session, SessionChange::NewBody);
-                self.avatar = None;
-                self.avatar_url = None;
-                if !fits {
-                    self.inform("The posture did not fit the mannequin; it stands at rest.");
-                }
-            }
-            Err(error) => self.warn(format!("The mannequin could not be built: {error}")),
-        }
-    }
-
-    /// Asks the page to fetch an avatar by URL (it arrives as a file).
-    fn fetch_avatar(&mut self, url: &str) {
-        if let Err(error) = self.hooks.fetch(url) {
-            self.pending_document = None;
-            self.warn(format!("The avatar at {url} could not be fetched: {error}"));
         }
     }
 
@@ -966,7 +946,7 @@ impl EditorModel {
             None => {}
         }
         if crate::avatar::is_avatar_file(name, &bytes) {
-            self.load_avatar(name, &bytes);
+            self.load_avatar(name, &bytes, &[]);
             return;
         }
         let Ok(text) = std::str::from_utf8(&bytes) else {

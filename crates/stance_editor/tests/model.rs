@@ -450,3 +450,53 @@ fn a_stiffer_shoulder_turns_less_in_a_pull_and_the_change_is_one_undo_step() {
     }
     assert!(editor.model.document().stiffness.joints.is_empty());
 }
+
+/// The default avatar as a `.gltf` and its `.bin`.
+fn gltf_and_bin() -> (Vec<u8>, Vec<u8>) {
+    let glb = stance_asset::export_glb(&stance_asset::make_default_avatar().unwrap()).unwrap();
+    let json_len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+    let mut json: serde_json::Value = serde_json::from_slice(&glb[20..20 + json_len]).unwrap();
+    let bin = glb[20 + json_len + 8..].to_vec();
+    json["buffers"] = serde_json::json!([{"byteLength": bin.len(), "uri": "mannequin.bin"}]);
+    (serde_json::to_vec(&json).unwrap(), bin)
+}
+
+/// A `.gltf` dropped with its `.bin` opens as one avatar, a document dropped with them opens
+/// too; a `.gltf` alone names the missing `.bin` and the mannequin stays.
+#[test]
+fn a_gltf_opens_with_its_bin_and_a_missing_bin_is_named() {
+    let (gltf, bin) = gltf_and_bin();
+    let mut editor = Clocked::new();
+    editor.apply(Command::OpenFiles(vec![(
+        "mannequin.gltf".to_owned(),
+        gltf.clone(),
+    )]));
+    let notice = editor.model.notice().unwrap();
+    assert!(
+        notice.is_error && notice.text.contains("mannequin.bin"),
+        "{}",
+        notice.text
+    );
+    assert!(editor.model.avatar().is_none(), "the mannequin stays");
+
+    let mut bent = Clocked::new();
+    let elbow = bent.joint("l_elbow");
+    let dof = bent.model.session().skeleton().joints()[elbow].dof_start;
+    bent.apply(Command::SetDof { dof, value: -1.0 });
+    let document = bent.model.document().to_json(false).into_bytes();
+    editor.apply(Command::OpenFiles(vec![
+        ("folder/mannequin.bin".to_owned(), bin),
+        ("folder/mannequin.gltf".to_owned(), gltf),
+        ("pose.json".to_owned(), document),
+    ]));
+    let avatar = editor.model.avatar().expect("the avatar opened");
+    assert_eq!(avatar.name, "folder/mannequin.gltf");
+    let values = editor.model.session().posture().values();
+    let elbow = editor.joint("l_elbow");
+    let dof = editor.model.session().skeleton().joints()[elbow].dof_start;
+    assert!(
+        (values[dof] + 1.0).abs() < 1e-6,
+        "the document opened on it: {}",
+        values[dof]
+    );
+}

@@ -189,6 +189,28 @@ impl WebHandle {
         self.send(HostMessage::OpenFile { name, bytes });
     }
 
+    /// Opens files picked or dropped together (a `.gltf` with its `.bin` and images, a
+    /// folder): `names[i]` (with its path in a dropped folder) holds `lengths[i]` bytes of
+    /// `bytes`, one after the other. Lengths that do not add up are reported, not opened.
+    #[wasm_bindgen]
+    pub fn open_files(&self, names: Vec<String>, lengths: Vec<u32>, bytes: Vec<u8>) {
+        let total: u64 = lengths.iter().map(|&n| u64::from(n)).sum();
+        if names.len() != lengths.len() || total != bytes.len() as u64 {
+            self.send(HostMessage::Failed(
+                "the dropped files could not be read together".to_owned(),
+            ));
+            return;
+        }
+        let mut files = Vec::with_capacity(names.len());
+        let mut at = 0usize;
+        for (name, length) in names.into_iter().zip(lengths) {
+            let end = at + length as usize;
+            files.push((name, bytes.get(at..end).unwrap_or_default().to_vec()));
+            at = end;
+        }
+        self.send(HostMessage::OpenFiles(files));
+    }
+
     /// Tells the editor that something the page did for it failed.
     #[wasm_bindgen]
     pub fn report_failure(&self, reason: String) {

@@ -84,7 +84,9 @@ impl<'a> Ctx<'a> {
                     None => Some(Cow::Owned(resolve(&uri).ok_or_else(|| {
                         AssetError::Buffer {
                             index: i,
-                            reason: format!("external file `{uri}` is not available"),
+                            reason: format!(
+                                "the file `{uri}` is missing (give it together with the .gltf)"
+                            ),
                         }
                     })?)),
                 },

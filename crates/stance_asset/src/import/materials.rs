@@ -5,7 +5,7 @@ use gltf::json::{self, validation::Checked};
 use serde_json::Value;
 
 use super::buffers::decode_data_uri;
-use super::{Ctx, bad_index, sz};
+use super::{Ctx, Resolver, bad_index, sz};
 use crate::model::{AlphaMode, Material, Texture, Wrap};
 use crate::{AssetError, Limits};
 
@@ -13,6 +13,7 @@ pub(super) fn import_textures(
     ctx: &mut Ctx<'_>,
     decode: bool,
     used: &[usize],
+    resolve: &mut Resolver<'_>,
 ) -> Result<Vec<Texture>, AssetError> {
     // Decode each image once; textures refer to images (EXT_texture_webp source first).
     let mut images: Vec<Option<(u32, u32, Vec<u8>)>> = vec![None; ctx.root.images.len()];
@@ -51,7 +52,7 @@ pub(super) fn import_textures(
             continue;
         }
         if images[source].is_none() {
-            match decode_image(ctx, source) {
+            match decode_image(ctx, source, resolve) {
                 Ok(img) => images[source] = Some(img),
                 Err(e @ AssetError::TooLarge { .. }) => return Err(e),
                 Err(e) => {
@@ -96,7 +97,11 @@ fn wrap_of(w: Checked<json::texture::WrappingMode>) -> Wrap {
     }
 }
 
-fn decode_image(ctx: &mut Ctx<'_>, index: usize) -> Result<(u32, u32, Vec<u8>), AssetError> {
+fn decode_image(
+    ctx: &mut Ctx<'_>,
+    index: usize,
+    resolve: &mut Resolver<'_>,
+) -> Result<(u32, u32, Vec<u8>), AssetError> {
     let what = format!("image {index}");
     let (view, uri) = {
         let img = &ctx.root.images[index];
@@ -113,12 +118,20 @@ fn decode_image(ctx: &mut Ctx<'_>, index: usize) -> Result<(u32, u32, Vec<u8>), 
                 &owned
             }
             Some(Err(reason)) => return Err(AssetError::Image { index, reason }),
-            None => {
-                return Err(AssetError::Image {
-                    index,
-                    reason: format!("external image `{uri}` not loaded"),
-                });
-            }
+            None => match resolve(uri) {
+                Some(d) => {
+                    owned = d;
+                    &owned
+                }
+                None => {
+                    return Err(AssetError::Image {
+                        index,
+                        reason: format!(
+                            "the image file `{uri}` is missing (give it with the .gltf); drawn white"
+                        ),
+                    });
+                }
+            },
         }
     } else {
         return Err(AssetError::Image {

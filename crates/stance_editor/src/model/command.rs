@@ -203,6 +203,9 @@ pub enum Command {
         /// The file's contents.
         bytes: Vec<u8>,
     },
+    /// Open files picked or dropped together (name, contents): a `.gltf` among them opens as
+    /// an avatar with the others as its `.bin` buffers and images; the rest open in turn.
+    OpenFiles(Vec<(String, Vec<u8>)>),
     /// Save the posture in the library under a name.
     SaveToLibrary(String),
     /// Load the library's entry `index`.
@@ -336,6 +339,7 @@ impl From<HostMessage> for Command {
         match message {
             HostMessage::OpenLink(fragment) => Command::OpenLink(fragment),
             HostMessage::OpenFile { name, bytes } => Command::OpenFile { name, bytes },
+            HostMessage::OpenFiles(files) => Command::OpenFiles(files),
             HostMessage::Failed(reason) => Command::HostFailed(reason),
             HostMessage::SensorConnected { device } => {
                 Command::Sensors(SensorCommand::Connected { device })
