@@ -1,7 +1,8 @@
 //! The glTF/GLB/VRM importer on arbitrary bytes: the first byte picks the options, the rest
-//! is the file. Must never panic; every error must say something. What loads is also built
-//! into a solver skeleton, posed at rest, exported and imported again; its short animations
-//! become clips.
+//! is the file. Must never panic; every error must say something. With bit 2 of the selector
+//! the file is a `.gltf` given with external files (multi-file glTF): its second half is every
+//! file its URIs name. What loads is also built into a solver skeleton, posed at rest,
+//! exported and imported again (a VRM stays a VRM); its short animations become clips.
 //!
 //! Seeds are files prefixed with the selector byte, e.g. from `crates/stance_asset`:
 //! `mkdir -p fuzz/corpus/import && (printf '\x02'; cat ../../public/default-avatar.glb) >
@@ -9,7 +10,10 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use stance_asset::{Limits, LoadOptions, clip_from_animation, export_glb, load_avatar};
+use stance_asset::{
+    Limits, LoadOptions, clip_from_animation, export_glb, find_resource, load_avatar,
+    load_avatar_with,
+};
 
 fuzz_target!(|data: &[u8]| {
     let Some((&selector, file)) = data.split_first() else {
@@ -26,7 +30,17 @@ fuzz_target!(|data: &[u8]| {
         require_humanoid: selector & 1 == 0,
         decode_textures: selector & 2 != 0,
     };
-    let avatar = match load_avatar(file, &options) {
+    let (file, resources) = if selector & 4 != 0 {
+        let (main, rest) = file.split_at(file.len() / 2);
+        (main, vec![("any".to_owned(), rest.to_vec())])
+    } else {
+        (file, Vec::new())
+    };
+    let mut resolve = |uri: &str| {
+        let found = find_resource(&resources, uri).map(<[u8]>::to_vec);
+        found.or_else(|| resources.first().map(|(_, bytes)| bytes.clone()))
+    };
+    let avatar = match load_avatar_with(file, &options, &mut resolve) {
         Ok(avatar) => avatar,
         Err(e) => {
             assert!(!e.to_string().trim().is_empty(), "empty error: {e:?}");
@@ -43,7 +57,9 @@ fuzz_target!(|data: &[u8]| {
             let _ = clip_from_animation(&avatar, i, 30.0);
         }
     }
-    if let Ok(bytes) = export_glb(&avatar) {
-        let _ = load_avatar(&bytes, &options);
+    if let Ok(bytes) = export_glb(&avatar)
+        && let Ok(again) = load_avatar(&bytes, &options)
+    {
+        assert_eq!(again.vrm.is_some(), avatar.vrm.is_some(), "a VRM stays a VRM");
     }
 });
