@@ -7,7 +7,7 @@ import { fileURLToPath } from "node:url";
 import { readFileSync, writeFileSync, mkdtempSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { join } from "node:path";
-import { BACKGROUND, CONFIGURATIONS, decodePng, launch, openEditor, saveArtifact, freshStoragePerTab, serve } from "./browser.mjs";
+import { CONFIGURATIONS, decodePng, isFigureColour, launch, openEditor, saveArtifact, freshStoragePerTab, serve } from "./browser.mjs";
 
 const SHARED_AVATAR = fileURLToPath(new URL("./fixtures/avatars/Black_F_2_Casual.glb", import.meta.url));
 
@@ -38,10 +38,7 @@ function avatarPixels(image, [vx, vy, vw, vh]) {
   let count = 0;
   for (let y = Math.ceil(vy) + 40; y < vy + vh - 4; y += 2) {
     for (let x = Math.ceil(vx) + 4; x < vx + vw - 4; x += 2) {
-      const [r, g, b] = image.at(x, y);
-      // Neither the dark background nor the grey floor grid: skin, hair, clothes.
-      const grey = Math.abs(r - g) < 12 && Math.abs(g - b) < 12;
-      if (!grey && !BACKGROUND(r, g, b)) count += 1;
+      if (isFigureColour(image.at(x, y))) count += 1;
     }
   }
   return count;

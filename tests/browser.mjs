@@ -101,9 +101,11 @@ export function BACKGROUND(r, g, b) {
   return Math.abs(r - 33) <= 6 && Math.abs(g - 37) <= 6 && Math.abs(b - 43) <= 6;
 }
 
-/** The mannequin's clay colour as the renderer draws it (see stance_render's offscreen test). */
-export function isBodyColour([r, g, b]) {
-  return r > 90 && r > 1.35 * g && g > b;
+/** A figure's pixel (the mannequin's figure or an avatar: skin, clothes, hair): neither the
+ * background nor the grey floor grid. */
+export function isFigureColour([r, g, b]) {
+  const grey = Math.abs(r - g) < 12 && Math.abs(g - b) < 12;
+  return !grey && !BACKGROUND(r, g, b);
 }
 
 export function saveArtifact(name, buffer) {

@@ -2,7 +2,7 @@
 import { after, before, describe, test } from "node:test";
 import assert from "node:assert/strict";
 import {
-  CONFIGURATIONS, decodePng, isBodyColour, launch, openEditor, saveArtifact, serve,
+  CONFIGURATIONS, decodePng, isFigureColour, launch, openEditor, saveArtifact, serve,
 } from "./browser.mjs";
 
 let site;
@@ -13,7 +13,7 @@ function bodyPixelsIn(image, region) {
   let count = 0;
   for (let y = region.y; y < region.y + region.height; y += 2) {
     for (let x = region.x; x < region.x + region.width; x += 2) {
-      if (isBodyColour(image.at(x, y))) count += 1;
+      if (isFigureColour(image.at(x, y))) count += 1;
     }
   }
   return count;
@@ -41,7 +41,7 @@ for (const [name, configuration] of Object.entries(CONFIGURATIONS)) {
       assert.deepEqual(errors, []);
     });
 
-    test("the viewport shows the standing body, and an orbit drag turns the view", async () => {
+    test("the viewport shows the standing body as a skinned figure, and an orbit drag turns the view", async () => {
       const { page } = editor;
       await page.waitForTimeout(300);
       const before = await page.screenshot();
@@ -51,10 +51,11 @@ for (const [name, configuration] of Object.entries(CONFIGURATIONS)) {
       const state = JSON.parse(await page.evaluate(() => window.stance.state_json()));
       const [vx, vy, vw, vh] = state.viewport;
       const viewport = { x: Math.ceil(vx), y: Math.ceil(vy), width: Math.floor(vw), height: Math.floor(vh) };
+      assert.equal(state.figure, true, "the mannequin is drawn as its skinned figure");
       const bodyBefore = bodyPixelsIn(image, viewport);
-      assert.ok(bodyBefore > 800, `only ${bodyBefore} body-coloured pixels in the viewport`);
+      assert.ok(bodyBefore > 800, `only ${bodyBefore} figure pixels in the viewport`);
       // The corners of the viewport are background or floor, not body.
-      assert.ok(!isBodyColour(image.at(viewport.x + 10, viewport.y + 10)));
+      assert.ok(!isFigureColour(image.at(viewport.x + 10, viewport.y + 10)));
 
       // Start the drag on the background (not on the body, which would pull it).
       const startX = viewport.x + viewport.width * 0.9;

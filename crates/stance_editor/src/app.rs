@@ -405,6 +405,8 @@ impl StanceApp {
     }
 
     fn view_menu(&mut self, ui: &mut egui::Ui) {
+        ui.checkbox(&mut self.viewport.show_figure, "Mannequin as a figure")
+            .on_hover_text("off: the mannequin's capsules (the heat map always colours them)");
         ui.checkbox(&mut self.viewport.show_floor, "Floor grid");
         ui.checkbox(&mut self.viewport.show_trace, "Effector trace (T)");
         let mut timeline = self.timeline_shown();

@@ -68,6 +68,15 @@ impl LoadedAvatar {
         let mut resolve = |uri: &str| find_resource(resources, uri).map(<[u8]>::to_vec);
         let avatar = load_avatar_with(bytes, &LoadOptions::default(), &mut resolve)
             .map_err(|error| error.to_string())?;
+        Self::from_avatar(name, avatar, loa)
+    }
+
+    /// An imported (or generated) avatar, its skeleton built at `loa`.
+    pub fn from_avatar(
+        name: &str,
+        avatar: Avatar,
+        loa: LevelOfArticulation,
+    ) -> Result<(Self, HumanoidSkeleton), String> {
         let humanoid = avatar
             .skeleton(&SkeletonOptions {
                 loa,

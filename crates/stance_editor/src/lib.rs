@@ -6,6 +6,7 @@
 
 mod app;
 pub mod avatar;
+pub mod figure;
 pub mod history;
 mod host;
 pub mod library;

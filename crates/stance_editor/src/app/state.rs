@@ -45,6 +45,7 @@ impl PageState<'_> {
                 "uploaded": self.viewport.avatar_uploaded,
                 "mapped": avatar.mapping_summary().0,
             })),
+            "figure": self.viewport.figure_shown(model),
             "selected": model.selected_joint().and_then(|joint| skeleton.joints().get(joint)).map(|joint| joint.name.clone()),
             "pulling": model.is_pulling(),
             "dragging_handle": model.gesture().is_some() && !model.is_pulling(),

@@ -4,12 +4,13 @@
 use egui::{Color32, RichText, Sense};
 use glam::DVec3;
 use stance_document::CameraSpec;
-use stance_hanim::{LimbName, readable_name};
+use stance_hanim::{LevelOfArticulation, LimbName, readable_name};
 use stance_render::{BODY_COLOR_LINEAR, OrbitCamera, Scene, ViewPreset, pick_capsule};
 
 use super::handles::Handles;
 use super::lens::Lens;
 use super::overlay::Overlay;
+use crate::figure::MannequinFigure;
 use crate::host::BackendSummary;
 use crate::model::{Command, EditorModel, NewTask, heat_color};
 use crate::viewport::{ViewportInput, ViewportRenderer, apply_gestures};
@@ -35,6 +36,10 @@ pub(super) struct ViewportPanel {
     renderer: Option<ViewportRenderer>,
     /// Whether the loaded avatar's mesh is on the GPU.
     pub avatar_uploaded: bool,
+    /// The mannequin drawn as a skinned figure (else as capsules).
+    pub show_figure: bool,
+    /// The mannequin's figure, and the level of articulation whose mesh is on the GPU.
+    figure: Option<(MannequinFigure, LevelOfArticulation)>,
     first_frame_reported: bool,
     /// CPU time of this frame's scene (mannequin capsules, or the avatar's skinning palettes).
     pub scene_ms: f64,
@@ -58,6 +63,8 @@ impl ViewportPanel {
             backend,
             renderer,
             avatar_uploaded: false,
+            show_figure: true,
+            figure: None,
             first_frame_reported: false,
             scene_ms: 0.0,
             render_ms: 0.0,
@@ -189,7 +196,8 @@ impl ViewportPanel {
         };
         overlay.draw(ui.painter());
         let clipped = ui.painter().with_clip_rect(self.rect);
-        if self.show_skeleton || (model.avatar().is_some() && model.selected_joint().is_some()) {
+        let covered = model.avatar().is_some() || self.figure_shown(model);
+        if self.show_skeleton || (covered && model.selected_joint().is_some()) {
             overlay.draw_skeleton(&clipped);
         }
         let handles = self.handles(model);
@@ -286,16 +294,7 @@ impl ViewportPanel {
             (rect.width() * pixels_per_point).round().max(1.0) as u32,
             (rect.height() * pixels_per_point).round().max(1.0) as u32,
         ];
-        if let (Some(renderer), Some(render_state)) =
-            (&mut self.renderer, frame.wgpu_render_state())
-            && let Some(mesh) = model.avatar.as_mut().and_then(|avatar| avatar.model.take())
-        {
-            renderer.set_avatar(render_state, Some(&mesh));
-            self.avatar_uploaded = true;
-        }
-        if model.avatar().is_none() {
-            self.avatar_uploaded = false;
-        }
+        self.upload_meshes(frame, model);
         let scene_started = web_time::Instant::now();
         let scene = self.scene(model);
         self.scene_ms = scene_started.elapsed().as_secs_f64() * 1000.0;
@@ -325,13 +324,57 @@ impl ViewportPanel {
         }
     }
 
-    /// What the renderer draws: the mannequin's capsules (selection and hover coloured), or
-    /// the avatar's skinning palettes once its mesh is on the GPU.
+    /// Puts on the GPU what the body is drawn with: a loaded avatar's mesh once, else the
+    /// mannequin's figure (made again when the level of articulation changes or after an
+    /// avatar took its place).
+    fn upload_meshes(&mut self, frame: &eframe::Frame, model: &mut EditorModel) {
+        let (Some(renderer), Some(render_state)) = (&mut self.renderer, frame.wgpu_render_state())
+        else {
+            return;
+        };
+        if let Some(mesh) = model.avatar.as_mut().and_then(|avatar| avatar.model.take()) {
+            renderer.set_avatar(render_state, Some(&mesh));
+            self.avatar_uploaded = true;
+            self.figure = None;
+        }
+        if model.avatar().is_some() {
+            return;
+        }
+        self.avatar_uploaded = false;
+        let loa = model.session().level_of_articulation();
+        if !self.show_figure || self.figure.as_ref().is_some_and(|(_, at)| *at == loa) {
+            return;
+        }
+        match MannequinFigure::new(loa) {
+            Ok(mut figure) => {
+                renderer.set_avatar(render_state, figure.take_model().as_ref());
+                self.figure = Some((figure, loa));
+            }
+            Err(error) => {
+                log::warn!("the mannequin's figure could not be made: {error}");
+                self.show_figure = false;
+            }
+        }
+    }
+
+    /// Whether the mannequin is drawn as its figure this frame (not with an avatar, nor with
+    /// the heat map, which colours the capsules).
+    pub(super) fn figure_shown(&self, model: &EditorModel) -> bool {
+        model.avatar().is_none()
+            && self.show_figure
+            && self.figure.is_some()
+            && !model.comfort.heat_map
+    }
+
+    /// What the renderer draws: the mannequin's figure, or its capsules (selection and hover
+    /// coloured), or the avatar's skinning palettes once its mesh is on the GPU.
     fn scene(&self, model: &EditorModel) -> Scene {
         let show_avatar = model.avatar().is_some() && self.avatar_uploaded;
-        // With an avatar the mannequin is hidden; the skeleton overlay shows the bones.
+        let show_figure = self.figure_shown(model);
+        // With an avatar or the figure the capsules are hidden; the skeleton overlay shows the
+        // bones of a selection.
         let heat = model.comfort.heat_shares(model.session().skeleton());
-        let capsules = if show_avatar {
+        let capsules = if show_avatar || show_figure {
             Vec::new()
         } else {
             model
@@ -353,14 +396,18 @@ impl ViewportPanel {
                 .collect()
         };
         let session = model.session();
-        let avatar_palettes = model
-            .avatar()
-            .and_then(|avatar| avatar.palettes(session.humanoid(), session.posture()))
-            .unwrap_or_default();
+        let avatar_palettes = match (model.avatar(), &self.figure) {
+            (Some(avatar), _) => avatar.palettes(session.humanoid(), session.posture()),
+            (None, Some((figure, _))) if show_figure => {
+                figure.palettes(session.skeleton(), session.posture())
+            }
+            _ => None,
+        }
+        .unwrap_or_default();
         Scene {
             capsules,
             show_floor: self.show_floor,
-            show_avatar,
+            show_avatar: show_avatar || show_figure,
             avatar_palettes,
         }
     }
