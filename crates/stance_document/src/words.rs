@@ -208,3 +208,14 @@ impl PostureValues {
         mirrored
     }
 }
+
+impl TaskKindSpec {
+    /// A soft task is never met: it takes only what the levels above leave (the posture
+    /// attraction, comfort). Grabs go above it, statuses do not say it gave way.
+    pub fn is_soft(&self) -> bool {
+        matches!(
+            self,
+            TaskKindSpec::Posture { .. } | TaskKindSpec::Comfort { .. }
+        )
+    }
+}

@@ -190,9 +190,9 @@ impl PosingSession {
         // Balance as the support polygon of the pinned feet (an inequality): the body leans
         // freely as long as its centre of mass stays over them.
         tasks.push(TaskSpec::balance());
-        // The rest-posture attraction, not yet the comfort task: with comfort a pull runs past
-        // one frame's budget while the cost still falls (see docs/comfort.md).
-        tasks.push(TaskSpec::rest_attraction());
+        // Comfort at the lowest level (the paper's open question): what the levels above
+        // leave free goes to lowering the joint loads, the range penalties and RULA.
+        tasks.push(TaskSpec::comfort());
         tasks
     }
 
@@ -651,7 +651,13 @@ impl PosingSession {
         }
         let mut tasks = Vec::with_capacity(self.tasks.len() + 1);
         let specs = self.timed_tasks();
+        // While a part is pulled or held the body follows the pointer; comfort settles the
+        // posture once it is let go.
+        let interactive = self.grab.is_some() || self.held.is_some();
         for spec in &specs {
+            if interactive && matches!(spec.kind, TaskKindSpec::Comfort { .. }) {
+                continue;
+            }
             if let Ok(converted) = spec.to_solver_tasks_on(&self.humanoid, &specs) {
                 tasks.extend(converted);
             }
@@ -663,7 +669,7 @@ impl PosingSession {
             let level = self
                 .tasks
                 .iter()
-                .filter(|task| !matches!(task.kind, TaskKindSpec::Posture { .. }))
+                .filter(|task| !task.kind.is_soft())
                 .map(|task| task.level)
                 .max()
                 .unwrap_or(0)
@@ -726,7 +732,7 @@ impl PosingSession {
             .zip(&evaluated)
             .map(|(spec, (residual, problem))| {
                 let unmet = spec.active
-                    && !matches!(spec.kind, TaskKindSpec::Posture { .. })
+                    && !spec.kind.is_soft()
                     && residual.is_some_and(|r| r > MET_TOLERANCE);
                 let gave_way = unmet.then(|| self.why_unmet(spec, &evaluated));
                 TaskStatus {
@@ -757,7 +763,7 @@ impl PosingSession {
             .filter(|(other, (residual, _))| {
                 other.active
                     && other.level < spec.level
-                    && !matches!(other.kind, TaskKindSpec::Posture { .. })
+                    && !other.kind.is_soft()
                     && residual.is_some()
             })
             .filter_map(|(other, _)| {

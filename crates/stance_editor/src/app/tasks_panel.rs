@@ -151,7 +151,7 @@ impl LevelZone<'_> {
             .collect();
         let level_met = members.iter().all(|&index| {
             !tasks[index].active
-                || matches!(tasks[index].kind, TaskKindSpec::Posture { .. })
+                || tasks[index].kind.is_soft()
                 || self
                     .statuses
                     .get(index)
@@ -371,7 +371,7 @@ fn task_editor(
 ) -> Option<EditKind> {
     let mut edit = None;
     let residual = status.and_then(|status| status.residual);
-    let is_posture = matches!(task.kind, TaskKindSpec::Posture { .. });
+    let is_soft = task.kind.is_soft();
     let (mark, color) = match status {
         _ if !task.active => ("off", INACTIVE_COLOR),
         Some(status) if status.problem.is_some() => ("error", PROBLEM_COLOR),
@@ -379,7 +379,7 @@ fn task_editor(
         _ => ("", MET_COLOR),
     };
     let residual_text = match residual {
-        Some(_) if is_posture => String::new(),
+        Some(_) if is_soft => String::new(),
         Some(value) if value < MET_TOLERANCE => "met".to_owned(),
         Some(value) if task_is_angular(task) => format!("{:.1}° off", value.to_degrees()),
         Some(value) => format!("{:.1} mm off", value * 1000.0),

@@ -39,12 +39,7 @@ fn next_level(session: &PosingSession) -> u32 {
     session
         .tasks()
         .iter()
-        .filter(|task| {
-            !matches!(
-                task.kind,
-                TaskKindSpec::Posture { .. } | TaskKindSpec::Comfort { .. }
-            )
-        })
+        .filter(|task| !task.kind.is_soft())
         .map(|task| task.level)
         .max()
         .unwrap_or(0)
