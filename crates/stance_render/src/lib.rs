@@ -4,21 +4,31 @@
 
 #![warn(missing_docs)]
 
+mod avatar;
 mod body;
 mod camera;
-#[cfg(not(target_arch = "wasm32"))]
 mod capture;
+#[cfg(not(target_arch = "wasm32"))]
+mod headless;
+mod image;
 mod pick;
 mod renderer;
 mod skinned;
 
+pub use avatar::{AvatarPalettes, avatar_model};
 pub use body::{
     BODY_COLOR_LINEAR, MannequinBone, MannequinJoint, mannequin_bones, mannequin_capsules,
-    rest_pose_capsules,
+    posed_mannequin_bones, rest_pose_capsules,
 };
 pub use camera::{OrbitCamera, ViewPreset};
 #[cfg(not(target_arch = "wasm32"))]
-pub use capture::{CaptureError, Pixels, read_pixels};
+pub use capture::read_pixels;
+pub use capture::{CaptureError, Pixels, Readback};
+#[cfg(not(target_arch = "wasm32"))]
+pub use headless::{HeadlessGpu, headless_gpu};
+pub use image::{
+    ImageError, ImageOptions, MAX_IMAGE_SIDE_PX, PendingImage, encode_png, render_image,
+};
 pub use pick::{CapsuleHit, pick_capsule};
 pub use renderer::{BACKGROUND_SRGB, COLOR_FORMAT, DEPTH_FORMAT, RenderTarget, SceneRenderer};
 pub use skinned::{
@@ -59,4 +69,21 @@ pub struct Scene {
     pub show_avatar: bool,
     /// This frame's matrix palettes of the avatar (mesh space -> H-Anim world), one per palette.
     pub avatar_palettes: Vec<Vec<glam::Mat4>>,
+    /// Overlay markers drawn like capsules (an image's task goals); the viewport draws its
+    /// overlays with egui instead and leaves this empty.
+    pub markers: Vec<Capsule>,
+    /// Clear to transparent black (alpha 0) instead of [`BACKGROUND_SRGB`]: the colours
+    /// drawn then come out premultiplied by their coverage.
+    pub transparent_background: bool,
+}
+
+impl Scene {
+    /// The clear colour, sRGB-encoded (premultiplied: transparent is all zeros).
+    pub fn background_srgb(&self) -> [f32; 4] {
+        if self.transparent_background {
+            [0.0; 4]
+        } else {
+            BACKGROUND_SRGB
+        }
+    }
 }
