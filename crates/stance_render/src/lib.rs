@@ -58,6 +58,23 @@ pub struct Capsule {
     pub color_linear: [f32; 4],
 }
 
+impl Capsule {
+    /// A marker: a small sphere of `color_linear` at `point_world` (an image's task goal).
+    pub fn marker(point_world: Vec3, color_linear: [f32; 4]) -> Self {
+        Self {
+            start_world: point_world,
+            end_world: point_world,
+            radius_m: MARKER_RADIUS_M,
+            color_linear,
+        }
+    }
+}
+
+/// Radius of a [`Capsule::marker`], metres.
+pub const MARKER_RADIUS_M: f32 = 0.035;
+/// Colour of a goal marker whose task is met, or whose status is unknown (linear RGB).
+pub const GOAL_COLOR_LINEAR: [f32; 4] = [0.1, 0.65, 0.2, 1.0];
+
 /// What one frame shows.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Scene {
