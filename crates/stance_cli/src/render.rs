@@ -154,7 +154,9 @@ fn extent_points(capsules: &[Capsule]) -> Vec<Vec3> {
                 .flat_map(move |point| {
                     [Vec3::X, Vec3::Y, Vec3::Z]
                         .into_iter()
-                        .flat_map(move |axis| [-1.0, 1.0].map(|s| point + axis * s * capsule.radius_m))
+                        .flat_map(move |axis| {
+                            [-1.0, 1.0].map(|s| point + axis * s * capsule.radius_m)
+                        })
                 })
         })
         .collect()
@@ -205,7 +207,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
         .map(|goal| Capsule::marker(DVec3::from_array(goal).as_vec3(), GOAL_COLOR_LINEAR))
         .collect();
     let scene = Scene {
-        capsules: if figure.mesh.is_some() { Vec::new() } else { capsules },
+        capsules: if figure.mesh.is_some() {
+            Vec::new()
+        } else {
+            capsules
+        },
         show_floor: true,
         show_avatar: figure.mesh.is_some(),
         avatar_palettes,
@@ -220,8 +226,15 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let gpu = headless_gpu()?;
     let mut renderer = SceneRenderer::new(&gpu.device);
     renderer.set_avatar(&gpu.device, &gpu.queue, figure.mesh.as_ref());
-    let pixels = render_image(&gpu.device, &gpu.queue, &mut renderer, &camera, &scene, &options)?
-        .wait(&gpu.device)?;
+    let pixels = render_image(
+        &gpu.device,
+        &gpu.queue,
+        &mut renderer,
+        &camera,
+        &scene,
+        &options,
+    )?
+    .wait(&gpu.device)?;
     let png = encode_png(&pixels)?;
     std::fs::write(&args.out, png)
         .with_context(|| format!("cannot write {}", args.out.display()))?;

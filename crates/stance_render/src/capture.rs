@@ -83,9 +83,11 @@ impl Readback {
         );
         queue.submit([encoder.finish()]);
         let (sender, mapped) = std::sync::mpsc::channel();
-        buffer.slice(..).map_async(wgpu::MapMode::Read, move |result| {
-            let _ = sender.send(result);
-        });
+        buffer
+            .slice(..)
+            .map_async(wgpu::MapMode::Read, move |result| {
+                let _ = sender.send(result);
+            });
         Self {
             buffer,
             size_px: [width, height],
@@ -137,7 +139,10 @@ impl Readback {
             .get_mapped_range()
             .map_err(|error| CaptureError::Map(error.to_string()))?;
         let mut rgba = Vec::with_capacity(unpadded_row * height as usize);
-        for row in mapped.chunks(self.padded_row as usize).take(height as usize) {
+        for row in mapped
+            .chunks(self.padded_row as usize)
+            .take(height as usize)
+        {
             rgba.extend_from_slice(row.get(..unpadded_row).unwrap_or(row));
         }
         drop(mapped);

@@ -18,7 +18,8 @@ pub struct HeadlessGpu {
 /// Opens the first adapter the environment allows (none asked of a display), with every
 /// limit it has: large images need its largest textures.
 pub fn headless_gpu() -> Result<HeadlessGpu, ImageError> {
-    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let instance =
+        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
     let adapter = pollster::block_on(wgpu::util::initialize_adapter_from_env_or_default(
         &instance, None,
     ))

@@ -2,9 +2,7 @@
 //! without the overlays and the background, read back and encoded as PNG. `stance render`
 //! and the editor's *File > Save image* both go through [`render_image`].
 
-use crate::{
-    CaptureError, OrbitCamera, Pixels, Readback, RenderTarget, Scene, SceneRenderer,
-};
+use crate::{CaptureError, OrbitCamera, Pixels, Readback, RenderTarget, Scene, SceneRenderer};
 
 /// The largest side of an image, pixels (the GPU's own limit may be lower).
 pub const MAX_IMAGE_SIDE_PX: u32 = 8192;
@@ -70,7 +68,9 @@ pub enum ImageError {
         max: u32,
     },
     /// No GPU (or software renderer) could be opened.
-    #[error("no GPU adapter could be opened ({0}); install a Vulkan or OpenGL driver (Mesa's lavapipe will do)")]
+    #[error(
+        "no GPU adapter could be opened ({0}); install a Vulkan or OpenGL driver (Mesa's lavapipe will do)"
+    )]
     NoAdapter(String),
     /// Reading the picture back failed.
     #[error(transparent)]
@@ -145,7 +145,8 @@ fn straight_alpha(mut pixels: Pixels, transparent: bool) -> Pixels {
             pixel[..3].fill(0);
         } else {
             for channel in &mut pixel[..3] {
-                let straight = (u32::from(*channel) * 255 + u32::from(alpha) / 2) / u32::from(alpha);
+                let straight =
+                    (u32::from(*channel) * 255 + u32::from(alpha) / 2) / u32::from(alpha);
                 *channel = u8::try_from(straight).unwrap_or(u8::MAX);
             }
         }
@@ -162,7 +163,9 @@ pub fn encode_png(pixels: &Pixels) -> Result<Vec<u8>, ImageError> {
     encoder.set_depth(png::BitDepth::Eight);
     encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
     let mut writer = encoder.write_header().map_err(encode_error)?;
-    writer.write_image_data(&pixels.rgba).map_err(encode_error)?;
+    writer
+        .write_image_data(&pixels.rgba)
+        .map_err(encode_error)?;
     writer.finish().map_err(encode_error)?;
     Ok(bytes)
 }
