@@ -286,13 +286,12 @@ impl TaskKindSpec {
         }
     }
 
-    /// The world point the task aims at, for the kinds that have one (position, gaze, centre
-    /// of mass, limb: m, H-Anim world frame); pictures mark it.
+    /// The world point the task aims at, for the kinds that have one (position, gaze, limb:
+    /// m, H-Anim world frame); pictures mark it.
     pub fn goal_point(&self) -> Option<[f64; 3]> {
         match self {
             TaskKindSpec::Position { target, .. }
             | TaskKindSpec::Gaze { target, .. }
-            | TaskKindSpec::Com { target, .. }
             | TaskKindSpec::Limb { target, .. } => Some(*target),
             _ => None,
         }

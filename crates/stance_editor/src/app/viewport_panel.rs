@@ -175,6 +175,7 @@ impl ViewportPanel {
             ui.ctx().request_repaint();
         }
         self.draw(ui, frame, model);
+        self.advance_image(ui, frame, model);
         model.readings_shown();
         self.draw_overlays(ui, model, response.hover_pos());
     }
@@ -325,6 +326,28 @@ impl ViewportPanel {
         }
     }
 
+    /// Whether the viewport draws with a GPU (images need one).
+    pub(super) fn has_gpu(&self) -> bool {
+        self.renderer.is_some()
+    }
+
+    /// *Save image* on this viewport's GPU (its renderer holds the avatar's mesh): the model
+    /// renders an asked image and downloads it once the read-back completes, frames later.
+    fn advance_image(&mut self, ui: &egui::Ui, frame: &eframe::Frame, model: &mut EditorModel) {
+        if !model.image.is_busy() {
+            return;
+        }
+        if let (Some(renderer), Some(render_state)) =
+            (&mut self.renderer, frame.wgpu_render_state())
+        {
+            let queue = &render_state.queue;
+            let renderer = renderer.scene_renderer_mut();
+            if model.advance_image(&render_state.device, queue, renderer) {
+                ui.ctx().request_repaint();
+            }
+        }
+    }
+
     /// What the renderer draws: the mannequin's capsules (selection and hover coloured), or
     /// the avatar's skinning palettes once its mesh is on the GPU.
     fn scene(&self, model: &EditorModel) -> Scene {
@@ -362,6 +385,7 @@ impl ViewportPanel {
             show_floor: self.show_floor,
             show_avatar,
             avatar_palettes,
+            ..Scene::default()
         }
     }
 }
