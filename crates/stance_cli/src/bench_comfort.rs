@@ -47,7 +47,7 @@ fn lowest_rula(
         ..ComfortSettings::default()
     };
     let mut with = tasks.to_vec();
-    with.push(Task::comfort(comfort_model(s, &built_axes(body), &settings).into()).at_level(4));
+    with.push(Task::comfort(comfort_model(s, &built_axes(body), &settings)).at_level(4));
     let (lo, hi) = (s.lower_limits(), s.upper_limits());
     let mut lowest = None;
     for start in 0..ORACLE_STARTS {
@@ -65,7 +65,12 @@ fn lowest_rula(
             ..SolverSettings::default()
         })?
         .solve(s, &with, &mut p)?;
-        if report.levels.iter().take(3).all(|l| l.met || l.posture_only) {
+        if report
+            .levels
+            .iter()
+            .take(3)
+            .all(|l| l.met || l.posture_only)
+        {
             let score = rula(&p);
             lowest = Some(lowest.map_or(score, |l: u8| l.min(score)));
         }
@@ -174,7 +179,9 @@ pub fn run(cases: usize, json: bool) -> Result<()> {
         let (before, after) = (rula(&plain), rula(&comfy));
         let found = lowest_rula(&body, &tasks, &rula, &mut oracle_rng)?.unwrap_or(before);
         outcomes.push(Outcome {
-            lowest: found.min(before).min(if met(&comfy_report) { after } else { before }),
+            lowest: found
+                .min(before)
+                .min(if met(&comfy_report) { after } else { before }),
             rula: (before, after),
             load: (
                 shoulder_and_back_torque(&body, &plain),

@@ -8,6 +8,7 @@ mod bench_comfort;
 mod comfort;
 mod decode;
 mod link;
+mod render;
 mod retarget;
 mod simulate;
 mod solve;
@@ -45,6 +46,8 @@ enum Command {
     MakeAvatar(avatar::MakeAvatarArgs),
     /// Encode a document into a posture link, or decode a link into a document.
     Link(link::LinkArgs),
+    /// Render a document's posture (on the default body or an avatar) as a PNG image.
+    Render(render::RenderArgs),
     /// Retargets clips (BVH, glTF animations) onto an avatar, holding foot contacts.
     Retarget(retarget::RetargetArgs),
 }
@@ -62,5 +65,6 @@ fn main() -> anyhow::Result<()> {
         Command::MakeAvatar(args) => avatar::make_avatar(args),
         Command::Link(args) => link::run(args),
         Command::Retarget(args) => retarget::run(args),
+        Command::Render(args) => render::run(args),
     }
 }

@@ -285,6 +285,17 @@ impl TaskKindSpec {
             TaskKindSpec::Limb { .. } => "limb",
         }
     }
+
+    /// The world point the task aims at, for the kinds that have one (position, gaze, limb:
+    /// m, H-Anim world frame); pictures mark it.
+    pub fn goal_point(&self) -> Option<[f64; 3]> {
+        match self {
+            TaskKindSpec::Position { target, .. }
+            | TaskKindSpec::Gaze { target, .. }
+            | TaskKindSpec::Limb { target, .. } => Some(*target),
+            _ => None,
+        }
+    }
 }
 
 // ---------------------------------------------------------------------------------------------

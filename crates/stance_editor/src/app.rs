@@ -6,6 +6,7 @@ mod avatar_panel;
 mod comfort_panel;
 mod handles;
 mod hands_panel;
+mod image_window;
 mod lens;
 mod overlay;
 mod sensors_panel;
@@ -67,6 +68,8 @@ pub(crate) struct Windows {
     pub mapping_subject: SubjectKind,
     /// The timeline panel: `None` shows it when a clip or keys exist.
     pub timeline: Option<bool>,
+    /// *Save image*.
+    pub image: image_window::ImageWindow,
 }
 
 impl std::fmt::Debug for StanceApp {
@@ -269,6 +272,11 @@ impl StanceApp {
         self.button_rects.push(("export_posed", posed.rect));
         if posed.clicked() {
             command = Some(Command::ExportPosedAvatar);
+        }
+        ui.separator();
+        if ui.button("Save image (PNG)…").clicked() {
+            self.windows.image.open = true;
+            ui.close();
         }
         if let Some(command) = command {
             self.model.apply(command);
@@ -599,6 +607,12 @@ impl StanceApp {
                 self.viewport.show(ui, frame, &mut self.model);
             });
         self.help_window(&ctx);
+        self.windows.image.show(
+            &ctx,
+            &mut self.model,
+            &self.viewport,
+            &mut self.button_rects,
+        );
         let mut sensors = SensorsWindow {
             model: &mut self.model,
             viewport_rect: self.viewport.rect,

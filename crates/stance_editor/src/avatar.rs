@@ -1,25 +1,13 @@
 //! A user's avatar in the editor: the imported glTF/GLB/VRM file, its H-Anim skeleton, and the
 //! GPU model (vertices, materials, textures) with the palettes that pose it every frame.
 
-use glam::{Mat4, Vec3};
-use stance_asset::{
-    AlphaMode, Avatar, LoadOptions, Primitive, Wrap, export_glb, find_resource, load_avatar_with,
-};
+use glam::Mat4;
+use stance_asset::{Avatar, LoadOptions, export_glb, find_resource, load_avatar_with};
 use stance_hanim::{
     HumanoidSkeleton, LevelOfArticulation, Mapping, SkeletonOptions, build_skeleton,
 };
 use stance_ik::Posture;
-use stance_render::{
-    MAX_PALETTE_MATRICES, SkinnedMaterial, SkinnedModel, SkinnedPrimitive, SkinnedTexture,
-    SkinnedVertex,
-};
-
-/// What moves a palette: a skin's joints, or one node carrying a rigid mesh.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum PaletteSource {
-    Skin(usize),
-    Node(usize),
-}
+use stance_render::{AvatarPalettes, SkinnedModel, avatar_model};
 
 /// A loaded avatar.
 pub struct LoadedAvatar {
@@ -29,7 +17,7 @@ pub struct LoadedAvatar {
     pub avatar: Avatar,
     /// The GPU model, taken by the renderer when it uploads it.
     pub model: Option<SkinnedModel>,
-    palettes: Vec<PaletteSource>,
+    palettes: AvatarPalettes,
     /// What the user should know (unmapped joints, clamped skins...).
     pub warnings: Vec<String>,
     /// Vertices of all its meshes, for the panels.
@@ -83,7 +71,7 @@ impl LoadedAvatar {
                 ..SkeletonOptions::default()
             })
             .map_err(|error| error.to_string())?;
-        let (model, palettes, mut warnings) = skinned_model(&avatar);
+        let (model, palettes, mut warnings) = avatar_model(&avatar);
         warnings.extend(avatar.warnings.iter().cloned());
         let vertex_count = model.primitives.iter().map(|p| p.vertices.len()).sum();
         let triangle_count = model.primitives.iter().map(|p| p.indices.len() / 3).sum();
@@ -121,21 +109,7 @@ impl LoadedAvatar {
         humanoid: &HumanoidSkeleton,
         posture: &Posture,
     ) -> Option<Vec<Vec<Mat4>>> {
-        let locals = self.avatar.posed_locals(humanoid, posture).ok()?;
-        let world = self.avatar.world_from_locals(&locals);
-        Some(
-            self.palettes
-                .iter()
-                .map(|source| match *source {
-                    PaletteSource::Skin(skin) => self.avatar.skinning_matrices(skin, &world),
-                    PaletteSource::Node(node) => vec![
-                        (self.avatar.hanim_from_file
-                            * world.get(node).copied().unwrap_or_default())
-                        .as_mat4(),
-                    ],
-                })
-                .collect(),
-        )
+        self.palettes.pose(&self.avatar, humanoid, posture)
     }
 
     /// The skeleton that `mapping` (a corrected mapping of this avatar's nodes) gives at
@@ -204,125 +178,6 @@ impl LoadedAvatar {
         let mapped = self.avatar.mapping.matches().len();
         let sources = self.avatar.mapping.source_count();
         (mapped, sources.saturating_sub(mapped))
-    }
-}
-
-/// The GPU model of an avatar: one palette per skin and per rigid mesh node.
-fn skinned_model(avatar: &Avatar) -> (SkinnedModel, Vec<PaletteSource>, Vec<String>) {
-    let mut model = SkinnedModel::default();
-    let mut sources: Vec<PaletteSource> = Vec::new();
-    let mut warnings = Vec::new();
-    for (node_index, node) in avatar.nodes.iter().enumerate() {
-        let Some(mesh) = node.mesh.and_then(|mesh| avatar.meshes.get(mesh)) else {
-            continue;
-        };
-        let source = match node.skin {
-            Some(skin) if skin < avatar.skins.len() => PaletteSource::Skin(skin),
-            _ => PaletteSource::Node(node_index),
-        };
-        let palette = match sources.iter().position(|known| *known == source) {
-            Some(index) => index,
-            None => {
-                let size = match source {
-                    PaletteSource::Skin(skin) => {
-                        avatar.skins.get(skin).map_or(1, |s| s.joints.len())
-                    }
-                    PaletteSource::Node(_) => 1,
-                };
-                if size > MAX_PALETTE_MATRICES {
-                    warnings.push(format!(
-                        "a skin has {size} joints; only the first {MAX_PALETTE_MATRICES} move its mesh"
-                    ));
-                }
-                sources.push(source);
-                model.palette_sizes.push(size.min(MAX_PALETTE_MATRICES));
-                sources.len() - 1
-            }
-        };
-        let skinned = matches!(source, PaletteSource::Skin(_));
-        for primitive in &mesh.primitives {
-            model
-                .primitives
-                .push(skinned_primitive(primitive, palette, skinned));
-        }
-    }
-    model.materials = avatar
-        .materials
-        .iter()
-        .map(|material| SkinnedMaterial {
-            base_color_factor: material.base_color_factor,
-            texture: material.base_color_texture,
-            unlit: material.unlit,
-            alpha_cutoff: (material.alpha_mode == AlphaMode::Mask).then_some(material.alpha_cutoff),
-        })
-        .collect();
-    model.textures = avatar
-        .textures
-        .iter()
-        .map(|texture| SkinnedTexture {
-            width: texture.width,
-            height: texture.height,
-            rgba8: texture.rgba8.clone(),
-            repeat: texture.wrap_u != Wrap::Clamp,
-        })
-        .collect();
-    (model, sources, warnings)
-}
-
-/// One primitive for the GPU: unit normals, weights summing to one (a rigid mesh rides on
-/// palette entry 0), indices within the vertices and whole triangles only.
-fn skinned_primitive(primitive: &Primitive, palette: usize, skinned: bool) -> SkinnedPrimitive {
-    let count = primitive.positions.len();
-    let vertices = (0..count)
-        .map(|i| {
-            let normal = primitive
-                .normals
-                .get(i)
-                .copied()
-                .filter(|n| Vec3::from_array(*n).length_squared() > 1e-12)
-                .unwrap_or([0.0, 1.0, 0.0]);
-            let (joints, weights) = if skinned {
-                let joints = primitive.joints.get(i).copied().unwrap_or([0; 4]);
-                let weights = primitive
-                    .weights
-                    .get(i)
-                    .copied()
-                    .unwrap_or([1.0, 0.0, 0.0, 0.0]);
-                let sum: f32 = weights.iter().filter(|w| w.is_finite()).sum();
-                let weights = if sum > 1e-6 {
-                    weights.map(|w| if w.is_finite() { w / sum } else { 0.0 })
-                } else {
-                    [1.0, 0.0, 0.0, 0.0]
-                };
-                (joints.map(u32::from), weights)
-            } else {
-                ([0; 4], [1.0, 0.0, 0.0, 0.0])
-            };
-            SkinnedVertex {
-                position: primitive.positions.get(i).copied().unwrap_or_default(),
-                normal,
-                uv: primitive.uvs.get(i).copied().unwrap_or_default(),
-                joints,
-                weights,
-            }
-        })
-        .collect();
-    let indices = if primitive.indices.is_empty() {
-        (0..u32::try_from(count - count % 3).unwrap_or(0)).collect()
-    } else {
-        primitive
-            .indices
-            .iter()
-            .copied()
-            .filter(|&index| (index as usize) < count)
-            .collect::<Vec<u32>>()
-    };
-    let indices_len = indices.len() - indices.len() % 3;
-    SkinnedPrimitive {
-        vertices,
-        indices: indices.into_iter().take(indices_len).collect(),
-        material: primitive.material.unwrap_or(usize::MAX),
-        palette,
     }
 }
 

@@ -15,6 +15,7 @@ mod clips;
 mod comfort;
 mod command;
 mod hands;
+mod image;
 mod mapping;
 mod motion;
 mod storage;
@@ -32,6 +33,7 @@ pub use self::comfort::{ComfortView, heat_color};
 use self::command::goals_moved;
 pub use self::command::{Command, Gesture, Notice, SessionChange};
 pub use self::hands::{HandCommand, Hands};
+pub use self::image::{IMAGE_FILE_NAME, ImageExport, ImageRequest};
 use self::mapping::MappingCorrections;
 pub use self::mapping::{Correction, carry_posture};
 pub use self::motion::{IntervalEdge, MotionCommand, SPEED_RANGE, Timeline};
@@ -91,6 +93,8 @@ pub struct EditorModel {
     pub(crate) timeline: Timeline,
     /// The comfort panel: report and heat map.
     pub(crate) comfort: ComfortView,
+    /// *Save image*: asked, rendering, downloaded.
+    pub(crate) image: ImageExport,
 }
 
 impl std::fmt::Debug for EditorModel {
@@ -134,6 +138,7 @@ impl EditorModel {
             session_generation: 0,
             timeline: Timeline::default(),
             comfort: ComfortView::default(),
+            image: ImageExport::default(),
         };
         model.load_library();
         if let Some(settings) = SensorSettings::load(model.hooks.as_ref()) {
@@ -438,16 +443,9 @@ impl EditorModel {
             Command::LoadFromLibrary(index) => self.load_from_library(index),
             Command::DeleteFromLibrary(index) => self.delete_from_library(index),
             Command::PickFile => self.host_result(self.hooks.pick_file(), "Could not open a file"),
-            Command::ExportDocument => {
-                let text = self.document().to_json(true);
-                let result = self.hooks.download("stance-pose.json", &text);
-                self.host_result(result, "Could not export the pose");
-            }
-            Command::ExportLibrary => {
-                let text = self.library.to_json();
-                let result = self.hooks.download("stance-library.json", &text);
-                self.host_result(result, "Could not export the library");
-            }
+            Command::ExportDocument => self.export_document(),
+            Command::ExportLibrary => self.export_library(),
+            Command::SaveImage(request) => self.image.request(request),
             Command::ExportPosedAvatar => self.export_posed_avatar(),
             Command::PickRecording => match self.hooks.pick_file() {
                 Ok(()) => self.pending_pick = Some(PickPurpose::Recording),

@@ -190,9 +190,10 @@ impl PosingSession {
         // Balance as the support polygon of the pinned feet (an inequality): the body leans
         // freely as long as its centre of mass stays over them.
         tasks.push(TaskSpec::balance());
-        // Comfort at the lowest level (the paper's open question): what the levels above
-        // leave free goes to lowering the joint loads, the range penalties and RULA.
-        tasks.push(TaskSpec::comfort());
+        // The rest-posture attraction, not yet the comfort task: comfort keeps moving a posture
+        // after every direct edit (a finger preset, a DOF typed in, sensors streaming) while
+        // its cost falls (see docs/comfort.md); it is one click away in Add task.
+        tasks.push(TaskSpec::rest_attraction());
         tasks
     }
 

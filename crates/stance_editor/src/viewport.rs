@@ -148,6 +148,11 @@ impl ViewportRenderer {
         }
     }
 
+    /// The scene renderer (images are drawn with it: it holds the avatar's mesh).
+    pub(crate) fn scene_renderer_mut(&mut self) -> &mut SceneRenderer {
+        &mut self.scene_renderer
+    }
+
     /// Uploads (or drops) the avatar's GPU model.
     pub(crate) fn set_avatar(
         &mut self,

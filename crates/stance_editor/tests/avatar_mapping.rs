@@ -123,7 +123,8 @@ fn swapping_the_elbows_in_the_mapping_window_rebuilds_the_skeleton() {
     assert_eq!(source_node(&harness, "l_elbow").as_deref(), Some("r_elbow"));
     assert_eq!(source_node(&harness, "r_elbow").as_deref(), Some("l_elbow"));
     // The rebuilt skeleton, at rest (the solver then poses it as its tasks ask).
-    let skeleton = harness.state().model().session().skeleton();
+    let session = harness.state().model().session();
+    let skeleton = session.skeleton();
     let rest = stance_ik::Frames::new(skeleton, &stance_ik::Posture::rest(skeleton));
     let swapped_x = rest.joint_position[skeleton.joint_index("l_elbow").unwrap()].x;
     assert!(

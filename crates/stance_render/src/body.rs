@@ -132,6 +132,33 @@ pub fn mannequin_bones(joints: &[MannequinJoint<'_>]) -> Vec<MannequinBone> {
     bones
 }
 
+/// The mannequin's bones of `skeleton` posed as `frames` (its forward kinematics) say.
+pub fn posed_mannequin_bones(
+    skeleton: &stance_ik::Skeleton,
+    frames: &stance_ik::Frames,
+) -> Vec<MannequinBone> {
+    let joints: Vec<MannequinJoint<'_>> = skeleton
+        .joints()
+        .iter()
+        .enumerate()
+        .map(|(index, joint)| MannequinJoint {
+            name: &joint.name,
+            parent: joint.parent,
+            position_world: frames
+                .joint_position
+                .get(index)
+                .copied()
+                .unwrap_or_default()
+                .as_vec3(),
+            up_world: frames
+                .world_from_joint_rotation
+                .get(index)
+                .map_or(Vec3::Y, |rotation| (*rotation * glam::DVec3::Y).as_vec3()),
+        })
+        .collect();
+    mannequin_bones(&joints)
+}
+
 /// The mannequin of the H-Anim default humanoid standing in its rest pose at `loa`.
 pub fn rest_pose_capsules(loa: stance_hanim::LevelOfArticulation) -> Vec<Capsule> {
     let joints = stance_hanim::humanoid_joints(loa);

@@ -121,6 +121,24 @@ impl OrbitCamera {
         self.distance_m = fit.clamp(Self::MIN_DISTANCE_M, Self::MAX_DISTANCE_M);
     }
 
+    /// Aims at the middle of `points_world` (their bounding box) from a distance that shows
+    /// them all, with a margin, in a view of `aspect` (width / height): a narrow view steps
+    /// back so that the width fits too. Nothing changes without a finite point.
+    pub fn frame_points(&mut self, points_world: &[Vec3], aspect: f32) {
+        let mut finite = points_world.iter().filter(|point| point.is_finite());
+        let Some(first) = finite.next() else {
+            return;
+        };
+        let (lo, hi) = finite.fold((*first, *first), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+        let radius_m = (hi - lo).length() * 0.5;
+        let narrow = if aspect.is_finite() && aspect > 0.0 {
+            aspect.min(1.0)
+        } else {
+            1.0
+        };
+        self.frame((lo + hi) * 0.5, radius_m / narrow);
+    }
+
     /// Camera position in world space.
     pub fn eye_world(&self) -> Vec3 {
         let (sin_yaw, cos_yaw) = self.yaw.sin_cos();

@@ -4,21 +4,31 @@
 
 #![warn(missing_docs)]
 
+mod avatar;
 mod body;
 mod camera;
-#[cfg(not(target_arch = "wasm32"))]
 mod capture;
+#[cfg(not(target_arch = "wasm32"))]
+mod headless;
+mod image;
 mod pick;
 mod renderer;
 mod skinned;
 
+pub use avatar::{AvatarPalettes, avatar_model};
 pub use body::{
     BODY_COLOR_LINEAR, MannequinBone, MannequinJoint, mannequin_bones, mannequin_capsules,
-    rest_pose_capsules,
+    posed_mannequin_bones, rest_pose_capsules,
 };
 pub use camera::{OrbitCamera, ViewPreset};
 #[cfg(not(target_arch = "wasm32"))]
-pub use capture::{CaptureError, Pixels, read_pixels};
+pub use capture::read_pixels;
+pub use capture::{CaptureError, Pixels, Readback};
+#[cfg(not(target_arch = "wasm32"))]
+pub use headless::{HeadlessGpu, headless_gpu};
+pub use image::{
+    ImageError, ImageOptions, MAX_IMAGE_SIDE_PX, PendingImage, encode_png, render_image,
+};
 pub use pick::{CapsuleHit, pick_capsule};
 pub use renderer::{BACKGROUND_SRGB, COLOR_FORMAT, DEPTH_FORMAT, RenderTarget, SceneRenderer};
 pub use skinned::{
@@ -48,6 +58,23 @@ pub struct Capsule {
     pub color_linear: [f32; 4],
 }
 
+impl Capsule {
+    /// A marker: a small sphere of `color_linear` at `point_world` (an image's task goal).
+    pub fn marker(point_world: Vec3, color_linear: [f32; 4]) -> Self {
+        Self {
+            start_world: point_world,
+            end_world: point_world,
+            radius_m: MARKER_RADIUS_M,
+            color_linear,
+        }
+    }
+}
+
+/// Radius of a [`Capsule::marker`], metres.
+pub const MARKER_RADIUS_M: f32 = 0.035;
+/// Colour of a goal marker whose task is met, or whose status is unknown (linear RGB).
+pub const GOAL_COLOR_LINEAR: [f32; 4] = [0.1, 0.65, 0.2, 1.0];
+
 /// What one frame shows.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Scene {
@@ -59,4 +86,21 @@ pub struct Scene {
     pub show_avatar: bool,
     /// This frame's matrix palettes of the avatar (mesh space -> H-Anim world), one per palette.
     pub avatar_palettes: Vec<Vec<glam::Mat4>>,
+    /// Overlay markers drawn like capsules (an image's task goals); the viewport draws its
+    /// overlays with egui instead and leaves this empty.
+    pub markers: Vec<Capsule>,
+    /// Clear to transparent black (alpha 0) instead of [`BACKGROUND_SRGB`]: the colours
+    /// drawn then come out premultiplied by their coverage.
+    pub transparent_background: bool,
+}
+
+impl Scene {
+    /// The clear colour, sRGB-encoded (premultiplied: transparent is all zeros).
+    pub fn background_srgb(&self) -> [f32; 4] {
+        if self.transparent_background {
+            [0.0; 4]
+        } else {
+            BACKGROUND_SRGB
+        }
+    }
 }

@@ -367,7 +367,7 @@ impl SceneRenderer {
                 .to_cols_array_2d(),
             camera_position_world: camera.eye_world().extend(1.0).to_array(),
             light_direction_world: LIGHT_DIRECTION_WORLD,
-            background: BACKGROUND_SRGB,
+            background: scene.background_srgb(),
         };
         queue.write_buffer(&self.frame_uniforms, 0, bytemuck::bytes_of(&uniforms));
         let draw_avatar = scene.show_avatar && self.avatar.is_some();
@@ -378,6 +378,7 @@ impl SceneRenderer {
         let instances: Vec<CapsuleInstance> = scene
             .capsules
             .iter()
+            .chain(&scene.markers)
             .filter(|capsule| {
                 capsule.start_world.is_finite()
                     && capsule.end_world.is_finite()
@@ -401,7 +402,7 @@ impl SceneRenderer {
             label: Some("stance frame"),
         });
         {
-            let [r, g, b, a] = BACKGROUND_SRGB.map(f64::from);
+            let [r, g, b, a] = scene.background_srgb().map(f64::from);
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("stance scene"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {

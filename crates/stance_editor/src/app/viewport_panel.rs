@@ -182,6 +182,7 @@ impl ViewportPanel {
             ui.ctx().request_repaint();
         }
         self.draw(ui, frame, model);
+        self.advance_image(ui, frame, model);
         model.readings_shown();
         self.draw_overlays(ui, model, response.hover_pos());
     }
@@ -357,6 +358,34 @@ impl ViewportPanel {
         }
     }
 
+    /// Whether the viewport draws with a GPU (images need one).
+    pub(super) fn has_gpu(&self) -> bool {
+        self.renderer.is_some()
+    }
+
+    /// *Save image* on this viewport's GPU (its renderer holds the avatar's mesh): the model
+    /// renders an asked image and downloads it once the read-back completes, frames later.
+    fn advance_image(&mut self, ui: &egui::Ui, frame: &eframe::Frame, model: &mut EditorModel) {
+        if !model.image.is_busy() {
+            return;
+        }
+        // The image shows the figure when the viewport does (its mesh is the renderer's).
+        let figure = self
+            .figure
+            .as_ref()
+            .map(|(figure, _)| figure)
+            .filter(|_| self.figure_shown(model));
+        if let (Some(renderer), Some(render_state)) =
+            (&mut self.renderer, frame.wgpu_render_state())
+        {
+            let queue = &render_state.queue;
+            let renderer = renderer.scene_renderer_mut();
+            if model.advance_image(&render_state.device, queue, renderer, figure) {
+                ui.ctx().request_repaint();
+            }
+        }
+    }
+
     /// Whether the mannequin is drawn as its figure this frame (not with an avatar, nor with
     /// the heat map, which colours the capsules).
     pub(super) fn figure_shown(&self, model: &EditorModel) -> bool {
@@ -409,6 +438,7 @@ impl ViewportPanel {
             show_floor: self.show_floor,
             show_avatar: show_avatar || show_figure,
             avatar_palettes,
+            ..Scene::default()
         }
     }
 }

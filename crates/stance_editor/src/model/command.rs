@@ -7,6 +7,7 @@ use stance_hanim::{LevelOfArticulation, Mapping};
 
 use super::clips::AnimationFormat;
 use super::hands::HandCommand;
+use super::image::ImageRequest;
 use super::mapping::Correction;
 use super::motion::MotionCommand;
 use super::tasks::NewTask;
@@ -220,6 +221,9 @@ pub enum Command {
     ExportLibrary,
     /// Offer the avatar in the current posture as a GLB download.
     ExportPosedAvatar,
+    /// Render an image (PNG) of the posture and offer it as a download: the viewport's GPU
+    /// draws it on a following frame (see `EditorModel::advance_image`).
+    SaveImage(ImageRequest),
     /// Ask the page for a sensor recording to replay.
     PickRecording,
     /// Ask the page for a motion clip (BVH, or a glTF file's animation).

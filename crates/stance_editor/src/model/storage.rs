@@ -4,6 +4,18 @@ use super::{EditorModel, document_of};
 use crate::library::PoseLibrary;
 
 impl EditorModel {
+    pub(super) fn export_document(&mut self) {
+        let text = self.document().to_json(true);
+        let result = self.hooks.download("stance-pose.json", &text);
+        self.host_result(result, "Could not export the pose");
+    }
+
+    pub(super) fn export_library(&mut self) {
+        let text = self.library.to_json();
+        let result = self.hooks.download("stance-library.json", &text);
+        self.host_result(result, "Could not export the library");
+    }
+
     pub(super) fn import_library(&mut self, name: &str, text: &str) {
         match self.library.import(text) {
             Ok((added, warnings)) => {

@@ -63,6 +63,8 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     }
     let distance_m = length(in.position_world - frame.camera_position_world.xyz);
     let fade = smoothstep(8.0, 30.0, distance_m);
+    // Into the background, alpha too: a transparent background (0, 0, 0, 0) leaves the
+    // distant floor transparent, premultiplied like the multisample resolve's edges.
     let srgb = mix(linear_to_srgb(color), frame.background.rgb, fade);
-    return vec4<f32>(srgb, 1.0);
+    return vec4<f32>(srgb, mix(1.0, frame.background.a, fade));
 }

@@ -1,0 +1,251 @@
+//! `stance render DOC.json --out IMAGE.png`: the document's posture on the default H-Anim body
+//! (the mannequin) or on an avatar (its skinned mesh), drawn natively with wgpu on any adapter
+//! (lavapipe will do) through the same image path as the editor's *File > Save image*.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result, anyhow, bail};
+use glam::{DVec3, Vec3};
+use stance_asset::LoadOptions;
+use stance_document::{CameraSpec, Document};
+use stance_hanim::{HumanoidSkeleton, LevelOfArticulation, SkeletonOptions, default_skeleton};
+use stance_ik::Frames;
+use stance_render::{
+    Capsule, GOAL_COLOR_LINEAR, ImageOptions, OrbitCamera, Scene, SceneRenderer, ViewPreset,
+    avatar_model, encode_png, headless_gpu, posed_mannequin_bones, render_image,
+};
+
+use crate::avatar;
+
+/// `stance render DOC.json --out IMAGE.png [--avatar FILE] [--view VIEW] [--size WxH]`.
+#[derive(clap::Args, Debug)]
+pub struct RenderArgs {
+    /// The document (JSON, as the editor exports it).
+    pub document: PathBuf,
+    /// The PNG to write.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// An avatar (.glb, .gltf, .vrm) to pose instead of the default body.
+    #[arg(long)]
+    pub avatar: Option<PathBuf>,
+    /// A standard view framed on the body; without it the document's saved camera (or the
+    /// editor's default view, framed on the body).
+    #[arg(long, value_enum)]
+    pub view: Option<View>,
+    /// Image size, WIDTHxHEIGHT pixels (each side 1 to 8192).
+    #[arg(long, default_value = "1280x960")]
+    pub size: String,
+    /// Alpha 0 where nothing is drawn (PNG with straight alpha).
+    #[arg(long)]
+    pub transparent: bool,
+    /// Draw the overlays: the floor grid and the tasks' goals (off: the figure alone).
+    #[arg(long)]
+    pub overlays: bool,
+    /// Level of articulation of the body (1-4; an avatar: 1 or 2).
+    #[arg(long, default_value_t = 2)]
+    pub loa: u8,
+}
+
+/// The standard views.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum View {
+    /// From the front.
+    Front,
+    /// From behind.
+    Back,
+    /// At the body's left side.
+    Left,
+    /// At the body's right side.
+    Right,
+    /// From above.
+    Top,
+    /// From the front-left, a little above.
+    ThreeQuarter,
+}
+
+impl View {
+    fn preset(self) -> ViewPreset {
+        match self {
+            View::Front => ViewPreset::Front,
+            View::Back => ViewPreset::Back,
+            View::Left => ViewPreset::Left,
+            View::Right => ViewPreset::Right,
+            View::Top => ViewPreset::Top,
+            View::ThreeQuarter => ViewPreset::ThreeQuarter,
+        }
+    }
+}
+
+/// `WxH` -> `[W, H]`, checked against the image limits.
+pub fn parse_size(text: &str) -> Result<[u32; 2]> {
+    let parsed = text
+        .split_once(['x', 'X'])
+        .and_then(|(w, h)| Some([w.trim().parse().ok()?, h.trim().parse().ok()?]));
+    let size_px = parsed
+        .ok_or_else(|| anyhow!("--size {text}: expected WIDTHxHEIGHT in pixels, e.g. 1280x960"))?;
+    ImageOptions {
+        size_px,
+        ..ImageOptions::default()
+    }
+    .check(u32::MAX)
+    .map_err(|error| anyhow!("--size {text}: {error}"))?;
+    Ok(size_px)
+}
+
+/// The body, its GPU model when it is an avatar, and what the scene draws of it.
+struct Figure {
+    humanoid: HumanoidSkeleton,
+    avatar: Option<(stance_asset::Avatar, stance_render::AvatarPalettes)>,
+    mesh: Option<stance_render::SkinnedModel>,
+}
+
+fn figure(args: &RenderArgs) -> Result<Figure> {
+    let loa = LevelOfArticulation::from_number(args.loa)
+        .ok_or_else(|| anyhow!("--loa {}: expected 1, 2, 3 or 4", args.loa))?;
+    let options = SkeletonOptions {
+        loa,
+        ..SkeletonOptions::default()
+    };
+    let Some(path) = &args.avatar else {
+        return Ok(Figure {
+            humanoid: default_skeleton(&options)?,
+            avatar: None,
+            mesh: None,
+        });
+    };
+    let loaded = avatar::load(path, &LoadOptions::default())?;
+    let humanoid = loaded
+        .skeleton(&options)
+        .with_context(|| format!("{}: no H-Anim skeleton", path.display()))?;
+    let (mesh, palettes, warnings) = avatar_model(&loaded);
+    for warning in warnings.iter().chain(&loaded.warnings) {
+        eprintln!("warning: {warning}");
+    }
+    if mesh.primitives.is_empty() {
+        bail!("{}: the file has no mesh to draw", path.display());
+    }
+    Ok(Figure {
+        humanoid,
+        avatar: Some((loaded, palettes)),
+        mesh: Some(mesh),
+    })
+}
+
+/// The camera a saved [`CameraSpec`] describes.
+fn saved_camera(spec: &CameraSpec) -> OrbitCamera {
+    OrbitCamera {
+        target_world: DVec3::from_array(spec.target).as_vec3(),
+        yaw: spec.yaw as f32,
+        pitch: spec.pitch as f32,
+        distance_m: spec.distance as f32,
+        orthographic: spec.orthographic,
+        ..OrbitCamera::default()
+    }
+}
+
+/// The body's extent: each capsule's ends widened by its radius.
+fn extent_points(capsules: &[Capsule]) -> Vec<Vec3> {
+    capsules
+        .iter()
+        .flat_map(|capsule| {
+            [capsule.start_world, capsule.end_world]
+                .into_iter()
+                .flat_map(move |point| {
+                    [Vec3::X, Vec3::Y, Vec3::Z]
+                        .into_iter()
+                        .flat_map(move |axis| {
+                            [-1.0, 1.0].map(|s| point + axis * s * capsule.radius_m)
+                        })
+                })
+        })
+        .collect()
+}
+
+pub fn run(args: RenderArgs) -> Result<()> {
+    let started = Instant::now();
+    let size_px = parse_size(&args.size)?;
+    let text = std::fs::read_to_string(&args.document)
+        .with_context(|| format!("cannot read {}", args.document.display()))?;
+    let document = Document::from_json(&text)
+        .map_err(|e| anyhow!("invalid document {}: {e}", args.document.display()))?;
+    let figure = figure(&args)?;
+    let skeleton = &figure.humanoid.skeleton;
+    let posture = document
+        .to_posture(skeleton)
+        .map_err(|e| anyhow!("{}: {e}", args.document.display()))?;
+    let frames = Frames::new(skeleton, &posture);
+    let capsules: Vec<Capsule> = posed_mannequin_bones(skeleton, &frames)
+        .into_iter()
+        .map(|bone| bone.capsule)
+        .collect();
+    let aspect = size_px[0] as f32 / size_px[1] as f32;
+    let camera = match (args.view, &document.camera) {
+        (Some(view), _) => {
+            let mut camera = OrbitCamera::default();
+            camera.set_view(view.preset());
+            camera.frame_points(&extent_points(&capsules), aspect);
+            camera
+        }
+        (None, Some(spec)) => saved_camera(spec),
+        (None, None) => {
+            let mut camera = OrbitCamera::default();
+            camera.frame_points(&extent_points(&capsules), aspect);
+            camera
+        }
+    };
+    let avatar_palettes = match &figure.avatar {
+        Some((avatar, palettes)) => palettes
+            .pose(avatar, &figure.humanoid, &posture)
+            .ok_or_else(|| anyhow!("the posture does not fit the avatar's skeleton"))?,
+        None => Vec::new(),
+    };
+    let markers = document
+        .tasks
+        .iter()
+        .filter_map(|task| task.kind.goal_point())
+        .map(|goal| Capsule::marker(DVec3::from_array(goal).as_vec3(), GOAL_COLOR_LINEAR))
+        .collect();
+    let scene = Scene {
+        capsules: if figure.mesh.is_some() {
+            Vec::new()
+        } else {
+            capsules
+        },
+        show_floor: true,
+        show_avatar: figure.mesh.is_some(),
+        avatar_palettes,
+        markers,
+        transparent_background: false,
+    };
+    let options = ImageOptions {
+        size_px,
+        transparent: args.transparent,
+        overlays: args.overlays,
+    };
+    let gpu = headless_gpu()?;
+    let mut renderer = SceneRenderer::new(&gpu.device);
+    renderer.set_avatar(&gpu.device, &gpu.queue, figure.mesh.as_ref());
+    let pixels = render_image(
+        &gpu.device,
+        &gpu.queue,
+        &mut renderer,
+        &camera,
+        &scene,
+        &options,
+    )?
+    .wait(&gpu.device)?;
+    let png = encode_png(&pixels)?;
+    std::fs::write(&args.out, png)
+        .with_context(|| format!("cannot write {}", args.out.display()))?;
+    eprintln!(
+        "{}: {}x{} on {} ({:?}) in {:.2} s",
+        args.out.display(),
+        pixels.width,
+        pixels.height,
+        gpu.adapter.name,
+        gpu.adapter.backend,
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
+}

@@ -1,0 +1,299 @@
+//! `stance render` end to end on whatever adapter the machine has (lavapipe on CI): the
+//! pixels of the PNG it writes, not only the file.
+
+#![allow(clippy::expect_used, clippy::unwrap_used, clippy::panic)]
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn stance(args: &[&str]) -> (bool, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_stance"))
+        .args(args)
+        .output()
+        .expect("runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn temp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("stance-render-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn write(name: &str, text: &str) -> String {
+    let path = temp(name);
+    std::fs::write(&path, text).unwrap();
+    path.to_string_lossy().into_owned()
+}
+
+/// A decoded PNG: width, height, RGBA rows.
+struct Image {
+    width: u32,
+    height: u32,
+    rgba: Vec<u8>,
+}
+
+impl Image {
+    fn alpha(&self, x: u32, y: u32) -> u8 {
+        self.rgba[((y * self.width + x) * 4 + 3) as usize]
+    }
+
+    /// The bounding box (x0, y0, x1, y1) of the pixels with any coverage.
+    fn covered_box(&self) -> (u32, u32, u32, u32) {
+        let mut bounds = (u32::MAX, u32::MAX, 0, 0);
+        for y in 0..self.height {
+            for x in 0..self.width {
+                if self.alpha(x, y) > 0 {
+                    bounds = (
+                        bounds.0.min(x),
+                        bounds.1.min(y),
+                        bounds.2.max(x),
+                        bounds.3.max(y),
+                    );
+                }
+            }
+        }
+        assert!(bounds.0 <= bounds.2, "nothing drawn");
+        bounds
+    }
+
+    fn covered_count(&self) -> usize {
+        self.rgba.chunks(4).filter(|p| p[3] > 0).count()
+    }
+}
+
+fn decode(path: &PathBuf) -> Image {
+    let bytes = std::fs::read(path).unwrap();
+    let mut reader = png::Decoder::new(std::io::Cursor::new(bytes))
+        .read_info()
+        .unwrap();
+    let mut rgba = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut rgba).unwrap();
+    assert_eq!(info.color_type, png::ColorType::Rgba);
+    Image {
+        width: info.width,
+        height: info.height,
+        rgba,
+    }
+}
+
+/// Renders `document` with `args` into a new PNG and decodes it.
+fn render(document: &str, name: &str, args: &[&str]) -> Image {
+    let out = temp(name);
+    let out_text = out.to_string_lossy().into_owned();
+    let mut all = vec!["render", document, "--out", &out_text];
+    all.extend_from_slice(args);
+    let (ok, err) = stance(&all);
+    assert!(ok, "{err}");
+    decode(&out)
+}
+
+const DEFAULT_DOCUMENT: &str = r#"{"version": 1}"#;
+
+#[test]
+fn the_front_view_is_wider_than_the_side_view_and_the_figure_is_centred() {
+    // Catches: a view preset ignored (same picture), a figure framed off-centre or cropped.
+    let doc = write("default.json", DEFAULT_DOCUMENT);
+    let front = render(
+        &doc,
+        "front.png",
+        &["--view", "front", "--size", "300x300", "--transparent"],
+    );
+    let side = render(
+        &doc,
+        "side.png",
+        &["--view", "left", "--size", "300x300", "--transparent"],
+    );
+    let (f0, fy0, f1, fy1) = front.covered_box();
+    let (s0, sy0, s1, sy1) = side.covered_box();
+    let (front_width, side_width) = (f1 - f0, s1 - s0);
+    assert!(
+        front_width as f32 > 1.4 * side_width as f32,
+        "front {front_width} px wide, side {side_width} px"
+    );
+    for (image, (x0, y0, x1, y1)) in [(&front, (f0, fy0, f1, fy1)), (&side, (s0, sy0, s1, sy1))] {
+        let centre = ((x0 + x1) as f32 / 2.0, (y0 + y1) as f32 / 2.0);
+        let middle = (image.width as f32 / 2.0, image.height as f32 / 2.0);
+        assert!(
+            (centre.0 - middle.0).abs() < 25.0 && (centre.1 - middle.1).abs() < 25.0,
+            "figure centred at {centre:?}"
+        );
+        // Framed on the body: tall, but not cropped at the top or bottom.
+        assert!(y1 - y0 > image.height / 2 && y0 > 0 && y1 < image.height - 1);
+    }
+}
+
+#[test]
+fn a_transparent_image_is_clear_in_the_corners_and_opaque_in_the_figure() {
+    // Catches: the background drawn anyway, alpha lost or left premultiplied in the PNG.
+    let doc = write("default-t.json", DEFAULT_DOCUMENT);
+    let image = render(
+        &doc,
+        "t.png",
+        &["--view", "front", "--size", "200x260", "--transparent"],
+    );
+    let (w, h) = (image.width, image.height);
+    for (x, y) in [(0, 0), (w - 1, 0), (0, h - 1), (w - 1, h - 1)] {
+        assert_eq!(image.alpha(x, y), 0, "corner {x},{y}");
+    }
+    // The camera aims at the body's middle: the pelvis is at the centre of the image.
+    assert_eq!(image.alpha(w / 2, h / 2), 255);
+    let middle = ((h / 2 * w + w / 2) * 4) as usize;
+    let [r, g, b] = [
+        image.rgba[middle],
+        image.rgba[middle + 1],
+        image.rgba[middle + 2],
+    ];
+    assert!(r > 90 && r > g && g > b, "clay-coloured body: {r} {g} {b}");
+    // Without --transparent the background is opaque.
+    let opaque = render(&doc, "o.png", &["--view", "front", "--size", "200x260"]);
+    assert_eq!(opaque.alpha(0, 0), 255);
+}
+
+#[test]
+fn the_image_has_exactly_the_size_asked() {
+    // Catches: width and height swapped, a row padding leaking into the image.
+    let doc = write("default-s.json", DEFAULT_DOCUMENT);
+    let image = render(&doc, "size.png", &["--size", "320x200"]);
+    assert_eq!((image.width, image.height), (320, 200));
+    assert_eq!(image.rgba.len(), 320 * 200 * 4);
+}
+
+#[test]
+fn raised_arms_reach_above_the_head_where_the_rest_posture_has_nothing() {
+    // Catches: the document's posture (or its saved camera) not reaching the picture.
+    let camera = r#""camera": {"target": [0, 1.0, 0], "yaw": 0, "pitch": 0, "distance": 4.5}"#;
+    let rest = write("rest.json", &format!(r#"{{"version": 1, {camera}}}"#));
+    let raised = write(
+        "raised.json",
+        &format!(
+            r#"{{"version": 1, {camera}, "posture": {{"l_shoulder": {{"rz": 2.9}}, "r_shoulder": {{"rz": -2.9}}}}}}"#
+        ),
+    );
+    let rest = render(&rest, "rest.png", &["--size", "240x240", "--transparent"]);
+    let raised = render(
+        &raised,
+        "raised.png",
+        &["--size", "240x240", "--transparent"],
+    );
+    let (_, rest_top, _, rest_bottom) = rest.covered_box();
+    let (_, raised_top, _, raised_bottom) = raised.covered_box();
+    // The same camera: the feet stay where they were, the hands rise well above the head.
+    assert!(
+        rest_bottom.abs_diff(raised_bottom) <= 2,
+        "{rest_bottom} {raised_bottom}"
+    );
+    let body_height = rest_bottom - rest_top;
+    assert!(
+        raised_top + body_height / 10 < rest_top,
+        "raised arms top at {raised_top}, the head at {rest_top}"
+    );
+}
+
+#[test]
+fn overlays_add_the_floor_and_the_goals() {
+    // Catches: --overlays ignored, or the floor drawn without it.
+    let doc = write(
+        "goal.json",
+        r#"{"version": 1, "tasks": [{"kind": "position", "joint": "l_wrist", "target": [0.5, 1.8, 0.3]}]}"#,
+    );
+    let plain = render(
+        &doc,
+        "plain.png",
+        &["--view", "front", "--size", "200x200", "--transparent"],
+    );
+    let overlaid = render(
+        &doc,
+        "overlaid.png",
+        &[
+            "--view",
+            "front",
+            "--size",
+            "200x200",
+            "--transparent",
+            "--overlays",
+        ],
+    );
+    assert!(
+        overlaid.covered_count() > plain.covered_count() + 2000,
+        "{} vs {}",
+        overlaid.covered_count(),
+        plain.covered_count()
+    );
+}
+
+#[test]
+fn an_avatar_is_drawn_with_its_skinned_mesh() {
+    // Catches: --avatar ignored, palettes that leave the mesh at the origin or collapsed.
+    let avatar = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../public/default-avatar.glb"
+    );
+    let doc = write("avatar.json", DEFAULT_DOCUMENT);
+    let mannequin = render(
+        &doc,
+        "m.png",
+        &["--view", "front", "--size", "200x200", "--transparent"],
+    );
+    let image = render(
+        &doc,
+        "a.png",
+        &[
+            "--view",
+            "front",
+            "--size",
+            "200x200",
+            "--transparent",
+            "--avatar",
+            avatar,
+        ],
+    );
+    let (_, y0, _, y1) = image.covered_box();
+    assert!(y1 - y0 > 100, "a standing figure: {y0}..{y1}");
+    let differing = image
+        .rgba
+        .chunks(4)
+        .zip(mannequin.rgba.chunks(4))
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(differing > 1000, "the avatar looks like the mannequin");
+}
+
+#[test]
+fn bad_documents_sizes_and_outputs_fail_with_a_reason_and_write_nothing() {
+    // Catches: a panic or a silent success on bad input, a half-written file.
+    let good = write("good.json", DEFAULT_DOCUMENT);
+    let bad_json = write("bad.json", "{ not json");
+    let bad_doc = write(
+        "bad-doc.json",
+        r#"{"version": 1, "posture": {"l_knee": {"rx": "bent"}}}"#,
+    );
+    let missing_dir = temp("no-such-dir").join("x.png");
+    let missing_dir = missing_dir.to_string_lossy().into_owned();
+    let cases: [(&str, &[&str], &str); 6] = [
+        (&bad_json, &[], "invalid document"),
+        (&bad_doc, &[], "l_knee"),
+        (&good, &["--size", "0x200"], "1 to 8192"),
+        (&good, &["--size", "9000x100"], "1 to 8192"),
+        (&good, &["--size", "big"], "WIDTHxHEIGHT"),
+        (&good, &["--out", &missing_dir], "cannot write"),
+    ];
+    for (index, (document, extra, expected)) in cases.iter().enumerate() {
+        let out = temp(&format!("fail-{index}.png"));
+        let out_text = out.to_string_lossy().into_owned();
+        let mut args = vec!["render", document];
+        if !extra.contains(&"--out") {
+            args.extend(["--out", &out_text]);
+        }
+        args.extend_from_slice(extra);
+        let (ok, err) = stance(&args);
+        assert!(!ok, "case {index} succeeded");
+        assert!(err.contains(expected), "case {index}: {err}");
+        assert!(!err.contains("panicked"), "case {index}: {err}");
+        assert!(!out.exists(), "case {index} wrote {}", out.display());
+        assert!(!std::path::Path::new(&missing_dir).exists());
+    }
+}

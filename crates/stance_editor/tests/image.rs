@@ -1,0 +1,132 @@
+//! *Save image* on the model alone (no egui): the command, the offscreen render on whatever
+//! adapter the machine has (lavapipe on CI), the asynchronous read-back polled frame by frame,
+//! and the PNG handed to the host.
+
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+mod clocked;
+use clocked::Clocked;
+
+use stance_editor::model::{IMAGE_FILE_NAME, ImageRequest};
+use stance_editor::{Command, MemoryHost};
+use stance_render::{ImageOptions, OrbitCamera, SceneRenderer, headless_gpu};
+
+/// A decoded PNG: width, height, RGBA.
+fn decode(bytes: &[u8]) -> (u32, u32, Vec<u8>) {
+    let mut reader = png::Decoder::new(std::io::Cursor::new(bytes.to_vec()))
+        .read_info()
+        .unwrap();
+    let mut rgba = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut rgba).unwrap();
+    (info.width, info.height, rgba)
+}
+
+/// Asks for an image with `options` and moves it along, frame by frame, until the host has
+/// it; returns the PNG's bytes.
+fn save_image(editor: &mut Clocked, host: &MemoryHost, options: ImageOptions) -> Vec<u8> {
+    let gpu = headless_gpu().expect("an adapter (lavapipe)");
+    let mut renderer = SceneRenderer::new(&gpu.device);
+    let before = host.inner.borrow().binary_downloads.len();
+    editor.apply(Command::SaveImage(ImageRequest {
+        options,
+        camera: OrbitCamera::default(),
+    }));
+    let mut frames = 0;
+    while editor
+        .model
+        .advance_image(&gpu.device, &gpu.queue, &mut renderer, None)
+    {
+        frames += 1;
+        assert!(frames < 2000, "the image never came back");
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    let downloads = &host.inner.borrow().binary_downloads;
+    assert_eq!(downloads.len(), before + 1, "{:?}", editor.model.notice());
+    let (name, bytes) = downloads.last().unwrap();
+    assert_eq!(name, IMAGE_FILE_NAME);
+    bytes.clone()
+}
+
+#[test]
+fn save_image_downloads_a_png_of_the_chosen_size_and_overlays_change_its_pixels() {
+    // Catches: the command lost, the read-back never polled to completion, the size not
+    // honoured, the overlays switch ignored.
+    let host = MemoryHost::default();
+    let mut editor = Clocked::with_host(host.clone());
+    editor.settle();
+    let options = ImageOptions {
+        size_px: [240, 180],
+        transparent: false,
+        overlays: true,
+    };
+    let with = decode(&save_image(&mut editor, &host, options));
+    let without = decode(&save_image(
+        &mut editor,
+        &host,
+        ImageOptions {
+            overlays: false,
+            ..options
+        },
+    ));
+    assert_eq!((with.0, with.1), (240, 180));
+    assert_eq!((without.0, without.1), (240, 180));
+    let differing = with
+        .2
+        .chunks(4)
+        .zip(without.2.chunks(4))
+        .filter(|(a, b)| a != b)
+        .count();
+    // The floor covers the lower part of the picture.
+    assert!(differing > 240 * 180 / 10, "{differing} pixels differ");
+    // Both opaque, and the body is in both.
+    assert!(with.2.chunks(4).all(|p| p[3] == 255));
+    let middle = ((90 * 240 + 120) * 4) as usize;
+    assert_eq!(with.2[middle..middle + 4], without.2[middle..middle + 4]);
+}
+
+#[test]
+fn a_transparent_image_without_overlays_is_clear_around_the_figure() {
+    // Catches: the transparent option dropped between the dialog's command and the render.
+    let host = MemoryHost::default();
+    let mut editor = Clocked::with_host(host.clone());
+    let (width, height, rgba) = decode(&save_image(
+        &mut editor,
+        &host,
+        ImageOptions {
+            size_px: [160, 160],
+            transparent: true,
+            overlays: false,
+        },
+    ));
+    let alpha = |x: u32, y: u32| rgba[((y * width + x) * 4 + 3) as usize];
+    assert_eq!(alpha(0, 0), 0);
+    assert_eq!(alpha(width - 1, height - 1), 0);
+    assert_eq!(alpha(width / 2, height / 2), 255, "the body's middle");
+}
+
+#[test]
+fn an_impossible_size_is_refused_with_a_notice_and_nothing_downloads() {
+    // Catches: a panic or a clamped image when the size is beyond the GPU's limits.
+    let host = MemoryHost::default();
+    let mut editor = Clocked::with_host(host.clone());
+    let gpu = headless_gpu().unwrap();
+    let mut renderer = SceneRenderer::new(&gpu.device);
+    editor.apply(Command::SaveImage(ImageRequest {
+        options: ImageOptions {
+            size_px: [0, 100],
+            ..ImageOptions::default()
+        },
+        camera: OrbitCamera::default(),
+    }));
+    assert!(
+        !editor
+            .model
+            .advance_image(&gpu.device, &gpu.queue, &mut renderer, None)
+    );
+    assert!(host.inner.borrow().binary_downloads.is_empty());
+    let notice = editor.model.notice().unwrap();
+    assert!(
+        notice.is_error && notice.text.contains("0x100"),
+        "{notice:?}"
+    );
+}
