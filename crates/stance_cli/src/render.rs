@@ -134,14 +134,13 @@ fn figure(args: &RenderArgs) -> Result<Figure> {
 
 /// The camera a saved [`CameraSpec`] describes.
 fn saved_camera(spec: &CameraSpec) -> OrbitCamera {
-    OrbitCamera {
-        target_world: DVec3::from_array(spec.target).as_vec3(),
-        yaw: spec.yaw as f32,
-        pitch: spec.pitch as f32,
-        distance_m: spec.distance as f32,
-        orthographic: spec.orthographic,
-        ..OrbitCamera::default()
-    }
+    OrbitCamera::saved(
+        spec.target,
+        spec.yaw,
+        spec.pitch,
+        spec.distance,
+        spec.orthographic,
+    )
 }
 
 /// The body's extent: each capsule's ends widened by its radius.

@@ -92,6 +92,29 @@ impl Default for OrbitCamera {
 }
 
 impl OrbitCamera {
+    /// A saved view (a document's `camera`: target, yaw, pitch, distance, projection) with
+    /// the default field of view.
+    pub fn saved(
+        target_world: [f64; 3],
+        yaw: f64,
+        pitch: f64,
+        distance_m: f64,
+        orthographic: bool,
+    ) -> Self {
+        Self {
+            target_world: Vec3::new(
+                target_world[0] as f32,
+                target_world[1] as f32,
+                target_world[2] as f32,
+            ),
+            yaw: yaw as f32,
+            pitch: pitch as f32,
+            distance_m: distance_m as f32,
+            orthographic,
+            ..Self::default()
+        }
+    }
+
     /// Radians of rotation per pixel of drag.
     pub const ORBIT_SPEED: f32 = 0.008;
     const MIN_DISTANCE_M: f32 = 0.2;

@@ -125,14 +125,13 @@ impl ViewportPanel {
         }
         self.view_request = model.view_request();
         if let Some(spec) = model.session().camera() {
-            self.camera = OrbitCamera {
-                target_world: DVec3::from_array(spec.target).as_vec3(),
-                yaw: spec.yaw as f32,
-                pitch: spec.pitch as f32,
-                distance_m: spec.distance as f32,
-                orthographic: spec.orthographic,
-                ..OrbitCamera::default()
-            };
+            self.camera = OrbitCamera::saved(
+                spec.target,
+                spec.yaw,
+                spec.pitch,
+                spec.distance,
+                spec.orthographic,
+            );
         }
     }
 
