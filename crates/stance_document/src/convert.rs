@@ -15,7 +15,7 @@ use crate::document::{
 
 pub use stance_hanim::resolve_joint;
 
-pub(crate) fn joint_at(skeleton: &Skeleton, name: &str, at: &str) -> Result<usize, DocumentError> {
+fn joint_at(skeleton: &Skeleton, name: &str, at: &str) -> Result<usize, DocumentError> {
     resolve_joint(skeleton, name)
         .ok_or_else(|| DocumentError::field(at, format!("unknown joint `{name}`")))
 }
@@ -34,10 +34,28 @@ impl PostureValues {
     /// Like [`PostureValues::to_posture`], with `at` as the path of this posture in errors.
     pub fn to_posture_at(&self, skeleton: &Skeleton, at: &str) -> Result<Posture, DocumentError> {
         let mut p = Posture::rest(skeleton);
+        self.for_each_dof(skeleton, at, |dof, value, there| {
+            if !value.is_finite() {
+                return Err(DocumentError::field(there, "not a finite number"));
+            }
+            p.values_mut()[dof] = value;
+            Ok(())
+        })?;
+        Ok(p)
+    }
+
+    /// Calls `f(dof, value, path)` for every value, its joint and DOF found on `skeleton`
+    /// (H-Anim aliases too); errors at `{at}.joint` (unknown joint) or `{at}.joint.dof` (a DOF
+    /// the joint does not have), and `f`'s own.
+    pub(crate) fn for_each_dof(
+        &self,
+        skeleton: &Skeleton,
+        at: &str,
+        mut f: impl FnMut(usize, f64, &str) -> Result<(), DocumentError>,
+    ) -> Result<(), DocumentError> {
         for (name, dofs) in &self.joints {
             let here = format!("{at}.{name}");
-            let j = joint_at(skeleton, name, &here)?;
-            let joint = &skeleton.joints()[j];
+            let joint = &skeleton.joints()[joint_at(skeleton, name, &here)?];
             for (d, value) in dofs.iter() {
                 let there = format!("{here}.{}", d.name());
                 let k = joint.dofs.iter().position(|&x| x == d).ok_or_else(|| {
@@ -46,13 +64,10 @@ impl PostureValues {
                         format!("joint `{name}` has no DOF `{}`", d.name()),
                     )
                 })?;
-                if !value.is_finite() {
-                    return Err(DocumentError::field(there, "not a finite number"));
-                }
-                p.values_mut()[joint.dof_start + k] = value;
+                f(joint.dof_start + k, value, &there)?;
             }
         }
-        Ok(p)
+        Ok(())
     }
 
     /// Every DOF of every joint that has DOF, by joint name (the shape `stance solve` prints).

@@ -115,9 +115,9 @@ fn engine() -> GeneralPurpose {
 
 /// The URL fragment (without `#`) that carries `document`. Values are quantised (see the module
 /// documentation); non-finite numbers, which a validated document never holds, are written as 0.
-/// Format 4 when the document sets a joint stiffness, else 3 when a task is a comfort task, else 2
-/// when the document has a timeline or a task
-/// interval, else 1 (the oldest format that holds it, for older readers).
+/// Format 4 when the document sets a joint stiffness, else 3 when a task is a comfort task,
+/// else 2 when the document has a timeline or a task interval, else 1 (the oldest format that
+/// holds it, for older readers).
 pub fn encode(document: &Document) -> String {
     let timed = document.motion.is_some() || document.tasks.iter().any(|t| t.interval.is_some());
     let comfort = document

@@ -38,18 +38,9 @@ pub fn apply_stiffness(
 ) -> Result<Skeleton, DocumentError> {
     validate_stiffness(values, "stiffness")?;
     let mut out = skeleton.clone();
-    for (name, dofs) in &values.joints {
-        let here = format!("stiffness.{name}");
-        let j = crate::convert::joint_at(skeleton, name, &here)?;
-        let joint = &skeleton.joints()[j];
-        for (d, value) in dofs.iter() {
-            let there = format!("{here}.{}", d.name());
-            let k = joint.dofs.iter().position(|&x| x == d).ok_or_else(|| {
-                DocumentError::field(&there, format!("joint `{name}` has no DOF `{}`", d.name()))
-            })?;
-            out.set_stiffness(joint.dof_start + k, value)
-                .map_err(|e| DocumentError::field(&there, e.to_string()))?;
-        }
-    }
+    values.for_each_dof(skeleton, "stiffness", |dof, value, there| {
+        out.set_stiffness(dof, value)
+            .map_err(|e| DocumentError::field(there, e.to_string()))
+    })?;
     Ok(out)
 }
