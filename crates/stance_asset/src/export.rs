@@ -436,45 +436,40 @@ pub(crate) fn export_with(
 /// binds; a thumbnail outside the written images is left out.
 fn vrm_for_export(vrm: &crate::VrmExtension, images: usize) -> Value {
     let mut value = vrm.value.clone();
-    let clear = |bind: &mut Value, key: &str| {
-        if let Some(binds) = bind.get_mut(key) {
-            *binds = json!([]);
-        }
-    };
-    if vrm.name == "VRM" {
-        if let Some(groups) = value
-            .pointer_mut("/blendShapeMaster/blendShapeGroups")
-            .and_then(Value::as_array_mut)
-        {
-            for group in groups {
-                clear(group, "binds");
-            }
-        }
-        let texture = value.pointer("/meta/texture").and_then(Value::as_u64);
-        if texture.is_some_and(|t| t as usize >= images)
-            && let Some(meta) = value.get_mut("meta").and_then(Value::as_object_mut)
-        {
-            meta.remove("texture");
-        }
+    let (thumbnail, expressions): (&str, &[(&str, &str)]) = if vrm.name == "VRM" {
+        (
+            "texture",
+            &[("/blendShapeMaster/blendShapeGroups", "binds")],
+        )
     } else {
-        for kind in ["preset", "custom"] {
-            if let Some(expressions) = value
-                .pointer_mut(&format!("/expressions/{kind}"))
-                .and_then(Value::as_object_mut)
-            {
-                for expression in expressions.values_mut() {
-                    clear(expression, "morphTargetBinds");
-                }
+        (
+            "thumbnailImage",
+            &[
+                ("/expressions/preset", "morphTargetBinds"),
+                ("/expressions/custom", "morphTargetBinds"),
+            ],
+        )
+    };
+    for (path, binds) in expressions {
+        // VRM 0.x's groups are an array, VRM 1.0's expressions objects by name.
+        let groups: Vec<&mut Value> = match value.pointer_mut(path) {
+            Some(Value::Array(groups)) => groups.iter_mut().collect(),
+            Some(Value::Object(groups)) => groups.values_mut().collect(),
+            _ => Vec::new(),
+        };
+        for group in groups {
+            if let Some(bound) = group.get_mut(*binds) {
+                *bound = json!([]);
             }
         }
-        let thumbnail = value
-            .pointer("/meta/thumbnailImage")
-            .and_then(Value::as_u64);
-        if thumbnail.is_some_and(|t| t as usize >= images)
-            && let Some(meta) = value.get_mut("meta").and_then(Value::as_object_mut)
-        {
-            meta.remove("thumbnailImage");
-        }
+    }
+    if let Some(meta) = value.get_mut("meta").and_then(Value::as_object_mut)
+        && meta
+            .get(thumbnail)
+            .and_then(Value::as_u64)
+            .is_some_and(|t| t as usize >= images)
+    {
+        meta.remove(thumbnail);
     }
     value
 }

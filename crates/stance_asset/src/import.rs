@@ -334,27 +334,24 @@ pub fn import(
     } else {
         SourceFormat::Gltf
     };
-    if let Some(vrm1) = ext.and_then(|e| e.get("VRMC_vrm")) {
-        format = SourceFormat::Vrm1;
-        if let Some(bones) = vrm1
-            .get("humanoid")
-            .and_then(|h| h.get("humanBones"))
-            .and_then(Value::as_object)
-        {
-            for (bone, v) in bones {
+    match vrm.as_ref().map(|v| (v.name.as_str(), &v.value)) {
+        Some(("VRMC_vrm", vrm1)) => {
+            format = SourceFormat::Vrm1;
+            let bones = vrm1
+                .pointer("/humanoid/humanBones")
+                .and_then(Value::as_object);
+            for (bone, v) in bones.into_iter().flatten() {
                 if let Some(n) = v.get("node").and_then(Value::as_u64) {
                     vrm_bones.push((bone.clone(), sz(n)));
                 }
             }
         }
-    } else if let Some(vrm0) = ext.and_then(|e| e.get("VRM")) {
-        format = SourceFormat::Vrm0;
-        if let Some(bones) = vrm0
-            .get("humanoid")
-            .and_then(|h| h.get("humanBones"))
-            .and_then(Value::as_array)
-        {
-            for b in bones {
+        Some((_, vrm0)) => {
+            format = SourceFormat::Vrm0;
+            let bones = vrm0
+                .pointer("/humanoid/humanBones")
+                .and_then(Value::as_array);
+            for b in bones.into_iter().flatten() {
                 if let (Some(bone), Some(n)) = (
                     b.get("bone").and_then(Value::as_str),
                     b.get("node").and_then(Value::as_u64),
@@ -363,6 +360,7 @@ pub fn import(
                 }
             }
         }
+        None => {}
     }
     for (bone, n) in &vrm_bones {
         if *n >= nodes.len() {
