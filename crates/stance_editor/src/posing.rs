@@ -376,6 +376,16 @@ impl PosingSession {
     /// Restores a document exactly as it was saved, without solving: undo, redo, opening a
     /// link or a saved pose show that very posture. On error the session stays as it was.
     pub fn restore_document(&mut self, document: &Document) -> Result<(), PosingError> {
+        self.take_document(document)?;
+        self.report = None;
+        self.settled = true;
+        self.refresh();
+        Ok(())
+    }
+
+    /// The document's posture, tasks, stiffness, timeline and camera in place of the
+    /// session's (a grab ends); nothing changes on error.
+    fn take_document(&mut self, document: &Document) -> Result<(), PosingError> {
         let posture = document.posture.to_posture(self.skeleton())?;
         self.apply_stiffness_overrides(&document.stiffness)?;
         self.posture = posture;
@@ -384,42 +394,22 @@ impl PosingSession {
         self.motion_revision = self.motion_revision.wrapping_add(1);
         self.camera = document.camera;
         self.grab = None;
-        self.report = None;
-        self.settled = true;
-        self.refresh();
         Ok(())
     }
 
     /// Sets one DOF (joint mode), clamped to its limits; the solver runs again so that the
     /// tasks above still hold.
     pub fn set_dof(&mut self, dof: usize, value: f64) {
-        if !value.is_finite() {
-            return;
-        }
-        let skeleton = &self.humanoid.skeleton;
-        let (Some(&lower), Some(&upper)) = (
-            skeleton.lower_limits().get(dof),
-            skeleton.upper_limits().get(dof),
-        ) else {
-            return;
-        };
-        let clamped = if lower <= upper {
-            value.clamp(lower, upper)
-        } else {
-            value
-        };
-        if let Some(slot) = self.posture.values_mut().get_mut(dof) {
-            *slot = clamped;
-            self.wake();
-        }
+        self.set_dofs(&[(dof, value)]);
     }
 
-    /// Sets several DOF at once (a hand preset), each clamped into its limits as by
-    /// [`Self::set_dof`]; the solver runs again once.
+    /// Sets several DOF at once (a hand preset), each clamped into its limits (a value that
+    /// is not finite or a DOF the body lacks is left out); the solver runs again once.
     pub fn set_dofs(&mut self, values: &[(usize, f64)]) {
         let skeleton = &self.humanoid.skeleton;
         let (lower, upper) = (skeleton.lower_limits(), skeleton.upper_limits());
         let posture = self.posture.values_mut();
+        let mut changed = false;
         for &(dof, value) in values {
             let (Some(&low), Some(&high), Some(slot)) =
                 (lower.get(dof), upper.get(dof), posture.get_mut(dof))
@@ -432,9 +422,12 @@ impl PosingSession {
                 } else {
                     value
                 };
+                changed = true;
             }
         }
-        self.wake();
+        if changed {
+            self.wake();
+        }
     }
 
     /// The swivel angle of a limb in the current posture and the swivel intervals that keep
@@ -537,14 +530,7 @@ impl PosingSession {
 
     /// Loads a document; on error the session stays as it was.
     pub fn load_document(&mut self, document: &Document) -> Result<(), PosingError> {
-        let posture = document.posture.to_posture(self.skeleton())?;
-        self.apply_stiffness_overrides(&document.stiffness)?;
-        self.posture = posture;
-        self.tasks = document.tasks.clone();
-        self.motion = document.motion.clone();
-        self.motion_revision = self.motion_revision.wrapping_add(1);
-        self.camera = document.camera;
-        self.grab = None;
+        self.take_document(document)?;
         self.wake();
         Ok(())
     }
