@@ -8,7 +8,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, anyhow, bail};
 use glam::{DVec3, Vec3};
 use stance_asset::LoadOptions;
-use stance_document::{CameraSpec, Document};
+use stance_document::Document;
 use stance_hanim::{HumanoidSkeleton, LevelOfArticulation, SkeletonOptions, default_skeleton};
 use stance_ik::Frames;
 use stance_render::{
@@ -132,17 +132,6 @@ fn figure(args: &RenderArgs) -> Result<Figure> {
     })
 }
 
-/// The camera a saved [`CameraSpec`] describes.
-fn saved_camera(spec: &CameraSpec) -> OrbitCamera {
-    OrbitCamera::saved(
-        spec.target,
-        spec.yaw,
-        spec.pitch,
-        spec.distance,
-        spec.orthographic,
-    )
-}
-
 /// The body's extent: each capsule's ends widened by its radius.
 fn extent_points(capsules: &[Capsule]) -> Vec<Vec3> {
     capsules
@@ -186,7 +175,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
             camera.frame_points(&extent_points(&capsules), aspect);
             camera
         }
-        (None, Some(spec)) => saved_camera(spec),
+        (None, Some(spec)) => OrbitCamera::saved(
+            spec.target,
+            spec.yaw,
+            spec.pitch,
+            spec.distance,
+            spec.orthographic,
+        ),
         (None, None) => {
             let mut camera = OrbitCamera::default();
             camera.frame_points(&extent_points(&capsules), aspect);
