@@ -101,9 +101,9 @@ impl std::fmt::Debug for PosingSession {
 
 /// What woke the solver. A comfort level never says "met": it moves the posture while its
 /// cost falls. It does so after a change of what the body must do (a task added, edited or
-/// removed, a pin, a released pull, a document loaded, a stiffness); a posture edited
-/// directly (a DOF typed in, a hand preset, a swivel, undo, sensors, a timeline frame) stays
-/// as the user left it, the other tasks still holding.
+/// removed, a pin, a document loaded, a stiffness); a posture edited directly (a pull, a DOF
+/// typed in, a hand preset, a swivel, undo, sensors, a timeline frame) stays as the user left
+/// it, the other tasks still holding.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Wake {
     /// The tasks changed: every level, comfort included, acts.
@@ -584,10 +584,11 @@ impl PosingSession {
         }
     }
 
-    /// Releases the pulled point: the body keeps the posture it reached.
+    /// Releases the pulled point: the body keeps the posture it reached (a pull is a direct
+    /// edit: comfort does not take the hand back down).
     pub fn end_grab(&mut self) {
         self.grab = None;
-        self.wake(Wake::Tasks);
+        self.wake(Wake::Posture);
     }
 
     /// The world position of the grabbed point in the current posture.

@@ -348,6 +348,33 @@ fn a_dof_typed_in_stays_as_typed_under_the_default_comfort() {
 }
 
 #[test]
+fn a_hand_pulled_up_and_let_go_stays_up_under_the_default_comfort() {
+    let mut session = session();
+    let wrist = session.skeleton().joint_index("r_radiocarpal").unwrap();
+    let start = session.frames().joint_position[wrist];
+    session.begin_grab(wrist, start);
+    let goal = start + DVec3::new(0.1, 0.5, 0.2);
+    for step in 1..=30 {
+        session.move_grab(start + (goal - start) * (f64::from(step) / 30.0));
+        session.solve_frame(None);
+    }
+    settle(&mut session);
+    let released = session.frames().joint_position[wrist];
+    assert!(
+        (released - goal).length() < 0.02,
+        "the hand followed the pull"
+    );
+    session.end_grab();
+    settle(&mut session);
+    let after = session.frames().joint_position[wrist];
+    assert!(
+        (after - released).length() < 1e-9,
+        "the hand stays where it was let go: moved {} m",
+        (after - released).length()
+    );
+}
+
+#[test]
 fn after_a_reach_the_default_comfort_settles_a_less_loaded_posture_than_rest_attraction() {
     let mut with_comfort = session();
     settle(&mut with_comfort);
