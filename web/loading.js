@@ -31,6 +31,17 @@ function isModel(name) {
   return /\.(glb|vrm|gltf)$/i.test(name.split(/[?#]/)[0]);
 }
 
+// The byte arrays one after the other in one array.
+function concat(arrays) {
+  const all = new Uint8Array(arrays.reduce((sum, bytes) => sum + bytes.length, 0));
+  let offset = 0;
+  for (const bytes of arrays) {
+    all.set(bytes, offset);
+    offset += bytes.length;
+  }
+  return all;
+}
+
 function describe(error) {
   if (error === undefined || error === null) return "unknown error";
   if (typeof error === "string") return error;
@@ -81,19 +92,12 @@ async function deliver(handle, files) {
     const decoded = await decodeTextures(files);
     if (decoded?.file && decoded.images.length) {
       const { images } = decoded;
-      const total = images.reduce((sum, image) => sum + image.rgba.length, 0);
-      const rgba = new Uint8Array(total);
-      let offset = 0;
-      for (const image of images) {
-        rgba.set(image.rgba, offset);
-        offset += image.rgba.length;
-      }
       handle.decoded_images(
         decoded.file,
         new Uint32Array(images.map((i) => i.index)),
         new Uint32Array(images.map((i) => i.width)),
         new Uint32Array(images.map((i) => i.height)),
-        rgba,
+        concat(images.map((i) => i.rgba)),
       );
     }
     progress("Building the avatar…");
@@ -101,14 +105,8 @@ async function deliver(handle, files) {
   if (files.length === 1) {
     handle.open_file(files[0].name, files[0].bytes);
   } else if (files.length > 1) {
-    const total = files.reduce((sum, f) => sum + f.bytes.length, 0);
-    const all = new Uint8Array(total);
-    let offset = 0;
-    for (const f of files) {
-      all.set(f.bytes, offset);
-      offset += f.bytes.length;
-    }
-    handle.open_files(files.map((f) => f.name), new Uint32Array(files.map((f) => f.bytes.length)), all);
+    const lengths = new Uint32Array(files.map((f) => f.bytes.length));
+    handle.open_files(files.map((f) => f.name), lengths, concat(files.map((f) => f.bytes)));
   }
 }
 
@@ -152,13 +150,7 @@ export async function fetchWithProgress(handle, url) {
       if (total) progress(`Loading avatar… ${Math.round((100 * received) / total)} %`, received / total);
       else progress(`Loading avatar… ${(received / 1048576).toFixed(1)} MB`);
     }
-    const bytes = new Uint8Array(received);
-    let offset = 0;
-    for (const chunk of chunks) {
-      bytes.set(chunk, offset);
-      offset += chunk.length;
-    }
-    await deliver(handle, [{ name: url, bytes }]);
+    await deliver(handle, [{ name: url, bytes: concat(chunks) }]);
   } catch (error) {
     handle.report_failure(`The avatar at ${url} could not be loaded: ${describe(error)}`);
   } finally {

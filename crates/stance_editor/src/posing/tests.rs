@@ -15,6 +15,19 @@ fn settle(session: &mut PosingSession) -> usize {
     frames
 }
 
+/// Grabs `joint` where it is and pulls it to `goal` over 30 frames, then lets the solver
+/// settle (the grab still held); returns where the pull started.
+fn pull_to(session: &mut PosingSession, joint: usize, goal: DVec3) -> DVec3 {
+    let start = session.frames().joint_position[joint];
+    session.begin_grab(joint, start);
+    for step in 1..=30 {
+        session.move_grab(start + (goal - start) * (f64::from(step) / 30.0));
+        session.solve_frame(None);
+    }
+    settle(session);
+    start
+}
+
 #[test]
 fn the_default_body_stands_with_its_tasks_met() {
     let mut session = session();
@@ -44,14 +57,8 @@ fn pulling_a_hand_moves_it_while_the_feet_stay_pinned() {
         session.joint_position("l_talocrural").unwrap(),
         session.joint_position("r_talocrural").unwrap(),
     );
-    let start = session.frames().joint_position[wrist];
-    session.begin_grab(wrist, start);
-    let goal = start + DVec3::new(0.2, 0.35, 0.25);
-    for step in 1..=30 {
-        session.move_grab(start + (goal - start) * (f64::from(step) / 30.0));
-        session.solve_frame(None);
-    }
-    settle(&mut session);
+    let goal = session.frames().joint_position[wrist] + DVec3::new(0.2, 0.35, 0.25);
+    pull_to(&mut session, wrist, goal);
     let reached = session.grabbed_point_world().unwrap();
     assert!(
         (reached - goal).length() < 0.02,
@@ -72,14 +79,8 @@ fn pulling_a_hand_moves_it_while_the_feet_stay_pinned() {
 /// mass and how far ahead of the ankles it ends.
 fn long_forward_pull(session: &mut PosingSession) -> DVec3 {
     let wrist = session.skeleton().joint_index("r_radiocarpal").unwrap();
-    let start = session.frames().joint_position[wrist];
-    session.begin_grab(wrist, start);
-    let goal = start + DVec3::new(0.0, 0.2, 1.2);
-    for step in 1..=30 {
-        session.move_grab(start + (goal - start) * (f64::from(step) / 30.0));
-        session.solve_frame(None);
-    }
-    settle(session);
+    let goal = session.frames().joint_position[wrist] + DVec3::new(0.0, 0.2, 1.2);
+    pull_to(session, wrist, goal);
     session.frames().center_of_mass()
 }
 
@@ -351,14 +352,8 @@ fn a_dof_typed_in_stays_as_typed_under_the_default_comfort() {
 fn a_hand_pulled_up_and_let_go_stays_up_under_the_default_comfort() {
     let mut session = session();
     let wrist = session.skeleton().joint_index("r_radiocarpal").unwrap();
-    let start = session.frames().joint_position[wrist];
-    session.begin_grab(wrist, start);
-    let goal = start + DVec3::new(0.1, 0.5, 0.2);
-    for step in 1..=30 {
-        session.move_grab(start + (goal - start) * (f64::from(step) / 30.0));
-        session.solve_frame(None);
-    }
-    settle(&mut session);
+    let goal = session.frames().joint_position[wrist] + DVec3::new(0.1, 0.5, 0.2);
+    pull_to(&mut session, wrist, goal);
     let released = session.frames().joint_position[wrist];
     assert!(
         (released - goal).length() < 0.02,
