@@ -4,9 +4,11 @@
 //! file its URIs name. What loads is also built into a solver skeleton, posed at rest,
 //! exported and imported again (a VRM stays a VRM); its short animations become clips.
 //!
-//! Seeds are files prefixed with the selector byte, e.g. from `crates/stance_asset`:
-//! `mkdir -p fuzz/corpus/import && (printf '\x02'; cat ../../public/default-avatar.glb) >
-//! fuzz/corpus/import/default-avatar`.
+//! Seeds: `fuzz/seeds/import/`, small valid files prefixed with their selector byte (a skinned
+//! LOA2 GLB, textured, a `.gltf` with data URIs, a `.gltf` with its `.bin` in the multi-file
+//! layout, VRM 0.x and 1.0, EXT_meshopt_compression, an animation, a static triangle), written
+//! by `cargo test -p stance_asset --test fuzz_seeds -- --ignored`; `scripts/fuzz.sh import`
+//! runs the target from them.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
