@@ -16,12 +16,9 @@ use super::{
 use crate::document::{
     AvatarReference, Document, DofValues, LimbName, PostureValues, TaskKindSpec, TaskSpec, dof_slot,
 };
-use crate::motion::{MotionKey, MotionSection, TaskInterval};
-use crate::stiffness::StiffnessValues;
-
-/// Most frames a linked timeline may declare.
-const MAX_FRAMES: u64 = 10_000_000;
+use crate::motion::{MAX_FRAME_COUNT, MotionKey, MotionSection, TaskInterval};
 use crate::range_coder::{Decoder, UintModel};
+use crate::stiffness::StiffnessValues;
 
 struct Reader<'a> {
     d: Decoder<'a>,
@@ -364,15 +361,16 @@ fn motion(r: &mut Reader, tasks: &mut [TaskSpec]) -> R<Option<MotionSection>> {
     }
     let frame_time = f64::from_bits(r.d.direct(64));
     let frame_count = r.d.direct(32);
-    if frame_count > MAX_FRAMES {
+    if frame_count > MAX_FRAME_COUNT as u64 {
         return Err(format!("a timeline of {frame_count} frames"));
     }
     let n = r.count("keys")?;
     let mut keys = Vec::with_capacity(n);
     for _ in 0..n {
+        // A key may lie beyond the timeline's last frame (as in a document).
         let frame = r.d.direct(32);
-        if frame >= frame_count {
-            return Err(format!("a key at frame {frame} of {frame_count}"));
+        if frame >= MAX_FRAME_COUNT as u64 {
+            return Err(format!("a key at frame {frame}"));
         }
         let posture = r.posture()?;
         keys.push(MotionKey {
