@@ -574,6 +574,33 @@ fn a_payload_ending_in_many_zero_bytes_opens() {
     round_trip(&d);
 }
 
+/// Found by the `link` fuzz target: a payload with a joint angle of 2^62 steps and more
+/// (4e14 rad) opened, and written again held another angle (the writer clamps, the reader did
+/// not). Quantised values beyond 2^48 steps are now refused, and within them a decoded link
+/// written again holds the same values.
+#[test]
+fn a_number_beyond_the_quantisation_range_is_refused() {
+    let fuzzed = "861b3d66a63a23c05612bf73152f31db1ac42f21f25b4a7ab0d1639520d8c71324d59c6d480037af35\
+        12dfe4d5b10036fbc305e7a75e6a82240100000000000042ae42b4133ca53c9323fce8ae00000000000000\
+        00000040";
+    let payload: Vec<u8> = (0..fuzzed.len() / 2)
+        .map(|i| u8::from_str_radix(&fuzzed[2 * i..2 * i + 2], 16).unwrap())
+        .collect();
+    let mut body = vec![2, payload.len() as u8];
+    body.extend_from_slice(&payload);
+    let e = link::decode(&reframe(body)).unwrap_err();
+    assert!(e.to_string().contains("out of range"), "{e}");
+    // Far beyond the range in a document: written as the largest value, which reads back.
+    let mut d = Document::default();
+    d.posture.set("l_knee", Dof::Rx, 1e20);
+    d.posture.set("humanoid_root", Dof::Tx, -1e20);
+    let back = link::decode(&link::encode(&d)).unwrap();
+    let rx = back.posture.get("l_knee", Dof::Rx).unwrap();
+    assert!((rx / ROTATION_STEP_RAD - 2f64.powi(48)).abs() < 1.0, "{rx}");
+    let again = link::decode(&link::encode(&back)).unwrap();
+    assert_eq!(again.posture, back.posture);
+}
+
 const ZERO_TAIL: &str = r#"{"avatar":{"url":"https://example.org/avatars/jin.vrm"},
 "posture":{"humanoid_root":{"tx":0.1,"ty":-0.02,"tz":0.0,"rx":0.0,"ry":0.5000368306963754,"rz":0.0},
  "l_knee":{"rx":0.3000220984178253},

@@ -7,8 +7,8 @@ use stance_ik::{Axes, Dof};
 use super::models::{
     ACTIVE, AVATAR_URL, AXES_XYZ, AXIS_Y, AXIS_Z, HANIM_JOINT, HAS_INTERVAL, HAS_JOINTS, HAS_LIMB,
     HAS_MOTION, HAS_ORIENTATION, HAS_REFERENCE, HAS_SWIVEL, JOINT_MASK_DEFAULT, KINDS,
-    MASKS_DEFAULT, Models, POINT_ZERO, WEIGHT_DECIMAL, WEIGHT_ONE, default_mask, dequantise,
-    from_decimal, in_loa_base,
+    MASKS_DEFAULT, MAX_QUANTISED, Models, POINT_ZERO, WEIGHT_DECIMAL, WEIGHT_ONE, default_mask,
+    dequantise, from_decimal, in_loa_base,
 };
 use super::{
     DIRECTION_STEP, MAX_COUNT, MAX_OVERRUN, MAX_STRING_BYTES, POSITION_STEP_M, ROTATION_STEP_RAD,
@@ -71,10 +71,13 @@ impl Reader<'_> {
     }
 
     fn signed(model: &mut UintModel, d: &mut Decoder, step: f64) -> R<f64> {
-        model
+        let q = model
             .decode_signed(d)
-            .map(|q| dequantise(q, step))
-            .ok_or_else(|| "bad number".to_owned())
+            .ok_or_else(|| "bad number".to_owned())?;
+        if q.unsigned_abs() > MAX_QUANTISED.unsigned_abs() {
+            return Err(format!("a number out of range ({q} steps)"));
+        }
+        Ok(dequantise(q, step))
     }
 
     fn position(&mut self) -> R<[f64; 3]> {
