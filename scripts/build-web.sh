@@ -32,7 +32,11 @@ cp "$three/build/three.module.js" "$three/build/three.core.js" "$example/vendor/
 cp "$three/examples/jsm/loaders/GLTFLoader.js" "$example/vendor/three/examples/jsm/loaders/"
 cp "$three/examples/jsm/utils/BufferGeometryUtils.js" "$example/vendor/three/examples/jsm/utils/"
 cp "$three/examples/jsm/libs/meshopt_decoder.module.js" "$example/vendor/three/examples/jsm/libs/"
+# Precompressed copies (brotli and gzip) that scripts/serve.mjs sends where accepted.
+node scripts/precompress.mjs dist/pkg/stance_web_bg.wasm dist/pkg/stance_web.js \
+  "$example/stance-ik/pkg/stance_ik_bg.wasm"
 size=$(stat -c %s dist/pkg/stance_web_bg.wasm)
-gzip_size=$(gzip -9 -c dist/pkg/stance_web_bg.wasm | wc -c)
+gzip_size=$(stat -c %s dist/pkg/stance_web_bg.wasm.gz)
+brotli_size=$(stat -c %s dist/pkg/stance_web_bg.wasm.br)
 echo "$gzip_size" > dist/pkg/wasm-gzip-bytes.txt
-say "dist/ ready: wasm $((size / 1024)) KiB, $((gzip_size / 1024)) KiB gzipped"
+say "dist/ ready: wasm $((size / 1024)) KiB, $((gzip_size / 1024)) KiB gzipped, $((brotli_size / 1024)) KiB brotli"

@@ -24,10 +24,20 @@ export function startServer(port = 0, host = "127.0.0.1") {
       if (!file.startsWith(root)) throw Object.assign(new Error("outside"), { code: "ENOENT" });
       const info = await stat(file);
       if (!info.isFile()) throw Object.assign(new Error("not a file"), { code: "ENOENT" });
-      const body = await readFile(file);
+      // A precompressed copy (written by scripts/precompress.mjs) where the browser takes it.
+      const accepted = String(request.headers["accept-encoding"] ?? "");
+      let encoding = null;
+      for (const [name, suffix] of [["br", ".br"], ["gzip", ".gz"]]) {
+        if (encoding || !new RegExp(`\\b${name}\\b`).test(accepted)) continue;
+        const copy = await stat(file + suffix).catch(() => null);
+        if (copy?.isFile() && copy.mtimeMs >= info.mtimeMs) encoding = [name, suffix];
+      }
+      const body = await readFile(encoding ? file + encoding[1] : file);
       response.writeHead(200, {
         "Content-Type": types[extname(file)] ?? "application/octet-stream",
         "Cache-Control": "no-cache",
+        "Vary": "Accept-Encoding",
+        ...(encoding ? { "Content-Encoding": encoding[0] } : {}),
       });
       response.end(body);
     } catch (error) {

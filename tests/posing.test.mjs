@@ -3,7 +3,10 @@
 // (world and screen) and the rectangles of the main buttons.
 import { after, before, describe, test } from "node:test";
 import assert from "node:assert/strict";
-import { CONFIGURATIONS, launch, openEditor, saveArtifact, freshStoragePerTab, serve } from "./browser.mjs";
+import { readFileSync } from "node:fs";
+import {
+  CONFIGURATIONS, decodePng, isFigureColour, launch, openEditor, saveArtifact, freshStoragePerTab, serve,
+} from "./browser.mjs";
 
 let site;
 let context;
@@ -224,6 +227,37 @@ describe("posing in the browser", () => {
     await page.waitForFunction(() => document.body.dataset.firstFrameMs);
     const reloaded = await settled(page);
     assert.deepEqual(reloaded.document, edited.document);
+    await page.close();
+  });
+
+  test("File > Save image downloads a PNG of the posture drawn by the page's GPU", async () => {
+    const { page, errors } = await freshEditor();
+    await clickButton(page, "file_menu");
+    await page.waitForTimeout(300);
+    await clickButton(page, "save_image_menu");
+    await page.waitForTimeout(300);
+    const download = page.waitForEvent("download", { timeout: 30_000 });
+    await clickButton(page, "save_image");
+    const file = await download;
+    assert.equal(file.suggestedFilename(), "stance-posture.png");
+    const bytes = readFileSync(await file.path());
+    saveArtifact("saved-image-webgl2.png", bytes);
+    const image = decodePng(bytes);
+    assert.deepEqual([image.width, image.height], [1280, 960], "the default size");
+    // The figure stands in the middle: figure-coloured pixels there, none in the top corners
+    // (the background; the floor grid fills the bottom ones).
+    let middle = 0;
+    let corners = 0;
+    for (let y = 0; y < image.height; y += 4) {
+      for (let x = 0; x < image.width; x += 4) {
+        if (!isFigureColour(image.at(x, y))) continue;
+        if (Math.abs(x - image.width / 2) < image.width / 4) middle += 1;
+        if ((x < 80 || x > image.width - 80) && y < 80) corners += 1;
+      }
+    }
+    assert.ok(middle > 500, `only ${middle} figure pixels in the middle of the image`);
+    assert.equal(corners, 0, "the top corners show the background");
+    assert.deepEqual(errors, [], `console errors: ${errors.join(" / ")}`);
     await page.close();
   });
 });

@@ -81,6 +81,32 @@ for (const [name, configuration] of Object.entries(CONFIGURATIONS)) {
   });
 }
 
+describe("the site as served", () => {
+  test("the wasm comes precompressed (brotli, gzip), 3 MiB or less gzipped", async () => {
+    const wasm = `${site.url}pkg/stance_web_bg.wasm`;
+    const size = async (encoding) => {
+      const response = await fetch(wasm, { headers: { "Accept-Encoding": encoding } });
+      const body = new Uint8Array(await response.arrayBuffer());
+      return { encoding: response.headers.get("content-encoding"), bytes: body.length };
+    };
+    // Node's fetch decodes what it asked for: the length on the wire is the file's.
+    const plain = await size("identity");
+    const br = await fetch(wasm, { headers: { "Accept-Encoding": "br" } });
+    const gz = await fetch(wasm, { headers: { "Accept-Encoding": "gzip" } });
+    assert.equal(plain.encoding, null);
+    assert.equal(br.headers.get("content-encoding"), "br");
+    assert.equal(gz.headers.get("content-encoding"), "gzip");
+    const { statSync } = await import("node:fs");
+    const dist = new URL("../dist/pkg/", import.meta.url);
+    const gzBytes = statSync(new URL("stance_web_bg.wasm.gz", dist)).size;
+    const brBytes = statSync(new URL("stance_web_bg.wasm.br", dist)).size;
+    console.log(`[site] wasm ${(plain.bytes / 1024).toFixed(0)} KiB, ${(gzBytes / 1024).toFixed(0)} KiB gzipped, `
+      + `${(brBytes / 1024).toFixed(0)} KiB brotli`);
+    assert.equal((await br.arrayBuffer()).byteLength, plain.bytes, "the brotli copy decodes to the wasm");
+    assert.ok(gzBytes <= 3 * 1024 * 1024, `${gzBytes} bytes gzipped`);
+  });
+});
+
 describe("editor without any graphics backend", () => {
   test("shows a readable error screen, not a blank page", async () => {
     // WebGL off and WebGPU without an adapter: neither backend can start.

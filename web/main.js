@@ -2,6 +2,7 @@
 // readable error screen instead of a blank page when it cannot start.
 import init, { WebHandle } from "./pkg/stance_web.js";
 import { connectSensor, disconnectSensor } from "./sensors.js";
+import { fetchWithProgress, openFiles } from "./loading.js";
 
 const loading = document.getElementById("loading");
 const errorScreen = document.getElementById("error");
@@ -68,12 +69,11 @@ window.stanceHost = {
     fileInput.value = "";
     fileInput.click();
   },
-  // Fetches an avatar with progress on the loading screen; the bytes go to the editor.
+  // Fetches an avatar with a progress bar; its textures are decoded off the main thread and
+  // the bytes go to the editor.
   fetchFile(url) {
-    fetchWithProgress(url).then(
-      (bytes) => window.stance?.open_file(url, bytes),
-      (error) => window.stance?.report_failure(`The avatar at ${url} could not be loaded: ${describe(error)}`),
-    );
+    if (!window.stance) throw new Error("the editor is not running");
+    fetchWithProgress(window.stance, url);
   },
 };
 
@@ -87,63 +87,7 @@ function offerDownload(fileName, blob) {
   setTimeout(() => URL.revokeObjectURL(anchor.href), 10000);
 }
 
-async function fetchWithProgress(url) {
-  const status = loading.querySelector("p");
-  loading.hidden = false;
-  status.textContent = "Loading avatar…";
-  try {
-    const response = await fetch(url);
-    if (!response.ok) throw new Error(`the server answered ${response.status} ${response.statusText}`);
-    const total = Number(response.headers.get("content-length")) || 0;
-    const reader = response.body.getReader();
-    const chunks = [];
-    let received = 0;
-    for (;;) {
-      const { done, value } = await reader.read();
-      if (done) break;
-      chunks.push(value);
-      received += value.length;
-      status.textContent = total
-        ? `Loading avatar… ${Math.round((100 * received) / total)} %`
-        : `Loading avatar… ${(received / 1048576).toFixed(1)} MB`;
-    }
-    const bytes = new Uint8Array(received);
-    let offset = 0;
-    for (const chunk of chunks) {
-      bytes.set(chunk, offset);
-      offset += chunk.length;
-    }
-    return bytes;
-  } finally {
-    loading.hidden = true;
-  }
-}
 let ignoreNextHashChange = null;
-
-// Files picked or dropped: one opens as it is; several together (a .gltf with its .bin and
-// images, a folder) go to the editor as one set, so that the .gltf finds its resources.
-async function openFiles(handle, files) {
-  const read = [];
-  for (const { file, path } of files) {
-    try {
-      read.push({ name: path || file.name, bytes: new Uint8Array(await file.arrayBuffer()) });
-    } catch (error) {
-      handle.report_failure(`${file.name} could not be read: ${describe(error)}`);
-    }
-  }
-  if (read.length === 1) {
-    handle.open_file(read[0].name, read[0].bytes);
-  } else if (read.length > 1) {
-    const total = read.reduce((sum, f) => sum + f.bytes.length, 0);
-    const all = new Uint8Array(total);
-    let offset = 0;
-    for (const f of read) {
-      all.set(f.bytes, offset);
-      offset += f.bytes.length;
-    }
-    handle.open_files(read.map((f) => f.name), new Uint32Array(read.map((f) => f.bytes.length)), all);
-  }
-}
 
 // The files of a drop, folders walked (their files named with their path in the folder).
 async function droppedFiles(dataTransfer) {

@@ -142,6 +142,8 @@ struct Ctx<'a> {
     limits: &'a Limits,
     decoded_bytes: u64,
     warnings: Vec<String>,
+    /// Images the caller decoded (see [`crate::load_avatar_with_images`]).
+    decoded_images: &'a [crate::DecodedImage],
 }
 
 fn bad_index(
@@ -220,6 +222,7 @@ pub fn import(
     bytes: &[u8],
     options: &LoadOptions,
     resolve: &mut Resolver<'_>,
+    decoded_images: &[crate::DecodedImage],
 ) -> Result<Avatar, AssetError> {
     let limits = &options.limits;
     let (json_bytes, bin, is_glb) = split_container(bytes, limits)?;
@@ -271,6 +274,7 @@ pub fn import(
         limits,
         decoded_bytes: 0,
         warnings: Vec::new(),
+        decoded_images,
     };
     ctx.load_buffers(resolve)?;
 

@@ -146,7 +146,7 @@ impl Default for LoadOptions {
 
 /// Imports a `.glb`, `.vrm` or `.gltf` (data URIs only) from memory.
 pub fn load_avatar(bytes: &[u8], options: &LoadOptions) -> Result<Avatar, AssetError> {
-    import::import(bytes, options, &mut |_| None)
+    import::import(bytes, options, &mut |_| None, &[])
 }
 
 /// Imports with a resolver for external URIs (`.gltf` next to its `.bin` and images).
@@ -155,5 +155,31 @@ pub fn load_avatar_with(
     options: &LoadOptions,
     resolve: &mut Resolver<'_>,
 ) -> Result<Avatar, AssetError> {
-    import::import(bytes, options, resolve)
+    import::import(bytes, options, resolve, &[])
+}
+
+/// An image of the file already decoded by the caller (a browser's own decoder, off the main
+/// thread): the glTF image `index` as `width x height` RGBA8 pixels, not premultiplied.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct DecodedImage {
+    /// Index in the file's `images`.
+    pub index: usize,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width * height * 4` bytes.
+    pub rgba8: Vec<u8>,
+}
+
+/// [`load_avatar_with`] where some images come decoded: those are used as they are (within
+/// the same size limits), the others are decoded here. A decoded image of the wrong size is
+/// set aside with a warning and the file's own bytes are decoded instead.
+pub fn load_avatar_with_images(
+    bytes: &[u8],
+    options: &LoadOptions,
+    resolve: &mut Resolver<'_>,
+    decoded: &[DecodedImage],
+) -> Result<Avatar, AssetError> {
+    import::import(bytes, options, resolve, decoded)
 }

@@ -216,7 +216,8 @@ impl StanceApp {
         egui::MenuBar::new().ui(ui, |ui| {
             ui.label(RichText::new("Stance").strong());
             ui.separator();
-            ui.menu_button("File", |ui| self.file_menu(ui));
+            let file = ui.menu_button("File", |ui| self.file_menu(ui));
+            self.button_rects.push(("file_menu", file.response.rect));
             ui.menu_button("Avatar", |ui| self.avatar_menu(ui));
             ui.menu_button("Edit", |ui| self.edit_menu(ui));
             ui.menu_button("View", |ui| self.view_menu(ui));
@@ -274,7 +275,9 @@ impl StanceApp {
             command = Some(Command::ExportPosedAvatar);
         }
         ui.separator();
-        if ui.button("Save image (PNG)…").clicked() {
+        let save_image = ui.button("Save image (PNG)…");
+        self.button_rects.push(("save_image_menu", save_image.rect));
+        if save_image.clicked() {
             self.windows.image.open = true;
             ui.close();
         }

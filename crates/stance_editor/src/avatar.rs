@@ -2,7 +2,9 @@
 //! GPU model (vertices, materials, textures) with the palettes that pose it every frame.
 
 use glam::Mat4;
-use stance_asset::{Avatar, LoadOptions, export_glb, find_resource, load_avatar_with};
+use stance_asset::{
+    Avatar, DecodedImage, LoadOptions, export_glb, find_resource, load_avatar_with_images,
+};
 use stance_hanim::{
     HumanoidSkeleton, LevelOfArticulation, Mapping, SkeletonOptions, build_skeleton,
 };
@@ -24,6 +26,8 @@ pub struct LoadedAvatar {
     pub vertex_count: usize,
     /// Triangles of all its meshes, for the panels.
     pub triangle_count: usize,
+    /// Texture images the host decoded for it (the others were decoded by the importer).
+    pub images_from_host: usize,
 }
 
 impl std::fmt::Debug for LoadedAvatar {
@@ -42,21 +46,25 @@ impl LoadedAvatar {
         bytes: &[u8],
         loa: LevelOfArticulation,
     ) -> Result<(Self, HumanoidSkeleton), String> {
-        Self::load_with(name, bytes, &[], loa)
+        Self::load_with(name, bytes, &[], &[], loa)
     }
 
     /// [`LoadedAvatar::load`] for a `.gltf` given with its files (`.bin` buffers, images),
-    /// found by the URIs the file uses; a missing one is named.
+    /// found by the URIs the file uses (a missing one is named), and with the texture images
+    /// the host already decoded (the others are decoded here).
     pub fn load_with(
         name: &str,
         bytes: &[u8],
         resources: &[(String, Vec<u8>)],
+        decoded: &[DecodedImage],
         loa: LevelOfArticulation,
     ) -> Result<(Self, HumanoidSkeleton), String> {
         let mut resolve = |uri: &str| find_resource(resources, uri).map(<[u8]>::to_vec);
-        let avatar = load_avatar_with(bytes, &LoadOptions::default(), &mut resolve)
+        let avatar = load_avatar_with_images(bytes, &LoadOptions::default(), &mut resolve, decoded)
             .map_err(|error| error.to_string())?;
-        Self::from_avatar(name, avatar, loa)
+        let (mut loaded, humanoid) = Self::from_avatar(name, avatar, loa)?;
+        loaded.images_from_host = decoded.len();
+        Ok((loaded, humanoid))
     }
 
     /// An imported (or generated) avatar, its skeleton built at `loa`.
@@ -87,6 +95,7 @@ impl LoadedAvatar {
                 warnings,
                 vertex_count,
                 triangle_count,
+                images_from_host: 0,
             },
             humanoid,
         ))

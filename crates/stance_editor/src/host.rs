@@ -108,6 +108,14 @@ pub enum HostMessage {
     /// Files picked or dropped together (name, contents), e.g. a `.gltf` with its `.bin`
     /// and images.
     OpenFiles(Vec<(String, Vec<u8>)>),
+    /// The texture images of the avatar file `file`, decoded by the host (the browser, off the
+    /// main thread): its import that follows takes them as they are.
+    DecodedImages {
+        /// The file (name or URL) the images belong to.
+        file: String,
+        /// The images' pixels.
+        images: Vec<stance_asset::DecodedImage>,
+    },
     /// The host failed to do what the editor asked (reading a file...).
     Failed(String),
     /// The sensor device is open.

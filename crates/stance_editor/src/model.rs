@@ -62,6 +62,8 @@ pub struct EditorModel {
     pub(crate) avatar: Option<LoadedAvatar>,
     /// The URL the avatar came from (links and autosave name it); `None` for local files.
     pub(crate) avatar_url: Option<String>,
+    /// Texture images the host decoded for the avatar file it opens next (file, images).
+    decoded_images: Option<(String, Vec<stance_asset::DecodedImage>)>,
     /// A document waiting for its avatar to arrive (a link or autosave naming a URL).
     pending_document: Option<Document>,
     pub(crate) mapping_corrections: MappingCorrections,
@@ -120,6 +122,7 @@ impl EditorModel {
             gesture: None,
             avatar: None,
             avatar_url: None,
+            decoded_images: None,
             pending_document: None,
             mapping_corrections: MappingCorrections::default(),
             trace: Vec::new(),
@@ -439,6 +442,7 @@ impl EditorModel {
             }
             Command::OpenFile { name, bytes } => self.open_file(&name, bytes),
             Command::OpenFiles(files) => self.open_files(files),
+            Command::DecodedImages { file, images } => self.decoded_images = Some((file, images)),
             Command::SaveToLibrary(name) => self.save_to_library(&name),
             Command::LoadFromLibrary(index) => self.load_from_library(index),
             Command::DeleteFromLibrary(index) => self.delete_from_library(index),
@@ -718,7 +722,11 @@ impl EditorModel {
     fn load_avatar(&mut self, name: &str, bytes: &[u8], resources: &[(String, Vec<u8>)]) {
         let loa = self.session.level_of_articulation();
         let mut mapping_note = None;
-        let loaded = LoadedAvatar::load_with(name, bytes, resources, loa).and_then(
+        let decoded = match self.decoded_images.take() {
+            Some((file, images)) if file == name => images,
+            _ => Vec::new(),
+        };
+        let loaded = LoadedAvatar::load_with(name, bytes, resources, &decoded, loa).and_then(
             |(mut avatar, mut humanoid)| {
                 mapping_note = self
                     .mapping_corrections

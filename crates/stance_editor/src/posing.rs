@@ -68,6 +68,9 @@ pub struct PosingSession {
     frames: Frames,
     statuses: Vec<TaskStatus>,
     settled: bool,
+    /// Whether the comfort levels may move the posture in the next solves: after a change of
+    /// tasks or a released pull, not after a direct edit of the posture (see [`Wake`]).
+    comfort_armed: bool,
     revision: u64,
     /// The document's timeline and keys.
     motion: Option<MotionSection>,
@@ -94,6 +97,19 @@ impl std::fmt::Debug for PosingSession {
             .field("settled", &self.settled)
             .finish()
     }
+}
+
+/// What woke the solver. A comfort level never says "met": it moves the posture while its
+/// cost falls. It does so after a change of what the body must do (a task added, edited or
+/// removed, a pin, a document loaded, a stiffness); a posture edited directly (a pull, a DOF
+/// typed in, a hand preset, a swivel, undo, sensors, a timeline frame) stays as the user left
+/// it, the other tasks still holding.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Wake {
+    /// The tasks changed: every level, comfort included, acts.
+    Tasks,
+    /// The posture was edited directly: comfort waits for the next change of tasks.
+    Posture,
 }
 
 /// Why a session could not be made.
@@ -166,6 +182,8 @@ impl PosingSession {
             frames,
             statuses: Vec::new(),
             settled: false,
+            // A new body stands at rest as built until the user gives it something to do.
+            comfort_armed: false,
             revision: 0,
             motion: None,
             motion_revision: 0,
@@ -190,10 +208,10 @@ impl PosingSession {
         // Balance as the support polygon of the pinned feet (an inequality): the body leans
         // freely as long as its centre of mass stays over them.
         tasks.push(TaskSpec::balance());
-        // The rest-posture attraction, not yet the comfort task: comfort keeps moving a posture
-        // after every direct edit (a finger preset, a DOF typed in, sensors streaming) while
-        // its cost falls (see docs/comfort.md); it is one click away in Add task.
-        tasks.push(TaskSpec::rest_attraction());
+        // Comfort at the lowest level: it settles the posture after every change of tasks
+        // (never after a direct edit, see `Wake`); the rest-posture attraction is one click
+        // away in Add task.
+        tasks.push(TaskSpec::comfort());
         tasks
     }
 
@@ -267,13 +285,13 @@ impl PosingSession {
     /// Replaces the task list (an edit from the panels); the solver runs again.
     pub fn set_tasks(&mut self, tasks: Vec<TaskSpec>) {
         self.tasks = tasks;
-        self.wake();
+        self.wake(Wake::Tasks);
     }
 
     /// Replaces the posture (undo, reset, mirror, sensors); the solver runs again.
     pub fn set_posture(&mut self, posture: Posture) {
         self.posture = posture;
-        self.wake();
+        self.wake(Wake::Posture);
     }
 
     /// Holds these joints where they are in the following solves (driven from outside: the
@@ -290,7 +308,7 @@ impl PosingSession {
             (0..skeleton.dof_count()).all(|d| self.solver.is_locked(d) == dofs.contains(&d));
         if !unchanged {
             self.solver.set_locked_dofs(&dofs);
-            self.wake();
+            self.wake(Wake::Posture);
         }
     }
 
@@ -341,7 +359,7 @@ impl PosingSession {
             }
         }
         if changed {
-            self.wake();
+            self.wake(Wake::Posture);
         }
     }
 
@@ -379,6 +397,7 @@ impl PosingSession {
         self.take_document(document)?;
         self.report = None;
         self.settled = true;
+        self.comfort_armed = false;
         self.refresh();
         Ok(())
     }
@@ -426,7 +445,7 @@ impl PosingSession {
             }
         }
         if changed {
-            self.wake();
+            self.wake(Wake::Posture);
         }
     }
 
@@ -480,7 +499,7 @@ impl PosingSession {
     /// Ends [`Self::hold_limb_end`].
     pub fn release_hold(&mut self) {
         if self.held.take().is_some() {
-            self.wake();
+            self.wake(Wake::Posture);
         }
     }
 
@@ -520,7 +539,7 @@ impl PosingSession {
             TimedFrame { time, frames }
         });
         self.grab = None;
-        self.wake();
+        self.wake(Wake::Posture);
     }
 
     /// The tasks as the solver takes them now (see [`timed_tasks`]).
@@ -531,7 +550,7 @@ impl PosingSession {
     /// Loads a document; on error the session stays as it was.
     pub fn load_document(&mut self, document: &Document) -> Result<(), PosingError> {
         self.take_document(document)?;
-        self.wake();
+        self.wake(Wake::Tasks);
         Ok(())
     }
 
@@ -549,7 +568,7 @@ impl PosingSession {
             point_local,
             target_world: point_world,
         });
-        self.wake();
+        self.wake(Wake::Tasks);
     }
 
     /// Moves the pulled point's goal.
@@ -565,10 +584,11 @@ impl PosingSession {
         }
     }
 
-    /// Releases the pulled point: the body keeps the posture it reached.
+    /// Releases the pulled point: the body keeps the posture it reached (a pull is a direct
+    /// edit: comfort does not take the hand back down).
     pub fn end_grab(&mut self) {
         self.grab = None;
-        self.wake();
+        self.wake(Wake::Posture);
     }
 
     /// The world position of the grabbed point in the current posture.
@@ -587,7 +607,7 @@ impl PosingSession {
             return;
         };
         self.tasks.push(TaskSpec::pin(&name, position.to_array()));
-        self.wake();
+        self.wake(Wake::Tasks);
     }
 
     /// Back to the rest posture (tasks kept).
@@ -639,10 +659,10 @@ impl PosingSession {
         let mut tasks = Vec::with_capacity(self.tasks.len() + 1);
         let specs = self.timed_tasks();
         // While a part is pulled or held the body follows the pointer; comfort settles the
-        // posture once it is let go.
-        let interactive = self.grab.is_some() || self.held.is_some();
+        // posture once it is let go, and leaves a posture edited directly as it is.
+        let comfort = self.comfort_armed && self.grab.is_none() && self.held.is_none();
         for spec in &specs {
-            if interactive && matches!(spec.kind, TaskKindSpec::Comfort { .. }) {
+            if !comfort && matches!(spec.kind, TaskKindSpec::Comfort { .. }) {
                 continue;
             }
             if let Ok(converted) = spec.to_solver_tasks_on(&self.humanoid, &specs) {
@@ -686,7 +706,8 @@ impl PosingSession {
         before != self.posture.values()
     }
 
-    fn wake(&mut self) {
+    fn wake(&mut self, cause: Wake) {
+        self.comfort_armed = cause == Wake::Tasks;
         self.settled = false;
         self.refresh();
     }

@@ -751,8 +751,8 @@ fn a_level_dragged_by_its_title_takes_the_place_of_another_and_undo_restores_the
             .map(|task| (task.level, task.kind.name().to_owned()))
             .collect()
     };
-    // Default: feet at 1, balance at 2, comfort (posture) at 10.
-    assert!(levels_of(&before).contains(&(10, "posture".to_owned())));
+    // Default: feet at 1, balance at 2, comfort at 10.
+    assert!(levels_of(&before).contains(&(10, "comfort".to_owned())));
     let from = harness.get_by_label("Level 10").rect().center();
     let onto = harness.get_by_label("Level 1").rect().center();
     let path: Vec<Pos2> = (0..=12)
@@ -762,7 +762,7 @@ fn a_level_dragged_by_its_title_takes_the_place_of_another_and_undo_restores_the
     settle(&mut harness);
     let after = document(&harness);
     let moved = levels_of(&after);
-    assert!(moved.contains(&(1, "posture".to_owned())), "{moved:?}");
+    assert!(moved.contains(&(1, "comfort".to_owned())), "{moved:?}");
     assert!(
         after
             .tasks

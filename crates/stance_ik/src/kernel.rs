@@ -259,10 +259,14 @@ pub fn prioritized_step(
     kn.theta.clear();
     kn.theta.resize(n, 0.0);
     kn.budget = params.max_dof_step;
-    let last_with_rows = levels.iter().rposition(|l| !l.dx.is_empty());
+    // A projection level (a cost's gradient) with a zero step adds nothing: a comfort level
+    // waiting for the levels above it.
+    let has_work =
+        |l: &LevelSystem| !l.dx.is_empty() && (!l.projection || l.dx.iter().any(|v| *v != 0.0));
+    let last_with_rows = levels.iter().rposition(has_work);
     for (k, level) in levels.iter().enumerate() {
         let m = level.dx.len();
-        let usable = m > 0 && level.jacobian_t.shape() == (n, m) && kn.rank < nf;
+        let usable = has_work(level) && level.jacobian_t.shape() == (n, m) && kn.rank < nf;
         if usable {
             level_step(
                 kn,

@@ -632,15 +632,24 @@ impl Solver {
                 let err = &mut sys.dx.as_mut_slice()[row..row + rows];
                 let jt = &mut sys.jacobian_t.as_mut_slice()[row * n..(row + rows) * n];
                 let support = &self.supports[ti];
-                let r = match task.comfort_system(
-                    skeleton,
-                    &self.frames,
-                    values,
-                    support,
-                    err,
-                    jt,
-                    Some(limits),
-                ) {
+                // A comfort level waiting for the levels above it (see below) only weighs its
+                // cost: no gradient, an empty row the kernel skips.
+                let waiting = layout.comfort && !above_met;
+                let comfort = if waiting {
+                    err.fill(0.0);
+                    task.comfort_cost(skeleton, &self.frames, values)
+                } else {
+                    task.comfort_system(
+                        skeleton,
+                        &self.frames,
+                        values,
+                        support,
+                        err,
+                        jt,
+                        Some(limits),
+                    )
+                };
+                let r = match comfort {
                     Some(cost) => cost,
                     None => {
                         let r = task.error(skeleton, &self.frames, values, err, Some(limits));
@@ -693,7 +702,10 @@ impl Solver {
             for &ti in &layout.tasks {
                 let task = &tasks[ti];
                 self.scratch.resize(task.rows(), 0.0);
-                let r = task.error(skeleton, &self.frames, values, &mut self.scratch, None);
+                let r = match task.comfort_cost(skeleton, &self.frames, values) {
+                    Some(cost) => cost,
+                    None => task.error(skeleton, &self.frames, values, &mut self.scratch, None),
+                };
                 *res += r * r;
                 *wres += task.weight * r * r;
             }

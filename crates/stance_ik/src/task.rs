@@ -769,6 +769,20 @@ impl Task {
         }
     }
 
+    /// A comfort task's cost alone (no gradient: a level waiting for the levels above it, or
+    /// a candidate posture weighed); `None` for other kinds.
+    pub(crate) fn comfort_cost(
+        &self,
+        skeleton: &Skeleton,
+        frames: &Frames,
+        values: &[f64],
+    ) -> Option<f64> {
+        let TaskKind::Comfort { model } = &self.kind else {
+            return None;
+        };
+        Some(model.terms(skeleton, frames, values).total)
+    }
+
     /// A comfort task's row and error at once (one gradient): `err[0]` and `jac_t` as
     /// [`Task::error`] and [`Task::jacobian_t`] write them; returns the cost. `None` for
     /// other kinds.

@@ -211,6 +211,48 @@ impl WebHandle {
         self.send(HostMessage::OpenFiles(files));
     }
 
+    /// The texture images of the avatar file `file` (as named to `open_file`/`open_files`),
+    /// decoded by the browser: image `indices[i]` is `widths[i] x heights[i]` RGBA8 pixels,
+    /// one after the other in `rgba`. Sent before the file itself; its import takes them as
+    /// they are. Sizes that do not add up send nothing (the import decodes the images).
+    #[wasm_bindgen]
+    pub fn decoded_images(
+        &self,
+        file: String,
+        indices: Vec<u32>,
+        widths: Vec<u32>,
+        heights: Vec<u32>,
+        rgba: Vec<u8>,
+    ) {
+        if indices.len() != widths.len() || widths.len() != heights.len() {
+            return;
+        }
+        let mut images = Vec::with_capacity(indices.len());
+        let mut at = 0usize;
+        for ((&index, &width), &height) in indices.iter().zip(&widths).zip(&heights) {
+            let size = (width as usize)
+                .checked_mul(height as usize)
+                .and_then(|n| n.checked_mul(4));
+            let Some(pixels) = size
+                .and_then(|size| Some((size, at.checked_add(size)?)))
+                .and_then(|(size, end)| Some((size, rgba.get(at..end)?)))
+            else {
+                return;
+            };
+            at += pixels.0;
+            images.push(stance_asset::DecodedImage {
+                index: index as usize,
+                width,
+                height,
+                rgba8: pixels.1.to_vec(),
+            });
+        }
+        if at != rgba.len() {
+            return;
+        }
+        self.send(HostMessage::DecodedImages { file, images });
+    }
+
     /// Tells the editor that something the page did for it failed.
     #[wasm_bindgen]
     pub fn report_failure(&self, reason: String) {

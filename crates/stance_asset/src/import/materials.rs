@@ -52,6 +52,9 @@ pub(super) fn import_textures(
             continue;
         }
         if images[source].is_none() {
+            images[source] = given_image(ctx, source)?;
+        }
+        if images[source].is_none() {
             match decode_image(ctx, source, resolve) {
                 Ok(img) => images[source] = Some(img),
                 Err(e @ AssetError::TooLarge { .. }) => return Err(e),
@@ -95,6 +98,34 @@ fn wrap_of(w: Checked<json::texture::WrappingMode>) -> Wrap {
         Checked::Valid(json::texture::WrappingMode::MirroredRepeat) => Wrap::Mirror,
         _ => Wrap::Repeat,
     }
+}
+
+/// The caller's decoded pixels of image `index`, checked against the limits and charged;
+/// `None` (with a warning when they were wrong) to decode the file's own bytes.
+fn given_image(ctx: &mut Ctx<'_>, index: usize) -> Result<Option<(u32, u32, Vec<u8>)>, AssetError> {
+    let Some(given) = ctx.decoded_images.iter().find(|d| d.index == index) else {
+        return Ok(None);
+    };
+    let side = ctx.limits.max_texture_side;
+    let expected = u64::from(given.width) * u64::from(given.height) * 4;
+    if given.width == 0 || given.height == 0 || expected != given.rgba8.len() as u64 {
+        ctx.warnings.push(format!(
+            "image {index}: the decoded pixels ({} bytes) do not fit {}x{}; decoded again",
+            given.rgba8.len(),
+            given.width,
+            given.height
+        ));
+        return Ok(None);
+    }
+    if given.width > side || given.height > side {
+        return Err(AssetError::TooLarge {
+            what: format!("image {index} side"),
+            size: u64::from(given.width.max(given.height)),
+            limit: u64::from(side),
+        });
+    }
+    ctx.charge(given.rgba8.len(), &format!("image {index}"))?;
+    Ok(Some((given.width, given.height, given.rgba8.clone())))
 }
 
 fn decode_image(

@@ -39,14 +39,18 @@ pub(super) fn show(ui: &mut egui::Ui, model: &mut EditorModel) {
                 continue;
             };
             ui.label(finger.map_or("hand", Finger::name));
-            let mut percent = current * 100.0;
+            // The slider shows whole percents and reports a change when it rounds the value
+            // it is given: only a move away from the shown value is the user's edit (a posture
+            // moved by the solver must not become an undo step).
+            let shown = (current * 100.0).round();
+            let mut percent = shown;
             let slider = egui::Slider::new(&mut percent, 0.0..=100.0)
                 .suffix("%")
                 .max_decimals(0);
             let response = ui
                 .add(slider)
                 .on_hover_text("curl: 0 % straight, 100 % closed as far as the joints allow");
-            if response.changed() {
+            if response.changed() && percent != shown {
                 model.apply(Command::Hands(HandCommand::Curl {
                     hands,
                     finger,

@@ -44,6 +44,7 @@ impl PageState<'_> {
                 "triangles": avatar.triangle_count,
                 "uploaded": self.viewport.avatar_uploaded,
                 "mapped": avatar.mapping_summary().0,
+                "images_from_host": avatar.images_from_host,
             })),
             "figure": self.viewport.figure_shown(model),
             "selected": model.selected_joint().and_then(|joint| skeleton.joints().get(joint)).map(|joint| joint.name.clone()),

@@ -207,6 +207,14 @@ pub enum Command {
     /// Open files picked or dropped together (name, contents): a `.gltf` among them opens as
     /// an avatar with the others as its `.bin` buffers and images; the rest open in turn.
     OpenFiles(Vec<(String, Vec<u8>)>),
+    /// The texture images of the avatar file `file` decoded by the host: its next import
+    /// takes them instead of decoding them.
+    DecodedImages {
+        /// The file (name or URL) they belong to.
+        file: String,
+        /// The images' pixels.
+        images: Vec<stance_asset::DecodedImage>,
+    },
     /// Save the posture in the library under a name.
     SaveToLibrary(String),
     /// Load the library's entry `index`.
@@ -344,6 +352,7 @@ impl From<HostMessage> for Command {
             HostMessage::OpenLink(fragment) => Command::OpenLink(fragment),
             HostMessage::OpenFile { name, bytes } => Command::OpenFile { name, bytes },
             HostMessage::OpenFiles(files) => Command::OpenFiles(files),
+            HostMessage::DecodedImages { file, images } => Command::DecodedImages { file, images },
             HostMessage::Failed(reason) => Command::HostFailed(reason),
             HostMessage::SensorConnected { device } => {
                 Command::Sensors(SensorCommand::Connected { device })

@@ -1,6 +1,7 @@
 //! Joint stiffness in a session: the body's anatomical defaults (kept from when it was built)
 //! and the document's overrides, applied to the skeleton the solver works on.
 
+use super::Wake;
 use stance_document::{StiffnessValues, apply_stiffness};
 
 use super::{PosingError, PosingSession};
@@ -40,7 +41,7 @@ impl PosingSession {
             }
         }
         self.apply_stiffness_overrides(&overrides)?;
-        self.wake();
+        self.wake(Wake::Tasks);
         Ok(())
     }
 

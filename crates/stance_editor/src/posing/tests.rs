@@ -296,3 +296,121 @@ fn documents_round_trip_and_a_bad_one_changes_nothing() {
     other.load_document(&broken).unwrap();
     assert!(other.statuses().last().unwrap().problem.is_some());
 }
+
+/// The effort of the posture against gravity: the sum of the squared shares of maximal
+/// voluntary torque.
+fn effort(session: &PosingSession) -> f64 {
+    stance_hanim::comfort::comfort_report(
+        session.skeleton(),
+        &stance_hanim::strength::built_axes(session.humanoid()),
+        session.posture(),
+        &Default::default(),
+    )
+    .terms
+    .effort
+}
+
+#[test]
+fn a_dof_typed_in_stays_as_typed_under_the_default_comfort() {
+    let mut session = session();
+    assert!(
+        session
+            .tasks()
+            .iter()
+            .any(|task| matches!(task.kind, TaskKindSpec::Comfort { .. })),
+        "comfort is a default task"
+    );
+    settle(&mut session);
+    // The right elbow bent to 90 degrees: a load comfort would lower if it could move.
+    let elbow = session.skeleton().joint_index("r_elbow").unwrap();
+    let dof = session.skeleton().joints()[elbow].rotation_dof[0].unwrap();
+    session.set_dof(dof, -1.5);
+    let typed = session.posture().values()[dof];
+    assert!(typed.abs() > 1.0, "the elbow bent: {typed}");
+    settle(&mut session);
+    assert_eq!(session.posture().values()[dof], typed, "the elbow stays");
+
+    // A change of tasks lets comfort move it again.
+    let mut tasks = session.tasks().to_vec();
+    tasks.iter_mut().for_each(|task| {
+        if let TaskKindSpec::Comfort { effort, .. } = &mut task.kind {
+            *effort *= 2.0;
+        }
+    });
+    session.set_tasks(tasks);
+    settle(&mut session);
+    assert!(
+        (session.posture().values()[dof] - typed).abs() > 0.05,
+        "after a change of tasks comfort relaxes the elbow: {} -> {}",
+        typed,
+        session.posture().values()[dof]
+    );
+}
+
+#[test]
+fn a_hand_pulled_up_and_let_go_stays_up_under_the_default_comfort() {
+    let mut session = session();
+    let wrist = session.skeleton().joint_index("r_radiocarpal").unwrap();
+    let start = session.frames().joint_position[wrist];
+    session.begin_grab(wrist, start);
+    let goal = start + DVec3::new(0.1, 0.5, 0.2);
+    for step in 1..=30 {
+        session.move_grab(start + (goal - start) * (f64::from(step) / 30.0));
+        session.solve_frame(None);
+    }
+    settle(&mut session);
+    let released = session.frames().joint_position[wrist];
+    assert!(
+        (released - goal).length() < 0.02,
+        "the hand followed the pull"
+    );
+    session.end_grab();
+    settle(&mut session);
+    let after = session.frames().joint_position[wrist];
+    assert!(
+        (after - released).length() < 1e-9,
+        "the hand stays where it was let go: moved {} m",
+        (after - released).length()
+    );
+}
+
+#[test]
+fn after_a_reach_the_default_comfort_settles_a_less_loaded_posture_than_rest_attraction() {
+    let mut with_comfort = session();
+    settle(&mut with_comfort);
+    let feet_before = with_comfort.joint_position("l_talocrural").unwrap();
+    let wrist = with_comfort.joint_position("r_radiocarpal").unwrap();
+    // The right hand 35 cm ahead and 30 cm up, at level 3 under the feet and balance.
+    let mut reach = TaskSpec::pin(
+        "r_radiocarpal",
+        (wrist + DVec3::new(0.0, 0.3, 0.35)).to_array(),
+    );
+    reach.level = 3;
+    let mut tasks = with_comfort.tasks().to_vec();
+    tasks.push(reach);
+    let mut with_rest = session();
+    settle(&mut with_rest);
+    let rest_tasks: Vec<TaskSpec> = tasks
+        .iter()
+        .map(|task| match task.kind {
+            TaskKindSpec::Comfort { .. } => TaskSpec::rest_attraction(),
+            _ => task.clone(),
+        })
+        .collect();
+    with_comfort.set_tasks(tasks);
+    with_rest.set_tasks(rest_tasks);
+    settle(&mut with_comfort);
+    settle(&mut with_rest);
+    for session in [&with_comfort, &with_rest] {
+        let reached = session.joint_position("r_radiocarpal").unwrap();
+        let goal = wrist + DVec3::new(0.0, 0.3, 0.35);
+        assert!((reached - goal).length() < 1e-4, "the hand reached");
+        let feet = session.joint_position("l_talocrural").unwrap();
+        assert!((feet - feet_before).length() < 1e-6, "the foot held");
+    }
+    let (comfort, rest) = (effort(&with_comfort), effort(&with_rest));
+    assert!(
+        comfort < 0.8 * rest,
+        "comfort lowers the effort of the reaching posture: {comfort} against {rest}"
+    );
+}

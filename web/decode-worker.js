@@ -1,0 +1,148 @@
+// Decodes the texture images of a glTF, GLB or VRM with the browser's own decoders
+// (createImageBitmap), off the page's main thread. The editor's importer then takes the RGBA
+// pixels as they are instead of decoding PNG, JPEG or WebP in WebAssembly.
+//
+// In:  { id, files: [{ name, bytes: Uint8Array }] }
+// Out: { id, file, images: [{ index, width, height, rgba: Uint8Array }], skipped: [reason] }
+// Whatever cannot be read here (no OffscreenCanvas, an unknown format, a missing file) is left
+// out: the importer decodes it itself and names the problem.
+
+const GLB_MAGIC = 0x46546c67; // "glTF"
+const JSON_CHUNK = 0x4e4f534a;
+const BIN_CHUNK = 0x004e4942;
+// Larger images are left to the importer, which refuses them by name.
+const MAX_SIDE = 8192;
+
+self.onmessage = async ({ data }) => {
+  const { id, files } = data;
+  try {
+    const { file, images, skipped } = await decodeImages(files);
+    self.postMessage({ id, file, images, skipped }, images.map((image) => image.rgba.buffer));
+  } catch (error) {
+    self.postMessage({ id, file: null, images: [], skipped: [String(error?.message || error)] });
+  }
+};
+
+// A glTF, GLB or VRM by its name (a URL's query and fragment left out).
+function isModel(name) {
+  return /\.(glb|vrm|gltf)$/i.test(name.split(/[?#]/)[0]);
+}
+
+// The main file's JSON and binary chunk (GLB, VRM) or its JSON (.gltf).
+function container(bytes) {
+  const view = new DataView(bytes.buffer, bytes.byteOffset, bytes.byteLength);
+  if (bytes.byteLength >= 20 && view.getUint32(0, true) === GLB_MAGIC) {
+    let at = 12;
+    let json = null;
+    let bin = null;
+    while (at + 8 <= bytes.byteLength) {
+      const length = view.getUint32(at, true);
+      const type = view.getUint32(at + 4, true);
+      const chunk = bytes.subarray(at + 8, Math.min(at + 8 + length, bytes.byteLength));
+      if (type === JSON_CHUNK && !json) json = JSON.parse(new TextDecoder().decode(chunk));
+      else if (type === BIN_CHUNK && !bin) bin = chunk;
+      at += 8 + length + ((4 - (length % 4)) % 4);
+    }
+    if (!json) throw new Error("no JSON chunk");
+    return { json, bin };
+  }
+  return { json: JSON.parse(new TextDecoder().decode(bytes)), bin: null };
+}
+
+function dataUri(uri) {
+  const match = /^data:([^;,]*)(;base64)?,(.*)$/s.exec(uri);
+  if (!match) return null;
+  if (!match[2]) return new TextEncoder().encode(decodeURIComponent(match[3]));
+  const text = atob(match[3]);
+  const out = new Uint8Array(text.length);
+  for (let i = 0; i < text.length; i += 1) out[i] = text.charCodeAt(i);
+  return out;
+}
+
+// A file of the set named by a relative URI (percent-encoded, maybe "./"), matched on its
+// path's end as the importer does.
+function resource(files, uri) {
+  let path;
+  try {
+    path = decodeURIComponent(uri).replace(/^\.\//, "");
+  } catch {
+    return null;
+  }
+  const found = files.find((f) => f.name === path || f.name.endsWith(`/${path}`));
+  return found ? found.bytes : null;
+}
+
+function bufferBytes(json, bin, files, index) {
+  const buffer = json.buffers?.[index];
+  if (!buffer) return null;
+  if (buffer.uri === undefined) return bin;
+  return dataUri(buffer.uri) ?? resource(files, buffer.uri);
+}
+
+function imageBytes(json, bin, files, image) {
+  if (image.bufferView !== undefined) {
+    const view = json.bufferViews?.[image.bufferView];
+    if (!view || view.extensions?.EXT_meshopt_compression) return null;
+    const bytes = bufferBytes(json, bin, files, view.buffer);
+    const start = view.byteOffset || 0;
+    if (!bytes || start + view.byteLength > bytes.byteLength) return null;
+    return bytes.subarray(start, start + view.byteLength);
+  }
+  if (typeof image.uri === "string") return dataUri(image.uri) ?? resource(files, image.uri);
+  return null;
+}
+
+function mimeOf(image, bytes) {
+  if (image.mimeType) return image.mimeType;
+  if (bytes[0] === 0x89 && bytes[1] === 0x50) return "image/png";
+  if (bytes[0] === 0xff && bytes[1] === 0xd8) return "image/jpeg";
+  if (bytes[8] === 0x57 && bytes[9] === 0x45 && bytes[10] === 0x42 && bytes[11] === 0x50) return "image/webp";
+  return "";
+}
+
+async function decode(bytes, mime) {
+  const bitmap = await createImageBitmap(new Blob([bytes], { type: mime }), {
+    premultiplyAlpha: "none",
+    colorSpaceConversion: "none",
+  });
+  try {
+    const { width, height } = bitmap;
+    if (width === 0 || height === 0 || width > MAX_SIDE || height > MAX_SIDE) return null;
+    const canvas = new OffscreenCanvas(width, height);
+    const context = canvas.getContext("2d", { willReadFrequently: true });
+    context.drawImage(bitmap, 0, 0);
+    const pixels = context.getImageData(0, 0, width, height).data;
+    return { width, height, rgba: new Uint8Array(pixels.buffer, pixels.byteOffset, pixels.byteLength) };
+  } finally {
+    bitmap.close();
+  }
+}
+
+async function decodeImages(files) {
+  const main = files.find((f) => isModel(f.name));
+  if (!main || typeof OffscreenCanvas !== "function" || typeof createImageBitmap !== "function") {
+    return { file: main?.name ?? null, images: [], skipped: [] };
+  }
+  const { json, bin } = container(main.bytes);
+  // The images textures use (a WebP source of EXT_texture_webp in place of the fallback).
+  const used = new Set();
+  for (const texture of json.textures || []) {
+    const webp = texture.extensions?.EXT_texture_webp?.source;
+    const source = Number.isInteger(webp) ? webp : texture.source;
+    if (Number.isInteger(source)) used.add(source);
+  }
+  const skipped = [];
+  const decoded = await Promise.all([...used].map(async (index) => {
+    const image = json.images?.[index];
+    const bytes = image && imageBytes(json, bin, files, image);
+    if (!bytes) return null;
+    try {
+      const pixels = await decode(bytes, mimeOf(image, bytes));
+      return pixels && { index, ...pixels };
+    } catch (error) {
+      skipped.push(`image ${index}: ${error?.message || error}`);
+      return null;
+    }
+  }));
+  return { file: main.name, images: decoded.filter(Boolean), skipped };
+}
