@@ -1,6 +1,7 @@
 //! The seed corpus of the `import` fuzz target (`fuzz/seeds/import/`): small valid files of
 //! every kind the importer reads, each prefixed with the target's selector byte (bit 0: no
-//! humanoid required, bit 1: decode textures, bit 2: the second half is the external file).
+//! humanoid required, bit 1: decode textures, bit 2: the second half is the external file, bit
+//! 3: images 0 and 1 given decoded, bits 4 to 7 their size).
 //!
 //! `the_fuzz_seeds_load` checks the committed seeds; `write_fuzz_seeds` (ignored) writes them
 //! again: `cargo test -p stance_asset --test fuzz_seeds -- --ignored`.
@@ -19,13 +20,14 @@ use meshopt_rs::index::sequence::{encode_index_sequence, encode_index_sequence_b
 use meshopt_rs::vertex::buffer::{encode_vertex_buffer, encode_vertex_buffer_bound};
 use serde_json::{Value, json};
 use stance_asset::{
-    Avatar, LoadOptions, Primitive, SourceFormat, export_glb, export_glb_animation, find_resource,
-    load_avatar_with, make_default_avatar,
+    Avatar, DecodedImage, LoadOptions, Primitive, SourceFormat, export_glb, export_glb_animation,
+    find_resource, load_avatar_with_images, make_default_avatar,
 };
 
 const NO_HUMANOID: u8 = 1;
 const TEXTURES: u8 = 2;
 const MULTI_FILE: u8 = 4;
+const DECODED_IMAGES: u8 = 8;
 
 fn seed_dir() -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/seeds/import")
@@ -49,7 +51,20 @@ fn load_seed(data: &[u8]) -> Result<Avatar, String> {
         let found = find_resource(&resources, uri).map(<[u8]>::to_vec);
         found.or_else(|| resources.first().map(|(_, bytes)| bytes.clone()))
     };
-    load_avatar_with(file, &options, &mut resolve).map_err(|e| e.to_string())
+    // The 1x1 images of selector bits 4 to 7 at 0: image 0 right, image 1 a pixel short.
+    assert!(selector >> 4 == 0, "the seeds give 1x1 images");
+    let decoded = if selector & DECODED_IMAGES != 0 {
+        let image = |index, rgba8| DecodedImage {
+            index,
+            width: 1,
+            height: 1,
+            rgba8,
+        };
+        vec![image(0, vec![200; 4]), image(1, vec![100; 3])]
+    } else {
+        Vec::new()
+    };
+    load_avatar_with_images(file, &options, &mut resolve, &decoded).map_err(|e| e.to_string())
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -525,9 +540,10 @@ fn meshopt_glb() -> Vec<u8> {
 }
 
 /// The seeds' file names.
-const SEEDS: [&str; 9] = [
+const SEEDS: [&str; 10] = [
     "humanoid.glb",
     "textured.glb",
+    "decoded-images.glb",
     "data-uri.gltf",
     "multi-file.gltf+bin",
     "vrm0.vrm",
@@ -542,6 +558,7 @@ fn seed(name: &str) -> (u8, Vec<u8>) {
     match name {
         "humanoid.glb" => (0, tiny_glb()),
         "textured.glb" => (TEXTURES, textured_glb()),
+        "decoded-images.glb" => (TEXTURES | DECODED_IMAGES, textured_glb()),
         "data-uri.gltf" => (TEXTURES, data_uri_gltf()),
         "multi-file.gltf+bin" => (MULTI_FILE, multi_file_gltf()),
         "vrm0.vrm" => (0, vrm_file(0)),
@@ -592,6 +609,11 @@ fn the_fuzz_seeds_load() {
                     .iter()
                     .any(|e| e == "EXT_meshopt_compression")
             );
+        }
+        if name.starts_with("decoded") {
+            let t = &avatar.textures[avatar.materials[0].base_color_texture.unwrap()];
+            assert_eq!((t.width, t.height, &t.rgba8[..]), (1, 1, &[200; 4][..]));
+            assert!(avatar.warnings.iter().any(|w| w.starts_with("image 1")));
         }
         if name.starts_with("animated") {
             assert_eq!(avatar.animations.len(), 1, "{name}");
