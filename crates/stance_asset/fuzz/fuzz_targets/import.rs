@@ -2,9 +2,10 @@
 //! is the file. Must never panic; every error must say something. With bit 2 of the selector
 //! the file is a `.gltf` given with external files (multi-file glTF): its second half is every
 //! file its URIs name. With bit 3 the caller gives images 0 and 1 decoded, as the browser does
-//! (`load_avatar_with_images`): image 0 at the size bits 4 to 7 pick, one side over the limit
-//! among them, image 1 with a pixel too few. What loads is also built into a solver skeleton, posed at rest,
-//! exported and imported again (a VRM stays a VRM); its short animations become clips.
+//! (`load_avatar_with_images`): image 0 at the size bits 4 to 7 pick (a width over the limit
+//! among them), image 1 with a pixel too few. What loads is also built into a solver skeleton,
+//! posed at rest, exported and imported again (a VRM stays a VRM); its short animations become
+//! clips.
 //!
 //! Seeds: `fuzz/seeds/import/`, small valid files prefixed with their selector byte (a skinned
 //! LOA2 GLB, textured, a `.gltf` with data URIs, a `.gltf` with its `.bin` in the multi-file
@@ -46,9 +47,10 @@ fuzz_target!(|data: &[u8]| {
         found.or_else(|| resources.first().map(|(_, bytes)| bytes.clone()))
     };
     let decoded = if selector & 8 != 0 {
-        const SIDES: [u32; 4] = [1, 2, 3, 1025];
-        let width = SIDES[usize::from(selector >> 4) & 3];
-        let height = SIDES[usize::from(selector >> 6) & 3];
+        // At most 16 KiB of pixels: every input pays for them.
+        const WIDTHS: [u32; 4] = [1, 2, 3, 1025];
+        let width = WIDTHS[usize::from(selector >> 4) & 3];
+        let height = u32::from(selector >> 6) + 1;
         let size = (width * height * 4) as usize;
         vec![
             DecodedImage {
