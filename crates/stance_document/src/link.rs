@@ -51,7 +51,9 @@ pub const MAX_LINK_CHARS: usize = 64 * 1024;
 
 const MAX_COUNT: u64 = 4096;
 const MAX_STRING_BYTES: u64 = 4096;
-const MAX_OVERRUN: usize = 16;
+/// Zero bytes the payload decoder reads past the end before it calls the payload cut: the
+/// most the encoder leaves off.
+const MAX_OVERRUN: usize = crate::range_coder::MAX_DROPPED_ZEROS;
 
 /// Why a link cannot be opened. The messages are meant for the person who opened the link.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]

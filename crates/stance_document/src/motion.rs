@@ -14,6 +14,9 @@ use crate::json::{arr, field, number, obj};
 pub const DEFAULT_FRAME_TIME: f64 = 1.0 / 30.0;
 /// Frames of a timeline without a clip (2 s at 30 fps).
 pub const DEFAULT_FRAME_COUNT: usize = 60;
+/// Most frames a timeline may have, and the frames a key may be at (a document or a link
+/// with more is refused: the editor walks every frame of its timeline).
+pub const MAX_FRAME_COUNT: usize = 10_000_000;
 
 /// `3x² − 2x³` of `x` clamped to `[0, 1]`: zero slope at both ends.
 pub fn smoothstep(x: f64) -> f64 {
@@ -166,7 +169,8 @@ impl Default for MotionSection {
 }
 
 impl MotionSection {
-    /// Checks the numbers and the key order (paths from `motion`).
+    /// Checks the numbers and the key order (paths from `motion`). Keys may lie beyond the
+    /// last frame (a timeline made shorter keeps them), not beyond [`MAX_FRAME_COUNT`].
     pub fn validate(&self) -> Result<(), DocumentError> {
         if !(self.frame_time.is_finite() && self.frame_time > 0.0) {
             return Err(DocumentError::field(
@@ -177,7 +181,19 @@ impl MotionSection {
         if self.frame_count == 0 {
             return Err(DocumentError::field("motion.frame_count", "must be >= 1"));
         }
+        if self.frame_count > MAX_FRAME_COUNT {
+            return Err(DocumentError::field(
+                "motion.frame_count",
+                format!("must be at most {MAX_FRAME_COUNT}"),
+            ));
+        }
         for (i, key) in self.keys.iter().enumerate() {
+            if key.frame >= MAX_FRAME_COUNT {
+                return Err(DocumentError::field(
+                    format!("motion.keys[{i}].frame"),
+                    format!("must be below {MAX_FRAME_COUNT}"),
+                ));
+            }
             if i > 0 && self.keys[i - 1].frame >= key.frame {
                 return Err(DocumentError::field(
                     format!("motion.keys[{i}].frame"),

@@ -15,6 +15,9 @@ const PROB_MIN: i32 = 24;
 /// the bits seen (the Krichevsky-Trofimov estimate) that becomes a moving one.
 const RATE_LIMIT: u16 = 24;
 const TOP: u32 = 1 << 24;
+/// Most zero bytes [`Encoder::finish`] leaves off the end of a stream: the decoder reads them
+/// back as zeros past the end, and a stream that needs more is damaged (`Decoder::overrun`).
+pub(crate) const MAX_DROPPED_ZEROS: usize = 16;
 
 /// An adaptive probability that the next bit is 0, and how many bits it has seen.
 #[derive(Debug, Clone, Copy)]
@@ -115,7 +118,9 @@ impl Encoder {
 
     /// The coded bytes. The always-zero first byte of the LZMA scheme is dropped, the final
     /// value is rounded to end in as many zero bytes as possible and those are dropped too
-    /// (the decoder reads zeros past the end).
+    /// (the decoder reads zeros past the end), at most [`MAX_DROPPED_ZEROS`] of them: a carry
+    /// out of the rounding turns the pending run of 0xFF bytes into zeros as well, and that run
+    /// can be longer than the decoder accepts to read past the end.
     pub(crate) fn finish(mut self) -> Vec<u8> {
         for k in (24..=32u32).rev() {
             let step = 1u64 << k;
@@ -130,7 +135,8 @@ impl Encoder {
             self.shift_low();
         }
         let mut out = self.out;
-        while out.len() > before_flush && out.last() == Some(&0) {
+        let keep = before_flush.max(out.len().saturating_sub(MAX_DROPPED_ZEROS));
+        while out.len() > keep && out.last() == Some(&0) {
             out.pop();
         }
         if out.first() == Some(&0) {

@@ -15,6 +15,7 @@ use base64::engine::general_purpose::URL_SAFE_NO_PAD;
 use common::*;
 use rand::RngExt;
 use stance_document::link::{self, LINK_FORMAT, LinkError, ROTATION_STEP_RAD};
+use stance_document::motion::MAX_FRAME_COUNT;
 use stance_document::{AvatarReference, Document, LimbName, PostureValues, TaskKindSpec, TaskSpec};
 use stance_ik::{Axes, Dof};
 
@@ -532,6 +533,90 @@ fn keys_and_intervals_travel_in_a_format_2_link() {
         link::encode(&plain).len()
     );
 }
+
+/// Found by the `document` fuzz target: a key beyond the timeline's last frame (the editor
+/// keeps the keys when the timeline is made shorter) is a valid document, and its link opened
+/// with "a key at frame 60 of 40". A timeline or a key beyond `MAX_FRAME_COUNT` is refused by
+/// the document as by the link.
+#[test]
+fn a_key_beyond_the_timeline_travels_in_a_link() {
+    let mut d = timed_document(3);
+    let motion = d.motion.as_mut().unwrap();
+    motion.frame_count = motion.keys[1].frame;
+    let back = round_trip(&d);
+    let motion = back.motion.as_ref().unwrap();
+    assert_eq!(motion.frame_count, 4);
+    assert_eq!(motion.keys[2].frame, 8);
+    assert_eq!(Document::from_json(&back.to_json(false)).unwrap(), back);
+    for (frame_count, key) in [(MAX_FRAME_COUNT + 1, 0), (60, MAX_FRAME_COUNT)] {
+        let mut far = timed_document(1);
+        let motion = far.motion.as_mut().unwrap();
+        motion.frame_count = frame_count;
+        motion.keys[0].frame = key;
+        let e = far.validate().unwrap_err().to_string();
+        assert!(e.starts_with("motion.") && e.contains("10000000"), "{e}");
+        let e = link::decode(&link::encode(&far)).unwrap_err();
+        assert!(matches!(e, LinkError::Malformed(_)), "{e}");
+    }
+}
+
+/// Found by the `link` fuzz target: a document whose payload ends in a long run of zero bytes
+/// (the range coder's final carry turns a pending run of 0xFF bytes into zeros) was written
+/// without all of them, more than the reader reads past the end, and its link did not open
+/// ("the data ends too early").
+#[test]
+fn a_payload_ending_in_many_zero_bytes_opens() {
+    let d = Document::from_json(ZERO_TAIL).unwrap();
+    let frame = URL_SAFE_NO_PAD.decode(link::encode(&d)).unwrap();
+    let payload = &frame[..frame.len() - 4];
+    let zeros = payload.iter().rev().take_while(|&&b| b == 0).count();
+    assert!(zeros > 0, "the payload keeps some of its zero bytes");
+    round_trip(&d);
+}
+
+/// Found by the `link` fuzz target: a payload with a joint angle of 2^62 steps and more
+/// (4e14 rad) opened, and written again held another angle (the writer clamps, the reader did
+/// not). Quantised values beyond 2^48 steps are now refused, and within them a decoded link
+/// written again holds the same values.
+#[test]
+fn a_number_beyond_the_quantisation_range_is_refused() {
+    let fuzzed = "861b3d66a63a23c05612bf73152f31db1ac42f21f25b4a7ab0d1639520d8c71324d59c6d480037af35\
+        12dfe4d5b10036fbc305e7a75e6a82240100000000000042ae42b4133ca53c9323fce8ae00000000000000\
+        00000040";
+    let payload: Vec<u8> = (0..fuzzed.len() / 2)
+        .map(|i| u8::from_str_radix(&fuzzed[2 * i..2 * i + 2], 16).unwrap())
+        .collect();
+    let mut body = vec![2, payload.len() as u8];
+    body.extend_from_slice(&payload);
+    let e = link::decode(&reframe(body)).unwrap_err();
+    assert!(e.to_string().contains("out of range"), "{e}");
+    // Far beyond the range in a document: written as the largest value, which reads back.
+    let mut d = Document::default();
+    d.posture.set("l_knee", Dof::Rx, 1e20);
+    d.posture.set("humanoid_root", Dof::Tx, -1e20);
+    let back = link::decode(&link::encode(&d)).unwrap();
+    let rx = back.posture.get("l_knee", Dof::Rx).unwrap();
+    assert!((rx / ROTATION_STEP_RAD - 2f64.powi(48)).abs() < 1.0, "{rx}");
+    let again = link::decode(&link::encode(&back)).unwrap();
+    assert_eq!(again.posture, back.posture);
+}
+
+const ZERO_TAIL: &str = r#"{"avatar":{"url":"https://example.org/avatars/jin.vrm"},
+"posture":{"humanoid_root":{"tx":0.1,"ty":-0.02,"tz":0.0,"rx":0.0,"ry":0.5000368306963754,"rz":0.0},
+ "l_knee":{"rx":0.3000220984178253},
+ "l_shoulder":{"rx":-0.40002946455710037,"ry":0.10000736613927509,"rz":1.2000011272087014},
+ "mixamorig:LeftHand":{"rz":0.20001473227855018}},
+"tasks":[
+ {"level":1,"kind":"position","joint":"l_talocrural","point":[0.0,0.0,0.01],"axes":"xz","target":[0.1,0.07,0.0]},
+ {"level":1,"kind":"orientation","joint":"skullbase","target":[0.0,0.0,0.09949341818939234,0.9950382202392984],"active":false},
+ {"level":1,"kind":"gaze","joint":"skullbase","axis":[0.0,0.0,1.0],"point":[0.0,0.08,0.1],"target":[0.0,1.6,2.0]},
+ {"level":2,"kind":"direction","joint":"r_radiocarpal","axis":[1.0,0.0,0.0],"target":[0.0,-1.0,0.0]},
+ {"level":2,"kind":"com","axes":"xz","target":[0.02,0.0,0.030000000000000002],"weight":0.5},
+ {"level":2,"kind":"balance","support":["l_talocrural","r_talocrural"],"margin":0.030000000000000002},
+ {"level":3,"kind":"limb","limb":"r_arm","target":[-0.3,1.2,0.3],"swivel":0.5000368306963754,"orientation":[0.0,0.0,0.0,1.0]},
+ {"level":3,"kind":"limb","joints":["l_hip","l_knee","l_angxj"],"target":[0.5538000000000001,-0.0097,0.0],"swivel":0.3769038519681755},
+ {"level":2,"kind":"limb","joints":["skullbase","l_talocalcaneonavicular","l_talocalcaneonavicular"],"target":[-0.037200000000000004,0.1973,0.7255],"swivel":0.0,"orientation":[-0.2636626098185588,0.0,-0.000043117352382429904,0.9646149627310165]}
+]}"#;
 
 #[test]
 fn a_long_timeline_is_left_out_of_a_shared_link_and_says_how_long_it_would_be() {

@@ -160,7 +160,7 @@ fn the_frame_time_is_written_to_round_trip_exactly() {
 #[cfg(not(target_arch = "wasm32"))]
 #[test]
 fn the_fuzz_seeds_are_valid_and_small() {
-    let dir = format!("{}/fuzz/corpus/bvh", env!("CARGO_MANIFEST_DIR"));
+    let dir = format!("{}/fuzz/seeds/bvh", env!("CARGO_MANIFEST_DIR"));
     let mut count = 0;
     for entry in std::fs::read_dir(dir).unwrap() {
         let bytes = std::fs::read(entry.unwrap().path()).unwrap();

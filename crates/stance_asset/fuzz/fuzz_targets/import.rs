@@ -1,18 +1,24 @@
 //! The glTF/GLB/VRM importer on arbitrary bytes: the first byte picks the options, the rest
 //! is the file. Must never panic; every error must say something. With bit 2 of the selector
 //! the file is a `.gltf` given with external files (multi-file glTF): its second half is every
-//! file its URIs name. What loads is also built into a solver skeleton, posed at rest,
-//! exported and imported again (a VRM stays a VRM); its short animations become clips.
+//! file its URIs name. With bit 3 the caller gives images 0 and 1 decoded, as the browser does
+//! (`load_avatar_with_images`): image 0 at the size bits 4 to 7 pick (a width over the limit
+//! among them), image 1 with a pixel too few. What loads is also built into a solver skeleton,
+//! posed at rest, exported and imported again (a VRM stays a VRM); its short animations become
+//! clips.
 //!
-//! Seeds are files prefixed with the selector byte, e.g. from `crates/stance_asset`:
-//! `mkdir -p fuzz/corpus/import && (printf '\x02'; cat ../../public/default-avatar.glb) >
-//! fuzz/corpus/import/default-avatar`.
+//! Seeds: `fuzz/seeds/import/`, small valid files prefixed with their selector byte (a skinned
+//! LOA2 GLB, textured, a `.gltf` with data URIs, a `.gltf` with its `.bin` in the multi-file
+//! layout, VRM 0.x and 1.0, EXT_meshopt_compression, an animation, a static triangle, images
+//! given decoded), written
+//! by `cargo test -p stance_asset --test fuzz_seeds -- --ignored`; `scripts/fuzz.sh import`
+//! runs the target from them.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
 use stance_asset::{
-    Limits, LoadOptions, clip_from_animation, export_glb, find_resource, load_avatar,
-    load_avatar_with,
+    DecodedImage, Limits, LoadOptions, clip_from_animation, export_glb, find_resource, load_avatar,
+    load_avatar_with_images,
 };
 
 fuzz_target!(|data: &[u8]| {
@@ -40,7 +46,30 @@ fuzz_target!(|data: &[u8]| {
         let found = find_resource(&resources, uri).map(<[u8]>::to_vec);
         found.or_else(|| resources.first().map(|(_, bytes)| bytes.clone()))
     };
-    let avatar = match load_avatar_with(file, &options, &mut resolve) {
+    let decoded = if selector & 8 != 0 {
+        // At most 16 KiB of pixels: every input pays for them.
+        const WIDTHS: [u32; 4] = [1, 2, 3, 1025];
+        let width = WIDTHS[usize::from(selector >> 4) & 3];
+        let height = u32::from(selector >> 6) + 1;
+        let size = (width * height * 4) as usize;
+        vec![
+            DecodedImage {
+                index: 0,
+                width,
+                height,
+                rgba8: vec![200; size],
+            },
+            DecodedImage {
+                index: 1,
+                width,
+                height,
+                rgba8: vec![100; size - 1],
+            },
+        ]
+    } else {
+        Vec::new()
+    };
+    let avatar = match load_avatar_with_images(file, &options, &mut resolve, &decoded) {
         Ok(avatar) => avatar,
         Err(e) => {
             assert!(!e.to_string().trim().is_empty(), "empty error: {e:?}");

@@ -121,13 +121,18 @@ pub(super) const KINDS: [&str; 9] = [
     "comfort",
 ];
 
+/// Largest quantised value a link holds (2^48: 2.4e10 rad, 2.8e10 m); larger ones are written
+/// as this and refused by the reader. Within it `quantise(dequantise(q))` is `q`, so a decoded
+/// link written again holds the same values.
+pub(super) const MAX_QUANTISED: i64 = 1 << 48;
+
 pub(super) fn quantise(x: f64, step: f64) -> i64 {
-    const LIMIT: f64 = 4.611_686_018_427_388e18; // 2^62
+    let limit = MAX_QUANTISED as f64;
     let q = (x / step).round();
     if q.is_nan() {
         0
     } else {
-        q.clamp(-LIMIT, LIMIT) as i64
+        q.clamp(-limit, limit) as i64
     }
 }
 

@@ -7,8 +7,8 @@ use stance_ik::{Axes, Dof};
 use super::models::{
     ACTIVE, AVATAR_URL, AXES_XYZ, AXIS_Y, AXIS_Z, HANIM_JOINT, HAS_INTERVAL, HAS_JOINTS, HAS_LIMB,
     HAS_MOTION, HAS_ORIENTATION, HAS_REFERENCE, HAS_SWIVEL, JOINT_MASK_DEFAULT, KINDS,
-    MASKS_DEFAULT, Models, POINT_ZERO, WEIGHT_DECIMAL, WEIGHT_ONE, default_mask, dequantise,
-    from_decimal, in_loa_base,
+    MASKS_DEFAULT, MAX_QUANTISED, Models, POINT_ZERO, WEIGHT_DECIMAL, WEIGHT_ONE, default_mask,
+    dequantise, from_decimal, in_loa_base,
 };
 use super::{
     DIRECTION_STEP, MAX_COUNT, MAX_OVERRUN, MAX_STRING_BYTES, POSITION_STEP_M, ROTATION_STEP_RAD,
@@ -16,12 +16,9 @@ use super::{
 use crate::document::{
     AvatarReference, Document, DofValues, LimbName, PostureValues, TaskKindSpec, TaskSpec, dof_slot,
 };
-use crate::motion::{MotionKey, MotionSection, TaskInterval};
-use crate::stiffness::StiffnessValues;
-
-/// Most frames a linked timeline may declare.
-const MAX_FRAMES: u64 = 10_000_000;
+use crate::motion::{MAX_FRAME_COUNT, MotionKey, MotionSection, TaskInterval};
 use crate::range_coder::{Decoder, UintModel};
+use crate::stiffness::StiffnessValues;
 
 struct Reader<'a> {
     d: Decoder<'a>,
@@ -74,10 +71,13 @@ impl Reader<'_> {
     }
 
     fn signed(model: &mut UintModel, d: &mut Decoder, step: f64) -> R<f64> {
-        model
+        let q = model
             .decode_signed(d)
-            .map(|q| dequantise(q, step))
-            .ok_or_else(|| "bad number".to_owned())
+            .ok_or_else(|| "bad number".to_owned())?;
+        if q.unsigned_abs() > MAX_QUANTISED.unsigned_abs() {
+            return Err(format!("a number out of range ({q} steps)"));
+        }
+        Ok(dequantise(q, step))
     }
 
     fn position(&mut self) -> R<[f64; 3]> {
@@ -364,15 +364,16 @@ fn motion(r: &mut Reader, tasks: &mut [TaskSpec]) -> R<Option<MotionSection>> {
     }
     let frame_time = f64::from_bits(r.d.direct(64));
     let frame_count = r.d.direct(32);
-    if frame_count > MAX_FRAMES {
+    if frame_count > MAX_FRAME_COUNT as u64 {
         return Err(format!("a timeline of {frame_count} frames"));
     }
     let n = r.count("keys")?;
     let mut keys = Vec::with_capacity(n);
     for _ in 0..n {
+        // A key may lie beyond the timeline's last frame (as in a document).
         let frame = r.d.direct(32);
-        if frame >= frame_count {
-            return Err(format!("a key at frame {frame} of {frame_count}"));
+        if frame >= MAX_FRAME_COUNT as u64 {
+            return Err(format!("a key at frame {frame}"));
         }
         let posture = r.posture()?;
         keys.push(MotionKey {

@@ -1,6 +1,10 @@
 //! Every decoder on arbitrary bytes: the first byte picks the decoder and the chunk size,
 //! the rest is fed as a byte stream and as HID reports. Must never panic, and the byte
 //! accounting must always balance.
+//!
+//! Seeds: `fuzz/seeds/decoders/`, a short simulated stream of every protocol behind a selector
+//! that picks its decoder (written by `cargo test -p stance_mocap --test fuzz_seeds --
+//! --ignored`); `scripts/fuzz.sh decoders` runs the target from them.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;

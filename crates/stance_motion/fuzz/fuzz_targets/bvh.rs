@@ -1,7 +1,8 @@
 //! The BVH reader on arbitrary bytes. Must never panic; every error must name its line and
 //! field. What loads is written again and read back.
 //!
-//! Seeds: `fuzz/corpus/bvh/` (small valid files in several dialects).
+//! Seeds: `fuzz/seeds/bvh/` (small valid files in several dialects); `scripts/fuzz.sh bvh` runs
+//! it from them.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;

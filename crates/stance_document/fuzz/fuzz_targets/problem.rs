@@ -1,0 +1,35 @@
+//! The problem-file reader (`Problem::from_json`, what `stance solve`, `stance bench
+//! --problem` and `stance comfort` read) on arbitrary text. Must never panic; every error
+//! must say something. A problem that loads gets its closed-form limb starts, a few solver
+//! iterations and the solution's JSON (joints, posture, report with the comfort).
+//!
+//! Seeds: `fuzz/seeds/problem/` (written by `cargo test -p stance_document --test fuzz_seeds
+//! -- --ignored`).
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use stance_document::Problem;
+
+fuzz_target!(|data: &[u8]| {
+    let text = String::from_utf8_lossy(data);
+    let problem = match Problem::from_json(&text) {
+        Ok(problem) => problem,
+        Err(e) => {
+            assert!(!e.to_string().trim().is_empty(), "empty error: {e:?}");
+            return;
+        }
+    };
+    let (mut posture, _) = problem.start_posture();
+    let mut settings = problem.settings;
+    settings.max_iterations = settings.max_iterations.min(3);
+    settings.time_budget_secs = None;
+    let report = problem
+        .solver(settings)
+        .and_then(|mut solver| solver.solve(&problem.skeleton, &problem.tasks, &mut posture));
+    match report {
+        Ok(report) => {
+            let _ = problem.solution_json(&posture, &report);
+        }
+        Err(e) => assert!(!e.to_string().trim().is_empty(), "empty error: {e:?}"),
+    }
+});
