@@ -194,20 +194,18 @@ impl WebHandle {
     /// `bytes`, one after the other. Lengths that do not add up are reported, not opened.
     #[wasm_bindgen]
     pub fn open_files(&self, names: Vec<String>, lengths: Vec<u32>, bytes: Vec<u8>) {
-        let total: u64 = lengths.iter().map(|&n| u64::from(n)).sum();
-        if names.len() != lengths.len() || total != bytes.len() as u64 {
+        let parts = split_by_lengths(&bytes, lengths.iter().map(|&n| Some(n as usize)));
+        let Some(parts) = parts.filter(|parts| parts.len() == names.len()) else {
             self.send(HostMessage::Failed(
                 "the dropped files could not be read together".to_owned(),
             ));
             return;
-        }
-        let mut files = Vec::with_capacity(names.len());
-        let mut at = 0usize;
-        for (name, length) in names.into_iter().zip(lengths) {
-            let end = at + length as usize;
-            files.push((name, bytes.get(at..end).unwrap_or_default().to_vec()));
-            at = end;
-        }
+        };
+        let files = names
+            .into_iter()
+            .zip(parts)
+            .map(|(name, part)| (name, part.to_vec()))
+            .collect();
         self.send(HostMessage::OpenFiles(files));
     }
 
@@ -227,29 +225,26 @@ impl WebHandle {
         if indices.len() != widths.len() || widths.len() != heights.len() {
             return;
         }
-        let mut images = Vec::with_capacity(indices.len());
-        let mut at = 0usize;
-        for ((&index, &width), &height) in indices.iter().zip(&widths).zip(&heights) {
-            let size = (width as usize)
+        let sizes = widths.iter().zip(&heights).map(|(&width, &height)| {
+            (width as usize)
                 .checked_mul(height as usize)
-                .and_then(|n| n.checked_mul(4));
-            let Some(pixels) = size
-                .and_then(|size| Some((size, at.checked_add(size)?)))
-                .and_then(|(size, end)| Some((size, rgba.get(at..end)?)))
-            else {
-                return;
-            };
-            at += pixels.0;
-            images.push(stance_asset::DecodedImage {
-                index: index as usize,
-                width,
-                height,
-                rgba8: pixels.1.to_vec(),
-            });
-        }
-        if at != rgba.len() {
+                .and_then(|n| n.checked_mul(4))
+        });
+        let Some(parts) = split_by_lengths(&rgba, sizes) else {
             return;
-        }
+        };
+        let images = parts
+            .into_iter()
+            .zip(indices.iter().zip(widths.iter().zip(&heights)))
+            .map(
+                |(pixels, (&index, (&width, &height)))| stance_asset::DecodedImage {
+                    index: index as usize,
+                    width,
+                    height,
+                    rgba8: pixels.to_vec(),
+                },
+            )
+            .collect();
         self.send(HostMessage::DecodedImages { file, images });
     }
 
@@ -312,4 +307,20 @@ impl WebHandle {
     pub fn panic_message(&self) -> Option<String> {
         self.runner.panic_summary().map(|summary| summary.message())
     }
+}
+
+/// `bytes` cut into consecutive parts of the given lengths; `None` when a length is unknown
+/// (overflowed) or the lengths do not add up to `bytes`.
+fn split_by_lengths(
+    bytes: &[u8],
+    lengths: impl Iterator<Item = Option<usize>>,
+) -> Option<Vec<&[u8]>> {
+    let mut parts = Vec::new();
+    let mut at = 0usize;
+    for length in lengths {
+        let end = at.checked_add(length?)?;
+        parts.push(bytes.get(at..end)?);
+        at = end;
+    }
+    (at == bytes.len()).then_some(parts)
 }
