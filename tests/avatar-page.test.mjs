@@ -69,7 +69,8 @@ describe("avatars in the page", () => {
     console.log(`[avatar] Black_F_2_Casual.glb: ${shown.avatar.vertices} vertices, ${shown.avatar.triangles} triangles, `
       + `${shown.avatar.mapped} joints mapped, ${shown.avatar.images_from_host} textures decoded by the browser; `
       + `picked to first posed frame ${loadMs} ms; main-thread long tasks while loading: ${longTasks.length}, `
-      + `longest ${Math.round(Math.max(0, ...longTasks))} ms`);
+      + `longest ${Math.round(Math.max(0, ...longTasks))} ms (of it: import ${Math.round(shown.avatar.load_ms.import)} ms, `
+      + `skeleton and GPU model ${Math.round(shown.avatar.load_ms.build)} ms, upload ${Math.round(shown.avatar.load_ms.upload)} ms)`);
     assert.equal(shown.avatar.images_from_host, 3, "the browser decoded the three WebP textures in its worker");
     assert.ok(progressShown, "a progress bar shows while the avatar loads");
     assert.ok(shown.avatar.mapped >= 18, `${shown.avatar.mapped} joints mapped`);

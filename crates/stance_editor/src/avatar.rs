@@ -28,6 +28,8 @@ pub struct LoadedAvatar {
     pub triangle_count: usize,
     /// Texture images the host decoded for it (the others were decoded by the importer).
     pub images_from_host: usize,
+    /// How long its loading took, in ms: the file's import, then its skeleton and GPU model.
+    pub load_ms: [f64; 2],
 }
 
 impl std::fmt::Debug for LoadedAvatar {
@@ -60,10 +62,13 @@ impl LoadedAvatar {
         loa: LevelOfArticulation,
     ) -> Result<(Self, HumanoidSkeleton), String> {
         let mut resolve = |uri: &str| find_resource(resources, uri).map(<[u8]>::to_vec);
+        let started = web_time::Instant::now();
         let avatar = load_avatar_with_images(bytes, &LoadOptions::default(), &mut resolve, decoded)
             .map_err(|error| error.to_string())?;
+        let imported = started.elapsed();
         let (mut loaded, humanoid) = Self::from_avatar(name, avatar, loa)?;
         loaded.images_from_host = decoded.len();
+        loaded.load_ms = [imported, started.elapsed() - imported].map(|t| t.as_secs_f64() * 1e3);
         Ok((loaded, humanoid))
     }
 
@@ -96,6 +101,7 @@ impl LoadedAvatar {
                 vertex_count,
                 triangle_count,
                 images_from_host: 0,
+                load_ms: [0.0; 2],
             },
             humanoid,
         ))

@@ -45,6 +45,11 @@ impl PageState<'_> {
                 "uploaded": self.viewport.avatar_uploaded,
                 "mapped": avatar.mapping_summary().0,
                 "images_from_host": avatar.images_from_host,
+                "load_ms": {
+                    "import": avatar.load_ms[0],
+                    "build": avatar.load_ms[1],
+                    "upload": self.viewport.avatar_upload_ms,
+                },
             })),
             "figure": self.viewport.figure_shown(model),
             "selected": model.selected_joint().and_then(|joint| skeleton.joints().get(joint)).map(|joint| joint.name.clone()),

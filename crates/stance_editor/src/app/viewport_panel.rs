@@ -36,6 +36,8 @@ pub(super) struct ViewportPanel {
     renderer: Option<ViewportRenderer>,
     /// Whether the loaded avatar's mesh is on the GPU.
     pub avatar_uploaded: bool,
+    /// How long the avatar's upload to the GPU took (ms).
+    pub avatar_upload_ms: f64,
     /// The mannequin drawn as a skinned figure (else as capsules).
     pub show_figure: bool,
     /// The mannequin's figure, and the level of articulation whose mesh is on the GPU.
@@ -63,6 +65,7 @@ impl ViewportPanel {
             backend,
             renderer,
             avatar_uploaded: false,
+            avatar_upload_ms: 0.0,
             show_figure: true,
             figure: None,
             first_frame_reported: false,
@@ -333,7 +336,9 @@ impl ViewportPanel {
             return;
         };
         if let Some(mesh) = model.avatar.as_mut().and_then(|avatar| avatar.model.take()) {
+            let started = web_time::Instant::now();
             renderer.set_avatar(render_state, Some(&mesh));
+            self.avatar_upload_ms = started.elapsed().as_secs_f64() * 1e3;
             self.avatar_uploaded = true;
             self.figure = None;
         }
