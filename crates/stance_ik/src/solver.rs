@@ -701,11 +701,7 @@ impl Solver {
             *wres = 0.0;
             for &ti in &layout.tasks {
                 let task = &tasks[ti];
-                self.scratch.resize(task.rows(), 0.0);
-                let r = match task.comfort_cost(skeleton, &self.frames, values) {
-                    Some(cost) => cost,
-                    None => task.error(skeleton, &self.frames, values, &mut self.scratch, None),
-                };
+                let r = task.residual_with(skeleton, &self.frames, values, &mut self.scratch);
                 *res += r * r;
                 *wres += task.weight * r * r;
             }

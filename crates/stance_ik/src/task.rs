@@ -544,10 +544,26 @@ impl Task {
         }
     }
 
-    /// Error (unclamped residual norm, in metres or radians) of the task at `frames`.
+    /// Error (unclamped residual norm, in metres or radians; a comfort task's cost) of the
+    /// task at `frames`.
     pub fn residual(&self, skeleton: &Skeleton, frames: &Frames, values: &[f64]) -> f64 {
-        let mut err = vec![0.0; self.rows()];
-        self.error(skeleton, frames, values, &mut err, None)
+        self.residual_with(skeleton, frames, values, &mut Vec::new())
+    }
+
+    /// [`Task::residual`] with a scratch buffer for the error rows. A comfort task weighs its
+    /// cost alone: its gradient is only needed to step.
+    pub(crate) fn residual_with(
+        &self,
+        skeleton: &Skeleton,
+        frames: &Frames,
+        values: &[f64],
+        scratch: &mut Vec<f64>,
+    ) -> f64 {
+        if let Some(cost) = self.comfort_cost(skeleton, frames, values) {
+            return cost;
+        }
+        scratch.resize(self.rows(), 0.0);
+        self.error(skeleton, frames, values, scratch, None)
     }
 
     /// The support polygon of a balance task at `frames`, as the solver sees it: the corners
