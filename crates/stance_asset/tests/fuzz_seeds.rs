@@ -64,7 +64,7 @@ fn load_seed(data: &[u8]) -> Result<Avatar, String> {
     } else {
         Vec::new()
     };
-    load_avatar_with_images(file, &options, &mut resolve, &decoded).map_err(|e| e.to_string())
+    load_avatar_with_images(file, &options, &mut resolve, decoded).map_err(|e| e.to_string())
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -234,78 +234,10 @@ fn multi_file_gltf() -> Vec<u8> {
     gltf
 }
 
-/// (VRM 1.0 bone, VRM 0.x bone, H-Anim joint).
-const BONES: &[(&str, &str, &str)] = &[
-    ("hips", "hips", "humanoid_root"),
-    ("spine", "spine", "vl5"),
-    ("chest", "chest", "vt10"),
-    ("upperChest", "upperChest", "vt1"),
-    ("neck", "neck", "vc4"),
-    ("head", "head", "skullbase"),
-    ("leftUpperLeg", "leftUpperLeg", "l_hip"),
-    ("leftLowerLeg", "leftLowerLeg", "l_knee"),
-    ("leftFoot", "leftFoot", "l_talocrural"),
-    ("leftToes", "leftToes", "l_metatarsophalangeal_2"),
-    ("rightUpperLeg", "rightUpperLeg", "r_hip"),
-    ("rightLowerLeg", "rightLowerLeg", "r_knee"),
-    ("rightFoot", "rightFoot", "r_talocrural"),
-    ("rightToes", "rightToes", "r_metatarsophalangeal_2"),
-    ("leftShoulder", "leftShoulder", "l_sternoclavicular"),
-    ("leftUpperArm", "leftUpperArm", "l_shoulder"),
-    ("leftLowerArm", "leftLowerArm", "l_elbow"),
-    ("leftHand", "leftHand", "l_radiocarpal"),
-    ("rightShoulder", "rightShoulder", "r_sternoclavicular"),
-    ("rightUpperArm", "rightUpperArm", "r_shoulder"),
-    ("rightLowerArm", "rightLowerArm", "r_elbow"),
-    ("rightHand", "rightHand", "r_radiocarpal"),
-    (
-        "leftThumbMetacarpal",
-        "leftThumbProximal",
-        "l_carpometacarpal_1",
-    ),
-    (
-        "leftIndexProximal",
-        "leftIndexProximal",
-        "l_metacarpophalangeal_2",
-    ),
-];
-
 /// The tiny avatar with scrambled node names, mapped by its VRM humanoid extension alone
 /// (as `tests/vrm.rs` builds them).
 fn vrm_file(version: u8) -> Vec<u8> {
-    let (mut j, bin) = common::split(&tiny_glb());
-    let mut index = HashMap::new();
-    for (i, n) in j["nodes"].as_array_mut().unwrap().iter_mut().enumerate() {
-        index.insert(n["name"].as_str().unwrap().to_owned(), i);
-        n["name"] = json!(format!("J{i:03}"));
-    }
-    if version == 0 {
-        // VRM 0.x models face -Z: turn the body around.
-        j["nodes"][index["humanoid_root"]]["rotation"] = json!([0.0, 1.0, 0.0, 0.0]);
-        let bones: Vec<Value> = BONES
-            .iter()
-            .map(|(_, b0, h)| json!({"bone": b0, "node": index[*h], "useDefaultValues": true}))
-            .collect();
-        j["extensions"] = json!({"VRM": {"exporterVersion": "seed", "humanoid": {"humanBones": bones},
-            "meta": {"title": "seed", "licenseName": "CC0"},
-            "blendShapeMaster": {"blendShapeGroups": [{"name": "Joy", "presetName": "joy",
-                "binds": [{"mesh": 0, "index": 0, "weight": 100}]}]},
-            "materialProperties": [{"name": "skin", "shader": "VRM/MToon", "textureProperties": {},
-                "vectorProperties": {"_Color": [0.5, 0.4, 0.3, 1.0]}}]}});
-        j["extensionsUsed"] = json!(["VRM"]);
-    } else {
-        let mut bones = serde_json::Map::new();
-        for (b1, _, h) in BONES {
-            bones.insert((*b1).into(), json!({"node": index[*h]}));
-        }
-        j["extensions"] = json!({"VRMC_vrm": {"specVersion": "1.0",
-            "meta": {"name": "seed", "licenseUrl": "https://vrm.dev/licenses/1.0/"},
-            "humanoid": {"humanBones": bones},
-            "expressions": {"preset": {"happy": {"morphTargetBinds": [{"node": 0, "index": 0, "weight": 1.0}]}}}}});
-        j["materials"][0]["extensions"] = json!({"VRMC_materials_mtoon": {"specVersion": "1.0"}});
-        j["extensionsUsed"] = json!(["VRMC_vrm", "VRMC_materials_mtoon"]);
-    }
-    common::join(&j, &bin)
+    common::vrm_from(&tiny_glb(), version)
 }
 
 /// The tiny avatar with a one-second animation: rest, the left elbow bent, rest.

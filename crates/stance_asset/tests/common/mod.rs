@@ -2,7 +2,7 @@
 
 #![allow(dead_code, clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-use serde_json::Value;
+use serde_json::{Value, json};
 
 pub fn split(glb: &[u8]) -> (Value, Vec<u8>) {
     let json_len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
@@ -78,5 +78,100 @@ pub fn z_up_centimetres_facing_minus_x(glb: &[u8]) -> Vec<u8> {
     );
     let armature = nodes.len() - 1;
     j["scenes"][0]["nodes"] = serde_json::json!([armature]);
+    join(&j, &bin)
+}
+
+/// (VRM 1.0 bone, VRM 0.x bone, H-Anim joint).
+pub const VRM_BONES: &[(&str, &str, &str)] = &[
+    ("hips", "hips", "humanoid_root"),
+    ("spine", "spine", "vl5"),
+    ("chest", "chest", "vt10"),
+    ("upperChest", "upperChest", "vt1"),
+    ("neck", "neck", "vc4"),
+    ("head", "head", "skullbase"),
+    ("leftUpperLeg", "leftUpperLeg", "l_hip"),
+    ("leftLowerLeg", "leftLowerLeg", "l_knee"),
+    ("leftFoot", "leftFoot", "l_talocrural"),
+    ("leftToes", "leftToes", "l_metatarsophalangeal_2"),
+    ("rightUpperLeg", "rightUpperLeg", "r_hip"),
+    ("rightLowerLeg", "rightLowerLeg", "r_knee"),
+    ("rightFoot", "rightFoot", "r_talocrural"),
+    ("rightToes", "rightToes", "r_metatarsophalangeal_2"),
+    ("leftShoulder", "leftShoulder", "l_sternoclavicular"),
+    ("leftUpperArm", "leftUpperArm", "l_shoulder"),
+    ("leftLowerArm", "leftLowerArm", "l_elbow"),
+    ("leftHand", "leftHand", "l_radiocarpal"),
+    ("rightShoulder", "rightShoulder", "r_sternoclavicular"),
+    ("rightUpperArm", "rightUpperArm", "r_shoulder"),
+    ("rightLowerArm", "rightLowerArm", "r_elbow"),
+    ("rightHand", "rightHand", "r_radiocarpal"),
+    (
+        "leftThumbMetacarpal",
+        "leftThumbProximal",
+        "l_carpometacarpal_1",
+    ),
+    (
+        "leftThumbProximal",
+        "leftThumbIntermediate",
+        "l_metacarpophalangeal_1",
+    ),
+    (
+        "leftThumbDistal",
+        "leftThumbDistal",
+        "l_carpal_interphalangeal_1",
+    ),
+    (
+        "leftIndexProximal",
+        "leftIndexProximal",
+        "l_metacarpophalangeal_2",
+    ),
+    (
+        "rightLittleDistal",
+        "rightLittleDistal",
+        "r_carpal_distal_interphalangeal_5",
+    ),
+];
+
+/// `glb` with scrambled node names and a VRM humanoid extension (0.x or 1.0) naming the bones
+/// of [`VRM_BONES`] it has: only the extension can map it.
+pub fn vrm_from(glb: &[u8], version: u8) -> Vec<u8> {
+    let (mut j, bin) = split(glb);
+    let nodes = j["nodes"].as_array_mut().unwrap();
+    let mut index = std::collections::HashMap::new();
+    for (i, n) in nodes.iter_mut().enumerate() {
+        index.insert(n["name"].as_str().unwrap().to_owned(), i);
+        n["name"] = json!(format!("J{i:03}"));
+    }
+    let named: Vec<_> = VRM_BONES
+        .iter()
+        .filter(|(_, _, h)| index.contains_key(*h))
+        .collect();
+    let root = index["humanoid_root"];
+    if version == 0 {
+        // VRM 0.x models face -Z: turn the body around.
+        j["nodes"][root]["rotation"] = json!([0.0, 1.0, 0.0, 0.0]);
+        let bones: Vec<Value> = named
+            .iter()
+            .map(|(_, b0, h)| json!({"bone": b0, "node": index[*h], "useDefaultValues": true}))
+            .collect();
+        j["extensions"] = json!({"VRM": {"exporterVersion": "test", "humanoid": {"humanBones": bones},
+            "meta": {"title": "test", "licenseName": "CC_BY"},
+            "blendShapeMaster": {"blendShapeGroups": [{"name": "Joy", "presetName": "joy",
+                "binds": [{"mesh": 0, "index": 0, "weight": 100}]}]},
+            "materialProperties": [{"name": "skin", "shader": "VRM/MToon", "textureProperties": {},
+                "vectorProperties": {"_Color": [0.5, 0.4, 0.3, 1.0]}}]}});
+        j["extensionsUsed"] = json!(["VRM"]);
+    } else {
+        let mut bones = serde_json::Map::new();
+        for (b1, _, h) in &named {
+            bones.insert((*b1).into(), json!({"node": index[*h]}));
+        }
+        j["extensions"] = json!({"VRMC_vrm": {"specVersion": "1.0",
+            "meta": {"name": "test", "licenseUrl": "https://vrm.dev/licenses/1.0/"},
+            "humanoid": {"humanBones": bones},
+            "expressions": {"preset": {"happy": {"morphTargetBinds": [{"node": 0, "index": 0, "weight": 1.0}]}}}}});
+        j["materials"][0]["extensions"] = json!({"VRMC_materials_mtoon": {"specVersion": "1.0"}});
+        j["extensionsUsed"] = json!(["VRMC_vrm", "VRMC_materials_mtoon"]);
+    }
     join(&j, &bin)
 }
