@@ -9,6 +9,8 @@
 
 use std::sync::OnceLock;
 
+mod solve_briefly;
+
 use libfuzzer_sys::fuzz_target;
 use stance_document::{Document, Problem, link};
 use stance_hanim::{HumanoidSkeleton, SkeletonOptions, default_skeleton};
@@ -51,17 +53,5 @@ fuzz_target!(|data: &[u8]| {
             return;
         }
     };
-    let (mut posture, _) = problem.start_posture();
-    let mut settings = problem.settings;
-    settings.max_iterations = settings.max_iterations.min(3);
-    settings.time_budget_secs = None;
-    let report = problem
-        .solver(settings)
-        .and_then(|mut solver| solver.solve(&problem.skeleton, &problem.tasks, &mut posture));
-    match report {
-        Ok(report) => {
-            let _ = problem.solution_json(&posture, &report);
-        }
-        Err(e) => assert!(!e.to_string().trim().is_empty(), "empty error: {e:?}"),
-    }
+    solve_briefly::solve_briefly(&problem);
 });
