@@ -143,7 +143,7 @@ struct Ctx<'a> {
     decoded_bytes: u64,
     warnings: Vec<String>,
     /// Images the caller decoded (see [`crate::load_avatar_with_images`]).
-    decoded_images: &'a [crate::DecodedImage],
+    decoded_images: Vec<crate::DecodedImage>,
 }
 
 fn bad_index(
@@ -222,7 +222,7 @@ pub fn import(
     bytes: &[u8],
     options: &LoadOptions,
     resolve: &mut Resolver<'_>,
-    decoded_images: &[crate::DecodedImage],
+    decoded_images: Vec<crate::DecodedImage>,
 ) -> Result<Avatar, AssetError> {
     let limits = &options.limits;
     let (json_bytes, bin, is_glb) = split_container(bytes, limits)?;

@@ -146,7 +146,7 @@ impl Default for LoadOptions {
 
 /// Imports a `.glb`, `.vrm` or `.gltf` (data URIs only) from memory.
 pub fn load_avatar(bytes: &[u8], options: &LoadOptions) -> Result<Avatar, AssetError> {
-    import::import(bytes, options, &mut |_| None, &[])
+    import::import(bytes, options, &mut |_| None, Vec::new())
 }
 
 /// Imports with a resolver for external URIs (`.gltf` next to its `.bin` and images).
@@ -155,7 +155,7 @@ pub fn load_avatar_with(
     options: &LoadOptions,
     resolve: &mut Resolver<'_>,
 ) -> Result<Avatar, AssetError> {
-    import::import(bytes, options, resolve, &[])
+    import::import(bytes, options, resolve, Vec::new())
 }
 
 /// An image of the file already decoded by the caller (a browser's own decoder, off the main
@@ -173,13 +173,14 @@ pub struct DecodedImage {
 }
 
 /// [`load_avatar_with`] where some images come decoded: those are used as they are (within
-/// the same size limits), the others are decoded here. A decoded image of the wrong size is
-/// set aside with a warning and the file's own bytes are decoded instead.
+/// the same size limits; their pixels move into the textures, uncopied), the others are
+/// decoded here. A decoded image of the wrong size is set aside with a warning and the
+/// file's own bytes are decoded instead.
 pub fn load_avatar_with_images(
     bytes: &[u8],
     options: &LoadOptions,
     resolve: &mut Resolver<'_>,
-    decoded: &[DecodedImage],
+    decoded: Vec<DecodedImage>,
 ) -> Result<Avatar, AssetError> {
     import::import(bytes, options, resolve, decoded)
 }

@@ -55,7 +55,7 @@ fn load(
     decoded: &[DecodedImage],
     options: &LoadOptions,
 ) -> Result<stance_asset::Avatar, AssetError> {
-    load_avatar_with_images(file, options, &mut |_| None, decoded)
+    load_avatar_with_images(file, options, &mut |_| None, decoded.to_vec())
 }
 
 #[test]

@@ -48,7 +48,7 @@ impl LoadedAvatar {
         bytes: &[u8],
         loa: LevelOfArticulation,
     ) -> Result<(Self, HumanoidSkeleton), String> {
-        Self::load_with(name, bytes, &[], &[], loa)
+        Self::load_with(name, bytes, &[], Vec::new(), loa)
     }
 
     /// [`LoadedAvatar::load`] for a `.gltf` given with its files (`.bin` buffers, images),
@@ -58,16 +58,17 @@ impl LoadedAvatar {
         name: &str,
         bytes: &[u8],
         resources: &[(String, Vec<u8>)],
-        decoded: &[DecodedImage],
+        decoded: Vec<DecodedImage>,
         loa: LevelOfArticulation,
     ) -> Result<(Self, HumanoidSkeleton), String> {
         let mut resolve = |uri: &str| find_resource(resources, uri).map(<[u8]>::to_vec);
+        let images_from_host = decoded.len();
         let started = web_time::Instant::now();
         let avatar = load_avatar_with_images(bytes, &LoadOptions::default(), &mut resolve, decoded)
             .map_err(|error| error.to_string())?;
         let imported = started.elapsed();
         let (mut loaded, humanoid) = Self::from_avatar(name, avatar, loa)?;
-        loaded.images_from_host = decoded.len();
+        loaded.images_from_host = images_from_host;
         loaded.load_ms = [imported, started.elapsed() - imported].map(|t| t.as_secs_f64() * 1e3);
         Ok((loaded, humanoid))
     }

@@ -726,7 +726,7 @@ impl EditorModel {
             Some((file, images)) if file == name => images,
             _ => Vec::new(),
         };
-        let loaded = LoadedAvatar::load_with(name, bytes, resources, &decoded, loa).and_then(
+        let loaded = LoadedAvatar::load_with(name, bytes, resources, decoded, loa).and_then(
             |(mut avatar, mut humanoid)| {
                 mapping_note = self
                     .mapping_corrections

@@ -69,7 +69,7 @@ fuzz_target!(|data: &[u8]| {
     } else {
         Vec::new()
     };
-    let avatar = match load_avatar_with_images(file, &options, &mut resolve, &decoded) {
+    let avatar = match load_avatar_with_images(file, &options, &mut resolve, decoded) {
         Ok(avatar) => avatar,
         Err(e) => {
             assert!(!e.to_string().trim().is_empty(), "empty error: {e:?}");

@@ -103,9 +103,10 @@ fn wrap_of(w: Checked<json::texture::WrappingMode>) -> Wrap {
 /// The caller's decoded pixels of image `index`, checked against the limits and charged;
 /// `None` (with a warning when they were wrong) to decode the file's own bytes.
 fn given_image(ctx: &mut Ctx<'_>, index: usize) -> Result<Option<(u32, u32, Vec<u8>)>, AssetError> {
-    let Some(given) = ctx.decoded_images.iter().find(|d| d.index == index) else {
+    let Some(at) = ctx.decoded_images.iter().position(|d| d.index == index) else {
         return Ok(None);
     };
+    let given = ctx.decoded_images.swap_remove(at);
     let side = ctx.limits.max_texture_side;
     let expected = u64::from(given.width) * u64::from(given.height) * 4;
     if given.width == 0 || given.height == 0 || expected != given.rgba8.len() as u64 {
@@ -125,7 +126,7 @@ fn given_image(ctx: &mut Ctx<'_>, index: usize) -> Result<Option<(u32, u32, Vec<
         });
     }
     ctx.charge(given.rgba8.len(), &format!("image {index}"))?;
-    Ok(Some((given.width, given.height, given.rgba8.clone())))
+    Ok(Some((given.width, given.height, given.rgba8)))
 }
 
 fn decode_image(
