@@ -7,6 +7,8 @@
 // Whatever cannot be read here (no OffscreenCanvas, an unknown format, a missing file) is left
 // out: the importer decodes it itself and names the problem.
 
+import { isModel } from "./model-files.js";
+
 const GLB_MAGIC = 0x46546c67; // "glTF"
 const JSON_CHUNK = 0x4e4f534a;
 const BIN_CHUNK = 0x004e4942;
@@ -22,11 +24,6 @@ self.onmessage = async ({ data }) => {
     self.postMessage({ id, file: null, images: [], skipped: [String(error?.message || error)] });
   }
 };
-
-// A glTF, GLB or VRM by its name (a URL's query and fragment left out).
-function isModel(name) {
-  return /\.(glb|vrm|gltf)$/i.test(name.split(/[?#]/)[0]);
-}
 
 // The main file's JSON and binary chunk (GLB, VRM) or its JSON (.gltf).
 function container(bytes) {

@@ -2,6 +2,8 @@
 // with a progress bar, the textures of a glTF, GLB or VRM are decoded by the browser in a
 // worker (decode-worker.js), and the editor receives the bytes with the decoded pixels.
 
+import { isModel } from "./model-files.js";
+
 const bar = document.createElement("div");
 bar.id = "progress";
 bar.hidden = true;
@@ -24,11 +26,6 @@ function progress(text, value) {
 // Hidden once the editor has taken the files: its import runs in its next frame.
 function done() {
   requestAnimationFrame(() => requestAnimationFrame(() => { bar.hidden = true; }));
-}
-
-// A glTF, GLB or VRM by its name (a URL's query and fragment left out).
-function isModel(name) {
-  return /\.(glb|vrm|gltf)$/i.test(name.split(/[?#]/)[0]);
 }
 
 // The byte arrays one after the other in one array.
