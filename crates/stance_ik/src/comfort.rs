@@ -92,6 +92,9 @@ impl StrengthCurve {
 
     /// The strength at DOF value `q` and its derivative in `q`.
     pub fn at(&self, q: f64) -> (f64, f64) {
+        if self.width == 0.0 {
+            return (self.peak.max(self.floor * self.peak), 0.0);
+        }
         let phase = self.width * (self.sign * q - self.centre);
         let value = self.peak * phase.cos();
         let least = self.floor * self.peak;
@@ -220,7 +223,7 @@ fn range_wall(x: f64) -> (f64, f64) {
     }
     // From 24 % of the range inward the penalty is below 1e-16 (base 0.68 at 5 x = 1.2):
     // taken as 0, which spares a sine and a power for nearly every DOF of a posture.
-    if FREQUENCY * x > 1.2 {
+    if x > RANGE_WALL_DEPTH {
         return (0.0, 0.0);
     }
     let (sin, cos) = (FREQUENCY * x + PHASE).sin_cos();
@@ -231,6 +234,9 @@ fn range_wall(x: f64) -> (f64, f64) {
         f64::from(POWER) * below * 0.5 * FREQUENCY * cos,
     )
 }
+
+/// How far into a DOF's range (a share of the range) [`range_wall`] is above 1e-16: 0.24.
+const RANGE_WALL_DEPTH: f64 = 1.2 / 5.0;
 
 /// `ln(1 + e^x)` and its derivative (the logistic), without overflow.
 fn softplus(x: f64) -> (f64, f64) {
@@ -448,6 +454,10 @@ impl ComfortModel {
                 continue;
             }
             let q = values.get(d).copied().unwrap_or(0.0);
+            // Inside the middle of the range both walls are 0 (see `range_wall`): no division.
+            if hi[d] - q > RANGE_WALL_DEPTH * span && q - lo[d] > RANGE_WALL_DEPTH * span {
+                continue;
+            }
             let (upper, d_upper) = range_wall((hi[d] - q) / span);
             let (lower, d_lower) = range_wall((q - lo[d]) / span);
             cost += upper + lower;
