@@ -3,6 +3,7 @@
 import init, { WebHandle } from "./pkg/stance_web.js";
 import { connectSensor, disconnectSensor } from "./sensors.js";
 import { fetchWithProgress, openFiles } from "./loading.js";
+import { createAccessibilityMirror } from "./accessibility.js";
 
 const loading = document.getElementById("loading");
 const errorScreen = document.getElementById("error");
@@ -30,6 +31,12 @@ fileInput.hidden = true;
 // A .gltf is picked together with its .bin and images.
 fileInput.multiple = true;
 document.body.append(fileInput);
+
+// egui's widgets as DOM elements for screen readers and keyboards (web/accessibility.js).
+const accessibility = createAccessibilityMirror(
+  document.getElementById("stance-canvas"),
+  (id, action, value) => window.stance?.accessibility_action(id, action, value ?? undefined),
+);
 
 window.stanceHost = {
   loadText(key) {
@@ -64,6 +71,10 @@ window.stanceHost = {
   },
   disconnectSensor() {
     disconnectSensor();
+  },
+  // The editor's accessibility tree changed (JSON, see web/accessibility.js).
+  accessibility(treeJson) {
+    accessibility.update(treeJson);
   },
   pickFile() {
     fileInput.value = "";

@@ -11,6 +11,8 @@ use eframe::wasm_bindgen::{self, prelude::*};
 use stance_editor::sensors::SensorConnection;
 use stance_editor::{BackendSummary, HostHooks, HostMessage, StanceApp};
 
+use crate::accessibility::{AccessibilityBridge, PageAction, PendingActions};
+
 #[wasm_bindgen]
 extern "C" {
     #[wasm_bindgen(js_namespace = stanceHost, js_name = loadText, catch)]
@@ -31,6 +33,8 @@ extern "C" {
     fn host_connect_sensor(request_json: &str) -> Result<(), JsValue>;
     #[wasm_bindgen(js_namespace = stanceHost, js_name = disconnectSensor, catch)]
     fn host_disconnect_sensor() -> Result<(), JsValue>;
+    #[wasm_bindgen(js_namespace = stanceHost, js_name = accessibility, catch)]
+    fn host_accessibility(tree_json: &str) -> Result<(), JsValue>;
 }
 
 fn describe(error: &JsValue) -> String {
@@ -121,6 +125,8 @@ pub struct WebHandle {
     runner: eframe::WebRunner,
     inbox: RefCell<Option<Sender<HostMessage>>>,
     context: Rc<RefCell<Option<egui::Context>>>,
+    /// Actions of the page's accessibility mirror, for the next frame.
+    accessibility: PendingActions,
 }
 
 #[wasm_bindgen]
@@ -135,6 +141,7 @@ impl WebHandle {
             runner: eframe::WebRunner::new(),
             inbox: RefCell::new(None),
             context: Rc::new(RefCell::new(None)),
+            accessibility: PendingActions::default(),
         }
     }
 
@@ -150,6 +157,7 @@ impl WebHandle {
         let (sender, receiver) = std::sync::mpsc::channel();
         *self.inbox.borrow_mut() = Some(sender);
         let context = Rc::clone(&self.context);
+        let accessibility = self.accessibility.clone();
         self.runner
             .start(
                 canvas,
@@ -159,6 +167,15 @@ impl WebHandle {
                         return Err("neither WebGPU nor WebGL2 could start".into());
                     }
                     *context.borrow_mut() = Some(creation.egui_ctx.clone());
+                    // egui's AccessKit tree, mirrored as DOM elements by the page.
+                    creation.egui_ctx.add_plugin(AccessibilityBridge::new(
+                        Box::new(|_, json| {
+                            if let Err(error) = host_accessibility(json) {
+                                log::warn!("accessibility mirror: {}", describe(&error));
+                            }
+                        }),
+                        accessibility,
+                    ));
                     let mut app =
                         StanceApp::new(creation, Box::new(PageHooks))?.with_inbox(receiver);
                     app.open_startup(Some(&link_fragment));
@@ -246,6 +263,21 @@ impl WebHandle {
             )
             .collect();
         self.send(HostMessage::DecodedImages { file, images });
+    }
+
+    /// An action of the page's accessibility mirror (`web/accessibility.js`) on the widget
+    /// with node id `id`: `click`, `focus`, `increment`, `decrement`, `set_number` or
+    /// `set_text` (with `value`). False when the action or its value is not understood.
+    #[wasm_bindgen]
+    pub fn accessibility_action(&self, id: String, action: String, value: Option<String>) -> bool {
+        let Some(action) = PageAction::parse(&action, value.as_deref()) else {
+            return false;
+        };
+        let queued = self.accessibility.push(&id, action);
+        if let Some(context) = self.context.borrow().as_ref() {
+            context.request_repaint();
+        }
+        queued
     }
 
     /// Tells the editor that something the page did for it failed.

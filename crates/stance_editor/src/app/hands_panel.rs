@@ -38,7 +38,7 @@ pub(super) fn show(ui: &mut egui::Ui, model: &mut EditorModel) {
             let Some(current) = model.hand_curl(hands, finger) else {
                 continue;
             };
-            ui.label(finger.map_or("hand", Finger::name));
+            let label = ui.label(finger.map_or("hand", Finger::name));
             // The slider shows whole percents and reports a change when it rounds the value
             // it is given: only a move away from the shown value is the user's edit (a posture
             // moved by the solver must not become an undo step).
@@ -49,6 +49,7 @@ pub(super) fn show(ui: &mut egui::Ui, model: &mut EditorModel) {
                 .max_decimals(0);
             let response = ui
                 .add(slider)
+                .labelled_by(label.id)
                 .on_hover_text("curl: 0 % straight, 100 % closed as far as the joints allow");
             if response.changed() && percent != shown {
                 model.apply(Command::Hands(HandCommand::Curl {
