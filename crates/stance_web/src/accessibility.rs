@@ -73,9 +73,7 @@ pub struct AxTree {
 pub fn aria_role(role: Role) -> &'static str {
     match role {
         // A collapsing header opens and closes with a press (`expanded` says which).
-        Role::Button | Role::DefaultButton | Role::DisclosureTriangle | Role::ColorWell => {
-            "button"
-        }
+        Role::Button | Role::DefaultButton | Role::DisclosureTriangle | Role::ColorWell => "button",
         Role::CheckBox => "checkbox",
         Role::Switch => "switch",
         Role::RadioButton => "radio",
@@ -120,7 +118,13 @@ fn id(node: NodeId) -> String {
 /// The page's description of an AccessKit tree update (egui sends the whole tree every frame).
 pub fn describe(update: &accesskit::TreeUpdate) -> AxTree {
     let root = update.tree.as_ref().map_or_else(
-        || update.nodes.first().map(|(n, _)| id(*n)).unwrap_or_default(),
+        || {
+            update
+                .nodes
+                .first()
+                .map(|(n, _)| id(*n))
+                .unwrap_or_default()
+        },
         |tree| id(tree.root),
     );
     // egui's root scales points to physical pixels; the page positions in CSS pixels, which

@@ -94,7 +94,11 @@ fn widgets_are_published_with_roles_names_values_and_places() {
     let button = f.node("button", "Add task");
     assert!(button.focusable);
     let [x, y, w, h] = button.bounds.unwrap();
-    assert!(x >= 0.0 && y >= 0.0 && w > 10.0 && h > 5.0, "{:?}", button.bounds);
+    assert!(
+        x >= 0.0 && y >= 0.0 && w > 10.0 && h > 5.0,
+        "{:?}",
+        button.bounds
+    );
     let weight = f.node("spinbutton", "weight");
     assert_eq!(weight.numeric, Some([Some(1.0), Some(0.0), Some(100.0)]));
     let active = f.node("checkbox", "active");
@@ -102,7 +106,11 @@ fn widgets_are_published_with_roles_names_values_and_places() {
     // Every node is reachable from the root, in reading order: the button before the field.
     let tree = f.last();
     let order: Vec<&str> = reading_order(&tree);
-    assert_eq!(order.len(), tree.nodes.len(), "every node hangs from the root once");
+    assert_eq!(
+        order.len(),
+        tree.nodes.len(),
+        "every node hangs from the root once"
+    );
     let at = |id: &str| order.iter().position(|o| *o == id).unwrap();
     assert!(at(&button.id) < at(&weight.id) && at(&weight.id) < at(&active.id));
 }
@@ -152,7 +160,11 @@ fn page_actions_operate_the_widgets() {
     assert!(f.pending.push(&button, PageAction::Focus));
     f.frame();
     f.frame();
-    assert_eq!(f.last().focus, button, "focus from the page moves egui's focus");
+    assert_eq!(
+        f.last().focus,
+        button,
+        "focus from the page moves egui's focus"
+    );
 }
 
 #[test]
