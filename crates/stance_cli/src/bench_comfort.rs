@@ -140,6 +140,67 @@ fn shoulder_and_back_torque(body: &HumanoidSkeleton, posture: &Posture) -> f64 {
         .sum()
 }
 
+/// The comfort level's own cost per iteration, at the postures its settling run goes through
+/// (every 4th, from the posture solved without comfort): at each, one iteration of the levels
+/// with the comfort level (stepping where the levels above are met, as the run does) against
+/// one of the levels without it, each timed as a solve of one iteration less a solve of none.
+/// Unlike the run-against-run figures, the postures are the same on both sides. Returns the
+/// summed times (without, with) in seconds and the postures measured.
+fn same_posture_cost(
+    s: &stance_ik::Skeleton,
+    tasks: &[Task],
+    with: &[Task],
+    start: &Posture,
+) -> Result<(f64, f64, usize)> {
+    const REPEATS: usize = 15;
+    let settings = |tolerance: Option<f64>, max_iterations: usize| SolverSettings {
+        max_iterations,
+        tolerance: tolerance.unwrap_or(SolverSettings::default().tolerance),
+        stall_step: 0.0,
+        stall_improvement: 0.0,
+        stall_window: usize::MAX,
+        restarts: false,
+        ..SolverSettings::default()
+    };
+    // A solve's mean time from `p` (seconds).
+    let timed = |tasks: &[Task], settings: SolverSettings, p: &Posture| -> Result<f64> {
+        let mut solver = Solver::new(settings)?;
+        let start = Instant::now();
+        for _ in 0..REPEATS {
+            let mut q = p.clone();
+            solver.solve_with_clock(s, tasks, &mut q, None)?;
+        }
+        Ok(start.elapsed().as_secs_f64() / REPEATS as f64)
+    };
+    let settled = Solver::new(SolverSettings {
+        restarts: false,
+        ..SolverSettings::default()
+    })?
+    .solve(s, with, &mut start.clone())?
+    .iterations;
+    let (mut without_sum, mut with_sum, mut postures) = (0.0, 0.0, 0);
+    for k in (0..settled.min(160)).step_by(4) {
+        let mut p = start.clone();
+        if k > 0 {
+            Solver::new(SolverSettings {
+                max_iterations: k,
+                restarts: false,
+                ..SolverSettings::default()
+            })?
+            .solve(s, with, &mut p)?;
+        }
+        // Without comfort at tolerance 0 (it always iterates); with comfort at the run's
+        // tolerance (its level steps where the levels above are met).
+        let without =
+            timed(tasks, settings(Some(0.0), 1), &p)? - timed(tasks, settings(Some(0.0), 0), &p)?;
+        let with_level = timed(with, settings(None, 1), &p)? - timed(with, settings(None, 0), &p)?;
+        without_sum += without;
+        with_sum += with_level;
+        postures += 1;
+    }
+    Ok((without_sum, with_sum, postures))
+}
+
 pub fn run(cases: usize, json: bool) -> Result<()> {
     let body = default_skeleton(&SkeletonOptions {
         loa: LevelOfArticulation::Loa2,
@@ -154,6 +215,7 @@ pub fn run(cases: usize, json: bool) -> Result<()> {
     let mut outcomes = Vec::new();
     let (mut iteration_plain, mut iteration_comfort, mut iteration_waiting) = (0.0, 0.0, 0.0);
     let mut timed = 0usize;
+    let (mut same_without, mut same_with, mut same_postures) = (0.0, 0.0, 0);
     for _ in 0..cases {
         let tasks = reach_tasks(&body, random_goal(&body, &mut r))?;
         let mut with = tasks.clone();
@@ -219,6 +281,10 @@ pub fn run(cases: usize, json: bool) -> Result<()> {
             stall_window: usize::MAX,
             ..SolverSettings::default()
         };
+        let (without, with_level, postures) = same_posture_cost(s, &tasks, &with, &plain)?;
+        same_without += without;
+        same_with += with_level;
+        same_postures += postures;
         let plain_time = iteration_time(&tasks, endless)?;
         let comfort_time = iteration_time(&with, SolverSettings::default())?;
         // The comfort level waiting (the levels above never count as met at tolerance 0).
@@ -279,6 +345,7 @@ pub fn run(cases: usize, json: bool) -> Result<()> {
     };
     let overhead = iteration_comfort / iteration_plain.max(f64::MIN_POSITIVE) - 1.0;
     let waiting = iteration_waiting / iteration_plain.max(f64::MIN_POSITIVE) - 1.0;
+    let same_share = same_with / same_without.max(f64::MIN_POSITIVE) - 1.0;
     let per_iteration_us = |sum: f64| 1e6 * sum / timed.max(1) as f64;
     if json {
         println!(
@@ -294,6 +361,8 @@ pub fn run(cases: usize, json: bool) -> Result<()> {
                 "levels_above_met": met,
                 "comfort_level_share_of_iteration": overhead,
                 "comfort_level_waiting_share_of_iteration": waiting,
+                "comfort_level_share_at_same_postures": same_share,
+                "same_postures_measured": same_postures,
                 "iteration_us": {
                     "without": per_iteration_us(iteration_plain),
                     "comfort_stepping": per_iteration_us(iteration_comfort),
@@ -336,6 +405,11 @@ pub fn run(cases: usize, json: bool) -> Result<()> {
             per_iteration_us(iteration_comfort),
             100.0 * waiting,
             per_iteration_us(iteration_waiting),
+        );
+        println!(
+            "  the comfort level's own cost at the same postures (its settling run's, {same_postures} \
+             measured): {:+.1} % of an iteration",
+            100.0 * same_share
         );
     }
     Ok(())
