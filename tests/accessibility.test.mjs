@@ -57,7 +57,9 @@ describe("accessibility on WebGL2", () => {
     const tree = await chromiumTree(page);
     const has = (role, name) => tree.some(([r, n]) => r === role && n === name);
     const named = (role) => tree.filter(([r, n]) => r === role && n).map(([, n]) => n);
-    console.log(`[a11y] ${tree.length} nodes; buttons: ${named("button").join(", ")}`);
+    const updateMs = await page.evaluate(() => document.getElementById("a11y").dataset.updateMs);
+    console.log(`[a11y] ${tree.length} nodes; buttons: ${named("button").join(", ")}; `
+      + `last mirror update ${updateMs} ms (after the frame, when the browser is idle)`);
     assert.ok(has("region", "Stance editor"), "the mirror is a named region");
     assert.ok(has("button", "Add task"), "the Add task menu");
     assert.ok(has("button", "Table 1 example"), "the tasks panel's example button");

@@ -115,19 +115,36 @@ export function createAccessibilityMirror(canvas, act) {
     } else if (node.focusable) {
       element.tabIndex = -1;
     }
-    if (node.bounds) {
-      const [x, y, w, h] = node.bounds;
-      element.style.left = `${x - offset[0]}px`;
-      element.style.top = `${y - offset[1]}px`;
-      element.style.width = `${w}px`;
-      element.style.height = `${h}px`;
-      element.classList.add("placed");
-    } else {
-      element.classList.remove("placed");
+    // Placed only when the place changed (each style write costs the browser a layout).
+    const place = node.bounds
+      ? `left:${node.bounds[0] - offset[0]}px;top:${node.bounds[1] - offset[1]}px;`
+        + `width:${node.bounds[2]}px;height:${node.bounds[3]}px`
+      : "";
+    if (element.dataset.place !== place) {
+      element.dataset.place = place;
+      element.style.cssText = place;
+      element.classList.toggle("placed", !!node.bounds);
     }
   }
 
+  // The tree arrives inside the editor's frame: the DOM is brought up to date after it, when
+  // the browser is idle (the latest tree only).
+  let waiting = null;
   function update(json) {
+    const first = waiting === null;
+    waiting = json;
+    if (!first) return;
+    const run = () => {
+      const latest = waiting;
+      waiting = null;
+      applyTree(latest);
+    };
+    if (window.requestIdleCallback) window.requestIdleCallback(run, { timeout: 200 });
+    else setTimeout(run, 0);
+  }
+
+  function applyTree(json) {
+    const started = performance.now();
     let tree;
     try {
       tree = JSON.parse(json);
@@ -135,10 +152,11 @@ export function createAccessibilityMirror(canvas, act) {
       return;
     }
     const rect = canvas.getBoundingClientRect();
-    root.style.left = `${rect.left}px`;
-    root.style.top = `${rect.top}px`;
-    root.style.width = `${rect.width}px`;
-    root.style.height = `${rect.height}px`;
+    const frame = `left:${rect.left}px;top:${rect.top}px;width:${rect.width}px;height:${rect.height}px`;
+    if (root.dataset.place !== frame) {
+      root.dataset.place = frame;
+      root.style.cssText = frame;
+    }
     const byId = new Map(tree.nodes.map((node) => [node.id, node]));
     const seen = new Set();
     // Depth first from the root, each element under its parent in reading order; absolute
@@ -188,6 +206,8 @@ export function createAccessibilityMirror(canvas, act) {
     }
     lastFocus = tree.focus;
     root.dataset.focus = `a11y-${tree.focus}`;
+    // How long the last update took (ms; read by the end-to-end test).
+    root.dataset.updateMs = (performance.now() - started).toFixed(2);
   }
 
   return { update, root };
