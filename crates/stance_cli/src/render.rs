@@ -7,10 +7,10 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow, bail};
 use glam::{DVec3, Vec3};
-use stance_asset::LoadOptions;
+use stance_asset::{LoadOptions, make_default_avatar};
 use stance_document::Document;
 use stance_hanim::{HumanoidSkeleton, LevelOfArticulation, SkeletonOptions, default_skeleton};
-use stance_ik::Frames;
+use stance_ik::{Frames, Posture};
 use stance_render::{
     Capsule, GOAL_COLOR_LINEAR, ImageOptions, OrbitCamera, Scene, SceneRenderer, ViewPreset,
     avatar_model, encode_png, headless_gpu, posed_mannequin_bones, render_image,
@@ -45,6 +45,10 @@ pub struct RenderArgs {
     /// Level of articulation of the body (1-4; an avatar: 1 or 2).
     #[arg(long, default_value_t = 2)]
     pub loa: u8,
+    /// Draw the mannequin as capsules (the editor's capsule view) instead of its skinned
+    /// figure; no effect with --avatar.
+    #[arg(long)]
+    pub capsules: bool,
 }
 
 /// The standard views.
@@ -93,11 +97,39 @@ pub fn parse_size(text: &str) -> Result<[u32; 2]> {
     Ok(size_px)
 }
 
-/// The body, its GPU model when it is an avatar, and what the scene draws of it.
+/// The body the document poses, and the skinned mesh drawn for it (none: capsules).
 struct Figure {
+    /// The skeleton the document's posture is read on.
     humanoid: HumanoidSkeleton,
-    avatar: Option<(stance_asset::Avatar, stance_render::AvatarPalettes)>,
-    mesh: Option<stance_render::SkinnedModel>,
+    mesh: Option<MeshFigure>,
+}
+
+/// A skinned mesh, posed on its own H-Anim skeleton.
+struct MeshFigure {
+    avatar: stance_asset::Avatar,
+    palettes: stance_render::AvatarPalettes,
+    model: stance_render::SkinnedModel,
+    /// The mesh's skeleton: the avatar's (`--avatar`), or the generated mannequin figure's,
+    /// which the mannequin's posture is carried onto joint by joint, as the editor draws it.
+    skeleton: HumanoidSkeleton,
+}
+
+impl MeshFigure {
+    fn new(avatar: stance_asset::Avatar, skeleton: HumanoidSkeleton, what: &str) -> Result<Self> {
+        let (model, palettes, warnings) = avatar_model(&avatar);
+        for warning in warnings.iter().chain(&avatar.warnings) {
+            eprintln!("warning: {warning}");
+        }
+        if model.primitives.is_empty() {
+            bail!("{what}: the file has no mesh to draw");
+        }
+        Ok(Self {
+            avatar,
+            palettes,
+            model,
+            skeleton,
+        })
+    }
 }
 
 fn figure(args: &RenderArgs) -> Result<Figure> {
@@ -108,26 +140,35 @@ fn figure(args: &RenderArgs) -> Result<Figure> {
         ..SkeletonOptions::default()
     };
     let Some(path) = &args.avatar else {
+        let humanoid = default_skeleton(&options)?;
+        if args.capsules {
+            return Ok(Figure {
+                humanoid,
+                mesh: None,
+            });
+        }
+        // The editor's figure: the generated default avatar (its skeleton at LOA 2 where
+        // the mesh has no joints of a higher level).
+        let avatar = make_default_avatar()?;
+        let skeleton = avatar.skeleton(&options).or_else(|_| {
+            avatar.skeleton(&SkeletonOptions {
+                loa: LevelOfArticulation::Loa2,
+                ..options
+            })
+        })?;
+        let mesh = MeshFigure::new(avatar, skeleton, "the default figure")?;
         return Ok(Figure {
-            humanoid: default_skeleton(&options)?,
-            avatar: None,
-            mesh: None,
+            humanoid,
+            mesh: Some(mesh),
         });
     };
     let loaded = avatar::load(path, &LoadOptions::default())?;
     let humanoid = loaded
         .skeleton(&options)
         .with_context(|| format!("{}: no H-Anim skeleton", path.display()))?;
-    let (mesh, palettes, warnings) = avatar_model(&loaded);
-    for warning in warnings.iter().chain(&loaded.warnings) {
-        eprintln!("warning: {warning}");
-    }
-    if mesh.primitives.is_empty() {
-        bail!("{}: the file has no mesh to draw", path.display());
-    }
+    let mesh = MeshFigure::new(loaded, humanoid.clone(), &path.display().to_string())?;
     Ok(Figure {
         humanoid,
-        avatar: Some((loaded, palettes)),
         mesh: Some(mesh),
     })
 }
@@ -188,10 +229,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
             camera
         }
     };
-    let avatar_palettes = match &figure.avatar {
-        Some((avatar, palettes)) => palettes
-            .pose(avatar, &figure.humanoid, &posture)
-            .ok_or_else(|| anyhow!("the posture does not fit the avatar's skeleton"))?,
+    let avatar_palettes = match &figure.mesh {
+        Some(mesh) => {
+            let carried = Posture::carried_over(&mesh.skeleton.skeleton, skeleton, &posture);
+            mesh.palettes
+                .pose(&mesh.avatar, &mesh.skeleton, &carried)
+                .ok_or_else(|| anyhow!("the posture does not fit the avatar's skeleton"))?
+        }
         None => Vec::new(),
     };
     let markers = document
@@ -219,7 +263,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
     };
     let gpu = headless_gpu()?;
     let mut renderer = SceneRenderer::new(&gpu.device);
-    renderer.set_avatar(&gpu.device, &gpu.queue, figure.mesh.as_ref());
+    renderer.set_avatar(
+        &gpu.device,
+        &gpu.queue,
+        figure.mesh.as_ref().map(|mesh| &mesh.model),
+    );
     let pixels = render_image(
         &gpu.device,
         &gpu.queue,

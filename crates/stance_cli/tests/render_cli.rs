@@ -147,7 +147,33 @@ fn a_transparent_image_is_clear_in_the_corners_and_opaque_in_the_figure() {
         image.rgba[middle + 1],
         image.rgba[middle + 2],
     ];
-    assert!(r > 90 && r > g && g > b, "clay-coloured body: {r} {g} {b}");
+    // The mannequin's figure, as the editor draws it: grey-blue clothes at the pelvis.
+    assert!(
+        b > r && b > 90,
+        "the figure's clothes at the pelvis: {r} {g} {b}"
+    );
+    // The capsule view: clay-coloured capsules.
+    let capsules = render(
+        &doc,
+        "tc.png",
+        &[
+            "--view",
+            "front",
+            "--size",
+            "200x260",
+            "--transparent",
+            "--capsules",
+        ],
+    );
+    let [r, g, b] = [
+        capsules.rgba[middle],
+        capsules.rgba[middle + 1],
+        capsules.rgba[middle + 2],
+    ];
+    assert!(
+        r > 90 && r > g && g > b,
+        "clay-coloured capsules: {r} {g} {b}"
+    );
     // Without --transparent the background is opaque.
     let opaque = render(&doc, "o.png", &["--view", "front", "--size", "200x260"]);
     assert_eq!(opaque.alpha(0, 0), 255);
@@ -227,39 +253,42 @@ fn overlays_add_the_floor_and_the_goals() {
 
 #[test]
 fn an_avatar_is_drawn_with_its_skinned_mesh() {
-    // Catches: --avatar ignored, palettes that leave the mesh at the origin or collapsed.
+    // Catches: --avatar ignored, palettes that leave the mesh at the origin or collapsed; the
+    // default figure not being the editor's (the generated avatar that the site ships as
+    // public/default-avatar.glb), or --capsules ignored.
     let avatar = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../../public/default-avatar.glb"
     );
-    let doc = write("avatar.json", DEFAULT_DOCUMENT);
-    let mannequin = render(
-        &doc,
-        "m.png",
-        &["--view", "front", "--size", "200x200", "--transparent"],
+    let doc = write(
+        "avatar.json",
+        r#"{"version": 1, "posture": {"r_shoulder": {"rz": -1.2}, "l_elbow": {"rx": -1.0}}}"#,
     );
-    let image = render(
-        &doc,
-        "a.png",
-        &[
-            "--view",
-            "front",
-            "--size",
-            "200x200",
-            "--transparent",
-            "--avatar",
-            avatar,
-        ],
-    );
+    let view = ["--view", "front", "--size", "200x200", "--transparent"];
+    let with = |extra: &[&'static str]| -> Vec<&'static str> { [&view[..], extra].concat() };
+    let capsules = render(&doc, "m.png", &with(&["--capsules"]));
+    let figure = render(&doc, "f.png", &view);
+    let image = render(&doc, "a.png", &with(&["--avatar", avatar]));
     let (_, y0, _, y1) = image.covered_box();
     assert!(y1 - y0 > 100, "a standing figure: {y0}..{y1}");
-    let differing = image
-        .rgba
-        .chunks(4)
-        .zip(mannequin.rgba.chunks(4))
-        .filter(|(a, b)| a != b)
-        .count();
-    assert!(differing > 1000, "the avatar looks like the mannequin");
+    let differing = |a: &Image, b: &Image| {
+        a.rgba
+            .chunks(4)
+            .zip(b.rgba.chunks(4))
+            .filter(|(a, b)| a != b)
+            .count()
+    };
+    assert!(
+        differing(&image, &capsules) > 1000,
+        "the avatar looks like the capsules"
+    );
+    // The default figure is that avatar, in the same posture: (nearly) the same picture.
+    let same = differing(&figure, &image);
+    assert!(
+        same < image.covered_count() / 50,
+        "{same} pixels differ between the default figure and the avatar it is made of"
+    );
+    assert!(differing(&figure, &capsules) > 1000);
 }
 
 #[test]

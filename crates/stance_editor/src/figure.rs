@@ -45,20 +45,7 @@ impl MannequinFigure {
     /// the figure's skeleton takes the value of the same joint's same DOF.
     pub fn palettes(&self, skeleton: &Skeleton, posture: &Posture) -> Option<Vec<Vec<Mat4>>> {
         let own = &self.humanoid.skeleton;
-        let mut values = Posture::rest(own);
-        for joint in own.joints() {
-            let Some(there) = skeleton.joint_index(&joint.name) else {
-                continue;
-            };
-            let other = &skeleton.joints()[there];
-            for (k, dof) in joint.dofs.iter().enumerate() {
-                if let Some(m) = other.dofs.iter().position(|d| d == dof)
-                    && let Some(&v) = posture.values().get(other.dof_start + m)
-                {
-                    values.values_mut()[joint.dof_start + k] = v;
-                }
-            }
-        }
+        let values = Posture::carried_over(own, skeleton, posture);
         self.avatar.palettes(&self.humanoid, &values)
     }
 }

@@ -32,6 +32,31 @@ impl Posture {
         }
     }
 
+    /// `posture` of the skeleton `source` carried onto `target` by name: each DOF of `target`
+    /// takes the value of the same DOF of the joint of the same name in `source`; joints and
+    /// DOF that `source` lacks stay at rest (e.g. a mannequin's posture on an avatar's
+    /// skeleton of the same standard, which may have fewer joints).
+    pub fn carried_over(target: &Skeleton, source: &Skeleton, posture: &Posture) -> Self {
+        let mut carried = Self::rest(target);
+        for joint in target.joints() {
+            let Some(there) = source.joint_index(&joint.name) else {
+                continue;
+            };
+            let Some(other) = source.joints().get(there) else {
+                continue;
+            };
+            for (k, dof) in joint.dofs.iter().enumerate() {
+                if let Some(m) = other.dofs.iter().position(|d| d == dof)
+                    && let Some(&v) = posture.values().get(other.dof_start + m)
+                    && let Some(slot) = carried.values.get_mut(joint.dof_start + k)
+                {
+                    *slot = v;
+                }
+            }
+        }
+        carried
+    }
+
     /// A posture from raw DOF values (checked against the skeleton; must be finite).
     pub fn from_values(skeleton: &Skeleton, values: Vec<f64>) -> Result<Self, IkError> {
         if values.len() != skeleton.dof_count() {

@@ -236,3 +236,37 @@ fn center_of_mass_is_mass_weighted() {
     let f = Frames::new(&s, &Posture::rest(&s));
     assert!((f.center_of_mass() - DVec3::new(1.5, 0.75, 0.0)).length() < 1e-12);
 }
+
+/// A posture carried onto another skeleton goes joint by joint and DOF by DOF by name: the
+/// same joint's same DOF gets the value wherever it sits in either skeleton's DOF order;
+/// what the source lacks stays at rest, and what the target lacks is dropped.
+#[test]
+fn a_posture_is_carried_over_by_joint_and_dof_name() {
+    let source = Skeleton::new(vec![
+        JointDef::new("root", None, DVec3::ZERO, &[Dof::Ry]),
+        JointDef::new("a", Some("root"), DVec3::Y, &[Dof::Rx, Dof::Rz]),
+        JointDef::new("only_here", Some("a"), DVec3::Y, &[Dof::Rx]),
+    ])
+    .unwrap();
+    // Other joint order, other DOF order, a joint the source lacks, a DOF it lacks.
+    let target = Skeleton::new(vec![
+        JointDef::new("root", None, DVec3::ZERO, &[Dof::Ry]),
+        JointDef::new("new", Some("root"), DVec3::X, &[Dof::Ry]),
+        JointDef::new("a", Some("new"), DVec3::Y, &[Dof::Rz, Dof::Ry, Dof::Rx]),
+    ])
+    .unwrap();
+    let posture = Posture::from_values(&source, vec![0.3, 0.5, -0.7, 1.1]).unwrap();
+    let carried = Posture::carried_over(&target, &source, &posture);
+    let a = &target.joints()[target.joint_index("a").unwrap()];
+    let value = |dof: Dof| {
+        let k = a.dofs.iter().position(|d| *d == dof).unwrap();
+        carried.values()[a.dof_start + k]
+    };
+    assert_eq!(carried.values()[0], 0.3, "root ry");
+    assert_eq!(value(Dof::Rx), 0.5);
+    assert_eq!(value(Dof::Rz), -0.7);
+    assert_eq!(value(Dof::Ry), 0.0, "a DOF the source lacks stays at rest");
+    let new = &target.joints()[target.joint_index("new").unwrap()];
+    assert_eq!(carried.values()[new.dof_start], 0.0);
+    assert_eq!(carried.values().len(), target.dof_count());
+}
