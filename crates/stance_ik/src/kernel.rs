@@ -29,6 +29,9 @@ pub(crate) struct Kernel {
     /// Householder vectors, `nf x nf`: column `j` holds `v_j` in rows `j..nf`.
     v: Vec<f64>,
     beta: Vec<f64>,
+    /// One past the last nonzero row of each `v_j`: a reflector built from a level whose
+    /// support is a few DOF only touches those rows (see `order_free_dof`).
+    v_end: Vec<usize>,
     rank: usize,
     /// Free DOF (reduced coordinate -> DOF) and its inverse (`NONE` for clamped DOF).
     free: Vec<usize>,
@@ -238,31 +241,19 @@ pub fn prioritized_step(
     }
     let mut partial = std::mem::take(ws.partial_mut());
     let kn = &mut ws.kernel;
-    kn.free.clear();
-    kn.pos.clear();
-    for d in 0..n {
-        let off = clamped.is_some_and(|mask| mask.get(d).copied().unwrap_or(false));
-        if off {
-            kn.pos.push(NONE);
-        } else {
-            kn.pos.push(kn.free.len());
-            kn.free.push(d);
-        }
-    }
+    order_free_dof(kn, levels, n, clamped);
     let nf = kn.free.len();
     // Column j of `v` is only read in rows j.., which `extend_basis` writes before any read:
     // stale values elsewhere are never seen, so the buffer is not cleared.
     kn.v.resize(nf * nf, 0.0);
     kn.beta.clear();
     kn.beta.resize(nf, 0.0);
+    kn.v_end.clear();
+    kn.v_end.resize(nf, nf);
     kn.rank = 0;
     kn.theta.clear();
     kn.theta.resize(n, 0.0);
     kn.budget = params.max_dof_step;
-    // A projection level (a cost's gradient) with a zero step adds nothing: a comfort level
-    // waiting for the levels above it.
-    let has_work =
-        |l: &LevelSystem| !l.dx.is_empty() && (!l.projection || l.dx.iter().any(|v| *v != 0.0));
     let last_with_rows = levels.iter().rposition(has_work);
     for (k, level) in levels.iter().enumerate() {
         let m = level.dx.len();
@@ -284,6 +275,42 @@ pub fn prioritized_step(
     }
     *ws.partial_mut() = partial;
     DVector::from_column_slice(&ws.kernel.theta)
+}
+
+/// A projection level (a cost's gradient) with a zero step adds nothing: a comfort level
+/// waiting for the levels above it.
+fn has_work(l: &LevelSystem) -> bool {
+    !l.dx.is_empty() && (!l.projection || l.dx.iter().any(|v| *v != 0.0))
+}
+
+/// The free (unclamped) DOF in the order the levels first reach them: the support of the
+/// first level, then what the second adds, and so on (the DOF no level reaches last). A
+/// level's Jacobian columns then live in the leading rows of the reduced coordinates, and so
+/// do the reflectors built from them (`Kernel::v_end`): applying the basis of a first level
+/// on the feet costs the legs' rows, not the whole body's. (A permutation of coordinates: the
+/// projectors and the step are the same.)
+fn order_free_dof(kn: &mut Kernel, levels: &[LevelSystem], n: usize, clamped: Option<&[bool]>) {
+    let is_clamped = |d: usize| clamped.is_some_and(|mask| mask.get(d).copied().unwrap_or(false));
+    kn.pos.clear();
+    kn.pos.resize(n, NONE);
+    kn.free.clear();
+    for level in levels.iter().filter(|l| has_work(l)) {
+        if level.support.is_empty() {
+            break;
+        }
+        for &d in &level.support {
+            if d < n && kn.pos[d] == NONE && !is_clamped(d) {
+                kn.pos[d] = kn.free.len();
+                kn.free.push(d);
+            }
+        }
+    }
+    for d in 0..n {
+        if kn.pos[d] == NONE && !is_clamped(d) {
+            kn.pos[d] = kn.free.len();
+            kn.free.push(d);
+        }
+    }
 }
 
 fn level_step(
@@ -372,17 +399,27 @@ fn level_step(
             }
         }
         for j in 0..r {
-            let vj = &kn.v[j * nf + j..(j + 1) * nf];
+            let end = kn.v_end[j];
+            let vj = &kn.v[j * nf + j..j * nf + end];
             let bj = kn.beta[j];
             let mut blocks = kn.z.chunks_exact_mut(4 * nf);
             for block in &mut blocks {
                 let (a, rest) = block.split_at_mut(nf);
                 let (b, rest) = rest.split_at_mut(nf);
                 let (c, d) = rest.split_at_mut(nf);
-                reflect4(vj, bj, [&mut a[j..], &mut b[j..], &mut c[j..], &mut d[j..]]);
+                reflect4(
+                    vj,
+                    bj,
+                    [
+                        &mut a[j..end],
+                        &mut b[j..end],
+                        &mut c[j..end],
+                        &mut d[j..end],
+                    ],
+                );
             }
             for col in blocks.into_remainder().chunks_exact_mut(nf) {
-                reflect(vj, bj, &mut col[j..]);
+                reflect(vj, bj, &mut col[j..end]);
             }
         }
     }
@@ -456,10 +493,11 @@ fn level_step(
             }
         }
         for j in (0..r).rev() {
+            let end = kn.v_end[j];
             reflect(
-                &kn.v[j * nf + j..(j + 1) * nf],
+                &kn.v[j * nf + j..j * nf + end],
                 kn.beta[j],
-                &mut kn.red[j..],
+                &mut kn.red[j..end],
             );
         }
         for (x, &d) in kn.red.iter().zip(&kn.free) {
@@ -492,7 +530,12 @@ impl Kernel {
             w.fill(0.0);
             w[i] = 1.0;
             for j in (0..=i).rev() {
-                reflect(&self.v[j * nf + j..(j + 1) * nf], self.beta[j], &mut w[j..]);
+                let end = self.v_end[j];
+                reflect(
+                    &self.v[j * nf + j..j * nf + end],
+                    self.beta[j],
+                    &mut w[j..end],
+                );
             }
             for (a, &da) in self.free.iter().enumerate() {
                 for (b, &db) in self.free.iter().enumerate() {
@@ -535,16 +578,20 @@ impl Kernel {
             let alpha = if x0 >= 0.0 { -sigma } else { sigma };
             let v0 = x0 - alpha;
             let beta = -1.0 / (alpha * v0);
+            // The reflector's rows end where the column's nonzero rows end (`v_end`).
+            let len = x.iter().rposition(|&e| e != 0.0).map_or(1, |last| last + 1);
             let dst = &mut self.v[i * nf + i..(i + 1) * nf];
             dst.copy_from_slice(x);
             dst[0] = v0;
             self.beta[i] = beta;
+            self.v_end[i] = i + len;
             self.rank += 1;
-            let vi = &self.v[i * nf + i..(i + 1) * nf];
+            let vi = &self.v[i * nf + i..i * nf + i + len];
             for c2 in 0..m {
                 if !self.used[c2] {
                     let other = &mut self.z[c2 * nf + i..(c2 + 1) * nf];
-                    self.norms[c2] = reflect_norm(vi, beta, other);
+                    let (head, tail) = other.split_at_mut(len);
+                    self.norms[c2] = reflect_norm(vi, beta, head) + dot(tail, tail);
                 }
             }
         }
