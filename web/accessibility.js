@@ -49,7 +49,7 @@ export function createAccessibilityMirror(canvas, act) {
     if (kind === "button") {
       element = document.createElement("button");
       element.type = "button";
-      element.addEventListener("click", () => act(node.id, "click"));
+      element.addEventListener("click", () => act(element.dataset.node, "click"));
     } else if (kind === "range" || kind === "text") {
       element = document.createElement("input");
       element.type = "text";

@@ -334,6 +334,21 @@ impl Avatar {
         )?)
     }
 
+    /// The skeleton at `options.loa`, or at LOA 2 when it cannot be built at that level (the
+    /// generated default avatar's mesh has no joints above LOA 2): how the mannequin's figure
+    /// is skeletoned at any level, in the editor and in `stance render`.
+    pub fn skeleton_or_loa2(
+        &self,
+        options: &SkeletonOptions,
+    ) -> Result<HumanoidSkeleton, AssetError> {
+        self.skeleton(options).or_else(|_| {
+            self.skeleton(&SkeletonOptions {
+                loa: stance_hanim::LevelOfArticulation::Loa2,
+                ..*options
+            })
+        })
+    }
+
     /// For each node, the skeleton joint that carries it: itself when mapped in `skeleton`,
     /// else its nearest mapped ancestor; `None` above the root.
     fn carrier(&self, skeleton: &HumanoidSkeleton) -> Vec<Option<usize>> {

@@ -150,12 +150,7 @@ fn figure(args: &RenderArgs) -> Result<Figure> {
         // The editor's figure: the generated default avatar (its skeleton at LOA 2 where
         // the mesh has no joints of a higher level).
         let avatar = make_default_avatar()?;
-        let skeleton = avatar.skeleton(&options).or_else(|_| {
-            avatar.skeleton(&SkeletonOptions {
-                loa: LevelOfArticulation::Loa2,
-                ..options
-            })
-        })?;
+        let skeleton = avatar.skeleton_or_loa2(&options)?;
         let mesh = MeshFigure::new(avatar, skeleton, "the default figure")?;
         return Ok(Figure {
             humanoid,

@@ -85,6 +85,12 @@ impl LoadedAvatar {
                 ..SkeletonOptions::default()
             })
             .map_err(|error| error.to_string())?;
+        Ok((Self::with_mesh(name, avatar)?, humanoid))
+    }
+
+    /// An imported (or generated) avatar's GPU model and palettes, its skeleton built by the
+    /// caller.
+    pub fn with_mesh(name: &str, avatar: Avatar) -> Result<Self, String> {
         let (model, palettes, mut warnings) = avatar_model(&avatar);
         warnings.extend(avatar.warnings.iter().cloned());
         let vertex_count = model.primitives.iter().map(|p| p.vertices.len()).sum();
@@ -92,20 +98,17 @@ impl LoadedAvatar {
         if vertex_count == 0 {
             return Err("the file has no mesh to show".to_owned());
         }
-        Ok((
-            Self {
-                name: name.to_owned(),
-                avatar,
-                model: Some(model),
-                palettes,
-                warnings,
-                vertex_count,
-                triangle_count,
-                images_from_host: 0,
-                load_ms: [0.0; 2],
-            },
-            humanoid,
-        ))
+        Ok(Self {
+            name: name.to_owned(),
+            avatar,
+            model: Some(model),
+            palettes,
+            warnings,
+            vertex_count,
+            triangle_count,
+            images_from_host: 0,
+            load_ms: [0.0; 2],
+        })
     }
 
     /// The skeleton of this avatar at another level of articulation.

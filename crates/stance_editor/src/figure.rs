@@ -4,7 +4,7 @@
 
 use glam::Mat4;
 use stance_asset::make_default_avatar;
-use stance_hanim::{HumanoidSkeleton, LevelOfArticulation};
+use stance_hanim::{HumanoidSkeleton, LevelOfArticulation, SkeletonOptions};
 use stance_ik::{Posture, Skeleton};
 use stance_render::SkinnedModel;
 
@@ -28,11 +28,14 @@ impl MannequinFigure {
     /// The figure for a mannequin at `loa` (its skeleton at LOA 2 where the generated mesh
     /// has no joints of a higher level: those joints' turns are not drawn).
     pub fn new(loa: LevelOfArticulation) -> Result<Self, String> {
-        let build = |loa| {
-            let avatar = make_default_avatar().map_err(|error| error.to_string())?;
-            LoadedAvatar::from_avatar("mannequin", avatar, loa)
-        };
-        let (avatar, humanoid) = build(loa).or_else(|_| build(LevelOfArticulation::Loa2))?;
+        let avatar = make_default_avatar().map_err(|error| error.to_string())?;
+        let humanoid = avatar
+            .skeleton_or_loa2(&SkeletonOptions {
+                loa,
+                ..SkeletonOptions::default()
+            })
+            .map_err(|error| error.to_string())?;
+        let avatar = LoadedAvatar::with_mesh("mannequin", avatar)?;
         Ok(Self { avatar, humanoid })
     }
 
