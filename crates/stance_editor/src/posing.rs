@@ -17,7 +17,7 @@ use stance_hanim::{
 use stance_ik::conflict::Unmet;
 use stance_ik::{
     Clock, Frames, Iteration, Limb, LimbGoal, Posture, Skeleton, SolveReport, SolveStatus, Solver,
-    SolverSettings, SwivelInterval, Task,
+    SolverSettings, SwivelInterval, TEXTBOOK_ANGULAR_STEP, TEXTBOOK_LINEAR_STEP, Task,
 };
 
 pub use self::timed::{TimedFrame, blended, timed_tasks, timed_tasks_at};
@@ -150,6 +150,10 @@ impl PosingSession {
             iteration: Iteration::Guarded,
             stall_window: GUARDED_STALL_WINDOW,
             restarts: false,
+            // A pull asks the textbook's short steps of its guarded iterations: a longer ask
+            // is halved by their line search before it is taken.
+            max_linear_step: TEXTBOOK_LINEAR_STEP,
+            max_angular_step: TEXTBOOK_ANGULAR_STEP,
             ..SolverSettings::default()
         };
         let posture = Posture::rest(&humanoid.skeleton);

@@ -50,6 +50,6 @@ pub use skeleton::{Dof, Joint, JointDef, Skeleton};
 pub use solver::SystemClock;
 pub use solver::{
     AnalyticRestart, Backend, Clock, Iteration, LevelReport, SolveReport, SolveStatus, Solver,
-    SolverSettings,
+    SolverSettings, TEXTBOOK_ANGULAR_STEP, TEXTBOOK_LINEAR_STEP,
 };
 pub use task::{Axes, BALANCE_BAND, Effector, Task, TaskFeature, TaskKind};

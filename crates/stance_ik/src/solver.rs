@@ -15,7 +15,9 @@ pub use report::{AnalyticRestart, LevelReport, SolveReport, SolveStatus};
 #[cfg(not(all(target_arch = "wasm32", target_os = "unknown")))]
 pub use settings::SystemClock;
 use settings::validate_damping;
-pub use settings::{Backend, Clock, Iteration, SolverSettings};
+pub use settings::{
+    Backend, Clock, Iteration, SolverSettings, TEXTBOOK_ANGULAR_STEP, TEXTBOOK_LINEAR_STEP,
+};
 
 use crate::kernel::prioritized_step;
 use crate::limb::{Limb, LimbGoal};
@@ -45,6 +47,9 @@ struct RestartStage {
     iteration: Iteration,
     trust_region: f64,
     stall_window: usize,
+    /// The task clamps of the run (`max_linear_step`, `max_angular_step`).
+    max_linear_step: f64,
+    max_angular_step: f64,
     /// From the start posture (else from the best posture so far).
     from_start: bool,
 }
@@ -211,6 +216,8 @@ impl Solver {
             self.settings.iteration = stage.iteration;
             self.settings.trust_region = stage.trust_region;
             self.settings.stall_window = stage.stall_window;
+            self.settings.max_linear_step = stage.max_linear_step;
+            self.settings.max_angular_step = stage.max_angular_step;
             self.settings.max_iterations = iterations_left;
             if stage.from_start {
                 values.copy_from_slice(&initial);
@@ -260,21 +267,28 @@ impl Solver {
     /// The runs a stalled solve goes on with, in order (none without `settings.restarts`):
     /// after textbook iterations, guarded ones from the best posture so far (their line
     /// search settles what whole steps leave oscillating), then the plain recursion from the
-    /// start posture; after guarded ones, the plain recursion.
+    /// start posture; after guarded ones, the plain recursion. Both with the textbook's task
+    /// clamps where the settings' are longer.
     fn restart_stages(&self) -> Vec<RestartStage> {
         if !self.settings.restarts {
             return Vec::new();
         }
+        let max_linear_step = self.settings.max_linear_step.min(TEXTBOOK_LINEAR_STEP);
+        let max_angular_step = self.settings.max_angular_step.min(TEXTBOOK_ANGULAR_STEP);
         let guarded = RestartStage {
             iteration: Iteration::Guarded,
             trust_region: self.settings.trust_region,
             stall_window: GUARDED_STALL_WINDOW,
+            max_linear_step,
+            max_angular_step,
             from_start: false,
         };
         let plain = RestartStage {
             iteration: Iteration::Textbook,
             trust_region: f64::INFINITY,
             stall_window: RESTART_STALL_WINDOW,
+            max_linear_step,
+            max_angular_step,
             from_start: true,
         };
         match self.settings.iteration {

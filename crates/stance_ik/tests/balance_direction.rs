@@ -12,7 +12,7 @@ wasm_bindgen_test::wasm_bindgen_test_configure!(run_in_browser);
 
 use glam::{DQuat, DVec3};
 use stance_hanim::scenarios::{humanoid50, standing_posture};
-use stance_ik::{Effector, Frames, Posture, Skeleton, Solver, Task};
+use stance_ik::{Effector, Frames, Posture, Skeleton, Solver, SolverSettings, Task};
 
 /// Sole corners of a foot, relative to its ankle (world axes at the standing posture): 4 cm
 /// to each side, 5 cm behind and 15 cm ahead of the ankle, on the floor.
@@ -78,6 +78,15 @@ fn depth_inside(rectangle: (f64, f64, f64, f64), com: DVec3) -> f64 {
 }
 
 fn reach(stand: &Stand, forward: f64, balance: Option<f64>) -> (Posture, Frames, f64) {
+    reach_with(stand, forward, balance, SolverSettings::default())
+}
+
+fn reach_with(
+    stand: &Stand,
+    forward: f64,
+    balance: Option<f64>,
+    settings: SolverSettings,
+) -> (Posture, Frames, f64) {
     let s = &stand.skeleton;
     let wrist = s.require_joint("r_radiocarpal").unwrap();
     let start_frames = Frames::new(s, &stand.start);
@@ -88,7 +97,8 @@ fn reach(stand: &Stand, forward: f64, balance: Option<f64>) -> (Posture, Frames,
     }
     tasks.push(Task::position(wrist, DVec3::ZERO, goal).at_level(3));
     let mut posture = stand.start.clone();
-    let report = Solver::default()
+    let report = Solver::new(settings)
+        .expect("valid settings")
         .solve(s, &tasks, &mut posture)
         .expect("valid problem");
     assert!(
@@ -134,10 +144,18 @@ fn balance_keeps_the_centre_of_mass_inside_the_feet_while_the_hand_reaches_far()
 fn balance_does_not_constrain_a_reach_that_stays_inside() {
     let stand = stand();
     // A small reach: the centre of mass stays well inside, so the inequality stays empty and
-    // the lower level is solved exactly as without it.
-    let (free_posture, free, free_hand) = reach(&stand, 0.3, None);
+    // the lower level is solved exactly as without it. With the textbook's short steps
+    // (0.1 m a task per iteration) no iterate comes near the margin; the default 0.3 m steps
+    // overshoot on the way (an iterate's projection crosses the margin, the inequality holds
+    // it there), which the second half checks: still met, still inside.
+    let short = SolverSettings {
+        max_linear_step: stance_ik::TEXTBOOK_LINEAR_STEP,
+        max_angular_step: stance_ik::TEXTBOOK_ANGULAR_STEP,
+        ..SolverSettings::default()
+    };
+    let (free_posture, free, free_hand) = reach_with(&stand, 0.3, None, short);
     assert!(depth_inside(stand.rectangle, free.center_of_mass()) > 0.03);
-    let (posture, _, hand) = reach(&stand, 0.3, Some(0.02));
+    let (posture, _, hand) = reach_with(&stand, 0.3, Some(0.02), short);
     assert!(free_hand < 1e-6 && hand < 1e-6, "{free_hand} {hand}");
     let moved = posture
         .values()
@@ -149,6 +167,9 @@ fn balance_does_not_constrain_a_reach_that_stays_inside() {
         moved < 1e-9,
         "same posture with and without balance: {moved}"
     );
+    let (_, held, hand) = reach(&stand, 0.3, Some(0.02));
+    let depth = depth_inside(stand.rectangle, held.center_of_mass());
+    assert!(hand < 1e-6 && depth >= 0.02 - 1e-6, "{hand} {depth}");
 }
 
 #[test]

@@ -327,6 +327,10 @@ fn higher_levels_stay_exact_while_dof_sit_on_their_limits() {
         restarts: false,
         max_iterations: 1,
         damping: Damping::Constant { lambda: 0.0 },
+        // The textbook's task clamps: the posture level asks 0.3 rad, so no DOF moves past
+        // the trust region (whose scaling would shorten level 1's step too).
+        max_linear_step: stance_ik::TEXTBOOK_LINEAR_STEP,
+        max_angular_step: stance_ik::TEXTBOOK_ANGULAR_STEP,
         ..SolverSettings::default()
     })
     .unwrap();
@@ -713,7 +717,13 @@ fn per_level_damping_acts_on_its_level_only() {
             .at_level(2),
     ];
     let n = chain.dof_count();
-    let plain = Solver::default()
+    // Level 2 asked 0.1 m (the textbook clamp) of the tip's 0.11 m error.
+    let short = SolverSettings {
+        max_linear_step: stance_ik::TEXTBOOK_LINEAR_STEP,
+        ..SolverSettings::default()
+    };
+    let plain = Solver::new(short)
+        .unwrap()
         .linear_systems(&chain, &tasks, &p)
         .unwrap();
     let mut damped = plain.clone();

@@ -75,9 +75,9 @@ pub struct SolverSettings {
     pub damping: Damping,
     /// Relative rank threshold of the projector (default 1e-9).
     pub rank_tolerance: f64,
-    /// Largest position / centre-of-mass change asked of a task per iteration (m, default 0.1).
+    /// Largest position / centre-of-mass change asked of a task per iteration (m, default 0.3).
     pub max_linear_step: f64,
-    /// Largest orientation / gaze / posture change asked per iteration (rad, default 0.3).
+    /// Largest orientation / gaze / posture change asked per iteration (rad, default 0.5).
     pub max_angular_step: f64,
     /// Largest DOF change per guarded iteration, shared by the levels in priority order
     /// (default 0.2; the textbook iteration has none).
@@ -136,8 +136,8 @@ impl Default for SolverSettings {
             time_budget_secs: None,
             damping: Damping::default(),
             rank_tolerance: 1e-9,
-            max_linear_step: 0.1,
-            max_angular_step: 0.3,
+            max_linear_step: 0.3,
+            max_angular_step: 0.5,
             max_dof_step: 0.2,
             enforce_limits: true,
             backend: Backend::Kernel,
@@ -214,6 +214,15 @@ pub(super) fn validate_damping(damping: Damping) -> Result<(), IkError> {
         _ => Ok(()),
     }
 }
+
+/// The textbook's per-iteration task clamp of positions and centres of mass (m; Buss & Kim's
+/// 0.1 m): shorter than the default [`SolverSettings::max_linear_step`], so more iterations,
+/// but whole steps fall into the basin of the posture nearest the start more often. The
+/// restarts of a stalled solve use it, and so do frame-by-frame guarded solves (a line search
+/// halves a long ask before it takes it).
+pub const TEXTBOOK_LINEAR_STEP: f64 = 0.1;
+/// The textbook's per-iteration task clamp of orientations, gazes and postures (rad).
+pub const TEXTBOOK_ANGULAR_STEP: f64 = 0.3;
 
 /// Iterations without a meaningful new best (in priority order) before "stalled".
 const STALL_WINDOW: usize = 40;

@@ -321,8 +321,8 @@ pub fn level_residuals(skeleton: &Skeleton, tasks: &[Task], posture: &Posture) -
 }
 
 /// The textbook recursion as a whole solver (the oracle of the convergence suites): per
-/// iteration each level's error clamped per task (0.1 m / 0.3 rad, the solver's
-/// `linear_systems`), `dtheta_k = dtheta_{k-1} + (J_k P_{k-1})^{+lambda} (dx_k - J_k
+/// iteration each level's error clamped per task (0.1 m / 0.3 rad, through the solver's
+/// `linear_systems`, whatever the solver's default step limits), `dtheta_k = dtheta_{k-1} + (J_k P_{k-1})^{+lambda} (dx_k - J_k
 /// dtheta_{k-1})`, `P_k = P_{k-1} - Jh_k^+ Jh_k` (undamped, rank-decided), all with explicit
 /// `N x N` matrices and a Jacobi SVD; joint limits by the textbook clamping loop (a DOF that
 /// would leave its range is put on the bound, its column removed, its move subtracted from
@@ -339,7 +339,13 @@ pub fn plain_recursion(
     let n = skeleton.dof_count();
     let (lo, hi) = (skeleton.lower_limits(), skeleton.upper_limits());
     let mut posture = start.clone();
-    let mut solver = stance_ik::Solver::default();
+    // The oracle's own clamp (the textbook's 0.1 m / 0.3 rad), whatever the solver's defaults.
+    let mut solver = stance_ik::Solver::new(stance_ik::SolverSettings {
+        max_linear_step: stance_ik::TEXTBOOK_LINEAR_STEP,
+        max_angular_step: stance_ik::TEXTBOOK_ANGULAR_STEP,
+        ..Default::default()
+    })
+    .expect("valid settings");
     let posture_only: Vec<bool> = tasks_by_level(tasks)
         .iter()
         .map(|level| level.iter().all(|t| t.is_posture()))
