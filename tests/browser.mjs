@@ -112,3 +112,52 @@ export function saveArtifact(name, buffer) {
   mkdirSync(ARTIFACTS, { recursive: true });
   writeFileSync(join(ARTIFACTS, name), buffer);
 }
+
+/**
+ * The page's main-thread tasks over 50 ms while `action` runs, from a Chromium trace: each as
+ * `{ ms, commitMs }`, where `commitMs` is the compositor's share (`Commit`: in headless
+ * Chromium without a GPU it reads the WebGL canvas back and waits for SwiftShader to finish
+ * the frame, which a GPU-composited browser does not). `ms - commitMs` is what the page's own
+ * script and layout held the thread.
+ */
+export async function longTasks(page, action) {
+  const cdp = await page.context().newCDPSession(page);
+  const events = [];
+  cdp.on("Tracing.dataCollected", ({ value }) => events.push(...value));
+  const complete = new Promise((resolve) => cdp.on("Tracing.tracingComplete", resolve));
+  await cdp.send("Tracing.start", {
+    traceConfig: { includedCategories: ["toplevel", "blink", "gpu", "disabled-by-default-devtools.timeline"] },
+    transferMode: "ReportEvents",
+  });
+  let result;
+  try {
+    result = await action();
+  } finally {
+    await cdp.send("Tracing.end");
+    await complete;
+    await cdp.detach();
+  }
+  const main = new Set(events
+    .filter((e) => e.ph === "M" && e.name === "thread_name" && e.args?.name === "CrRendererMain")
+    .map((e) => `${e.pid}:${e.tid}`));
+  const onMain = events.filter((e) => e.ph === "X" && main.has(`${e.pid}:${e.tid}`));
+  const tasks = onMain
+    .filter((e) => e.name === "ThreadControllerImpl::RunTask" && e.dur > 50_000)
+    .map((task) => {
+      const inside = (e) => e.pid === task.pid && e.tid === task.tid && e.ts >= task.ts
+        && e.ts + (e.dur ?? 0) <= task.ts + task.dur;
+      const commit = onMain.filter((e) => e.name === "Commit" && inside(e))
+        .reduce((sum, e) => sum + e.dur, 0);
+      return { ms: task.dur / 1000, commitMs: commit / 1000 };
+    });
+  return { result, tasks };
+}
+
+/** A line describing `longTasks`' result. */
+export function describeLongTasks(tasks) {
+  const own = tasks.map((t) => t.ms - t.commitMs);
+  const longest = tasks.reduce((a, t) => (t.ms > (a?.ms ?? 0) ? t : a), null);
+  return `${tasks.length} main-thread tasks over 50 ms, longest ${Math.round(longest?.ms ?? 0)} ms `
+    + `(${Math.round(longest?.commitMs ?? 0)} ms of it the compositor's canvas readback); `
+    + `longest without the readback ${Math.round(Math.max(0, ...own))} ms`;
+}

@@ -1,6 +1,9 @@
 // Opening files and fetched avatars without blocking the page: files are read and fetched
-// with a progress bar, the textures of a glTF, GLB or VRM are decoded by the browser in a
-// worker (decode-worker.js), and the editor receives the bytes with the decoded pixels.
+// with a progress bar, and a worker (load-worker.js) decodes the textures of a glTF, GLB or
+// VRM with the browser's decoders. Once it holds the editor's WebAssembly module it also
+// imports the avatars the editor asks for (stanceHost.importAvatar), so that the main thread
+// only receives the imported avatar; before that (or where no worker can run) the editor
+// receives the file with its decoded pixels and imports it itself.
 
 import { isModel } from "./model-files.js";
 
@@ -23,9 +26,15 @@ function progress(text, value) {
   else meter.value = value;
 }
 
-// Hidden once the editor has taken the files: its import runs in its next frame.
+// Imports under way in the worker: the bar stays until they are back.
+let importing = 0;
+
+// Hidden once the editor has taken the files (its own import runs in its next frame) and the
+// worker's imports are back.
 function done() {
-  requestAnimationFrame(() => requestAnimationFrame(() => { bar.hidden = true; }));
+  requestAnimationFrame(() => requestAnimationFrame(() => {
+    if (importing === 0) bar.hidden = true;
+  }));
 }
 
 // The byte arrays one after the other in one array.
@@ -46,18 +55,26 @@ function describe(error) {
 }
 
 let worker = null;
+let workerImports = false;
 let nextRequest = 0;
 const pending = new Map();
 
-function decoder() {
+function loader() {
   if (worker === null) {
     try {
-      worker = new Worker(new URL("./decode-worker.js", import.meta.url), { type: "module" });
+      worker = new Worker(new URL("./load-worker.js", import.meta.url), { type: "module" });
       worker.onmessage = ({ data }) => {
+        if (data.type === "ready") {
+          workerImports = data.ok;
+          if (!data.ok) console.warn("the loading worker cannot import avatars:", data.error);
+          return;
+        }
         pending.get(data.id)?.(data);
         pending.delete(data.id);
       };
-      worker.onerror = () => {
+      worker.onerror = (event) => {
+        console.warn("the loading worker failed:", event.message);
+        workerImports = false;
         for (const resolve of pending.values()) resolve(null);
         pending.clear();
       };
@@ -68,23 +85,90 @@ function decoder() {
   return worker || null;
 }
 
-// The texture images of the model among `files`, decoded off the main thread; null where no
-// worker could do it (the editor then decodes them itself).
-function decodeTextures(files) {
-  const decoderWorker = decoder();
-  if (!decoderWorker || !files.some((f) => isModel(f.name))) {
-    return Promise.resolve(null);
-  }
+function request(message, transfer = []) {
   const id = nextRequest++;
   return new Promise((resolve) => {
     pending.set(id, resolve);
-    decoderWorker.postMessage({ id, files });
+    worker.postMessage({ ...message, id }, transfer);
   });
 }
 
+// The textures of the model file last handed to the editor, decoding in the worker while the
+// editor looks at the file: its import request (if it comes) takes them.
+let prefetched = null;
+
+// Gives the loading worker the editor's compiled module: from then on it imports avatars.
+export function startImporter(module) {
+  loader()?.postMessage({ type: "init", module });
+}
+
+// stanceHost.importAvatar: the editor asks for `name` (with its resources, `lengths[i]`
+// bytes each, one after the other in `bytes`) to be imported off the main thread. False when
+// the worker cannot: the editor imports it itself.
+export function importAvatar(handle, name, names, lengths, bytes) {
+  if (!workerImports || !loader()) return false;
+  const files = [];
+  let offset = 0;
+  names.forEach((fileName, i) => {
+    // A copy: `bytes` is a view of the editor's memory, which posting would copy whole.
+    files.push({ name: fileName, bytes: bytes.slice(offset, offset + lengths[i]) });
+    offset += lengths[i];
+  });
+  importing += 1;
+  progress(`Importing ${name.split("/").pop()}…`);
+  const decoding = prefetched?.name === name ? prefetched.decoding : Promise.resolve(null);
+  prefetched = null;
+  decoding.then((decoded) => {
+    const images = decoded?.file === name ? decoded.images : null;
+    return request({ type: "import", files, images }, (images ?? []).map((i) => i.rgba.buffer));
+  }).then((reply) => {
+    // One reply at a time reaches the editor, each texture in a task of its own: a 2048x2048
+    // texture is 16 MB to copy into the editor's memory.
+    delivery = delivery.then(async () => {
+      try {
+        if (reply?.avatar) {
+          for (const pixels of reply.pixels) {
+            handle.avatar_texture(pixels);
+            await nextTask();
+          }
+          handle.avatar_imported(name, reply.avatar, reply.importMs, reply.imagesFromHost);
+        } else {
+          handle.avatar_import_failed(name, reply?.error ?? "the loading worker stopped");
+        }
+      } catch (error) {
+        handle.avatar_import_failed(name, describe(error));
+      } finally {
+        importing -= 1;
+        done();
+      }
+    });
+  });
+  return true;
+}
+
+let delivery = Promise.resolve();
+
+function nextTask() {
+  return new Promise((resolve) => setTimeout(resolve, 0));
+}
+
+// The texture images of the model among `files`, decoded off the main thread; null where no
+// worker could do it (the editor then decodes them itself).
+function decodeTextures(files) {
+  if (!loader() || !files.some((f) => isModel(f.name))) {
+    return Promise.resolve(null);
+  }
+  return request({ type: "decode", files });
+}
+
 // Hands the decoded pixels to the editor (for the file they belong to), then the files.
+// With an importing worker the editor asks for the import, which takes the textures the
+// worker started decoding at once.
 async function deliver(handle, files) {
-  if (files.some((f) => isModel(f.name))) {
+  const model = files.find((f) => isModel(f.name));
+  if (workerImports && model) {
+    prefetched = { name: model.name, decoding: decodeTextures(files) };
+  } else if (model) {
     progress("Decoding textures…");
     const decoded = await decodeTextures(files);
     if (decoded?.file && decoded.images.length) {

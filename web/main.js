@@ -2,7 +2,7 @@
 // readable error screen instead of a blank page when it cannot start.
 import init, { WebHandle } from "./pkg/stance_web.js";
 import { connectSensor, disconnectSensor } from "./sensors.js";
-import { fetchWithProgress, openFiles } from "./loading.js";
+import { fetchWithProgress, importAvatar, openFiles, startImporter } from "./loading.js";
 import { createAccessibilityMirror } from "./accessibility.js";
 
 const loading = document.getElementById("loading");
@@ -86,7 +86,26 @@ window.stanceHost = {
     if (!window.stance) throw new Error("the editor is not running");
     fetchWithProgress(window.stance, url);
   },
+  // Imports an avatar file in the loading worker; false when it cannot (see loading.js).
+  importAvatar(name, names, lengths, bytes) {
+    if (!window.stance) return false;
+    return importAvatar(window.stance, name, names, lengths, bytes);
+  },
 };
+
+// The editor's WebAssembly, compiled once: the page runs it, and the loading worker runs the
+// same module to import avatars.
+async function compileEditor() {
+  const url = new URL("./pkg/stance_web_bg.wasm", import.meta.url);
+  try {
+    return await WebAssembly.compileStreaming(fetch(url));
+  } catch {
+    // A server that does not say application/wasm.
+    const response = await fetch(url);
+    if (!response.ok) throw new Error(`${url.pathname}: the server answered ${response.status}`);
+    return WebAssembly.compile(await response.arrayBuffer());
+  }
+}
 
 function offerDownload(fileName, blob) {
   const anchor = document.createElement("a");
@@ -157,8 +176,10 @@ async function main() {
     showError("This browser has no WebAssembly.");
     return;
   }
+  let module;
   try {
-    await init();
+    module = await compileEditor();
+    await init({ module_or_path: module });
   } catch (error) {
     showError(`The editor's code could not load: ${describe(error)}`);
     return;
@@ -175,6 +196,7 @@ async function main() {
     return;
   }
   connectPage(handle);
+  startImporter(module);
   // ?avatar=URL opens that avatar.
   const avatarUrl = new URLSearchParams(window.location.search).get("avatar");
   if (avatarUrl) window.stanceHost.fetchFile(avatarUrl);

@@ -10,7 +10,7 @@ use crate::AssetError;
 use crate::model::{Avatar, Trs, orthonormalize};
 
 /// The node property a channel animates.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum AnimationPath {
     /// `translation` (3 components, file units).
     Translation,
@@ -40,7 +40,9 @@ impl AnimationPath {
 }
 
 /// How values between keys are computed (glTF `sampler.interpolation`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize,
+)]
 pub enum Interpolation {
     /// Linear; spherical linear (slerp, the shorter way) for rotations.
     #[default]
@@ -52,7 +54,7 @@ pub enum Interpolation {
 }
 
 /// One animated property of one node: a glTF channel with its sampler.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct AnimationChannel {
     /// The node animated (index into [`Avatar::nodes`]).
     pub node: usize,
@@ -62,14 +64,16 @@ pub struct AnimationChannel {
     pub interpolation: Interpolation,
     /// Key times in seconds: finite, the first >= 0, strictly increasing, at least one
     /// (two for CUBICSPLINE).
+    #[serde(with = "crate::transfer::pod_vec")]
     pub times: Vec<f64>,
     /// Per key [`AnimationPath::components`] numbers (rotation keys normalised); for
     /// CUBICSPLINE per key three such groups: in-tangent, value, out-tangent.
+    #[serde(with = "crate::transfer::pod_vec")]
     pub values: Vec<f64>,
 }
 
 /// A glTF animation read from a file.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Animation {
     /// Its name in the file (`animation{i}` when it has none).
     pub name: String,

@@ -3,6 +3,9 @@
 /// What went wrong while reading or writing an avatar file.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum AssetError {
+    /// An avatar handed between threads as bytes did not decode (see `avatar_from_bytes`).
+    #[error("the imported avatar did not arrive intact: {0}")]
+    Transfer(String),
     /// The input is neither a GLB container nor glTF JSON.
     #[error("not a glTF file: {0}")]
     NotGltf(String),

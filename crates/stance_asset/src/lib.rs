@@ -41,6 +41,7 @@ mod meshopt;
 mod model;
 mod normalize;
 mod resources;
+mod transfer;
 
 pub use animation::{
     Animation, AnimationChannel, AnimationPath, Interpolation, clip_from_animation,
@@ -56,6 +57,7 @@ pub use model::{
     VrmExtension, Wrap,
 };
 pub use resources::{find_resource, relative_path};
+pub use transfer::AvatarTransfer;
 
 /// Limits against hostile files. The defaults fit real avatars (tens of MB) with room.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -10,7 +10,7 @@ use crate::AssetError;
 use crate::animation::Animation;
 
 /// Where an avatar came from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum SourceFormat {
     /// Binary glTF container.
     Glb,
@@ -25,7 +25,7 @@ pub enum SourceFormat {
 }
 
 /// A local transform: translation, rotation, scale (file units, parent frame).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Trs {
     /// Translation.
     pub translation: DVec3,
@@ -68,7 +68,7 @@ impl Trs {
 }
 
 /// One node of the scene graph (a joint, a mesh holder or both).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Node {
     /// Name in the file (`node{i}` when it has none).
     pub name: String,
@@ -88,7 +88,7 @@ pub struct Node {
 }
 
 /// A skin: joints and their inverse bind matrices.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Skin {
     /// Name in the file.
     pub name: String,
@@ -99,7 +99,9 @@ pub struct Skin {
 }
 
 /// Alpha mode of a material.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize,
+)]
 pub enum AlphaMode {
     /// Opaque.
     #[default]
@@ -111,7 +113,7 @@ pub enum AlphaMode {
 }
 
 /// A material reduced to what the renderer draws: a base colour (factor x texture).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Material {
     /// Name in the file.
     pub name: String,
@@ -147,7 +149,9 @@ impl Default for Material {
 }
 
 /// Texture wrap mode.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize,
+)]
 pub enum Wrap {
     /// Repeat (glTF default).
     #[default]
@@ -160,7 +164,7 @@ pub enum Wrap {
 
 /// A decoded texture: RGBA8, rows top to bottom, sRGB when used as base colour. Textures
 /// that no material uses as base colour are 1x1 white placeholders (not decoded).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Texture {
     /// Name of the image.
     pub name: String,
@@ -169,7 +173,8 @@ pub struct Texture {
     /// Height in pixels.
     pub height: u32,
     /// `width * height * 4` bytes.
-    pub rgba8: Vec<u8>,
+    #[serde(with = "crate::transfer::byte_vec")]
+    pub rgba8: std::sync::Arc<Vec<u8>>,
     /// Wrap along u.
     pub wrap_u: Wrap,
     /// Wrap along v.
@@ -177,26 +182,32 @@ pub struct Texture {
 }
 
 /// One drawable part of a mesh (glTF primitive), triangles only.
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct Primitive {
     /// Vertex positions (mesh space, file units; dequantised).
+    #[serde(with = "crate::transfer::pod_vec")]
     pub positions: Vec<[f32; 3]>,
     /// Unit normals (computed from the triangles when the file has none).
+    #[serde(with = "crate::transfer::pod_vec")]
     pub normals: Vec<[f32; 3]>,
     /// Texture coordinates (`[0, 0]` when absent).
+    #[serde(with = "crate::transfer::pod_vec")]
     pub uvs: Vec<[f32; 2]>,
     /// Skin joint indices (into the node's [`Skin::joints`]); empty when not skinned.
+    #[serde(with = "crate::transfer::pod_vec")]
     pub joints: Vec<[u16; 4]>,
     /// Skin weights, summing to 1; empty when not skinned.
+    #[serde(with = "crate::transfer::pod_vec")]
     pub weights: Vec<[f32; 4]>,
     /// Triangle list.
+    #[serde(with = "crate::transfer::pod_vec")]
     pub indices: Vec<u32>,
     /// Material index.
     pub material: Option<usize>,
 }
 
 /// A mesh: its primitives.
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct Mesh {
     /// Name in the file.
     pub name: String,
@@ -206,17 +217,18 @@ pub struct Mesh {
 
 /// A VRM file's humanoid extension: its name and JSON (meta with the licence, humanoid bones
 /// by node index, expressions, first person...).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct VrmExtension {
     /// `VRM` (0.x) or `VRMC_vrm` (1.0).
     pub name: String,
     /// The extension object.
+    #[serde(with = "crate::transfer::json_text")]
     pub value: serde_json::Value,
 }
 
 /// A loaded avatar. All transforms are in file units; [`Avatar::hanim_from_file`] takes the
 /// file's world space to the H-Anim frame (metres, +Y up, +Z front, +X the body's left).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Avatar {
     /// Where it came from.
     pub format: SourceFormat,

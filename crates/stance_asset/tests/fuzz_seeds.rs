@@ -1,7 +1,9 @@
-//! The seed corpus of the `import` fuzz target (`fuzz/seeds/import/`): small valid files of
+//! The seed corpora of the `import` fuzz target (`fuzz/seeds/import/`): small valid files of
 //! every kind the importer reads, each prefixed with the target's selector byte (bit 0: no
 //! humanoid required, bit 1: decode textures, bit 2: the second half is the external file, bit
-//! 3: images 0 and 1 given decoded, bits 4 to 7 their size).
+//! 3: images 0 and 1 given decoded, bits 4 to 7 their size); and of the `transfer` target
+//! (`fuzz/seeds/transfer/`): each of those avatars as the bytes the page's import worker hands
+//! to the editor.
 //!
 //! `the_fuzz_seeds_load` checks the committed seeds; `write_fuzz_seeds` (ignored) writes them
 //! again: `cargo test -p stance_asset --test fuzz_seeds -- --ignored`.
@@ -31,6 +33,22 @@ const DECODED_IMAGES: u8 = 8;
 
 fn seed_dir() -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/seeds/import")
+}
+
+/// A seed of the `transfer` target: the avatar's bytes, then each texture's pixels, each
+/// part after its length (4 bytes, little-endian); see `fuzz_targets/transfer.rs`.
+fn transfer_seed(transfer: &stance_asset::AvatarTransfer) -> Vec<u8> {
+    let mut seed = Vec::new();
+    for part in std::iter::once(&transfer.avatar).chain(&transfer.pixels) {
+        seed.extend_from_slice(&u32::try_from(part.len()).unwrap().to_le_bytes());
+        seed.extend_from_slice(part);
+    }
+    seed
+}
+
+/// The seeds of the `transfer` target: each import seed's avatar as transfer bytes.
+fn transfer_dir() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/seeds/transfer")
 }
 
 /// The fuzz target's reading of a seed (keep in step with `fuzz/fuzz_targets/import.rs`).
@@ -507,11 +525,19 @@ fn seed(name: &str) -> (u8, Vec<u8>) {
 fn write_fuzz_seeds() {
     let dir = seed_dir();
     std::fs::create_dir_all(&dir).unwrap();
+    std::fs::create_dir_all(transfer_dir()).unwrap();
     for name in SEEDS {
         let (selector, file) = seed(name);
         let mut data = vec![selector];
         data.extend_from_slice(&file);
+        let avatar = load_seed(&data).unwrap();
         std::fs::write(dir.join(name), data).unwrap();
+        let transfer = stance_asset::AvatarTransfer::new(avatar).unwrap();
+        std::fs::write(
+            transfer_dir().join(format!("{name}.bin")),
+            transfer_seed(&transfer),
+        )
+        .unwrap();
     }
 }
 
@@ -526,6 +552,16 @@ fn the_fuzz_seeds_load() {
         assert!(data.len() < 64 * 1024, "{name}: {} bytes", data.len());
         total += data.len();
         let avatar = load_seed(&data).unwrap_or_else(|e| panic!("{name}: {e}"));
+        // Handed between threads as bytes (the page's import worker), it comes back equal:
+        // VRM extension, textures, animations and mapping included.
+        let transfer = stance_asset::AvatarTransfer::new(avatar.clone()).unwrap();
+        let seed = transfer_dir().join(format!("{name}.bin"));
+        assert_eq!(
+            std::fs::read(&seed).ok(),
+            Some(transfer_seed(&transfer)),
+            "{name}: the transfer seed is not the avatar's transfer (run write_fuzz_seeds)"
+        );
+        assert_eq!(transfer.into_avatar().unwrap(), avatar, "{name}");
         let expected = match name.as_str() {
             "vrm0.vrm" => Some(SourceFormat::Vrm0),
             "vrm1.vrm" => Some(SourceFormat::Vrm1),

@@ -11,6 +11,8 @@ use stance_hanim::{
 use stance_ik::Posture;
 use stance_render::{AvatarPalettes, SkinnedModel, avatar_model};
 
+use crate::host::ImportedAvatar;
+
 /// A loaded avatar.
 pub struct LoadedAvatar {
     /// File name or URL it came from.
@@ -28,8 +30,24 @@ pub struct LoadedAvatar {
     pub triangle_count: usize,
     /// Texture images the host decoded for it (the others were decoded by the importer).
     pub images_from_host: usize,
-    /// How long its loading took, in ms: the file's import, then its skeleton and GPU model.
-    pub load_ms: [f64; 2],
+    /// How long its loading took.
+    pub load: LoadTimes,
+}
+
+/// How long an avatar's loading took, phase by phase, in ms.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct LoadTimes {
+    /// The file's import (textures decoded by the host excluded).
+    pub import_ms: f64,
+    /// Whether the import ran off the editor's thread (the page's import worker).
+    pub in_worker: bool,
+    /// Handing the imported avatar to the editor's thread.
+    pub transfer_ms: f64,
+    /// Its skeleton and GPU model.
+    pub build_ms: f64,
+    /// The posing session on its skeleton (with the mapping corrections and the document
+    /// that waited for it).
+    pub session_ms: f64,
 }
 
 impl std::fmt::Debug for LoadedAvatar {
@@ -48,28 +66,45 @@ impl LoadedAvatar {
         bytes: &[u8],
         loa: LevelOfArticulation,
     ) -> Result<(Self, HumanoidSkeleton), String> {
-        Self::load_with(name, bytes, &[], Vec::new(), loa)
+        Self::from_imported(name, Self::import(bytes, &[], Vec::new())?, loa)
     }
 
-    /// [`LoadedAvatar::load`] for a `.gltf` given with its files (`.bin` buffers, images),
-    /// found by the URIs the file uses (a missing one is named), and with the texture images
-    /// the host already decoded (the others are decoded here).
-    pub fn load_with(
-        name: &str,
+    /// Imports `bytes` (GLB, glTF with data URIs, VRM; a `.gltf` with its `resources`:
+    /// `.bin` buffers and images, found by the URIs the file uses, a missing one named),
+    /// taking the texture images the host already `decoded` as they are.
+    pub fn import(
         bytes: &[u8],
         resources: &[(String, Vec<u8>)],
         decoded: Vec<DecodedImage>,
-        loa: LevelOfArticulation,
-    ) -> Result<(Self, HumanoidSkeleton), String> {
+    ) -> Result<ImportedAvatar, String> {
         let mut resolve = |uri: &str| find_resource(resources, uri).map(<[u8]>::to_vec);
         let images_from_host = decoded.len();
         let started = web_time::Instant::now();
         let avatar = load_avatar_with_images(bytes, &LoadOptions::default(), &mut resolve, decoded)
             .map_err(|error| error.to_string())?;
-        let imported = started.elapsed();
-        let (mut loaded, humanoid) = Self::from_avatar(name, avatar, loa)?;
-        loaded.images_from_host = images_from_host;
-        loaded.load_ms = [imported, started.elapsed() - imported].map(|t| t.as_secs_f64() * 1e3);
+        Ok(ImportedAvatar {
+            avatar,
+            import_ms: started.elapsed().as_secs_f64() * 1e3,
+            transfer_ms: 0.0,
+            images_from_host,
+        })
+    }
+
+    /// An imported avatar (here or by the host), its skeleton built at `loa`.
+    pub fn from_imported(
+        name: &str,
+        imported: ImportedAvatar,
+        loa: LevelOfArticulation,
+    ) -> Result<(Self, HumanoidSkeleton), String> {
+        let started = web_time::Instant::now();
+        let (mut loaded, humanoid) = Self::from_avatar(name, imported.avatar, loa)?;
+        loaded.images_from_host = imported.images_from_host;
+        loaded.load = LoadTimes {
+            import_ms: imported.import_ms,
+            transfer_ms: imported.transfer_ms,
+            build_ms: started.elapsed().as_secs_f64() * 1e3,
+            ..LoadTimes::default()
+        };
         Ok((loaded, humanoid))
     }
 
@@ -107,7 +142,7 @@ impl LoadedAvatar {
             vertex_count,
             triangle_count,
             images_from_host: 0,
-            load_ms: [0.0; 2],
+            load: LoadTimes::default(),
         })
     }
 

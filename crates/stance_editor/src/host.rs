@@ -40,6 +40,31 @@ impl BackendSummary {
     }
 }
 
+/// An avatar file for the host to import off the editor's thread
+/// ([`HostHooks::import_avatar`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct AvatarImport {
+    /// The file's name or URL; the reply names it.
+    pub name: String,
+    /// The file's contents (GLB, glTF, VRM).
+    pub bytes: Vec<u8>,
+    /// The files a `.gltf` refers to (`.bin` buffers, images), by name.
+    pub resources: Vec<(String, Vec<u8>)>,
+}
+
+/// An avatar the host imported ([`HostMessage::AvatarImported`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImportedAvatar {
+    /// The imported file.
+    pub avatar: stance_asset::Avatar,
+    /// How long the import took where it ran, in ms.
+    pub import_ms: f64,
+    /// How long handing it to the editor's thread took (decoding the transfer), in ms.
+    pub transfer_ms: f64,
+    /// Texture images the host's own decoders decoded for it.
+    pub images_from_host: usize,
+}
+
 /// What the editor asks of its host. Every method but the first has a do-nothing default.
 pub trait HostHooks {
     /// Called once, after the first frame with the 3D scene has been rendered.
@@ -91,6 +116,14 @@ pub trait HostHooks {
     fn download_bytes(&self, _file_name: &str, _bytes: &[u8]) -> Result<(), String> {
         Err("this shell cannot download files".to_owned())
     }
+
+    /// Imports an avatar file off the editor's thread (the page's import worker), so that a
+    /// large file does not hold up the frames; the result arrives as
+    /// [`HostMessage::AvatarImported`]. Gives the request back when this host cannot: the
+    /// editor then imports it itself.
+    fn import_avatar(&self, request: AvatarImport) -> Result<(), AvatarImport> {
+        Err(request)
+    }
 }
 
 /// What the host tells the editor, through the sender given to `StanceApp::with_inbox`.
@@ -118,6 +151,14 @@ pub enum HostMessage {
     },
     /// The host failed to do what the editor asked (reading a file...).
     Failed(String),
+    /// The avatar asked for with [`HostHooks::import_avatar`], or why it could not be
+    /// imported.
+    AvatarImported {
+        /// The file's name or URL, as asked.
+        name: String,
+        /// The avatar, or what is wrong with the file.
+        result: Result<Box<ImportedAvatar>, String>,
+    },
     /// The sensor device is open.
     SensorConnected {
         /// The device's name as the browser gives it.
@@ -183,6 +224,10 @@ pub struct MemoryHostState {
     pub sensor_disconnects: usize,
     /// The binary downloads offered, in order: file name and contents.
     pub binary_downloads: Vec<(String, Vec<u8>)>,
+    /// Whether it takes avatar imports ([`HostHooks::import_avatar`]; default no).
+    pub imports_avatars: bool,
+    /// The avatar imports it took, in order (a test answers them).
+    pub avatar_imports: Vec<AvatarImport>,
 }
 
 impl HostHooks for MemoryHost {
@@ -242,6 +287,15 @@ impl HostHooks for MemoryHost {
             .borrow_mut()
             .binary_downloads
             .push((file_name.to_owned(), bytes.to_vec()));
+        Ok(())
+    }
+
+    fn import_avatar(&self, request: AvatarImport) -> Result<(), AvatarImport> {
+        let mut inner = self.inner.borrow_mut();
+        if !inner.imports_avatars {
+            return Err(request);
+        }
+        inner.avatar_imports.push(request);
         Ok(())
     }
 }

@@ -16,6 +16,9 @@ pub mod sensors;
 mod viewport;
 
 pub use app::StanceApp;
-pub use host::{BackendSummary, HostHooks, HostMessage, MemoryHost, MemoryHostState, NoHostHooks};
+pub use host::{
+    AvatarImport, BackendSummary, HostHooks, HostMessage, ImportedAvatar, MemoryHost,
+    MemoryHostState, NoHostHooks,
+};
 pub use model::{Command, EditorModel, Gesture, Notice, SessionChange};
 pub use viewport::{CameraGesture, ViewportInput};

@@ -66,6 +66,9 @@ pub struct EditorModel {
     decoded_images: Option<(String, Vec<stance_asset::DecodedImage>)>,
     /// A document waiting for its avatar to arrive (a link or autosave naming a URL).
     pending_document: Option<Document>,
+    /// The avatar file being imported for the editor: its name, and whether the host's
+    /// worker imports it.
+    pending_import: Option<(String, bool)>,
     pub(crate) mapping_corrections: MappingCorrections,
     pub(crate) trace: Vec<DVec3>,
     pub(crate) notice: Option<Notice>,
@@ -124,6 +127,7 @@ impl EditorModel {
             avatar_url: None,
             decoded_images: None,
             pending_document: None,
+            pending_import: None,
             mapping_corrections: MappingCorrections::default(),
             trace: Vec::new(),
             notice: None,
@@ -429,7 +433,7 @@ impl EditorModel {
     fn apply_outside(&mut self, command: Command) {
         match command {
             Command::SetLevelOfArticulation(loa) => self.set_level_of_articulation(loa),
-            Command::LoadAvatar { name, bytes } => self.load_avatar(&name, &bytes, &[]),
+            Command::LoadAvatar { name, bytes } => self.load_avatar(name, bytes, Vec::new()),
             Command::FetchAvatar(url) => self.fetch_avatar(&url),
             Command::UseMannequin => self.use_mannequin(),
             Command::ApplyMapping {
@@ -443,6 +447,7 @@ impl EditorModel {
             Command::OpenFile { name, bytes } => self.open_file(&name, bytes),
             Command::OpenFiles(files) => self.open_files(files),
             Command::DecodedImages { file, images } => self.decoded_images = Some((file, images)),
+            Command::AvatarImported { name, result } => self.avatar_imported(&name, result),
             Command::SaveToLibrary(name) => self.save_to_library(&name),
             Command::LoadFromLibrary(index) => self.load_from_library(index),
             Command::DeleteFromLibrary(index) => self.delete_from_library(index),
@@ -717,58 +722,6 @@ impl EditorModel {
         }
     }
 
-    /// Loads an avatar file (a `.gltf` with its `resources`); on failure says why and keeps
-    /// the current one.
-    fn load_avatar(&mut self, name: &str, bytes: &[u8], resources: &[(String, Vec<u8>)]) {
-        let loa = self.session.level_of_articulation();
-        let mut mapping_note = None;
-        let decoded = match self.decoded_images.take() {
-            Some((file, images)) if file == name => images,
-            _ => Vec::new(),
-        };
-        let loaded = LoadedAvatar::load_with(name, bytes, resources, decoded, loa).and_then(
-            |(mut avatar, mut humanoid)| {
-                mapping_note = self
-                    .mapping_corrections
-                    .reapply(&mut avatar, loa, &mut humanoid);
-                let session =
-                    PosingSession::with_humanoid(humanoid).map_err(|error| error.to_string())?;
-                Ok((avatar, session))
-            },
-        );
-        match loaded {
-            Ok((avatar, session)) => {
-                let (mapped, unmapped) = avatar.mapping_summary();
-                let mut text = format!(
-                    "Loaded {name}: {} vertices, {mapped} joints mapped onto H-Anim ({unmapped} left unmapped); posed at LOA {}.",
-                    avatar.vertex_count,
-                    loa.number()
-                );
-                if !avatar.warnings.is_empty() {
-                    text.push_str(&format!(" Notes: {}", avatar.warnings.join("; ")));
-                }
-                if let Some(note) = mapping_note {
-                    text.push_str(&format!(" {note}"));
-                }
-                self.replace_session(session, SessionChange::NewBody);
-                self.avatar = Some(avatar);
-                self.avatar_url = crate::avatar::is_url(name).then(|| name.to_owned());
-                self.inform(text);
-                if let Some(document) = self.pending_document.take()
-                    && let Err(error) = self.session.restore_document(&document)
-                {
-                    self.warn(format!("The posture does not fit this avatar: {error}"));
-                }
-            }
-            Err(error) => {
-                self.pending_document = None;
-                self.warn(format!(
-                    "{name} could not be opened as an avatar: {error}. The previous avatar stays."
-                ));
-            }
-        }
-    }
-
     /// Offers the avatar in the current posture as a GLB download (what `stance
     /// export-posed` writes); says why when it cannot.
     fn export_posed_avatar(&mut self) {
@@ -952,7 +905,7 @@ impl EditorModel {
             None => {}
         }
         if crate::avatar::is_avatar_file(name, &bytes) {
-            self.load_avatar(name, &bytes, &[]);
+            self.load_avatar(name.to_owned(), bytes, Vec::new());
             return;
         }
         let Ok(text) = std::str::from_utf8(&bytes) else {

@@ -163,6 +163,22 @@ impl ViewportRenderer {
             .set_avatar(&render_state.device, &render_state.queue, model);
     }
 
+    /// Starts uploading the avatar's GPU model over the next frames.
+    pub(crate) fn begin_avatar_upload(&mut self, model: stance_render::SkinnedModel) {
+        self.scene_renderer.begin_avatar_upload(model);
+    }
+
+    /// One step of the avatar's upload: true once it is complete.
+    pub(crate) fn continue_avatar_upload(&mut self, render_state: &egui_wgpu::RenderState) -> bool {
+        self.scene_renderer
+            .continue_avatar_upload(&render_state.device, &render_state.queue)
+    }
+
+    /// Drops an avatar upload under way.
+    pub(crate) fn cancel_avatar_upload(&mut self) {
+        self.scene_renderer.cancel_avatar_upload();
+    }
+
     /// Renders the scene at `size_px` and returns the egui texture that shows it.
     pub(crate) fn render(
         &mut self,

@@ -62,6 +62,25 @@ fn the_shared_avatar_maps_renders_skinned_and_reaches_with_its_hand() {
     let mut renderer = SceneRenderer::new(&device);
     let model = loaded.model.take().unwrap();
     renderer.set_avatar(&device, &queue, Some(&model));
+    // The same avatar uploaded over frames, as the editor does it.
+    let mut staged = SceneRenderer::new(&device);
+    staged.begin_avatar_upload(model.clone());
+    let mut steps = 1;
+    while !staged.continue_avatar_upload(&device, &queue) {
+        steps += 1;
+        assert!(steps < 100, "the upload never ends");
+    }
+    // Each texture in bands of 4 MB of rows, then the buffers.
+    let bands: usize = model
+        .textures
+        .iter()
+        .map(|t| {
+            let rows = (4 << 20) / (t.width as usize * 4);
+            (t.height as usize).div_ceil(rows)
+        })
+        .sum();
+    assert!(bands > model.textures.len(), "{bands} bands");
+    assert_eq!(steps, bands + 1);
     let size = [320u32, 320u32];
     let target = RenderTarget::new(&device, size);
     let camera = OrbitCamera {
@@ -89,6 +108,19 @@ fn the_shared_avatar_maps_renders_skinned_and_reaches_with_its_hand() {
     };
 
     let rest = draw(&session);
+    let scene = Scene {
+        show_avatar: true,
+        avatar_palettes: loaded
+            .palettes(session.humanoid(), session.posture())
+            .unwrap(),
+        ..Scene::default()
+    };
+    staged.render(&device, &queue, &target, &camera, &scene);
+    let staged_pixels = read_pixels(&device, &queue, &target).unwrap();
+    assert!(
+        staged_pixels == rest,
+        "the avatar uploaded over frames draws as the one uploaded at once"
+    );
     let covered = (0..size[1])
         .flat_map(|y| (0..size[0]).map(move |x| (x, y)))
         .filter(|&(x, y)| !is_background(rest.get(x, y).unwrap()))

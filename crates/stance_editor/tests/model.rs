@@ -500,3 +500,100 @@ fn a_gltf_opens_with_its_bin_and_a_missing_bin_is_named() {
         values[dof]
     );
 }
+
+/// What the page's worker does with an import request: the editor's own importer, the
+/// avatar handed back as transfer bytes.
+fn import_as_the_worker_does(
+    request: &stance_editor::AvatarImport,
+) -> stance_editor::ImportedAvatar {
+    let imported =
+        stance_editor::avatar::LoadedAvatar::import(&request.bytes, &request.resources, Vec::new())
+            .unwrap();
+    let transfer = stance_asset::AvatarTransfer::new(imported.avatar.clone()).unwrap();
+    stance_editor::ImportedAvatar {
+        avatar: transfer.into_avatar().unwrap(),
+        ..imported
+    }
+}
+
+#[test]
+fn an_avatar_imported_by_the_host_opens_when_it_arrives_and_only_the_last_asked_for() {
+    let host = MemoryHost::default();
+    host.inner.borrow_mut().imports_avatars = true;
+    let asked = host.inner.clone();
+    let mut editor = Clocked::with_host(host);
+    let bytes = stance_asset::export_glb(&stance_asset::make_default_avatar().unwrap()).unwrap();
+    editor.apply(Command::LoadAvatar {
+        name: "first.glb".to_owned(),
+        bytes: bytes.clone(),
+    });
+    // Asked of the host, not imported here: the body stays the mannequin meanwhile.
+    assert_eq!(asked.borrow().avatar_imports.len(), 1);
+    assert_eq!(asked.borrow().avatar_imports[0].bytes, bytes);
+    assert!(editor.model.avatar().is_none());
+    assert_eq!(editor.model.importing(), Some("first.glb"));
+    editor.frames(2);
+
+    // A second file asked for before the first arrives: the first's reply is dropped.
+    editor.apply(Command::LoadAvatar {
+        name: "second.glb".to_owned(),
+        bytes: bytes.clone(),
+    });
+    let requests = asked.borrow().avatar_imports.clone();
+    let first = import_as_the_worker_does(&requests[0]);
+    editor.apply(Command::AvatarImported {
+        name: "first.glb".to_owned(),
+        result: Ok(Box::new(first)),
+    });
+    assert!(editor.model.avatar().is_none(), "a reply no longer awaited");
+    let second = import_as_the_worker_does(&requests[1]);
+    let vertices: usize = second
+        .avatar
+        .meshes
+        .iter()
+        .flat_map(|m| &m.primitives)
+        .map(|p| p.positions.len())
+        .sum();
+    editor.apply(Command::AvatarImported {
+        name: "second.glb".to_owned(),
+        result: Ok(Box::new(second)),
+    });
+    let avatar = editor.model.avatar().expect("the awaited avatar opened");
+    assert_eq!(editor.model.importing(), None);
+    assert_eq!(avatar.name, "second.glb");
+    assert_eq!(avatar.vertex_count, vertices);
+    assert!(avatar.load.in_worker);
+    assert!(avatar.mapping_summary().0 >= 18);
+    // Its body is posed: the wrist of the new session follows a pull as on any avatar.
+    editor.settle_within(300);
+    let before = editor.position("r_radiocarpal");
+    let wrist = editor.joint("r_radiocarpal");
+    editor.apply(Command::BeginPull {
+        joint: wrist,
+        point_world: before,
+    });
+    editor.apply(Command::MoveGrab {
+        target_world: before + DVec3::new(0.0, 0.1, 0.05),
+    });
+    editor.settle_within(300);
+    editor.apply(Command::EndGesture);
+    assert!((editor.position("r_radiocarpal") - before).length() > 0.05);
+
+    // A file the host could not import: the notice names it and the avatar stays.
+    editor.apply(Command::LoadAvatar {
+        name: "broken.glb".to_owned(),
+        bytes: b"glTF".to_vec(),
+    });
+    editor.apply(Command::AvatarImported {
+        name: "broken.glb".to_owned(),
+        result: Err("bad GLB container: too short".to_owned()),
+    });
+    let notice = editor.model.notice().unwrap();
+    assert!(notice.is_error);
+    assert!(
+        notice.text.contains("broken.glb") && notice.text.contains("too short"),
+        "{}",
+        notice.text
+    );
+    assert_eq!(editor.model.avatar().unwrap().name, "second.glb");
+}

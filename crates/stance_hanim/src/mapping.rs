@@ -29,7 +29,7 @@ pub struct SourceJoint {
 }
 
 /// How a joint was matched.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum MatchMethod {
     /// The VRM humanoid extension named it.
     Vrm,
@@ -77,8 +77,45 @@ pub enum MappingError {
     },
 }
 
+/// A [`JointMatch`] as it is serialised: the H-Anim name as text, read back as the standard's
+/// own name (an unknown one is refused).
+#[derive(serde::Serialize, serde::Deserialize)]
+struct JointMatchWire {
+    hanim: String,
+    source: usize,
+    confidence: f32,
+    method: MatchMethod,
+}
+
+impl serde::Serialize for JointMatch {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        JointMatchWire {
+            hanim: self.hanim.to_owned(),
+            source: self.source,
+            confidence: self.confidence,
+            method: self.method,
+        }
+        .serialize(serializer)
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for JointMatch {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        let wire = JointMatchWire::deserialize(deserializer)?;
+        let (_, joint) = joint_by_name(&wire.hanim).ok_or_else(|| {
+            <D::Error as serde::de::Error>::custom(MappingError::UnknownHAnimJoint(wire.hanim))
+        })?;
+        Ok(Self {
+            hanim: joint.name,
+            source: wire.source,
+            confidence: wire.confidence,
+            method: wire.method,
+        })
+    }
+}
+
 /// The mapping of an avatar's joints onto H-Anim 2.0.
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct Mapping {
     matches: Vec<JointMatch>,
     source_count: usize,

@@ -108,7 +108,7 @@ pub fn avatar_model(avatar: &Avatar) -> (SkinnedModel, AvatarPalettes, Vec<Strin
         .map(|texture| SkinnedTexture {
             width: texture.width,
             height: texture.height,
-            rgba8: texture.rgba8.clone(),
+            rgba8: std::sync::Arc::clone(&texture.rgba8),
             repeat: texture.wrap_u != Wrap::Clamp,
         })
         .collect();

@@ -32,8 +32,8 @@ pub use image::{
 pub use pick::{CapsuleHit, pick_capsule};
 pub use renderer::{BACKGROUND_SRGB, COLOR_FORMAT, DEPTH_FORMAT, RenderTarget, SceneRenderer};
 pub use skinned::{
-    AvatarGpu, MAX_PALETTE_MATRICES, SkinnedMaterial, SkinnedModel, SkinnedPrimitive,
-    SkinnedTexture, SkinnedVertex,
+    AvatarGpu, AvatarUpload, MAX_PALETTE_MATRICES, SkinnedMaterial, SkinnedModel, SkinnedPrimitive,
+    SkinnedTexture, SkinnedVertex, UPLOAD_STEP_BYTES,
 };
 
 use glam::Vec3;

@@ -4,7 +4,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec2;
 use wgpu::util::DeviceExt;
 
-use crate::skinned::{AvatarGpu, SkinnedModel, SkinnedPipeline};
+use crate::skinned::{AvatarGpu, AvatarUpload, SkinnedModel, SkinnedPipeline};
 use crate::{OrbitCamera, SHADERS, Scene};
 
 /// Colour format of the render target: what egui can show as a native texture. The shaders
@@ -118,6 +118,8 @@ pub struct SceneRenderer {
     capsule_pipeline: wgpu::RenderPipeline,
     skinned_pipeline: SkinnedPipeline,
     avatar: Option<AvatarGpu>,
+    /// An avatar being uploaded over frames, drawn once complete.
+    upload: Option<AvatarUpload>,
     floor_pipeline: wgpu::RenderPipeline,
     frame_uniforms: wgpu::Buffer,
     frame_bind_group: wgpu::BindGroup,
@@ -314,6 +316,7 @@ impl SceneRenderer {
             capsule_pipeline,
             skinned_pipeline,
             avatar: None,
+            upload: None,
             floor_pipeline,
             frame_uniforms,
             frame_bind_group,
@@ -341,8 +344,36 @@ impl SceneRenderer {
         queue: &wgpu::Queue,
         model: Option<&SkinnedModel>,
     ) {
+        self.upload = None;
         self.avatar =
             model.map(|model| AvatarGpu::new(device, queue, &self.skinned_pipeline, model));
+    }
+
+    /// Starts uploading `model` over the next frames ([`SceneRenderer::continue_avatar_upload`],
+    /// a texture a frame); the avatar uploaded before stays until it is complete.
+    pub fn begin_avatar_upload(&mut self, model: SkinnedModel) {
+        self.upload = Some(AvatarUpload::new(model));
+    }
+
+    /// One step of the upload begun with [`SceneRenderer::begin_avatar_upload`]: true when the
+    /// new avatar is in place (or no upload is under way).
+    pub fn continue_avatar_upload(&mut self, device: &wgpu::Device, queue: &wgpu::Queue) -> bool {
+        let Some(upload) = &mut self.upload else {
+            return true;
+        };
+        match upload.step(device, queue, &self.skinned_pipeline) {
+            Some(avatar) => {
+                self.avatar = Some(avatar);
+                self.upload = None;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Drops an upload under way.
+    pub fn cancel_avatar_upload(&mut self) {
+        self.upload = None;
     }
 
     /// The uploaded avatar, if any.

@@ -57,8 +57,8 @@ pub struct SkinnedTexture {
     pub width: u32,
     /// Height, pixels.
     pub height: u32,
-    /// `width * height * 4` bytes.
-    pub rgba8: Vec<u8>,
+    /// `width * height * 4` bytes (shared with the avatar they come from).
+    pub rgba8: std::sync::Arc<Vec<u8>>,
     /// Sample with repeat wrapping; otherwise clamp to the edge.
     pub repeat: bool,
 }
@@ -214,6 +214,14 @@ fn texture_gpu(
     queue: &wgpu::Queue,
     texture: &SkinnedTexture,
 ) -> Option<wgpu::Texture> {
+    let gpu = empty_texture_gpu(device, texture)?;
+    write_rows(queue, &gpu, texture, 0, texture.height);
+    Some(gpu)
+}
+
+/// The GPU texture for `texture`, its pixels not written yet; `None` when it is malformed or
+/// too large for the device.
+fn empty_texture_gpu(device: &wgpu::Device, texture: &SkinnedTexture) -> Option<wgpu::Texture> {
     let expected = (texture.width as usize)
         .checked_mul(texture.height as usize)?
         .checked_mul(4)?;
@@ -224,37 +232,151 @@ fn texture_gpu(
     if texture.width > limit || texture.height > limit {
         return None;
     }
-    let size = wgpu::Extent3d {
-        width: texture.width,
-        height: texture.height,
-        depth_or_array_layers: 1,
-    };
-    let gpu = device.create_texture(&wgpu::TextureDescriptor {
+    Some(device.create_texture(&wgpu::TextureDescriptor {
         label: Some("stance avatar texture"),
-        size,
+        size: wgpu::Extent3d {
+            width: texture.width,
+            height: texture.height,
+            depth_or_array_layers: 1,
+        },
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
         format: wgpu::TextureFormat::Rgba8UnormSrgb,
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
-    });
+    }))
+}
+
+/// Writes rows `first..end` of `texture` (already checked by [`empty_texture_gpu`]) into `gpu`.
+fn write_rows(
+    queue: &wgpu::Queue,
+    gpu: &wgpu::Texture,
+    texture: &SkinnedTexture,
+    first: u32,
+    end: u32,
+) {
+    let row_bytes = texture.width as usize * 4;
+    let Some(pixels) = texture
+        .rgba8
+        .get(first as usize * row_bytes..end as usize * row_bytes)
+    else {
+        return;
+    };
     queue.write_texture(
         wgpu::TexelCopyTextureInfo {
-            texture: &gpu,
+            texture: gpu,
             mip_level: 0,
-            origin: wgpu::Origin3d::ZERO,
+            origin: wgpu::Origin3d {
+                x: 0,
+                y: first,
+                z: 0,
+            },
             aspect: wgpu::TextureAspect::All,
         },
-        &texture.rgba8,
+        pixels,
         wgpu::TexelCopyBufferLayout {
             offset: 0,
             bytes_per_row: Some(texture.width * 4),
-            rows_per_image: Some(texture.height),
+            rows_per_image: Some(end - first),
         },
-        size,
+        wgpu::Extent3d {
+            width: texture.width,
+            height: end - first,
+            depth_or_array_layers: 1,
+        },
     );
-    Some(gpu)
+}
+
+/// A texture's view on the GPU with its wrapping (repeat), or `None` when it is malformed or
+/// too large for the device.
+fn texture_view(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &SkinnedTexture,
+) -> Option<(wgpu::TextureView, bool)> {
+    texture_gpu(device, queue, texture).map(|gpu| {
+        (
+            gpu.create_view(&wgpu::TextureViewDescriptor::default()),
+            texture.repeat,
+        )
+    })
+}
+
+/// Pixels written per step of an [`AvatarUpload`] (a 2048-wide texture: 512 rows).
+pub const UPLOAD_STEP_BYTES: usize = 4 << 20;
+
+/// An avatar's upload spread over frames: its textures a band of rows per step (about
+/// [`UPLOAD_STEP_BYTES`]), then its buffers and bind groups, so that no single frame carries a
+/// whole large avatar (three 2048x2048 textures are 48 MB of pixels).
+pub struct AvatarUpload {
+    model: SkinnedModel,
+    /// The textures done (`None`: malformed or too large, drawn white).
+    textures: Vec<Option<(wgpu::TextureView, bool)>>,
+    /// The texture being written and the rows written so far.
+    current: Option<(wgpu::Texture, u32)>,
+}
+
+impl std::fmt::Debug for AvatarUpload {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("AvatarUpload")
+            .field("textures_uploaded", &self.textures.len())
+            .field("textures", &self.model.textures.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl AvatarUpload {
+    /// An upload of `model`, nothing on the GPU yet.
+    pub fn new(model: SkinnedModel) -> Self {
+        Self {
+            textures: Vec::with_capacity(model.textures.len()),
+            current: None,
+            model,
+        }
+    }
+
+    /// Writes the next band of rows of the next texture; once every texture is up, uploads
+    /// the rest and returns the avatar.
+    pub(crate) fn step(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        pipeline: &SkinnedPipeline,
+    ) -> Option<AvatarGpu> {
+        if let Some(texture) = self.model.textures.get(self.textures.len()) {
+            let (gpu, done) = match self.current.take() {
+                Some(current) => current,
+                None => match empty_texture_gpu(device, texture) {
+                    Some(gpu) => (gpu, 0),
+                    None => {
+                        self.textures.push(None);
+                        return None;
+                    }
+                },
+            };
+            let rows = (UPLOAD_STEP_BYTES / (texture.width as usize * 4)).max(1);
+            let end = texture
+                .height
+                .min(done.saturating_add(u32::try_from(rows).unwrap_or(u32::MAX)));
+            write_rows(queue, &gpu, texture, done, end);
+            if end < texture.height {
+                self.current = Some((gpu, end));
+            } else {
+                let view = gpu.create_view(&wgpu::TextureViewDescriptor::default());
+                self.textures.push(Some((view, texture.repeat)));
+            }
+            return None;
+        }
+        let textures = std::mem::take(&mut self.textures);
+        Some(AvatarGpu::with_textures(
+            device,
+            queue,
+            pipeline,
+            &self.model,
+            textures,
+        ))
+    }
 }
 
 /// A 1x1 white texture: what untextured materials sample.
@@ -301,19 +423,23 @@ impl AvatarGpu {
         pipeline: &SkinnedPipeline,
         model: &SkinnedModel,
     ) -> Self {
-        let white = white_texture(device, queue);
-        let textures: Vec<Option<(wgpu::TextureView, bool)>> = model
+        let textures = model
             .textures
             .iter()
-            .map(|texture| {
-                texture_gpu(device, queue, texture).map(|gpu| {
-                    (
-                        gpu.create_view(&wgpu::TextureViewDescriptor::default()),
-                        texture.repeat,
-                    )
-                })
-            })
+            .map(|texture| texture_view(device, queue, texture))
             .collect();
+        Self::with_textures(device, queue, pipeline, model, textures)
+    }
+
+    /// Uploads `model` but its textures, given uploaded (`None`: drawn white).
+    fn with_textures(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        pipeline: &SkinnedPipeline,
+        model: &SkinnedModel,
+        textures: Vec<Option<(wgpu::TextureView, bool)>>,
+    ) -> Self {
+        let white = white_texture(device, queue);
         let white_view = white.create_view(&wgpu::TextureViewDescriptor::default());
         let sampler = |repeat: bool| {
             let address_mode = if repeat {

@@ -8,8 +8,11 @@ use std::rc::Rc;
 use std::sync::mpsc::Sender;
 
 use eframe::wasm_bindgen::{self, prelude::*};
+use stance_editor::avatar::LoadedAvatar;
 use stance_editor::sensors::SensorConnection;
-use stance_editor::{BackendSummary, HostHooks, HostMessage, StanceApp};
+use stance_editor::{
+    AvatarImport, BackendSummary, HostHooks, HostMessage, ImportedAvatar, StanceApp,
+};
 
 use crate::accessibility::{AccessibilityBridge, PageAction, PendingActions};
 
@@ -33,6 +36,13 @@ extern "C" {
     fn host_connect_sensor(request_json: &str) -> Result<(), JsValue>;
     #[wasm_bindgen(js_namespace = stanceHost, js_name = disconnectSensor, catch)]
     fn host_disconnect_sensor() -> Result<(), JsValue>;
+    #[wasm_bindgen(js_namespace = stanceHost, js_name = importAvatar, catch)]
+    fn host_import_avatar(
+        name: &str,
+        names: Vec<String>,
+        lengths: Vec<u32>,
+        bytes: &[u8],
+    ) -> Result<bool, JsValue>;
     #[wasm_bindgen(js_namespace = stanceHost, js_name = accessibility, catch)]
     fn host_accessibility(tree_json: &str) -> Result<(), JsValue>;
 }
@@ -117,6 +127,93 @@ impl HostHooks for PageHooks {
     fn download_bytes(&self, file_name: &str, bytes: &[u8]) -> Result<(), String> {
         host_download_bytes(file_name, bytes).map_err(|error| describe(&error))
     }
+
+    fn import_avatar(&self, request: AvatarImport) -> Result<(), AvatarImport> {
+        // The file first, then its resources, one after the other.
+        let mut names = vec![request.name.clone()];
+        let mut lengths = vec![u32::try_from(request.bytes.len()).unwrap_or(u32::MAX)];
+        let mut bytes = request.bytes.clone();
+        for (name, part) in &request.resources {
+            names.push(name.clone());
+            lengths.push(u32::try_from(part.len()).unwrap_or(u32::MAX));
+            bytes.extend_from_slice(part);
+        }
+        match host_import_avatar(&request.name, names, lengths, &bytes) {
+            Ok(true) => Ok(()),
+            Ok(false) => Err(request),
+            Err(error) => {
+                log::warn!("the import worker refused the avatar: {}", describe(&error));
+                Err(request)
+            }
+        }
+    }
+}
+
+/// Runs in the page's loading worker (`web/load-worker.js`), not in the editor: imports the
+/// avatar file `names[0]` with the other files as its resources and the texture images the
+/// worker decoded (as [`WebHandle::decoded_images`] takes them), and returns it split for the
+/// trip (`stance_asset::AvatarTransfer`): `[avatar bytes, pixels of texture 0, ...]`, for
+/// [`WebHandle::avatar_texture`] and [`WebHandle::avatar_imported`]. Throws what is wrong with
+/// the file.
+#[wasm_bindgen]
+pub fn import_avatar_file(
+    names: Vec<String>,
+    lengths: Vec<u32>,
+    bytes: Vec<u8>,
+    indices: Vec<u32>,
+    widths: Vec<u32>,
+    heights: Vec<u32>,
+    rgba: Vec<u8>,
+) -> Result<js_sys::Array, String> {
+    let parts = split_by_lengths(&bytes, lengths.iter().map(|&n| Some(n as usize)))
+        .filter(|parts| parts.len() == names.len() && !parts.is_empty())
+        .ok_or("the files could not be read together")?;
+    let mut files = names.into_iter().zip(parts);
+    let (_, main) = files.next().ok_or("no file")?;
+    let resources: Vec<(String, Vec<u8>)> =
+        files.map(|(name, part)| (name, part.to_vec())).collect();
+    let decoded = decoded_images(&indices, &widths, &heights, &rgba).unwrap_or_default();
+    let imported = LoadedAvatar::import(main, &resources, decoded)?;
+    let transfer =
+        stance_asset::AvatarTransfer::new(imported.avatar).map_err(|error| error.to_string())?;
+    let out = js_sys::Array::new();
+    for part in std::iter::once(&transfer.avatar).chain(&transfer.pixels) {
+        out.push(&js_sys::Uint8Array::from(part.as_slice()));
+    }
+    Ok(out)
+}
+
+/// Images `indices[i]` of `widths[i] x heights[i]` RGBA8 pixels, one after the other in
+/// `rgba`; `None` when the sizes do not add up.
+fn decoded_images(
+    indices: &[u32],
+    widths: &[u32],
+    heights: &[u32],
+    rgba: &[u8],
+) -> Option<Vec<stance_asset::DecodedImage>> {
+    if indices.len() != widths.len() || widths.len() != heights.len() {
+        return None;
+    }
+    let sizes = widths.iter().zip(heights).map(|(&width, &height)| {
+        (width as usize)
+            .checked_mul(height as usize)
+            .and_then(|n| n.checked_mul(4))
+    });
+    let parts = split_by_lengths(rgba, sizes)?;
+    Some(
+        parts
+            .into_iter()
+            .zip(indices.iter().zip(widths.iter().zip(heights)))
+            .map(
+                |(pixels, (&index, (&width, &height)))| stance_asset::DecodedImage {
+                    index: index as usize,
+                    width,
+                    height,
+                    rgba8: pixels.to_vec(),
+                },
+            )
+            .collect(),
+    )
 }
 
 /// The running editor, held by the page.
@@ -127,6 +224,8 @@ pub struct WebHandle {
     context: Rc<RefCell<Option<egui::Context>>>,
     /// Actions of the page's accessibility mirror, for the next frame.
     accessibility: PendingActions,
+    /// Texture pixels of the avatar the loading worker imported, until its bytes arrive.
+    arriving_pixels: RefCell<Vec<Vec<u8>>>,
 }
 
 #[wasm_bindgen]
@@ -142,6 +241,7 @@ impl WebHandle {
             inbox: RefCell::new(None),
             context: Rc::new(RefCell::new(None)),
             accessibility: PendingActions::default(),
+            arriving_pixels: RefCell::new(Vec::new()),
         }
     }
 
@@ -239,29 +339,9 @@ impl WebHandle {
         heights: Vec<u32>,
         rgba: Vec<u8>,
     ) {
-        if indices.len() != widths.len() || widths.len() != heights.len() {
-            return;
-        }
-        let sizes = widths.iter().zip(&heights).map(|(&width, &height)| {
-            (width as usize)
-                .checked_mul(height as usize)
-                .and_then(|n| n.checked_mul(4))
-        });
-        let Some(parts) = split_by_lengths(&rgba, sizes) else {
+        let Some(images) = decoded_images(&indices, &widths, &heights, &rgba) else {
             return;
         };
-        let images = parts
-            .into_iter()
-            .zip(indices.iter().zip(widths.iter().zip(&heights)))
-            .map(
-                |(pixels, (&index, (&width, &height)))| stance_asset::DecodedImage {
-                    index: index as usize,
-                    width,
-                    height,
-                    rgba8: pixels.to_vec(),
-                },
-            )
-            .collect();
         self.send(HostMessage::DecodedImages { file, images });
     }
 
@@ -278,6 +358,56 @@ impl WebHandle {
             context.request_repaint();
         }
         queued
+    }
+
+    /// The pixels of the next texture of the avatar the loading worker imported
+    /// ([`import_avatar_file`]), given one call (one task of the page) each before
+    /// [`WebHandle::avatar_imported`].
+    #[wasm_bindgen]
+    pub fn avatar_texture(&self, pixels: Vec<u8>) {
+        self.arriving_pixels.borrow_mut().push(pixels);
+    }
+
+    /// The avatar file `name` the editor asked the page to import (`stanceHost.importAvatar`),
+    /// as the loading worker returned it ([`import_avatar_file`]: `bytes`, its textures'
+    /// pixels given before), imported in `import_ms` with `images_from_host` textures
+    /// decoded by the browser.
+    #[wasm_bindgen]
+    pub fn avatar_imported(
+        &self,
+        name: String,
+        bytes: Vec<u8>,
+        import_ms: f64,
+        images_from_host: u32,
+    ) {
+        let started = web_time::Instant::now();
+        let transfer = stance_asset::AvatarTransfer {
+            avatar: bytes,
+            pixels: std::mem::take(&mut *self.arriving_pixels.borrow_mut()),
+        };
+        let result = transfer
+            .into_avatar()
+            .map(|avatar| {
+                Box::new(ImportedAvatar {
+                    avatar,
+                    import_ms,
+                    transfer_ms: started.elapsed().as_secs_f64() * 1e3,
+                    images_from_host: images_from_host as usize,
+                })
+            })
+            .map_err(|error| error.to_string());
+        self.send(HostMessage::AvatarImported { name, result });
+    }
+
+    /// The avatar file `name` the editor asked the page to import could not be: `reason`
+    /// says why (the importer's words).
+    #[wasm_bindgen]
+    pub fn avatar_import_failed(&self, name: String, reason: String) {
+        self.arriving_pixels.borrow_mut().clear();
+        self.send(HostMessage::AvatarImported {
+            name,
+            result: Err(reason),
+        });
     }
 
     /// Tells the editor that something the page did for it failed.

@@ -4,8 +4,8 @@
 //! file its URIs name. With bit 3 the caller gives images 0 and 1 decoded, as the browser does
 //! (`load_avatar_with_images`): image 0 at the size bits 4 to 7 pick (a width over the limit
 //! among them), image 1 with a pixel too few. What loads is also built into a solver skeleton,
-//! posed at rest, exported and imported again (a VRM stays a VRM); its short animations become
-//! clips.
+//! posed at rest, exported and imported again (a VRM stays a VRM), and handed through the
+//! import worker's transfer bytes (it comes back equal); its short animations become clips.
 //!
 //! Seeds: `fuzz/seeds/import/`, small valid files prefixed with their selector byte (a skinned
 //! LOA2 GLB, textured, a `.gltf` with data URIs, a `.gltf` with its `.bin` in the multi-file
@@ -17,8 +17,8 @@
 
 use libfuzzer_sys::fuzz_target;
 use stance_asset::{
-    DecodedImage, Limits, LoadOptions, clip_from_animation, export_glb, find_resource, load_avatar,
-    load_avatar_with_images,
+    AvatarTransfer, DecodedImage, Limits, LoadOptions, clip_from_animation, export_glb,
+    find_resource, load_avatar, load_avatar_with_images,
 };
 
 fuzz_target!(|data: &[u8]| {
@@ -76,6 +76,9 @@ fuzz_target!(|data: &[u8]| {
             return;
         }
     };
+    // Handed to the editor's thread as the page's import worker does, it comes back equal.
+    let transfer = AvatarTransfer::new(avatar.clone()).expect("an imported avatar encodes");
+    assert_eq!(transfer.into_avatar().as_ref(), Ok(&avatar), "transfer round trip");
     if let Ok(body) = avatar.skeleton(&Default::default())
         && let Ok(posture) = avatar.current_posture(&body)
     {

@@ -73,7 +73,7 @@ pub(super) fn import_textures(
             name,
             width,
             height,
-            rgba8,
+            rgba8: std::sync::Arc::new(rgba8),
             wrap_u,
             wrap_v,
         });
@@ -86,7 +86,7 @@ fn placeholder(name: String, wrap_u: Wrap, wrap_v: Wrap) -> Texture {
         name,
         width: 1,
         height: 1,
-        rgba8: vec![255; 4],
+        rgba8: std::sync::Arc::new(vec![255; 4]),
         wrap_u,
         wrap_v,
     }

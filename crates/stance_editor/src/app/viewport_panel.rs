@@ -15,6 +15,11 @@ use crate::host::BackendSummary;
 use crate::model::{Command, EditorModel, NewTask, heat_color};
 use crate::viewport::{ViewportInput, ViewportRenderer, apply_gestures};
 
+/// The most a frame spends uploading an avatar, in ms, and the most texture bytes it writes
+/// (see `upload_meshes`): more would wait for the GPU process to drain the command buffer's
+/// transfer memory (WebGL in Chromium), in the frame.
+const UPLOAD_MS_PER_FRAME: f64 = 12.0;
+const UPLOAD_STEPS_PER_FRAME: usize = (8 << 20) / stance_render::UPLOAD_STEP_BYTES;
 /// Colour of the selected body part (linear RGB).
 const SELECTED_COLOR_LINEAR: [f32; 4] = [0.15, 0.45, 0.85, 1.0];
 /// Colour of the body part under the cursor (linear RGB).
@@ -36,6 +41,8 @@ pub(super) struct ViewportPanel {
     renderer: Option<ViewportRenderer>,
     /// Whether the loaded avatar's mesh is on the GPU.
     pub avatar_uploaded: bool,
+    /// An avatar's upload is under way (see `upload_meshes`).
+    avatar_uploading: bool,
     /// How long the avatar's upload to the GPU took (ms).
     pub avatar_upload_ms: f64,
     /// The mannequin drawn as a skinned figure (else as capsules).
@@ -65,6 +72,7 @@ impl ViewportPanel {
             backend,
             renderer,
             avatar_uploaded: false,
+            avatar_uploading: false,
             avatar_upload_ms: 0.0,
             show_figure: true,
             figure: None,
@@ -297,7 +305,8 @@ impl ViewportPanel {
             (rect.width() * pixels_per_point).round().max(1.0) as u32,
             (rect.height() * pixels_per_point).round().max(1.0) as u32,
         ];
-        self.upload_meshes(frame, model);
+        let ctx = ui.ctx().clone();
+        self.upload_meshes(&ctx, frame, model);
         let scene_started = web_time::Instant::now();
         let scene = self.scene(model);
         self.scene_ms = scene_started.elapsed().as_secs_f64() * 1000.0;
@@ -327,23 +336,53 @@ impl ViewportPanel {
         }
     }
 
-    /// Puts on the GPU what the body is drawn with: a loaded avatar's mesh once, else the
+    /// Puts on the GPU what the body is drawn with: a loaded avatar's mesh, else the
     /// mannequin's figure (made again when the level of articulation changes or after an
-    /// avatar took its place).
-    fn upload_meshes(&mut self, frame: &eframe::Frame, model: &mut EditorModel) {
+    /// avatar took its place). An avatar goes up a few MB of texture at a time for at most
+    /// [`UPLOAD_MS_PER_FRAME`] a frame, so that no frame carries the whole load; its body
+    /// shows as capsules meanwhile.
+    fn upload_meshes(
+        &mut self,
+        ctx: &egui::Context,
+        frame: &eframe::Frame,
+        model: &mut EditorModel,
+    ) {
         let (Some(renderer), Some(render_state)) = (&mut self.renderer, frame.wgpu_render_state())
         else {
             return;
         };
         if let Some(mesh) = model.avatar.as_mut().and_then(|avatar| avatar.model.take()) {
+            renderer.begin_avatar_upload(mesh);
+            self.avatar_uploaded = false;
+            self.avatar_uploading = true;
+            self.avatar_upload_ms = 0.0;
+        }
+        if self.avatar_uploading && model.avatar().is_some() {
+            // Steps while this frame's share of the upload lasts (time and bytes).
             let started = web_time::Instant::now();
-            renderer.set_avatar(render_state, Some(&mesh));
-            self.avatar_upload_ms = started.elapsed().as_secs_f64() * 1e3;
-            self.avatar_uploaded = true;
-            self.figure = None;
+            let mut done = false;
+            let mut steps = 0;
+            while !done
+                && steps < UPLOAD_STEPS_PER_FRAME
+                && started.elapsed().as_secs_f64() * 1e3 < UPLOAD_MS_PER_FRAME
+            {
+                done = renderer.continue_avatar_upload(render_state);
+                steps += 1;
+            }
+            self.avatar_upload_ms += started.elapsed().as_secs_f64() * 1e3;
+            if done {
+                self.avatar_uploading = false;
+                self.avatar_uploaded = true;
+                self.figure = None;
+            }
+            ctx.request_repaint();
         }
         if model.avatar().is_some() {
             return;
+        }
+        if self.avatar_uploading {
+            renderer.cancel_avatar_upload();
+            self.avatar_uploading = false;
         }
         self.avatar_uploaded = false;
         let loa = model.session().level_of_articulation();

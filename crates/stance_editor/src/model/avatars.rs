@@ -4,6 +4,8 @@
 use serde_json::Value;
 
 use super::{EditorModel, SessionChange};
+use crate::avatar::LoadedAvatar;
+use crate::host::{AvatarImport, ImportedAvatar};
 use crate::posing::PosingSession;
 
 impl EditorModel {
@@ -26,10 +28,111 @@ impl EditorModel {
             uris.iter()
                 .any(|uri| stance_asset::find_resource(std::slice::from_ref(file), uri).is_some())
         });
-        self.load_avatar(&name, &bytes, &used);
+        self.load_avatar(name, bytes, used);
         for (name, bytes) in others {
             self.open_file(&name, bytes);
         }
+    }
+
+    /// Loads an avatar file (a `.gltf` with its `resources`): the host imports it off the
+    /// editor's thread where it can (the page's worker; the reply arrives as
+    /// [`Command::AvatarImported`](super::Command::AvatarImported)), else it is imported here.
+    /// On failure the notice says why and the current avatar stays.
+    pub(super) fn load_avatar(
+        &mut self,
+        name: String,
+        bytes: Vec<u8>,
+        resources: Vec<(String, Vec<u8>)>,
+    ) {
+        let decoded = match self.decoded_images.take() {
+            Some((file, images)) if file == name => images,
+            _ => Vec::new(),
+        };
+        let request = AvatarImport {
+            name: name.clone(),
+            bytes,
+            resources,
+        };
+        match self.hooks.import_avatar(request) {
+            // The page shows the import's progress; a notice here would cost frames (and
+            // the worker CPU time) while it imports.
+            Ok(()) => self.pending_import = Some((name, true)),
+            Err(request) => {
+                let imported = LoadedAvatar::import(&request.bytes, &request.resources, decoded);
+                self.pending_import = Some((name.clone(), false));
+                self.avatar_imported(&name, imported.map(Box::new));
+            }
+        }
+    }
+
+    /// The avatar file `name` imported (by the host or here): its skeleton, model and posing
+    /// session replace the current ones. A reply for a file that is no longer awaited (a later
+    /// file was opened since) is dropped.
+    pub(super) fn avatar_imported(
+        &mut self,
+        name: &str,
+        result: Result<Box<ImportedAvatar>, String>,
+    ) {
+        let in_worker = match self.pending_import.take() {
+            Some((pending, in_worker)) if pending == name => in_worker,
+            other => {
+                self.pending_import = other;
+                return;
+            }
+        };
+        let started = web_time::Instant::now();
+        let loa = self.session.level_of_articulation();
+        let mut mapping_note = None;
+        let loaded = result
+            .and_then(|imported| LoadedAvatar::from_imported(name, *imported, loa))
+            .and_then(|(mut avatar, mut humanoid)| {
+                mapping_note = self
+                    .mapping_corrections
+                    .reapply(&mut avatar, loa, &mut humanoid);
+                let session =
+                    PosingSession::with_humanoid(humanoid).map_err(|error| error.to_string())?;
+                Ok((avatar, session))
+            });
+        let (mut avatar, session) = match loaded {
+            Ok(loaded) => loaded,
+            Err(error) => {
+                self.pending_document = None;
+                self.warn(format!(
+                    "{name} could not be opened as an avatar: {error}. The previous avatar stays."
+                ));
+                return;
+            }
+        };
+        let (mapped, unmapped) = avatar.mapping_summary();
+        let mut text = format!(
+            "Loaded {name}: {} vertices, {mapped} joints mapped onto H-Anim ({unmapped} left unmapped); posed at LOA {}.",
+            avatar.vertex_count,
+            loa.number()
+        );
+        if !avatar.warnings.is_empty() {
+            text.push_str(&format!(" Notes: {}", avatar.warnings.join("; ")));
+        }
+        if let Some(note) = mapping_note {
+            text.push_str(&format!(" {note}"));
+        }
+        self.replace_session(session, SessionChange::NewBody);
+        avatar.load.in_worker = in_worker;
+        self.avatar = Some(avatar);
+        self.avatar_url = crate::avatar::is_url(name).then(|| name.to_owned());
+        self.inform(text);
+        if let Some(document) = self.pending_document.take()
+            && let Err(error) = self.session.restore_document(&document)
+        {
+            self.warn(format!("The posture does not fit this avatar: {error}"));
+        }
+        if let Some(avatar) = &mut self.avatar {
+            avatar.load.session_ms = started.elapsed().as_secs_f64() * 1e3 - avatar.load.build_ms;
+        }
+    }
+
+    /// The avatar file the host is importing for the editor, if any.
+    pub fn importing(&self) -> Option<&str> {
+        self.pending_import.as_ref().map(|(name, _)| name.as_str())
     }
 
     /// Back to the built-in mannequin (the posture carries over by joint name).
@@ -41,6 +144,8 @@ impl EditorModel {
                 self.replace_session(session, SessionChange::NewBody);
                 self.avatar = None;
                 self.avatar_url = None;
+                // An import still under way no longer replaces the body.
+                self.pending_import = None;
                 if !fits {
                     self.inform("The posture did not fit the mannequin; it stands at rest.");
                 }

@@ -215,6 +215,13 @@ pub enum Command {
         /// The images' pixels.
         images: Vec<stance_asset::DecodedImage>,
     },
+    /// The avatar the host imported for the editor, or why it could not.
+    AvatarImported {
+        /// The file's name or URL.
+        name: String,
+        /// The avatar, or what is wrong with the file.
+        result: Result<Box<crate::host::ImportedAvatar>, String>,
+    },
     /// Save the posture in the library under a name.
     SaveToLibrary(String),
     /// Load the library's entry `index`.
@@ -354,6 +361,9 @@ impl From<HostMessage> for Command {
             HostMessage::OpenFiles(files) => Command::OpenFiles(files),
             HostMessage::DecodedImages { file, images } => Command::DecodedImages { file, images },
             HostMessage::Failed(reason) => Command::HostFailed(reason),
+            HostMessage::AvatarImported { name, result } => {
+                Command::AvatarImported { name, result }
+            }
             HostMessage::SensorConnected { device } => {
                 Command::Sensors(SensorCommand::Connected { device })
             }

@@ -1,12 +1,22 @@
-// Decodes the texture images of a glTF, GLB or VRM with the browser's own decoders
-// (createImageBitmap), off the page's main thread. The editor's importer then takes the RGBA
-// pixels as they are instead of decoding PNG, JPEG or WebP in WebAssembly.
+// The page's loading worker, off the main thread:
+// - decodes the texture images of a glTF, GLB or VRM with the browser's own decoders
+//   (createImageBitmap), so that the importer takes the RGBA pixels as they are instead of
+//   decoding PNG, JPEG or WebP in WebAssembly;
+// - and, once the page has given it the editor's compiled WebAssembly module, imports the
+//   whole avatar (glTF parsing, meshopt, skins, the H-Anim mapping) with the editor's own
+//   importer and returns it split for the trip: the avatar's bytes and each texture's pixels
+//   (WebHandle.avatar_texture, then WebHandle.avatar_imported).
 //
-// In:  { id, files: [{ name, bytes: Uint8Array }] }
-// Out: { id, file, images: [{ index, width, height, rgba: Uint8Array }], skipped: [reason] }
-// Whatever cannot be read here (no OffscreenCanvas, an unknown format, a missing file) is left
-// out: the importer decodes it itself and names the problem.
+// In:  { type: "init", module }                      -> { type: "ready", ok, error }
+//      { type: "decode", id, files: [{ name, bytes }] } -> { id, file, images, skipped }
+//      { type: "import", id, files, images? }  -> { id, avatar, pixels: [Uint8Array],
+//                                     importMs, imagesFromHost } or { id, error }
+//      (images: those a "decode" request returned, else they are decoded first)
+// Images: [{ index, width, height, rgba: Uint8Array }]. Whatever cannot be decoded here (no
+// OffscreenCanvas, an unknown format, a missing file) is left out: the importer decodes it
+// itself and names the problem.
 
+import init, { import_avatar_file } from "./pkg/stance_web.js";
 import { isModel } from "./model-files.js";
 
 const GLB_MAGIC = 0x46546c67; // "glTF"
@@ -16,14 +26,69 @@ const BIN_CHUNK = 0x004e4942;
 const MAX_SIDE = 8192;
 
 self.onmessage = async ({ data }) => {
-  const { id, files } = data;
-  try {
-    const { file, images, skipped } = await decodeImages(files);
-    self.postMessage({ id, file, images, skipped }, images.map((image) => image.rgba.buffer));
-  } catch (error) {
-    self.postMessage({ id, file: null, images: [], skipped: [String(error?.message || error)] });
+  if (data.type === "init") {
+    try {
+      await init({ module_or_path: data.module });
+      self.postMessage({ type: "ready", ok: true });
+    } catch (error) {
+      self.postMessage({ type: "ready", ok: false, error: describe(error) });
+    }
+    return;
   }
+  const { id, files } = data;
+  let decoded;
+  try {
+    // An import whose textures were decoded here before comes with them.
+    decoded = data.images ? { images: data.images } : await decodeImages(files);
+  } catch (error) {
+    decoded = { file: null, images: [], skipped: [describe(error)] };
+  }
+  if (data.type === "import") {
+    const reply = importAvatar(id, files, decoded.images);
+    const buffers = reply.avatar ? [reply.avatar, ...reply.pixels].map((part) => part.buffer) : [];
+    self.postMessage(reply, buffers);
+    return;
+  }
+  const { file, images, skipped } = decoded;
+  self.postMessage({ id, file, images, skipped }, images.map((image) => image.rgba.buffer));
 };
+
+function describe(error) {
+  if (error === undefined || error === null) return "unknown error";
+  if (typeof error === "string") return error;
+  return error.message || String(error);
+}
+
+// The byte arrays one after the other in one array.
+function concat(arrays) {
+  const all = new Uint8Array(arrays.reduce((sum, bytes) => sum + bytes.length, 0));
+  let offset = 0;
+  for (const bytes of arrays) {
+    all.set(bytes, offset);
+    offset += bytes.length;
+  }
+  return all;
+}
+
+// The avatar among `files` (the first) imported with the others as its resources and the
+// images decoded here; its transfer bytes, or the importer's words for what is wrong.
+function importAvatar(id, files, images) {
+  const started = performance.now();
+  try {
+    const [avatar, ...pixels] = import_avatar_file(
+      files.map((f) => f.name),
+      new Uint32Array(files.map((f) => f.bytes.length)),
+      concat(files.map((f) => f.bytes)),
+      new Uint32Array(images.map((i) => i.index)),
+      new Uint32Array(images.map((i) => i.width)),
+      new Uint32Array(images.map((i) => i.height)),
+      concat(images.map((i) => i.rgba)),
+    );
+    return { id, avatar, pixels, importMs: performance.now() - started, imagesFromHost: images.length };
+  } catch (error) {
+    return { id, error: describe(error) };
+  }
+}
 
 // The main file's JSON and binary chunk (GLB, VRM) or its JSON (.gltf).
 function container(bytes) {
