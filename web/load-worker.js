@@ -18,6 +18,7 @@
 
 import init, { import_avatar_file } from "./pkg/stance_web.js";
 import { isModel } from "./model-files.js";
+import { concat, describe } from "./common.js";
 
 const GLB_MAGIC = 0x46546c67; // "glTF"
 const JSON_CHUNK = 0x4e4f534a;
@@ -53,22 +54,7 @@ self.onmessage = async ({ data }) => {
   self.postMessage({ id, file, images, skipped }, images.map((image) => image.rgba.buffer));
 };
 
-function describe(error) {
-  if (error === undefined || error === null) return "unknown error";
-  if (typeof error === "string") return error;
-  return error.message || String(error);
-}
 
-// The byte arrays one after the other in one array.
-function concat(arrays) {
-  const all = new Uint8Array(arrays.reduce((sum, bytes) => sum + bytes.length, 0));
-  let offset = 0;
-  for (const bytes of arrays) {
-    all.set(bytes, offset);
-    offset += bytes.length;
-  }
-  return all;
-}
 
 // The avatar among `files` (the first) imported with the others as its resources and the
 // images decoded here; its transfer bytes, or the importer's words for what is wrong.

@@ -6,6 +6,7 @@
 // receives the file with its decoded pixels and imports it itself.
 
 import { isModel } from "./model-files.js";
+import { concat, describe } from "./common.js";
 
 const bar = document.createElement("div");
 bar.id = "progress";
@@ -37,22 +38,7 @@ function done() {
   }));
 }
 
-// The byte arrays one after the other in one array.
-function concat(arrays) {
-  const all = new Uint8Array(arrays.reduce((sum, bytes) => sum + bytes.length, 0));
-  let offset = 0;
-  for (const bytes of arrays) {
-    all.set(bytes, offset);
-    offset += bytes.length;
-  }
-  return all;
-}
 
-function describe(error) {
-  if (error === undefined || error === null) return "unknown error";
-  if (typeof error === "string") return error;
-  return error.message || String(error);
-}
 
 let worker = null;
 let workerImports = false;

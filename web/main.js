@@ -4,6 +4,7 @@ import init, { WebHandle } from "./pkg/stance_web.js";
 import { connectSensor, disconnectSensor } from "./sensors.js";
 import { fetchWithProgress, importAvatar, openFiles, startImporter } from "./loading.js";
 import { createAccessibilityMirror } from "./accessibility.js";
+import { describe } from "./common.js";
 
 const loading = document.getElementById("loading");
 const errorScreen = document.getElementById("error");
@@ -165,11 +166,6 @@ function connectPage(handle) {
   });
 }
 
-function describe(error) {
-  if (error === undefined || error === null) return "unknown error";
-  if (typeof error === "string") return error;
-  return error.message || String(error);
-}
 
 async function main() {
   if (typeof WebAssembly !== "object") {

@@ -4,13 +4,9 @@
 // the WebHandle: sensor_connected(name), sensor_bytes(bytes), sensor_report(id, data),
 // sensor_lost(reason).
 
-let current = null; // { close(): Promise<void> } of the open device
+import { describe } from "./common.js";
 
-function describe(error) {
-  if (error === undefined || error === null) return "unknown error";
-  if (typeof error === "string") return error;
-  return error.message || String(error);
-}
+let current = null; // { close(): Promise<void> } of the open device
 
 function hex4(value) {
   return Number(value).toString(16).padStart(4, "0");
