@@ -38,8 +38,6 @@ function done() {
   }));
 }
 
-
-
 let worker = null;
 let workerImports = false;
 let nextRequest = 0;

@@ -85,6 +85,7 @@ impl LoadedAvatar {
         Ok(ImportedAvatar {
             avatar,
             import_ms: started.elapsed().as_secs_f64() * 1e3,
+            in_worker: false,
             transfer_ms: 0.0,
             images_from_host,
         })
@@ -101,6 +102,7 @@ impl LoadedAvatar {
         loaded.images_from_host = imported.images_from_host;
         loaded.load = LoadTimes {
             import_ms: imported.import_ms,
+            in_worker: imported.in_worker,
             transfer_ms: imported.transfer_ms,
             build_ms: started.elapsed().as_secs_f64() * 1e3,
             ..LoadTimes::default()

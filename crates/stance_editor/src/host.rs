@@ -59,6 +59,8 @@ pub struct ImportedAvatar {
     pub avatar: stance_asset::Avatar,
     /// How long the import took where it ran, in ms.
     pub import_ms: f64,
+    /// Whether it was imported off the editor's thread (the page's loading worker).
+    pub in_worker: bool,
     /// How long handing it to the editor's thread took (decoding the transfer), in ms.
     pub transfer_ms: f64,
     /// Texture images the host's own decoders decoded for it.

@@ -66,9 +66,8 @@ pub struct EditorModel {
     decoded_images: Option<(String, Vec<stance_asset::DecodedImage>)>,
     /// A document waiting for its avatar to arrive (a link or autosave naming a URL).
     pending_document: Option<Document>,
-    /// The avatar file being imported for the editor: its name, and whether the host's
-    /// worker imports it.
-    pending_import: Option<(String, bool)>,
+    /// The avatar file the host is importing for the editor (its name).
+    pending_import: Option<String>,
     pub(crate) mapping_corrections: MappingCorrections,
     pub(crate) trace: Vec<DVec3>,
     pub(crate) notice: Option<Notice>,

@@ -179,6 +179,11 @@ impl ViewportRenderer {
         self.scene_renderer.cancel_avatar_upload();
     }
 
+    /// Whether an avatar upload is under way.
+    pub(crate) fn is_uploading_avatar(&self) -> bool {
+        self.scene_renderer.is_uploading_avatar()
+    }
+
     /// Renders the scene at `size_px` and returns the egui texture that shows it.
     pub(crate) fn render(
         &mut self,

@@ -512,6 +512,7 @@ fn import_as_the_worker_does(
     let transfer = stance_asset::AvatarTransfer::new(imported.avatar.clone()).unwrap();
     stance_editor::ImportedAvatar {
         avatar: transfer.into_avatar().unwrap(),
+        in_worker: true,
         ..imported
     }
 }

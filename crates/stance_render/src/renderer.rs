@@ -350,7 +350,7 @@ impl SceneRenderer {
     }
 
     /// Starts uploading `model` over the next frames ([`SceneRenderer::continue_avatar_upload`],
-    /// a texture a frame); the avatar uploaded before stays until it is complete.
+    /// a band of texture rows a step); the avatar uploaded before stays until it is complete.
     pub fn begin_avatar_upload(&mut self, model: SkinnedModel) {
         self.upload = Some(AvatarUpload::new(model));
     }
@@ -374,6 +374,11 @@ impl SceneRenderer {
     /// Drops an upload under way.
     pub fn cancel_avatar_upload(&mut self) {
         self.upload = None;
+    }
+
+    /// Whether an upload is under way.
+    pub fn is_uploading_avatar(&self) -> bool {
+        self.upload.is_some()
     }
 
     /// The uploaded avatar, if any.

@@ -391,6 +391,7 @@ impl WebHandle {
                 Box::new(ImportedAvatar {
                     avatar,
                     import_ms,
+                    in_worker: true,
                     transfer_ms: started.elapsed().as_secs_f64() * 1e3,
                     images_from_host: images_from_host as usize,
                 })

@@ -41,8 +41,6 @@ pub(super) struct ViewportPanel {
     renderer: Option<ViewportRenderer>,
     /// Whether the loaded avatar's mesh is on the GPU.
     pub avatar_uploaded: bool,
-    /// An avatar's upload is under way (see `upload_meshes`).
-    avatar_uploading: bool,
     /// How long the avatar's upload to the GPU took (ms).
     pub avatar_upload_ms: f64,
     /// The mannequin drawn as a skinned figure (else as capsules).
@@ -72,7 +70,6 @@ impl ViewportPanel {
             backend,
             renderer,
             avatar_uploaded: false,
-            avatar_uploading: false,
             avatar_upload_ms: 0.0,
             show_figure: true,
             figure: None,
@@ -354,10 +351,9 @@ impl ViewportPanel {
         if let Some(mesh) = model.avatar.as_mut().and_then(|avatar| avatar.model.take()) {
             renderer.begin_avatar_upload(mesh);
             self.avatar_uploaded = false;
-            self.avatar_uploading = true;
             self.avatar_upload_ms = 0.0;
         }
-        if self.avatar_uploading && model.avatar().is_some() {
+        if renderer.is_uploading_avatar() && model.avatar().is_some() {
             // Steps while this frame's share of the upload lasts (time and bytes).
             let started = web_time::Instant::now();
             let mut done = false;
@@ -371,7 +367,6 @@ impl ViewportPanel {
             }
             self.avatar_upload_ms += started.elapsed().as_secs_f64() * 1e3;
             if done {
-                self.avatar_uploading = false;
                 self.avatar_uploaded = true;
                 self.figure = None;
             }
@@ -380,10 +375,7 @@ impl ViewportPanel {
         if model.avatar().is_some() {
             return;
         }
-        if self.avatar_uploading {
-            renderer.cancel_avatar_upload();
-            self.avatar_uploading = false;
-        }
+        renderer.cancel_avatar_upload();
         self.avatar_uploaded = false;
         let loa = model.session().level_of_articulation();
         if !self.show_figure || self.figure.as_ref().is_some_and(|(_, at)| *at == loa) {

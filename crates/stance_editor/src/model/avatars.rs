@@ -56,30 +56,32 @@ impl EditorModel {
         match self.hooks.import_avatar(request) {
             // The page shows the import's progress; a notice here would cost frames (and
             // the worker CPU time) while it imports.
-            Ok(()) => self.pending_import = Some((name, true)),
+            Ok(()) => self.pending_import = Some(name),
             Err(request) => {
+                // Whatever was awaited, this file is the last one asked for.
+                self.pending_import = None;
                 let imported = LoadedAvatar::import(&request.bytes, &request.resources, decoded);
-                self.pending_import = Some((name.clone(), false));
-                self.avatar_imported(&name, imported.map(Box::new));
+                self.open_imported_avatar(&name, imported.map(Box::new));
             }
         }
     }
 
-    /// The avatar file `name` imported (by the host or here): its skeleton, model and posing
-    /// session replace the current ones. A reply for a file that is no longer awaited (a later
-    /// file was opened since) is dropped.
+    /// The avatar file `name` the host imported: opened if it is the one awaited, dropped if
+    /// a later file was opened since (or the mannequin chosen).
     pub(super) fn avatar_imported(
         &mut self,
         name: &str,
         result: Result<Box<ImportedAvatar>, String>,
     ) {
-        let in_worker = match self.pending_import.take() {
-            Some((pending, in_worker)) if pending == name => in_worker,
-            other => {
-                self.pending_import = other;
-                return;
-            }
-        };
+        if self.pending_import.as_deref() == Some(name) {
+            self.pending_import = None;
+            self.open_imported_avatar(name, result);
+        }
+    }
+
+    /// The avatar file `name` imported (by the host or here): its skeleton, model and posing
+    /// session replace the current ones; on failure the notice says why.
+    fn open_imported_avatar(&mut self, name: &str, result: Result<Box<ImportedAvatar>, String>) {
         let started = web_time::Instant::now();
         let loa = self.session.level_of_articulation();
         let mut mapping_note = None;
@@ -93,7 +95,7 @@ impl EditorModel {
                     PosingSession::with_humanoid(humanoid).map_err(|error| error.to_string())?;
                 Ok((avatar, session))
             });
-        let (mut avatar, session) = match loaded {
+        let (avatar, session) = match loaded {
             Ok(loaded) => loaded,
             Err(error) => {
                 self.pending_document = None;
@@ -116,7 +118,6 @@ impl EditorModel {
             text.push_str(&format!(" {note}"));
         }
         self.replace_session(session, SessionChange::NewBody);
-        avatar.load.in_worker = in_worker;
         self.avatar = Some(avatar);
         self.avatar_url = crate::avatar::is_url(name).then(|| name.to_owned());
         self.inform(text);
@@ -132,7 +133,7 @@ impl EditorModel {
 
     /// The avatar file the host is importing for the editor, if any.
     pub fn importing(&self) -> Option<&str> {
-        self.pending_import.as_ref().map(|(name, _)| name.as_str())
+        self.pending_import.as_deref()
     }
 
     /// Back to the built-in mannequin (the posture carries over by joint name).
