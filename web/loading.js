@@ -106,6 +106,7 @@ export function importAvatar(handle, name, names, lengths, bytes) {
     const images = decoded?.file === name ? decoded.images : null;
     return request({ type: "import", files, images }, (images ?? []).map((i) => i.rgba.buffer));
   }).then((reply) => {
+    performance.mark("stance:avatar-imported");
     // One reply at a time reaches the editor, each texture in a task of its own: a 2048x2048
     // texture is 16 MB to copy into the editor's memory.
     delivery = delivery.then(async () => {
@@ -132,6 +133,26 @@ export function importAvatar(handle, name, names, lengths, bytes) {
 
 let delivery = Promise.resolve();
 
+// stanceHost.uploadAvatar: the editor began putting an avatar on the GPU. The page steps the
+// upload (a few MB of texture per task, WebHandle.upload_avatar_step) in tasks back to back
+// instead of the editor's frames: a frame that repaints the canvas can take a few hundred ms
+// to come where the canvas is composited in software, and the upload would wait for each.
+export function uploadAvatar(handle) {
+  const channel = new MessageChannel();
+  channel.port1.onmessage = () => {
+    let more = false;
+    try {
+      more = handle.upload_avatar_step();
+    } catch (error) {
+      console.warn(`the avatar's upload: ${describe(error)}`);
+    }
+    if (more) channel.port2.postMessage(null);
+    else channel.port1.close();
+  };
+  channel.port2.postMessage(null);
+  return true;
+}
+
 function nextTask() {
   return new Promise((resolve) => setTimeout(resolve, 0));
 }
@@ -142,7 +163,10 @@ function decodeTextures(files) {
   if (!loader() || !files.some((f) => isModel(f.name))) {
     return Promise.resolve(null);
   }
-  return request({ type: "decode", files });
+  return request({ type: "decode", files }).then((decoded) => {
+    performance.mark("stance:textures-decoded");
+    return decoded;
+  });
 }
 
 // Hands the decoded pixels to the editor (for the file they belong to), then the files.

@@ -2,7 +2,7 @@
 // readable error screen instead of a blank page when it cannot start.
 import init, { WebHandle } from "./pkg/stance_web.js";
 import { connectSensor, disconnectSensor } from "./sensors.js";
-import { fetchWithProgress, importAvatar, openFiles, startImporter } from "./loading.js";
+import { fetchWithProgress, importAvatar, openFiles, startImporter, uploadAvatar } from "./loading.js";
 import { createAccessibilityMirror } from "./accessibility.js";
 import { describe } from "./common.js";
 
@@ -86,6 +86,11 @@ window.stanceHost = {
   fetchFile(url) {
     if (!window.stance) throw new Error("the editor is not running");
     fetchWithProgress(window.stance, url);
+  },
+  // Steps an avatar's upload to the GPU in tasks of the page's own (see loading.js).
+  uploadAvatar() {
+    if (!window.stance) return false;
+    return uploadAvatar(window.stance);
   },
   // Imports an avatar file in the loading worker; false when it cannot (see loading.js).
   importAvatar(name, names, lengths, bytes) {

@@ -31,10 +31,9 @@ use self::state::PageState;
 use self::tasks_panel::TasksPanel;
 use self::timeline_panel::TimelinePanel;
 use self::viewport_panel::ViewportPanel;
-use crate::host::{BackendSummary, HostHooks, HostMessage};
+use crate::host::{HostHooks, HostMessage};
 use crate::model::{Command, EditorModel, MotionCommand};
 use crate::posing::PosingError;
-use crate::viewport::ViewportRenderer;
 
 /// The Stance editor.
 pub struct StanceApp {
@@ -86,12 +85,8 @@ impl StanceApp {
         creation: &eframe::CreationContext<'_>,
         hooks: Box<dyn HostHooks>,
     ) -> Result<Self, PosingError> {
-        let render_state = creation.wgpu_render_state.as_ref();
         let mut app = Self::without_gpu(hooks)?;
-        app.viewport = ViewportPanel::new(
-            render_state.map(|state| BackendSummary::from_adapter(&state.adapter.get_info())),
-            render_state.map(|state| ViewportRenderer::new(&state.device)),
-        );
+        app.viewport = ViewportPanel::new(creation.wgpu_render_state.as_ref());
         Ok(app)
     }
 
@@ -99,7 +94,7 @@ impl StanceApp {
     pub fn without_gpu(hooks: Box<dyn HostHooks>) -> Result<Self, PosingError> {
         Ok(Self {
             model: EditorModel::new(hooks)?,
-            viewport: ViewportPanel::new(None, None),
+            viewport: ViewportPanel::new(None),
             windows: Windows::default(),
             mapping_editor: MappingEditor::default(),
             library_name: String::new(),
@@ -537,6 +532,13 @@ impl StanceApp {
 
     // -----------------------------------------------------------------------------------------
     // State for the page
+
+    /// A share of the avatar's GPU upload, stepped by the host between frames (see
+    /// [`HostHooks::upload_in_tasks`]): a few MB, its writes submitted. True while more is
+    /// left; once done, the next frame draws the avatar.
+    pub fn upload_avatar_task(&mut self) -> bool {
+        self.viewport.upload_task()
+    }
 
     /// The editor's observable state as JSON (see `app/state.rs`): the page's test hook and
     /// scripts read it; it is built only when asked.

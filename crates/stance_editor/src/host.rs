@@ -98,6 +98,14 @@ pub trait HostHooks {
         Err("this shell has no file picker".to_owned())
     }
 
+    /// An avatar's upload to the GPU began: the host may step it in tasks of its own
+    /// (`StanceApp::upload_avatar_task` until it returns false), between frames, and return
+    /// true; false (the default): the frames step it. In a browser, frames that repaint a
+    /// software-composited canvas are slow to come while a large avatar arrives.
+    fn upload_in_tasks(&self) -> bool {
+        false
+    }
+
     /// Fetches `url` (an avatar); the bytes arrive as [`HostMessage::OpenFile`] named by the
     /// URL, a failure as [`HostMessage::Failed`].
     fn fetch(&self, _url: &str) -> Result<(), String> {

@@ -36,6 +36,8 @@ extern "C" {
     fn host_connect_sensor(request_json: &str) -> Result<(), JsValue>;
     #[wasm_bindgen(js_namespace = stanceHost, js_name = disconnectSensor, catch)]
     fn host_disconnect_sensor() -> Result<(), JsValue>;
+    #[wasm_bindgen(js_namespace = stanceHost, js_name = uploadAvatar, catch)]
+    fn host_upload_avatar() -> Result<bool, JsValue>;
     #[wasm_bindgen(js_namespace = stanceHost, js_name = importAvatar, catch)]
     fn host_import_avatar(
         name: &str,
@@ -126,6 +128,16 @@ impl HostHooks for PageHooks {
 
     fn download_bytes(&self, file_name: &str, bytes: &[u8]) -> Result<(), String> {
         host_download_bytes(file_name, bytes).map_err(|error| describe(&error))
+    }
+
+    fn upload_in_tasks(&self) -> bool {
+        host_upload_avatar().unwrap_or_else(|error| {
+            log::warn!(
+                "the page cannot step the avatar's upload: {}",
+                describe(&error)
+            );
+            false
+        })
     }
 
     fn import_avatar(&self, request: AvatarImport) -> Result<(), AvatarImport> {
@@ -398,6 +410,21 @@ impl WebHandle {
             })
             .map_err(|error| error.to_string());
         self.send(HostMessage::AvatarImported { name, result });
+    }
+
+    /// A share of the avatar's GPU upload, stepped by the page in a task of its own when the
+    /// editor asked it (`stanceHost.uploadAvatar`): true while more is left. The last share
+    /// asks for the frame that draws the avatar.
+    #[wasm_bindgen]
+    pub fn upload_avatar_step(&self) -> bool {
+        let more = self
+            .runner
+            .app_mut::<StanceApp>()
+            .is_some_and(|mut app| app.upload_avatar_task());
+        if !more && let Some(context) = self.context.borrow().as_ref() {
+            context.request_repaint();
+        }
+        more
     }
 
     /// The avatar file `name` the editor asked the page to import could not be: `reason`

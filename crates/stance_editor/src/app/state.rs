@@ -43,6 +43,7 @@ impl PageState<'_> {
                 "vertices": avatar.vertex_count,
                 "triangles": avatar.triangle_count,
                 "uploaded": self.viewport.avatar_uploaded,
+                "upload_tasks": self.viewport.avatar_upload_tasks,
                 "mapped": avatar.mapping_summary().0,
                 "images_from_host": avatar.images_from_host,
                 "imported_in_worker": avatar.load.in_worker,

@@ -15,11 +15,17 @@ use crate::host::BackendSummary;
 use crate::model::{Command, EditorModel, NewTask, heat_color};
 use crate::viewport::{ViewportInput, ViewportRenderer, apply_gestures};
 
-/// The most a frame spends uploading an avatar, in ms, and the most texture bytes it writes
-/// (see `upload_meshes`): more would wait for the GPU process to drain the command buffer's
-/// transfer memory (WebGL in Chromium), in the frame.
-const UPLOAD_MS_PER_FRAME: f64 = 12.0;
-const UPLOAD_STEPS_PER_FRAME: usize = (8 << 20) / stance_render::UPLOAD_STEP_BYTES;
+/// The most a frame (or a host task) spends uploading an avatar, in ms, and the most texture
+/// bytes it writes (see `upload_meshes`): more would wait for the GPU process to drain the
+/// command buffer's transfer memory (WebGL in Chromium), in the frame.
+const UPLOAD_MS_PER_SHARE: f64 = 12.0;
+const UPLOAD_STEPS_PER_SHARE: usize = (8 << 20) / stance_render::UPLOAD_STEP_BYTES;
+/// The most a host task spends uploading: its writes are submitted step by step (4 MB each), so
+/// the GPU process drains them as they come and the task's time is what it costs.
+const UPLOAD_MS_PER_TASK: f64 = 30.0;
+/// While the host steps an avatar's upload in its own tasks, a frame every so often steps it
+/// too (should the host stop), in seconds.
+const UPLOAD_FALLBACK_S: f32 = 0.5;
 /// Colour of the selected body part (linear RGB).
 const SELECTED_COLOR_LINEAR: [f32; 4] = [0.15, 0.45, 0.85, 1.0];
 /// Colour of the body part under the cursor (linear RGB).
@@ -39,10 +45,19 @@ pub(super) struct ViewportPanel {
     pub pin_tool: bool,
     pub backend: Option<BackendSummary>,
     renderer: Option<ViewportRenderer>,
+    /// eframe's wgpu device and queue, for the uploads the host steps between frames.
+    render_state: Option<egui_wgpu::RenderState>,
+    /// The host steps the avatar's upload under way in tasks of its own
+    /// ([`HostHooks::upload_in_tasks`](crate::HostHooks::upload_in_tasks)), not the frames.
+    upload_in_tasks: bool,
+    /// The avatar's upload finished since the last frame.
+    upload_finished: bool,
     /// Whether the loaded avatar's mesh is on the GPU.
     pub avatar_uploaded: bool,
     /// How long the avatar's upload to the GPU took (ms).
     pub avatar_upload_ms: f64,
+    /// How many shares of it the host stepped between frames.
+    pub avatar_upload_tasks: usize,
     /// The mannequin drawn as a skinned figure (else as capsules).
     pub show_figure: bool,
     /// The mannequin's figure, and the level of articulation whose mesh is on the GPU.
@@ -57,8 +72,12 @@ pub(super) struct ViewportPanel {
 }
 
 impl ViewportPanel {
-    /// A viewport with the floor and the trace shown, drawing with `renderer`.
-    pub(super) fn new(backend: Option<BackendSummary>, renderer: Option<ViewportRenderer>) -> Self {
+    /// A viewport with the floor and the trace shown, drawing with eframe's wgpu
+    /// `render_state` (none: the viewport says why it is empty).
+    pub(super) fn new(render_state: Option<&egui_wgpu::RenderState>) -> Self {
+        let backend =
+            render_state.map(|state| BackendSummary::from_adapter(&state.adapter.get_info()));
+        let renderer = render_state.map(|state| ViewportRenderer::new(&state.device));
         Self {
             camera: OrbitCamera::default(),
             rect: egui::Rect::NOTHING,
@@ -69,8 +88,12 @@ impl ViewportPanel {
             pin_tool: false,
             backend,
             renderer,
+            render_state: render_state.cloned(),
+            upload_in_tasks: false,
+            upload_finished: false,
             avatar_uploaded: false,
             avatar_upload_ms: 0.0,
+            avatar_upload_tasks: 0,
             show_figure: true,
             figure: None,
             first_frame_reported: false,
@@ -336,7 +359,7 @@ impl ViewportPanel {
     /// Puts on the GPU what the body is drawn with: a loaded avatar's mesh, else the
     /// mannequin's figure (made again when the level of articulation changes or after an
     /// avatar took its place). An avatar goes up a few MB of texture at a time for at most
-    /// [`UPLOAD_MS_PER_FRAME`] a frame, so that no frame carries the whole load; its body
+    /// [`UPLOAD_MS_PER_SHARE`] a frame (or a task of the host's), so that no frame carries the whole load; its body
     /// shows as capsules meanwhile.
     fn upload_meshes(
         &mut self,
@@ -344,34 +367,46 @@ impl ViewportPanel {
         frame: &eframe::Frame,
         model: &mut EditorModel,
     ) {
+        if self.renderer.is_none() || frame.wgpu_render_state().is_none() {
+            return;
+        }
+        if std::mem::take(&mut self.upload_finished) {
+            self.avatar_uploaded = true;
+            self.figure = None;
+        }
+        if let Some(mesh) = model.avatar.as_mut().and_then(|avatar| avatar.model.take()) {
+            if let Some(renderer) = &mut self.renderer {
+                renderer.begin_avatar_upload(mesh);
+            }
+            self.avatar_uploaded = false;
+            self.avatar_upload_ms = 0.0;
+            self.avatar_upload_tasks = 0;
+            // Frames that repaint the canvas are slow to come while a large avatar arrives
+            // (a software-composited canvas is read back each time): the page steps the
+            // upload in tasks of its own where it can.
+            self.upload_in_tasks = model.hooks.upload_in_tasks();
+        }
+        if self
+            .renderer
+            .as_ref()
+            .is_some_and(|r| r.is_uploading_avatar())
+            && model.avatar().is_some()
+        {
+            if self.upload_in_tasks {
+                ctx.request_repaint_after(std::time::Duration::from_secs_f32(UPLOAD_FALLBACK_S));
+            } else {
+                ctx.request_repaint();
+            }
+            self.upload_share(false);
+            if std::mem::take(&mut self.upload_finished) {
+                self.avatar_uploaded = true;
+                self.figure = None;
+            }
+        }
         let (Some(renderer), Some(render_state)) = (&mut self.renderer, frame.wgpu_render_state())
         else {
             return;
         };
-        if let Some(mesh) = model.avatar.as_mut().and_then(|avatar| avatar.model.take()) {
-            renderer.begin_avatar_upload(mesh);
-            self.avatar_uploaded = false;
-            self.avatar_upload_ms = 0.0;
-        }
-        if renderer.is_uploading_avatar() && model.avatar().is_some() {
-            // Steps while this frame's share of the upload lasts (time and bytes).
-            let started = web_time::Instant::now();
-            let mut done = false;
-            let mut steps = 0;
-            while !done
-                && steps < UPLOAD_STEPS_PER_FRAME
-                && started.elapsed().as_secs_f64() * 1e3 < UPLOAD_MS_PER_FRAME
-            {
-                done = renderer.continue_avatar_upload(render_state);
-                steps += 1;
-            }
-            self.avatar_upload_ms += started.elapsed().as_secs_f64() * 1e3;
-            if done {
-                self.avatar_uploaded = true;
-                self.figure = None;
-            }
-            ctx.request_repaint();
-        }
         if model.avatar().is_some() {
             return;
         }
@@ -391,6 +426,49 @@ impl ViewportPanel {
                 self.show_figure = false;
             }
         }
+    }
+
+    /// One share of the avatar's upload under way: a frame's ([`UPLOAD_MS_PER_SHARE`],
+    /// [`UPLOAD_STEPS_PER_SHARE`]), or with `flush` a host task's ([`UPLOAD_MS_PER_TASK`]),
+    /// which submits each step's writes (no frame submits them). Returns whether more is
+    /// left.
+    fn upload_share(&mut self, flush: bool) -> bool {
+        let (Some(renderer), Some(render_state)) = (&mut self.renderer, &self.render_state) else {
+            return false;
+        };
+        if !renderer.is_uploading_avatar() {
+            return false;
+        }
+        let started = web_time::Instant::now();
+        let (most_steps, most_ms) = if flush {
+            (usize::MAX, UPLOAD_MS_PER_TASK)
+        } else {
+            (UPLOAD_STEPS_PER_SHARE, UPLOAD_MS_PER_SHARE)
+        };
+        let mut done = false;
+        let mut steps = 0;
+        while !done && steps < most_steps && started.elapsed().as_secs_f64() * 1e3 < most_ms {
+            done = renderer.continue_avatar_upload(render_state);
+            if flush {
+                render_state.queue.submit(std::iter::empty());
+            }
+            steps += 1;
+        }
+        self.avatar_upload_ms += started.elapsed().as_secs_f64() * 1e3;
+        if done {
+            self.upload_in_tasks = false;
+            // Uploaded by a frame, or between frames: the next frame draws it.
+            self.upload_finished = true;
+        }
+        !done
+    }
+
+    /// A share of the avatar's upload stepped by the host between frames (see
+    /// [`HostHooks::upload_in_tasks`](crate::HostHooks::upload_in_tasks)): true while more is
+    /// left; the caller asks for a frame once it is done.
+    pub(super) fn upload_task(&mut self) -> bool {
+        self.avatar_upload_tasks += 1;
+        self.upload_share(true)
     }
 
     /// Whether the viewport draws with a GPU (images need one).
