@@ -9,9 +9,11 @@
 //
 // In:  { type: "init", module }                      -> { type: "ready", ok, error }
 //      { type: "decode", id, files: [{ name, bytes }] } -> { id, file, images, skipped }
-//      { type: "import", id, files, images? }  -> { id, avatar, pixels: [Uint8Array],
-//                                     importMs, imagesFromHost } or { id, error }
-//      (images: those a "decode" request returned, else they are decoded first)
+//      { type: "import", id, files, images?, follow? }  -> { id, avatar, textures, pixels:
+//                          [Uint8Array], importMs, imagesFromHost } or { id, error }
+//      (images: those a "decode" request returned; follow: the page decodes them meanwhile
+//      and fills the textures' empty pixels, textures giving image, width and height of
+//      each; else they are decoded here first)
 // Images: [{ index, width, height, rgba: Uint8Array }]. Whatever cannot be decoded here (no
 // OffscreenCanvas, an unknown format, a missing file) is left out: the importer decodes it
 // itself and names the problem.
@@ -37,31 +39,41 @@ self.onmessage = async ({ data }) => {
     return;
   }
   const { id, files } = data;
-  let decoded;
-  try {
-    // An import whose textures were decoded here before comes with them.
-    decoded = data.images ? { images: data.images } : await decodeImages(files);
-  } catch (error) {
-    decoded = { file: null, images: [], skipped: [describe(error)] };
-  }
   if (data.type === "import") {
-    const reply = importAvatar(id, files, decoded.images);
-    const buffers = reply.avatar ? [reply.avatar, ...reply.pixels].map((part) => part.buffer) : [];
+    // The images decoded before come with the import; with `follow`, the page is decoding
+    // them meanwhile and the import leaves their pixels out; else they are decoded here.
+    let images = data.images ?? [];
+    let toFollow = [];
+    try {
+      if (data.follow) toFollow = textureImages(files).map((source) => source.index);
+      else if (!data.images) images = (await decodeImages(files)).images;
+    } catch {
+      images = [];
+      toFollow = [];
+    }
+    const reply = importAvatar(id, files, images, toFollow);
+    const buffers = reply.avatar ? [reply.avatar, reply.textures, ...reply.pixels].map((part) => part.buffer) : [];
     self.postMessage(reply, buffers);
     return;
+  }
+  let decoded;
+  try {
+    decoded = await decodeImages(files);
+  } catch (error) {
+    decoded = { file: null, images: [], skipped: [describe(error)] };
   }
   const { file, images, skipped } = decoded;
   self.postMessage({ id, file, images, skipped }, images.map((image) => image.rgba.buffer));
 };
 
-
-
-// The avatar among `files` (the first) imported with the others as its resources and the
-// images decoded here; its transfer bytes, or the importer's words for what is wrong.
-function importAvatar(id, files, images) {
+// The avatar among `files` (the first) imported with the others as its resources, the
+// images decoded and those whose pixels follow (`toFollow`, image indices); its transfer
+// bytes, its textures (image, width, height each) and their pixels (empty where they follow),
+// or the importer's words for what is wrong.
+function importAvatar(id, files, images, toFollow) {
   const started = performance.now();
   try {
-    const [avatar, ...pixels] = import_avatar_file(
+    const [avatar, textures, ...pixels] = import_avatar_file(
       files.map((f) => f.name),
       new Uint32Array(files.map((f) => f.bytes.length)),
       concat(files.map((f) => f.bytes)),
@@ -69,8 +81,13 @@ function importAvatar(id, files, images) {
       new Uint32Array(images.map((i) => i.width)),
       new Uint32Array(images.map((i) => i.height)),
       concat(images.map((i) => i.rgba)),
+      new Uint32Array(toFollow),
     );
-    return { id, avatar, pixels, importMs: performance.now() - started, imagesFromHost: images.length };
+    return {
+      id, avatar, textures, pixels,
+      importMs: performance.now() - started,
+      imagesFromHost: images.length + toFollow.length,
+    };
   } catch (error) {
     return { id, error: describe(error) };
   }
@@ -166,24 +183,32 @@ async function decode(bytes, mime) {
   }
 }
 
-async function decodeImages(files) {
+// The images the textures of the model among `files` use (a WebP source of
+// EXT_texture_webp in place of the fallback) whose bytes are at hand, as this worker can
+// decode them: [{ index, image, bytes }]; none where it cannot decode.
+function textureImages(files) {
   const main = files.find((f) => isModel(f.name));
   if (!main || typeof OffscreenCanvas !== "function" || typeof createImageBitmap !== "function") {
-    return { file: main?.name ?? null, images: [], skipped: [] };
+    return [];
   }
   const { json, bin } = container(main.bytes);
-  // The images textures use (a WebP source of EXT_texture_webp in place of the fallback).
   const used = new Set();
   for (const texture of json.textures || []) {
     const webp = texture.extensions?.EXT_texture_webp?.source;
     const source = Number.isInteger(webp) ? webp : texture.source;
     if (Number.isInteger(source)) used.add(source);
   }
-  const skipped = [];
-  const decoded = await Promise.all([...used].map(async (index) => {
+  return [...used].flatMap((index) => {
     const image = json.images?.[index];
     const bytes = image && imageBytes(json, bin, files, image);
-    if (!bytes) return null;
+    return bytes ? [{ index, image, bytes }] : [];
+  });
+}
+
+async function decodeImages(files) {
+  const main = files.find((f) => isModel(f.name));
+  const skipped = [];
+  const decoded = await Promise.all(textureImages(files).map(async ({ index, image, bytes }) => {
     try {
       const pixels = await decode(bytes, mimeOf(image, bytes));
       return pixels && { index, ...pixels };
@@ -192,5 +217,5 @@ async function decodeImages(files) {
       return null;
     }
   }));
-  return { file: main.name, images: decoded.filter(Boolean), skipped };
+  return { file: main?.name ?? null, images: decoded.filter(Boolean), skipped };
 }

@@ -38,43 +38,62 @@ function done() {
   }));
 }
 
-let worker = null;
 let workerImports = false;
-let nextRequest = 0;
-const pending = new Map();
 
-function loader() {
-  if (worker === null) {
-    try {
-      worker = new Worker(new URL("./load-worker.js", import.meta.url), { type: "module" });
-      worker.onmessage = ({ data }) => {
-        if (data.type === "ready") {
-          workerImports = data.ok;
-          if (!data.ok) console.warn("the loading worker cannot import avatars:", data.error);
-          return;
-        }
-        pending.get(data.id)?.(data);
-        pending.delete(data.id);
-      };
-      worker.onerror = (event) => {
-        console.warn("the loading worker failed:", event.message);
-        workerImports = false;
-        for (const resolve of pending.values()) resolve(null);
-        pending.clear();
-      };
-    } catch {
-      worker = undefined;
-    }
+// A loading worker (load-worker.js) and its requests, answered by id; null where none can run.
+function startWorker(onReady) {
+  let worker;
+  try {
+    worker = new Worker(new URL("./load-worker.js", import.meta.url), { type: "module" });
+  } catch {
+    return null;
   }
-  return worker || null;
+  const pending = new Map();
+  let nextRequest = 0;
+  worker.onmessage = ({ data }) => {
+    if (data.type === "ready") {
+      onReady?.(data);
+      return;
+    }
+    pending.get(data.id)?.(data);
+    pending.delete(data.id);
+  };
+  worker.onerror = (event) => {
+    console.warn("a loading worker failed:", event.message);
+    onReady?.({ ok: false, error: event.message });
+    for (const resolve of pending.values()) resolve(null);
+    pending.clear();
+  };
+  return {
+    post: (message) => worker.postMessage(message),
+    request(message, transfer = []) {
+      const id = nextRequest++;
+      return new Promise((resolve) => {
+        pending.set(id, resolve);
+        worker.postMessage({ ...message, id }, transfer);
+      });
+    },
+  };
 }
 
-function request(message, transfer = []) {
-  const id = nextRequest++;
-  return new Promise((resolve) => {
-    pending.set(id, resolve);
-    worker.postMessage({ ...message, id }, transfer);
-  });
+// Two workers: one imports avatars with the editor's module, the other decodes textures
+// meanwhile (undefined: not started yet).
+let importer;
+let decoder;
+
+function loader() {
+  if (importer === undefined) {
+    importer = startWorker((ready) => {
+      workerImports = ready.ok;
+      if (!ready.ok) console.warn("the loading worker cannot import avatars:", ready.error);
+    });
+  }
+  return importer;
+}
+
+function textureDecoder() {
+  if (decoder === undefined) decoder = startWorker(null);
+  return decoder;
 }
 
 // The textures of the model file last handed to the editor, decoding in the worker while the
@@ -82,8 +101,11 @@ function request(message, transfer = []) {
 let prefetched = null;
 
 // Gives the loading worker the editor's compiled module: from then on it imports avatars.
+// The texture decoder starts with it, so that the first file does not wait for a worker to
+// load (a few hundred ms while the page is busy).
 export function startImporter(module) {
-  loader()?.postMessage({ type: "init", module });
+  loader()?.post({ type: "init", module });
+  textureDecoder();
 }
 
 // stanceHost.importAvatar: the editor asks for `name` (with its resources, `lengths[i]`
@@ -100,12 +122,9 @@ export function importAvatar(handle, name, names, lengths, bytes) {
   });
   importing += 1;
   progress(`Importing ${name.split("/").pop()}…`);
-  const decoding = prefetched?.name === name ? prefetched.decoding : Promise.resolve(null);
+  const decoding = prefetched?.name === name ? prefetched.decoding : null;
   prefetched = null;
-  decoding.then((decoded) => {
-    const images = decoded?.file === name ? decoded.images : null;
-    return request({ type: "import", files, images }, (images ?? []).map((i) => i.rgba.buffer));
-  }).then((reply) => {
+  importWith(loader(), files, decoding).then((reply) => {
     performance.mark("stance:avatar-imported");
     // One reply at a time reaches the editor, each texture in a task of its own: a 2048x2048
     // texture is 16 MB to copy into the editor's memory.
@@ -131,6 +150,42 @@ export function importAvatar(handle, name, names, lengths, bytes) {
   return true;
 }
 
+// The import of `files` in the worker. Where the page is decoding their textures
+// (`decoding`), the import runs meanwhile without those pixels, and the decoded images fill
+// its textures once both are done.
+async function importWith(worker, files, decoding) {
+  performance.mark("stance:import-requested");
+  if (!decoding) return worker.request({ type: "import", files });
+  const [reply, decoded] = await Promise.all([
+    worker.request({ type: "import", files, follow: true }),
+    decoding,
+  ]);
+  if (!reply?.avatar) return reply;
+  const filled = fillTextures(reply, decoded);
+  if (filled) return filled;
+  // A texture the browser could not decode: the importer decodes it itself and names what is
+  // wrong with it.
+  const images = decoded?.images ?? null;
+  return worker.request({ type: "import", files, images }, (images ?? []).map((i) => i.rgba.buffer));
+}
+
+// The worker's reply with the textures whose pixels follow (empty, of a size) filled by the
+// decoded images; null where one is missing or of another size.
+function fillTextures(reply, decoded) {
+  const given = new Set();
+  const pixels = reply.pixels.map((own, i) => {
+    const [image, width, height] = reply.textures.subarray(3 * i, 3 * i + 3);
+    if (own.length > 0) return own;
+    const found = decoded?.images.find((d) => d.index === image && d.width === width && d.height === height);
+    if (!found) return null;
+    // An image shown by two textures travels twice.
+    const rgba = given.has(found) ? found.rgba.slice() : found.rgba;
+    given.add(found);
+    return rgba;
+  });
+  return pixels.includes(null) ? null : { ...reply, pixels };
+}
+
 let delivery = Promise.resolve();
 
 // stanceHost.uploadAvatar: the editor began putting an avatar on the GPU. The page steps the
@@ -146,8 +201,14 @@ export function uploadAvatar(handle) {
     } catch (error) {
       console.warn(`the avatar's upload: ${describe(error)}`);
     }
-    if (more) channel.port2.postMessage(null);
-    else channel.port1.close();
+    if (more) {
+      channel.port2.postMessage(null);
+    } else {
+      channel.port1.close();
+      // The editor's next frame draws the avatar (its repaint is asked): marked once that
+      // frame's work is done.
+      requestAnimationFrame(() => setTimeout(() => performance.mark("stance:avatar-shown"), 0));
+    }
   };
   channel.port2.postMessage(null);
   return true;
@@ -160,10 +221,11 @@ function nextTask() {
 // The texture images of the model among `files`, decoded off the main thread; null where no
 // worker could do it (the editor then decodes them itself).
 function decodeTextures(files) {
-  if (!loader() || !files.some((f) => isModel(f.name))) {
+  const worker = textureDecoder();
+  if (!worker || !files.some((f) => isModel(f.name))) {
     return Promise.resolve(null);
   }
-  return request({ type: "decode", files }).then((decoded) => {
+  return worker.request({ type: "decode", files }).then((decoded) => {
     performance.mark("stance:textures-decoded");
     return decoded;
   });
@@ -202,6 +264,7 @@ async function deliver(handle, files) {
 // Files picked or dropped: one opens as it is; several together (a .gltf with its .bin and
 // images, a folder) go to the editor as one set, so that the .gltf finds its resources.
 export async function openFiles(handle, files) {
+  performance.mark("stance:files-picked");
   const read = [];
   const size = files.reduce((sum, { file }) => sum + file.size, 0) || 1;
   let loaded = 0;

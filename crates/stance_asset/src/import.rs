@@ -144,6 +144,8 @@ struct Ctx<'a> {
     warnings: Vec<String>,
     /// Images the caller decoded (see [`crate::load_avatar_with_images`]).
     decoded_images: Vec<crate::DecodedImage>,
+    /// Images whose pixels the caller gives later (see [`crate::HostImages::to_follow`]).
+    images_to_follow: Vec<usize>,
 }
 
 fn bad_index(
@@ -222,7 +224,7 @@ pub fn import(
     bytes: &[u8],
     options: &LoadOptions,
     resolve: &mut Resolver<'_>,
-    decoded_images: Vec<crate::DecodedImage>,
+    host: crate::HostImages,
 ) -> Result<Avatar, AssetError> {
     let limits = &options.limits;
     let (json_bytes, bin, is_glb) = split_container(bytes, limits)?;
@@ -274,7 +276,8 @@ pub fn import(
         limits,
         decoded_bytes: 0,
         warnings: Vec::new(),
-        decoded_images,
+        decoded_images: host.decoded,
+        images_to_follow: host.to_follow,
     };
     ctx.load_buffers(resolve)?;
 

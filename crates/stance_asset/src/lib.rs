@@ -148,7 +148,7 @@ impl Default for LoadOptions {
 
 /// Imports a `.glb`, `.vrm` or `.gltf` (data URIs only) from memory.
 pub fn load_avatar(bytes: &[u8], options: &LoadOptions) -> Result<Avatar, AssetError> {
-    import::import(bytes, options, &mut |_| None, Vec::new())
+    import::import(bytes, options, &mut |_| None, HostImages::default())
 }
 
 /// Imports with a resolver for external URIs (`.gltf` next to its `.bin` and images).
@@ -157,7 +157,7 @@ pub fn load_avatar_with(
     options: &LoadOptions,
     resolve: &mut Resolver<'_>,
 ) -> Result<Avatar, AssetError> {
-    import::import(bytes, options, resolve, Vec::new())
+    import::import(bytes, options, resolve, HostImages::default())
 }
 
 /// An image of the file already decoded by the caller (a browser's own decoder, off the main
@@ -174,6 +174,19 @@ pub struct DecodedImage {
     pub rgba8: Vec<u8>,
 }
 
+/// The images a caller decodes itself (a browser's own decoder, off the main thread).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct HostImages {
+    /// Images already decoded.
+    pub decoded: Vec<DecodedImage>,
+    /// Indices (in the file's `images`) of images whose pixels the caller gives later: their
+    /// textures come with the size their header declares (checked against the limits) and no
+    /// pixels (`Texture::rgba8` empty, `Texture::image` naming the image), for the caller to
+    /// fill, e.g. in [`AvatarTransfer::pixels`] before [`AvatarTransfer::into_avatar`]. The
+    /// import then overlaps the caller's decoding.
+    pub to_follow: Vec<usize>,
+}
+
 /// [`load_avatar_with`] where some images come decoded: those are used as they are (within
 /// the same size limits; their pixels move into the textures, uncopied), the others are
 /// decoded here. A decoded image of the wrong size is set aside with a warning and the
@@ -184,5 +197,24 @@ pub fn load_avatar_with_images(
     resolve: &mut Resolver<'_>,
     decoded: Vec<DecodedImage>,
 ) -> Result<Avatar, AssetError> {
-    import::import(bytes, options, resolve, decoded)
+    load_avatar_with_host_images(
+        bytes,
+        options,
+        resolve,
+        HostImages {
+            decoded,
+            to_follow: Vec::new(),
+        },
+    )
+}
+
+/// [`load_avatar_with_images`], where the pixels of some images follow later (see
+/// [`HostImages::to_follow`]).
+pub fn load_avatar_with_host_images(
+    bytes: &[u8],
+    options: &LoadOptions,
+    resolve: &mut Resolver<'_>,
+    host: HostImages,
+) -> Result<Avatar, AssetError> {
+    import::import(bytes, options, resolve, host)
 }

@@ -172,9 +172,13 @@ pub struct Texture {
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
-    /// `width * height * 4` bytes.
+    /// `width * height * 4` bytes (empty while its pixels are still to come: see
+    /// [`crate::HostImages::to_follow`]).
     #[serde(with = "crate::transfer::byte_vec")]
     pub rgba8: std::sync::Arc<Vec<u8>>,
+    /// The file's image (index in its `images`) the pixels come from; `None` for a
+    /// placeholder.
+    pub image: Option<usize>,
     /// Wrap along u.
     pub wrap_u: Wrap,
     /// Wrap along v.

@@ -202,6 +202,7 @@ mod tests {
             width: 2,
             height: 3,
             rgba8: std::sync::Arc::new(pattern()),
+            image: Some(0),
             wrap_u: crate::Wrap::Repeat,
             wrap_v: crate::Wrap::Clamp,
         });

@@ -11,7 +11,10 @@ wasm_bindgen_test::wasm_bindgen_test_configure!(run_in_browser);
 mod common;
 
 use serde_json::json;
-use stance_asset::{AssetError, DecodedImage, Limits, LoadOptions, load_avatar_with_images};
+use stance_asset::{
+    AssetError, AvatarTransfer, DecodedImage, HostImages, Limits, LoadOptions,
+    load_avatar_with_host_images, load_avatar_with_images,
+};
 
 /// The default avatar as a `.gltf` whose first material shows image 0: a 2x2 red PNG in a
 /// data URI, or bytes no decoder reads.
@@ -110,4 +113,62 @@ fn a_decoded_image_beyond_the_side_limit_is_refused_by_name() {
     };
     let error = load(&gltf_with_image(true), &[blue(8, 1)], &options).unwrap_err();
     assert!(error.to_string().contains("image 0"), "{error}");
+}
+
+fn load_following(file: &[u8], options: &LoadOptions) -> Result<stance_asset::Avatar, AssetError> {
+    let host = HostImages {
+        decoded: Vec::new(),
+        to_follow: vec![0],
+    };
+    load_avatar_with_host_images(file, options, &mut |_| None, host)
+}
+
+#[test]
+fn an_image_to_follow_comes_with_its_size_and_no_pixels_and_fills_to_the_decoded_avatar() {
+    // The oracle: the same file with its image decoded here.
+    let file = gltf_with_image(true);
+    let decoded = load(&file, &[], &LoadOptions::default()).unwrap();
+    let followed = load_following(&file, &LoadOptions::default()).unwrap();
+    let (texture, oracle) = (&followed.textures[0], &decoded.textures[0]);
+    assert_eq!((texture.width, texture.height), (2, 2), "the PNG header's size");
+    assert!(texture.rgba8.is_empty(), "no pixels yet");
+    assert_eq!((texture.image, oracle.image), (Some(0), Some(0)));
+    // Handed over without its pixels, the avatar is refused by name...
+    let transfer = AvatarTransfer::new(followed).unwrap();
+    let slot = transfer.pixels.iter().position(Vec::is_empty).unwrap();
+    let error = transfer.clone().into_avatar().unwrap_err();
+    assert!(error.to_string().contains("is 2x2 but has 0 bytes"), "{error}");
+    // ...and with the pixels the browser decoded, it is the avatar decoded here.
+    let mut filled = transfer;
+    filled.pixels[slot] = oracle.rgba8.to_vec();
+    assert_eq!(filled.into_avatar().unwrap(), decoded);
+}
+
+#[test]
+fn an_image_to_follow_is_checked_against_the_limits_as_a_decoded_one() {
+    let small = LoadOptions {
+        limits: Limits {
+            max_texture_side: 1,
+            ..Limits::default()
+        },
+        ..LoadOptions::default()
+    };
+    // Over the side limit, or a header no decoder reads: drawn white with the reason, as
+    // when the importer decodes the image itself; no pixels are left to follow.
+    for (file, options) in [
+        (gltf_with_image(true), &small),
+        (gltf_with_image(false), &LoadOptions::default()),
+    ] {
+        let followed = load_following(&file, options).expect("imported");
+        let decoded = load(&file, &[], options).expect("imported");
+        let texture = &followed.textures[0];
+        assert_eq!((texture.width, texture.height), (1, 1));
+        assert_eq!(&texture.rgba8[..], &[255; 4]);
+        assert_eq!(followed.warnings, decoded.warnings);
+        assert!(
+            followed.warnings.iter().any(|w| w.contains("image 0")),
+            "{:?}",
+            followed.warnings
+        );
+    }
 }

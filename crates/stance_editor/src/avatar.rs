@@ -3,7 +3,7 @@
 
 use glam::Mat4;
 use stance_asset::{
-    Avatar, DecodedImage, LoadOptions, export_glb, find_resource, load_avatar_with_images,
+    Avatar, HostImages, LoadOptions, export_glb, find_resource, load_avatar_with_host_images,
 };
 use stance_hanim::{
     HumanoidSkeleton, LevelOfArticulation, Mapping, SkeletonOptions, build_skeleton,
@@ -66,7 +66,7 @@ impl LoadedAvatar {
         bytes: &[u8],
         loa: LevelOfArticulation,
     ) -> Result<(Self, HumanoidSkeleton), String> {
-        Self::from_imported(name, Self::import(bytes, &[], Vec::new())?, loa)
+        Self::from_imported(name, Self::import(bytes, &[], HostImages::default())?, loa)
     }
 
     /// Imports `bytes` (GLB, glTF with data URIs, VRM; a `.gltf` with its `resources`:
@@ -75,13 +75,14 @@ impl LoadedAvatar {
     pub fn import(
         bytes: &[u8],
         resources: &[(String, Vec<u8>)],
-        decoded: Vec<DecodedImage>,
+        host: HostImages,
     ) -> Result<ImportedAvatar, String> {
         let mut resolve = |uri: &str| find_resource(resources, uri).map(<[u8]>::to_vec);
-        let images_from_host = decoded.len();
+        let images_from_host = host.decoded.len() + host.to_follow.len();
         let started = web_time::Instant::now();
-        let avatar = load_avatar_with_images(bytes, &LoadOptions::default(), &mut resolve, decoded)
-            .map_err(|error| error.to_string())?;
+        let avatar =
+            load_avatar_with_host_images(bytes, &LoadOptions::default(), &mut resolve, host)
+                .map_err(|error| error.to_string())?;
         Ok(ImportedAvatar {
             avatar,
             import_ms: started.elapsed().as_secs_f64() * 1e3,

@@ -507,7 +507,7 @@ fn import_as_the_worker_does(
     request: &stance_editor::AvatarImport,
 ) -> stance_editor::ImportedAvatar {
     let imported =
-        stance_editor::avatar::LoadedAvatar::import(&request.bytes, &request.resources, Vec::new())
+        stance_editor::avatar::LoadedAvatar::import(&request.bytes, &request.resources, Default::default())
             .unwrap();
     let transfer = stance_asset::AvatarTransfer::new(imported.avatar.clone()).unwrap();
     stance_editor::ImportedAvatar {

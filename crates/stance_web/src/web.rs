@@ -162,12 +162,16 @@ impl HostHooks for PageHooks {
 }
 
 /// Runs in the page's loading worker (`web/load-worker.js`), not in the editor: imports the
-/// avatar file `names[0]` with the other files as its resources and the texture images the
-/// worker decoded (as [`WebHandle::decoded_images`] takes them), and returns it split for the
-/// trip (`stance_asset::AvatarTransfer`): `[avatar bytes, pixels of texture 0, ...]`, for
-/// [`WebHandle::avatar_texture`] and [`WebHandle::avatar_imported`]. Throws what is wrong with
-/// the file.
+/// avatar file `names[0]` with the other files as its resources, the texture images the page
+/// decoded (as [`WebHandle::decoded_images`] takes them) and, without their pixels, the images
+/// `to_follow` the page is decoding meanwhile (`stance_asset::HostImages::to_follow`), and
+/// returns it split for the trip (`stance_asset::AvatarTransfer`): `[avatar bytes, textures,
+/// pixels of texture 0, ...]`, for [`WebHandle::avatar_texture`] and
+/// [`WebHandle::avatar_imported`]. `textures` holds three numbers per texture: its image's
+/// index (`u32::MAX`: none), width and height; a texture whose pixels follow has empty
+/// pixels here, for the page to fill. Throws what is wrong with the file.
 #[wasm_bindgen]
+#[allow(clippy::too_many_arguments)]
 pub fn import_avatar_file(
     names: Vec<String>,
     lengths: Vec<u32>,
@@ -176,6 +180,7 @@ pub fn import_avatar_file(
     widths: Vec<u32>,
     heights: Vec<u32>,
     rgba: Vec<u8>,
+    to_follow: Vec<u32>,
 ) -> Result<js_sys::Array, String> {
     let parts = split_by_lengths(&bytes, lengths.iter().map(|&n| Some(n as usize)))
         .filter(|parts| parts.len() == names.len() && !parts.is_empty())
@@ -184,12 +189,26 @@ pub fn import_avatar_file(
     let (_, main) = files.next().ok_or("no file")?;
     let resources: Vec<(String, Vec<u8>)> =
         files.map(|(name, part)| (name, part.to_vec())).collect();
-    let decoded = decoded_images(&indices, &widths, &heights, &rgba).unwrap_or_default();
-    let imported = LoadedAvatar::import(main, &resources, decoded)?;
+    let host = stance_asset::HostImages {
+        decoded: decoded_images(&indices, &widths, &heights, &rgba).unwrap_or_default(),
+        to_follow: to_follow.iter().map(|&i| i as usize).collect(),
+    };
+    let imported = LoadedAvatar::import(main, &resources, host)?;
+    let textures: Vec<u32> = imported
+        .avatar
+        .textures
+        .iter()
+        .flat_map(|t| {
+            let image = t.image.and_then(|i| u32::try_from(i).ok());
+            [image.unwrap_or(u32::MAX), t.width, t.height]
+        })
+        .collect();
     let transfer =
         stance_asset::AvatarTransfer::new(imported.avatar).map_err(|error| error.to_string())?;
     let out = js_sys::Array::new();
-    for part in std::iter::once(&transfer.avatar).chain(&transfer.pixels) {
+    out.push(&js_sys::Uint8Array::from(transfer.avatar.as_slice()));
+    out.push(&js_sys::Uint32Array::from(textures.as_slice()));
+    for part in &transfer.pixels {
         out.push(&js_sys::Uint8Array::from(part.as_slice()));
     }
     Ok(out)

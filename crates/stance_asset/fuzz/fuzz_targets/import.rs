@@ -3,7 +3,8 @@
 //! the file is a `.gltf` given with external files (multi-file glTF): its second half is every
 //! file its URIs name. With bit 3 the caller gives images 0 and 1 decoded, as the browser does
 //! (`load_avatar_with_images`): image 0 at the size bits 4 to 7 pick (a width over the limit
-//! among them), image 1 with a pixel too few. What loads is also built into a solver skeleton,
+//! among them), image 1 with a pixel too few, and image 2's pixels to follow
+//! (`HostImages::to_follow`, filled before the transfer as the page does). What loads is also built into a solver skeleton,
 //! posed at rest, exported and imported again (a VRM stays a VRM), and handed through the
 //! import worker's transfer bytes (it comes back equal); its short animations become clips.
 //!
@@ -17,8 +18,8 @@
 
 use libfuzzer_sys::fuzz_target;
 use stance_asset::{
-    AvatarTransfer, DecodedImage, Limits, LoadOptions, clip_from_animation, export_glb,
-    find_resource, load_avatar, load_avatar_with_images,
+    AvatarTransfer, DecodedImage, HostImages, Limits, LoadOptions, clip_from_animation,
+    export_glb, find_resource, load_avatar, load_avatar_with_host_images,
 };
 
 fuzz_target!(|data: &[u8]| {
@@ -69,13 +70,22 @@ fuzz_target!(|data: &[u8]| {
     } else {
         Vec::new()
     };
-    let avatar = match load_avatar_with_images(file, &options, &mut resolve, decoded) {
+    let to_follow = if selector & 8 != 0 { vec![2] } else { Vec::new() };
+    let host = HostImages { decoded, to_follow };
+    let mut avatar = match load_avatar_with_host_images(file, &options, &mut resolve, host) {
         Ok(avatar) => avatar,
         Err(e) => {
             assert!(!e.to_string().trim().is_empty(), "empty error: {e:?}");
             return;
         }
     };
+    // The pixels that follow, given as the page gives the browser's (of the header's size).
+    for texture in &mut avatar.textures {
+        if texture.rgba8.is_empty() {
+            let size = texture.width as usize * texture.height as usize * 4;
+            texture.rgba8 = std::sync::Arc::new(vec![7; size]);
+        }
+    }
     // Handed to the editor's thread as the page's import worker does, it comes back equal.
     let transfer = AvatarTransfer::new(avatar.clone()).expect("an imported avatar encodes");
     assert_eq!(transfer.into_avatar().as_ref(), Ok(&avatar), "transfer round trip");

@@ -54,8 +54,10 @@ pub(super) fn import_textures(
         if images[source].is_none() {
             images[source] = given_image(ctx, source)?;
         }
+        // Pixels that follow: the header's size now, no pixels.
+        let size_only = ctx.images_to_follow.contains(&source);
         if images[source].is_none() {
-            match decode_image(ctx, source, resolve) {
+            match decode_image(ctx, source, resolve, size_only) {
                 Ok(img) => images[source] = Some(img),
                 Err(e @ AssetError::TooLarge { .. }) => return Err(e),
                 Err(e) => {
@@ -66,7 +68,10 @@ pub(super) fn import_textures(
         }
         // Each texture holds its own copy of the pixels: charge every copy, so that many
         // textures sharing one large image cannot multiply memory past the limit.
-        let bytes = images[source].as_ref().map_or(4, |i| i.2.len());
+        // (Pixels that follow are charged at their size.)
+        let bytes = images[source]
+            .as_ref()
+            .map_or(4, |i| (i.0 as usize).saturating_mul(i.1 as usize).saturating_mul(4));
         ctx.charge(bytes, &format!("texture {t}"))?;
         let (width, height, rgba8) = images[source].clone().unwrap_or((1, 1, vec![255; 4]));
         textures.push(Texture {
@@ -74,6 +79,7 @@ pub(super) fn import_textures(
             width,
             height,
             rgba8: std::sync::Arc::new(rgba8),
+            image: Some(source),
             wrap_u,
             wrap_v,
         });
@@ -87,6 +93,7 @@ fn placeholder(name: String, wrap_u: Wrap, wrap_v: Wrap) -> Texture {
         width: 1,
         height: 1,
         rgba8: std::sync::Arc::new(vec![255; 4]),
+        image: None,
         wrap_u,
         wrap_v,
     }
@@ -129,10 +136,12 @@ fn given_image(ctx: &mut Ctx<'_>, index: usize) -> Result<Option<(u32, u32, Vec<
     Ok(Some((given.width, given.height, given.rgba8)))
 }
 
+/// Image `index` decoded, or with `size_only` its header's size and no pixels.
 fn decode_image(
     ctx: &mut Ctx<'_>,
     index: usize,
     resolve: &mut Resolver<'_>,
+    size_only: bool,
 ) -> Result<(u32, u32, Vec<u8>), AssetError> {
     let what = format!("image {index}");
     let (view, uri) = {
@@ -171,18 +180,20 @@ fn decode_image(
             reason: "neither bufferView nor uri".into(),
         });
     };
-    let image = decode_image_bytes(bytes, index, ctx.limits, ctx.decoded_bytes)?;
+    let image = decode_image_bytes(bytes, index, ctx.limits, ctx.decoded_bytes, size_only)?;
     ctx.charge(image.2.len(), &what)?;
     Ok(image)
 }
 
 /// Decodes an encoded image to RGBA8 after checking its declared size against the side
-/// limit and against what is left of the decoded-bytes budget (`already` spent).
+/// limit and against what is left of the decoded-bytes budget (`already` spent); with
+/// `size_only`, the checked size and no pixels.
 fn decode_image_bytes(
     bytes: &[u8],
     index: usize,
     limits: &Limits,
     already: u64,
+    size_only: bool,
 ) -> Result<(u32, u32, Vec<u8>), AssetError> {
     let format = image::guess_format(bytes).map_err(|e| AssetError::Image {
         index,
@@ -216,6 +227,9 @@ fn decode_image_bytes(
             size: total,
             limit: limits.max_decoded_bytes,
         });
+    }
+    if size_only {
+        return Ok((w, h, Vec::new()));
     }
     let mut reader = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
     reader.limits(lim);

@@ -60,7 +60,11 @@ impl EditorModel {
             Err(request) => {
                 // Whatever was awaited, this file is the last one asked for.
                 self.pending_import = None;
-                let imported = LoadedAvatar::import(&request.bytes, &request.resources, decoded);
+                let host = stance_asset::HostImages {
+                    decoded,
+                    to_follow: Vec::new(),
+                };
+                let imported = LoadedAvatar::import(&request.bytes, &request.resources, host);
                 self.open_imported_avatar(&name, imported.map(Box::new));
             }
         }
