@@ -7,6 +7,7 @@ import { fileURLToPath } from "node:url";
 import { readFileSync, writeFileSync, mkdtempSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { join } from "node:path";
+import zlib from "node:zlib";
 import { CONFIGURATIONS, decodePng, describeLongTasks, isFigureColour, launch, longTasks, openEditor, saveArtifact, freshStoragePerTab, serve } from "./browser.mjs";
 
 const SHARED_AVATAR = fileURLToPath(new URL("./fixtures/avatars/Black_F_2_Casual.glb", import.meta.url));
@@ -221,6 +222,46 @@ describe("avatars in the page", () => {
     assert.equal(shown.avatar.name, "mannequin.gltf");
     assert.ok(avatarPixels(decodePng(await page.screenshot()), shown.viewport) > 800);
     assert.deepEqual(errors, [], `console errors: ${errors.join(" / ")}`);
+    await page.close();
+  });
+
+  test("a texture the browser cannot decode: the import does it over, names the image, and the avatar opens", async () => {
+    // The default avatar as a .gltf whose skin shows skin.png, whose bytes are no image: the
+    // import that left its pixels to the browser is done again by the importer alone.
+    const glb = readFileSync(fileURLToPath(new URL("../public/default-avatar.glb", import.meta.url)));
+    const jsonLength = glb.readUInt32LE(12);
+    const json = JSON.parse(glb.subarray(20, 20 + jsonLength).toString("utf8"));
+    const bin = glb.subarray(20 + jsonLength + 8);
+    json.buffers = [{ byteLength: bin.length, uri: "mannequin.bin" }];
+    json.images = [{ uri: "skin.png", mimeType: "image/png" }];
+    json.textures = [{ source: 0 }];
+    json.materials[0].pbrMetallicRoughness = { ...json.materials[0].pbrMetallicRoughness, baseColorTexture: { index: 0 } };
+    const dir = mkdtempSync(join(tmpdir(), "stance-gltf-"));
+    writeFileSync(join(dir, "mannequin.gltf"), JSON.stringify(json));
+    writeFileSync(join(dir, "mannequin.bin"), bin);
+    // A 4x4 PNG header (what the importer reads first) over pixels no decoder can inflate.
+    const chunk = (type, data) => {
+      const body = Buffer.concat([Buffer.from(type, "latin1"), data]);
+      const length = Buffer.alloc(4);
+      length.writeUInt32BE(data.length);
+      const crc = Buffer.alloc(4);
+      crc.writeUInt32BE(zlib.crc32(body));
+      return Buffer.concat([length, body, crc]);
+    };
+    const header = Buffer.from([0, 0, 0, 4, 0, 0, 0, 4, 8, 6, 0, 0, 0]);
+    writeFileSync(join(dir, "skin.png"), Buffer.concat([
+      Buffer.from([0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a]),
+      chunk("IHDR", header), chunk("IDAT", Buffer.from("not deflate data")), chunk("IEND", Buffer.alloc(0)),
+    ]));
+    const page = await context.newPage();
+    await openEditor(context, site.url, page);
+    await page.setInputFiles("input[type=file]", ["mannequin.gltf", "mannequin.bin", "skin.png"].map((f) => join(dir, f)));
+    const shown = await avatarShown(page);
+    assert.equal(shown.avatar.name, "mannequin.gltf");
+    assert.ok(shown.avatar.imported_in_worker, "imported in the worker");
+    assert.equal(shown.avatar.images_from_host, 0, "no texture came from the browser");
+    assert.match(shown.notice?.text ?? "", /image 0/, "the notice names the image");
+    assert.ok(avatarPixels(decodePng(await page.screenshot()), shown.viewport) > 800);
     await page.close();
   });
 });

@@ -86,7 +86,8 @@ function importAvatar(id, files, images, toFollow) {
     return {
       id, avatar, textures, pixels,
       importMs: performance.now() - started,
-      imagesFromHost: images.length + toFollow.length,
+      // Those that follow count once the page has filled them.
+      imagesFromHost: images.length,
     };
   } catch (error) {
     return { id, error: describe(error) };

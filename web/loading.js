@@ -183,7 +183,8 @@ function fillTextures(reply, decoded) {
     given.add(found);
     return rgba;
   });
-  return pixels.includes(null) ? null : { ...reply, pixels };
+  if (pixels.includes(null)) return null;
+  return { ...reply, pixels, imagesFromHost: reply.imagesFromHost + given.size };
 }
 
 let delivery = Promise.resolve();

@@ -130,14 +130,21 @@ fn an_image_to_follow_comes_with_its_size_and_no_pixels_and_fills_to_the_decoded
     let decoded = load(&file, &[], &LoadOptions::default()).unwrap();
     let followed = load_following(&file, &LoadOptions::default()).unwrap();
     let (texture, oracle) = (&followed.textures[0], &decoded.textures[0]);
-    assert_eq!((texture.width, texture.height), (2, 2), "the PNG header's size");
+    assert_eq!(
+        (texture.width, texture.height),
+        (2, 2),
+        "the PNG header's size"
+    );
     assert!(texture.rgba8.is_empty(), "no pixels yet");
     assert_eq!((texture.image, oracle.image), (Some(0), Some(0)));
     // Handed over without its pixels, the avatar is refused by name...
     let transfer = AvatarTransfer::new(followed).unwrap();
     let slot = transfer.pixels.iter().position(Vec::is_empty).unwrap();
     let error = transfer.clone().into_avatar().unwrap_err();
-    assert!(error.to_string().contains("is 2x2 but has 0 bytes"), "{error}");
+    assert!(
+        error.to_string().contains("is 2x2 but has 0 bytes"),
+        "{error}"
+    );
     // ...and with the pixels the browser decoded, it is the avatar decoded here.
     let mut filled = transfer;
     filled.pixels[slot] = oracle.rgba8.to_vec();

@@ -78,7 +78,8 @@ impl LoadedAvatar {
         host: HostImages,
     ) -> Result<ImportedAvatar, String> {
         let mut resolve = |uri: &str| find_resource(resources, uri).map(<[u8]>::to_vec);
-        let images_from_host = host.decoded.len() + host.to_follow.len();
+        // (Images whose pixels follow count where the host fills them.)
+        let images_from_host = host.decoded.len();
         let started = web_time::Instant::now();
         let avatar =
             load_avatar_with_host_images(bytes, &LoadOptions::default(), &mut resolve, host)

@@ -506,9 +506,12 @@ fn a_gltf_opens_with_its_bin_and_a_missing_bin_is_named() {
 fn import_as_the_worker_does(
     request: &stance_editor::AvatarImport,
 ) -> stance_editor::ImportedAvatar {
-    let imported =
-        stance_editor::avatar::LoadedAvatar::import(&request.bytes, &request.resources, Default::default())
-            .unwrap();
+    let imported = stance_editor::avatar::LoadedAvatar::import(
+        &request.bytes,
+        &request.resources,
+        Default::default(),
+    )
+    .unwrap();
     let transfer = stance_asset::AvatarTransfer::new(imported.avatar.clone()).unwrap();
     stance_editor::ImportedAvatar {
         avatar: transfer.into_avatar().unwrap(),

@@ -69,9 +69,11 @@ pub(super) fn import_textures(
         // Each texture holds its own copy of the pixels: charge every copy, so that many
         // textures sharing one large image cannot multiply memory past the limit.
         // (Pixels that follow are charged at their size.)
-        let bytes = images[source]
-            .as_ref()
-            .map_or(4, |i| (i.0 as usize).saturating_mul(i.1 as usize).saturating_mul(4));
+        let bytes = images[source].as_ref().map_or(4, |i| {
+            (i.0 as usize)
+                .saturating_mul(i.1 as usize)
+                .saturating_mul(4)
+        });
         ctx.charge(bytes, &format!("texture {t}"))?;
         let (width, height, rgba8) = images[source].clone().unwrap_or((1, 1, vec![255; 4]));
         textures.push(Texture {
