@@ -184,19 +184,29 @@ async function decode(bytes, mime) {
   }
 }
 
-// The images the textures of the model among `files` use (a WebP source of
+// The images the base-colour textures of the model among `files` show (as the importer
+// chooses them: a material's baseColorTexture, a VRM 0.x MToon's _MainTex; a WebP source of
 // EXT_texture_webp in place of the fallback) whose bytes are at hand, as this worker can
-// decode them: [{ index, image, bytes }]; none where it cannot decode.
+// decode them: [{ index, image, bytes }]; none where it cannot decode. (The importer draws
+// nothing else: normal or roughness maps are not worth decoding.)
 function textureImages(files) {
   const main = files.find((f) => isModel(f.name));
   if (!main || typeof OffscreenCanvas !== "function" || typeof createImageBitmap !== "function") {
     return [];
   }
   const { json, bin } = container(main.bytes);
+  const baseColour = new Set();
+  for (const material of json.materials || []) {
+    baseColour.add(material?.pbrMetallicRoughness?.baseColorTexture?.index);
+  }
+  for (const properties of json.extensions?.VRM?.materialProperties || []) {
+    baseColour.add(properties?.textureProperties?._MainTex);
+  }
   const used = new Set();
-  for (const texture of json.textures || []) {
-    const webp = texture.extensions?.EXT_texture_webp?.source;
-    const source = Number.isInteger(webp) ? webp : texture.source;
+  for (const index of baseColour) {
+    const texture = Number.isInteger(index) ? json.textures?.[index] : undefined;
+    const webp = texture?.extensions?.EXT_texture_webp?.source;
+    const source = Number.isInteger(webp) ? webp : texture?.source;
     if (Number.isInteger(source)) used.add(source);
   }
   return [...used].flatMap((index) => {
