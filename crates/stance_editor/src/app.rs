@@ -533,6 +533,17 @@ impl StanceApp {
     // -----------------------------------------------------------------------------------------
     // State for the page
 
+    /// A message from the host taken between frames instead of at the next one (the messages
+    /// queued before it first): an avatar it opens begins its GPU upload at once, in tasks
+    /// the host steps (see [`HostHooks::upload_in_tasks`]). Returns whether the host steps
+    /// one; its last share asks for the frame that draws the avatar. Else the caller asks for
+    /// a frame.
+    pub fn receive_between_frames(&mut self, message: HostMessage) -> bool {
+        self.drain_inbox();
+        self.model.receive(message);
+        self.viewport.begin_avatar_upload(&mut self.model)
+    }
+
     /// A share of the avatar's GPU upload, stepped by the host between frames (see
     /// [`HostHooks::upload_in_tasks`]): a few MB, its writes submitted. True while more is
     /// left; once done, the next frame draws the avatar.

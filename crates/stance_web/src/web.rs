@@ -428,7 +428,18 @@ impl WebHandle {
                 })
             })
             .map_err(|error| error.to_string());
-        self.send(HostMessage::AvatarImported { name, result });
+        let message = HostMessage::AvatarImported { name, result };
+        // Taken now rather than at the next frame: the avatar's upload starts in the page's
+        // tasks, and the first frame after it draws the avatar instead of its capsules.
+        if let Some(mut app) = self.runner.app_mut::<StanceApp>() {
+            let uploading = app.receive_between_frames(message);
+            drop(app);
+            if !uploading && let Some(context) = self.context.borrow().as_ref() {
+                context.request_repaint();
+            }
+        } else {
+            self.send(message);
+        }
     }
 
     /// A share of the avatar's GPU upload, stepped by the page in a task of its own when the

@@ -374,18 +374,7 @@ impl ViewportPanel {
             self.avatar_uploaded = true;
             self.figure = None;
         }
-        if let Some(mesh) = model.avatar.as_mut().and_then(|avatar| avatar.model.take()) {
-            if let Some(renderer) = &mut self.renderer {
-                renderer.begin_avatar_upload(mesh);
-            }
-            self.avatar_uploaded = false;
-            self.avatar_upload_ms = 0.0;
-            self.avatar_upload_tasks = 0;
-            // Frames that repaint the canvas are slow to come while a large avatar arrives
-            // (a software-composited canvas is read back each time): the page steps the
-            // upload in tasks of its own where it can.
-            self.upload_in_tasks = model.hooks.upload_in_tasks();
-        }
+        self.begin_avatar_upload(model);
         if self
             .renderer
             .as_ref()
@@ -426,6 +415,25 @@ impl ViewportPanel {
                 self.show_figure = false;
             }
         }
+    }
+
+    /// Begins the upload of a newly opened avatar's GPU model (the model hands it over once).
+    /// Frames that repaint the canvas are slow to come while a large avatar arrives (a
+    /// software-composited canvas is read back each time): the page steps the upload in tasks
+    /// of its own where it can. Returns whether it does.
+    pub(super) fn begin_avatar_upload(&mut self, model: &mut EditorModel) -> bool {
+        let Some(renderer) = &mut self.renderer else {
+            return false;
+        };
+        let Some(mesh) = model.avatar.as_mut().and_then(|avatar| avatar.model.take()) else {
+            return false;
+        };
+        renderer.begin_avatar_upload(mesh);
+        self.avatar_uploaded = false;
+        self.avatar_upload_ms = 0.0;
+        self.avatar_upload_tasks = 0;
+        self.upload_in_tasks = model.hooks.upload_in_tasks();
+        self.upload_in_tasks
     }
 
     /// One share of the avatar's upload under way: a frame's ([`UPLOAD_MS_PER_SHARE`],
