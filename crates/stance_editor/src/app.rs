@@ -535,13 +535,23 @@ impl StanceApp {
 
     /// A message from the host taken between frames instead of at the next one (the messages
     /// queued before it first): an avatar it opens begins its GPU upload at once, in tasks
-    /// the host steps (see [`HostHooks::upload_in_tasks`]). Returns whether the host steps
-    /// one; its last share asks for the frame that draws the avatar. Else the caller asks for
-    /// a frame.
+    /// the host steps (see [`HostHooks::upload_in_tasks`]). Returns whether the next frame
+    /// can wait: the host steps that upload (its last share asks for the frame that draws
+    /// the avatar), or the message handed an avatar file to the host's import
+    /// ([`HostHooks::import_avatar`]) and nothing shows until it is back. Else the caller
+    /// asks for a frame.
     pub fn receive_between_frames(&mut self, message: HostMessage) -> bool {
         self.drain_inbox();
+        let opens_file = matches!(
+            message,
+            HostMessage::OpenFile { .. } | HostMessage::OpenFiles(_)
+        );
+        let awaited = self.model.importing().map(str::to_owned);
         self.model.receive(message);
-        self.viewport.begin_avatar_upload(&mut self.model)
+        let handed_to_host = opens_file
+            && self.model.importing().is_some()
+            && self.model.importing() != awaited.as_deref();
+        self.viewport.begin_avatar_upload(&mut self.model) || handed_to_host
     }
 
     /// A share of the avatar's GPU upload, stepped by the host between frames (see

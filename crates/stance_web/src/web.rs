@@ -316,6 +316,23 @@ impl WebHandle {
             .await
     }
 
+    /// Hands `message` to the editor between frames (after the messages queued before it)
+    /// and asks for a frame only where the editor has something to show: not while the
+    /// loading worker imports the avatar it opened or the page steps its upload (frames that
+    /// repaint a software-composited canvas are slow). Queued for the next frame where the
+    /// editor cannot be reached now.
+    fn deliver_now(&self, message: HostMessage) {
+        if let Some(mut app) = self.runner.app_mut::<StanceApp>() {
+            let can_wait = app.receive_between_frames(message);
+            drop(app);
+            if !can_wait && let Some(context) = self.context.borrow().as_ref() {
+                context.request_repaint();
+            }
+        } else {
+            self.send(message);
+        }
+    }
+
     fn send(&self, message: HostMessage) {
         if let Some(sender) = self.inbox.borrow().as_ref() {
             let _ = sender.send(message);
@@ -334,7 +351,7 @@ impl WebHandle {
     /// Opens a file the user picked or dropped.
     #[wasm_bindgen]
     pub fn open_file(&self, name: String, bytes: Vec<u8>) {
-        self.send(HostMessage::OpenFile { name, bytes });
+        self.deliver_now(HostMessage::OpenFile { name, bytes });
     }
 
     /// Opens files picked or dropped together (a `.gltf` with its `.bin` and images, a
@@ -354,7 +371,7 @@ impl WebHandle {
             .zip(parts)
             .map(|(name, part)| (name, part.to_vec()))
             .collect();
-        self.send(HostMessage::OpenFiles(files));
+        self.deliver_now(HostMessage::OpenFiles(files));
     }
 
     /// The texture images of the avatar file `file` (as named to `open_file`/`open_files`),
@@ -428,18 +445,9 @@ impl WebHandle {
                 })
             })
             .map_err(|error| error.to_string());
-        let message = HostMessage::AvatarImported { name, result };
         // Taken now rather than at the next frame: the avatar's upload starts in the page's
         // tasks, and the first frame after it draws the avatar instead of its capsules.
-        if let Some(mut app) = self.runner.app_mut::<StanceApp>() {
-            let uploading = app.receive_between_frames(message);
-            drop(app);
-            if !uploading && let Some(context) = self.context.borrow().as_ref() {
-                context.request_repaint();
-            }
-        } else {
-            self.send(message);
-        }
+        self.deliver_now(HostMessage::AvatarImported { name, result });
     }
 
     /// A share of the avatar's GPU upload, stepped by the page in a task of its own when the
