@@ -40,6 +40,21 @@ async function avatarShown(page, timeout = 60_000) {
   return state(page);
 }
 
+// public/default-avatar.glb split into mannequin.gltf + mannequin.bin in a new folder (its
+// JSON changed by `edit` first); returns the folder.
+function splitDefaultAvatar(edit = () => {}) {
+  const glb = readFileSync(fileURLToPath(new URL("../public/default-avatar.glb", import.meta.url)));
+  const jsonLength = glb.readUInt32LE(12);
+  const json = JSON.parse(glb.subarray(20, 20 + jsonLength).toString("utf8"));
+  const bin = glb.subarray(20 + jsonLength + 8);
+  json.buffers = [{ byteLength: bin.length, uri: "mannequin.bin" }];
+  edit(json);
+  const dir = mkdtempSync(join(tmpdir(), "stance-gltf-"));
+  writeFileSync(join(dir, "mannequin.gltf"), JSON.stringify(json));
+  writeFileSync(join(dir, "mannequin.bin"), bin);
+  return dir;
+}
+
 function avatarPixels(image, [vx, vy, vw, vh]) {
   let count = 0;
   for (let y = Math.ceil(vy) + 40; y < vy + vh - 4; y += 2) {
@@ -202,15 +217,7 @@ describe("avatars in the page", () => {
   });
 
   test("a .gltf picked with its .bin opens; alone, it names the missing .bin", async () => {
-    // public/default-avatar.glb split into mannequin.gltf + mannequin.bin.
-    const glb = readFileSync(fileURLToPath(new URL("../public/default-avatar.glb", import.meta.url)));
-    const jsonLength = glb.readUInt32LE(12);
-    const json = JSON.parse(glb.subarray(20, 20 + jsonLength).toString("utf8"));
-    const bin = glb.subarray(20 + jsonLength + 8);
-    json.buffers = [{ byteLength: bin.length, uri: "mannequin.bin" }];
-    const dir = mkdtempSync(join(tmpdir(), "stance-gltf-"));
-    writeFileSync(join(dir, "mannequin.gltf"), JSON.stringify(json));
-    writeFileSync(join(dir, "mannequin.bin"), bin);
+    const dir = splitDefaultAvatar();
     const page = await context.newPage();
     const { errors } = await openEditor(context, site.url, page);
     await page.setInputFiles("input[type=file]", join(dir, "mannequin.gltf"));
@@ -229,17 +236,11 @@ describe("avatars in the page", () => {
   test("a texture the browser cannot decode: the import does it over, names the image, and the avatar opens", async () => {
     // The default avatar as a .gltf whose skin shows skin.png, whose bytes are no image: the
     // import that left its pixels to the browser is done again by the importer alone.
-    const glb = readFileSync(fileURLToPath(new URL("../public/default-avatar.glb", import.meta.url)));
-    const jsonLength = glb.readUInt32LE(12);
-    const json = JSON.parse(glb.subarray(20, 20 + jsonLength).toString("utf8"));
-    const bin = glb.subarray(20 + jsonLength + 8);
-    json.buffers = [{ byteLength: bin.length, uri: "mannequin.bin" }];
-    json.images = [{ uri: "skin.png", mimeType: "image/png" }];
-    json.textures = [{ source: 0 }];
-    json.materials[0].pbrMetallicRoughness = { ...json.materials[0].pbrMetallicRoughness, baseColorTexture: { index: 0 } };
-    const dir = mkdtempSync(join(tmpdir(), "stance-gltf-"));
-    writeFileSync(join(dir, "mannequin.gltf"), JSON.stringify(json));
-    writeFileSync(join(dir, "mannequin.bin"), bin);
+    const dir = splitDefaultAvatar((json) => {
+      json.images = [{ uri: "skin.png", mimeType: "image/png" }];
+      json.textures = [{ source: 0 }];
+      json.materials[0].pbrMetallicRoughness = { ...json.materials[0].pbrMetallicRoughness, baseColorTexture: { index: 0 } };
+    });
     // A 4x4 PNG header (what the importer reads first) over pixels no decoder can inflate.
     const chunk = (type, data) => {
       const body = Buffer.concat([Buffer.from(type, "latin1"), data]);

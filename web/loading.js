@@ -1,8 +1,10 @@
 // Opening files and fetched avatars without blocking the page: files are read and fetched
-// with a progress bar, and a worker (load-worker.js) decodes the textures of a glTF, GLB or
-// VRM with the browser's decoders. Once it holds the editor's WebAssembly module it also
-// imports the avatars the editor asks for (stanceHost.importAvatar), so that the main thread
-// only receives the imported avatar; before that (or where no worker can run) the editor
+// with a progress bar. Two Web Workers (load-worker.js) take the work off the main thread:
+// one decodes the base-colour textures of a glTF, GLB or VRM with the browser's decoders;
+// the other, once it holds the editor's WebAssembly module, imports the avatars the editor
+// asks for (stanceHost.importAvatar) meanwhile, leaving those textures' pixels to follow, so
+// that the main thread only receives the imported avatar and uploads it to the GPU in tasks
+// of its own (stanceHost.uploadAvatar). Before that (or where no worker can run) the editor
 // receives the file with its decoded pixels and imports it itself.
 
 import { isModel } from "./model-files.js";

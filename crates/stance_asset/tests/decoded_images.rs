@@ -53,6 +53,17 @@ fn blue(width: u32, height: u32) -> DecodedImage {
     }
 }
 
+/// The default options with textures of at most `side` pixels a side.
+fn side_limit(side: u32) -> LoadOptions {
+    LoadOptions {
+        limits: Limits {
+            max_texture_side: side,
+            ..Limits::default()
+        },
+        ..LoadOptions::default()
+    }
+}
+
 fn load(
     file: &[u8],
     decoded: &[DecodedImage],
@@ -104,14 +115,7 @@ fn decoded_pixels_of_the_wrong_size_are_set_aside_and_the_file_decoded() {
 
 #[test]
 fn a_decoded_image_beyond_the_side_limit_is_refused_by_name() {
-    let options = LoadOptions {
-        limits: Limits {
-            max_texture_side: 4,
-            ..Limits::default()
-        },
-        ..LoadOptions::default()
-    };
-    let error = load(&gltf_with_image(true), &[blue(8, 1)], &options).unwrap_err();
+    let error = load(&gltf_with_image(true), &[blue(8, 1)], &side_limit(4)).unwrap_err();
     assert!(error.to_string().contains("image 0"), "{error}");
 }
 
@@ -153,13 +157,7 @@ fn an_image_to_follow_comes_with_its_size_and_no_pixels_and_fills_to_the_decoded
 
 #[test]
 fn an_image_to_follow_is_checked_against_the_limits_as_a_decoded_one() {
-    let small = LoadOptions {
-        limits: Limits {
-            max_texture_side: 1,
-            ..Limits::default()
-        },
-        ..LoadOptions::default()
-    };
+    let small = side_limit(1);
     // Over the side limit, or a header no decoder reads: drawn white with the reason, as
     // when the importer decodes the image itself; no pixels are left to follow.
     for (file, options) in [
