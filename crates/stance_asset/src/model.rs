@@ -210,6 +210,39 @@ pub struct Primitive {
     pub material: Option<usize>,
 }
 
+impl Primitive {
+    /// Attributes one per vertex (or none), triangles whose corners are vertices, a material
+    /// among `materials`.
+    fn check_structure(&self, materials: usize) -> Result<(), String> {
+        let count = self.positions.len();
+        for (what, len) in [
+            ("normals", self.normals.len()),
+            ("uvs", self.uvs.len()),
+            ("joints", self.joints.len()),
+            ("weights", self.weights.len()),
+        ] {
+            if len != 0 && len != count {
+                return Err(format!("{len} {what} for {count} vertices"));
+            }
+        }
+        if !self.indices.len().is_multiple_of(3) {
+            return Err(format!(
+                "{} indices, not whole triangles",
+                self.indices.len()
+            ));
+        }
+        if let Some(&corner) = self.indices.iter().find(|&&i| i as usize >= count) {
+            return Err(format!("a corner is vertex {corner} of {count}"));
+        }
+        if let Some(material) = self.material
+            && material >= materials
+        {
+            return Err(format!("material {material} of {materials}"));
+        }
+        Ok(())
+    }
+}
+
 /// A mesh: its primitives.
 #[derive(Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct Mesh {
@@ -265,6 +298,82 @@ pub struct Avatar {
 }
 
 impl Avatar {
+    /// Checks what the importer guarantees of an avatar's structure and what its users index
+    /// by: node, mesh, skin, material and texture indices in range, a primitive's attributes
+    /// one per vertex (or none) and its triangles' corners among its vertices, animation
+    /// channels valid and on existing nodes, mapped joints among the nodes. An avatar that
+    /// did not come from the importer (the bytes of an [`crate::AvatarTransfer`]) is checked
+    /// before use. The error names the first problem.
+    pub fn check_structure(&self) -> Result<(), String> {
+        let n = self.nodes.len();
+        let in_range = |what: &str, index: usize, count: usize| {
+            if index < count {
+                Ok(())
+            } else {
+                Err(format!("{what} is {index}, beyond the {count} there are"))
+            }
+        };
+        for &root in &self.scene_roots {
+            in_range("a scene root", root, n)?;
+        }
+        for (i, node) in self.nodes.iter().enumerate() {
+            let what = |field: &str| format!("node {i}'s {field}");
+            if let Some(parent) = node.parent {
+                in_range(&what("parent"), parent, n)?;
+            }
+            for &child in &node.children {
+                in_range(&what("child"), child, n)?;
+            }
+            if let Some(mesh) = node.mesh {
+                in_range(&what("mesh"), mesh, self.meshes.len())?;
+            }
+            if let Some(skin) = node.skin {
+                in_range(&what("skin"), skin, self.skins.len())?;
+            }
+        }
+        for (i, skin) in self.skins.iter().enumerate() {
+            for &joint in &skin.joints {
+                in_range(&format!("skin {i}'s joint"), joint, n)?;
+            }
+        }
+        for (i, material) in self.materials.iter().enumerate() {
+            if let Some(texture) = material.base_color_texture {
+                in_range(
+                    &format!("material {i}'s texture"),
+                    texture,
+                    self.textures.len(),
+                )?;
+            }
+        }
+        for (m, mesh) in self.meshes.iter().enumerate() {
+            for (p, primitive) in mesh.primitives.iter().enumerate() {
+                primitive
+                    .check_structure(self.materials.len())
+                    .map_err(|e| format!("mesh {m} primitive {p}: {e}"))?;
+            }
+        }
+        for (a, animation) in self.animations.iter().enumerate() {
+            for (c, channel) in animation.channels.iter().enumerate() {
+                in_range(
+                    &format!("animation {a} channel {c}'s node"),
+                    channel.node,
+                    n,
+                )?;
+                channel
+                    .validate()
+                    .map_err(|e| format!("animation {a} channel {c}: {e}"))?;
+            }
+        }
+        for joint in self.mapping.matches() {
+            in_range(
+                &format!("the mapped joint {}", joint.hanim),
+                joint.source,
+                n,
+            )?;
+        }
+        Ok(())
+    }
+
     /// World transforms (file space) from per-node local transforms.
     pub fn world_from_locals(&self, locals: &[Trs]) -> Vec<DMat4> {
         let mut world = vec![DMat4::IDENTITY; self.nodes.len()];

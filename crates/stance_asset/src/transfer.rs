@@ -52,6 +52,9 @@ impl AvatarTransfer {
             }
             Err(error) => return Err(AssetError::Transfer(error.to_string())),
         };
+        avatar
+            .check_structure()
+            .map_err(|e| AssetError::Transfer(format!("the avatar is inconsistent: {e}")))?;
         if self.pixels.len() != avatar.textures.len() {
             return Err(AssetError::Transfer(format!(
                 "{} textures but pixels for {}",
@@ -256,6 +259,22 @@ mod tests {
                 .to_string()
                 .contains("is 2x3 but has 23 bytes")
         );
+        // Bytes that decode but do not hang together (found by the transfer's fuzz target:
+        // a node's parent beyond the nodes).
+        let mut avatar = textured();
+        avatar.nodes[1].parent = Some(avatar.nodes.len() + 42);
+        let error = AvatarTransfer::new(avatar)
+            .unwrap()
+            .into_avatar()
+            .unwrap_err();
+        assert!(error.to_string().contains("node 1's parent"), "{error}");
+        let mut avatar = textured();
+        avatar.meshes[0].primitives[0].indices[0] = u32::MAX;
+        let error = AvatarTransfer::new(avatar)
+            .unwrap()
+            .into_avatar()
+            .unwrap_err();
+        assert!(error.to_string().contains("mesh 0 primitive 0"), "{error}");
         // Every byte flipped in turn, over a stride: an error or an avatar, never a panic.
         for at in (0..transfer.avatar.len()).step_by(997) {
             let mut bad = transfer.clone();
