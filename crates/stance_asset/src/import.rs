@@ -224,7 +224,7 @@ pub fn import(
     bytes: &[u8],
     options: &LoadOptions,
     resolve: &mut Resolver<'_>,
-    host: crate::HostImages,
+    images: crate::HostImages,
 ) -> Result<Avatar, AssetError> {
     let limits = &options.limits;
     let (json_bytes, bin, is_glb) = split_container(bytes, limits)?;
@@ -276,8 +276,8 @@ pub fn import(
         limits,
         decoded_bytes: 0,
         warnings: Vec::new(),
-        decoded_images: host.decoded,
-        images_to_follow: host.to_follow,
+        decoded_images: images.decoded,
+        images_to_follow: images.to_follow,
     };
     ctx.load_buffers(resolve)?;
 

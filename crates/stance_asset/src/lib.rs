@@ -187,34 +187,16 @@ pub struct HostImages {
     pub to_follow: Vec<usize>,
 }
 
-/// [`load_avatar_with`] where some images come decoded: those are used as they are (within
-/// the same size limits; their pixels move into the textures, uncopied), the others are
-/// decoded here. A decoded image of the wrong size is set aside with a warning and the
+/// [`load_avatar_with`] where the caller decodes some images itself: those given decoded
+/// are used as they are (within the same size limits; their pixels move into the textures,
+/// uncopied), those to follow come without pixels (see [`HostImages::to_follow`]), the others
+/// are decoded here. A decoded image of the wrong size is set aside with a warning and the
 /// file's own bytes are decoded instead.
 pub fn load_avatar_with_images(
     bytes: &[u8],
     options: &LoadOptions,
     resolve: &mut Resolver<'_>,
-    decoded: Vec<DecodedImage>,
+    images: HostImages,
 ) -> Result<Avatar, AssetError> {
-    load_avatar_with_host_images(
-        bytes,
-        options,
-        resolve,
-        HostImages {
-            decoded,
-            to_follow: Vec::new(),
-        },
-    )
-}
-
-/// [`load_avatar_with_images`], where the pixels of some images follow later (see
-/// [`HostImages::to_follow`]).
-pub fn load_avatar_with_host_images(
-    bytes: &[u8],
-    options: &LoadOptions,
-    resolve: &mut Resolver<'_>,
-    host: HostImages,
-) -> Result<Avatar, AssetError> {
-    import::import(bytes, options, resolve, host)
+    import::import(bytes, options, resolve, images)
 }

@@ -13,7 +13,7 @@ mod common;
 use serde_json::json;
 use stance_asset::{
     AssetError, AvatarTransfer, DecodedImage, HostImages, Limits, LoadOptions,
-    load_avatar_with_host_images, load_avatar_with_images,
+    load_avatar_with_images,
 };
 
 /// The default avatar as a `.gltf` whose first material shows image 0: a 2x2 red PNG in a
@@ -69,7 +69,11 @@ fn load(
     decoded: &[DecodedImage],
     options: &LoadOptions,
 ) -> Result<stance_asset::Avatar, AssetError> {
-    load_avatar_with_images(file, options, &mut |_| None, decoded.to_vec())
+    let images = HostImages {
+        decoded: decoded.to_vec(),
+        ..Default::default()
+    };
+    load_avatar_with_images(file, options, &mut |_| None, images)
 }
 
 #[test]
@@ -120,11 +124,11 @@ fn a_decoded_image_beyond_the_side_limit_is_refused_by_name() {
 }
 
 fn load_following(file: &[u8], options: &LoadOptions) -> Result<stance_asset::Avatar, AssetError> {
-    let host = HostImages {
-        decoded: Vec::new(),
+    let images = HostImages {
         to_follow: vec![0],
+        ..Default::default()
     };
-    load_avatar_with_host_images(file, options, &mut |_| None, host)
+    load_avatar_with_images(file, options, &mut |_| None, images)
 }
 
 #[test]

@@ -82,7 +82,11 @@ fn load_seed(data: &[u8]) -> Result<Avatar, String> {
     } else {
         Vec::new()
     };
-    load_avatar_with_images(file, &options, &mut resolve, decoded).map_err(|e| e.to_string())
+    let images = stance_asset::HostImages {
+        decoded,
+        ..Default::default()
+    };
+    load_avatar_with_images(file, &options, &mut resolve, images).map_err(|e| e.to_string())
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -3,7 +3,7 @@
 
 use glam::Mat4;
 use stance_asset::{
-    Avatar, HostImages, LoadOptions, export_glb, find_resource, load_avatar_with_host_images,
+    Avatar, HostImages, LoadOptions, export_glb, find_resource, load_avatar_with_images,
 };
 use stance_hanim::{
     HumanoidSkeleton, LevelOfArticulation, Mapping, SkeletonOptions, build_skeleton,
@@ -75,15 +75,14 @@ impl LoadedAvatar {
     pub fn import(
         bytes: &[u8],
         resources: &[(String, Vec<u8>)],
-        host: HostImages,
+        images: HostImages,
     ) -> Result<ImportedAvatar, String> {
         let mut resolve = |uri: &str| find_resource(resources, uri).map(<[u8]>::to_vec);
         // (Images whose pixels follow count where the host fills them.)
-        let images_from_host = host.decoded.len();
+        let images_from_host = images.decoded.len();
         let started = web_time::Instant::now();
-        let avatar =
-            load_avatar_with_host_images(bytes, &LoadOptions::default(), &mut resolve, host)
-                .map_err(|error| error.to_string())?;
+        let avatar = load_avatar_with_images(bytes, &LoadOptions::default(), &mut resolve, images)
+            .map_err(|error| error.to_string())?;
         Ok(ImportedAvatar {
             avatar,
             import_ms: started.elapsed().as_secs_f64() * 1e3,

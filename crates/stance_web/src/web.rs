@@ -189,11 +189,11 @@ pub fn import_avatar_file(
     let (_, main) = files.next().ok_or("no file")?;
     let resources: Vec<(String, Vec<u8>)> =
         files.map(|(name, part)| (name, part.to_vec())).collect();
-    let host = stance_asset::HostImages {
+    let images = stance_asset::HostImages {
         decoded: decoded_images(&indices, &widths, &heights, &rgba).unwrap_or_default(),
         to_follow: to_follow.iter().map(|&i| i as usize).collect(),
     };
-    let imported = LoadedAvatar::import(main, &resources, host)?;
+    let imported = LoadedAvatar::import(main, &resources, images)?;
     let textures: Vec<u32> = imported
         .avatar
         .textures
@@ -325,18 +325,23 @@ impl WebHandle {
         if let Some(mut app) = self.runner.app_mut::<StanceApp>() {
             let can_wait = app.receive_between_frames(message);
             drop(app);
-            if !can_wait && let Some(context) = self.context.borrow().as_ref() {
-                context.request_repaint();
+            if !can_wait {
+                self.request_frame();
             }
         } else {
             self.send(message);
         }
     }
 
+    /// Queues `message` for the editor's next frame, and asks for that frame.
     fn send(&self, message: HostMessage) {
         if let Some(sender) = self.inbox.borrow().as_ref() {
             let _ = sender.send(message);
         }
+        self.request_frame();
+    }
+
+    fn request_frame(&self) {
         if let Some(context) = self.context.borrow().as_ref() {
             context.request_repaint();
         }
@@ -402,9 +407,7 @@ impl WebHandle {
             return false;
         };
         let queued = self.accessibility.push(&id, action);
-        if let Some(context) = self.context.borrow().as_ref() {
-            context.request_repaint();
-        }
+        self.request_frame();
         queued
     }
 
@@ -459,8 +462,8 @@ impl WebHandle {
             .runner
             .app_mut::<StanceApp>()
             .is_some_and(|mut app| app.upload_avatar_task());
-        if !more && let Some(context) = self.context.borrow().as_ref() {
-            context.request_repaint();
+        if !more {
+            self.request_frame();
         }
         more
     }

@@ -19,7 +19,7 @@
 use libfuzzer_sys::fuzz_target;
 use stance_asset::{
     AvatarTransfer, DecodedImage, HostImages, Limits, LoadOptions, clip_from_animation,
-    export_glb, find_resource, load_avatar, load_avatar_with_host_images,
+    export_glb, find_resource, load_avatar, load_avatar_with_images,
 };
 
 fuzz_target!(|data: &[u8]| {
@@ -71,8 +71,8 @@ fuzz_target!(|data: &[u8]| {
         Vec::new()
     };
     let to_follow = if selector & 8 != 0 { vec![2] } else { Vec::new() };
-    let host = HostImages { decoded, to_follow };
-    let mut avatar = match load_avatar_with_host_images(file, &options, &mut resolve, host) {
+    let images = HostImages { decoded, to_follow };
+    let mut avatar = match load_avatar_with_images(file, &options, &mut resolve, images) {
         Ok(avatar) => avatar,
         Err(e) => {
             assert!(!e.to_string().trim().is_empty(), "empty error: {e:?}");

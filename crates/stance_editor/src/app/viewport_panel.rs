@@ -358,9 +358,9 @@ impl ViewportPanel {
 
     /// Puts on the GPU what the body is drawn with: a loaded avatar's mesh, else the
     /// mannequin's figure (made again when the level of articulation changes or after an
-    /// avatar took its place). An avatar goes up a few MB of texture at a time for at most
-    /// [`UPLOAD_MS_PER_SHARE`] a frame (or a task of the host's), so that no frame carries the whole load; its body
-    /// shows as capsules meanwhile.
+    /// avatar took its place). An avatar goes up a few MB of texture at a time, at most
+    /// [`UPLOAD_MS_PER_SHARE`] a frame (or in the host's tasks), so that no frame carries the
+    /// whole load; its body shows as capsules meanwhile.
     fn upload_meshes(
         &mut self,
         ctx: &egui::Context,
@@ -369,10 +369,6 @@ impl ViewportPanel {
     ) {
         if self.renderer.is_none() || frame.wgpu_render_state().is_none() {
             return;
-        }
-        if std::mem::take(&mut self.upload_finished) {
-            self.avatar_uploaded = true;
-            self.figure = None;
         }
         self.begin_avatar_upload(model);
         if self
@@ -387,10 +383,11 @@ impl ViewportPanel {
                 ctx.request_repaint();
             }
             self.upload_share(false);
-            if std::mem::take(&mut self.upload_finished) {
-                self.avatar_uploaded = true;
-                self.figure = None;
-            }
+        }
+        // Finished by this frame's share or by the host's tasks since the last frame.
+        if std::mem::take(&mut self.upload_finished) {
+            self.avatar_uploaded = true;
+            self.figure = None;
         }
         let (Some(renderer), Some(render_state)) = (&mut self.renderer, frame.wgpu_render_state())
         else {
@@ -447,6 +444,9 @@ impl ViewportPanel {
         if !renderer.is_uploading_avatar() {
             return false;
         }
+        if flush {
+            self.avatar_upload_tasks += 1;
+        }
         let started = web_time::Instant::now();
         let (most_steps, most_ms) = if flush {
             (usize::MAX, UPLOAD_MS_PER_TASK)
@@ -475,7 +475,6 @@ impl ViewportPanel {
     /// [`HostHooks::upload_in_tasks`](crate::HostHooks::upload_in_tasks)): true while more is
     /// left; the caller asks for a frame once it is done.
     pub(super) fn upload_task(&mut self) -> bool {
-        self.avatar_upload_tasks += 1;
         self.upload_share(true)
     }
 

@@ -60,11 +60,11 @@ impl EditorModel {
             Err(request) => {
                 // Whatever was awaited, this file is the last one asked for.
                 self.pending_import = None;
-                let host = stance_asset::HostImages {
+                let images = stance_asset::HostImages {
                     decoded,
-                    to_follow: Vec::new(),
+                    ..Default::default()
                 };
-                let imported = LoadedAvatar::import(&request.bytes, &request.resources, host);
+                let imported = LoadedAvatar::import(&request.bytes, &request.resources, images);
                 self.open_imported_avatar(&name, imported.map(Box::new));
             }
         }
