@@ -22,7 +22,7 @@ const UPLOAD_MS_PER_SHARE: f64 = 12.0;
 const UPLOAD_STEPS_PER_SHARE: usize = (8 << 20) / stance_render::UPLOAD_STEP_BYTES;
 /// The most a host task spends uploading: its writes are submitted step by step (4 MB each), so
 /// the GPU process drains them as they come and the task's time is what it costs.
-const UPLOAD_MS_PER_TASK: f64 = 30.0;
+const UPLOAD_MS_PER_TASK: f64 = 16.0;
 /// While the host steps an avatar's upload in its own tasks, a frame every so often steps it
 /// too (should the host stop), in seconds.
 const UPLOAD_FALLBACK_S: f32 = 0.5;
