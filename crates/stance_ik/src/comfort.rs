@@ -238,16 +238,39 @@ fn range_wall(x: f64) -> (f64, f64) {
 /// How far into a DOF's range (a share of the range) [`range_wall`] is above 1e-16: 0.24.
 const RANGE_WALL_DEPTH: f64 = 1.2 / 5.0;
 
-/// `ln(1 + e^x)` and its derivative (the logistic), without overflow.
-fn softplus(x: f64) -> (f64, f64) {
-    let value = if x > 30.0 { x } else { x.exp().ln_1p() };
-    (value, logistic(x).0)
+/// One edge of an angle band at `x` (the angle past the edge, in widths): the logistic step
+/// and the softplus ramps on either side, from one exponential and one logarithm.
+struct BandEdge {
+    x: f64,
+    /// `s(x) = 1 / (1 + e^-x)`.
+    step: f64,
+    /// `s'(x) = s (1 - s)`.
+    slope: f64,
+    /// `ln(1 + e^-x)`, without overflow.
+    below: f64,
 }
 
-/// The logistic step of an angle band and its derivative.
-fn logistic(x: f64) -> (f64, f64) {
-    let s = 1.0 / (1.0 + (-x).exp());
-    (s, s * (1.0 - s))
+impl BandEdge {
+    fn at(x: f64) -> Self {
+        let e = (-x).exp();
+        let step = 1.0 / (1.0 + e);
+        Self {
+            x,
+            step,
+            slope: step * (1.0 - step),
+            below: if e.is_finite() { e.ln_1p() } else { -x },
+        }
+    }
+
+    /// `ln(1 + e^x)` and its derivative `s(x)`.
+    fn softplus(&self) -> (f64, f64) {
+        (self.x + self.below, self.step)
+    }
+
+    /// `ln(1 + e^-x)` and its derivative in `-x`, `s(-x)`.
+    fn softplus_below(&self) -> (f64, f64) {
+        (self.below, 1.0 - self.step)
+    }
 }
 
 impl ComfortModel {
@@ -364,21 +387,27 @@ impl ComfortModel {
         skeleton: &Skeleton,
         frames: &Frames,
         values: &[f64],
-        gradient: Option<&mut [f64]>,
+        mut gradient: Option<&mut [f64]>,
     ) -> f64 {
         let joints = skeleton.joints();
         let kinds = skeleton.dof_kinds();
         let nj = joints.len();
+        let w = self.effort_weight;
         let mut cost = 0.0;
-        // Per joint: dE/d tau_j (G) and the axis term sum_d e_d x (dE/d e_d).
-        let mut g_tau = vec![DVec3::ZERO; nj];
-        let mut axis_term = vec![DVec3::ZERO; nj];
-        let mut r = vec![DVec3::ZERO; nj];
-        // Per DOF: d(share^2)/dq through the strength's angle curve.
-        let mut own = Vec::new();
+        // Per joint (with a gradient only): dE/d tau_j (G), the axis term
+        // sum_d e_d x (dE/d e_d), r_j, and the sums down (chain) and up (below) the tree.
+        let per = if gradient.is_some() { nj } else { 0 };
+        let mut buffer = vec![DVec3::ZERO; 5 * per];
+        let (g_tau, rest) = buffer.split_at_mut(per);
+        let (axis_term, rest) = rest.split_at_mut(per);
+        let (r, rest) = rest.split_at_mut(per);
+        let (chain_g, below) = rest.split_at_mut(per);
         for (j, joint) in joints.iter().enumerate() {
-            r[j] = frames.subtree_moment[j] - frames.subtree_mass[j] * frames.joint_position[j];
-            let tau = r[j].cross(GRAVITY);
+            let rj = frames.subtree_moment[j] - frames.subtree_mass[j] * frames.joint_position[j];
+            let tau = rj.cross(GRAVITY);
+            if let Some(slot) = r.get_mut(j) {
+                *slot = rj;
+            }
             for d in joint.dof_range() {
                 let Some(Some(strength)) = self.strength.get(d) else {
                     continue;
@@ -396,8 +425,12 @@ impl ComfortModel {
                 }
                 let share = t / s;
                 cost += share * share;
+                let Some(gradient) = gradient.as_deref_mut() else {
+                    continue;
+                };
+                // Through the strength's angle curve.
                 if slope != 0.0 {
-                    own.push((d, -2.0 * share * share / s * slope));
+                    gradient[d] += w * (-2.0 * share * share / s * slope);
                 }
                 // d(share^2) = 2 share / s (d tau . e + tau . d e).
                 let k = 2.0 * share / s;
@@ -408,15 +441,12 @@ impl ComfortModel {
         let Some(gradient) = gradient else {
             return cost;
         };
-        let w = self.effort_weight;
         // Down the tree: the sum of G_j over the chain from the root to each joint (inclusive).
-        let mut chain_g = vec![DVec3::ZERO; nj];
         for (j, joint) in joints.iter().enumerate() {
             chain_g[j] = g_tau[j] + joint.parent.map_or(DVec3::ZERO, |p| chain_g[p]);
         }
         // Up the tree: the sum over the strict subtree of the rigid-motion vectors
         // U_j = g (G_j . r_j) - G_j (r_j . g) + axis_term_j.
-        let mut below = vec![DVec3::ZERO; nj];
         for j in (0..nj).rev() {
             if let Some(p) = joints[j].parent {
                 let own =
@@ -436,9 +466,6 @@ impl ComfortModel {
                     gradient[d] += w * frames.dof_axis[d].dot(v);
                 }
             }
-        }
-        for (d, g) in own {
-            gradient[d] += w * g;
         }
         cost
     }
@@ -496,13 +523,17 @@ impl ComfortModel {
             let mut slope = 0.0;
             for &(edge, step) in &band.edges {
                 let x = (phi - edge) / width;
-                let (s, ds) = logistic(x);
-                cost += step * s;
-                slope += step * ds / width;
+                let edge = BandEdge::at(x);
+                cost += step * edge.step;
+                slope += step * edge.slope / width;
                 if band.ramp > 0.0 {
                     // The costly side: above a rising edge, below a falling one.
+                    let (soft, dsoft) = if step >= 0.0 {
+                        edge.softplus()
+                    } else {
+                        edge.softplus_below()
+                    };
                     let side = step.signum();
-                    let (soft, dsoft) = softplus(side * x);
                     cost += band.ramp * step.abs() * soft;
                     slope += band.ramp * step.abs() * dsoft * side / width;
                 }

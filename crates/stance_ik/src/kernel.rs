@@ -52,6 +52,9 @@ pub(crate) struct Kernel {
     step: Vec<f64>,
     red: Vec<f64>,
     budget: f64,
+    /// Where the last level stepped was a projection level that did not extend the basis:
+    /// its index and the step budget left before it (see [`project_last_again`]).
+    last_projection: Option<(usize, f64)>,
 }
 
 #[inline]
@@ -254,19 +257,17 @@ pub fn prioritized_step(
     kn.theta.clear();
     kn.theta.resize(n, 0.0);
     kn.budget = params.max_dof_step;
+    kn.last_projection = None;
     let last_with_rows = levels.iter().rposition(has_work);
     for (k, level) in levels.iter().enumerate() {
         let m = level.dx.len();
         let usable = has_work(level) && level.jacobian_t.shape() == (n, m) && kn.rank < nf;
         if usable {
-            level_step(
-                kn,
-                level,
-                n,
-                params,
-                fixed,
-                Some(k) != last_with_rows || projectors.is_some(),
-            );
+            let extend = Some(k) != last_with_rows || projectors.is_some();
+            if level.projection && !extend {
+                kn.last_projection = Some((k, kn.budget));
+            }
+            level_step(kn, level, n, params, fixed, extend);
         }
         if let Some(p) = projectors.as_deref_mut() {
             p.push(kn.projector(n));
@@ -275,6 +276,59 @@ pub fn prioritized_step(
     }
     *ws.partial_mut() = partial;
     DVector::from_column_slice(&ws.kernel.theta)
+}
+
+/// After [`prioritized_step`] whose last level with a step is a projection level (the
+/// comfort task): that level's share taken again with the DOF `blocked` also held (their unit
+/// rows appended to the basis of the levels above: a share that stays off them and out of the
+/// way of the levels above), on top of the step of the levels above, which stays as it was.
+/// Returns the whole step; `None` where the workspace holds no such step. Cheaper than
+/// clamping the blocked DOF and taking every level's step again.
+pub(crate) fn project_last_again(
+    levels: &[LevelSystem],
+    n: usize,
+    params: &StepParams,
+    blocked: &[usize],
+    ws: &mut StepWorkspace,
+) -> Option<DVector<f64>> {
+    let (k, budget) = ws.kernel.last_projection?;
+    let level = levels.get(k)?;
+    let above = ws.partial_steps().get(k.checked_sub(1)?)?.clone();
+    let kn = &mut ws.kernel;
+    let mut support: Vec<usize> = blocked
+        .iter()
+        .copied()
+        .filter(|&d| kn.pos.get(d).is_some_and(|&p| p != NONE))
+        .collect();
+    support.sort_unstable();
+    support.dedup();
+    if above.len() != n || kn.theta.len() != n || support.is_empty() {
+        return None;
+    }
+    let mut jacobian_t = DMatrix::zeros(n, support.len());
+    for (c, &d) in support.iter().enumerate() {
+        jacobian_t[(d, c)] = 1.0;
+    }
+    let held = LevelSystem {
+        level: level.level,
+        jacobian_t,
+        dx: DVector::zeros(support.len()),
+        support,
+        damping: None,
+        projection: true,
+    };
+    kn.theta.copy_from_slice(above.as_slice());
+    kn.budget = budget;
+    // A projection level with a zero `dx`: no step, the basis extended by the held DOF.
+    level_step(kn, &held, n, params, None, true);
+    if kn.rank < kn.free.len() {
+        level_step(kn, level, n, params, None, false);
+    }
+    let step = DVector::from_column_slice(&kn.theta);
+    if let Some(last) = ws.partial_mut().get_mut(k) {
+        last.copy_from(&step);
+    }
+    Some(step)
 }
 
 /// A projection level (a cost's gradient) with a zero step adds nothing: a comfort level
@@ -344,19 +398,24 @@ fn level_step(
             *x = src[d];
         }
     }
-    // e = dx - J (theta + fixed): theta lives on the free DOF, `fixed` (the moves of clamped
-    // DOF onto their limits) on the clamped ones, whose columns are read from the full J^T.
-    kn.y.clear();
-    kn.y.extend(kn.sup.iter().map(|&d| kn.theta[d]));
-    kn.e.clear();
-    kn.e.extend_from_slice(level.dx.as_slice());
     kn.col_norms.clear();
     for c in 0..m {
         let col = &kn.jts[c * s..(c + 1) * s];
-        kn.e[c] -= dot(col, &kn.y);
         kn.col_norms.push(dot(col, col).sqrt());
     }
-    if let Some(fixed) = fixed {
+    // e = dx - J (theta + fixed): theta lives on the free DOF, `fixed` (the moves of clamped
+    // DOF onto their limits) on the clamped ones, whose columns are read from the full J^T. A
+    // projection level's rows are scaled by `dx` as they are, never solved for: no `e`.
+    kn.e.clear();
+    if !level.projection {
+        kn.y.clear();
+        kn.y.extend(kn.sup.iter().map(|&d| kn.theta[d]));
+        kn.e.extend_from_slice(level.dx.as_slice());
+        for c in 0..m {
+            kn.e[c] -= dot(&kn.jts[c * s..(c + 1) * s], &kn.y);
+        }
+    }
+    if let Some(fixed) = fixed.filter(|_| !level.projection) {
         let clamped_rows = |d: &usize| kn.pos[*d] == NONE && fixed[*d] != 0.0;
         let support: &[usize] = if level.support.is_empty() {
             &[]
@@ -423,8 +482,10 @@ fn level_step(
             }
         }
     }
-    // G = Jh Jh^T = Z[r.., :]^T Z[r.., :] (= J J^T on the support when r = 0).
-    for a in 0..m {
+    // G = Jh Jh^T = Z[r.., :]^T Z[r.., :] (= J J^T on the support when r = 0); a projection
+    // level needs it only to extend the basis.
+    let need_g = !level.projection || extend;
+    for a in (0..m).filter(|_| need_g) {
         for b in a..m {
             let v = if r == 0 {
                 dot(&kn.jts[a * s..(a + 1) * s], &kn.jts[b * s..(b + 1) * s])

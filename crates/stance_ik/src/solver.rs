@@ -19,7 +19,7 @@ pub use settings::{
     Backend, Clock, Iteration, SolverSettings, TEXTBOOK_ANGULAR_STEP, TEXTBOOK_LINEAR_STEP,
 };
 
-use crate::kernel::prioritized_step;
+use crate::kernel::{prioritized_step, project_last_again};
 use crate::limb::{Limb, LimbGoal};
 use crate::posture::clamp_and_wrap;
 use crate::priority::{Damping, LevelSystem, StepWorkspace, prioritized_step_nalgebra};
@@ -52,6 +52,47 @@ struct RestartStage {
     max_angular_step: f64,
     /// From the start posture (else from the best posture so far).
     from_start: bool,
+}
+
+/// The least share of a comfort level's step kept by shortening it to stay inside the joint
+/// limits; below it the DOF in the way are clamped and the step is taken again.
+const COMFORT_SHARE_KEPT: f64 = 0.5;
+
+/// The largest `alpha` (above 1 when nothing is in the way) with
+/// `values + above + alpha * share` inside the limits on the unclamped DOF, and the DOF that
+/// would cut it below [`COMFORT_SHARE_KEPT`]. `None` where `values + above` is outside.
+fn within_limits(
+    values: &[f64],
+    above: &DVector<f64>,
+    share: &DVector<f64>,
+    clamped: &[bool],
+    lo: &[f64],
+    hi: &[f64],
+) -> Option<(f64, Vec<usize>)> {
+    let mut alpha: f64 = 2.0;
+    let mut blocking = Vec::new();
+    for i in 0..values.len() {
+        if clamped[i] {
+            continue;
+        }
+        let base = values[i] + above[i];
+        if !(lo[i] <= base && base <= hi[i]) {
+            return None;
+        }
+        let next = base + share[i];
+        let room = if next > hi[i] {
+            (hi[i] - base) / share[i]
+        } else if next < lo[i] {
+            (lo[i] - base) / share[i]
+        } else {
+            continue;
+        };
+        alpha = alpha.min(room);
+        if room < COMFORT_SHARE_KEPT {
+            blocking.push(i);
+        }
+    }
+    Some((alpha, blocking))
 }
 
 /// Cached per-solve task layout.
@@ -108,6 +149,10 @@ pub struct Solver {
     comfort_gain: f64,
     /// Whether the last linearisation let a comfort level step.
     comfort_stepping: bool,
+    /// Whether the comfort levels' residuals hold their cost at a posture of this run: a
+    /// comfort level waiting for the levels above keeps that cost instead of weighing it
+    /// again (see `linearize_at_frames`).
+    comfort_known: bool,
 }
 
 impl Solver {
@@ -222,6 +267,7 @@ impl Solver {
             if stage.from_start {
                 values.copy_from_slice(&initial);
             }
+            self.comfort_known = false;
             self.linearize(skeleton, tasks, values);
             let next = self.run(skeleton, tasks, values, clock, start);
             self.settings = saved;
@@ -245,6 +291,7 @@ impl Solver {
             clamped_dofs,
             analytic_restarts,
         } = run;
+        self.weigh_comfort(skeleton, tasks, values);
         let levels = self.level_reports(&before);
         let gave_way = levels
             .iter()
@@ -335,6 +382,8 @@ impl Solver {
         let mut analytic_restarts = Vec::new();
         let tol = self.settings.tolerance;
         let comfort = self.layout.iter().any(|l| l.comfort);
+        // The comfort cost where the last comfort step not yet judged started.
+        let mut stepped_from: Option<f64> = None;
         let status = loop {
             // With a comfort level, "met" is not the end: the cost falls while it can.
             if self.all_met(tol) && (!comfort || flat_iterations >= COMFORT_STALL_WINDOW) {
@@ -349,13 +398,17 @@ impl Solver {
                 break SolveStatus::TimeBudget;
             }
             // Whether this iteration's comfort level steps (see `linearize_at_frames`).
-            let stepping = self.comfort_stepping;
-            let cost_before = if stepping { self.comfort_cost() } else { 0.0 };
+            if self.comfort_stepping && stepped_from.is_none() {
+                stepped_from = Some(self.comfort_cost());
+            }
             let (moved, clamped) = self.iteration(skeleton, tasks, values);
-            if stepping {
-                // A gradient step with an adaptive length: longer while the cost falls, half
-                // as long when it rose.
-                self.comfort_gain = if self.comfort_cost() < cost_before {
+            // A gradient step with an adaptive length: longer while the cost falls, half as
+            // long when it rose. Judged where the cost is next weighed, with the comfort level
+            // stepping again (the iterations between pull back the drift of the levels above).
+            if self.comfort_stepping
+                && let Some(before) = stepped_from.take()
+            {
+                self.comfort_gain = if self.comfort_cost() < before {
                     (self.comfort_gain * COMFORT_GAIN_UP).min(COMFORT_GAIN_MAX)
                 } else {
                     (self.comfort_gain * 0.5).max(COMFORT_GAIN_MIN)
@@ -471,6 +524,7 @@ impl Solver {
             let solution = limb.solve_within_limits(base, &goal, preferred);
             limb.apply_values(&solution, values);
             self.clamp_free(skeleton, values);
+            self.comfort_known = false;
             self.linearize(skeleton, tasks, values);
             return Some(AnalyticRestart {
                 joints,
@@ -605,6 +659,7 @@ impl Solver {
         self.residual_sq = vec![0.0; self.layout.len()];
         self.weighted_sq = vec![0.0; self.layout.len()];
         self.comfort_gain = 1.0;
+        self.comfort_known = false;
         Ok(())
     }
 
@@ -636,6 +691,14 @@ impl Solver {
             .zip(self.residual_sq.iter_mut())
             .zip(self.weighted_sq.iter_mut())
         {
+            if layout.comfort && !above_met && self.comfort_known {
+                // A comfort level waiting for the levels above it (see below) keeps the cost
+                // it had when last weighed: a zero step, which the kernel skips. The levels
+                // above only pull back the drift of its last step; its cost is weighed again
+                // with its gradient once they are met (the solve's report weighs it afresh).
+                sys.dx.fill(0.0);
+                continue;
+            }
             sys.jacobian_t.as_mut_slice().fill(0.0);
             let mut row = 0;
             *res = 0.0;
@@ -699,10 +762,13 @@ impl Solver {
             above_met &= layout.posture_only || *res <= tol2;
         }
         self.comfort_stepping = comfort_stepping;
+        self.comfort_known = true;
         self.residual_sq.clone()
     }
 
     /// Forward kinematics and the squared residual per level only (no Jacobian).
+    /// A comfort level keeps its residual: no candidate is judged by it, and the candidate
+    /// taken is linearised, which weighs it.
     fn evaluate_residuals(&mut self, skeleton: &Skeleton, tasks: &[Task], values: &[f64]) {
         self.frames.update(skeleton, values);
         for ((layout, res), wres) in self
@@ -711,6 +777,9 @@ impl Solver {
             .zip(self.residual_sq.iter_mut())
             .zip(self.weighted_sq.iter_mut())
         {
+            if layout.comfort {
+                continue;
+            }
             *res = 0.0;
             *wres = 0.0;
             for &ti in &layout.tasks {
@@ -833,6 +902,33 @@ impl Solver {
         (moved, clamped)
     }
 
+    /// The comfort levels' residuals weighed afresh at `values` (a waiting comfort level keeps
+    /// the cost it last had, see `linearize_at_frames`).
+    fn weigh_comfort(&mut self, skeleton: &Skeleton, tasks: &[Task], values: &[f64]) {
+        if !self.layout.iter().any(|l| l.comfort) {
+            return;
+        }
+        self.frames.update(skeleton, values);
+        for ((layout, res), wres) in self
+            .layout
+            .iter()
+            .zip(self.residual_sq.iter_mut())
+            .zip(self.weighted_sq.iter_mut())
+            .filter(|((l, _), _)| l.comfort)
+        {
+            *res = 0.0;
+            *wres = 0.0;
+            for &ti in &layout.tasks {
+                let task = &tasks[ti];
+                let r = task
+                    .comfort_cost(skeleton, &self.frames, values)
+                    .unwrap_or(0.0);
+                *res += r * r;
+                *wres += task.weight * r * r;
+            }
+        }
+    }
+
     /// The summed cost of the comfort levels (their residuals), 0 without one.
     fn comfort_cost(&self) -> f64 {
         self.layout
@@ -922,6 +1018,58 @@ impl Solver {
         None
     }
 
+    /// Where the last level is a comfort level that steps and the step of the levels above
+    /// it (within `total`, `step + fixed`) stays inside the joint limits: the whole step with
+    /// the comfort level's share kept inside them too, without taking the levels' steps again.
+    /// The DOF that would cut the share below [`COMFORT_SHARE_KEPT`] are held out of it
+    /// (`project_last_again`), a few times at most; what is still in the way shortens it.
+    /// `None`: clamp and step again.
+    #[allow(clippy::too_many_arguments)]
+    fn comfort_within_limits(
+        &mut self,
+        values: &[f64],
+        (lo, hi): (&[f64], &[f64]),
+        used: usize,
+        scale: Option<&[f64]>,
+        total: &DVector<f64>,
+        clamped: &[bool],
+        params: &crate::StepParams,
+    ) -> Option<DVector<f64>> {
+        const HOLDS: usize = 2;
+        if !(used >= 2 && self.comfort_stepping && self.layout.get(used - 1)?.comfort) {
+            return None;
+        }
+        let partial = self.workspace.partial_steps();
+        let above_step = partial.get(used - 2)?.clone();
+        let unweigh = |i: usize| scale.map_or(1.0, |s| s[i]);
+        // The comfort share of a whole kernel step, in the DOF's own coordinates.
+        let share_of = |step: &DVector<f64>| {
+            DVector::from_fn(total.len(), |i, _| (step[i] - above_step[i]) * unweigh(i))
+        };
+        let mut share = share_of(partial.get(used - 1)?);
+        let above = total - &share;
+        let mut held = Vec::new();
+        for hold in 0..=HOLDS {
+            let (alpha, blocking) = within_limits(values, &above, &share, clamped, lo, hi)?;
+            if alpha >= COMFORT_SHARE_KEPT {
+                return Some(above + share * alpha.min(1.0));
+            }
+            if hold == HOLDS || self.settings.backend != Backend::Kernel {
+                return None;
+            }
+            held.extend(blocking);
+            let systems = if scale.is_some() {
+                &self.weighted[..used]
+            } else {
+                &self.systems[..used]
+            };
+            let step =
+                project_last_again(systems, values.len(), params, &held, &mut self.workspace)?;
+            share = share_of(&step);
+        }
+        None
+    }
+
     /// Prioritized step with the joint-limit clamping loop. Returns (step, clamped DOF count);
     /// `values + step` is inside the limits.
     fn compute_step(
@@ -992,6 +1140,18 @@ impl Solver {
             }
             total = step + &fixed;
             if !has_limits {
+                break;
+            }
+            if let Some(step) = self.comfort_within_limits(
+                values,
+                (lo, hi),
+                used,
+                scale.as_deref(),
+                &total,
+                &clamped,
+                &params,
+            ) {
+                total = step;
                 break;
             }
             let mut new_clamp = false;
