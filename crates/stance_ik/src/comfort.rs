@@ -213,6 +213,7 @@ pub fn dof_torques(skeleton: &Skeleton, frames: &Frames) -> Vec<f64> {
 /// Marler et al. (2005)'s penalty of a DOF at normalised distance `x = (upper - q) / range`
 /// from one end of its range: `(0.5 sin(5 x + 1.571) + 0.5)^100`, 1 at the end, below 1e-2
 /// from 7 % of the range inward; and its derivative in `x`.
+#[inline]
 fn range_wall(x: f64) -> (f64, f64) {
     const FREQUENCY: f64 = 5.0;
     const PHASE: f64 = 1.571;
@@ -226,13 +227,65 @@ fn range_wall(x: f64) -> (f64, f64) {
     if x > RANGE_WALL_DEPTH {
         return (0.0, 0.0);
     }
-    let (sin, cos) = (FREQUENCY * x + PHASE).sin_cos();
-    let base = 0.5 * sin + 0.5;
-    let below = base.powi(POWER - 1);
+    // With h = (5 x + 1.571 - pi / 2) / 2 in [0, 0.61]: the base is
+    // 0.5 cos(2 h) + 0.5 = cos^2 h, and the penalty cos^200 h.
+    let h = 0.5 * (FREQUENCY * x + PHASE - std::f64::consts::FRAC_PI_2);
+    let (sin, cos) = short_sin_cos(h);
+    let power = cos_power_199(cos);
+    // d/dx cos^200 h = -200 cos^199 h sin h * 5 / 2.
     (
-        below * base,
-        f64::from(POWER) * below * 0.5 * FREQUENCY * cos,
+        power * cos,
+        -2.0 * f64::from(POWER) * power * sin * 0.5 * FREQUENCY,
     )
+}
+
+/// `sin h` and `cos h` for `|h| <= 0.65` by their Taylor series to the 17th and 16th powers
+/// (the first term left out is below 2e-17 of 1): a few multiply-adds instead of a call.
+fn short_sin_cos(h: f64) -> (f64, f64) {
+    let h2 = h * h;
+    // 1 / k! for k = 2..17.
+    const F: [f64; 16] = [
+        1.0 / 2.0,
+        1.0 / 6.0,
+        1.0 / 24.0,
+        1.0 / 120.0,
+        1.0 / 720.0,
+        1.0 / 5040.0,
+        1.0 / 40320.0,
+        1.0 / 362_880.0,
+        1.0 / 3_628_800.0,
+        1.0 / 39_916_800.0,
+        1.0 / 479_001_600.0,
+        1.0 / 6_227_020_800.0,
+        1.0 / 87_178_291_200.0,
+        1.0 / 1_307_674_368_000.0,
+        1.0 / 20_922_789_888_000.0,
+        1.0 / 355_687_428_096_000.0,
+    ];
+    let cos = 1.0
+        - h2 * (F[0]
+            - h2 * (F[2]
+                - h2 * (F[4]
+                    - h2 * (F[6] - h2 * (F[8] - h2 * (F[10] - h2 * (F[12] - h2 * F[14])))))));
+    let sin = h
+        * (1.0
+            - h2 * (F[1]
+                - h2 * (F[3]
+                    - h2 * (F[5]
+                        - h2 * (F[7] - h2 * (F[9] - h2 * (F[11] - h2 * (F[13] - h2 * F[15]))))))));
+    (sin, cos)
+}
+
+/// `c^199` by squaring (199 = 128 + 64 + 4 + 2 + 1).
+fn cos_power_199(c: f64) -> f64 {
+    let c2 = c * c;
+    let c4 = c2 * c2;
+    let c8 = c4 * c4;
+    let c16 = c8 * c8;
+    let c32 = c16 * c16;
+    let c64 = c32 * c32;
+    let c128 = c64 * c64;
+    (c128 * c64) * (c4 * (c2 * c))
 }
 
 /// How far into a DOF's range (a share of the range) [`range_wall`] is above 1e-16: 0.24.
@@ -437,16 +490,17 @@ impl ComfortModel {
                 g_tau[j] += k * e;
                 axis_term[j] += e.cross(k * tau);
             }
+            // Down the tree (parents come first): the sum of G over the chain from the root to
+            // the joint (inclusive).
+            if gradient.is_some() {
+                chain_g[j] = g_tau[j] + joint.parent.map_or(DVec3::ZERO, |p| chain_g[p]);
+            }
         }
         let Some(gradient) = gradient else {
             return cost;
         };
-        // Down the tree: the sum of G_j over the chain from the root to each joint (inclusive).
-        for (j, joint) in joints.iter().enumerate() {
-            chain_g[j] = g_tau[j] + joint.parent.map_or(DVec3::ZERO, |p| chain_g[p]);
-        }
-        // Up the tree: the sum over the strict subtree of the rigid-motion vectors
-        // U_j = g (G_j . r_j) - G_j (r_j . g) + axis_term_j.
+        // Up the tree (children come first): the sum over the strict subtree of the
+        // rigid-motion vectors U_j = g (G_j . r_j) - G_j (r_j . g) + axis_term_j.
         for j in (0..nj).rev() {
             if let Some(p) = joints[j].parent {
                 let own =
@@ -457,8 +511,7 @@ impl ComfortModel {
         }
         for (a, joint) in joints.iter().enumerate() {
             // Joints at or above `a`: their torque changes with the subtree of `a` moved.
-            let q = r[a];
-            let chain = chain_g[a];
+            let (q, chain) = (r[a], chain_g[a]);
             let above = GRAVITY * chain.dot(q) - chain * q.dot(GRAVITY);
             let v = above + below[a] + axis_term[a];
             for d in joint.dof_range() {
@@ -481,15 +534,27 @@ impl ComfortModel {
                 continue;
             }
             let q = values.get(d).copied().unwrap_or(0.0);
-            // Inside the middle of the range both walls are 0 (see `range_wall`): no division.
-            if hi[d] - q > RANGE_WALL_DEPTH * span && q - lo[d] > RANGE_WALL_DEPTH * span {
+            // Away from a wall its penalty is 0 (see `range_wall`): only the walls near are
+            // weighed, and the middle of the range costs no division.
+            let (to_upper, to_lower) = (hi[d] - q, q - lo[d]);
+            let near = RANGE_WALL_DEPTH * span;
+            if to_upper > near && to_lower > near {
                 continue;
             }
-            let (upper, d_upper) = range_wall((hi[d] - q) / span);
-            let (lower, d_lower) = range_wall((q - lo[d]) / span);
-            cost += upper + lower;
+            let per_span = 1.0 / span;
+            let mut slope = 0.0;
+            if to_upper <= near {
+                let (upper, d_upper) = range_wall(to_upper * per_span);
+                cost += upper;
+                slope -= d_upper;
+            }
+            if to_lower <= near {
+                let (lower, d_lower) = range_wall(to_lower * per_span);
+                cost += lower;
+                slope += d_lower;
+            }
             if let Some(g) = gradient.as_deref_mut() {
-                g[d] += self.range_weight * (d_lower - d_upper) / span;
+                g[d] += self.range_weight * slope * per_span;
             }
         }
         cost
@@ -570,29 +635,17 @@ impl ComfortModel {
 }
 
 /// The deepest joint that is `a` or an ancestor of `a` and also `b` or an ancestor of `b`.
+/// Every parent comes before its children ([`Skeleton`]): the later of the two is never an
+/// ancestor of the other, so it moves up until they meet.
 fn lowest_common_ancestor(skeleton: &Skeleton, a: usize, b: usize) -> Option<usize> {
-    let depth = |mut j: usize| {
-        let mut n = 0usize;
-        while let Some(p) = skeleton.joints().get(j).and_then(|jt| jt.parent) {
-            j = p;
-            n += 1;
-        }
-        n
-    };
     let parent = |j: usize| skeleton.joints().get(j).and_then(|jt| jt.parent);
-    let (mut a, mut b) = (Some(a), Some(b));
-    let (mut da, mut db) = (depth(a?), depth(b?));
-    while da > db {
-        a = parent(a?);
-        da -= 1;
-    }
-    while db > da {
-        b = parent(b?);
-        db -= 1;
-    }
+    let (mut a, mut b) = (a, b);
     while a != b {
-        a = parent(a?);
-        b = parent(b?);
+        if a > b {
+            a = parent(a)?;
+        } else {
+            b = parent(b)?;
+        }
     }
-    a
+    Some(a)
 }

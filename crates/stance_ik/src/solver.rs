@@ -58,41 +58,73 @@ struct RestartStage {
 /// limits; below it the DOF in the way are clamped and the step is taken again.
 const COMFORT_SHARE_KEPT: f64 = 0.5;
 
-/// The largest `alpha` (above 1 when nothing is in the way) with
-/// `values + above + alpha * share` inside the limits on the unclamped DOF, and the DOF that
-/// would cut it below [`COMFORT_SHARE_KEPT`]. `None` where `values + above` is outside.
-fn within_limits(
-    values: &[f64],
-    above: &DVector<f64>,
-    share: &DVector<f64>,
-    clamped: &[bool],
-    lo: &[f64],
-    hi: &[f64],
-) -> Option<(f64, Vec<usize>)> {
-    let mut alpha: f64 = 2.0;
-    let mut blocking = Vec::new();
-    for i in 0..values.len() {
-        if clamped[i] {
-            continue;
-        }
-        let base = values[i] + above[i];
-        if !(lo[i] <= base && base <= hi[i]) {
-            return None;
-        }
-        let next = base + share[i];
-        let room = if next > hi[i] {
-            (hi[i] - base) / share[i]
-        } else if next < lo[i] {
-            (lo[i] - base) / share[i]
-        } else {
-            continue;
-        };
-        alpha = alpha.min(room);
-        if room < COMFORT_SHARE_KEPT {
-            blocking.push(i);
-        }
+/// A step's joint limits and what is already decided (see `compute_step`): the DOF values,
+/// their limits, the stiffness scale of the kernel's coordinates, the moves of the clamped DOF.
+struct StepLimitsAt<'a> {
+    values: &'a [f64],
+    lo: &'a [f64],
+    hi: &'a [f64],
+    scale: Option<&'a [f64]>,
+    fixed: &'a DVector<f64>,
+    clamped: &'a [bool],
+}
+
+impl StepLimitsAt<'_> {
+    /// DOF `i`'s move by the levels above (`above`, a kernel step) and the last level's share
+    /// (`whole` less `above`), in the DOF's own coordinates.
+    fn moves(&self, above: &DVector<f64>, whole: &DVector<f64>, i: usize) -> (f64, f64) {
+        let unweigh = self.scale.map_or(1.0, |s| s[i]);
+        (
+            above[i] * unweigh + self.fixed[i],
+            (whole[i] - above[i]) * unweigh,
+        )
     }
-    Some((alpha, blocking))
+
+    /// The largest `alpha` (above 1 when nothing is in the way) with the levels above's move
+    /// plus `alpha` times the last level's share inside the limits on the unclamped DOF, and
+    /// the DOF that would cut it below [`COMFORT_SHARE_KEPT`]. `None` where the levels above
+    /// alone leave the limits.
+    fn share_room(&self, above: &DVector<f64>, whole: &DVector<f64>) -> Option<(f64, Vec<usize>)> {
+        let mut alpha: f64 = 2.0;
+        let mut blocking = Vec::new();
+        for i in 0..self.values.len() {
+            if self.clamped[i] {
+                continue;
+            }
+            let (moved, share) = self.moves(above, whole, i);
+            let (lo, hi) = (self.lo[i], self.hi[i]);
+            let base = self.values[i] + moved;
+            if !(lo <= base && base <= hi) {
+                return None;
+            }
+            let next = base + share;
+            let room = if next > hi {
+                (hi - base) / share
+            } else if next < lo {
+                (lo - base) / share
+            } else {
+                continue;
+            };
+            alpha = alpha.min(room);
+            if room < COMFORT_SHARE_KEPT {
+                blocking.push(i);
+            }
+        }
+        Some((alpha, blocking))
+    }
+
+    /// The whole step: the levels above's move plus `alpha` times the last level's share.
+    fn step_with_share(
+        &self,
+        above: &DVector<f64>,
+        whole: &DVector<f64>,
+        alpha: f64,
+    ) -> DVector<f64> {
+        DVector::from_fn(self.values.len(), |i, _| {
+            let (moved, share) = self.moves(above, whole, i);
+            moved + alpha * share
+        })
+    }
 }
 
 /// Cached per-solve task layout.
@@ -1019,53 +1051,45 @@ impl Solver {
     }
 
     /// Where the last level is a comfort level that steps and the step of the levels above
-    /// it (within `total`, `step + fixed`) stays inside the joint limits: the whole step with
-    /// the comfort level's share kept inside them too, without taking the levels' steps again.
-    /// The DOF that would cut the share below [`COMFORT_SHARE_KEPT`] are held out of it
+    /// it stays inside the joint limits: the whole step (`step + fixed`) with the comfort
+    /// level's share kept inside them too, without taking the levels' steps again. The DOF
+    /// that would cut the share below [`COMFORT_SHARE_KEPT`] are held out of it
     /// (`project_last_again`), a few times at most; what is still in the way shortens it.
     /// `None`: clamp and step again.
-    #[allow(clippy::too_many_arguments)]
     fn comfort_within_limits(
         &mut self,
-        values: &[f64],
-        (lo, hi): (&[f64], &[f64]),
+        limits: &StepLimitsAt<'_>,
         used: usize,
-        scale: Option<&[f64]>,
-        total: &DVector<f64>,
-        clamped: &[bool],
         params: &crate::StepParams,
     ) -> Option<DVector<f64>> {
         const HOLDS: usize = 2;
         if !(used >= 2 && self.comfort_stepping && self.layout.get(used - 1)?.comfort) {
             return None;
         }
-        let partial = self.workspace.partial_steps();
-        let above_step = partial.get(used - 2)?.clone();
-        let unweigh = |i: usize| scale.map_or(1.0, |s| s[i]);
-        // The comfort share of a whole kernel step, in the DOF's own coordinates.
-        let share_of = |step: &DVector<f64>| {
-            DVector::from_fn(total.len(), |i, _| (step[i] - above_step[i]) * unweigh(i))
-        };
-        let mut share = share_of(partial.get(used - 1)?);
-        let above = total - &share;
         let mut held = Vec::new();
         for hold in 0..=HOLDS {
-            let (alpha, blocking) = within_limits(values, &above, &share, clamped, lo, hi)?;
+            let partial = self.workspace.partial_steps();
+            let (above, whole) = (partial.get(used - 2)?, partial.get(used - 1)?);
+            let (alpha, blocking) = limits.share_room(above, whole)?;
             if alpha >= COMFORT_SHARE_KEPT {
-                return Some(above + share * alpha.min(1.0));
+                return Some(limits.step_with_share(above, whole, alpha.min(1.0)));
             }
             if hold == HOLDS || self.settings.backend != Backend::Kernel {
                 return None;
             }
             held.extend(blocking);
-            let systems = if scale.is_some() {
+            let systems = if limits.scale.is_some() {
                 &self.weighted[..used]
             } else {
                 &self.systems[..used]
             };
-            let step =
-                project_last_again(systems, values.len(), params, &held, &mut self.workspace)?;
-            share = share_of(&step);
+            project_last_again(
+                systems,
+                limits.values.len(),
+                params,
+                &held,
+                &mut self.workspace,
+            )?;
         }
         None
     }
@@ -1142,15 +1166,15 @@ impl Solver {
             if !has_limits {
                 break;
             }
-            if let Some(step) = self.comfort_within_limits(
+            let limits = StepLimitsAt {
                 values,
-                (lo, hi),
-                used,
-                scale.as_deref(),
-                &total,
-                &clamped,
-                &params,
-            ) {
+                lo,
+                hi,
+                scale: scale.as_deref(),
+                fixed: &fixed,
+                clamped: &clamped,
+            };
+            if let Some(step) = self.comfort_within_limits(&limits, used, &params) {
                 total = step;
                 break;
             }
