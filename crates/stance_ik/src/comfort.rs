@@ -649,3 +649,44 @@ fn lowest_common_ancestor(skeleton: &Skeleton, a: usize, b: usize) -> Option<usi
     }
     Some(a)
 }
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+    use super::{RANGE_WALL_DEPTH, range_wall};
+
+    /// Marler et al.'s wall as written, through the C library's sine, cosine and power.
+    fn marler(x: f64) -> (f64, f64) {
+        let y = 5.0 * x + 1.571;
+        if y <= std::f64::consts::FRAC_PI_2 {
+            return (1.0, 0.0);
+        }
+        let base = 0.5 * y.sin() + 0.5;
+        (base.powi(100), 100.0 * base.powi(99) * 0.5 * 5.0 * y.cos())
+    }
+
+    #[test]
+    fn the_range_wall_is_marlers_formula() {
+        for i in 0..=2500 {
+            let x = -0.001 + f64::from(i) * 1e-4;
+            let (value, slope) = range_wall(x);
+            let (expected, expected_slope) = if x > RANGE_WALL_DEPTH {
+                // Beyond the depth the formula is below 1e-16 and taken as 0.
+                let (v, d) = marler(x);
+                assert!(v < 1e-16 && d.abs() < 1e-13, "x {x}: {v} {d}");
+                (0.0, 0.0)
+            } else {
+                marler(x)
+            };
+            assert!(
+                (value - expected).abs() <= 1e-13 * expected.max(1e-3),
+                "x {x}: {value} against {expected}"
+            );
+            assert!(
+                (slope - expected_slope).abs() <= 1e-12 * expected_slope.abs().max(1e-3),
+                "x {x}: slope {slope} against {expected_slope}"
+            );
+        }
+    }
+}

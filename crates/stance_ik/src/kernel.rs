@@ -658,3 +658,91 @@ impl Kernel {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+    use nalgebra::{DMatrix, DVector};
+    use rand::rngs::StdRng;
+    use rand::{RngExt, SeedableRng};
+
+    use super::{StepWorkspace, prioritized_step, project_last_again};
+    use crate::priority::{Damping, LevelSystem, StepParams};
+
+    fn level(jacobian: DMatrix<f64>, dx: DVector<f64>, projection: bool) -> LevelSystem {
+        LevelSystem {
+            level: 0,
+            jacobian_t: jacobian.transpose(),
+            dx,
+            support: Vec::new(),
+            damping: None,
+            projection,
+        }
+    }
+
+    /// `I - A^+ A`: the projector onto the null space of the rows of `a` (the textbook
+    /// oracle, by singular values).
+    fn null_space_projector(a: &DMatrix<f64>) -> DMatrix<f64> {
+        let n = a.ncols();
+        let svd = a.clone().svd(false, true);
+        let v_t = svd.v_t.unwrap();
+        let mut p = DMatrix::identity(n, n);
+        for (k, &sigma) in svd.singular_values.iter().enumerate() {
+            if sigma > 1e-9 {
+                let v = v_t.row(k).transpose();
+                p -= &v * v.transpose();
+            }
+        }
+        p
+    }
+
+    #[test]
+    fn a_projection_level_taken_again_stays_off_the_held_dof_and_out_of_the_way() {
+        let params = StepParams {
+            damping: Damping::Constant { lambda: 0.0 },
+            rank_tolerance: 1e-10,
+            max_dof_step: f64::INFINITY,
+        };
+        let mut r = StdRng::seed_from_u64(17);
+        for case in 0..40 {
+            let n = r.random_range(8..20);
+            let mut random =
+                |rows: usize| DMatrix::from_fn(rows, n, |_, _| r.random_range(-1.0..1.0));
+            let (j1, j2, g) = (random(3), random(2), random(1));
+            let levels = [
+                level(j1.clone(), DVector::from_element(3, 0.1), false),
+                level(j2.clone(), DVector::from_element(2, -0.05), false),
+                level(g.clone(), DVector::from_element(1, 0.2), true),
+            ];
+            let mut ws = StepWorkspace::default();
+            prioritized_step(&levels, n, &params, None, None, &mut ws, None);
+            let above = ws.partial_steps()[1].clone();
+            let first = &ws.partial_steps()[2] - &above;
+            let held = [case % n, (case * 7 + 3) % n];
+            // The first share moves the held DOF: holding them changes it.
+            assert!(held.iter().any(|&d| first[d].abs() > 1e-6), "case {case}");
+            let step = project_last_again(&levels, n, &params, &held, &mut ws).unwrap();
+            let share = &step - &above;
+            // The oracle: the gradient row through the projector of the levels above and the
+            // held DOF's unit rows, scaled by the level's dx.
+            let mut rows = DMatrix::zeros(5 + held.len(), n);
+            rows.rows_mut(0, 3).copy_from(&j1);
+            rows.rows_mut(3, 2).copy_from(&j2);
+            for (k, &d) in held.iter().enumerate() {
+                rows[(5 + k, d)] = 1.0;
+            }
+            let expected = null_space_projector(&rows) * g.transpose() * 0.2;
+            assert!(
+                (&share - &expected).amax() < 1e-10,
+                "case {case}: share {share} expected {expected}"
+            );
+            for &d in &held {
+                assert!(share[d].abs() < 1e-12, "case {case}: held DOF {d} moved");
+            }
+            assert!((&j1 * &share).amax() < 1e-10 && (&j2 * &share).amax() < 1e-10);
+            // The workspace's last partial step is the new whole step.
+            assert!((&ws.partial_steps()[2] - &step).amax() < 1e-15);
+        }
+    }
+}

@@ -300,6 +300,47 @@ fn a_comfort_level_lowers_the_effort_while_the_levels_above_stay_exact() {
 }
 
 #[test]
+fn the_report_gives_the_comfort_cost_of_the_posture_left() {
+    // A comfort level waits while the levels above are unmet and keeps the cost it last had;
+    // whichever iteration a solve stops at, its report weighs the posture it leaves.
+    let s = humanoid50().unwrap();
+    let start = standing_posture(&s);
+    let model = full_model(&s);
+    let wrist = s.require_joint("r_radiocarpal").unwrap();
+    let goal = Frames::new(&s, &start).joint_position[wrist] + DVec3::new(0.0, 0.3, 0.3);
+    let tasks = [
+        Task::position(wrist, DVec3::ZERO, goal),
+        Task::comfort(model.clone()).at_level(2),
+    ];
+    let mut waiting = 0;
+    for max_iterations in 1..=30 {
+        let mut p = start.clone();
+        // Short task steps: the reach takes many iterations, the comfort level waiting.
+        let report = Solver::new(SolverSettings {
+            max_iterations,
+            max_linear_step: 0.02,
+            ..SolverSettings::default()
+        })
+        .unwrap()
+        .solve(&s, &tasks, &mut p)
+        .unwrap();
+        let reported = report.levels[1].residual_after;
+        let cost = model.terms(&s, &Frames::new(&s, &p), p.values()).total;
+        assert!(
+            (reported - cost).abs() <= 1e-12 * cost.max(1.0),
+            "{max_iterations} iterations: reported {reported} for a posture of cost {cost}"
+        );
+        if !report.levels[0].met && p.values() != start.values() {
+            waiting += 1;
+        }
+    }
+    assert!(
+        waiting >= 5,
+        "solves stop on the way, the comfort level waiting: {waiting}"
+    );
+}
+
+#[test]
 fn a_comfort_task_cannot_share_its_level() {
     let s = humanoid50().unwrap();
     let start = standing_posture(&s);
