@@ -55,6 +55,19 @@ pub(crate) struct Kernel {
     /// Where the last level stepped was a projection level that did not extend the basis:
     /// its index and the step budget left before it (see [`project_last_again`]).
     last_projection: Option<(usize, f64)>,
+    /// A level stepped without extending the basis, for a projection level after it to pass
+    /// through by its Gram matrix (see [`projection_past_deferred`]): its `Z` and `G` stay in
+    /// `z` and `g`.
+    deferred: Option<Deferred>,
+    /// A projection level's rows in the rotated coordinates (`nf x m`), beside `z`.
+    zc: Vec<f64>,
+}
+
+/// A level whose reflectors are not (yet) in the basis: its row count and rank tolerance.
+#[derive(Debug, Clone, Copy)]
+struct Deferred {
+    m: usize,
+    tol: f64,
 }
 
 #[inline]
@@ -258,7 +271,14 @@ pub fn prioritized_step(
     kn.theta.resize(n, 0.0);
     kn.budget = params.max_dof_step;
     kn.last_projection = None;
+    kn.deferred = None;
     let last_with_rows = levels.iter().rposition(has_work);
+    // A projection level last, after a regular one: that level's basis is left unbuilt, and
+    // the projection passes through it by its Gram matrix (cheaper than its reflectors).
+    let deferred = last_with_rows
+        .filter(|&k| levels[k].projection && projectors.is_none())
+        .and_then(|k| levels[..k].iter().rposition(has_work))
+        .filter(|&k| !levels[k].projection);
     for (k, level) in levels.iter().enumerate() {
         let m = level.dx.len();
         let usable = has_work(level) && level.jacobian_t.shape() == (n, m) && kn.rank < nf;
@@ -267,7 +287,13 @@ pub fn prioritized_step(
             if level.projection && !extend {
                 kn.last_projection = Some((k, kn.budget));
             }
-            level_step(kn, level, n, params, fixed, extend);
+            if Some(k) == deferred {
+                level_step(kn, level, n, params, fixed, Step::Deferred);
+            } else if level.projection && kn.deferred.is_some() {
+                projection_past_deferred(kn, level, n, params);
+            } else {
+                level_step(kn, level, n, params, fixed, Step::with_basis(extend));
+            }
         }
         if let Some(p) = projectors.as_deref_mut() {
             p.push(kn.projector(n));
@@ -295,6 +321,10 @@ pub(crate) fn project_last_again(
     let level = levels.get(k)?;
     let above = ws.partial_steps().get(k.checked_sub(1)?)?.clone();
     let kn = &mut ws.kernel;
+    if let Some(Deferred { m, tol }) = kn.deferred.take() {
+        // The level before goes into the basis after all (its `Z` and `G` are still there).
+        kn.extend_basis(m, tol);
+    }
     let mut support: Vec<usize> = blocked
         .iter()
         .copied()
@@ -320,9 +350,9 @@ pub(crate) fn project_last_again(
     kn.theta.copy_from_slice(above.as_slice());
     kn.budget = budget;
     // A projection level with a zero `dx`: no step, the basis extended by the held DOF.
-    level_step(kn, &held, n, params, None, true);
+    level_step(kn, &held, n, params, None, Step::Extend);
     if kn.rank < kn.free.len() {
-        level_step(kn, level, n, params, None, false);
+        level_step(kn, level, n, params, None, Step::Last);
     }
     let step = DVector::from_column_slice(&kn.theta);
     if let Some(last) = ws.partial_mut().get_mut(k) {
@@ -367,14 +397,32 @@ fn order_free_dof(kn: &mut Kernel, levels: &[LevelSystem], n: usize, clamped: Op
     }
 }
 
+/// What a level's step leaves of the basis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Step {
+    /// The basis as it was (the last level).
+    Last,
+    /// Extended by the level's rows.
+    Extend,
+    /// As it was, the level's `Z` and `G` kept for a projection level after it.
+    Deferred,
+}
+
+impl Step {
+    fn with_basis(extend: bool) -> Self {
+        if extend { Self::Extend } else { Self::Last }
+    }
+}
+
 fn level_step(
     kn: &mut Kernel,
     level: &LevelSystem,
     n: usize,
     params: &StepParams,
     fixed: Option<&DVector<f64>>,
-    extend: bool,
+    basis: Step,
 ) {
+    let extend = basis == Step::Extend;
     let m = level.dx.len();
     let r = kn.rank;
     let nf = kn.free.len();
@@ -446,7 +494,7 @@ fn level_step(
     let tol = params.rank_tolerance * row_scale;
     kn.g.clear();
     kn.g.resize(m * m, 0.0);
-    let need_z = r > 0 || extend;
+    let need_z = r > 0 || basis != Step::Last;
     if need_z {
         // Z = Q^T J^T in reduced coordinates; its rows r.. are the coordinates of Jh^T = P J^T.
         kn.z.clear();
@@ -575,8 +623,95 @@ fn level_step(
         axpy(scale, &kn.step, &mut kn.theta);
         kn.budget -= scale * max;
     }
-    if extend {
-        kn.extend_basis(m, tol);
+    match basis {
+        Step::Extend => kn.extend_basis(m, tol),
+        Step::Deferred => kn.deferred = Some(Deferred { m, tol }),
+        Step::Last => {}
+    }
+}
+
+/// A projection level's step past the deferred level (`kn.deferred`): its rows rotated by
+/// the basis of the levels before (`Q^T z`), less their part in the deferred level's row
+/// space, solved through that level's Gram matrix `G = Z^T Z` (the same space its pivoted QR
+/// would add to the basis), rotated back, times `dx`. Where `G` is near singular, the basis
+/// is extended after all and the level takes the plain path. Writes neither `z` nor `g`.
+fn projection_past_deferred(kn: &mut Kernel, level: &LevelSystem, n: usize, params: &StepParams) {
+    let Some(Deferred { m: md, tol }) = kn.deferred else {
+        return;
+    };
+    let (r, nf, m) = (kn.rank, kn.free.len(), level.dx.len());
+    // The Gram matrix's Cholesky factor, where every pivot stays well above the rank
+    // tolerance (else: the pivoted QR's rank decision, through the basis).
+    kn.l.clear();
+    kn.l.extend_from_slice(&kn.g[..md * md]);
+    let floor = (1e3 * tol).powi(2);
+    if !(cholesky(&mut kn.l, md) && (0..md).all(|i| kn.l[i * md + i].powi(2) > floor)) {
+        kn.extend_basis(md, tol);
+        kn.deferred = None;
+        level_step(kn, level, n, params, None, Step::Last);
+        return;
+    }
+    // `kn.deferred` stays: `project_last_again` extends the basis by it (`z` and `g` stay).
+    let jt = level.jacobian_t.as_slice();
+    kn.zc.clear();
+    kn.zc.resize(nf * m, 0.0);
+    for c in 0..m {
+        let (src, dst) = (&jt[c * n..(c + 1) * n], &mut kn.zc[c * nf..(c + 1) * nf]);
+        for (&d, x) in kn.free.iter().zip(dst.iter_mut()) {
+            *x = src[d];
+        }
+        for j in 0..r {
+            let end = kn.v_end[j];
+            reflect(
+                &kn.v[j * nf + j..j * nf + end],
+                kn.beta[j],
+                &mut dst[j..end],
+            );
+        }
+    }
+    // red = sum_c dx_c (y_c - Z G^-1 Z^T y_c), y_c = zc[r.., c].
+    kn.red.clear();
+    kn.red.resize(nf, 0.0);
+    for c in 0..m {
+        let dx = level.dx[c];
+        if dx == 0.0 {
+            continue;
+        }
+        let y = &kn.zc[c * nf + r..(c + 1) * nf];
+        kn.y.clear();
+        kn.y.extend((0..md).map(|a| dot(&kn.z[a * nf + r..(a + 1) * nf], y)));
+        cholesky_solve(&kn.l, md, &mut kn.y);
+        axpy(dx, y, &mut kn.red[r..]);
+        for a in 0..md {
+            axpy(
+                -dx * kn.y[a],
+                &kn.z[a * nf + r..(a + 1) * nf],
+                &mut kn.red[r..],
+            );
+        }
+    }
+    for j in (0..r).rev() {
+        let end = kn.v_end[j];
+        reflect(
+            &kn.v[j * nf + j..j * nf + end],
+            kn.beta[j],
+            &mut kn.red[j..end],
+        );
+    }
+    kn.step.clear();
+    kn.step.resize(n, 0.0);
+    for (x, &d) in kn.red.iter().zip(&kn.free) {
+        kn.step[d] = *x;
+    }
+    let max = kn.step.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    if max.is_finite() && kn.budget > 0.0 {
+        let scale = if max > kn.budget {
+            kn.budget / max
+        } else {
+            1.0
+        };
+        axpy(scale, &kn.step, &mut kn.theta);
+        kn.budget -= scale * max;
     }
 }
 
@@ -695,6 +830,63 @@ mod tests {
             }
         }
         p
+    }
+
+    #[test]
+    fn a_projection_level_past_a_deferred_level_is_the_textbook_step() {
+        let params = StepParams {
+            damping: Damping::Constant { lambda: 0.01 },
+            rank_tolerance: 1e-10,
+            max_dof_step: f64::INFINITY,
+        };
+        let mut r = StdRng::seed_from_u64(12);
+        for case in 0..60 {
+            let n = r.random_range(8..24);
+            let mut random =
+                |rows: usize| DMatrix::from_fn(rows, n, |_, _| r.random_range(-1.0..1.0));
+            let (j1, j2, mut j3, g) = (random(3), random(2), random(3), random(2));
+            if case % 3 == 0 {
+                // A singular level before the projection: two equal rows (the QR path).
+                let row = j3.row(0).clone_owned();
+                j3.row_mut(1).copy_from(&row);
+            }
+            let levels = [
+                level(j1.clone(), DVector::from_element(3, 0.1), false),
+                level(j2.clone(), DVector::from_element(2, -0.05), false),
+                level(j3.clone(), DVector::from_element(3, 0.07), false),
+                level(g.clone(), DVector::from_vec(vec![0.2, -0.1]), true),
+            ];
+            let mut ws = StepWorkspace::default();
+            let step = prioritized_step(&levels, n, &params, None, None, &mut ws, None);
+            // The oracle: the recursion with every level's basis built (as when projectors
+            // are asked for) and the projection level through the explicit projector.
+            let mut projectors = Vec::new();
+            let mut oracle_ws = StepWorkspace::default();
+            let built = prioritized_step(
+                &levels,
+                n,
+                &params,
+                None,
+                None,
+                &mut oracle_ws,
+                Some(&mut projectors),
+            );
+            assert!(
+                (&step - &built).amax() < 1e-10,
+                "case {case}: {step} against {built}"
+            );
+            let mut rows = DMatrix::zeros(8, n);
+            rows.rows_mut(0, 3).copy_from(&j1);
+            rows.rows_mut(3, 2).copy_from(&j2);
+            rows.rows_mut(5, 3).copy_from(&j3);
+            let share =
+                null_space_projector(&rows) * g.transpose() * DVector::from_vec(vec![0.2, -0.1]);
+            let above = &ws.partial_steps()[2];
+            assert!(
+                (&(&step - above) - &share).amax() < 1e-9,
+                "case {case}: the projection level's share"
+            );
+        }
     }
 
     #[test]
