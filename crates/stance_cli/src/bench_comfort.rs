@@ -353,6 +353,9 @@ pub fn run(cases: usize, json: bool) -> Result<()> {
     let overhead = iteration_comfort / iteration_plain.max(f64::MIN_POSITIVE) - 1.0;
     let waiting = iteration_waiting / iteration_plain.max(f64::MIN_POSITIVE) - 1.0;
     let same_share = same_with / same_without.max(f64::MIN_POSITIVE) - 1.0;
+    // Per iteration at the settling runs' postures (the levels above move there, and an
+    // iteration of theirs costs more than at the posture solved without comfort).
+    let same_us = |sum: f64| 1e6 * sum / same_postures.max(1) as f64;
     let per_iteration_us = |sum: f64| 1e6 * sum / timed.max(1) as f64;
     if json {
         println!(
@@ -374,6 +377,8 @@ pub fn run(cases: usize, json: bool) -> Result<()> {
                     "without": per_iteration_us(iteration_plain),
                     "comfort_stepping": per_iteration_us(iteration_comfort),
                     "comfort_waiting": per_iteration_us(iteration_waiting),
+                    "same_postures_without": same_us(same_without),
+                    "same_postures_with": same_us(same_with),
                 },
                 "gradient_us": gradient_us,
                 "gradient_us_by_term": {"effort": term_us[0], "range": term_us[1], "bands": term_us[2]},
@@ -415,8 +420,10 @@ pub fn run(cases: usize, json: bool) -> Result<()> {
         );
         println!(
             "  the comfort level's own cost at the same postures (its settling run's, {same_postures} \
-             measured): {:+.1} % of an iteration",
-            100.0 * same_share
+             measured): {:+.1} % of an iteration ({:.1} us -> {:.1} us)",
+            100.0 * same_share,
+            same_us(same_without),
+            same_us(same_with)
         );
     }
     Ok(())
