@@ -4,6 +4,7 @@
 //!
 //! The settings live in the submodule `settings`, the report types in `report`.
 
+mod comfort_step;
 mod report;
 mod settings;
 
@@ -19,12 +20,13 @@ pub use settings::{
     Backend, Clock, Iteration, SolverSettings, TEXTBOOK_ANGULAR_STEP, TEXTBOOK_LINEAR_STEP,
 };
 
-use crate::kernel::{prioritized_step, project_last_again};
+use crate::kernel::prioritized_step;
 use crate::limb::{Limb, LimbGoal};
 use crate::posture::clamp_and_wrap;
 use crate::priority::{Damping, LevelSystem, StepWorkspace, prioritized_step_nalgebra};
 use crate::task::StepLimits;
 use crate::{Frames, IkError, Posture, Skeleton, Task, TaskKind};
+use comfort_step::StepLimitsAt;
 
 /// Relative decrease below which an unmet level counts as not progressing.
 const STALL_RELATIVE: f64 = 1e-4;
@@ -52,79 +54,6 @@ struct RestartStage {
     max_angular_step: f64,
     /// From the start posture (else from the best posture so far).
     from_start: bool,
-}
-
-/// The least share of a comfort level's step kept by shortening it to stay inside the joint
-/// limits; below it the DOF in the way are clamped and the step is taken again.
-const COMFORT_SHARE_KEPT: f64 = 0.5;
-
-/// A step's joint limits and what is already decided (see `compute_step`): the DOF values,
-/// their limits, the stiffness scale of the kernel's coordinates, the moves of the clamped DOF.
-struct StepLimitsAt<'a> {
-    values: &'a [f64],
-    lo: &'a [f64],
-    hi: &'a [f64],
-    scale: Option<&'a [f64]>,
-    fixed: &'a DVector<f64>,
-    clamped: &'a [bool],
-}
-
-impl StepLimitsAt<'_> {
-    /// DOF `i`'s move by the levels above (`above`, a kernel step) and the last level's share
-    /// (`whole` less `above`), in the DOF's own coordinates.
-    fn moves(&self, above: &DVector<f64>, whole: &DVector<f64>, i: usize) -> (f64, f64) {
-        let unweigh = self.scale.map_or(1.0, |s| s[i]);
-        (
-            above[i] * unweigh + self.fixed[i],
-            (whole[i] - above[i]) * unweigh,
-        )
-    }
-
-    /// The largest `alpha` (above 1 when nothing is in the way) with the levels above's move
-    /// plus `alpha` times the last level's share inside the limits on the unclamped DOF, and
-    /// the DOF that would cut it below [`COMFORT_SHARE_KEPT`]. `None` where the levels above
-    /// alone leave the limits.
-    fn share_room(&self, above: &DVector<f64>, whole: &DVector<f64>) -> Option<(f64, Vec<usize>)> {
-        let mut alpha: f64 = 2.0;
-        let mut blocking = Vec::new();
-        for i in 0..self.values.len() {
-            if self.clamped[i] {
-                continue;
-            }
-            let (moved, share) = self.moves(above, whole, i);
-            let (lo, hi) = (self.lo[i], self.hi[i]);
-            let base = self.values[i] + moved;
-            if !(lo <= base && base <= hi) {
-                return None;
-            }
-            let next = base + share;
-            let room = if next > hi {
-                (hi - base) / share
-            } else if next < lo {
-                (lo - base) / share
-            } else {
-                continue;
-            };
-            alpha = alpha.min(room);
-            if room < COMFORT_SHARE_KEPT {
-                blocking.push(i);
-            }
-        }
-        Some((alpha, blocking))
-    }
-
-    /// The whole step: the levels above's move plus `alpha` times the last level's share.
-    fn step_with_share(
-        &self,
-        above: &DVector<f64>,
-        whole: &DVector<f64>,
-        alpha: f64,
-    ) -> DVector<f64> {
-        DVector::from_fn(self.values.len(), |i, _| {
-            let (moved, share) = self.moves(above, whole, i);
-            moved + alpha * share
-        })
-    }
 }
 
 /// Cached per-solve task layout.
@@ -323,7 +252,9 @@ impl Solver {
             clamped_dofs,
             analytic_restarts,
         } = run;
-        self.weigh_comfort(skeleton, tasks, values);
+        if self.layout.iter().any(|l| l.comfort) {
+            self.weigh_levels(skeleton, tasks, values, true);
+        }
         let levels = self.level_reports(&before);
         let gave_way = levels
             .iter()
@@ -729,6 +660,7 @@ impl Solver {
                 // above only pull back the drift of its last step; its cost is weighed again
                 // with its gradient once they are met (the solve's report weighs it afresh).
                 sys.dx.fill(0.0);
+                sys.jacobian_t.as_mut_slice().fill(0.0);
                 continue;
             }
             sys.jacobian_t.as_mut_slice().fill(0.0);
@@ -798,20 +730,20 @@ impl Solver {
         self.residual_sq.clone()
     }
 
-    /// Forward kinematics and the squared residual per level only (no Jacobian).
-    /// A comfort level keeps its residual: no candidate is judged by it, and the candidate
-    /// taken is linearised, which weighs it.
-    fn evaluate_residuals(&mut self, skeleton: &Skeleton, tasks: &[Task], values: &[f64]) {
+    /// Forward kinematics at `values` and the squared residuals of the comfort levels
+    /// (`comfort`) or of the others (no Jacobian). A guarded step's candidates weigh the other
+    /// levels only: no candidate is judged by a comfort level, and the candidate taken is
+    /// linearised, which weighs it (or keeps the cost of a waiting one, see
+    /// `linearize_at_frames`); a solve's report weighs the comfort levels afresh.
+    fn weigh_levels(&mut self, skeleton: &Skeleton, tasks: &[Task], values: &[f64], comfort: bool) {
         self.frames.update(skeleton, values);
         for ((layout, res), wres) in self
             .layout
             .iter()
             .zip(self.residual_sq.iter_mut())
             .zip(self.weighted_sq.iter_mut())
+            .filter(|((l, _), _)| l.comfort == comfort)
         {
-            if layout.comfort {
-                continue;
-            }
             *res = 0.0;
             *wres = 0.0;
             for &ti in &layout.tasks {
@@ -909,7 +841,7 @@ impl Solver {
                 moved = moved.max(step[i].abs());
             }
             self.clamp_free(skeleton, values);
-            self.evaluate_residuals(skeleton, tasks, values);
+            self.weigh_levels(skeleton, tasks, values, false);
             let Some(worse) = self.rejecting_level(&old) else {
                 break;
             };
@@ -934,33 +866,6 @@ impl Solver {
         (moved, clamped)
     }
 
-    /// The comfort levels' residuals weighed afresh at `values` (a waiting comfort level keeps
-    /// the cost it last had, see `linearize_at_frames`).
-    fn weigh_comfort(&mut self, skeleton: &Skeleton, tasks: &[Task], values: &[f64]) {
-        if !self.layout.iter().any(|l| l.comfort) {
-            return;
-        }
-        self.frames.update(skeleton, values);
-        for ((layout, res), wres) in self
-            .layout
-            .iter()
-            .zip(self.residual_sq.iter_mut())
-            .zip(self.weighted_sq.iter_mut())
-            .filter(|((l, _), _)| l.comfort)
-        {
-            *res = 0.0;
-            *wres = 0.0;
-            for &ti in &layout.tasks {
-                let task = &tasks[ti];
-                let r = task
-                    .comfort_cost(skeleton, &self.frames, values)
-                    .unwrap_or(0.0);
-                *res += r * r;
-                *wres += task.weight * r * r;
-            }
-        }
-    }
-
     /// The summed cost of the comfort levels (their residuals), 0 without one.
     fn comfort_cost(&self) -> f64 {
         self.layout
@@ -978,7 +883,9 @@ impl Solver {
         let tol = 10.0 * self.settings.tolerance;
         for ((layout, &a), &b) in self.layout.iter().zip(a).zip(b) {
             let (a, b) = (a.sqrt(), b.sqrt());
-            if (layout.posture_only && !layout.comfort) || (a <= tol && b <= tol) {
+            // A comfort level that waits keeps the cost it last had: nothing to judge by.
+            let kept = layout.comfort && !self.comfort_stepping;
+            if (layout.posture_only && !layout.comfort) || kept || (a <= tol && b <= tol) {
                 continue;
             }
             let margin = self.settings.stall_improvement.max(STALL_RELATIVE * b);
@@ -1046,50 +953,6 @@ impl Solver {
             if new > old + slack {
                 return Some(k);
             }
-        }
-        None
-    }
-
-    /// Where the last level is a comfort level that steps and the step of the levels above
-    /// it stays inside the joint limits: the whole step (`step + fixed`) with the comfort
-    /// level's share kept inside them too, without taking the levels' steps again. The DOF
-    /// that would cut the share below [`COMFORT_SHARE_KEPT`] are held out of it
-    /// (`project_last_again`), a few times at most; what is still in the way shortens it.
-    /// `None`: clamp and step again.
-    fn comfort_within_limits(
-        &mut self,
-        limits: &StepLimitsAt<'_>,
-        used: usize,
-        params: &crate::StepParams,
-    ) -> Option<DVector<f64>> {
-        const HOLDS: usize = 2;
-        if !(used >= 2 && self.comfort_stepping && self.layout.get(used - 1)?.comfort) {
-            return None;
-        }
-        let mut held = Vec::new();
-        for hold in 0..=HOLDS {
-            let partial = self.workspace.partial_steps();
-            let (above, whole) = (partial.get(used - 2)?, partial.get(used - 1)?);
-            let (alpha, blocking) = limits.share_room(above, whole)?;
-            if alpha >= COMFORT_SHARE_KEPT {
-                return Some(limits.step_with_share(above, whole, alpha.min(1.0)));
-            }
-            if hold == HOLDS || self.settings.backend != Backend::Kernel {
-                return None;
-            }
-            held.extend(blocking);
-            let systems = if limits.scale.is_some() {
-                &self.weighted[..used]
-            } else {
-                &self.systems[..used]
-            };
-            project_last_again(
-                systems,
-                limits.values.len(),
-                params,
-                &held,
-                &mut self.workspace,
-            )?;
         }
         None
     }
@@ -1174,8 +1037,7 @@ impl Solver {
                 fixed: &fixed,
                 clamped: &clamped,
             };
-            if let Some(step) = self.comfort_within_limits(&limits, used, &params) {
-                total = step;
+            if self.comfort_within_limits(&limits, used, &params, &mut total) {
                 break;
             }
             let mut new_clamp = false;
