@@ -1,11 +1,13 @@
 //! The iterative solver: linearise every level, take a prioritized step, enforce joint
 //! limits, repeat until converged, stalled or out of budget; report per-level residuals.
-
 //!
-//! The settings live in the submodule `settings`, the report types in `report`.
+//! The settings live in the submodule `settings`, the report types in `report`, the
+//! multi-start's later runs and the hybrid's limb restart in `restart`, and a comfort level's
+//! share of a step kept inside the joint limits in `comfort_step`.
 
 mod comfort_step;
 mod report;
+mod restart;
 mod settings;
 
 use std::collections::BTreeMap;
@@ -21,19 +23,15 @@ pub use settings::{
 };
 
 use crate::kernel::prioritized_step;
-use crate::limb::{Limb, LimbGoal};
+use crate::limb::Limb;
 use crate::posture::clamp_and_wrap;
 use crate::priority::{Damping, LevelSystem, StepWorkspace, prioritized_step_nalgebra};
 use crate::task::StepLimits;
-use crate::{Frames, IkError, Posture, Skeleton, Task, TaskKind};
+use crate::{Frames, IkError, Posture, Skeleton, Task};
 use comfort_step::StepLimitsAt;
 
 /// Relative decrease below which an unmet level counts as not progressing.
 const STALL_RELATIVE: f64 = 1e-4;
-/// The stall window of the multi-start's plain recursion from the start posture.
-const RESTART_STALL_WINDOW: usize = 20;
-/// The stall window of the multi-start's guarded run.
-const GUARDED_STALL_WINDOW: usize = 5;
 /// Iterations without a meaningful fall of a comfort level's cost, every other level met,
 /// before the solve has converged.
 const COMFORT_STALL_WINDOW: usize = 3;
@@ -43,18 +41,6 @@ const COMFORT_GAIN_UP: f64 = 1.5;
 const COMFORT_GAIN_MAX: f64 = 20.0;
 /// ... and halves after a step that did not, down to this.
 const COMFORT_GAIN_MIN: f64 = 0.05;
-
-/// One run of a multi-start after the first.
-struct RestartStage {
-    iteration: Iteration,
-    trust_region: f64,
-    stall_window: usize,
-    /// The task clamps of the run (`max_linear_step`, `max_angular_step`).
-    max_linear_step: f64,
-    max_angular_step: f64,
-    /// From the start posture (else from the best posture so far).
-    from_start: bool,
-}
 
 /// Cached per-solve task layout.
 #[derive(Debug, Clone, Default)]
@@ -274,40 +260,6 @@ impl Solver {
         })
     }
 
-    /// The runs a stalled solve goes on with, in order (none without `settings.restarts`):
-    /// after textbook iterations, guarded ones from the best posture so far (their line
-    /// search settles what whole steps leave oscillating), then the plain recursion from the
-    /// start posture; after guarded ones, the plain recursion. Both with the textbook's task
-    /// clamps where the settings' are longer.
-    fn restart_stages(&self) -> Vec<RestartStage> {
-        if !self.settings.restarts {
-            return Vec::new();
-        }
-        let max_linear_step = self.settings.max_linear_step.min(TEXTBOOK_LINEAR_STEP);
-        let max_angular_step = self.settings.max_angular_step.min(TEXTBOOK_ANGULAR_STEP);
-        let guarded = RestartStage {
-            iteration: Iteration::Guarded,
-            trust_region: self.settings.trust_region,
-            stall_window: GUARDED_STALL_WINDOW,
-            max_linear_step,
-            max_angular_step,
-            from_start: false,
-        };
-        let plain = RestartStage {
-            iteration: Iteration::Textbook,
-            trust_region: f64::INFINITY,
-            stall_window: RESTART_STALL_WINDOW,
-            max_linear_step,
-            max_angular_step,
-            from_start: true,
-        };
-        match self.settings.iteration {
-            Iteration::Guarded => vec![plain],
-            Iteration::Textbook if self.settings.trust_region == f64::INFINITY => vec![guarded],
-            Iteration::Textbook => vec![guarded, plain],
-        }
-    }
-
     /// One report per level: its residuals `before` (squared) and now.
     fn level_reports(&self, before: &[f64]) -> Vec<LevelReport> {
         let tol = self.settings.tolerance;
@@ -414,89 +366,6 @@ impl Solver {
             clamped_dofs,
             analytic_restarts,
         }
-    }
-
-    /// The hybrid: for the first unmet level, a limb (not yet restarted in this solve) whose end
-    /// joint carries one of its position tasks is put in its closed-form posture for the goal
-    /// that task implies (the end joint moved by the task's error on its axes; an orientation
-    /// task on the end joint at that level or above sets the end rotation). Relinearises.
-    fn analytic_restart(
-        &mut self,
-        skeleton: &Skeleton,
-        tasks: &[Task],
-        values: &mut [f64],
-        iteration: usize,
-        done: &[AnalyticRestart],
-    ) -> Option<AnalyticRestart> {
-        if self.limbs.is_empty() {
-            return None;
-        }
-        let k = self.first_unmet_level()?;
-        let level = self.layout[k].level;
-        let name = |j: usize| skeleton.joints()[j].name.clone();
-        for limb in &self.limbs {
-            let [upper, middle, end] = limb.joints();
-            let joints = [name(upper), name(middle), name(end)];
-            if done.iter().any(|r| r.joints == joints) {
-                continue;
-            }
-            let held = [upper, middle, end]
-                .iter()
-                .any(|&j| skeleton.joints()[j].dof_range().any(|d| self.is_locked(d)));
-            if held {
-                continue;
-            }
-            let goal = self.layout[k]
-                .tasks
-                .iter()
-                .find_map(|&ti| match &tasks[ti].kind {
-                    TaskKind::Position {
-                        effector,
-                        axes,
-                        target,
-                    } if effector.joint == end => {
-                        let now = self.frames.point(end, effector.point);
-                        let mut position = self.frames.joint_position[end];
-                        for axis in 0..3 {
-                            if axes.has(axis) {
-                                position[axis] += target[axis] - now[axis];
-                            }
-                        }
-                        Some(position)
-                    }
-                    _ => None,
-                });
-            let Some(position) = goal else {
-                continue;
-            };
-            let orientation = tasks.iter().find_map(|t| match &t.kind {
-                TaskKind::Orientation { joint, target }
-                    if t.active && t.level <= level && *joint == end =>
-                {
-                    Some(*target)
-                }
-                _ => None,
-            });
-            let base = limb.base(skeleton, &self.frames);
-            let current = Posture::from_values(skeleton, values.to_vec()).ok()?;
-            let preferred = limb.swivel_angle(skeleton, &current);
-            let goal = LimbGoal {
-                position,
-                orientation,
-            };
-            let solution = limb.solve_within_limits(base, &goal, preferred);
-            limb.apply_values(&solution, values);
-            self.clamp_free(skeleton, values);
-            self.comfort_known = false;
-            self.linearize(skeleton, tasks, values);
-            return Some(AnalyticRestart {
-                joints,
-                iteration,
-                level,
-                swivel_angle: solution.swivel_angle,
-            });
-        }
-        None
     }
 
     /// One prioritized iteration from `posture` (for interactive use: a few per frame).
