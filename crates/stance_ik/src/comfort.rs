@@ -227,65 +227,13 @@ fn range_wall(x: f64) -> (f64, f64) {
     if x > RANGE_WALL_DEPTH {
         return (0.0, 0.0);
     }
-    // With h = (5 x + 1.571 - pi / 2) / 2 in [0, 0.61]: the base is
-    // 0.5 cos(2 h) + 0.5 = cos^2 h, and the penalty cos^200 h.
-    let h = 0.5 * (FREQUENCY * x + PHASE - std::f64::consts::FRAC_PI_2);
-    let (sin, cos) = short_sin_cos(h);
-    let power = cos_power_199(cos);
-    // d/dx cos^200 h = -200 cos^199 h sin h * 5 / 2.
+    let (sin, cos) = (FREQUENCY * x + PHASE).sin_cos();
+    let base = 0.5 * sin + 0.5;
+    let below = base.powi(POWER - 1);
     (
-        power * cos,
-        -2.0 * f64::from(POWER) * power * sin * 0.5 * FREQUENCY,
+        below * base,
+        f64::from(POWER) * below * 0.5 * FREQUENCY * cos,
     )
-}
-
-/// `sin h` and `cos h` for `|h| <= 0.65` by their Taylor series to the 17th and 16th powers
-/// (the first term left out is below 2e-17 of 1): a few multiply-adds instead of a call.
-fn short_sin_cos(h: f64) -> (f64, f64) {
-    let h2 = h * h;
-    // 1 / k! for k = 2..17.
-    const F: [f64; 16] = [
-        1.0 / 2.0,
-        1.0 / 6.0,
-        1.0 / 24.0,
-        1.0 / 120.0,
-        1.0 / 720.0,
-        1.0 / 5040.0,
-        1.0 / 40320.0,
-        1.0 / 362_880.0,
-        1.0 / 3_628_800.0,
-        1.0 / 39_916_800.0,
-        1.0 / 479_001_600.0,
-        1.0 / 6_227_020_800.0,
-        1.0 / 87_178_291_200.0,
-        1.0 / 1_307_674_368_000.0,
-        1.0 / 20_922_789_888_000.0,
-        1.0 / 355_687_428_096_000.0,
-    ];
-    let cos = 1.0
-        - h2 * (F[0]
-            - h2 * (F[2]
-                - h2 * (F[4]
-                    - h2 * (F[6] - h2 * (F[8] - h2 * (F[10] - h2 * (F[12] - h2 * F[14])))))));
-    let sin = h
-        * (1.0
-            - h2 * (F[1]
-                - h2 * (F[3]
-                    - h2 * (F[5]
-                        - h2 * (F[7] - h2 * (F[9] - h2 * (F[11] - h2 * (F[13] - h2 * F[15]))))))));
-    (sin, cos)
-}
-
-/// `c^199` by squaring (199 = 128 + 64 + 4 + 2 + 1).
-fn cos_power_199(c: f64) -> f64 {
-    let c2 = c * c;
-    let c4 = c2 * c2;
-    let c8 = c4 * c4;
-    let c16 = c8 * c8;
-    let c32 = c16 * c16;
-    let c64 = c32 * c32;
-    let c128 = c64 * c64;
-    (c128 * c64) * (c4 * (c2 * c))
 }
 
 /// How far into a DOF's range (a share of the range) [`range_wall`] is above 1e-16: 0.24.
