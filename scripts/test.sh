@@ -42,8 +42,8 @@ cargo test --workspace --quiet --all-targets --no-run
 cargo test --workspace --quiet --lib --bins --tests -- --skip scenario_timings --skip frame_cost
 # The S2..S5 timings, printed (the same test prints them in the browser below), and the
 # editor's CPU per frame with the shared avatar and Table 1 while pulling.
-cargo test --quiet -p stance_ik --test timing -- --nocapture
-cargo test --quiet -p stance_editor --test frame_cost -- --nocapture
+cargo test --quiet -p stance_ik --test all timing:: -- --nocapture
+cargo test --quiet -p stance_editor --test all frame_cost:: -- --nocapture
 
 # wasm-pack runs each pure crate's wasm-bindgen tests in headless Chromium (Debian's
 # chromedriver). `stance_asset` (the importer) is tested natively; in the browser it runs in

@@ -6,12 +6,12 @@
 //! to the editor.
 //!
 //! `the_fuzz_seeds_load` checks the committed seeds; `write_fuzz_seeds` (ignored) writes them
-//! again: `cargo test -p stance_asset --test fuzz_seeds -- --ignored`.
+//! again: `cargo test -p stance_asset --test all fuzz_seeds:: -- --ignored`.
 
 #![cfg(not(target_arch = "wasm32"))]
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-mod common;
+use crate::common;
 
 use std::collections::HashMap;
 

@@ -1,7 +1,7 @@
 //! The seed corpora of the `link`, `document` and `problem` fuzz targets (`fuzz/seeds/<target>/`):
 //! small valid links (as text and as framed payloads, every link format), documents and
 //! problem files. `the_fuzz_seeds_are_valid` checks the committed seeds; `write_fuzz_seeds`
-//! (ignored) writes them again: `cargo test -p stance_document --test fuzz_seeds -- --ignored`.
+//! (ignored) writes them again: `cargo test -p stance_document --test all fuzz_seeds:: -- --ignored`.
 
 #![cfg(not(target_arch = "wasm32"))]
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]

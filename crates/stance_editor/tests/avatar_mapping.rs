@@ -15,7 +15,7 @@ use stance_editor::{Command, MemoryHost, NoHostHooks, StanceApp};
 use stance_hanim::{LevelOfArticulation, SkeletonOptions};
 use stance_ik::Frames;
 
-mod common;
+use crate::common;
 use common::{drag_right_forearm_up, harness_sized, release_at, settle, state};
 
 /// A small skinned humanoid with H-Anim joint names (the generated default avatar), as GLB.

@@ -9,7 +9,7 @@ use egui_kittest::kittest::{NodeT, Queryable};
 use stance_document::{Document, TaskKindSpec};
 use stance_editor::{Command, MemoryHost, StanceApp};
 
-mod common;
+use crate::common;
 use common::{
     click_at, drag_right_forearm_up, harness_for, release_at, screen_position, settle, state,
 };

@@ -3,7 +3,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-mod clocked;
+use crate::clocked;
 use clocked::Clocked;
 
 use stance_document::link;

@@ -4,7 +4,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-mod clocked;
+use crate::clocked;
 use clocked::Clocked;
 
 use stance_editor::model::{IMAGE_FILE_NAME, ImageRequest};

@@ -3,7 +3,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-mod clocked;
+use crate::clocked;
 use clocked::Clocked;
 
 use std::f64::consts::FRAC_PI_4;

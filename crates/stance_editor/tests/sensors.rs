@@ -21,7 +21,7 @@ use stance_mocap::fob::{FobConfig, FobMode, encode_record};
 use stance_mocap::simulate::{SimulatedDevice, SimulationOptions, simulate};
 use stance_mocap::{Sample, SensorId};
 
-mod common;
+use crate::common;
 use common::{click_button, harness_for, state};
 
 const RATE_HZ: f64 = 50.0;

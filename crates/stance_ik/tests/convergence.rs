@@ -11,10 +11,8 @@
 
 #[cfg(target_arch = "wasm32")]
 use wasm_bindgen_test::wasm_bindgen_test as test;
-#[cfg(target_arch = "wasm32")]
-wasm_bindgen_test::wasm_bindgen_test_configure!(run_in_browser);
 
-mod common;
+use crate::common;
 
 use common::*;
 use glam::DVec3;
@@ -303,7 +301,7 @@ fn gaze_turns_toward_the_exact_antipode() {
 /// The speed target on the feasible suite: time per solve of Stance against the
 /// textbook recursion (`plain_recursion`: explicit `N x N` nalgebra matrices), both from the
 /// same start, in one run. A measurement, not a check: run it in release with
-/// `cargo test --release -p stance_ik --test convergence -- --ignored --nocapture`
+/// `cargo test --release -p stance_ik --test all convergence:: -- --ignored --nocapture`
 /// (`STANCE_CASES` cases, default 200).
 #[cfg(not(target_arch = "wasm32"))]
 #[test]
@@ -369,7 +367,7 @@ fn feasible_suite_time_per_solve_against_the_oracle() {
 /// Writes the first `STANCE_CASES` (default 200) cases of the feasible suite as problem files
 /// (`docs/problem-format.md`) into the folder `STANCE_SUITE_OUT`, for `stance bench --suite`
 /// and for peers measured side by side on the same problems (`bench/placo/`). Run with
-/// `STANCE_SUITE_OUT=DIR cargo test -p stance_ik --test convergence -- --ignored export`.
+/// `STANCE_SUITE_OUT=DIR cargo test -p stance_ik --test all convergence:: -- --ignored export`.
 #[cfg(not(target_arch = "wasm32"))]
 #[test]
 #[ignore = "writes files: run on request"]

@@ -1,7 +1,7 @@
 //! The seed corpus of the `decoders` fuzz target (`fuzz/seeds/decoders/`): a short simulated
 //! stream of every protocol, prefixed with a selector byte that picks its decoder in the
 //! target. `the_fuzz_seeds_decode` checks the committed seeds; `write_fuzz_seeds` (ignored)
-//! writes them again: `cargo test -p stance_mocap --test fuzz_seeds -- --ignored`.
+//! writes them again: `cargo test -p stance_mocap --test all fuzz_seeds:: -- --ignored`.
 
 #![cfg(not(target_arch = "wasm32"))]
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]

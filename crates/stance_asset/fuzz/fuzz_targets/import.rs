@@ -12,7 +12,7 @@
 //! LOA2 GLB, textured, a `.gltf` with data URIs, a `.gltf` with its `.bin` in the multi-file
 //! layout, VRM 0.x and 1.0, EXT_meshopt_compression, an animation, a static triangle, images
 //! given decoded), written
-//! by `cargo test -p stance_asset --test fuzz_seeds -- --ignored`; `scripts/fuzz.sh import`
+//! by `cargo test -p stance_asset --test all fuzz_seeds:: -- --ignored`; `scripts/fuzz.sh import`
 //! runs the target from them.
 #![no_main]
 

@@ -5,7 +5,7 @@
 //! (its skeleton, posed at rest, exported) and splits again into the same parts.
 //!
 //! Seeds: `fuzz/seeds/transfer/`, the import seeds' avatars as transfers, written by
-//! `cargo test -p stance_asset --test fuzz_seeds -- --ignored`.
+//! `cargo test -p stance_asset --test all fuzz_seeds:: -- --ignored`.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;

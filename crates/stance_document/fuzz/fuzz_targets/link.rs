@@ -5,7 +5,7 @@
 //! link that opens is a valid document, opens again once written again with the same
 //! posture, and survives the document's JSON.
 //!
-//! Seeds: `fuzz/seeds/link/` (written by `cargo test -p stance_document --test fuzz_seeds --
+//! Seeds: `fuzz/seeds/link/` (written by `cargo test -p stance_document --test all fuzz_seeds:: --
 //! --ignored`).
 #![no_main]
 

@@ -3,7 +3,7 @@
 //! must say something. A problem that loads gets its closed-form limb starts, a few solver
 //! iterations and the solution's JSON (joints, posture, report with the comfort).
 //!
-//! Seeds: `fuzz/seeds/problem/` (written by `cargo test -p stance_document --test fuzz_seeds
+//! Seeds: `fuzz/seeds/problem/` (written by `cargo test -p stance_document --test all fuzz_seeds::
 //! -- --ignored`).
 #![no_main]
 

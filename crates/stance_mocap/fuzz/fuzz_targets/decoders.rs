@@ -3,7 +3,7 @@
 //! accounting must always balance.
 //!
 //! Seeds: `fuzz/seeds/decoders/`, a short simulated stream of every protocol behind a selector
-//! that picks its decoder (written by `cargo test -p stance_mocap --test fuzz_seeds --
+//! that picks its decoder (written by `cargo test -p stance_mocap --test all fuzz_seeds:: --
 //! --ignored`); `scripts/fuzz.sh decoders` runs the target from them.
 #![no_main]
 
