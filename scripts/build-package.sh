@@ -1,9 +1,14 @@
 #!/usr/bin/env bash
 # Builds the `stance-ik` npm package (packages/stance-ik/pkg) from crates/stance_js with
-# wasm-pack (release, ES module for browsers and Node); checks that the package's version is
-# the workspace's. wasm-pack finds the pinned wasm-bindgen CLI that setup.sh installs.
+# wasm-pack (release, ES module for browsers and Node), then wasm-opt (scripts/wasm-opt.sh);
+# checks that the package's version is the workspace's. wasm-pack finds the pinned
+# wasm-bindgen CLI that setup.sh installs. Quick when nothing changed: wasm-pack and wasm-opt
+# run only when cargo's wasm is newer than the package's. `npm pack` in packages/stance-ik
+# runs this first (its prepack).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# What ships is compiled by plain rustc (see scripts/clippy-env.sh).
+unset RUSTC_WORKSPACE_WRAPPER CLIPPY_ARGS
 say() { printf '\033[1;34m[package]\033[0m %s\n' "$*"; }
 
 workspace=$(sed -n '/^\[workspace.package\]/,/^\[/s/^version = "\(.*\)"/\1/p' Cargo.toml)
@@ -12,8 +17,20 @@ if [ "$workspace" != "$package" ]; then
   echo "packages/stance-ik/package.json is version $package, the workspace $workspace" >&2
   exit 1
 fi
-say "wasm-pack build crates/stance_js (release)"
-wasm-pack --quiet build crates/stance_js --release --target web --no-pack \
-  --out-dir ../../packages/stance-ik/pkg --out-name stance_ik
-gzip_size=$(gzip -9 -c packages/stance-ik/pkg/stance_ik_bg.wasm | wc -c)
+pkg=packages/stance-ik/pkg
+# The same build wasm-pack makes (release, wasm32): when its output is not newer than the
+# package's wasm, the package is up to date.
+cargo build --quiet --release -p stance_js --lib --target wasm32-unknown-unknown
+wasm=${CARGO_TARGET_DIR:-target}/wasm32-unknown-unknown/release/stance_js.wasm
+if [ -f "$pkg/stance_ik_bg.wasm" ] && [ -f "$pkg/stance_ik.js" ] && [ ! "$wasm" -nt "$pkg/stance_ik_bg.wasm" ]; then
+  say "packages/stance-ik is up to date"
+else
+  say "wasm-pack build crates/stance_js (release)"
+  rm -f "$pkg/stance_ik_bg.wasm"
+  wasm-pack --quiet build crates/stance_js --release --target web --no-pack \
+    --out-dir ../../packages/stance-ik/pkg --out-name stance_ik
+  bash scripts/wasm-opt.sh "$pkg/stance_ik_bg.wasm"
+fi
+gzip_size=$(gzip -9 -c "$pkg/stance_ik_bg.wasm" | wc -c)
+echo "$gzip_size" > "$pkg/wasm-gzip-bytes.txt"
 say "packages/stance-ik ready: wasm $((gzip_size / 1024)) KiB gzipped"

@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
 # Builds the site into dist/: the release wasm, its wasm-bindgen glue, web/ and public/, and
 # the three.js example of the stance-ik package (dist/examples/three).
-# Cargo and wasm-bindgen only redo work when their inputs changed.
+# Cargo, wasm-bindgen and wasm-opt only redo work when their inputs changed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# What ships is compiled by plain rustc, even when called from the tests' clippy builds
+# (scripts/clippy-env.sh): clippy-driver turns MIR optimisations off.
+unset RUSTC_WORKSPACE_WRAPPER CLIPPY_ARGS
 say() { printf '\033[1;34m[build]\033[0m %s\n' "$*"; }
 
 say "compiling stance_web for wasm32 (release)"
@@ -12,7 +15,12 @@ wasm=${CARGO_TARGET_DIR:-target}/wasm32-unknown-unknown/release/stance_web.wasm
 mkdir -p dist/pkg
 if [ ! -f dist/pkg/stance_web_bg.wasm ] || [ "$wasm" -nt dist/pkg/stance_web_bg.wasm ]; then
   say "wasm-bindgen"
-  wasm-bindgen --target web --no-typescript --remove-name-section --out-dir dist/pkg "$wasm"
+  # Into a folder of its own, so that an interrupted wasm-opt never leaves dist/ looking done.
+  bindgen=${CARGO_TARGET_DIR:-target}/wasm-bindgen/stance_web
+  rm -rf "$bindgen"
+  wasm-bindgen --target web --no-typescript --remove-name-section --out-dir "$bindgen" "$wasm"
+  bash scripts/wasm-opt.sh "$bindgen/stance_web_bg.wasm"
+  cp -r "$bindgen/." dist/pkg/
 fi
 cp -r web/. dist/
 cp -r public/. dist/

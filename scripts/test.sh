@@ -35,6 +35,16 @@ for crate in "${PURE_CRATES[@]}"; do
   fi
 done
 
+step "fuzz targets: every file in crates/*/fuzz/fuzz_targets is a declared target (scripts/fuzz.sh runs them all)"
+for fuzz_dir in crates/*/fuzz; do
+  for file in "$fuzz_dir"/fuzz_targets/*.rs; do
+    if ! grep -qx "path = \"fuzz_targets/$(basename "$file")\"" "$fuzz_dir/Cargo.toml"; then
+      echo "$file is not declared as a [[bin]] in $fuzz_dir/Cargo.toml: cargo fuzz never runs it" >&2
+      exit 1
+    fi
+  done
+done
+
 step "native build (with clippy) and tests"
 # Every target is built (benches too, as `cargo clippy --all-targets` checked them); no doc
 # tests: the crates have none, and each would cost a rustdoc run.

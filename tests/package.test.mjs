@@ -7,10 +7,11 @@
 import { before, describe, test } from "node:test";
 import assert from "node:assert/strict";
 import { execFileSync, spawnSync } from "node:child_process";
-import { existsSync, mkdtempSync, readFileSync, writeFileSync } from "node:fs";
+import { copyFileSync, existsSync, mkdtempSync, readFileSync, writeFileSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { dirname, join } from "node:path";
 import { fileURLToPath, pathToFileURL } from "node:url";
+import { gzipSync } from "node:zlib";
 import { stanceBinary } from "./browser.mjs";
 
 const root = join(dirname(fileURLToPath(import.meta.url)), "..");
@@ -143,6 +144,30 @@ describe("stance-ik", () => {
       { cwd: root, encoding: "utf8" },
     );
     assert.equal(tsc.status, 0, tsc.stdout + tsc.stderr);
+  });
+
+  test("the wasm that ships is wasm-opt's and 300 KiB or less gzipped", () => {
+    // Catches: the package built without wasm-opt (scripts/wasm-opt.sh skipped or failing
+    // quietly), or a dependency that makes the download grow past the README's figure.
+    const wasm = readFileSync(join(packageDir, "pkg", "stance_ik_bg.wasm"));
+    const gzipped = gzipSync(wasm, { level: 9 }).length;
+    console.log(`[package] wasm ${(wasm.length / 1024).toFixed(0)} KiB, ${(gzipped / 1024).toFixed(0)} KiB gzipped`);
+    assert.ok(gzipped <= 300 * 1024, `${gzipped} bytes gzipped`);
+  });
+
+  test("a copy of the package without its built wasm refuses to be packed", () => {
+    // Catches: a prepack that is missing or lets `npm pack` through, which made a tarball
+    // whose index.js imports a pkg/stance_ik.js that is not in it (it failed only at import).
+    const copy = mkdtempSync(join(tmpdir(), "stance-unbuilt-"));
+    for (const file of ["package.json", "index.js", "index.d.ts", "README.md", "prepack.mjs"]) {
+      copyFileSync(join(packageDir, file), join(copy, file));
+    }
+    const packed = spawnSync("npm", ["pack", "--pack-destination", copy], { cwd: copy, encoding: "utf8" });
+    assert.notEqual(packed.status, 0, "npm pack went through without pkg/");
+    assert.match(packed.stderr, /stance-ik cannot be packed: pkg\/stance_ik\.js/);
+    assert.match(packed.stderr, /scripts\/build-package\.sh/);
+    const { version } = JSON.parse(readFileSync(join(packageDir, "package.json"), "utf8"));
+    assert.ok(!existsSync(join(copy, `stance-ik-${version}.tgz`)), "a tarball was written");
   });
 
   test("npm pack gives a tarball that installs and solves on its own", () => {

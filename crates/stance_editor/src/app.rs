@@ -580,7 +580,8 @@ impl StanceApp {
         self.drain_inbox();
         self.shortcuts(&ctx);
         // The frame's step runs before anything is drawn: the panels and the viewport show
-        // this frame's posture and statuses. Gestures read below are solved by the next step.
+        // this frame's posture and statuses. A gesture the viewport reads below is solved
+        // there again before the body is drawn (EditorModel::follow_input).
         let origin = self.clock_origin;
         let clock = move || origin.elapsed().as_secs_f64();
         self.model.step(self.now_secs(), Some(&clock));
@@ -630,7 +631,7 @@ impl StanceApp {
             .show(ui, |ui| {
                 self.notice_strip(ui);
                 self.viewport.follow_document_camera(&self.model);
-                self.viewport.show(ui, frame, &mut self.model);
+                self.viewport.show(ui, frame, &mut self.model, &clock);
             });
         self.help_window(&ctx);
         self.windows.image.show(

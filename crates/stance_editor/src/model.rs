@@ -272,6 +272,29 @@ impl EditorModel {
         self.solver_ms = started.elapsed().as_secs_f64() * 1000.0;
         self.motion_after_solve();
         self.capture_frame(now_secs);
+        self.extend_trace();
+        self.refresh_bones();
+        self.autosave();
+    }
+
+    /// The pointer moved a gesture in this frame, after its [`step`](Self::step) (the view
+    /// reads the pointer once the frame's layout is known): solves again within `clock`'s
+    /// budget, so that the body drawn in the frame that read the pointer follows it, not
+    /// one frame later. Nothing to do without a gesture or when the step's posture still
+    /// holds.
+    pub fn follow_input(&mut self, clock: Option<&dyn Clock>) {
+        if self.gesture.is_none() || self.session.is_settled() {
+            return;
+        }
+        let started = web_time::Instant::now();
+        self.session.solve_frame(clock);
+        self.solver_ms += started.elapsed().as_secs_f64() * 1000.0;
+        self.extend_trace();
+        self.refresh_bones();
+    }
+
+    /// The pulled point's path: a point where it moved far enough from the last one.
+    fn extend_trace(&mut self) {
         if let Some(point) = self.session.grabbed_point_world() {
             let moved = self
                 .trace
@@ -281,8 +304,6 @@ impl EditorModel {
                 self.trace.push(point);
             }
         }
-        self.refresh_bones();
-        self.autosave();
     }
 
     /// The sensors' readings were shown: their latency is measured up to here.

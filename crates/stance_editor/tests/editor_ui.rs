@@ -148,6 +148,48 @@ fn dragging_the_right_hand_pulls_it_while_the_pinned_feet_hold() {
 }
 
 #[test]
+fn a_pull_moves_the_body_in_the_frame_that_read_the_pointer() {
+    // Catches: the pull's goal moved after the frame's solve (the viewport reads the pointer
+    // after EditorModel::step), so that the body drawn lags the pointer by one frame.
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    let (_, end) = drag_right_forearm_up(&mut harness);
+    for _ in 0..40 {
+        harness.step();
+    }
+    let grabbed = |harness: &Harness<'static, StanceApp>| {
+        let session = harness.state().model().session();
+        session.grabbed_point_world().unwrap()
+    };
+    let wrist_on_screen = screen_position(&harness, "r_radiocarpal");
+    let before = grabbed(&harness);
+    // One frame with the pointer 10 points further right: the body drawn in it has moved.
+    harness.event(egui::Event::PointerMoved(end + egui::vec2(10.0, 0.0)));
+    harness.step();
+    let in_that_frame = grabbed(&harness);
+    let wrist_moved = screen_position(&harness, "r_radiocarpal").x - wrist_on_screen.x;
+    // A frame without input: the posture had already caught up.
+    harness.step();
+    let next_frame = grabbed(&harness);
+    let moved = (in_that_frame - before).length();
+    let left = (next_frame - in_that_frame).length();
+    assert!(
+        moved > 0.01,
+        "the pulled point moved {moved} m in the frame that read the pointer"
+    );
+    assert!(
+        left < moved * 0.05,
+        "it moved {moved} m in that frame and {left} m more in the next"
+    );
+    assert!(
+        wrist_moved > 5.0,
+        "the wrist drawn moved {wrist_moved} points toward the pointer"
+    );
+    release_at(&mut harness, end + egui::vec2(10.0, 0.0));
+    settle(&mut harness);
+}
+
+#[test]
 fn a_copied_link_opens_the_same_posture_and_tasks_and_a_tampered_one_says_so() {
     let host = MemoryHost::default();
     let mut harness = harness(&host);

@@ -3,12 +3,13 @@
 //! set on the default H-Anim body (LOA2) as the editor does: its posture, its tasks as a
 //! problem, their mirror images, and a few solver iterations with the solution's report.
 //!
-//! Seeds: `fuzz/seeds/document/` (written by `cargo test -p stance_document --test
-//! fuzz_seeds -- --ignored`).
+//! Seeds: `fuzz/seeds/document/` (written by `cargo test -p stance_document --test all
+//! fuzz_seeds:: -- --ignored`).
 #![no_main]
 
 use std::sync::OnceLock;
 
+#[path = "../common/solve_briefly.rs"]
 mod solve_briefly;
 
 use libfuzzer_sys::fuzz_target;

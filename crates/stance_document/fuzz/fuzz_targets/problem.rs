@@ -7,6 +7,7 @@
 //! -- --ignored`).
 #![no_main]
 
+#[path = "../common/solve_briefly.rs"]
 mod solve_briefly;
 
 use libfuzzer_sys::fuzz_target;

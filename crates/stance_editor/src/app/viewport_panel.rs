@@ -5,6 +5,7 @@ use egui::{Color32, RichText, Sense};
 use glam::DVec3;
 use stance_document::CameraSpec;
 use stance_hanim::{LevelOfArticulation, LimbName, readable_name};
+use stance_ik::Clock;
 use stance_render::{BODY_COLOR_LINEAR, OrbitCamera, Scene, ViewPreset, pick_capsule};
 
 use super::handles::Handles;
@@ -187,13 +188,16 @@ impl ViewportPanel {
         }
     }
 
-    /// The viewport in `ui`'s remaining space: input as commands to `model`, then the
-    /// picture of the model's posture with its overlays.
+    /// The viewport in `ui`'s remaining space: input as commands to `model` (a gesture the
+    /// pointer moved is solved at once, within `clock`'s frame budget), then the picture of
+    /// the model's posture with its overlays: the body drawn follows the pointer read in
+    /// the same frame.
     pub(super) fn show(
         &mut self,
         ui: &mut egui::Ui,
         frame: &eframe::Frame,
         model: &mut EditorModel,
+        clock: &dyn Clock,
     ) {
         let rect = ui.available_rect_before_wrap();
         self.rect = rect;
@@ -207,6 +211,7 @@ impl ViewportPanel {
         );
         let input = ViewportInput::read(ui, &response);
         self.gestures(ui, &response, &input, model);
+        model.follow_input(Some(clock));
         context_menu(&response, model);
         if model.is_busy() {
             ui.ctx().request_repaint();

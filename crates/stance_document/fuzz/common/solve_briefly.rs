@@ -1,3 +1,6 @@
+//! Not a fuzz target: shared by the `document` and `problem` targets (fuzz_targets/ holds
+//! only targets, each declared in Cargo.toml; scripts/test.sh checks it).
+//!
 //! What the `document` and `problem` targets do with a problem that loads: its closed-form
 //! limb starts, a few solver iterations and the solution's JSON (joints, posture, report with
 //! the comfort). Every error must say something.
