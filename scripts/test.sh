@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # Runs every layer of Stance's tests and its quality gates; stops at the first failure.
 #   1. gates: rustfmt, purity of the core crates; clippy (-D warnings) runs inside the test
-#      builds below (scripts/clippy-env.sh): natively for all targets, for wasm32 in
-#      wasm-pack's builds; stance_js's wasm32-only code is linted on its own
+#      builds below (scripts/clippy-env.sh): natively for all targets, for wasm32 in the
+#      browser tests' build; stance_js's wasm32-only code is linted on its own
 #   2. native `cargo test --workspace` (includes the lavapipe offscreen render)
-#   3. the pure crates' tests in headless Chromium (wasm-pack test)
+#   3. the pure crates' tests in headless Chromium (cargo test for wasm32, one invocation)
 #   4. the built site in headless Chromium, WebGL2 and WebGPU (Playwright), and the npm
 #      package stance-ik from Node (tests/package.test.mjs)
 # Expects scripts/setup.sh --test to have run (npm test does both).
@@ -55,16 +55,19 @@ cargo test --workspace --quiet --lib --bins --tests -- --skip scenario_timings -
 cargo test --quiet -p stance_ik --test all timing:: -- --nocapture
 cargo test --quiet -p stance_editor --test all frame_cost:: -- --nocapture
 
-# wasm-pack runs each pure crate's wasm-bindgen tests in headless Chromium (Debian's
-# chromedriver). `stance_asset` (the importer) is tested natively; in the browser it runs in
-# the release wasm of the page's end-to-end avatar tests (picked and broken files), which
-# saves CI about a minute of wasm32 debug builds.
-for crate in "${PURE_CRATES[@]}"; do
-  step "$crate in headless Chromium (wasm-pack test)"
-  # stance_ik's console output carries its S2..S5 timings.
-  show=(); [ "$crate" = stance_ik ] && show=(-- --nocapture)
-  wasm-pack test --headless --chrome --chromedriver "$(command -v chromedriver)" "crates/$crate" "${show[@]}"
-done
+# The pure crates' wasm-bindgen tests in headless Chromium, in one cargo invocation (their
+# dependencies built once for all, with the features unified): .cargo/config.toml's runner,
+# wasm-bindgen-test-runner, runs each test binary through Debian's chromedriver (what
+# `wasm-pack test --headless --chrome` does, one crate at a time). `stance_asset` (the
+# importer) is tested natively; in the browser it runs in the release wasm of the page's
+# end-to-end avatar tests (picked and broken files), which saves CI about a minute of wasm32
+# debug builds.
+step "${PURE_CRATES[*]} in headless Chromium (wasm32 tests)"
+packages=()
+for crate in "${PURE_CRATES[@]}"; do packages+=(-p "$crate"); done
+# --nocapture: stance_ik's console output carries its S2..S5 timings.
+CHROMEDRIVER="$(command -v chromedriver)" cargo test --quiet --target wasm32-unknown-unknown \
+  "${packages[@]}" --lib --tests -- --nocapture
 
 step "clippy (wasm32): stance_js, the npm package's bindings"
 env -u RUSTC_WORKSPACE_WRAPPER -u CLIPPY_ARGS \
@@ -75,6 +78,8 @@ step "site build (and the stance-ik package with its three.js example)"
 env -u RUSTC_WORKSPACE_WRAPPER -u CLIPPY_ARGS bash scripts/build-web.sh
 
 step "end to end in headless Chromium (WebGL2 and WebGPU)"
-node --test --test-concurrency=1 tests/
+# Two files at a time (each file starts its own server on a free port and its own browser
+# profile): the machine's two cores are busy either way.
+node --test --test-concurrency=2 tests/
 
 step "all green in $((SECONDS - started)) s; wasm $(($(cat dist/pkg/wasm-gzip-bytes.txt) / 1024)) KiB gzipped"
