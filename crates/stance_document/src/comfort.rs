@@ -3,7 +3,7 @@
 //! `report.comfort` of `stance solve`), see `docs/comfort.md`.
 
 use serde_json::{Map, Value, json};
-use stance_hanim::comfort::rula::{RulaLoad, RulaVariant};
+use stance_hanim::comfort::rula::{RulaLoad, RulaTolerances, RulaVariant};
 use stance_hanim::comfort::{ComfortReport, ComfortSettings, comfort_report};
 use stance_hanim::strength::{Sex, aligned_axes};
 use stance_ik::{Posture, Skeleton};
@@ -11,10 +11,14 @@ use stance_ik::{Posture, Skeleton};
 use crate::DocumentError;
 use crate::json::{number, obj, optional_bool, string};
 
-/// The file's names of RULA's variants, loads and the strength profile's sexes.
+/// The file's names of RULA's variants, tolerances, loads and the strength profile's sexes.
 const VARIANTS: &[(&str, RulaVariant)] = &[
     ("paper", RulaVariant::Paper),
     ("worksheet", RulaVariant::Worksheet),
+];
+const TOLERANCES: &[(&str, RulaTolerances)] = &[
+    ("stance", RulaTolerances::STANCE),
+    ("none", RulaTolerances::NONE),
 ];
 const LOADS: &[(&str, RulaLoad)] = &[
     ("none", RulaLoad::None),
@@ -50,10 +54,10 @@ fn choice<T: Copy>(
     }
 }
 
-/// Parses `{"variant": "paper" | "worksheet", "load": "none" | "intermittent_2_10" |
-/// "static_2_10" | "intermittent_10" | "static_10" | "shock", "muscle_use": bool,
-/// "arm_supported": bool, "legs_supported": bool, "seated_supported": bool, "sex": "male" |
-/// "female", "mass": kg, "stature": m}`; every field optional.
+/// Parses `{"variant": "paper" | "worksheet", "tolerances": "stance" | "none", "load": "none"
+/// | "intermittent_2_10" | "static_2_10" | "intermittent_10" | "static_10" | "shock",
+/// "muscle_use": bool, "arm_supported": bool, "legs_supported": bool, "seated_supported":
+/// bool, "sex": "male" | "female", "mass": kg, "stature": m}`; every field optional.
 pub fn parse_comfort_settings(v: &Value, at: &str) -> Result<ComfortSettings, DocumentError> {
     let o = obj(v, at)?;
     let mut s = ComfortSettings::default();
@@ -61,6 +65,9 @@ pub fn parse_comfort_settings(v: &Value, at: &str) -> Result<ComfortSettings, Do
     let flag = |name: &str| optional_bool(o, at, name);
     if let Some(variant) = choice(o, at, "variant", VARIANTS)? {
         s.rula_settings.variant = variant;
+    }
+    if let Some(tolerances) = choice(o, at, "tolerances", TOLERANCES)? {
+        s.rula_settings.tolerances = tolerances;
     }
     if let Some(load) = choice(o, at, "load", LOADS)? {
         s.rula_settings.load = load;
@@ -153,4 +160,32 @@ fn rula_parts(r: &stance_hanim::comfort::rula::RulaReport) -> Value {
         "posture_b": r.body.posture_b,
         "score_d": r.body.score_d,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use super::*;
+
+    #[test]
+    fn the_comfort_object_chooses_rulas_tolerances() {
+        // Catches a `tolerances` field that is ignored, read into the wrong setting, or that
+        // changes the default when absent.
+        let parse = |text: &str| {
+            parse_comfort_settings(&serde_json::from_str(text).unwrap(), "comfort")
+                .map(|s| s.rula_settings)
+        };
+        assert_eq!(parse("{}").unwrap().tolerances, RulaTolerances::STANCE);
+        let printed = parse(r#"{"tolerances": "none", "variant": "worksheet"}"#).unwrap();
+        assert_eq!(printed.tolerances, RulaTolerances::NONE);
+        assert_eq!(printed.variant, RulaVariant::Worksheet);
+        let stance = parse(r#"{"tolerances": "stance"}"#).unwrap();
+        assert_eq!(stance.tolerances, RulaTolerances::STANCE);
+        let err = parse(r#"{"tolerances": "paper"}"#).unwrap_err().to_string();
+        assert!(
+            err.contains("comfort.tolerances") && err.contains("none"),
+            "{err}"
+        );
+    }
 }

@@ -123,7 +123,7 @@ fn a_ring_turns_its_dof_by_the_pointer_angle() {
         start_value,
         sign: 1.0,
     }));
-    // A quarter turn in two steps, then across the ±π seam: the turn accumulates.
+    // A quarter turn in two steps: the turn accumulates.
     editor.apply(Command::TurnRing {
         screen_angle: std::f32::consts::FRAC_PI_8,
     });
@@ -140,6 +140,67 @@ fn a_ring_turns_its_dof_by_the_pointer_angle() {
     );
     editor.apply(Command::EndGesture);
     assert!(editor.model.gesture().is_none());
+}
+
+#[test]
+fn a_ring_drag_across_the_pi_seam_keeps_turning_the_same_way() {
+    // Catches a ring that takes the pointer's screen angle as it comes, without unwrapping it
+    // across the ±π seam: the angle jumps from just below +π to just above -π there, a turn
+    // of 0.1 rad read as -2π + 0.1, and the DOF spins the other way to its limit. (The test
+    // above, named for the seam until now, never reached it: it turned from 0 to π/4.)
+    //
+    // By hand: the pointer starts at π - 0.1 and moves to π - 0.05, then -π + 0.05 (that is
+    // π + 0.05, past the seam), then -π + 0.15 (π + 0.15): turns of 0.05, 0.1 and 0.1, in all
+    // 0.25 rad clockwise, so the DOF goes to start - 0.25 (sign +1). Back across the seam to
+    // π - 0.1: a turn of -0.25, the DOF back at its start.
+    use std::f32::consts::PI;
+    let mut editor = Clocked::new();
+    let elbow = editor.joint("l_elbow");
+    let dof = editor.model.session().skeleton().joints()[elbow].dof_start;
+    // The elbow flexes toward -rx: start a little bent so that the turn stays in its range.
+    editor.apply(Command::SetDof { dof, value: -0.5 });
+    let start_value = editor.model.session().posture().values()[dof];
+    assert!((start_value + 0.5).abs() < 1e-12, "{start_value}");
+    editor.apply(Command::BeginHandle(Gesture::Ring {
+        dof,
+        centre_px: [100.0, 100.0],
+        last_angle: PI - 0.1,
+        accumulated: 0.0,
+        start_value,
+        sign: 1.0,
+    }));
+    let accumulated = |editor: &Clocked| match editor.model.gesture() {
+        Some(Gesture::Ring { accumulated, .. }) => *accumulated,
+        other => panic!("a ring drag: {other:?}"),
+    };
+    for screen_angle in [PI - 0.05, -PI + 0.05, -PI + 0.15] {
+        editor.apply(Command::TurnRing { screen_angle });
+    }
+    let turned = accumulated(&editor);
+    assert!(
+        (turned - 0.25).abs() < 1e-5,
+        "turned {turned} rad, by hand 0.25"
+    );
+    let value = editor.model.session().posture().values()[dof];
+    assert!(
+        (value - (start_value - 0.25)).abs() < 1e-5,
+        "{value} vs {}",
+        start_value - 0.25
+    );
+    editor.apply(Command::TurnRing {
+        screen_angle: PI - 0.1,
+    });
+    assert!(
+        accumulated(&editor).abs() < 1e-5,
+        "{}",
+        accumulated(&editor)
+    );
+    let value = editor.model.session().posture().values()[dof];
+    assert!(
+        (value - start_value).abs() < 1e-5,
+        "{value} vs {start_value}"
+    );
+    editor.apply(Command::EndGesture);
 }
 
 #[test]

@@ -180,6 +180,169 @@ fn goal_orientation_sets_the_end_joint() {
     }
 }
 
+/// A 3-4-5 arm for hand computations: a torso at the origin turning about y only, the
+/// shoulder at its centre, upper arm 0.3 m and forearm 0.4 m hanging along -y, the elbow
+/// flexing about x toward -rx (the forearm swings forward to +z, as on the H-Anim body).
+fn right_angle_arm() -> Skeleton {
+    Skeleton::new(vec![
+        JointDef::new("torso", None, DVec3::ZERO, &[Dof::Ry]),
+        JointDef::new(
+            "shoulder",
+            Some("torso"),
+            DVec3::ZERO,
+            &[Dof::Rx, Dof::Ry, Dof::Rz],
+        ),
+        JointDef::new(
+            "elbow",
+            Some("shoulder"),
+            DVec3::new(0.0, -0.3, 0.0),
+            &[Dof::Rx],
+        )
+        .with_limit(Dof::Rx, -2.5, 0.0),
+        JointDef::new(
+            "wrist",
+            Some("elbow"),
+            DVec3::new(0.0, -0.4, 0.0),
+            &[Dof::Rx, Dof::Rz],
+        ),
+    ])
+    .unwrap()
+}
+
+#[test]
+fn the_swivel_zero_and_sign_match_a_hand_computed_arm() {
+    // Catches a swivel convention that is consistent with itself but not the documented one
+    // (limb.rs, problem-format.md): a flipped sign or a moved zero in both `solve` and
+    // `swivel_angle` passes the round trips above, not this.
+    //
+    // Hand computation. The wrist goal is 0.5 m from the shoulder: 0.5^2 = 0.3^2 + 0.4^2,
+    // so the elbow is a right angle (hinge -pi/2: flexion is -rx). The elbow lies
+    // 0.3^2 / 0.5 = 0.18 m along the shoulder-wrist axis n and 0.3 * 0.4 / 0.5 = 0.24 m off
+    // it, in the direction r cos(s) + (n x r) sin(s) for swivel s (right-handed about n).
+    // The reference r: the pole is the rest direction -y; the elbow flexes (-rx) by swinging
+    // the forearm to +z, so the elbow sits behind the shoulder-wrist line: r0 = -z ("elbow
+    // behind the arm"). For n other than the pole, r0 is carried by the shortest rotation
+    // from -y to n.
+    // - Goal (0, -0.5, 0): n = -y = the pole, r = -z, n x r = (-y) x (-z) = +x.
+    //   s = 0: 0.18 n + 0.24 r = (0, -0.18, -0.24); s = pi/2: (0.24, -0.18, 0);
+    //   s = -pi/2: (-0.24, -0.18, 0); s = pi: (0, -0.18, 0.24).
+    // - Goal (0, 0, 0.5), the arm raised forward: n = +z; the shortest rotation from -y to
+    //   +z is 90 deg about (-y) x z = -x, which takes -z to -y: r = -y (elbow down),
+    //   n x r = z x (-y) = +x. s = 0: (0, -0.24, 0.18); s = pi/2: (0.24, 0, 0.18);
+    //   s = -pi/2: (-0.24, 0, 0.18).
+    // - The torso turned +90 deg about y (x -> -z, z -> x), goal (0, -0.5, 0): the swivel is
+    //   measured in the torso's frame, so s = pi/2 puts the elbow at the torso's +x, in the
+    //   world (0, -0.18, -0.24) (not (0.24, -0.18, 0), which a world-frame swivel would give).
+    let s = right_angle_arm();
+    let limb = Limb::from_names(&s, ["shoulder", "elbow", "wrist"]).unwrap();
+    let [_, elbow, wrist] = limb.joints();
+    let h = std::f64::consts::FRAC_PI_2;
+    let cases: [(f64, DVec3, f64, DVec3); 8] = [
+        (
+            0.0,
+            DVec3::new(0.0, -0.5, 0.0),
+            0.0,
+            DVec3::new(0.0, -0.18, -0.24),
+        ),
+        (
+            0.0,
+            DVec3::new(0.0, -0.5, 0.0),
+            h,
+            DVec3::new(0.24, -0.18, 0.0),
+        ),
+        (
+            0.0,
+            DVec3::new(0.0, -0.5, 0.0),
+            -h,
+            DVec3::new(-0.24, -0.18, 0.0),
+        ),
+        (
+            0.0,
+            DVec3::new(0.0, -0.5, 0.0),
+            PI,
+            DVec3::new(0.0, -0.18, 0.24),
+        ),
+        (
+            0.0,
+            DVec3::new(0.0, 0.0, 0.5),
+            0.0,
+            DVec3::new(0.0, -0.24, 0.18),
+        ),
+        (
+            0.0,
+            DVec3::new(0.0, 0.0, 0.5),
+            h,
+            DVec3::new(0.24, 0.0, 0.18),
+        ),
+        (
+            0.0,
+            DVec3::new(0.0, 0.0, 0.5),
+            -h,
+            DVec3::new(-0.24, 0.0, 0.18),
+        ),
+        (
+            h,
+            DVec3::new(0.0, -0.5, 0.0),
+            h,
+            DVec3::new(0.0, -0.18, -0.24),
+        ),
+    ];
+    for (torso, goal, swivel, expected) in cases {
+        let mut p = Posture::rest(&s);
+        p.values_mut()[0] = torso;
+        let base = limb.base(&s, &Frames::new(&s, &p));
+        let sol = limb.solve(base, &LimbGoal::position(goal), swivel);
+        assert!(sol.reached);
+        assert!((sol.hinge_angle + h).abs() < 1e-12, "{}", sol.hinge_angle);
+        limb.apply(&sol, &mut p);
+        let frames = Frames::new(&s, &p);
+        let what = format!("torso {torso}, goal {goal}, swivel {swivel}");
+        assert!(
+            (frames.joint_position[wrist] - goal).length() < 1e-12,
+            "{what}"
+        );
+        let got = frames.joint_position[elbow];
+        assert!(
+            (got - expected).length() < 1e-12,
+            "{what}: elbow at {got}, by hand {expected}"
+        );
+        assert!(
+            angle_diff(limb.swivel_angle(&s, &p), swivel) < 1e-12,
+            "{what}"
+        );
+    }
+}
+
+#[test]
+fn swivel_zero_bends_the_hanim_elbow_back_and_the_knee_forward() {
+    // Catches a swivel zero on the wrong side for the H-Anim limbs (the documented natural
+    // bend: "elbow behind the arm, knee in front of the leg"; H-Anim's +z is the front).
+    // Goals straight below the upper joint at 90 % of the reach; the middle joint's offset
+    // from the upper-end line, seen along z, must point back (elbows) or forward (knees) and
+    // barely sideways.
+    let body = scenarios::humanoid50().unwrap();
+    let rest = Posture::rest(&body);
+    let frames = Frames::new(&body, &rest);
+    for (limb, forward) in hanim_limbs(&body).into_iter().zip([-1.0, -1.0, 1.0, 1.0]) {
+        let base = limb.base(&body, &frames);
+        let (_, reach_max) = limb.reach();
+        let goal = base.upper_position + DVec3::new(0.0, -0.9 * reach_max, 0.0);
+        let sol = limb.solve(base, &LimbGoal::position(goal), 0.0);
+        let mut p = rest.clone();
+        limb.apply(&sol, &mut p);
+        let f = Frames::new(&body, &p);
+        let [upper, middle, _] = limb.joints();
+        let off = f.joint_position[middle] - f.joint_position[upper];
+        // The line is vertical here: the offset from it is the horizontal part.
+        let side = DVec3::new(off.x, 0.0, off.z);
+        assert!(
+            forward * side.z > 0.9 * side.length() && side.length() > 0.02,
+            "{:?}: middle joint offset {side} from the line",
+            limb.joints()
+        );
+    }
+}
+
 /// The goal's rotation vector with the components off the DOF zeroed (the old projection).
 fn zeroed_rotation_vector(q: DQuat, dofs: [bool; 3]) -> DVec3 {
     let q = if q.w < 0.0 { -q } else { q };

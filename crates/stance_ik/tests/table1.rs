@@ -55,9 +55,17 @@ fn table1_feasible_level1_tasks_are_met() {
     }
     assert!(report.levels[0].met, "{report:#?}");
     // The temporary drags at level 4 conflict with the rest: level 4 (at least) gives way.
-    if let Some(level) = report.gave_way {
-        assert!(level > 1, "{report:#?}");
-    }
+    // The temporary drags at level 4 conflict with the rest: level 4 gives way, levels 1-3
+    // hold. (Until now this read `if let Some(level) = report.gave_way { level > 1 }`, which
+    // passed with `gave_way` None: a report that lost the conflict, or named no level, went
+    // unnoticed.)
+    assert_eq!(report.gave_way, Some(4), "{report:#?}");
+    let met: Vec<(u32, bool)> = report.levels.iter().map(|l| (l.level, l.met)).collect();
+    assert_eq!(
+        met,
+        [(1, true), (2, true), (3, true), (4, false)],
+        "{report:#?}"
+    );
 }
 
 #[test]

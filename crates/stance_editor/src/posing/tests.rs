@@ -6,12 +6,21 @@ fn session() -> PosingSession {
     PosingSession::new(LevelOfArticulation::Loa2).unwrap()
 }
 
+/// Solves frames until the session settles and returns how many it took; panics, with the
+/// last solve's report, when it has not within 200 (a test going on unsettled would check a
+/// posture still on its way).
 fn settle(session: &mut PosingSession) -> usize {
+    const LIMIT: usize = 200;
     let mut frames = 0;
-    while !session.is_settled() && frames < 200 {
+    while !session.is_settled() && frames < LIMIT {
         session.solve_frame(None);
         frames += 1;
     }
+    assert!(
+        session.is_settled(),
+        "the session did not settle within {LIMIT} frames: {:?}",
+        session.report()
+    );
     frames
 }
 

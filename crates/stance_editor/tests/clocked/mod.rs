@@ -1,10 +1,14 @@
 //! The editor model driven frame by frame at 60 Hz, without egui: what the model tests share.
 
 #![allow(dead_code)]
+// Test-support code (not itself a #[test]): panicking on broken fixtures is what we want.
+// Since the tests became one binary (tests/all.rs) the allowances of the files that include
+// this module no longer reach it.
+#![allow(clippy::expect_used, clippy::unwrap_used, clippy::panic)]
 
 use glam::DVec3;
 use stance_editor::model::MotionCommand;
-use stance_editor::{Command, EditorModel, MemoryHost};
+use stance_editor::{Command, EditorModel, Gesture, MemoryHost};
 
 /// Seconds between two frames.
 pub const FRAME: f64 = 1.0 / 60.0;
@@ -36,7 +40,9 @@ impl Clocked {
         }
     }
 
-    /// Steps until the solver settles (at most `limit` frames).
+    /// Steps until the solver settles; panics, saying where the solver stands, when it has
+    /// not within `limit` frames (a test that goes on unsettled would check a posture still
+    /// on its way).
     pub fn settle_within(&mut self, limit: usize) {
         for _ in 0..limit {
             self.frames(1);
@@ -44,9 +50,10 @@ impl Clocked {
                 return;
             }
         }
+        panic!("{}", unsettled(&self.model, limit));
     }
 
-    /// Steps until the solver settles (at most 300 frames).
+    /// Steps until the solver settles (at most 300 frames, else a panic).
     pub fn settle(&mut self) {
         self.settle_within(300);
     }
@@ -73,4 +80,45 @@ impl Clocked {
             .joint_position(name)
             .unwrap_or_else(|| panic!("{name} has a position"))
     }
+}
+
+/// Why a settle gave up: the frames spent, the last solve's status, iterations and each
+/// level's residual, and what the model was doing.
+pub fn unsettled(model: &EditorModel, frames: usize) -> String {
+    let session = model.session();
+    let solve = match session.report() {
+        Some(report) => {
+            let levels: Vec<String> = report
+                .levels
+                .iter()
+                .map(|l| {
+                    format!(
+                        "level {} {} residual {:.3e}",
+                        l.level,
+                        if l.met { "met" } else { "unmet" },
+                        l.residual_after
+                    )
+                })
+                .collect();
+            format!(
+                "last solve {:?} after {} iterations, gave way {:?}; {}",
+                report.status,
+                report.iterations,
+                report.gave_way,
+                levels.join(", ")
+            )
+        }
+        None => "no solve yet".to_owned(),
+    };
+    let gesture = match model.gesture() {
+        None => "none",
+        Some(Gesture::Pull { .. }) => "pull",
+        Some(Gesture::Goal { .. }) => "goal drag",
+        Some(Gesture::Ring { .. }) => "ring",
+        Some(Gesture::Swivel { .. }) => "swivel",
+    };
+    format!(
+        "the model did not settle within {frames} frames: {solve}; gesture {gesture}, {} tasks",
+        session.tasks().len()
+    )
 }

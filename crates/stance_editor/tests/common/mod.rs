@@ -2,6 +2,10 @@
 //! until the solver settles, the published state, and clicks where a hand would make them.
 
 #![allow(dead_code)]
+// Test-support code (not itself a #[test]): panicking on broken fixtures is what we want.
+// Since the tests became one binary (tests/all.rs) the allowances of the files that include
+// this module no longer reach it.
+#![allow(clippy::expect_used, clippy::unwrap_used, clippy::panic)]
 
 use egui::{Modifiers, PointerButton, Pos2};
 use egui_kittest::Harness;
@@ -23,14 +27,24 @@ pub fn harness_for(app: StanceApp) -> Harness<'static, StanceApp> {
     harness_sized(app, egui::vec2(1280.0, 720.0))
 }
 
-/// Runs frames until the solver has settled (or a generous bound).
+/// Runs frames until the solver has settled, then two more; panics, saying where the solver
+/// stands, when it has not within 400 frames (a test that goes on unsettled would check a
+/// posture still on its way).
 pub fn settle(harness: &mut Harness<'static, StanceApp>) {
-    for _ in 0..400 {
+    const LIMIT: usize = 400;
+    let mut settled = false;
+    for _ in 0..LIMIT {
         harness.step();
         if harness.state().model().session().is_settled() {
+            settled = true;
             break;
         }
     }
+    assert!(
+        settled,
+        "{}",
+        crate::clocked::unsettled(harness.state().model(), LIMIT)
+    );
     harness.run_steps(2);
 }
 

@@ -141,3 +141,6 @@ pub fn comfort_report(
         terms: model.terms(skeleton, &frames, posture.values()),
     }
 }
+
+#[cfg(test)]
+mod tests;

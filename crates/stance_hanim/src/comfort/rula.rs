@@ -10,7 +10,7 @@
 //! 31 cells and is not monotone). Inputs are clamped to the tables' ranges (0 reads as 1,
 //! score C above 8 as 8, score D above 7 as 7).
 //!
-//! # Part scores (the paper's rules)
+//! # Part scores (the paper's rules, with Stance's default tolerances)
 //! Every band owns its upper edge ("the lower band is closed"): an upper arm at exactly 20
 //! degrees of flexion scores 1, at 20.5 degrees 2; at exactly 45 degrees 2, at 45.5 degrees 3.
 //! The paper does not say who owns an edge; most code does this.
@@ -55,6 +55,18 @@
 //! 15 degrees scores 2, and abduction counts beyond 15 degrees). Nothing else differs: Table A
 //! stays the common one (not the worksheet's), the load scores stay the paper's, the lower arm
 //! keeps a single +1.
+//!
+//! # Tolerances
+//! The paper scores a wrist, neck or trunk as neutral only at exactly 0 degrees and adds 1 for
+//! any twist, side-bend, deviation, abduction or raised shoulder. A measured posture is never
+//! exactly neutral, so by default Stance counts an angle as neutral within a tolerance
+//! ([`RulaTolerances::STANCE`]: [`WRIST_NEUTRAL_DEG`], [`NECK_EXTENSION_DEG`],
+//! [`TRUNK_UPRIGHT_DEG`], [`TWIST_BEND_DEG`], [`SHOULDER_RAISED_DEG`], abduction beyond the
+//! variant's `e1`). [`RulaTolerances::NONE`] scores by the paper as printed: every tolerance
+//! 0 (wrist 1 only when straight, any neck extension 4, a trunk 1 only when upright, any
+//! abduction, twist, side-bend or deviation +1). Either combines with either variant; the
+//! smooth stand-in ([`rula_bands`]) keeps Stance's tolerances (a step at 0 degrees would give
+//! a solver no direction either).
 //!
 //! # Measurement ([`measure`])
 //! Angles are in degrees. The trunk frame is the world frame of the upper trunk: the spine
@@ -263,6 +275,52 @@ impl RulaVariant {
     }
 }
 
+/// How far from neutral an angle must be before it counts (degrees; see the module
+/// documentation's "Tolerances"). An angle counts when it is strictly beyond its tolerance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RulaTolerances {
+    /// Wrist flexion or extension scores 1 up to this, and deviation adds 1 beyond it.
+    pub wrist_neutral_deg: f64,
+    /// A head tilted back beyond this is in extension (neck 4).
+    pub neck_extension_deg: f64,
+    /// A trunk within this of vertical (either way) is upright (trunk 1).
+    pub trunk_upright_deg: f64,
+    /// Twist and side-bend of the neck or trunk add 1 beyond this.
+    pub twist_bend_deg: f64,
+    /// A clavicle elevated beyond this above rest: the shoulder is raised (+1).
+    pub shoulder_raised_deg: f64,
+    /// An upper arm abducted beyond this adds 1; `None`: the variant's neutral edge `e1`
+    /// ([`RulaVariant::upper_arm_edges`]).
+    pub abduction_deg: Option<f64>,
+}
+
+impl RulaTolerances {
+    /// Stance's tolerances (the default): a measured angle is never exactly 0.
+    pub const STANCE: Self = Self {
+        wrist_neutral_deg: WRIST_NEUTRAL_DEG,
+        neck_extension_deg: NECK_EXTENSION_DEG,
+        trunk_upright_deg: TRUNK_UPRIGHT_DEG,
+        twist_bend_deg: TWIST_BEND_DEG,
+        shoulder_raised_deg: SHOULDER_RAISED_DEG,
+        abduction_deg: None,
+    };
+    /// The paper as printed: no tolerance anywhere.
+    pub const NONE: Self = Self {
+        wrist_neutral_deg: 0.0,
+        neck_extension_deg: 0.0,
+        trunk_upright_deg: 0.0,
+        twist_bend_deg: 0.0,
+        shoulder_raised_deg: 0.0,
+        abduction_deg: Some(0.0),
+    };
+}
+
+impl Default for RulaTolerances {
+    fn default() -> Self {
+        Self::STANCE
+    }
+}
+
 /// The force or load handled (the paper's force/load score).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum RulaLoad {
@@ -298,6 +356,9 @@ impl RulaLoad {
 pub struct RulaSettings {
     /// Band edges (default [`RulaVariant::Paper`]).
     pub variant: RulaVariant,
+    /// How far from neutral an angle must be to count (default [`RulaTolerances::STANCE`];
+    /// [`RulaTolerances::NONE`] is the paper as printed).
+    pub tolerances: RulaTolerances,
     /// The posture is mainly static (held longer than a minute) or repeated more than 4 times
     /// a minute: +1 to scores C and D.
     pub muscle_use: bool,
@@ -466,8 +527,9 @@ fn bounded(score: i32, max: u8) -> u8 {
 }
 
 /// The upper arm score of one arm, 1-6.
-fn upper_arm_score(arm: &ArmAngles, variant: RulaVariant, supported: bool) -> u8 {
-    let [neutral, middle, high] = variant.upper_arm_edges();
+fn upper_arm_score(arm: &ArmAngles, settings: &RulaSettings) -> u8 {
+    let [neutral, middle, high] = settings.variant.upper_arm_edges();
+    let tolerances = &settings.tolerances;
     let flexion = arm.upper_arm_flexion;
     let mut score = if flexion < -neutral {
         2
@@ -482,14 +544,14 @@ fn upper_arm_score(arm: &ArmAngles, variant: RulaVariant, supported: bool) -> u8
     };
     if arm
         .shoulder_elevation
-        .is_some_and(|e| e > SHOULDER_RAISED_DEG)
+        .is_some_and(|e| e > tolerances.shoulder_raised_deg)
     {
         score += 1;
     }
-    if arm.upper_arm_abduction > neutral {
+    if arm.upper_arm_abduction > tolerances.abduction_deg.unwrap_or(neutral) {
         score += 1;
     }
-    if supported {
+    if settings.arm_supported {
         score -= 1;
     }
     bounded(score, 6)
@@ -510,25 +572,25 @@ fn lower_arm_score(arm: &ArmAngles) -> u8 {
 }
 
 /// The wrist score of one arm, 1-4.
-fn wrist_score(arm: &ArmAngles) -> u8 {
+fn wrist_score(arm: &ArmAngles, tolerances: &RulaTolerances) -> u8 {
     let bend = arm.wrist_flexion.abs();
-    let mut score = if bend <= WRIST_NEUTRAL_DEG {
+    let mut score = if bend <= tolerances.wrist_neutral_deg {
         1
     } else if bend <= 15.0 {
         2
     } else {
         3
     };
-    if arm.wrist_deviation.abs() > WRIST_NEUTRAL_DEG {
+    if arm.wrist_deviation.abs() > tolerances.wrist_neutral_deg {
         score += 1;
     }
     bounded(score, 4)
 }
 
 /// The neck score, 1-6.
-fn neck_score(angles: &RulaAngles) -> u8 {
+fn neck_score(angles: &RulaAngles, tolerances: &RulaTolerances) -> u8 {
     let flexion = angles.neck_flexion;
-    let mut score = if flexion < -NECK_EXTENSION_DEG {
+    let mut score = if flexion < -tolerances.neck_extension_deg {
         4
     } else if flexion <= 10.0 {
         1
@@ -537,19 +599,20 @@ fn neck_score(angles: &RulaAngles) -> u8 {
     } else {
         3
     };
-    if angles.neck_twist.abs() > TWIST_BEND_DEG {
+    if angles.neck_twist.abs() > tolerances.twist_bend_deg {
         score += 1;
     }
-    if angles.neck_side_bend.abs() > TWIST_BEND_DEG {
+    if angles.neck_side_bend.abs() > tolerances.twist_bend_deg {
         score += 1;
     }
     bounded(score, 6)
 }
 
 /// The trunk score, 1-6.
-fn trunk_score(angles: &RulaAngles, seated_supported: bool) -> u8 {
+fn trunk_score(angles: &RulaAngles, settings: &RulaSettings) -> u8 {
+    let tolerances = &settings.tolerances;
     let flexion = angles.trunk_flexion;
-    let mut score = if flexion.abs() <= TRUNK_UPRIGHT_DEG {
+    let mut score = if flexion.abs() <= tolerances.trunk_upright_deg {
         1
     } else if flexion <= 20.0 {
         // Flexion up to 20 degrees, or extension beyond the upright tolerance.
@@ -559,25 +622,26 @@ fn trunk_score(angles: &RulaAngles, seated_supported: bool) -> u8 {
     } else {
         4
     };
-    if seated_supported && flexion <= 20.0 {
+    if settings.seated_supported && flexion <= 20.0 {
         score = 1;
     }
-    if angles.trunk_twist.abs() > TWIST_BEND_DEG {
+    if angles.trunk_twist.abs() > tolerances.twist_bend_deg {
         score += 1;
     }
-    if angles.trunk_side_bend.abs() > TWIST_BEND_DEG {
+    if angles.trunk_side_bend.abs() > tolerances.twist_bend_deg {
         score += 1;
     }
     bounded(score, 6)
 }
 
-/// Scores measured angles with the paper's rules (band edges per `settings.variant`).
+/// Scores measured angles with the paper's rules (band edges per `settings.variant`,
+/// tolerances per `settings.tolerances`).
 pub fn score(angles: &RulaAngles, settings: &RulaSettings) -> RulaReport {
     let muscle_use = u8::from(settings.muscle_use);
     let load = settings.load.score();
     let legs_ok = settings.legs_supported.unwrap_or(angles.weight_balanced);
-    let neck = neck_score(angles);
-    let trunk = trunk_score(angles, settings.seated_supported);
+    let neck = neck_score(angles, &settings.tolerances);
+    let trunk = trunk_score(angles, settings);
     let legs = if legs_ok { 1 } else { 2 };
     let posture_b = table_b(neck, trunk, legs);
     let body = RulaBody {
@@ -590,9 +654,9 @@ pub fn score(angles: &RulaAngles, settings: &RulaSettings) -> RulaReport {
         score_d: posture_b + muscle_use + load,
     };
     let arm = |angles: &ArmAngles| {
-        let upper_arm = upper_arm_score(angles, settings.variant, settings.arm_supported);
+        let upper_arm = upper_arm_score(angles, settings);
         let lower_arm = lower_arm_score(angles);
-        let wrist = wrist_score(angles);
+        let wrist = wrist_score(angles, &settings.tolerances);
         let wrist_twist = angles.wrist_twist.clamp(1, 2);
         let posture_a = table_a(upper_arm, lower_arm, wrist, wrist_twist);
         let score_c = posture_a + muscle_use + load;

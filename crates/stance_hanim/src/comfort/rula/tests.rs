@@ -342,6 +342,215 @@ fn scores_c_and_d_and_the_grand_score() {
 }
 
 // ---------------------------------------------------------------------------------------------
+// The paper as printed: no tolerance (`RulaTolerances::NONE`).
+
+const AS_PRINTED: RulaSettings = RulaSettings {
+    tolerances: RulaTolerances::NONE,
+    ..PAPER
+};
+
+#[test]
+fn paper_as_printed_scores_every_part_at_its_band_edges() {
+    // Catches a tolerance left in the paper-as-printed mode (a 5 degree neutral wrist, neck or
+    // trunk, a 10 degree twist, the variant's 20 degrees for abduction), a band edge owned by
+    // the wrong side, and the default losing its tolerances. The expected scores are the
+    // paper's rules read directly (McAtamney & Corlett 1993): upper arm 20 ext. to 20 flex.
+    // 1, 20-45 2, 45-90 3, above 90 4, +1 abducted, +1 shoulder raised; lower arm 60-100 1,
+    // else 2; wrist 0 = 1, up to 15 either way 2, beyond 3, +1 deviated; neck 0-10 1, 10-20 2,
+    // beyond 3, extension 4, +1 twisted, +1 side-bent; trunk 0 = 1, 0-20 2, 20-60 3, beyond
+    // 4, +1 twisted, +1 side-bent. An edge belongs to the lower band; 0.001 degrees past it
+    // is in the next.
+    let arm = |f: &dyn Fn(&mut ArmAngles)| {
+        let mut angles = RulaAngles::default();
+        f(&mut angles.left);
+        let r = score(&angles, &AS_PRINTED).left;
+        [r.upper_arm, r.lower_arm, r.wrist]
+    };
+    let ua = |f: &dyn Fn(&mut ArmAngles)| arm(f)[0];
+    for (flexion, expected) in [
+        (-20.001, 2),
+        (-20.0, 1),
+        (0.0, 1),
+        (20.0, 1),
+        (20.001, 2),
+        (45.0, 2),
+        (45.001, 3),
+        (90.0, 3),
+        (90.001, 4),
+    ] {
+        assert_eq!(
+            ua(&|a| a.upper_arm_flexion = flexion),
+            expected,
+            "upper arm {flexion}"
+        );
+    }
+    // Abducted or raised by anything at all: +1 (Stance's default waits for 20 and 10).
+    assert_eq!(ua(&|a| a.upper_arm_abduction = 0.0), 1);
+    assert_eq!(ua(&|a| a.upper_arm_abduction = 0.001), 2);
+    assert_eq!(
+        ua(&|a| a.upper_arm_abduction = -5.0),
+        1,
+        "adduction adds nothing"
+    );
+    assert_eq!(ua(&|a| a.shoulder_elevation = Some(0.0)), 1);
+    assert_eq!(ua(&|a| a.shoulder_elevation = Some(0.001)), 2);
+    let la = |e: f64| arm(&|a| a.elbow_flexion = e)[1];
+    assert_eq!([la(60.0), la(60.001), la(100.0), la(100.001)], [2, 1, 1, 2]);
+    let wr = |w: f64| arm(&|a| a.wrist_flexion = w)[2];
+    assert_eq!(
+        [
+            wr(0.0),
+            wr(0.001),
+            wr(-0.001),
+            wr(15.0),
+            wr(-15.0),
+            wr(15.001)
+        ],
+        [1, 2, 2, 2, 2, 3]
+    );
+    assert_eq!(arm(&|a| a.wrist_deviation = 0.001)[2], 2, "deviated: +1");
+    assert_eq!(arm(&|a| a.wrist_deviation = -0.001)[2], 2, "ulnar too");
+    let body = |f: &dyn Fn(&mut RulaAngles)| {
+        let mut angles = RulaAngles::default();
+        f(&mut angles);
+        let b = score(&angles, &AS_PRINTED).body;
+        [b.neck, b.trunk]
+    };
+    let neck = |n: f64| body(&|a| a.neck_flexion = n)[0];
+    assert_eq!(
+        [
+            neck(-0.001),
+            neck(0.0),
+            neck(10.0),
+            neck(10.001),
+            neck(20.0),
+            neck(20.001)
+        ],
+        [4, 1, 1, 2, 2, 3]
+    );
+    assert_eq!(body(&|a| a.neck_twist = 0.001)[0], 2);
+    assert_eq!(body(&|a| a.neck_side_bend = -0.001)[0], 2);
+    let trunk = |t: f64| body(&|a| a.trunk_flexion = t)[1];
+    // Trunk extension has no rule in the paper: Stance scores it as the first flexed band.
+    assert_eq!(
+        [
+            trunk(0.0),
+            trunk(0.001),
+            trunk(-0.001),
+            trunk(20.0),
+            trunk(20.001),
+            trunk(60.0),
+            trunk(60.001)
+        ],
+        [1, 2, 2, 2, 3, 3, 4]
+    );
+    assert_eq!(body(&|a| a.trunk_twist = 0.001)[1], 2);
+    assert_eq!(body(&|a| a.trunk_side_bend = -0.001)[1], 2);
+    // The default keeps Stance's tolerances: the same small angles score neutral.
+    assert_eq!(RulaSettings::default().tolerances, RulaTolerances::STANCE);
+    let mut small = RulaAngles::default();
+    small.left.upper_arm_abduction = 3.0;
+    small.left.shoulder_elevation = Some(3.0);
+    small.left.wrist_flexion = 3.0;
+    small.left.wrist_deviation = 3.0;
+    small.neck_flexion = -3.0;
+    small.neck_twist = 3.0;
+    small.trunk_flexion = 3.0;
+    small.trunk_side_bend = 3.0;
+    let stance = score(&small, &RulaSettings::default());
+    let printed = score(&small, &AS_PRINTED);
+    let parts = |r: &RulaReport| [r.left.upper_arm, r.left.wrist, r.body.neck, r.body.trunk];
+    // Printed: upper arm 1 + abducted + raised = 3; wrist 2 + deviated = 3; neck extension 4
+    // + twisted = 5; trunk 2 + side-bent = 3.
+    assert_eq!(parts(&stance), [1, 1, 1, 1]);
+    assert_eq!(parts(&printed), [3, 3, 5, 3]);
+}
+
+#[test]
+fn paper_as_printed_gives_a_hand_computed_grand_score() {
+    // Catches tolerances that reach the part scores but not Tables A, B and C (or the other
+    // way round), with every part off neutral by less than Stance's tolerances.
+    //
+    // Angles: upper arm 30 flexion, 5 abduction; elbow 80; wrist 10 flexion, 3 deviation,
+    // twist 1; neck 5 flexion, 2 twist; trunk 10 flexion, 1 side-bend; legs supported.
+    // As printed: upper arm 2 (20-45) + 1 (abducted) = 3; lower arm 1 (60-100); wrist
+    // 2 (0-15) + 1 (deviated) = 3. Table A (UA 3, LA 1, wrist 3, twist 1) = 4 (row "3 1":
+    // 3 3 4 4 [4] 4 5 5). Neck 1 (0-10) + 1 (twisted) = 2; trunk 2 (0-20) + 1 (side-bent) =
+    // 3; legs 1. Table B (neck 2, trunk 3, legs 1) = 4 (row 2: 2 3 2 3 [4] 5 ...). No muscle
+    // use or load: C = 4, D = 4; Table C (4, 4) = 4 (row 4: 3 3 3 [4] 5 6 6); action level 2.
+    // With Stance's tolerances: upper arm 2, wrist 2, Table A (2, 1, 2, 1) = 3; neck 1,
+    // trunk 2, Table B (1, 2, 1) = 2; Table C (3, 2) = 3.
+    let mut angles = RulaAngles::default();
+    for arm in [&mut angles.left, &mut angles.right] {
+        arm.upper_arm_flexion = 30.0;
+        arm.upper_arm_abduction = 5.0;
+        arm.elbow_flexion = 80.0;
+        arm.wrist_flexion = 10.0;
+        arm.wrist_deviation = 3.0;
+    }
+    angles.neck_flexion = 5.0;
+    angles.neck_twist = 2.0;
+    angles.trunk_flexion = 10.0;
+    angles.trunk_side_bend = 1.0;
+    let printed = score(&angles, &AS_PRINTED);
+    let arm = |a: &RulaArm| {
+        [
+            a.upper_arm,
+            a.lower_arm,
+            a.wrist,
+            a.wrist_twist,
+            a.posture_a,
+        ]
+    };
+    assert_eq!(arm(&printed.left), [3, 1, 3, 1, 4]);
+    assert_eq!(arm(&printed.right), [3, 1, 3, 1, 4]);
+    let b = printed.body;
+    assert_eq!([b.neck, b.trunk, b.legs, b.posture_b], [2, 3, 1, 4]);
+    assert_eq!((printed.left.score_c, b.score_d), (4, 4));
+    assert_eq!((printed.score, printed.action_level), (4, 2));
+    let stance = score(&angles, &PAPER);
+    assert_eq!(arm(&stance.left), [2, 1, 2, 1, 3]);
+    assert_eq!(
+        [stance.body.neck, stance.body.trunk, stance.body.posture_b],
+        [1, 2, 2]
+    );
+    assert_eq!((stance.score, stance.action_level), (3, 2));
+}
+
+#[test]
+fn paper_as_printed_scores_a_measured_arm_raised_forward_and_out() {
+    // Catches an upper arm whose flexion and abduction are not read as the paper's two
+    // separate things (flexion in the sagittal plane, abduction out of it), and an abduction
+    // threshold that is not 0 as printed.
+    //
+    // Hand computation: the left shoulder (LOA 1, H-Anim rest frames) turned 60 deg about the
+    // horizontal axis k = (-cos 15, 0, sin 15): rotation vector 60 k = (-57.9555, 0, 15.5291)
+    // deg. The arm's rest direction d = (0, -1, 0) goes to
+    // d cos 60 + (k x d) sin 60 = (sin 15 sin 60, -cos 60, cos 15 sin 60)
+    //   = (0.25882 * 0.86603, -0.5, 0.96593 * 0.86603) = (0.22414, -0.5, 0.83652).
+    // Abduction, the angle out of the sagittal plane: asin(0.22414) = 12.953 deg.
+    // Flexion, the sagittal projection (0, -0.5, 0.83652) from down: atan2(0.83652, 0.5) =
+    // 59.133 deg.
+    // As printed: 45 < 59.133 <= 90 -> 3, abducted (12.953 > 0) -> +1: 4. Stance's default
+    // (abduction beyond 20) and the worksheet's (beyond 15): 3.
+    let s = body(LevelOfArticulation::Loa1);
+    let (sin, cos) = 15f64.to_radians().sin_cos();
+    let angles = measured(
+        &s,
+        &[
+            ("l_shoulder", Rx, -60.0 * cos),
+            ("l_shoulder", Rz, 60.0 * sin),
+        ],
+    );
+    let a = angles.left;
+    assert!((a.upper_arm_abduction - 12.953).abs() < 1e-3, "{a:?}");
+    assert!((a.upper_arm_flexion - 59.133).abs() < 1e-3, "{a:?}");
+    assert_eq!(score(&angles, &AS_PRINTED).left.upper_arm, 4);
+    assert_eq!(score(&angles, &PAPER).left.upper_arm, 3);
+    assert_eq!(score(&angles, &WORKSHEET).left.upper_arm, 3);
+}
+
+// ---------------------------------------------------------------------------------------------
 // Postures on the default body.
 
 fn body(loa: LevelOfArticulation) -> Skeleton {
@@ -386,6 +595,7 @@ const BODY: BodyScores = [1, 1, 1];
 
 const PAPER: RulaSettings = RulaSettings {
     variant: RulaVariant::Paper,
+    tolerances: RulaTolerances::STANCE,
     muscle_use: false,
     load: RulaLoad::None,
     arm_supported: false,
@@ -413,8 +623,10 @@ const LEGS_UNSUPPORTED: RulaSettings = RulaSettings {
     ..PAPER
 };
 
-/// One posture and its expected part scores, worked out by hand from the paper's rules (see
-/// the module documentation; edges belong to the lower band). Left arm: shoulder flexion is
+/// One posture and its expected part scores, worked out by hand from the paper's rules with
+/// Stance's tolerances (a wrist, neck or trunk within 5 degrees is neutral, twist and
+/// side-bend count beyond 10; see the module documentation; edges belong to the lower band).
+/// The paper as printed, without them: `paper_as_printed_*` below. Left arm: shoulder flexion is
 /// `-rx`, abduction `+rz`, elbow flexion `-rx`, forearm rotation `ry`, wrist flexion `-rz`,
 /// deviation `rx`; the right arm mirrors `ry` and `rz`. Neck and spine flexion is `+rx`.
 struct Case {
@@ -847,7 +1059,7 @@ const CASES: &[Case] = &[
 ];
 
 #[test]
-fn postures_score_their_parts_by_the_paper() {
+fn postures_score_their_parts_by_the_paper_with_stances_tolerances() {
     assert!(CASES.len() >= 40, "{} postures", CASES.len());
     let loa1 = body(LevelOfArticulation::Loa1);
     let loa2 = body(LevelOfArticulation::Loa2);
