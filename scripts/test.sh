@@ -65,8 +65,9 @@ cargo test --quiet -p stance_editor --test all frame_cost:: -- --nocapture
 step "${PURE_CRATES[*]} in headless Chromium (wasm32 tests)"
 packages=()
 for crate in "${PURE_CRATES[@]}"; do packages+=(-p "$crate"); done
-# --nocapture: stance_ik's console output carries its S2..S5 timings.
-CHROMEDRIVER="$(command -v chromedriver)" cargo test --quiet --target wasm32-unknown-unknown \
+# --nocapture: stance_ik's console output carries its S2..S5 timings. Not --quiet: cargo would
+# pass it on to wasm-bindgen-test-runner, which refuses it.
+CHROMEDRIVER="$(command -v chromedriver)" cargo test --target wasm32-unknown-unknown \
   "${packages[@]}" --lib --tests -- --nocapture
 
 step "clippy (wasm32): stance_js, the npm package's bindings"
