@@ -80,6 +80,10 @@ describe("motion", () => {
       `${smoothness.worst_boundary_jump.toFixed(4)} rad (clip's own ${smoothness.clip_max_jump.toFixed(4)}); ` +
       `${report.frames_per_second.toFixed(0)} frames/s (debug build)`);
     assert.ok(output.max_drift <= 0.002 && output.mean_drift <= 0.0005, JSON.stringify(output));
+    // Backs README.md's "the plain copy slides 5 to 10 cm on the CMU walk, Stance 0.01 mm"
+    // (77 mm and 0.01 mm on the default avatar when written).
+    assert.ok(copy.max_drift >= 0.05 && copy.max_drift <= 0.10, `the copy slides ${mm(copy.max_drift)} mm`);
+    assert.ok(output.max_drift <= 0.00005, `Stance's feet slide ${mm(output.max_drift)} mm`);
     assert.ok(output.max_sink <= 0.002, JSON.stringify(output));
     assert.ok(smoothness.worst_boundary_jump <= smoothness.clip_max_jump, JSON.stringify(smoothness));
     // Every level's residual is reported per frame.

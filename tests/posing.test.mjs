@@ -205,7 +205,9 @@ describe("posing in the browser", () => {
     const link = page.url();
     const fragment = link.slice(link.indexOf("#") + 1);
     console.log(`[link] Table 1 document: ${fragment.length} characters after '#', ${link.length} in all`);
-    assert.ok(fragment.length < 600, `${fragment.length} characters`);
+    // Backs README.md's "about 300 characters for the Table 1 document" (304 in all when
+    // written): a link that grows or shrinks by a sixth fails here.
+    assert.ok(link.length >= 250 && link.length <= 350, `${link.length} characters in all`);
     await page.close();
 
     const { page: opened, errors } = await freshEditor(link);
