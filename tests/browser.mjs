@@ -304,7 +304,7 @@ export function shareNear(image, [px, py], test, radius = 4) {
 /**
  * Asserts that the figure is drawn at each of `joints` that the state's skeleton has, as the
  * state projects it: at least `share` of the pixels around each projected joint pass `test`.
- * Returns the shares.
+ * Returns the shares (STANCE_PIXEL_LOG=1 prints them).
  */
 export function assertDrawnAtJoints(image, state, { test = isFigureColour, joints = BODY_JOINTS,
   share = 0.5, radius = 4, label = "" } = {}) {
