@@ -8,7 +8,11 @@ import { readFileSync, writeFileSync, mkdtempSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { join } from "node:path";
 import zlib from "node:zlib";
-import { CONFIGURATIONS, decodePng, describeLongTasks, isFigureColour, launch, longTasks, openEditor, saveArtifact, freshStoragePerTab, serve } from "./browser.mjs";
+import {
+  CONFIGURATIONS, assertDrawnAtJoints, assertNotDrawnAt, decodePng, describeLongTasks,
+  isAvatarPixel, isFigureColour, launch, longTasks, openEditor, pointsAwayFromFigure,
+  saveArtifact, freshStoragePerTab, serve, viewportRect, waitForSettled, waitForState,
+} from "./browser.mjs";
 
 const SHARED_AVATAR = fileURLToPath(new URL("./fixtures/avatars/Black_F_2_Casual.glb", import.meta.url));
 
@@ -31,13 +35,13 @@ let stanceLongTasks = null;
 
 const state = async (page) => JSON.parse(await page.evaluate(() => window.stance.state_json()));
 
-async function avatarShown(page, timeout = 60_000) {
-  await page.waitForFunction(() => {
-    const s = JSON.parse(window.stance.state_json());
-    return s.avatar?.uploaded && s.settled;
-  }, null, { timeout });
-  await page.waitForTimeout(200);
-  return state(page);
+// Catches an avatar that never shows (or a solver that never settles on it): fails naming
+// the state the page was left in, never returns before the avatar is uploaded and settled
+// at two reads in a row (the second after a frame drawn with it).
+function avatarShown(page, timeout = 60_000) {
+  return waitForState(page, (s, previous) => s.avatar?.uploaded && s.settled
+    && previous?.avatar?.uploaded && previous.settled && previous.avatar.name === s.avatar.name,
+  { timeout, what: "the avatar is uploaded and its posture settles" });
 }
 
 // public/default-avatar.glb split into mannequin.gltf + mannequin.bin in a new folder (its
@@ -55,14 +59,30 @@ function splitDefaultAvatar(edit = () => {}) {
   return dir;
 }
 
-function avatarPixels(image, [vx, vy, vw, vh]) {
+/**
+ * Pixels of the viewport (every second row and column, 16 px in from its edges: see
+ * `viewportRect`) that pass `test`.
+ */
+function avatarPixels(image, state, test) {
+  const rect = viewportRect(state, 16);
   let count = 0;
-  for (let y = Math.ceil(vy) + 40; y < vy + vh - 4; y += 2) {
-    for (let x = Math.ceil(vx) + 4; x < vx + vw - 4; x += 2) {
-      if (isFigureColour(image.at(x, y))) count += 1;
+  for (let y = rect.y; y < rect.y + rect.height; y += 2) {
+    for (let x = rect.x; x < rect.x + rect.width; x += 2) {
+      if (test(image.at(x, y))) count += 1;
     }
   }
   return count;
+}
+
+/**
+ * Catches an avatar not drawn where its skeleton's posture puts it (a wrong mapping, skin or
+ * camera): its pixels at each projected joint, none beside it. The shared avatar's textures
+ * have any colours (`isAvatarPixel`: not the backdrop); the mannequin's files have the
+ * mannequin's (`isFigureColour`).
+ */
+function assertAvatarDrawn(image, shown, test, label) {
+  assertDrawnAtJoints(image, shown, { test, label });
+  assertNotDrawnAt(image, pointsAwayFromFigure(shown), { test, label });
 }
 
 describe("avatars in the page", () => {
@@ -104,10 +124,12 @@ describe("avatars in the page", () => {
     assert.ok(progressShown, "a progress bar shows while the avatar loads");
     assert.ok(shown.avatar.mapped >= 18, `${shown.avatar.mapped} joints mapped`);
     assert.equal(shown.notice?.error, false, shown.notice?.text);
-    const image = decodePng(await page.screenshot());
-    saveArtifact("avatar-webgl2.png", await page.screenshot());
-    const pixels = avatarPixels(image, shown.viewport);
-    assert.ok(pixels > 1500, `only ${pixels} avatar-coloured pixels in the viewport`);
+    const shot = await page.screenshot();
+    saveArtifact("avatar-webgl2.png", shot);
+    const image = decodePng(shot);
+    assertAvatarDrawn(image, shown, isAvatarPixel, "the shared avatar: ");
+    const pixels = avatarPixels(image, shown, isAvatarPixel);
+    assert.ok(pixels > 1500, `only ${pixels} avatar pixels in the viewport`);
 
     // Pull the right forearm toward the upper left; the feet hold.
     const [wx, wy] = shown.screen.r_radiocarpal;
@@ -135,19 +157,32 @@ describe("avatars in the page", () => {
       + `${(memoryEmpty / 1048576).toFixed(0)} MiB with the mannequin, ${(memoryBefore / 1048576).toFixed(0)} MiB `
       + `with the avatar (peak of loading included: wasm memory does not shrink)`);
     await page.mouse.up();
-    await page.waitForFunction(() => JSON.parse(window.stance.state_json()).settled);
-    const pulled = await state(page);
+    await waitForSettled(page, { what: "the pulled avatar settles" });
     saveArtifact("avatar-pulled-webgl2.png", await page.screenshot());
+    // Deselected (Escape), the skeleton and the rings over the avatar are gone.
+    await page.keyboard.press("Escape");
+    const pulled = await waitForState(page, (s, previous) => s.settled && s.selected === null
+      && previous?.selected === null, { what: "the forearm is deselected" });
     assert.ok(pulled.joints.r_radiocarpal[1] > handBefore[1] + 0.1,
       `the hand rose: ${handBefore[1].toFixed(3)} -> ${pulled.joints.r_radiocarpal[1].toFixed(3)}`);
     const footMoved = Math.hypot(...pulled.joints.l_talocrural.map((v, i) => v - footBefore[i]));
     assert.ok(footMoved < 1e-3, `the pinned foot moved ${footMoved} m`);
+    // Catches a drawn avatar that does not follow the solved posture: the hand's pixels
+    // moved where its joint moved (the avatar at every joint as now projected, the hand's
+    // new place included; nothing there before the pull).
     const after = decodePng(await page.screenshot());
+    const [hx, hy] = pulled.screen.r_radiocarpal;
+    assert.ok(Math.hypot(hx - wx, hy - wy) > 60, "the hand moved well away on screen");
+    assertNotDrawnAt(image, [[hx, hy]], { test: isAvatarPixel, label: "before the pull, where the hand ends: " });
+    assertAvatarDrawn(after, pulled, isAvatarPixel, "the pulled avatar: ");
+    const rect = viewportRect(pulled, 16);
     let changed = 0;
-    for (let i = 0; i < after.data.length; i += 4) {
-      if (Math.abs(after.data[i] - image.data[i]) > 10) changed += 1;
+    for (let y = rect.y; y < rect.y + rect.height; y += 1) {
+      for (let x = rect.x; x < rect.x + rect.width; x += 1) {
+        if (Math.abs(after.at(x, y)[0] - image.at(x, y)[0]) > 10) changed += 1;
+      }
     }
-    assert.ok(changed > 500, `the drawn avatar moved (${changed} pixels changed)`);
+    assert.ok(changed > 500, `the drawn avatar moved (${changed} pixels of the viewport changed)`);
 
     // A broken file: a message, and the avatar stays.
     const broken = join(mkdtempSync(join(tmpdir(), "stance-")), "broken.glb");
@@ -210,9 +245,11 @@ describe("avatars in the page", () => {
     await openEditor(context, `${site.url}?avatar=default-avatar.glb`, page);
     const shown = await avatarShown(page);
     assert.equal(shown.avatar.name, "default-avatar.glb");
-    const image = decodePng(await page.screenshot());
-    saveArtifact("avatar-default-webgl2.png", await page.screenshot());
-    assert.ok(avatarPixels(image, shown.viewport) > 800);
+    const shot = await page.screenshot();
+    saveArtifact("avatar-default-webgl2.png", shot);
+    const image = decodePng(shot);
+    assertAvatarDrawn(image, shown, isFigureColour, "default-avatar.glb: ");
+    assert.ok(avatarPixels(image, shown, isFigureColour) > 4000);
     await page.close();
   });
 
@@ -228,7 +265,9 @@ describe("avatars in the page", () => {
     await page.setInputFiles("input[type=file]", [join(dir, "mannequin.gltf"), join(dir, "mannequin.bin")]);
     const shown = await avatarShown(page);
     assert.equal(shown.avatar.name, "mannequin.gltf");
-    assert.ok(avatarPixels(decodePng(await page.screenshot()), shown.viewport) > 800);
+    const image = decodePng(await page.screenshot());
+    assertAvatarDrawn(image, shown, isFigureColour, "mannequin.gltf: ");
+    assert.ok(avatarPixels(image, shown, isFigureColour) > 4000);
     assert.deepEqual(errors, [], `console errors: ${errors.join(" / ")}`);
     await page.close();
   });
@@ -263,7 +302,12 @@ describe("avatars in the page", () => {
     assert.ok(shown.avatar.imported_in_worker, "imported in the worker");
     assert.equal(shown.avatar.images_from_host, 0, "no texture came from the browser");
     assert.match(shown.notice?.text ?? "", /image 0/, "the notice names the image");
-    assert.ok(avatarPixels(decodePng(await page.screenshot()), shown.viewport) > 800);
+    const shot = await page.screenshot();
+    saveArtifact("avatar-undecodable-texture-webgl2.png", shot);
+    const image = decodePng(shot);
+    // Drawn in the skin material's own colour (its base colour factor) without the texture.
+    assertAvatarDrawn(image, shown, isFigureColour, "the skin without its texture: ");
+    assert.ok(avatarPixels(image, shown, isFigureColour) > 4000);
     await page.close();
   });
 });

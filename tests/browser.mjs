@@ -1,6 +1,7 @@
 // Shared helpers of the end-to-end tests: the two Chromium configurations (WebGL2 and
 // WebGPU), the static server, PNG pixels, the `stance` CLI.
 import { chromium } from "playwright-core";
+import assert from "node:assert/strict";
 import { execFileSync } from "node:child_process";
 import { mkdtempSync, mkdirSync, writeFileSync } from "node:fs";
 import { tmpdir } from "node:os";
@@ -83,6 +84,56 @@ export async function openEditor(context, url, existingPage = undefined) {
   return { page, errors };
 }
 
+/** The page's state (its test hook `window.stance.state_json()`), parsed. */
+export async function pageState(page) {
+  return JSON.parse(await page.evaluate(() => window.stance.state_json()));
+}
+
+/** A line on a state for a failure message: what waits on the solver, the view, the avatar. */
+export function describeState(state) {
+  if (!state) return "no state was read";
+  const tasks = (state.tasks ?? []).map((t) => `${t.description} (level ${t.level}) residual `
+    + `${Number(t.residual).toExponential(1)}${t.gave_way != null ? `, gave way ${t.gave_way}` : ""}`);
+  return [`revision ${state.revision}`, `settled ${state.settled}`, `pulling ${state.pulling}`,
+    `gave_way ${state.gave_way}`, `importing ${state.importing}`,
+    `avatar ${state.avatar ? `${state.avatar.name} uploaded ${state.avatar.uploaded}` : "none"}`,
+    `notice ${JSON.stringify(state.notice?.text ?? null)}`, `tasks: ${tasks.join("; ")}`].join(", ");
+}
+
+/**
+ * Polls the page's state until `predicate(state, previous)` holds (`previous`: the state read
+ * before it) and returns that state; after `timeout` ms, fails naming `what` and the last
+ * state read. Nothing passes on a timeout.
+ */
+export async function waitForState(page, predicate, { timeout = 20_000, what = "the awaited state",
+  interval = 50 } = {}) {
+  const started = Date.now();
+  let previous = null;
+  let state = null;
+  for (;;) {
+    state = await pageState(page);
+    if (predicate(state, previous)) return state;
+    if (Date.now() - started > timeout) break;
+    previous = state;
+    await page.waitForTimeout(interval);
+  }
+  throw new Error(`${what}: not within ${timeout} ms. Last state: ${describeState(state)}`);
+}
+
+const sameScreen = (a, b) => Object.entries(a.screen).every(([joint, [x, y]]) => b.screen[joint]
+  && Math.abs(b.screen[joint][0] - x) < 0.01 && Math.abs(b.screen[joint][1] - y) < 0.01);
+
+/**
+ * Waits until the solver has settled (the state's `settled`) and, with `still`, the view
+ * too (the joints on screen where they were at the read before); fails with a message
+ * naming what did not settle otherwise.
+ */
+export function waitForSettled(page, { timeout = 20_000, still = false, what = "the posture settles" } = {}) {
+  return waitForState(page, (state, previous) => state.settled
+    && (!still || (previous?.settled && sameScreen(previous, state))),
+  { timeout, what: still ? `${what} and the view stops moving` : what });
+}
+
 export function decodePng(buffer) {
   const png = PNG.sync.read(buffer);
   return {
@@ -101,11 +152,202 @@ export function BACKGROUND(r, g, b) {
   return Math.abs(r - 33) <= 6 && Math.abs(g - 37) <= 6 && Math.abs(b - 43) <= 6;
 }
 
-/** A figure's pixel (the mannequin's figure or an avatar: skin, clothes, hair): neither the
- * background nor the grey floor grid. */
-export function isFigureColour([r, g, b]) {
-  const grey = Math.abs(r - g) < 12 && Math.abs(g - b) < 12;
-  return !grey && !BACKGROUND(r, g, b);
+const LINEAR = Array.from({ length: 256 }, (_, c) => {
+  const v = c / 255;
+  return v <= 0.04045 ? v / 12.92 : ((v + 0.055) / 1.055) ** 2.4;
+});
+/** An sRGB byte (0-255, not rounded) from a linear value, as the shaders' linear_to_srgb. */
+function srgbByte(linear) {
+  const c = Math.min(1, Math.max(0, linear));
+  return 255 * (c <= 0.0031308 ? c * 12.92 : 1.055 * c ** (1 / 2.4) - 0.055);
+}
+
+/**
+ * The mannequin's two materials (public/default-avatar.glb, written by `stance make-avatar`:
+ * "skin" and "clothes"), linear base colours. tests/pixels.test.mjs checks them against the
+ * file.
+ */
+export const FIGURE_MATERIALS = { skin: [0.78, 0.6, 0.49], clothes: [0.22, 0.3, 0.42] };
+
+/**
+ * Of a pixel, the mannequin's material and light that come closest to it under the skinned
+ * shader's lighting (skinned.wgsl: linear = base * light + specular, light = sky 0.22-0.4 +
+ * diffuse 0-0.75, specular 0-0.04): `{ material, light, specular, error }`, the error the
+ * largest difference of a channel in sRGB levels.
+ */
+export function figureFit([r, g, b]) {
+  const p = [LINEAR[r], LINEAR[g], LINEAR[b]];
+  let best = null;
+  for (const [material, base] of Object.entries(FIGURE_MATERIALS)) {
+    const norm = base[0] ** 2 + base[1] ** 2 + base[2] ** 2;
+    for (let specular = 0; specular <= 0.04 + 1e-9; specular += 0.005) {
+      const light = base.reduce((sum, c, i) => sum + (p[i] - specular) * c, 0) / norm;
+      const error = Math.max(...base.map((c, i) => Math.abs(srgbByte(c * light + specular) - [r, g, b][i])));
+      if (!best || error < best.error) best = { material, light, specular, error };
+    }
+  }
+  return best;
+}
+
+/**
+ * A pixel of the mannequin's figure (the default avatar the editor draws, its saved image,
+ * ?avatar=default-avatar.glb): its skin or its clothes lit as the shader lights them, the
+ * light from 0.2 to 1.2 (measured on the editor's screenshot: 0.25 in the figure's shadows
+ * to 1.1 where the light faces it), within 4 sRGB levels. Not the background, the floor and
+ * its axes, the panels, the overlays (tests/pixels.test.mjs); not a textured avatar's pixel
+ * either (`isAvatarPixel`). Edge pixels, blended with what is behind, do not pass.
+ */
+export function isFigureColour(rgb) {
+  const key = (rgb[0] << 16) | (rgb[1] << 8) | rgb[2];
+  let known = FIGURE_CACHE.get(key);
+  if (known === undefined) {
+    const fit = figureFit(rgb);
+    known = fit.error <= 4 && fit.light >= 0.2 && fit.light <= 1.2;
+    FIGURE_CACHE.set(key, known);
+  }
+  return known;
+}
+const FIGURE_CACHE = new Map();
+
+// The floor's colours (floor.wgsl): its base, its lines (minor ones at 0.35), the red and
+// blue axes, each faded into the background with distance, in sRGB levels.
+const FLOOR = {
+  base: [0.055, 0.06, 0.07].map(srgbByte),
+  line: [0.2, 0.21, 0.23].map(srgbByte),
+  red: [0.55, 0.12, 0.12].map(srgbByte),
+  blue: [0.12, 0.2, 0.6].map(srgbByte),
+};
+const BACKGROUND_LEVELS = [0.13, 0.145, 0.17].map((c) => c * 255);
+const mix = (a, b, t) => a.map((v, i) => v + (b[i] - v) * t);
+const FLOOR_SEGMENTS = [["base", "line"], ["base", "red"], ["base", "blue"]]
+  .map(([a, b]) => [FLOOR[a], FLOOR[b]]);
+
+/**
+ * A pixel of the viewport's backdrop: the background, or the floor (its colours blended as
+ * the edges of its lines and axes blend them with its base, faded into the background), within
+ * 4 sRGB levels.
+ */
+export function isBackdrop(rgb) {
+  const key = (rgb[0] << 16) | (rgb[1] << 8) | rgb[2];
+  let known = BACKDROP_CACHE.get(key);
+  if (known === undefined) {
+    known = onTheBackdrop(rgb);
+    BACKDROP_CACHE.set(key, known);
+  }
+  return known;
+}
+const BACKDROP_CACHE = new Map();
+
+function onTheBackdrop(rgb) {
+  for (const [a, b] of FLOOR_SEGMENTS) {
+    for (let t = 0; t <= 1 + 1e-9; t += 0.05) {
+      const near = mix(a, b, t);
+      // The fade into the background that comes closest, 0 to 1.
+      const away = near.map((v, i) => BACKGROUND_LEVELS[i] - v);
+      const length = away.reduce((sum, v) => sum + v * v, 0);
+      const fade = Math.min(1, Math.max(0, length > 0
+        ? away.reduce((sum, v, i) => sum + v * (rgb[i] - near[i]), 0) / length : 0));
+      const colour = mix(near, BACKGROUND_LEVELS, fade);
+      if (Math.max(...colour.map((v, i) => Math.abs(v - rgb[i]))) <= 4) return true;
+    }
+  }
+  return false;
+}
+
+/**
+ * A textured avatar's pixel, inside the viewport: not its backdrop. Its textures have any
+ * colours, so this passes the overlays too, and the panels: only ever ask inside the
+ * viewport's rectangle, away from the overlays, and for a share of a patch (`shareNear`).
+ */
+export function isAvatarPixel(rgb) {
+  return !isBackdrop(rgb);
+}
+
+/**
+ * The joints of the body the pixel checks look at: head, trunk, limbs and feet (not the
+ * fingers, a few pixels wide; the feet by their middle, the ankles being under the pins'
+ * markers).
+ */
+export const BODY_JOINTS = ["skullbase", "vt1", "vl1", "sacroiliac", "l_shoulder", "r_shoulder",
+  "l_elbow", "r_elbow", "l_radiocarpal", "r_radiocarpal", "l_hip", "r_hip", "l_knee",
+  "r_knee", "l_tarsometatarsal_2", "r_tarsometatarsal_2"];
+
+/**
+ * The viewport's rectangle in whole pixels (the state's `viewport`, points = CSS pixels),
+ * `inset` pixels in from each edge. With an avatar loaded the editor's rectangle runs about
+ * 10 px under the tasks panel (702 px wide where 693 show): checks that must see only the
+ * viewport's own pixels take it 16 px in.
+ */
+export function viewportRect(state, inset = 0) {
+  const [x, y, width, height] = state.viewport;
+  return { x: Math.ceil(x) + inset, y: Math.ceil(y) + inset, width: Math.floor(width) - 2 * inset,
+    height: Math.floor(height) - 2 * inset };
+}
+
+const inside = (rect, x, y) => x >= rect.x && y >= rect.y && x < rect.x + rect.width
+  && y < rect.y + rect.height;
+
+/** The share of the pixels within `radius` (a square) of `point` that pass `test`. */
+export function shareNear(image, [px, py], test, radius = 4) {
+  let passed = 0;
+  let all = 0;
+  for (let y = Math.round(py) - radius; y <= Math.round(py) + radius; y += 1) {
+    for (let x = Math.round(px) - radius; x <= Math.round(px) + radius; x += 1) {
+      if (x < 0 || y < 0 || x >= image.width || y >= image.height) continue;
+      all += 1;
+      if (test(image.at(x, y))) passed += 1;
+    }
+  }
+  return all ? passed / all : 0;
+}
+
+/**
+ * Asserts that the figure is drawn at each of `joints` that the state's skeleton has, as the
+ * state projects it: at least `share` of the pixels around each projected joint pass `test`.
+ * Returns the shares (STANCE_PIXEL_LOG=1 prints them).
+ */
+export function assertDrawnAtJoints(image, state, { test = isFigureColour, joints = BODY_JOINTS,
+  share = 0.5, radius = 4, label = "" } = {}) {
+  const rect = viewportRect(state);
+  const shares = {};
+  const missing = [];
+  // A skeleton mapped from an avatar may lack some (a shorter spine).
+  const present = joints.filter((joint) => !state.joints || joint in state.joints);
+  assert.ok(present.length >= 12, `${label}only ${present.join(", ")} of the joints checked`);
+  for (const joint of present) {
+    const point = state.screen[joint];
+    assert.ok(point, `${label}the state projects ${joint} onto the screen`);
+    assert.ok(inside(rect, point[0], point[1]), `${label}${joint} at ${point} is inside the viewport`);
+    shares[joint] = shareNear(image, point, test, radius);
+    if (process.env.STANCE_PIXEL_LOG) console.log(`[pixels] ${label}${joint} ${shares[joint].toFixed(2)}`);
+    if (shares[joint] < share) missing.push(`${joint} at (${point.map(Math.round)}): ${shares[joint].toFixed(2)}`);
+  }
+  assert.deepEqual(missing, [], `${label}the figure is not drawn where these joints project `
+    + `(share of figure pixels around each, ${share} wanted): ${missing.join("; ")}`);
+  return shares;
+}
+
+/**
+ * Points of the viewport away from the figure: left and right of the projected joints' box
+ * by `margin` pixels, at the height of the head, the hips and the knees, where inside the
+ * viewport (16 px in: `viewportRect`); and the viewport's two top corners.
+ */
+export function pointsAwayFromFigure(state, margin = 70) {
+  const rect = viewportRect(state, 16);
+  const points = Object.values(state.screen);
+  const left = Math.min(...points.map((p) => p[0])) - margin;
+  const right = Math.max(...points.map((p) => p[0])) + margin;
+  const heights = ["skullbase", "sacroiliac", "l_knee"].map((joint) => state.screen[joint][1]);
+  const away = [[rect.x + 6, rect.y + 6], [rect.x + rect.width - 6, rect.y + 6]];
+  for (const y of heights) away.push([left, y], [right, y]);
+  return away.filter(([x, y]) => inside(rect, x - 5, y - 5) && inside(rect, x + 5, y + 5));
+}
+
+/** Asserts that none of the pixels around the points pass `test` (the figure's colours). */
+export function assertNotDrawnAt(image, points, { test = isFigureColour, radius = 4, label = "" } = {}) {
+  const drawn = points.filter((point) => shareNear(image, point, test, radius) > 0);
+  assert.deepEqual(drawn.map((p) => p.map(Math.round)), [],
+    `${label}figure pixels where only the backdrop should be (around each point, ${radius} px)`);
 }
 
 export function saveArtifact(name, buffer) {

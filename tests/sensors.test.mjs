@@ -10,7 +10,7 @@ import { tmpdir } from "node:os";
 import { dirname, join } from "node:path";
 import { fileURLToPath } from "node:url";
 import {
-  CONFIGURATIONS, freshStoragePerTab, launch, openEditor, serve, stanceBinary,
+  CONFIGURATIONS, freshStoragePerTab, launch, openEditor, serve, stanceBinary, waitForState,
 } from "./browser.mjs";
 
 const root = join(dirname(fileURLToPath(import.meta.url)), "..");
@@ -181,13 +181,13 @@ async function state(page) {
   return JSON.parse(await page.evaluate(() => window.stance.state_json()));
 }
 
-async function waitFor(page, predicate, argument, timeout = 20_000) {
-  await page.waitForFunction(
-    ([source, arg]) => new Function("state", "arg", `return (${source})(state, arg);`)(
-      JSON.parse(window.stance.state_json()), arg),
-    [predicate.toString(), argument], { timeout },
-  );
-  return state(page);
+// Catches a page that never gets there (never settles, never connects): it fails naming
+// the predicate and the state the page was left in (a waitForFunction's timeout said only
+// "Timeout exceeded"), and returns the state that met the predicate, not a later one.
+function waitFor(page, predicate, argument, timeout = 20_000) {
+  const what = `the page's state meets ${predicate.toString()}`
+    + `${argument == null ? "" : ` with ${JSON.stringify(argument)}`}`;
+  return waitForState(page, (s) => predicate(s, argument), { timeout, what });
 }
 
 async function clickButton(page, name) {

@@ -2,7 +2,8 @@
 import { after, before, describe, test } from "node:test";
 import assert from "node:assert/strict";
 import {
-  CONFIGURATIONS, decodePng, isFigureColour, launch, openEditor, saveArtifact, serve,
+  CONFIGURATIONS, assertDrawnAtJoints, assertNotDrawnAt, decodePng, isFigureColour, launch,
+  openEditor, pointsAwayFromFigure, saveArtifact, serve, viewportRect, waitForSettled,
 } from "./browser.mjs";
 
 let site;
@@ -43,19 +44,34 @@ for (const [name, configuration] of Object.entries(CONFIGURATIONS)) {
 
     test("the viewport shows the standing body as a skinned figure, and an orbit drag turns the view", async () => {
       const { page } = editor;
-      await page.waitForTimeout(300);
+      const state = await waitForSettled(page, { still: true });
       const before = await page.screenshot();
       saveArtifact(`viewport-${name}.png`, before);
       const image = decodePng(before);
-      // The viewport's rectangle, as the editor reports it (between the panels and bars).
-      const state = JSON.parse(await page.evaluate(() => window.stance.state_json()));
-      const [vx, vy, vw, vh] = state.viewport;
-      const viewport = { x: Math.ceil(vx), y: Math.ceil(vy), width: Math.floor(vw), height: Math.floor(vh) };
+      // The viewport's rectangle, as the editor reports it (between the panels and bars):
+      // every pixel check below looks inside it.
+      const viewport = viewportRect(state);
       assert.equal(state.figure, true, "the mannequin is drawn as its skinned figure");
+      // Catches a figure drawn elsewhere than its posture puts it (a wrong camera or
+      // skinning palette), or not at all: the figure's colours at each projected joint.
+      assertDrawnAtJoints(image, state, { label: `${name}: ` });
+      // Catches a figure drawn everywhere (or a colour test that passes the floor): none of
+      // its colours beside the body.
+      assertNotDrawnAt(image, pointsAwayFromFigure(state), { label: `${name}: ` });
+      // The test of the test: no pixel of the panels, the menu and the status bar passes as
+      // the figure's colour.
+      let outside = 0;
+      for (let y = 0; y < image.height; y += 1) {
+        for (let x = 0; x < image.width; x += 1) {
+          const inViewport = x >= viewport.x && x < viewport.x + viewport.width
+            && y >= viewport.y && y < viewport.y + viewport.height;
+          if (!inViewport && isFigureColour(image.at(x, y))) outside += 1;
+        }
+      }
+      assert.equal(outside, 0, "panel pixels pass as the figure's colour");
       const bodyBefore = bodyPixelsIn(image, viewport);
-      assert.ok(bodyBefore > 800, `only ${bodyBefore} figure pixels in the viewport`);
-      // The corners of the viewport are background or floor, not body.
-      assert.ok(!isFigureColour(image.at(viewport.x + 10, viewport.y + 10)));
+      // About 9,400 counted (every second row and column) front on, 5,200 from the side.
+      assert.ok(bodyBefore > 6000, `only ${bodyBefore} figure pixels in the viewport`);
 
       // Start the drag on the background (not on the body, which would pull it).
       const startX = viewport.x + viewport.width * 0.9;
@@ -66,17 +82,33 @@ for (const [name, configuration] of Object.entries(CONFIGURATIONS)) {
         await page.mouse.move(startX - step * 15, startY + step * 4);
       }
       await page.mouse.up();
-      await page.waitForTimeout(500);
+      const orbited = await waitForSettled(page, { still: true });
       const turned = await page.screenshot();
       saveArtifact(`viewport-${name}-orbited.png`, turned);
       const after = decodePng(turned);
-      let differing = 0;
-      for (let i = 0; i < after.data.length; i += 4) {
-        if (Math.abs(after.data[i] - image.data[i]) > 8
-          || Math.abs(after.data[i + 1] - image.data[i + 1]) > 8) differing += 1;
+      // Catches an orbit that does not turn the view: the hands, far from the axis the view
+      // turns about, moved on screen.
+      for (const hand of ["l_radiocarpal", "r_radiocarpal"]) {
+        const moved = Math.hypot(orbited.screen[hand][0] - state.screen[hand][0],
+          orbited.screen[hand][1] - state.screen[hand][1]);
+        assert.ok(moved > 10, `${hand} moved ${moved.toFixed(1)} px on screen`);
       }
-      assert.ok(differing > 5000, `only ${differing} pixels changed after the drag`);
-      assert.ok(bodyPixelsIn(after, viewport) > 500, "the body is still in view");
+      // Catches a picture that does not follow the camera: the figure is drawn where the
+      // turned view projects the joints, and the viewport's pixels changed.
+      assertDrawnAtJoints(after, orbited, { label: `${name}, orbited: ` });
+      assertNotDrawnAt(after, pointsAwayFromFigure(orbited), { label: `${name}, orbited: ` });
+      let differing = 0;
+      for (let y = viewport.y; y < viewport.y + viewport.height; y += 1) {
+        for (let x = viewport.x; x < viewport.x + viewport.width; x += 1) {
+          const [r0, g0] = image.at(x, y);
+          const [r1, g1] = after.at(x, y);
+          if (Math.abs(r1 - r0) > 8 || Math.abs(g1 - g0) > 8) differing += 1;
+        }
+      }
+      assert.ok(differing > 5000, `only ${differing} pixels of the viewport changed after the drag`);
+      const bodyAfter = bodyPixelsIn(after, viewport);
+      console.log(`[${name}] figure pixels in the viewport (every second row and column): ${bodyBefore}, orbited ${bodyAfter}`);
+      assert.ok(bodyAfter > 3500, `the body is still in view: ${bodyAfter} figure pixels`);
     });
   });
 }
