@@ -501,11 +501,18 @@ impl StanceApp {
             .fill(fill)
             .inner_margin(egui::Margin::symmetric(8, 4))
             .show(ui, |ui| {
-                ui.horizontal(|ui| {
-                    ui.add(egui::Label::new(RichText::new(&notice.text).color(text_color)).wrap());
+                // The dismiss button first, from the right: the text wraps in the width left
+                // beside it. (After a wrapped text, the button stuck out past the panel and
+                // widened the viewport under the tasks panel.)
+                ui.with_layout(egui::Layout::right_to_left(egui::Align::Min), |ui| {
                     if ui.small_button("x").on_hover_text("dismiss").clicked() {
                         self.model.apply(Command::DismissNotice);
                     }
+                    ui.with_layout(egui::Layout::left_to_right(egui::Align::Min), |ui| {
+                        ui.add(
+                            egui::Label::new(RichText::new(&notice.text).color(text_color)).wrap(),
+                        );
+                    });
                 });
             });
         if !notice.is_error {

@@ -247,6 +247,41 @@ fn a_copied_link_opens_the_same_posture_and_tasks_and_a_tampered_one_says_so() {
 }
 
 #[test]
+fn a_long_notice_leaves_the_viewport_between_the_panels() {
+    // Catches: the notice strip's dismiss button placed after a wrapped text, which widened
+    // the central panel: the viewport's rectangle ran about 10 points under the tasks panel
+    // (the state and the status bar gave a size larger than what was visible).
+    let viewport = |harness: &Harness<'static, StanceApp>| {
+        let rect = &state(harness)["viewport"];
+        [0, 1, 2, 3].map(|i| rect[i].as_f64().unwrap())
+    };
+    let plain = harness(&MemoryHost::default());
+    let mut app = StanceApp::without_gpu(Box::new(MemoryHost::default())).unwrap();
+    app.open_startup(Some("#p=damaged-link-that-does-not-decode"));
+    let notice = app.model().notice().unwrap().text.clone();
+    let mut noticed = harness_for(app);
+    noticed.run_steps(2);
+    assert!(
+        noticed.state().model().notice().is_some(),
+        "the notice is still shown"
+    );
+    let [x0, y0, w0, _] = viewport(&plain);
+    let [x1, y1, w1, _] = viewport(&noticed);
+    assert!(notice.len() > 120, "a notice long enough to wrap: {notice}");
+    assert!((x1 - x0).abs() < 0.5, "left edge {x0} -> {x1}");
+    assert!(
+        (x1 + w1 - (x0 + w0)).abs() < 0.5,
+        "right edge {} -> {} with the notice",
+        x0 + w0,
+        x1 + w1
+    );
+    assert!(
+        y1 > y0 + 10.0,
+        "the notice pushes the viewport down: {y0} -> {y1}"
+    );
+}
+
+#[test]
 fn work_survives_a_reload_and_the_library_keeps_named_poses() {
     let host = MemoryHost::default();
     let mut harness = harness(&host);
