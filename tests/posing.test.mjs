@@ -32,9 +32,11 @@ function settled(page, timeout = 20_000) {
   return waitForSettled(page, { timeout });
 }
 
+// Waits for the button to be published: a menu or window opened by the click before shows a
+// frame later, and later still when another test file shares the CPU.
 async function clickButton(page, name) {
-  const { buttons } = await state(page);
-  assert.ok(buttons[name], `the ${name} button is on screen`);
+  const { buttons } = await waitForState(page, (s) => Boolean(s.buttons?.[name]),
+    { timeout: 10_000, what: `the ${name} button on screen` });
   const [x, y, width, height] = buttons[name];
   await page.mouse.click(x + width / 2, y + height / 2);
 }
