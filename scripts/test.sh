@@ -45,19 +45,6 @@ for fuzz_dir in crates/*/fuzz; do
   done
 done
 
-# The site build (release wasm32 by plain rustc, then the stance-ik package) runs beside the
-# native and browser tests below: cargo locks each profile's folder (target/release and
-# target/wasm32-unknown-unknown/release here, the dev ones there), and together they keep both
-# cores busy where the test builds alone leave one idle (links, the chain of workspace
-# crates). Its output is printed when it is waited for, before the end-to-end tests.
-site_log=$(mktemp)
-step "site build started beside the tests (and the stance-ik package with its three.js example)"
-# In a process group of its own (setsid), so that a failure here stops all of it.
-setsid bash scripts/build-web.sh >"$site_log" 2>&1 &
-site_pid=$!
-site_started=$SECONDS
-trap 'kill -- "-$site_pid" 2>/dev/null || true' EXIT
-
 step "native build (with clippy) and tests"
 # Every target is built (benches too, as `cargo clippy --all-targets` checked them); no doc
 # tests: the crates have none, and each would cost a rustdoc run.
@@ -87,17 +74,9 @@ step "clippy (wasm32): stance_js, the npm package's bindings"
 env -u RUSTC_WORKSPACE_WRAPPER -u CLIPPY_ARGS \
   cargo clippy --quiet --target wasm32-unknown-unknown -p stance_js --lib -- -D warnings
 
-step "site build: waiting for it"
-site_status=0
-wait "$site_pid" || site_status=$?
-trap - EXIT
-cat "$site_log"
-rm -f "$site_log"
-if [ "$site_status" != 0 ]; then
-  echo "the site build failed (exit $site_status)" >&2
-  exit 1
-fi
-echo "site build done $((SECONDS - site_started)) s after it started"
+step "site build (and the stance-ik package with its three.js example)"
+# What ships is compiled by plain rustc (see scripts/clippy-env.sh).
+env -u RUSTC_WORKSPACE_WRAPPER -u CLIPPY_ARGS bash scripts/build-web.sh
 
 step "end to end in headless Chromium (WebGL2 and WebGPU)"
 # Two files at a time (each file starts its own server on a free port and its own browser
