@@ -52,8 +52,9 @@ cargo test --workspace --quiet --all-targets --no-run
 cargo test --workspace --quiet --lib --bins --tests -- --skip scenario_timings --skip frame_cost
 # The S2..S5 timings, printed (the same test prints them in the browser below), and the
 # editor's CPU per frame with the shared avatar and Table 1 while pulling.
-cargo test --quiet -p stance_ik --test all timing:: -- --nocapture
-cargo test --quiet -p stance_editor --test all frame_cost:: -- --nocapture
+# Through --workspace, as above: `-p CRATE` would unify other features and build the crate's
+# dependencies again (about three minutes on a fresh clone).
+cargo test --workspace --quiet --test all -- --nocapture scenario_timings frame_cost
 
 # The pure crates' wasm-bindgen tests in headless Chromium, in one cargo invocation (their
 # dependencies built once for all, with the features unified): .cargo/config.toml's runner,
@@ -79,6 +80,10 @@ step "site build (and the stance-ik package with its three.js example)"
 env -u RUSTC_WORKSPACE_WRAPPER -u CLIPPY_ARGS bash scripts/build-web.sh
 
 step "end to end in headless Chromium (WebGL2 and WebGPU)"
+# The CLI the native tests built (with the workspace's features): tests/browser.mjs would
+# otherwise build it alone with `-p stance_cli`, another feature set, from its dependencies up.
+export STANCE_BIN="${CARGO_TARGET_DIR:-target}/debug/stance"
+[ -x "$STANCE_BIN" ] || { echo "$STANCE_BIN is missing after the native tests" >&2; exit 1; }
 # Two files at a time (each file starts its own server on a free port and its own browser
 # profile): the machine's two cores are busy either way.
 node --test --test-concurrency=2 tests/
