@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Builds the `stance-ik` npm package (packages/stance-ik/pkg) from crates/stance_js with
-# wasm-pack (release, ES module for browsers and Node), then wasm-opt (scripts/wasm-opt.sh);
-# checks that the package's version is the workspace's. wasm-pack finds the pinned
+# wasm-pack (release, ES module for browsers and Node), then binaryen's wasm-opt -Oz from the
+# npm `binaryen` package (a JavaScript/wasm build that installs offline with the other npm
+# packages; wasm-pack cannot download binaryen here and Debian's binaryen 108 breaks the
+# module): it drops wasm-pack's name section and shrinks the code. Checks that the package's version is the workspace's. wasm-pack finds the pinned
 # wasm-bindgen CLI that setup.sh installs. Quick when nothing changed: wasm-pack and wasm-opt
 # run only when cargo's wasm is newer than the package's. `npm pack` in packages/stance-ik
 # runs this first (its prepack).
@@ -29,8 +31,12 @@ else
   rm -f "$pkg/stance_ik_bg.wasm"
   wasm-pack --quiet build crates/stance_js --release --target web --no-pack \
     --out-dir ../../packages/stance-ik/pkg --out-name stance_ik
-  bash scripts/wasm-opt.sh "$pkg/stance_ik_bg.wasm"
+  # The features rustc's wasm32 target emits with the workspace's flags (simd128 from
+  # .cargo/config.toml): wasm-opt keeps the module within them.
+  node_modules/.bin/wasm-opt -Oz --enable-simd --enable-bulk-memory --enable-bulk-memory-opt \
+    --enable-sign-ext --enable-mutable-globals --enable-nontrapping-float-to-int \
+    --enable-reference-types --enable-multivalue --enable-call-indirect-overlong \
+    "$pkg/stance_ik_bg.wasm" -o "$pkg/stance_ik_bg.wasm"
 fi
 gzip_size=$(gzip -9 -c "$pkg/stance_ik_bg.wasm" | wc -c)
-echo "$gzip_size" > "$pkg/wasm-gzip-bytes.txt"
 say "packages/stance-ik ready: wasm $((gzip_size / 1024)) KiB gzipped"

@@ -15,7 +15,7 @@ wasm=${CARGO_TARGET_DIR:-target}/wasm32-unknown-unknown/release/stance_web.wasm
 mkdir -p dist/pkg
 if [ ! -f dist/pkg/stance_web_bg.wasm ] || [ "$wasm" -nt dist/pkg/stance_web_bg.wasm ]; then
   say "wasm-bindgen"
-  # No wasm-opt here (scripts/wasm-opt.sh is the package's): on this module binaryen 132's
+  # No wasm-opt here (scripts/build-package.sh runs it on the package): on this module binaryen 132's
   # -Oz, -Os and -O2 cut the raw size by 8-10 % but make it 2-3 % larger gzipped and 5 %
   # larger in brotli, what the page downloads; its dead-code passes alone save 0.5 % for
   # 40 s of build.

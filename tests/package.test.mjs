@@ -147,7 +147,7 @@ describe("stance-ik", () => {
   });
 
   test("the wasm that ships went through wasm-opt and is 330 KiB or less gzipped", () => {
-    // Catches: the package built without wasm-opt (scripts/wasm-opt.sh skipped or failing
+    // Catches: the package built without wasm-opt (its step in scripts/build-package.sh skipped or failing
     // quietly: wasm-pack's output keeps a 116 KiB name section and is 352 KiB gzipped), or a
     // dependency that makes the download grow. With wasm-opt -Oz it is 328 KiB (2026-11).
     const customSections = (bytes) => {
