@@ -147,11 +147,6 @@ export function decodePng(buffer) {
   };
 }
 
-/** The viewport's background (BACKGROUND_SRGB of stance_render), with a little tolerance. */
-export function BACKGROUND(r, g, b) {
-  return Math.abs(r - 33) <= 6 && Math.abs(g - 37) <= 6 && Math.abs(b - 43) <= 6;
-}
-
 const LINEAR = Array.from({ length: 256 }, (_, c) => {
   const v = c / 255;
   return v <= 0.04045 ? v / 12.92 : ((v + 0.055) / 1.055) ** 2.4;
