@@ -120,6 +120,33 @@ export async function waitForState(page, predicate, { timeout = 20_000, what = "
   throw new Error(`${what}: not within ${timeout} ms. Last state: ${describeState(state)}`);
 }
 
+/**
+ * Clicks the button the editor published under `name` (the state's `buttons`), waiting for it
+ * to be published: a menu or window opened by the click before shows a frame later, and later
+ * still when another test file shares the CPU. With `until` (a predicate on the state), waits
+ * for the click's effect and returns that state. egui counts a press and a release as a click
+ * only when the frames that read them are under 0.8 s apart; on this shared CPU a frame can
+ * be longer, so a click that had no effect at all (`until` and `started` both false after
+ * 5 s) is made once more, and said so.
+ */
+export async function clickButton(page, name, { until = null, started = until,
+  timeout = 20_000 } = {}) {
+  const { buttons } = await waitForState(page, (s) => Boolean(s.buttons?.[name]),
+    { timeout: 10_000, what: `the ${name} button on screen` });
+  const [x, y, width, height] = buttons[name];
+  await page.mouse.click(x + width / 2, y + height / 2);
+  if (!until) return null;
+  const what = `the effect of a click on ${name}: ${until.toString()}`;
+  try {
+    const state = await waitForState(page, (s) => until(s) || started(s), { timeout: 5_000, what });
+    if (until(state)) return state;
+  } catch {
+    console.log(`[click] ${name}: no effect within 5 s, clicked again`);
+    await page.mouse.click(x + width / 2, y + height / 2);
+  }
+  return waitForState(page, until, { timeout, what });
+}
+
 const sameScreen = (a, b) => Object.entries(a.screen).every(([joint, [x, y]]) => b.screen[joint]
   && Math.abs(b.screen[joint][0] - x) < 0.01 && Math.abs(b.screen[joint][1] - y) < 0.01);
 

@@ -5,7 +5,7 @@ import { after, before, describe, test } from "node:test";
 import assert from "node:assert/strict";
 import { readFileSync } from "node:fs";
 import {
-  CONFIGURATIONS, assertDrawnAtJoints, assertNotDrawnAt, decodePng, isFigureColour, launch,
+  CONFIGURATIONS, assertDrawnAtJoints, clickButton, assertNotDrawnAt, decodePng, isFigureColour, launch,
   openEditor, pointsAwayFromFigure, saveArtifact, freshStoragePerTab, serve,
   waitForSettled, waitForState,
 } from "./browser.mjs";
@@ -30,15 +30,6 @@ async function state(page) {
 // waitForFunction's timeout said only "Timeout exceeded"), and never returns unsettled.
 function settled(page, timeout = 20_000) {
   return waitForSettled(page, { timeout });
-}
-
-// Waits for the button to be published: a menu or window opened by the click before shows a
-// frame later, and later still when another test file shares the CPU.
-async function clickButton(page, name) {
-  const { buttons } = await waitForState(page, (s) => Boolean(s.buttons?.[name]),
-    { timeout: 10_000, what: `the ${name} button on screen` });
-  const [x, y, width, height] = buttons[name];
-  await page.mouse.click(x + width / 2, y + height / 2);
 }
 
 const distance = (a, b) => Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);

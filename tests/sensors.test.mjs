@@ -10,7 +10,7 @@ import { tmpdir } from "node:os";
 import { dirname, join } from "node:path";
 import { fileURLToPath } from "node:url";
 import {
-  CONFIGURATIONS, freshStoragePerTab, launch, openEditor, serve, stanceBinary, waitForState,
+  CONFIGURATIONS, clickButton, freshStoragePerTab, launch, openEditor, serve, stanceBinary, waitForState,
 } from "./browser.mjs";
 
 const root = join(dirname(fileURLToPath(import.meta.url)), "..");
@@ -190,12 +190,6 @@ function waitFor(page, predicate, argument, timeout = 20_000) {
   return waitForState(page, (s) => predicate(s, argument), { timeout, what });
 }
 
-async function clickButton(page, name) {
-  const { buttons } = await waitFor(page, (s, n) => Boolean(s.buttons[n]), name);
-  const [x, y, width, height] = buttons[name];
-  await page.mouse.click(x + width / 2, y + height / 2);
-}
-
 /** Opens the editor with these sensor settings remembered, and the sensors window open. */
 async function editorWithSensors(settings) {
   const page = await context.newPage();
@@ -207,8 +201,7 @@ async function editorWithSensors(settings) {
     await page.waitForFunction(() => document.body.dataset.firstFrameMs);
   }
   await waitFor(page, (s) => s.settled);
-  await clickButton(page, "sensors_open");
-  await waitFor(page, (s) => Boolean(s.buttons.sensors_connect));
+  await clickButton(page, "sensors_open", { until: (s) => Boolean(s.buttons.sensors_connect) });
   return { page, errors };
 }
 
@@ -216,9 +209,8 @@ async function editorWithSensors(settings) {
 async function followsTheArm(page, sendFrames, frameCount, truth, worldFromDevice, label) {
   await sendFrames(0, 1);
   await waitFor(page, (s) => s.sensors.samples >= 4);
-  await clickButton(page, "sensors_preset_right_arm");
-  await waitFor(page, (s) => s.sensors.assigned === 4);
-  await clickButton(page, "sensors_calibrate");
+  await clickButton(page, "sensors_preset_right_arm", { until: (s) => s.sensors.assigned === 4 });
+  await clickButton(page, "sensors_calibrate", { until: (s) => s.sensors.calibrated });
   const calibrated = await waitFor(page, (s) => s.sensors.calibrated && s.settled);
   // At the calibration instant the joints keep the calibration posture (Molet et al.).
   const atCalibration = Object.fromEntries(
@@ -270,8 +262,10 @@ describe("motion-capture sensors in the browser", () => {
   test("a Flock of Birds on a (fake) serial port drives the arm; unplugging says so and keeps the posture", async () => {
     const { page, errors } = await editorWithSensors();
     const before = await state(page);
-    await clickButton(page, "sensors_connect");
-    await waitFor(page, (s) => s.sensors.link === "connected");
+    await clickButton(page, "sensors_connect", {
+      until: (s) => s.sensors.link === "connected",
+      started: (s) => s.sensors.link !== "idle",
+    });
     const port = await page.evaluate(() => ({
       baudRate: window.__fakeSerial.opened?.baudRate,
       written: window.__fakeSerial.written,
@@ -304,8 +298,10 @@ describe("motion-capture sensors in the browser", () => {
 
   test("a SlimeVR receiver on (fake) WebHID drives the arm", async () => {
     const { page, errors } = await editorWithSensors({ device: "SlimeVr", frame: "EarthZUp" });
-    await clickButton(page, "sensors_connect");
-    await waitFor(page, (s) => s.sensors.link === "connected");
+    await clickButton(page, "sensors_connect", {
+      until: (s) => s.sensors.link === "connected",
+      started: (s) => s.sensors.link !== "idle",
+    });
     const requested = await page.evaluate(() => window.__fakeHid.requested);
     assert.deepEqual(requested.filters, [{ vendorId: 0x1209, productId: 0x7690 }]);
     const sendFrames = (from, to) => page.evaluate((reports) => window.__fakeHid.send(reports),
