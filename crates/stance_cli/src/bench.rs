@@ -16,7 +16,7 @@ use std::time::Instant;
 
 use std::collections::BTreeMap;
 
-use anyhow::{Context, Result, bail};
+use anyhow::Result;
 use serde::Serialize;
 use stance_hanim::scenarios;
 use stance_ik::{Damping, Iteration, Posture, Skeleton, SolveStatus, Solver, SolverSettings, Task};
@@ -29,10 +29,19 @@ pub struct BenchArgs {
     /// Time this problem file instead of the built-in scenarios.
     #[arg(long)]
     pub problem: Option<PathBuf>,
-    /// Solve every problem file (`*.json`) of this directory: how many met every level, the
-    /// median time per solve and per iteration.
+    /// Solve every problem file (`*.json`) of this directory and its sub-folders (one per
+    /// family, as `stance families` writes them): per family, how many met every level, the
+    /// median and 90th-percentile iterations, the median time per solve and per iteration.
     #[arg(long)]
     pub suite: Option<PathBuf>,
+    /// With `--suite`: a peer's results on the same files (JSON lines with `family`,
+    /// `problem`, `met_every_level`, `iterations`, `us_per_solve`, as `stance-textbook`
+    /// prints them): the counts and ratios side by side.
+    #[arg(long, requires = "suite")]
+    pub peer: Option<PathBuf>,
+    /// With `--suite`: solve without the restarts of a stalled solve.
+    #[arg(long, requires = "suite")]
+    pub no_restarts: bool,
     /// Only these scenarios (e.g. `--scenario S2 --scenario S6`).
     #[arg(long)]
     pub scenario: Vec<String>,
@@ -85,7 +94,7 @@ fn target_us(name: &str) -> Option<f64> {
 pub fn run(args: BenchArgs) -> Result<()> {
     let budget = std::time::Duration::from_millis(args.millis);
     if let Some(dir) = &args.suite {
-        return run_suite(dir, &args);
+        return crate::bench_suite::run(dir, args.peer.as_deref(), args.no_restarts, args.json);
     }
     if let Some(cases) = args.comfort {
         return crate::bench_comfort::run(cases, args.json);
@@ -279,66 +288,6 @@ fn bench_file(
     )
 }
 
-/// `--suite DIR`: every `*.json` problem file of `dir`, in name order.
-fn run_suite(dir: &std::path::Path, args: &BenchArgs) -> Result<()> {
-    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
-        .with_context(|| format!("{}: cannot list the directory", dir.display()))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|e| e == "json"))
-        .collect();
-    files.sort();
-    if files.is_empty() {
-        bail!(
-            "{}: no problem file (*.json) in the directory",
-            dir.display()
-        );
-    }
-    // Each problem: a short measuring time (at least 5 runs), so that a suite of hundreds runs
-    // in seconds.
-    let budget = std::time::Duration::from_millis(args.millis.min(20));
-    let mut rows = Vec::new();
-    let (mut per_solve, mut per_iteration) = (Vec::new(), Vec::new());
-    let mut met = 0;
-    for path in &files {
-        let r = bench_file(path, budget, args.iterations)?;
-        met += usize::from(r.met_every_level);
-        per_solve.push(r.us_per_solve);
-        per_iteration.push(r.us_per_solve / r.iterations.max(1) as f64);
-        if !args.json {
-            println!(
-                "{}: {:?} after {} iterations, {:.1} us/solve, residuals {:?}",
-                path.display(),
-                r.status,
-                r.iterations,
-                r.us_per_solve,
-                r.residuals
-            );
-        }
-        rows.push(serde_json::json!({
-            "problem": path.file_name().map(|n| n.to_string_lossy().into_owned()),
-            "status": r.status,
-            "iterations": r.iterations,
-            "us_per_solve": r.us_per_solve,
-            "residuals": r.residuals,
-            "met_every_level": r.met_every_level,
-        }));
-    }
-    let summary = serde_json::json!({
-        "problems": files.len(),
-        "met_every_level": met,
-        "median_us_per_solve": median(per_solve),
-        "median_us_per_iteration": median(per_iteration),
-    });
-    if args.json {
-        let mut out = summary;
-        out["results"] = serde_json::Value::Array(rows);
-        println!("{out}");
-    } else {
-        println!("{summary}");
-    }
-    Ok(())
-}
-
 /// Times S7 (see the module docs).
 pub fn bench_limb(s: &scenarios::LimbScenario, budget: std::time::Duration) -> BenchResult {
     const BATCH: usize = 1000;
@@ -377,7 +326,7 @@ pub fn bench_limb(s: &scenarios::LimbScenario, budget: std::time::Duration) -> B
     }
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
+pub fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     match v.len() {
         0 => f64::NAN,

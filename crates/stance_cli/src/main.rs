@@ -5,8 +5,10 @@ use clap::{Parser, Subcommand};
 mod avatar;
 mod bench;
 mod bench_comfort;
+mod bench_suite;
 mod comfort;
 mod decode;
+mod families;
 mod link;
 mod render;
 mod retarget;
@@ -33,6 +35,8 @@ enum Command {
     Comfort(comfort::ComfortArgs),
     /// Benchmark the solver scenarios (or one problem file).
     Bench(bench::BenchArgs),
+    /// Write the generated problem families as problem files (for `bench --suite`).
+    Families(families::FamiliesArgs),
     /// Decode a recorded sensor byte stream into JSON lines.
     Decode(decode::DecodeArgs),
     /// Write a simulated sensor byte stream.
@@ -58,6 +62,7 @@ fn main() -> anyhow::Result<()> {
         Command::Solve(args) => solve::run(args),
         Command::Comfort(args) => comfort::run(args),
         Command::Bench(args) => bench::run(args),
+        Command::Families(args) => families::run(args),
         Command::Decode(args) => decode::run(args),
         Command::SimulateSensors(args) => simulate::run(args),
         Command::Inspect(args) => avatar::inspect(args),

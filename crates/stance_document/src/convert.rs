@@ -88,6 +88,63 @@ impl PostureValues {
     }
 }
 
+impl TaskSpec {
+    /// The problem-file form of a solver task on `skeleton` (joints by name); `None` for the
+    /// kinds a problem file cannot hold (comfort, posture attraction) and joints out of range.
+    pub fn from_task(skeleton: &Skeleton, task: &Task) -> Option<Self> {
+        let name = |j: usize| skeleton.joints().get(j).map(|joint| joint.name.clone());
+        let kind = match &task.kind {
+            TaskKind::Position {
+                effector,
+                axes,
+                target,
+            } => TaskKindSpec::Position {
+                joint: name(effector.joint)?,
+                point: effector.point.to_array(),
+                axes: *axes,
+                target: target.to_array(),
+            },
+            TaskKind::Orientation { joint, target } => TaskKindSpec::Orientation {
+                joint: name(*joint)?,
+                target: target.to_array(),
+            },
+            TaskKind::Gaze {
+                effector,
+                axis,
+                target,
+            } => TaskKindSpec::Gaze {
+                joint: name(effector.joint)?,
+                axis: axis.to_array(),
+                point: effector.point.to_array(),
+                target: target.to_array(),
+            },
+            TaskKind::Direction {
+                joint,
+                axis,
+                target,
+            } => TaskKindSpec::Direction {
+                joint: name(*joint)?,
+                axis: axis.to_array(),
+                target: target.to_array(),
+            },
+            TaskKind::CenterOfMass { axes, target } => TaskKindSpec::Com {
+                axes: *axes,
+                target: target.to_array(),
+            },
+            TaskKind::Balance { .. }
+            | TaskKind::Comfort { .. }
+            | TaskKind::PostureAttraction { .. } => return None,
+        };
+        Some(Self {
+            level: task.level,
+            weight: task.weight,
+            active: task.active,
+            kind,
+            interval: None,
+        })
+    }
+}
+
 /// A `limb` task resolved on a skeleton: the closed-form limb, its goal and the requested
 /// swivel, for the editor's closed-form start and swivel handle (as `stance solve` does).
 #[derive(Debug, Clone)]

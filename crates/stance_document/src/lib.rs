@@ -36,5 +36,7 @@ pub use document::{
 pub use error::DocumentError;
 pub use link::LinkError;
 pub use motion::{MotionKey, MotionSection, TaskInterval};
-pub use problem::{LimbStart, Problem, ProblemSettings, parse_skeleton};
+pub use problem::{
+    LimbStart, Problem, ProblemSettings, parse_skeleton, problem_json, skeleton_json,
+};
 pub use stiffness::{StiffnessValues, apply_stiffness};

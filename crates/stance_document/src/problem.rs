@@ -460,3 +460,78 @@ fn parse_settings(v: &Value) -> Result<Settings, DocumentError> {
     let hybrid = flag("hybrid")?.unwrap_or(false);
     Ok((s, hybrid, parse_level_damping(o)?))
 }
+
+/// A skeleton in the problem format's `skeleton` form (what [`parse_skeleton`] reads back).
+pub fn skeleton_json(skeleton: &Skeleton) -> Value {
+    let (lower, upper) = (skeleton.lower_limits(), skeleton.upper_limits());
+    let stiffness = skeleton.stiffness();
+    let joints: Vec<Value> = skeleton
+        .joints()
+        .iter()
+        .map(|joint| {
+            let mut limits = Map::new();
+            let mut stiff = Map::new();
+            for (k, d) in joint.dofs.iter().enumerate() {
+                let i = joint.dof_start + k;
+                if lower[i].is_finite() || upper[i].is_finite() {
+                    let bound = |v: f64| if v.is_finite() { json!(v) } else { Value::Null };
+                    limits.insert(
+                        d.name().to_owned(),
+                        json!([bound(lower[i]), bound(upper[i])]),
+                    );
+                }
+                if d.is_rotation() && stiffness.get(i).is_some_and(|&s| s != 0.0) {
+                    stiff.insert(d.name().to_owned(), json!(stiffness[i]));
+                }
+            }
+            let mut o = Map::new();
+            o.insert("name".into(), json!(joint.name));
+            o.insert(
+                "parent".into(),
+                joint
+                    .parent
+                    .map_or(Value::Null, |p| json!(skeleton.joints()[p].name)),
+            );
+            o.insert("offset".into(), json!(joint.offset.to_array()));
+            let dofs: Vec<&str> = joint.dofs.iter().map(|d| d.name()).collect();
+            o.insert("dofs".into(), json!(dofs));
+            if !limits.is_empty() {
+                o.insert("limits".into(), Value::Object(limits));
+            }
+            if !stiff.is_empty() {
+                o.insert("stiffness".into(), Value::Object(stiff));
+            }
+            o.insert("mass".into(), json!(joint.mass));
+            o.insert("com".into(), json!(joint.com.to_array()));
+            Value::Object(o)
+        })
+        .collect();
+    json!({ "joints": joints })
+}
+
+/// A problem file (`docs/problem-format.md`) of solver tasks on a skeleton from a start
+/// posture, with default settings; errors name the first task the format cannot hold
+/// (comfort, posture attraction).
+pub fn problem_json(
+    skeleton: &Skeleton,
+    tasks: &[Task],
+    start: &Posture,
+) -> Result<Value, DocumentError> {
+    let specs = tasks
+        .iter()
+        .enumerate()
+        .map(|(i, task)| {
+            TaskSpec::from_task(skeleton, task).ok_or_else(|| {
+                DocumentError::field(
+                    format!("tasks[{i}]"),
+                    "this kind of solver task has no problem-file form",
+                )
+            })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(json!({
+        "skeleton": skeleton_json(skeleton),
+        "tasks": specs,
+        "posture": PostureValues::from_posture(skeleton, start),
+    }))
+}

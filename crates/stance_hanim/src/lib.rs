@@ -15,6 +15,7 @@ pub mod anatomy;
 pub mod builder;
 pub mod chains;
 pub mod comfort;
+pub mod families;
 pub mod frame;
 pub mod hands;
 mod joint_table;

@@ -1,0 +1,407 @@
+//! Problem families: generated prioritized IK problems that differ in structure (bodies,
+//! levels, task counts and kinds, partial axes, active joint limits, spreads, starts), for
+//! measuring the solver on problems it was not tuned on (`stance families`, `stance bench
+//! --suite`, the convergence tests).
+//!
+//! Every problem is *feasible*: all its targets are read off one goal posture within the joint
+//! limits, so every level can be met at once, and a solver that stops short of one has not
+//! converged (it is not a conflict between levels). Each family says whether the solver's
+//! settings were tuned on it ([`Family::tuned`]); the others are held out, and their figures
+//! are reported apart.
+//!
+//! The pseudo-random numbers are xorshift (Marsaglia), whose sequence for a seed is fixed by
+//! its definition: a family's problems for a seed are the same in every version.
+
+use std::ops::RangeInclusive;
+
+use glam::DVec3;
+use rand::{RngExt, SeedableRng};
+use rand_xorshift::XorShiftRng;
+use stance_ik::{Axes, Frames, IkError, Posture, Skeleton, Task, TaskKind};
+
+use crate::LevelOfArticulation;
+use crate::builder::{BuildError, SkeletonOptions, default_skeleton};
+use crate::scenarios::{humanoid50, standing_posture};
+
+/// The body of a family.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Body {
+    /// The 50-DOF humanoid of the scenarios ([`humanoid50`]).
+    Humanoid50,
+    /// The H-Anim default body at LOA 1 (built by [`default_skeleton`]).
+    Loa1,
+    /// The H-Anim default body at LOA 2 (132 DOF).
+    Loa2,
+}
+
+impl Body {
+    /// The skeleton.
+    pub fn skeleton(self) -> Result<Skeleton, BuildError> {
+        let built = |loa| {
+            default_skeleton(&SkeletonOptions {
+                loa,
+                ..SkeletonOptions::default()
+            })
+            .map(|h| h.skeleton)
+        };
+        match self {
+            Body::Humanoid50 => Ok(humanoid50()?),
+            Body::Loa1 => built(LevelOfArticulation::Loa1),
+            Body::Loa2 => built(LevelOfArticulation::Loa2),
+        }
+    }
+}
+
+/// The kinds of task a family draws from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kinds {
+    /// Positions on every axis.
+    Positions,
+    /// Positions, half of them on some axes only (`y`, `xz`, ...).
+    PartialPositions,
+    /// Positions (some partial), orientations, directions, one gaze, centres of mass.
+    Mixed,
+}
+
+/// Where the solve starts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Start {
+    /// The relaxed standing posture.
+    Rest,
+    /// A random posture within the limits, this far from standing per DOF (rad).
+    Random(f64),
+}
+
+/// A family of generated problems.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Family {
+    /// Short name (file names: `NAME-0000.json`).
+    pub name: &'static str,
+    /// What it is, in a line.
+    pub description: &'static str,
+    /// Whether the solver's settings were tuned on it (false: held out).
+    pub tuned: bool,
+    /// The body.
+    pub body: Body,
+    /// Number of priority levels.
+    pub levels: RangeInclusive<u32>,
+    /// Number of tasks (at least one per level).
+    pub tasks: RangeInclusive<usize>,
+    /// Task kinds.
+    pub kinds: Kinds,
+    /// Spread of the goal posture about standing, per rotation DOF (rad; drawn per problem).
+    pub spread: (f64, f64),
+    /// Goal postures drawn this far beyond the limits and clamped back onto them (rad; 0:
+    /// within the limits), so that some joints sit on their limits at the solution.
+    pub beyond_limits: f64,
+    /// Where the solve starts.
+    pub start: Start,
+}
+
+/// One generated problem.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FamilyProblem {
+    /// `NAME-0000`.
+    pub name: String,
+    /// Its tasks (levels 1..).
+    pub tasks: Vec<Task>,
+    /// The start posture.
+    pub start: Posture,
+    /// The goal posture the targets were read off (one solution).
+    pub goal: Posture,
+}
+
+/// The families, the tuned ones first.
+pub fn families() -> Vec<Family> {
+    vec![
+        Family {
+            name: "reach",
+            description: "50 DOF, 4 levels, 7 positions, spread 0.2-0.45, start at rest",
+            tuned: true,
+            body: Body::Humanoid50,
+            levels: 4..=4,
+            tasks: 7..=7,
+            kinds: Kinds::Positions,
+            spread: (0.2, 0.45),
+            beyond_limits: 0.0,
+            start: Start::Rest,
+        },
+        Family {
+            name: "partial",
+            description: "50 DOF, 5 levels, 12 positions (half on some axes), spread 0.3-0.6",
+            tuned: true,
+            body: Body::Humanoid50,
+            levels: 5..=5,
+            tasks: 12..=12,
+            kinds: Kinds::PartialPositions,
+            spread: (0.3, 0.6),
+            beyond_limits: 0.0,
+            start: Start::Rest,
+        },
+        Family {
+            name: "mixed",
+            description: "50 DOF, 2-6 levels, 5-12 mixed kinds, spread 0.1-0.5, random start",
+            tuned: true,
+            body: Body::Humanoid50,
+            levels: 2..=6,
+            tasks: 5..=12,
+            kinds: Kinds::Mixed,
+            spread: (0.1, 0.5),
+            beyond_limits: 0.0,
+            start: Start::Random(0.3),
+        },
+        Family {
+            name: "loa1",
+            description: "LOA 1 body, 3 levels, 6-10 mixed kinds, spread 0.2-0.5, at rest",
+            tuned: true,
+            body: Body::Loa1,
+            levels: 3..=3,
+            tasks: 6..=10,
+            kinds: Kinds::Mixed,
+            spread: (0.2, 0.5),
+            beyond_limits: 0.0,
+            start: Start::Rest,
+        },
+        Family {
+            name: "loa2",
+            description: "LOA 2 body (132 DOF), 2-6 levels, 8-25 mixed kinds, spread 0.1-0.4",
+            tuned: false,
+            body: Body::Loa2,
+            levels: 2..=6,
+            tasks: 8..=25,
+            kinds: Kinds::Mixed,
+            spread: (0.1, 0.4),
+            beyond_limits: 0.0,
+            start: Start::Random(0.2),
+        },
+        Family {
+            name: "limits",
+            description: "50 DOF, 3-4 levels, 6-12 mixed kinds, goals on the joint limits",
+            tuned: false,
+            body: Body::Humanoid50,
+            levels: 3..=4,
+            tasks: 6..=12,
+            kinds: Kinds::Mixed,
+            spread: (0.3, 0.6),
+            beyond_limits: 0.6,
+            start: Start::Rest,
+        },
+        Family {
+            name: "wide",
+            description: "50 DOF, 6 levels, 15-25 partial positions, spread 0.5-0.7",
+            tuned: false,
+            body: Body::Humanoid50,
+            levels: 6..=6,
+            tasks: 15..=25,
+            kinds: Kinds::PartialPositions,
+            spread: (0.5, 0.7),
+            beyond_limits: 0.0,
+            start: Start::Random(0.3),
+        },
+    ]
+}
+
+/// The family of this name.
+pub fn family(name: &str) -> Option<Family> {
+    families().into_iter().find(|f| f.name == name)
+}
+
+/// End joints and points on them (joint frame, m) that position tasks hold, by H-Anim name;
+/// a body without one of them leaves it out.
+const EFFECTORS: &[(&str, [f64; 3])] = &[
+    ("l_radiocarpal", [0.0, -0.08, 0.0]),
+    ("r_radiocarpal", [0.0, -0.08, 0.0]),
+    ("l_talocrural", [0.0, -0.05, 0.0]),
+    ("r_talocrural", [0.0, -0.05, 0.0]),
+    ("l_metatarsophalangeal_2", [0.0, 0.0, 0.04]),
+    ("r_metatarsophalangeal_2", [0.0, 0.0, 0.04]),
+    ("skullbase", [0.0, 0.1, 0.05]),
+    ("l_elbow", [0.0, 0.0, 0.0]),
+    ("r_elbow", [0.0, 0.0, 0.0]),
+    ("l_knee", [0.0, 0.0, 0.0]),
+    ("r_knee", [0.0, 0.0, 0.0]),
+    ("sacroiliac", [0.0, 0.0, 0.05]),
+    ("vt1", [0.0, 0.0, 0.08]),
+    ("l_carpal_distal_interphalangeal_3", [0.0, -0.01, 0.0]),
+    ("r_carpal_distal_interphalangeal_2", [0.0, -0.01, 0.0]),
+];
+/// Joints whose orientation or a segment direction a task may hold.
+const ORIENTED: &[&str] = &[
+    "l_radiocarpal",
+    "r_radiocarpal",
+    "skullbase",
+    "sacroiliac",
+    "vt6",
+    "l_talocrural",
+    "r_elbow",
+    "l_knee",
+];
+/// Partial axes of position tasks.
+const PARTIAL: &[&str] = &["y", "xz", "x", "z", "xy", "yz"];
+
+impl Family {
+    /// `count` problems from `seed` (the same ones for the same seed, in every version).
+    pub fn problems(&self, seed: u64, count: usize) -> Result<Vec<FamilyProblem>, BuildError> {
+        let skeleton = self.body.skeleton()?;
+        (0..count)
+            .map(|i| self.problem(&skeleton, seed, i).map_err(BuildError::from))
+            .collect()
+    }
+
+    /// Problem `index` of `seed`.
+    pub fn problem(
+        &self,
+        skeleton: &Skeleton,
+        seed: u64,
+        index: usize,
+    ) -> Result<FamilyProblem, IkError> {
+        let mut r = XorShiftRng::seed_from_u64(
+            seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ (index as u64).wrapping_add(1),
+        );
+        let spread = r.random_range(self.spread.0..=self.spread.1);
+        let goal = self.goal_posture(&mut r, skeleton, spread);
+        let levels = r.random_range(self.levels.clone());
+        let count = r.random_range(self.tasks.clone()).max(levels as usize);
+        let frames = Frames::new(skeleton, &goal);
+        let mut used_gaze = false;
+        let mut tasks = Vec::with_capacity(count);
+        for i in 0..count {
+            // Every level gets one task, the rest fall on random levels.
+            let level = if i < levels as usize {
+                i as u32 + 1
+            } else {
+                r.random_range(1..=levels)
+            };
+            tasks.push(
+                self.task(&mut r, skeleton, &frames, &mut used_gaze)?
+                    .at_level(level),
+            );
+        }
+        tasks.sort_by_key(|t| t.level);
+        let start = match self.start {
+            Start::Rest => standing_posture(skeleton),
+            Start::Random(amplitude) => random_posture(&mut r, skeleton, amplitude, 0.0),
+        };
+        Ok(FamilyProblem {
+            name: format!("{}-{index:04}", self.name),
+            tasks,
+            start,
+            goal,
+        })
+    }
+
+    fn goal_posture(&self, r: &mut XorShiftRng, skeleton: &Skeleton, spread: f64) -> Posture {
+        random_posture(r, skeleton, spread, self.beyond_limits)
+    }
+
+    fn task(
+        &self,
+        r: &mut XorShiftRng,
+        skeleton: &Skeleton,
+        frames: &Frames,
+        used_gaze: &mut bool,
+    ) -> Result<Task, IkError> {
+        let effectors: Vec<(usize, DVec3)> = EFFECTORS
+            .iter()
+            .filter_map(|(name, p)| {
+                skeleton
+                    .joint_index(name)
+                    .map(|j| (j, DVec3::from_array(*p)))
+            })
+            .collect();
+        let oriented: Vec<usize> = ORIENTED
+            .iter()
+            .filter_map(|name| skeleton.joint_index(name))
+            .filter(|&j| skeleton.joints()[j].has_rotation())
+            .collect();
+        let Some(&(first, _)) = effectors.first() else {
+            return Err(IkError::BadTask {
+                index: 0,
+                reason: "the body has none of the families' end joints".to_owned(),
+            });
+        };
+        let position = |r: &mut XorShiftRng, partial: bool| {
+            let (j, point) = effectors[r.random_range(0..effectors.len())];
+            let task = Task::position(j, point, frames.point(j, point));
+            if partial {
+                let axes = PARTIAL[r.random_range(0..PARTIAL.len())];
+                task.with_axes(Axes::parse(axes).unwrap_or(Axes::XYZ))
+            } else {
+                task
+            }
+        };
+        Ok(match self.kinds {
+            Kinds::Positions => position(r, false),
+            Kinds::PartialPositions => {
+                let partial = r.random_bool(0.5);
+                position(r, partial)
+            }
+            Kinds::Mixed => match r.random_range(0..10) {
+                0..=4 => {
+                    let partial = r.random_bool(0.3);
+                    position(r, partial)
+                }
+                5 | 6 if !oriented.is_empty() => {
+                    let j = oriented[r.random_range(0..oriented.len())];
+                    Task::orientation(j, frames.rotation(j))
+                }
+                7 if !oriented.is_empty() => {
+                    let j = oriented[r.random_range(0..oriented.len())];
+                    let axis = unit(r);
+                    Task::direction(j, axis, frames.world_from_joint_rotation[j] * axis)
+                }
+                8 if !*used_gaze && skeleton.joint_index("skullbase").is_some() => {
+                    *used_gaze = true;
+                    let j = skeleton.require_joint("skullbase")?;
+                    let eye = DVec3::new(0.0, 0.08, 0.08);
+                    let forward = frames.world_from_joint_rotation[j] * DVec3::Z;
+                    let target = frames.point(j, eye) + forward * r.random_range(0.5..3.0);
+                    let mut task = Task::gaze(j, DVec3::Z, target);
+                    if let TaskKind::Gaze { effector, .. } = &mut task.kind {
+                        effector.point = eye;
+                    }
+                    task
+                }
+                9 => Task::center_of_mass(Axes::XZ, frames.center_of_mass()),
+                _ => {
+                    let point = DVec3::ZERO;
+                    Task::position(first, point, frames.point(first, point))
+                }
+            },
+        })
+    }
+}
+
+/// A random unit vector.
+fn unit(r: &mut XorShiftRng) -> DVec3 {
+    loop {
+        let v = DVec3::new(
+            r.random_range(-1.0..1.0),
+            r.random_range(-1.0..1.0),
+            r.random_range(-1.0..1.0),
+        );
+        let length = v.length();
+        if (0.1..=1.0).contains(&length) {
+            return v / length;
+        }
+    }
+}
+
+/// Standing plus a uniform offset in `[-a, a]` per rotation DOF (`0.2 a` m per translation),
+/// `a = amplitude + beyond` and then clamped into the limits.
+fn random_posture(
+    r: &mut XorShiftRng,
+    skeleton: &Skeleton,
+    amplitude: f64,
+    beyond: f64,
+) -> Posture {
+    let mut posture = standing_posture(skeleton);
+    let (lower, upper) = (skeleton.lower_limits(), skeleton.upper_limits());
+    let kinds = skeleton.dof_kinds();
+    let a = amplitude + beyond;
+    for (d, value) in posture.values_mut().iter_mut().enumerate() {
+        let scale = if kinds[d].is_rotation() { a } else { 0.2 * a };
+        *value = (*value + r.random_range(-scale..=scale)).clamp(lower[d], upper[d]);
+    }
+    posture
+}

@@ -1,0 +1,946 @@
+//! The plain textbook prioritized inverse kinematics, written from the problem format
+//! (`docs/problem-format.md`) and the textbook alone: it shares no code with `stance_ik`.
+//!
+//! It is the tests' **oracle** (its own forward kinematics, task errors and Jacobians judge
+//! whether a posture meets every level: [`Problem::level_residuals`]) and the benchmark's
+//! **peer** (`stance-textbook`, compared with `stance bench --suite --peer`).
+//!
+//! The iteration is the recursion of Siciliano & Slotine as the paper writes it (Baerlocher &
+//! Boulic): with `P_0 = I` and `dq_0 = 0`, for each level `k` in priority order,
+//! `dq_k = dq_{k-1} + (J_k P_{k-1})^+ (e_k - J_k dq_{k-1})` and
+//! `P_k = P_{k-1} - (J_k P_{k-1})^+ (J_k P_{k-1})`, the pseudo-inverses by singular value
+//! decomposition (nalgebra, dynamic matrices), damped by a small constant in the step and
+//! exact in the projector; each task's error clamped to the textbook's 0.1 m / 0.3 rad (Buss
+//! & Kim); the joint values clamped into their limits after the step. The Jacobians are
+//! analytic; the tests check them against central differences of the forward kinematics.
+
+use std::collections::HashMap;
+
+use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, SVD, UnitQuaternion, Vector3};
+use serde_json::Value;
+
+/// What makes a problem file unreadable here.
+#[derive(Debug, thiserror::Error)]
+pub enum ProblemError {
+    /// Not JSON.
+    #[error("not JSON: {0}")]
+    Json(#[from] serde_json::Error),
+    /// A field is missing or of the wrong shape.
+    #[error("{0}")]
+    Field(String),
+}
+
+fn bad(what: impl Into<String>) -> ProblemError {
+    ProblemError::Field(what.into())
+}
+
+/// A DOF: translation or rotation-vector component along axis 0, 1 or 2.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Dof {
+    Translation(usize),
+    Rotation(usize),
+}
+
+#[derive(Debug, Clone)]
+struct Joint {
+    parent: Option<usize>,
+    offset: Vector3<f64>,
+    /// (DOF, its index in the posture).
+    dofs: Vec<(Dof, usize)>,
+    mass: f64,
+    com: Vector3<f64>,
+}
+
+/// A task, in world terms.
+#[derive(Debug, Clone)]
+enum Goal {
+    Position {
+        joint: usize,
+        point: Vector3<f64>,
+        axes: [bool; 3],
+        target: Vector3<f64>,
+    },
+    Orientation {
+        joint: usize,
+        target: Rotation3<f64>,
+    },
+    Direction {
+        joint: usize,
+        axis: Vector3<f64>,
+        target: Vector3<f64>,
+    },
+    Gaze {
+        joint: usize,
+        point: Vector3<f64>,
+        axis: Vector3<f64>,
+        target: Vector3<f64>,
+    },
+    Com {
+        axes: [bool; 3],
+        target: Vector3<f64>,
+    },
+}
+
+#[derive(Debug, Clone)]
+struct Weighted {
+    goal: Goal,
+    /// `sqrt(weight)`, the rows' scale.
+    scale: f64,
+}
+
+/// A problem file, read by this crate's own reader.
+#[derive(Debug, Clone)]
+pub struct Problem {
+    joints: Vec<Joint>,
+    /// `ancestor[j][a]`: joint `a` is `j` or one of its ancestors.
+    ancestor: Vec<Vec<bool>>,
+    lower: Vec<f64>,
+    upper: Vec<f64>,
+    dof_names: Vec<(String, String)>,
+    /// Per DOF: its joint.
+    owner: Vec<usize>,
+    /// Per DOF: a rotation (else a translation).
+    rotational: Vec<bool>,
+    /// Levels in priority order.
+    levels: Vec<Vec<Weighted>>,
+    /// The start posture.
+    pub start: Vec<f64>,
+    /// The file's tolerance on a level's residual (default 1e-6).
+    pub tolerance: f64,
+}
+
+/// World frames of one posture.
+struct Frames {
+    rotation: Vec<Matrix3<f64>>,
+    position: Vec<Vector3<f64>>,
+    /// Per DOF: the world axis of its rotation (angular velocity per unit change) or
+    /// translation.
+    axis: Vec<Vector3<f64>>,
+}
+
+/// How a solve is taken.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Settings {
+    /// Iteration budget.
+    pub max_iterations: usize,
+    /// Damping of the step's pseudo-inverses.
+    pub lambda: f64,
+    /// Clamp of position and centre-of-mass errors per iteration (m).
+    pub max_linear: f64,
+    /// Clamp of orientation, direction and gaze errors per iteration (rad).
+    pub max_angular: f64,
+    /// Iterations without a new best (in priority order) before giving up.
+    pub stall_window: usize,
+    /// Largest DOF change of a step (rad or m): a longer step is scaled down as a whole
+    /// (Buss & Kim clamp joint changes per iteration the same way).
+    pub max_dof_step: f64,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            max_iterations: 200,
+            lambda: 0.01,
+            max_linear: 0.1,
+            max_angular: 0.3,
+            stall_window: 40,
+            max_dof_step: std::f64::consts::FRAC_PI_4,
+        }
+    }
+}
+
+/// The end of a solve.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Solution {
+    /// The best posture met, in priority order.
+    pub posture: Vec<f64>,
+    /// Its residual per level.
+    pub residuals: Vec<f64>,
+    /// Every level within the tolerance.
+    pub met_every_level: bool,
+    /// Iterations taken.
+    pub iterations: usize,
+}
+
+fn vector(v: &Value, at: &str) -> Result<Vector3<f64>, ProblemError> {
+    let a = v
+        .as_array()
+        .filter(|a| a.len() == 3)
+        .ok_or_else(|| bad(format!("{at}: expected 3 numbers")))?;
+    let mut out = Vector3::zeros();
+    for (i, x) in a.iter().enumerate() {
+        out[i] = x
+            .as_f64()
+            .ok_or_else(|| bad(format!("{at}[{i}]: expected a number")))?;
+    }
+    Ok(out)
+}
+
+fn axes(v: Option<&Value>, at: &str) -> Result<[bool; 3], ProblemError> {
+    let Some(s) = v.and_then(Value::as_str) else {
+        return Ok([true; 3]);
+    };
+    let mut out = [false; 3];
+    for c in s.chars() {
+        match c {
+            'x' | 'X' => out[0] = true,
+            'y' | 'Y' => out[1] = true,
+            'z' | 'Z' => out[2] = true,
+            _ => return Err(bad(format!("{at}: unknown axis `{c}`"))),
+        }
+    }
+    Ok(out)
+}
+
+fn dof_of(name: &str) -> Option<Dof> {
+    Some(match name {
+        "tx" => Dof::Translation(0),
+        "ty" => Dof::Translation(1),
+        "tz" => Dof::Translation(2),
+        "rx" => Dof::Rotation(0),
+        "ry" => Dof::Rotation(1),
+        "rz" => Dof::Rotation(2),
+        _ => return None,
+    })
+}
+
+/// `exp` of a rotation vector.
+fn exp(r: &Vector3<f64>) -> Matrix3<f64> {
+    Rotation3::new(*r).into_inner()
+}
+
+fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
+    Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
+}
+
+/// The left Jacobian of SO(3): `d exp(r) / dr_i = skew(J_l(r) e_i) exp(r)`.
+fn left_jacobian(r: &Vector3<f64>) -> Matrix3<f64> {
+    let theta = r.norm();
+    let k = skew(r);
+    if theta < 1e-6 {
+        return Matrix3::identity() + 0.5 * k + (k * k) / 6.0;
+    }
+    let t2 = theta * theta;
+    Matrix3::identity()
+        + ((1.0 - theta.cos()) / t2) * k
+        + ((theta - theta.sin()) / (t2 * theta)) * (k * k)
+}
+
+/// The inverse of the left Jacobian of SO(3) at `phi`.
+fn left_jacobian_inverse(phi: &Vector3<f64>) -> Matrix3<f64> {
+    let theta = phi.norm();
+    let k = skew(phi);
+    let c = if theta < 1e-6 {
+        1.0 / 12.0
+    } else {
+        1.0 / (theta * theta) - (1.0 + theta.cos()) / (2.0 * theta * theta.sin())
+    };
+    Matrix3::identity() - 0.5 * k + c * (k * k)
+}
+
+/// The angle of a rotation matrix (rad, in [0, pi]).
+fn angle(m: &Matrix3<f64>) -> f64 {
+    (((m.trace() - 1.0) / 2.0).clamp(-1.0, 1.0)).acos()
+}
+
+fn unit_angle(a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
+    // atan2 keeps precision near 0 and pi.
+    a.cross(b).norm().atan2(a.dot(b))
+}
+
+impl Problem {
+    /// Reads a problem file (the subset of the format the families use: `position`,
+    /// `orientation`, `direction`, `gaze`, `com`).
+    pub fn from_json(text: &str) -> Result<Self, ProblemError> {
+        let root: Value = serde_json::from_str(text)?;
+        let listed = root
+            .pointer("/skeleton/joints")
+            .and_then(Value::as_array)
+            .ok_or_else(|| bad("skeleton.joints: expected a list"))?;
+        // Parents before children, whatever the file's order.
+        let mut pending: Vec<&Value> = listed.iter().collect();
+        let mut joints: Vec<Joint> = Vec::new();
+        let mut by_name: HashMap<String, usize> = HashMap::new();
+        let mut lower = Vec::new();
+        let mut upper = Vec::new();
+        let mut dof_names = Vec::new();
+        while !pending.is_empty() {
+            let before = pending.len();
+            let mut rest = Vec::new();
+            for j in pending {
+                let name = j
+                    .get("name")
+                    .and_then(Value::as_str)
+                    .ok_or_else(|| bad("skeleton.joints[]: a joint without a name"))?;
+                let parent = match j.get("parent").and_then(Value::as_str) {
+                    None => None,
+                    Some(p) => match by_name.get(p) {
+                        Some(&i) => Some(i),
+                        None => {
+                            rest.push(j);
+                            continue;
+                        }
+                    },
+                };
+                let offset = match j.get("offset") {
+                    Some(v) => vector(v, &format!("{name}.offset"))?,
+                    None => Vector3::zeros(),
+                };
+                let mut dofs = Vec::new();
+                for d in j
+                    .get("dofs")
+                    .and_then(Value::as_array)
+                    .into_iter()
+                    .flatten()
+                {
+                    let dn = d.as_str().unwrap_or("");
+                    let dof = dof_of(dn).ok_or_else(|| bad(format!("{name}: unknown DOF {d}")))?;
+                    let limit = j
+                        .pointer(&format!("/limits/{dn}"))
+                        .and_then(Value::as_array);
+                    let bound = |k: usize, default: f64| {
+                        limit
+                            .and_then(|l| l.get(k))
+                            .and_then(Value::as_f64)
+                            .unwrap_or(default)
+                    };
+                    lower.push(bound(0, f64::NEG_INFINITY));
+                    upper.push(bound(1, f64::INFINITY));
+                    dof_names.push((name.to_owned(), dn.to_owned()));
+                    dofs.push((dof, lower.len() - 1));
+                }
+                let com = match j.get("com") {
+                    Some(v) if !v.is_null() => vector(v, &format!("{name}.com"))?,
+                    _ => Vector3::zeros(),
+                };
+                by_name.insert(name.to_owned(), joints.len());
+                joints.push(Joint {
+                    parent,
+                    offset,
+                    dofs,
+                    mass: j.get("mass").and_then(Value::as_f64).unwrap_or(0.0),
+                    com,
+                });
+            }
+            if rest.len() == before {
+                return Err(bad(
+                    "skeleton: a parent is missing or the parents form a cycle",
+                ));
+            }
+            pending = rest;
+        }
+        let ancestor: Vec<Vec<bool>> = (0..joints.len())
+            .map(|j| {
+                let mut row = vec![false; joints.len()];
+                let mut at = Some(j);
+                while let Some(a) = at {
+                    row[a] = true;
+                    at = joints[a].parent;
+                }
+                row
+            })
+            .collect();
+        let joint = |t: &Value, at: &str| -> Result<usize, ProblemError> {
+            let name = t
+                .get("joint")
+                .and_then(Value::as_str)
+                .ok_or_else(|| bad(format!("{at}.joint: missing")))?;
+            by_name
+                .get(name)
+                .copied()
+                .ok_or_else(|| bad(format!("{at}.joint: unknown joint `{name}`")))
+        };
+        let mut by_level: Vec<(u64, Weighted)> = Vec::new();
+        for (i, t) in root
+            .get("tasks")
+            .and_then(Value::as_array)
+            .into_iter()
+            .flatten()
+            .enumerate()
+        {
+            let at = format!("tasks[{i}]");
+            if t.get("active").and_then(Value::as_bool) == Some(false) {
+                continue;
+            }
+            let target = || {
+                vector(
+                    t.get("target").unwrap_or(&Value::Null),
+                    &format!("{at}.target"),
+                )
+            };
+            let point = || match t.get("point") {
+                Some(v) => vector(v, &format!("{at}.point")),
+                None => Ok(Vector3::zeros()),
+            };
+            let axis = |default: Vector3<f64>| match t.get("axis") {
+                Some(v) => vector(v, &format!("{at}.axis")).map(|a| a.normalize()),
+                None => Ok(default),
+            };
+            let goal =
+                match t.get("kind").and_then(Value::as_str) {
+                    Some("position") => Goal::Position {
+                        joint: joint(t, &at)?,
+                        point: point()?,
+                        axes: axes(t.get("axes"), &at)?,
+                        target: target()?,
+                    },
+                    Some("orientation") => {
+                        let q = t
+                            .get("target")
+                            .and_then(Value::as_array)
+                            .filter(|q| q.len() == 4)
+                            .ok_or_else(|| bad(format!("{at}.target: expected 4 numbers")))?;
+                        let c = |k: usize| q[k].as_f64().unwrap_or(0.0);
+                        let quaternion = UnitQuaternion::from_quaternion(
+                            nalgebra::Quaternion::new(c(3), c(0), c(1), c(2)),
+                        );
+                        Goal::Orientation {
+                            joint: joint(t, &at)?,
+                            target: quaternion.to_rotation_matrix(),
+                        }
+                    }
+                    Some("direction") => Goal::Direction {
+                        joint: joint(t, &at)?,
+                        axis: axis(Vector3::y())?,
+                        target: target()?.normalize(),
+                    },
+                    Some("gaze") => Goal::Gaze {
+                        joint: joint(t, &at)?,
+                        point: point()?,
+                        axis: axis(Vector3::z())?,
+                        target: target()?,
+                    },
+                    Some("com") => Goal::Com {
+                        axes: axes(t.get("axes"), &at)?,
+                        target: target()?,
+                    },
+                    other => return Err(bad(format!("{at}.kind: {other:?} is not read here"))),
+                };
+            let weight = t.get("weight").and_then(Value::as_f64).unwrap_or(1.0);
+            let level = t.get("level").and_then(Value::as_u64).unwrap_or(1);
+            by_level.push((
+                level,
+                Weighted {
+                    goal,
+                    scale: weight.max(0.0).sqrt(),
+                },
+            ));
+        }
+        by_level.sort_by_key(|(level, _)| *level);
+        let mut levels: Vec<Vec<Weighted>> = Vec::new();
+        let mut last = None;
+        for (level, task) in by_level {
+            if last != Some(level) {
+                levels.push(Vec::new());
+                last = Some(level);
+            }
+            if let Some(l) = levels.last_mut() {
+                l.push(task);
+            }
+        }
+        let mut owner = vec![0; lower.len()];
+        let mut rotational = vec![false; lower.len()];
+        for (j, joint) in joints.iter().enumerate() {
+            for &(dof, i) in &joint.dofs {
+                owner[i] = j;
+                rotational[i] = matches!(dof, Dof::Rotation(_));
+            }
+        }
+        let mut problem = Self {
+            owner,
+            rotational,
+            joints,
+            ancestor,
+            lower,
+            upper,
+            dof_names,
+            levels,
+            start: Vec::new(),
+            tolerance: root
+                .pointer("/settings/tolerance")
+                .and_then(Value::as_f64)
+                .unwrap_or(1e-6),
+        };
+        problem.start = match root.get("posture") {
+            Some(p) if !p.is_null() => problem.posture_from_json(p)?,
+            _ => vec![0.0; problem.dof_count()],
+        };
+        Ok(problem)
+    }
+
+    /// Number of DOF.
+    pub fn dof_count(&self) -> usize {
+        self.lower.len()
+    }
+
+    /// Number of levels.
+    pub fn level_count(&self) -> usize {
+        self.levels.len()
+    }
+
+    /// A posture in the format's form (`{"joint": {"rx": ..}}`; missing DOF at 0).
+    pub fn posture_from_json(&self, v: &Value) -> Result<Vec<f64>, ProblemError> {
+        let mut out = vec![0.0; self.dof_count()];
+        for (i, (joint, dof)) in self.dof_names.iter().enumerate() {
+            if let Some(x) = v.get(joint).and_then(|j| j.get(dof)) {
+                out[i] = x
+                    .as_f64()
+                    .ok_or_else(|| bad(format!("posture.{joint}.{dof}: expected a number")))?;
+            }
+        }
+        Ok(out)
+    }
+
+    fn frames(&self, q: &[f64]) -> Frames {
+        let n = self.joints.len();
+        let mut f = Frames {
+            rotation: Vec::with_capacity(n),
+            position: Vec::with_capacity(n),
+            axis: vec![Vector3::zeros(); self.dof_count()],
+        };
+        for joint in &self.joints {
+            let (parent_rotation, parent_position) = match joint.parent {
+                Some(p) => (f.rotation[p], f.position[p]),
+                None => (Matrix3::identity(), Vector3::zeros()),
+            };
+            let mut t = Vector3::zeros();
+            let mut r = Vector3::zeros();
+            for &(dof, i) in &joint.dofs {
+                match dof {
+                    Dof::Translation(k) => t[k] = q[i],
+                    Dof::Rotation(k) => r[k] = q[i],
+                }
+            }
+            let jl = left_jacobian(&r);
+            for &(dof, i) in &joint.dofs {
+                f.axis[i] = match dof {
+                    Dof::Translation(k) => parent_rotation.column(k).into_owned(),
+                    Dof::Rotation(k) => parent_rotation * jl.column(k),
+                };
+            }
+            f.position
+                .push(parent_position + parent_rotation * (joint.offset + t));
+            f.rotation.push(parent_rotation * exp(&r));
+        }
+        f
+    }
+
+    /// Whether DOF `i` (of joint `owner`) moves joint `j`'s frame.
+    fn moves(&self, owner: usize, j: usize) -> bool {
+        self.ancestor[j][owner]
+    }
+
+    fn is_rotation(&self, i: usize) -> bool {
+        self.rotational[i]
+    }
+
+    /// Centre of mass (the root's position when massless).
+    fn com(&self, f: &Frames) -> Vector3<f64> {
+        let mut sum = Vector3::zeros();
+        let mut mass = 0.0;
+        for (j, joint) in self.joints.iter().enumerate() {
+            sum += joint.mass * (f.position[j] + f.rotation[j] * joint.com);
+            mass += joint.mass;
+        }
+        if mass > 0.0 {
+            sum / mass
+        } else {
+            f.position[0]
+        }
+    }
+
+    /// A task's residual at these frames (m or rad), unscaled.
+    fn residual(&self, goal: &Goal, f: &Frames) -> f64 {
+        match goal {
+            Goal::Position {
+                joint,
+                point,
+                axes,
+                target,
+            } => {
+                let p = f.position[*joint] + f.rotation[*joint] * point;
+                (0..3)
+                    .filter(|&k| axes[k])
+                    .map(|k| (target[k] - p[k]).powi(2))
+                    .sum::<f64>()
+                    .sqrt()
+            }
+            Goal::Orientation { joint, target } => {
+                angle(&(target.matrix() * f.rotation[*joint].transpose()))
+            }
+            Goal::Direction {
+                joint,
+                axis,
+                target,
+            } => unit_angle(&(f.rotation[*joint] * axis), target),
+            Goal::Gaze {
+                joint,
+                point,
+                axis,
+                target,
+            } => {
+                let eye = f.position[*joint] + f.rotation[*joint] * point;
+                unit_angle(&(f.rotation[*joint] * axis), &(target - eye))
+            }
+            Goal::Com { axes, target } => {
+                let c = self.com(f);
+                (0..3)
+                    .filter(|&k| axes[k])
+                    .map(|k| (target[k] - c[k]).powi(2))
+                    .sum::<f64>()
+                    .sqrt()
+            }
+        }
+    }
+
+    /// Every level's residual at posture `q` (m and rad; the norm of its tasks' residuals,
+    /// each scaled by `sqrt(weight)`): the judge of whether a posture meets the levels.
+    pub fn level_residuals(&self, q: &[f64]) -> Vec<f64> {
+        let f = self.frames(q);
+        self.levels
+            .iter()
+            .map(|level| {
+                level
+                    .iter()
+                    .map(|t| (t.scale * self.residual(&t.goal, &f)).powi(2))
+                    .sum::<f64>()
+                    .sqrt()
+            })
+            .collect()
+    }
+
+    /// The textbook error of a task (clamped) and its rows of the Jacobian of the quantity the
+    /// error pulls (`e ~ J dq`).
+    fn rows(
+        &self,
+        goal: &Goal,
+        f: &Frames,
+        owner: &[usize],
+        settings: &Settings,
+        clamp: bool,
+    ) -> (Vec<f64>, Vec<Vec<f64>>) {
+        let n = self.dof_count();
+        let clamp_to = |e: &mut Vec<f64>, size: f64, limit: f64| {
+            if clamp && size > limit {
+                for x in e.iter_mut() {
+                    *x *= limit / size;
+                }
+            }
+        };
+        // d(point)/dq, per DOF, for a point carried by joint j.
+        let point_columns = |j: usize, p: &Vector3<f64>| -> Vec<Vector3<f64>> {
+            (0..n)
+                .map(|i| {
+                    let a = owner[i];
+                    if !self.moves(a, j) {
+                        Vector3::zeros()
+                    } else if self.is_rotation(i) {
+                        f.axis[i].cross(&(p - f.position[a]))
+                    } else {
+                        f.axis[i]
+                    }
+                })
+                .collect()
+        };
+        let angular_columns = |j: usize| -> Vec<Vector3<f64>> {
+            (0..n)
+                .map(|i| {
+                    if self.moves(owner[i], j) && self.is_rotation(i) {
+                        f.axis[i]
+                    } else {
+                        Vector3::zeros()
+                    }
+                })
+                .collect()
+        };
+        let select = |axes: &[bool; 3], e: Vector3<f64>, cols: Vec<Vector3<f64>>| {
+            let mut err = Vec::new();
+            let mut rows = Vec::new();
+            for k in (0..3).filter(|&k| axes[k]) {
+                err.push(e[k]);
+                rows.push(cols.iter().map(|c| c[k]).collect());
+            }
+            (err, rows)
+        };
+        let all = [true; 3];
+        match goal {
+            Goal::Position {
+                joint,
+                point,
+                axes,
+                target,
+            } => {
+                let p = f.position[*joint] + f.rotation[*joint] * point;
+                let (mut e, rows) = select(axes, target - p, point_columns(*joint, &p));
+                let size = e.iter().map(|x| x * x).sum::<f64>().sqrt();
+                clamp_to(&mut e, size, settings.max_linear);
+                (e, rows)
+            }
+            Goal::Orientation { joint, target } => {
+                // E = R_t R^T; the error log(E), whose exact derivative is
+                // -J_l^-1(log E) E w for a world angular velocity w of the joint.
+                let difference = target.matrix() * f.rotation[*joint].transpose();
+                let error = Rotation3::from_matrix_unchecked(difference).scaled_axis();
+                let map = left_jacobian_inverse(&error) * difference;
+                let cols: Vec<Vector3<f64>> =
+                    angular_columns(*joint).iter().map(|w| map * w).collect();
+                let (mut e, rows) = select(&all, error, cols);
+                clamp_to(&mut e, error.norm(), settings.max_angular);
+                (e, rows)
+            }
+            Goal::Direction {
+                joint,
+                axis,
+                target,
+            } => {
+                let d = f.rotation[*joint] * axis;
+                let cols: Vec<Vector3<f64>> = angular_columns(*joint)
+                    .iter()
+                    .map(|w| w.cross(&d))
+                    .collect();
+                let (mut e, rows) = select(&all, target - d, cols);
+                clamp_to(&mut e, unit_angle(&d, target), settings.max_angular);
+                (e, rows)
+            }
+            Goal::Gaze {
+                joint,
+                point,
+                axis,
+                target,
+            } => {
+                let eye = f.position[*joint] + f.rotation[*joint] * point;
+                let d = f.rotation[*joint] * axis;
+                let v = target - eye;
+                let distance = v.norm().max(1e-9);
+                let toward = v / distance;
+                let squash = (Matrix3::identity() - toward * toward.transpose()) / distance;
+                let eye_cols = point_columns(*joint, &eye);
+                // e = toward - d; the quantity pulled is d - toward.
+                let cols: Vec<Vector3<f64>> = angular_columns(*joint)
+                    .iter()
+                    .zip(&eye_cols)
+                    .map(|(w, pe)| w.cross(&d) + squash * pe)
+                    .collect();
+                let (mut e, rows) = select(&all, toward - d, cols);
+                clamp_to(&mut e, unit_angle(&d, &toward), settings.max_angular);
+                (e, rows)
+            }
+            Goal::Com { axes, target } => {
+                let total: f64 = self.joints.iter().map(|j| j.mass).sum();
+                let c = self.com(f);
+                let cols: Vec<Vector3<f64>> = if total > 0.0 {
+                    let centres: Vec<Vector3<f64>> = self
+                        .joints
+                        .iter()
+                        .enumerate()
+                        .map(|(j, joint)| f.position[j] + f.rotation[j] * joint.com)
+                        .collect();
+                    (0..n)
+                        .map(|i| {
+                            let a = owner[i];
+                            let mut col = Vector3::zeros();
+                            for (j, joint) in self.joints.iter().enumerate() {
+                                if joint.mass > 0.0 && self.moves(a, j) {
+                                    col += joint.mass
+                                        * if self.is_rotation(i) {
+                                            f.axis[i].cross(&(centres[j] - f.position[a]))
+                                        } else {
+                                            f.axis[i]
+                                        };
+                                }
+                            }
+                            col / total
+                        })
+                        .collect()
+                } else {
+                    point_columns(0, &f.position[0])
+                };
+                let (mut e, rows) = select(axes, target - c, cols);
+                let size = e.iter().map(|x| x * x).sum::<f64>().sqrt();
+                clamp_to(&mut e, size, settings.max_linear);
+                (e, rows)
+            }
+        }
+    }
+
+    /// Every level's error and Jacobian at `q` (clamped errors when `clamp`).
+    fn linearise(
+        &self,
+        q: &[f64],
+        settings: &Settings,
+        clamp: bool,
+    ) -> Vec<(DVector<f64>, DMatrix<f64>)> {
+        let f = self.frames(q);
+        let owner = &self.owner;
+        let n = self.dof_count();
+        self.levels
+            .iter()
+            .map(|level| {
+                let mut e = Vec::new();
+                let mut rows: Vec<Vec<f64>> = Vec::new();
+                for t in level {
+                    let (te, tr) = self.rows(&t.goal, &f, owner, settings, clamp);
+                    e.extend(te.iter().map(|x| x * t.scale));
+                    rows.extend(
+                        tr.into_iter()
+                            .map(|r| r.into_iter().map(|x| x * t.scale).collect()),
+                    );
+                }
+                let jacobian = DMatrix::from_fn(rows.len(), n, |r, c| rows[r][c]);
+                (DVector::from_vec(e), jacobian)
+            })
+            .collect()
+    }
+
+    /// Every level's Jacobian at `q` (of the quantities the errors pull; for the tests, which
+    /// compare it with central differences).
+    pub fn jacobians(&self, q: &[f64]) -> Vec<DMatrix<f64>> {
+        self.linearise(q, &Settings::default(), false)
+            .into_iter()
+            .map(|(_, j)| j)
+            .collect()
+    }
+
+    /// Every level's unclamped error at `q` (for the tests).
+    pub fn errors(&self, q: &[f64]) -> Vec<DVector<f64>> {
+        self.linearise(q, &Settings::default(), false)
+            .into_iter()
+            .map(|(e, _)| e)
+            .collect()
+    }
+
+    /// One textbook iteration's step from `q`, with the paper's joint-limit clamping loop: a
+    /// DOF the step would carry past a limit is stopped on it, leaves the Jacobians, and the
+    /// step is taken again with what it moved.
+    pub fn step(&self, q: &[f64], settings: &Settings) -> DVector<f64> {
+        let n = self.dof_count();
+        let systems = self.linearise(q, settings, true);
+        let mut free = vec![true; n];
+        let mut fixed = DVector::zeros(n);
+        loop {
+            let dq = Self::recursion(&systems, &free, &fixed, settings);
+            let mut again = false;
+            for i in 0..n {
+                let to = q[i] + dq[i];
+                if free[i] && (to < self.lower[i] || to > self.upper[i]) {
+                    free[i] = false;
+                    fixed[i] = to.clamp(self.lower[i], self.upper[i]) - q[i];
+                    again = true;
+                }
+            }
+            if !again {
+                return dq;
+            }
+        }
+    }
+
+    /// The recursion over the levels, the DOF not `free` held at their `fixed` steps.
+    fn recursion(
+        systems: &[(DVector<f64>, DMatrix<f64>)],
+        free: &[bool],
+        fixed: &DVector<f64>,
+        settings: &Settings,
+    ) -> DVector<f64> {
+        let n = free.len();
+        let mut dq = fixed.clone();
+        let mut projector = DMatrix::<f64>::from_diagonal(&DVector::from_fn(n, |i, _| {
+            f64::from(u8::from(free[i]))
+        }));
+        for (e, j) in systems {
+            if e.is_empty() {
+                continue;
+            }
+            let projected = j * &projector;
+            // A bounded number of sweeps: a matrix with non-finite entries never converges.
+            let Some(svd) = SVD::try_new(projected, true, true, f64::EPSILON, 1000) else {
+                break;
+            };
+            let (Some(u), Some(v_t)) = (svd.u.as_ref(), svd.v_t.as_ref()) else {
+                break;
+            };
+            let largest = svd.singular_values.iter().copied().fold(0.0, f64::max);
+            let cut = (largest * 1e-9).max(1e-12);
+            let residual = e - j * &dq;
+            let along = u.transpose() * residual;
+            for (k, &s) in svd.singular_values.iter().enumerate() {
+                if s <= cut {
+                    continue;
+                }
+                let v = v_t.row(k).transpose();
+                dq += &v * (along[k] * s / (s * s + settings.lambda * settings.lambda));
+                projector -= &v * v.transpose();
+            }
+        }
+        dq
+    }
+
+    fn clamp(&self, q: &mut [f64]) {
+        for (i, x) in q.iter_mut().enumerate() {
+            *x = x.clamp(self.lower[i], self.upper[i]);
+        }
+    }
+
+    /// Solves from the start posture.
+    pub fn solve(&self, settings: &Settings) -> Solution {
+        let mut q = self.start.clone();
+        self.clamp(&mut q);
+        let mut residuals = self.level_residuals(&q);
+        let mut best = (q.clone(), residuals.clone());
+        let mut since_best = 0;
+        let mut iterations = 0;
+        let met = |r: &[f64]| r.iter().all(|&x| x <= self.tolerance);
+        while !met(&residuals) && iterations < settings.max_iterations {
+            let mut dq = self.step(&q, settings);
+            if dq.iter().any(|d| !d.is_finite()) {
+                break;
+            }
+            let largest = dq.amax();
+            if largest > settings.max_dof_step {
+                dq *= settings.max_dof_step / largest;
+            }
+            for (x, d) in q.iter_mut().zip(dq.iter()) {
+                *x += d;
+            }
+            self.clamp(&mut q);
+            iterations += 1;
+            residuals = self.level_residuals(&q);
+            if better(&residuals, &best.1, self.tolerance) {
+                best = (q.clone(), residuals.clone());
+                since_best = 0;
+            } else {
+                since_best += 1;
+                if since_best >= settings.stall_window || dq.amax() < 1e-12 {
+                    break;
+                }
+            }
+        }
+        let (posture, residuals) = if met(&residuals) {
+            (q, residuals)
+        } else {
+            best
+        };
+        Solution {
+            met_every_level: met(&residuals),
+            posture,
+            residuals,
+            iterations,
+        }
+    }
+}
+
+/// `a` beats `b` in priority order: at the first level where they differ meaningfully (met
+/// levels count as equal), `a` is lower.
+pub fn better(a: &[f64], b: &[f64], tolerance: f64) -> bool {
+    for (&x, &y) in a.iter().zip(b) {
+        if x <= tolerance && y <= tolerance {
+            continue;
+        }
+        if x < y * (1.0 - 1e-9) - 1e-15 {
+            return true;
+        }
+        if x > y * (1.0 + 1e-9) + 1e-15 {
+            return false;
+        }
+    }
+    false
+}

@@ -1,0 +1,94 @@
+//! Stance against the textbook oracle on every problem family (`stance_hanim::families`),
+//! with and without the restarts of a stalled solve. The oracle shares no code with Stance:
+//! it reads the problem file itself, and Stance's solved posture is judged by the oracle's
+//! own forward kinematics and task errors (world positions and angles), never by
+//! `Task::residual`. Asserted per family: Stance meets every level in at least as many cases
+//! as the oracle's own solve, and in the number of cases `docs/solver-families.md` states
+//! (within one case). The counts are printed (`-- --nocapture`).
+
+use stance_document::Problem as StanceProblem;
+use stance_ik::{Posture, SolverSettings};
+use stance_textbook::{Problem, Settings};
+
+use crate::common::{all_families, problems};
+
+/// Cases per family (the figures of `docs/solver-families.md`, seed 1).
+const CASES: usize = 40;
+
+/// Per family: (name, cases Stance meets with restarts, without), as the docs state them.
+const STATED: &[(&str, usize, usize)] = &[
+    ("reach", 40, 40),
+    ("partial", 38, 38),
+    ("mixed", 40, 40),
+    ("loa1", 40, 40),
+    ("loa2", 33, 33),
+    ("limits", 34, 32),
+    ("wide", 28, 28),
+];
+
+/// Stance's solve of `text`, the posture as the oracle reads postures (by joint and DOF
+/// name, through the problem format's posture form).
+fn stance_solution(text: &str, oracle: &Problem, restarts: bool) -> Vec<f64> {
+    let problem = StanceProblem::from_json(text).unwrap();
+    let settings = SolverSettings {
+        restarts,
+        ..problem.settings
+    };
+    let mut solver = problem.solver(settings).unwrap();
+    let (mut posture, _): (Posture, _) = problem.start_posture();
+    solver
+        .solve(&problem.skeleton, &problem.tasks, &mut posture)
+        .unwrap();
+    let values = stance_document::PostureValues::from_posture(&problem.skeleton, &posture);
+    oracle
+        .posture_from_json(&serde_json::to_value(values).unwrap())
+        .unwrap()
+}
+
+#[test]
+fn stance_meets_every_level_wherever_the_textbook_oracle_does_on_every_family() {
+    let mut failures = Vec::new();
+    for family in all_families() {
+        let mut met = [0usize; 2];
+        let mut oracle_met = 0;
+        let mut missed_where_oracle_met = [0usize; 2];
+        for (oracle, text, _) in problems(&family, CASES) {
+            let tolerance = oracle.tolerance * (1.0 + 1e-6);
+            let meets = |q: &[f64]| oracle.level_residuals(q).iter().all(|&r| r <= tolerance);
+            let textbook = oracle.solve(&Settings::default());
+            // The oracle's own verdict on its own solve, from its residuals.
+            assert_eq!(textbook.met_every_level, meets(&textbook.posture));
+            oracle_met += usize::from(textbook.met_every_level);
+            for (k, restarts) in [true, false].into_iter().enumerate() {
+                let ours = meets(&stance_solution(&text, &oracle, restarts));
+                met[k] += usize::from(ours);
+                if textbook.met_every_level && !ours {
+                    missed_where_oracle_met[k] += 1;
+                }
+            }
+        }
+        let tuned = if family.tuned { "tuned" } else { "held out" };
+        println!(
+            "{:<8} ({tuned}): Stance meets every level in {}/{CASES} (without restarts {}/{CASES}), \
+             the textbook oracle in {oracle_met}/{CASES}; Stance misses {} (without restarts {}) \
+             of the oracle's",
+            family.name, met[0], met[1], missed_where_oracle_met[0], missed_where_oracle_met[1]
+        );
+        if met[0] < oracle_met {
+            failures.push(format!("{}: Stance {} < oracle {oracle_met}", family.name, met[0]));
+        }
+        let stated = STATED.iter().find(|s| s.0 == family.name);
+        match stated {
+            Some(&(_, with, without)) => {
+                if met[0].abs_diff(with) > 1 || met[1].abs_diff(without) > 1 {
+                    failures.push(format!(
+                        "{}: met {}/{} (restarts / none), the docs state {with}/{without}",
+                        family.name, met[0], met[1]
+                    ));
+                }
+            }
+            None => failures.push(format!("{}: no stated count", family.name)),
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
