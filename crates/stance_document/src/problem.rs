@@ -313,7 +313,8 @@ fn dof(v: &Value, at: &str) -> Result<Dof, DocumentError> {
     })
 }
 
-/// `lambda` (constant damping) or `adaptive_damping` (`{"lambda_max", "epsilon"}`) of `o`.
+/// `lambda` (constant damping), `levenberg` (`{"lambda", "error_scale"}`) or
+/// `adaptive_damping` (`{"lambda_max", "epsilon"}`) of `o`.
 fn parse_damping(o: &Map<String, Value>, at: &str) -> Result<Option<Damping>, DocumentError> {
     let mut damping = None;
     if let Some(v) = o.get("lambda").filter(|v| !v.is_null()) {
@@ -323,6 +324,25 @@ fn parse_damping(o: &Map<String, Value>, at: &str) -> Result<Option<Damping>, Do
             return Err(DocumentError::field(here, "expected a number >= 0"));
         }
         damping = Some(Damping::Constant { lambda });
+    }
+    if let Some(l) = o.get("levenberg").filter(|l| !l.is_null()) {
+        let here = format!("{at}.levenberg");
+        let l = obj(l, &here)?;
+        let lambda = number(field(l, "lambda", &here)?, &format!("{here}.lambda"))?;
+        let error_scale = number(
+            field(l, "error_scale", &here)?,
+            &format!("{here}.error_scale"),
+        )?;
+        if !(lambda >= 0.0 && error_scale > 0.0) {
+            return Err(DocumentError::field(
+                here,
+                "expected lambda >= 0 and error_scale > 0",
+            ));
+        }
+        damping = Some(Damping::Levenberg {
+            lambda,
+            error_scale,
+        });
     }
     if let Some(a) = o.get("adaptive_damping").filter(|a| !a.is_null()) {
         let here = format!("{at}.adaptive_damping");
@@ -360,8 +380,9 @@ fn parse_level_damping(o: &Map<String, Value>) -> Result<BTreeMap<u32, Damping>,
             .filter(|&l| l >= 1)
             .ok_or_else(|| DocumentError::field(&at, "a level is a whole number >= 1"))?;
         let entry = obj(v, &at)?;
-        let damping = parse_damping(entry, &at)?
-            .ok_or_else(|| DocumentError::field(&at, "expected `lambda` or `adaptive_damping`"))?;
+        let damping = parse_damping(entry, &at)?.ok_or_else(|| {
+            DocumentError::field(&at, "expected `lambda`, `levenberg` or `adaptive_damping`")
+        })?;
         out.insert(level, damping);
     }
     Ok(out)

@@ -559,7 +559,10 @@ fn level_step(
         kn.y.extend_from_slice(level.dx.as_slice());
         solved = true;
     }
-    let damping = level.damping.unwrap_or(params.damping);
+    let damping = level
+        .damping
+        .unwrap_or(params.damping)
+        .at_error(level.dx.norm());
     if !solved
         && let Damping::Constant { lambda } = damping
         && lambda > 0.0

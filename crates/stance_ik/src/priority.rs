@@ -30,11 +30,41 @@ pub enum Damping {
         /// Width of the singular region.
         epsilon: f64,
     },
+    /// Levenberg-Marquardt style: `lambda` while the level's error is at least `error_scale`
+    /// (m / rad), falling in proportion with it below: the step near a singularity stays
+    /// bounded far from the goal, and the last iterations are the undamped Newton steps that
+    /// converge quadratically.
+    Levenberg {
+        /// The damping far from the goal.
+        lambda: f64,
+        /// The error below which the damping falls (m / rad, > 0).
+        error_scale: f64,
+    },
 }
 
 impl Default for Damping {
+    /// `Levenberg { lambda: 0.002, error_scale: 0.01 }`.
     fn default() -> Self {
-        Damping::Constant { lambda: 0.002 }
+        Damping::Levenberg {
+            lambda: 0.002,
+            error_scale: 0.01,
+        }
+    }
+}
+
+impl Damping {
+    /// The damping of a level whose desired change has norm `error`: a
+    /// [`Damping::Levenberg`] becomes the constant it takes there, the others stay.
+    pub fn at_error(self, error: f64) -> Self {
+        match self {
+            Damping::Levenberg {
+                lambda,
+                error_scale,
+            } => Damping::Constant {
+                lambda: lambda * (error / error_scale).min(1.0),
+            },
+            other => other,
+        }
     }
 }
 
@@ -229,7 +259,8 @@ pub fn prioritized_step_nalgebra(
         let y = if level.projection {
             level.dx.clone()
         } else {
-            damped_solve(&g, &e, level.damping.unwrap_or(params.damping), tol)
+            let damping = level.damping.unwrap_or(params.damping);
+            damped_solve(&g, &e, damping.at_error(level.dx.norm()), tol)
         };
         let mut step = &ws.jht * y;
         let max = step.amax();
@@ -290,7 +321,8 @@ pub(crate) fn damped_solve(
             continue;
         }
         let l2 = match damping {
-            Damping::Constant { lambda } => lambda * lambda,
+            // Callers pass a Levenberg damping through `at_error`; taken at full here.
+            Damping::Constant { lambda } | Damping::Levenberg { lambda, .. } => lambda * lambda,
             Damping::Adaptive {
                 lambda_max,
                 epsilon,

@@ -9,6 +9,7 @@ mod balance_direction;
 mod comfort;
 mod common;
 mod convergence;
+mod damping;
 mod joint_rotation;
 mod kinematics;
 mod limb;

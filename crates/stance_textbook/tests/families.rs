@@ -75,7 +75,10 @@ fn stance_meets_every_level_wherever_the_textbook_oracle_does_on_every_family() 
             family.name, met[0], met[1], missed_where_oracle_met[0], missed_where_oracle_met[1]
         );
         if met[0] < oracle_met {
-            failures.push(format!("{}: Stance {} < oracle {oracle_met}", family.name, met[0]));
+            failures.push(format!(
+                "{}: Stance {} < oracle {oracle_met}",
+                family.name, met[0]
+            ));
         }
         let stated = STATED.iter().find(|s| s.0 == family.name);
         match stated {

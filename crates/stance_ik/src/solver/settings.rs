@@ -70,7 +70,8 @@ pub struct SolverSettings {
     pub trust_region: f64,
     /// Wall-clock budget in seconds (needs a [`Clock`]; default none).
     pub time_budget_secs: Option<f64>,
-    /// Damping of every level without its own (default constant 0.002; see
+    /// Damping of every level without its own (default [`Damping::Levenberg`] 0.002, falling
+    /// below errors of 0.01 m / rad; see
     /// [`Solver::level_damping`](crate::Solver::level_damping)).
     pub damping: Damping,
     /// Relative rank threshold of the projector (default 1e-9).
@@ -200,6 +201,16 @@ pub(super) fn validate_damping(damping: Damping) -> Result<(), IkError> {
     match damping {
         Damping::Constant { lambda } if !(lambda.is_finite() && lambda >= 0.0) => {
             Err(IkError::BadSetting("damping.lambda"))
+        }
+        Damping::Levenberg {
+            lambda,
+            error_scale,
+        } if !(lambda.is_finite()
+            && lambda >= 0.0
+            && error_scale.is_finite()
+            && error_scale > 0.0) =>
+        {
+            Err(IkError::BadSetting("damping"))
         }
         Damping::Adaptive {
             lambda_max,
