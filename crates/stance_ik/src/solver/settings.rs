@@ -106,8 +106,9 @@ pub enum Iteration {
     Guarded,
     /// The textbook recursion: every level's step at once, joint-limit clamping, the whole
     /// step scaled into [`SolverSettings::trust_region`], nothing else. Converges on
-    /// multi-level problems where the guarded safeguards stop lower levels short (in about
-    /// 13 iterations on the feasible suite, against 40 guarded), but an iteration may leave a
+    /// multi-level problems where the guarded safeguards stop lower levels short (5 to 8
+    /// iterations median on the tuned problem families of docs/solver-families.md), but an
+    /// iteration may leave a
     /// higher level worse on the way: a solve returns the best posture met in priority order.
     #[default]
     Textbook,
