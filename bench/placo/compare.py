@@ -186,7 +186,7 @@ class Problem:
         return sorted({t.level for t in self.tasks})
 
 
-SUPPORTED_KINDS = ("position", "orientation", "gaze", "com")
+SUPPORTED_KINDS = ("position", "orientation", "gaze", "direction", "com")
 
 
 def load_problem(path: Path) -> Problem:
@@ -235,6 +235,8 @@ def load_problem(path: Path) -> Problem:
             spec.point = np.array(t["point"], dtype=float)
         if "axis" in t:
             spec.axis = np.array(t["axis"], dtype=float)
+        elif kind == "direction":
+            spec.axis = np.array([0.0, 1.0, 0.0])
         spec.axes = t.get("axes", "xyz")
         spec.target = np.array(t["target"], dtype=float)
         tasks.append(spec)
@@ -278,6 +280,12 @@ def task_residual(task: TaskSpec, frames: Frames) -> float:
         return float(np.linalg.norm((task.target - current)[mask]))
     if task.kind == "orientation":
         return rotation_angle(quaternion_to_matrix(task.target) @ frames.rotation(task.joint).T)
+    if task.kind == "direction":
+        axis = frames.rotation(task.joint) @ task.axis
+        target = task.target
+        cos = np.dot(axis, target) / (np.linalg.norm(axis) * np.linalg.norm(target))
+        sin = np.linalg.norm(np.cross(axis, target)) / (np.linalg.norm(axis) * np.linalg.norm(target))
+        return math.atan2(sin, cos)
     if task.kind == "gaze":
         to_target = task.target - frames.point(task.joint, task.point)
         if np.linalg.norm(to_target) < 1e-12:
@@ -661,6 +669,10 @@ class PlacoProblem:
             return t
         if task.kind == "orientation":
             return solver.add_orientation_task(task.joint, quaternion_to_matrix(task.target))
+        if task.kind == "direction":
+            # A segment axis onto a world direction: PlaCo's axis-align task on the joint's frame.
+            target = task.target / np.linalg.norm(task.target)
+            return solver.add_axisalign_task(task.joint, task.axis / np.linalg.norm(task.axis), target)
         if task.kind == "gaze":
             # No gaze task in PlaCo: an axis-align task whose world target direction is
             # re-aimed from the eye to the target point before every solve.
