@@ -494,12 +494,9 @@ pub fn skeleton_json(skeleton: &Skeleton) -> Value {
             let mut stiff = Map::new();
             for (k, d) in joint.dofs.iter().enumerate() {
                 let i = joint.dof_start + k;
-                if lower[i].is_finite() || upper[i].is_finite() {
-                    let bound = |v: f64| if v.is_finite() { json!(v) } else { Value::Null };
-                    limits.insert(
-                        d.name().to_owned(),
-                        json!([bound(lower[i]), bound(upper[i])]),
-                    );
+                // A skeleton's limits are finite on both sides, or absent (infinite).
+                if lower[i].is_finite() && upper[i].is_finite() {
+                    limits.insert(d.name().to_owned(), json!([lower[i], upper[i]]));
                 }
                 if d.is_rotation() && stiffness.get(i).is_some_and(|&s| s != 0.0) {
                     stiff.insert(d.name().to_owned(), json!(stiffness[i]));

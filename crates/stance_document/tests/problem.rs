@@ -13,42 +13,7 @@ use stance_ik::{Frames, Skeleton, TaskKind};
 
 /// The LOA2 body as a problem file's `skeleton` (names, parents, offsets, DOF, limits).
 fn skeleton_json(s: &Skeleton) -> String {
-    let joints: Vec<String> = s
-        .joints()
-        .iter()
-        .map(|j| {
-            let parent = j
-                .parent
-                .map_or("null".to_owned(), |p| format!("\"{}\"", s.joints()[p].name));
-            let dofs: Vec<String> = j.dofs.iter().map(|d| format!("\"{}\"", d.name())).collect();
-            let limits: Vec<String> = j
-                .dofs
-                .iter()
-                .enumerate()
-                .map(|(k, d)| {
-                    let i = j.dof_start + k;
-                    let (lo, hi) = (s.lower_limits()[i], s.upper_limits()[i]);
-                    let lo = if lo.is_finite() { lo } else { -1e9 };
-                    let hi = if hi.is_finite() { hi } else { 1e9 };
-                    format!("\"{}\":[{lo},{hi}]", d.name())
-                })
-                .collect();
-            format!(
-                r#"{{"name":"{}","parent":{parent},"offset":[{},{},{}],"dofs":[{}],"limits":{{{}}},"mass":{},"com":[{},{},{}]}}"#,
-                j.name,
-                j.offset.x,
-                j.offset.y,
-                j.offset.z,
-                dofs.join(","),
-                limits.join(","),
-                j.mass,
-                j.com.x,
-                j.com.y,
-                j.com.z
-            )
-        })
-        .collect();
-    format!(r#"{{"joints":[{}]}}"#, joints.join(","))
+    stance_document::skeleton_json(s).to_string()
 }
 
 const TASKS: &str = r#"[
@@ -109,6 +74,14 @@ fn problem_file_errors_name_the_field() {
             "settings.levels.2.lambda",
         ),
         (r#""settings":{"hybrid":1}"#, "settings.hybrid"),
+        (
+            r#""settings":{"levenberg":{"lambda":0.002,"error_scale":0}}"#,
+            "settings.levenberg",
+        ),
+        (
+            r#""settings":{"levenberg":{"lambda":0.002}}"#,
+            "error_scale",
+        ),
         (r#""settings":{"tolerance":-1}"#, "settings"),
         (r#""posture":{"l_knee":{"rq":1}}"#, "posture.l_knee"),
     ] {
@@ -129,4 +102,74 @@ fn problem_file_errors_name_the_field() {
             .to_string()
             .contains("not valid JSON")
     );
+}
+
+/// A problem written by `problem_json` reads back as the same skeleton, tasks and start
+/// posture, for every family's kinds.
+#[test]
+fn a_written_problem_reads_back_the_same() {
+    use stance_hanim::families::families;
+    for family in families() {
+        let skeleton = family.body.skeleton().unwrap();
+        for index in 0..3 {
+            let p = family.problem(&skeleton, 7, index).unwrap();
+            let json = stance_document::problem_json(&skeleton, &p.tasks, &p.start).unwrap();
+            let back = Problem::from_json(&json.to_string()).unwrap();
+            assert_eq!(back.skeleton, skeleton, "{}", p.name);
+            assert_eq!(back.tasks.len(), p.tasks.len(), "{}", p.name);
+            for (read, written) in back.tasks.iter().zip(&p.tasks) {
+                // Quaternions and directions are normalised on reading (an ulp or so).
+                let as_json = |t: &stance_ik::Task| {
+                    serde_json::to_value(stance_document::TaskSpec::from_task(&skeleton, t))
+                        .unwrap()
+                };
+                let (r, w) = (as_json(read), as_json(written));
+                assert!(close(&r, &w), "{}: {r} read back as {w}", p.name);
+            }
+            assert_eq!(back.start_posture().0, p.start, "{}", p.name);
+        }
+    }
+}
+
+/// `settings.levenberg` is the damping that falls with the error; `lambda` a constant one.
+#[test]
+fn the_damping_settings_read_as_written() {
+    let skeleton = skeleton_json(&loa2_body40().unwrap());
+    let damping = |settings: &str| {
+        Problem::from_json(&format!(
+            r#"{{"skeleton":{skeleton},"settings":{settings}}}"#
+        ))
+        .unwrap()
+        .settings
+        .damping
+    };
+    assert_eq!(damping("{}"), stance_ik::Damping::default());
+    assert_eq!(
+        damping(r#"{"levenberg":{"lambda":0.01,"error_scale":0.05}}"#),
+        stance_ik::Damping::Levenberg {
+            lambda: 0.01,
+            error_scale: 0.05
+        }
+    );
+    assert_eq!(
+        damping(r#"{"lambda":0.01}"#),
+        stance_ik::Damping::Constant { lambda: 0.01 }
+    );
+}
+
+/// The same JSON, numbers within 1e-12.
+fn close(a: &serde_json::Value, b: &serde_json::Value) -> bool {
+    use serde_json::Value;
+    match (a, b) {
+        (Value::Number(x), Value::Number(y)) => {
+            (x.as_f64().unwrap() - y.as_f64().unwrap()).abs() <= 1e-12
+        }
+        (Value::Array(x), Value::Array(y)) => {
+            x.len() == y.len() && x.iter().zip(y).all(|(p, q)| close(p, q))
+        }
+        (Value::Object(x), Value::Object(y)) => {
+            x.len() == y.len() && x.iter().all(|(k, v)| y.get(k).is_some_and(|w| close(v, w)))
+        }
+        _ => a == b,
+    }
 }
