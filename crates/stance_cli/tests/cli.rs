@@ -197,32 +197,91 @@ fn bench_times_a_problem_file() {
 }
 
 #[test]
-fn bench_suite_counts_the_problems_that_met_every_level() {
+fn bench_suite_counts_per_family_and_beside_a_peer() {
     let dir = std::env::temp_dir().join(format!("stance-cli-suite-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    // One reachable problem, and the same body asked to reach 10 m away (never met).
-    std::fs::write(dir.join("a-reachable.json"), EXAMPLE).unwrap();
+    let (one, two) = (dir.join("one"), dir.join("two"));
+    std::fs::create_dir_all(&one).unwrap();
+    std::fs::create_dir_all(&two).unwrap();
+    // Family "one": a reachable problem and the same body asked to reach 10 m away (never
+    // met); family "two": the reachable one alone.
+    std::fs::write(one.join("a-reachable.json"), EXAMPLE).unwrap();
     let far = EXAMPLE.replace("[0.25,1.1,0.3]", "[10.0,1.1,0.3]");
-    std::fs::write(dir.join("b-unreachable.json"), far).unwrap();
-    std::fs::write(dir.join("notes.txt"), "not a problem").unwrap();
+    std::fs::write(one.join("b-unreachable.json"), far).unwrap();
+    std::fs::write(one.join("notes.txt"), "not a problem").unwrap();
+    std::fs::write(two.join("a-reachable.json"), EXAMPLE).unwrap();
+    // A peer that met both of family one's problems in 20 iterations, 1 ms each.
+    let peer = dir.join("peer.jsonl");
+    std::fs::write(
+        &peer,
+        "{\"family\":\"one\",\"problem\":\"a-reachable.json\",\"met_every_level\":true,\"iterations\":20,\"us_per_solve\":1000.0}\n\
+         {\"family\":\"one\",\"problem\":\"b-unreachable.json\",\"met_every_level\":true,\"iterations\":20,\"us_per_solve\":1000.0}\n",
+    )
+    .unwrap();
     let (ok, stdout, stderr) = stance(&[
         "bench",
         "--suite",
         dir.to_str().unwrap(),
+        "--peer",
+        peer.to_str().unwrap(),
         "--json",
-        "--millis",
-        "5",
     ]);
     assert!(ok, "{stderr}");
     let v: Value = serde_json::from_str(&stdout).unwrap();
-    assert_eq!(v["problems"], 2, "{v}");
-    assert_eq!(v["met_every_level"], 1, "{v}");
-    assert!(v["median_us_per_solve"].as_f64().unwrap() > 0.0);
-    assert!(v["median_us_per_iteration"].as_f64().unwrap() > 0.0);
+    let families = v["families"].as_array().unwrap();
+    assert_eq!(families.len(), 2, "{v}");
+    let (f1, f2) = (&families[0], &families[1]);
+    assert_eq!(
+        (f1["family"].as_str(), f1["cases"].as_u64()),
+        (Some("one"), Some(2))
+    );
+    assert_eq!(f1["met_every_level"], 1, "{v}");
+    assert_eq!(f1["peer"]["met_every_level"], 2, "{v}");
+    assert_eq!(f1["peer"]["stance_meets_where_peer_meets"], 1, "{v}");
+    assert_eq!(f1["peer"]["median_iterations_both"]["peer"], 20.0, "{v}");
+    let ratio = f1["peer"]["per_solve_ratio"].as_f64().unwrap();
+    let ours = f1["peer"]["median_us_per_solve_both"]["stance"]
+        .as_f64()
+        .unwrap();
+    assert!((ratio - 1000.0 / ours).abs() < 1e-9 * ratio, "{v}");
+    assert_eq!(
+        (f2["family"].as_str(), f2["met_every_level"].as_u64()),
+        (Some("two"), Some(1))
+    );
+    assert_eq!(f2["peer"]["cases"], 0, "no peer line for family two: {v}");
     let results = v["results"].as_array().unwrap();
-    assert_eq!(results[0]["met_every_level"], true);
+    assert_eq!(results.len(), 3);
     assert_eq!(results[1]["met_every_level"], false);
-    assert_ne!(results[1]["status"], "converged");
+    // Without --json: a table with a line per family.
+    let (ok, stdout, _) = stance(&["bench", "--suite", dir.to_str().unwrap()]);
+    assert!(ok);
+    assert!(stdout.lines().any(|l| l.starts_with("one ")), "{stdout}");
+    assert!(stdout.lines().any(|l| l.starts_with("two ")), "{stdout}");
+}
+
+/// `stance families` writes problem files that `stance solve` reads, one folder per family.
+#[test]
+fn families_are_written_as_problem_files_that_solve() {
+    let dir = std::env::temp_dir().join(format!("stance-cli-families-{}", std::process::id()));
+    let (ok, stdout, stderr) = stance(&[
+        "families",
+        "--out",
+        dir.to_str().unwrap(),
+        "--cases",
+        "2",
+        "--family",
+        "reach",
+        "--family",
+        "mixed",
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("reach: 2 problems"), "{stdout}");
+    let file = dir.join("mixed").join("mixed-0001.json");
+    let (ok, stdout, stderr) = stance(&["solve", file.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    let v: Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(v["report"]["status"], "converged", "{v}");
+    let (ok, _, stderr) = stance(&["families", "--out", "/tmp/x", "--family", "nope"]);
+    assert!(!ok && stderr.contains("no family `nope`"), "{stderr}");
 }
 
 #[test]
