@@ -405,3 +405,40 @@ fn random_posture(
     }
     posture
 }
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    /// Every family's problems are feasible (the goal posture meets every task, within the
+    /// limits), have a task on every level, and are the same for the same seed.
+    #[test]
+    fn problems_are_feasible_and_reproducible() {
+        for family in families() {
+            let skeleton = family.body.skeleton().unwrap();
+            for index in 0..5 {
+                let p = family.problem(&skeleton, 3, index).unwrap();
+                assert_eq!(p, family.problem(&skeleton, 3, index).unwrap());
+                let frames = Frames::new(&skeleton, &p.goal);
+                for task in &p.tasks {
+                    let r = task.residual(&skeleton, &frames, p.goal.values());
+                    assert!(r < 1e-9, "{}: {task:?} residual {r} at the goal", p.name);
+                }
+                let (lower, upper) = (skeleton.lower_limits(), skeleton.upper_limits());
+                for (d, v) in p.goal.values().iter().enumerate() {
+                    assert!(lower[d] <= *v && *v <= upper[d], "{}: DOF {d}", p.name);
+                }
+                let levels: Vec<u32> = p.tasks.iter().map(|t| t.level).collect();
+                let top = *levels.iter().max().unwrap();
+                assert!((1..=top).all(|l| levels.contains(&l)), "{}", p.name);
+                assert!(family.levels.contains(&top) && family.tasks.contains(&p.tasks.len()));
+            }
+            assert_ne!(
+                family.problem(&skeleton, 3, 0).unwrap(),
+                family.problem(&skeleton, 4, 0).unwrap(),
+                "another seed, other problems"
+            );
+        }
+    }
+}
