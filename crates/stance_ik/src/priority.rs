@@ -43,12 +43,11 @@ pub enum Damping {
 }
 
 impl Default for Damping {
-    /// `Levenberg { lambda: 0.002, error_scale: 0.01 }`.
+    /// `Constant { lambda: 0.002 }`. ([`Damping::Levenberg`] converges faster on whole
+    /// solves, but near a straight knee its undamped last steps throw frame-by-frame solves
+    /// off: retargeting with contacts drifted by 29 mm; docs/solver-families.md.)
     fn default() -> Self {
-        Damping::Levenberg {
-            lambda: 0.002,
-            error_scale: 0.01,
-        }
+        Damping::Constant { lambda: 0.002 }
     }
 }
 

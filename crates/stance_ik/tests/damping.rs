@@ -1,7 +1,6 @@
-//! The default damping falls with the error (Levenberg-Marquardt style): near a singularity,
-//! where a constant damping makes every iteration shave off only a share of the error
-//! (linear convergence at the rate `lambda^2 / (sigma^2 + lambda^2)`), the default converges
-//! quadratically. Checked on an arm reaching nearly straight, by the errors of successive
+//! The damping that falls with the error (`Damping::Levenberg`): near a singularity, where a
+//! constant damping makes every iteration shave off only a share of the error (linear
+//! convergence at the rate `lambda^2 / (sigma^2 + lambda^2)`), it converges quadratically. Checked on an arm reaching nearly straight, by the errors of successive
 //! iterations (independent of the solver's own convergence test).
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
@@ -42,11 +41,17 @@ fn errors(damping: Damping, count: usize) -> Vec<f64> {
 }
 
 #[test]
-fn near_full_reach_the_default_damping_converges_quadratically_and_a_constant_one_does_not() {
-    let default = errors(Damping::default(), 40);
+fn near_full_reach_levenberg_damping_converges_quadratically_and_a_constant_one_does_not() {
+    let default = errors(
+        Damping::Levenberg {
+            lambda: 0.002,
+            error_scale: 0.01,
+        },
+        40,
+    );
     let constant = errors(Damping::Constant { lambda: 0.002 }, 40);
     let to = |e: &[f64], tol: f64| e.iter().position(|&x| x <= tol);
-    let ours = to(&default, 1e-12).expect("the default damping reaches 1e-12 m");
+    let ours = to(&default, 1e-12).expect("the Levenberg damping reaches 1e-12 m");
     // Quadratic: once below 1 mm, each error at most a modest multiple of the last squared.
     let tail: Vec<f64> = default[..=ours]
         .iter()

@@ -70,8 +70,7 @@ pub struct SolverSettings {
     pub trust_region: f64,
     /// Wall-clock budget in seconds (needs a [`Clock`]; default none).
     pub time_budget_secs: Option<f64>,
-    /// Damping of every level without its own (default [`Damping::Levenberg`] 0.002, falling
-    /// below errors of 0.01 m / rad; see
+    /// Damping of every level without its own (default constant 0.002; see
     /// [`Solver::level_damping`](crate::Solver::level_damping)).
     pub damping: Damping,
     /// Relative rank threshold of the projector (default 1e-9).
