@@ -25,6 +25,12 @@ struct Row {
     met_every_level: bool,
     iterations: usize,
     us_per_solve: f64,
+    /// How the solve ended (Stance's rows; `bench/placo/compare.py` reads it).
+    #[serde(default)]
+    status: Option<serde_json::Value>,
+    /// Every level's residual (Stance's rows).
+    #[serde(default)]
+    residuals: Vec<f64>,
 }
 
 fn problem_files(dir: &Path, out: &mut Vec<PathBuf>) -> Result<()> {
@@ -76,6 +82,8 @@ fn solve_row(path: &Path, no_restarts: bool) -> Result<Row> {
         met_every_level: report.levels.iter().all(|l| l.met || l.posture_only),
         iterations: report.iterations,
         us_per_solve: median(times),
+        status: Some(serde_json::to_value(report.status)?),
+        residuals: report.levels.iter().map(|l| l.residual_after).collect(),
     })
 }
 
@@ -225,6 +233,8 @@ pub fn run(dir: &Path, peer: Option<&Path>, no_restarts: bool, json_out: bool) -
                     "met_every_level": r.met_every_level,
                     "iterations": r.iterations,
                     "us_per_solve": r.us_per_solve,
+                    "status": r.status,
+                    "residuals": r.residuals,
                 })
             })
             .collect();
