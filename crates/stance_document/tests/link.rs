@@ -45,6 +45,7 @@ fn all_kinds() -> Document {
         interval: None,
     };
     Document {
+        rest: Default::default(),
         avatar: AvatarReference::Url("https://example.org/models/Jin.glb?x=1#frag".to_owned()),
         posture: posture.clone(),
         tasks: vec![
@@ -200,6 +201,7 @@ fn a_full_loa2_posture_with_six_tasks_fits_in_600_characters() {
     let n = 50;
     for _ in 0..n {
         let d = Document {
+            rest: Default::default(),
             avatar: AvatarReference::Default,
             posture: loa2_posture(&mut r, 0.6),
             tasks: table1_tasks(&mut r),
@@ -214,6 +216,7 @@ fn a_full_loa2_posture_with_six_tasks_fits_in_600_characters() {
         round_trip(&d);
     }
     let d0 = Document {
+        rest: Default::default(),
         avatar: AvatarReference::Default,
         posture: loa2_posture(&mut r, 0.6),
         tasks: vec![],
@@ -245,6 +248,7 @@ fn report_link_lengths_and_the_general_compressors() {
     let body = stance_hanim::scenarios::loa2_body40().unwrap();
     let standing = stance_hanim::scenarios::standing_posture(&body);
     let table1 = Document {
+        rest: Default::default(),
         avatar: AvatarReference::Default,
         posture: PostureValues::from_posture(&body, &standing),
         tasks: table1_tasks(&mut r),
@@ -261,6 +265,7 @@ fn report_link_lengths_and_the_general_compressors() {
     );
     for spread in [0.2, 0.6, 1.0, std::f64::consts::PI] {
         let d = Document {
+            rest: Default::default(),
             avatar: AvatarReference::Default,
             posture: loa2_posture(&mut r, spread),
             tasks: table1_tasks(&mut r),

@@ -574,10 +574,21 @@ impl EditorModel {
         }
     }
 
+    /// Undo or redo: `document` on the current body, which may lack some of its joints (the
+    /// step crossed an avatar swap or a change of level of articulation): their values are
+    /// left out.
     fn restore(&mut self, document: &Document, what: &str) {
         self.motion_restored();
         let camera = self.session.camera();
-        if let Err(error) = self.session.restore_document(document) {
+        let skeleton = self.session.skeleton();
+        let mut document = document.clone();
+        document.posture = document.posture.fitted(skeleton);
+        if let Some(motion) = &mut document.motion {
+            for key in &mut motion.keys {
+                key.posture = key.posture.fitted(skeleton);
+            }
+        }
+        if let Err(error) = self.session.restore_document(&document) {
             self.warn(format!("Could not {what}: {error}"));
         }
         if self.session.camera() != camera {

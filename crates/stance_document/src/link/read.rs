@@ -14,7 +14,8 @@ use super::{
     DIRECTION_STEP, MAX_COUNT, MAX_OVERRUN, MAX_STRING_BYTES, POSITION_STEP_M, ROTATION_STEP_RAD,
 };
 use crate::document::{
-    AvatarReference, Document, DofValues, LimbName, PostureValues, TaskKindSpec, TaskSpec, dof_slot,
+    AvatarReference, Document, DofValues, LimbName, PostureRest, PostureValues, TaskKindSpec,
+    TaskSpec, dof_slot,
 };
 use crate::motion::{MAX_FRAME_COUNT, MotionKey, MotionSection, TaskInterval};
 use crate::range_coder::{Decoder, UintModel};
@@ -427,5 +428,7 @@ pub(super) fn decode_payload(bytes: &[u8], format: u8) -> R<Document> {
         motion,
         camera: None,
         stiffness,
+        // Links do not say what their values are relative to yet: the standard pose.
+        rest: PostureRest::Standard,
     })
 }

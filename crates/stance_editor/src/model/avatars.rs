@@ -5,6 +5,7 @@ use serde_json::Value;
 
 use super::{EditorModel, SessionChange};
 use crate::avatar::LoadedAvatar;
+use crate::history::EditKind;
 use crate::host::{AvatarImport, ImportedAvatar};
 use crate::posing::PosingSession;
 
@@ -84,19 +85,30 @@ impl EditorModel {
     }
 
     /// The avatar file `name` imported (by the host or here): its skeleton, model and posing
-    /// session replace the current ones; on failure the notice says why.
+    /// session replace the current ones; on failure the notice says why. A document that
+    /// waited for this avatar (opened with it) is restored on it; otherwise the avatar is
+    /// swapped under the current document: its posture (which means the same pose on every
+    /// body) and the tasks whose joints the new body has carry over as one undoable edit, the
+    /// others are named.
     fn open_imported_avatar(&mut self, name: &str, result: Result<Box<ImportedAvatar>, String>) {
         let started = web_time::Instant::now();
         let loa = self.session.level_of_articulation();
         let mut mapping_note = None;
+        let swap = self.pending_document.is_none();
+        let mut dropped = Vec::new();
         let loaded = result
             .and_then(|imported| LoadedAvatar::from_imported(name, *imported, loa))
             .and_then(|(mut avatar, mut humanoid)| {
                 mapping_note = self
                     .mapping_corrections
                     .reapply(&mut avatar, loa, &mut humanoid);
-                let session =
-                    PosingSession::with_humanoid(humanoid).map_err(|error| error.to_string())?;
+                let session = if swap {
+                    let (session, gone) = super::mapping::rebuilt_session(&self.session, humanoid)?;
+                    dropped = gone;
+                    session
+                } else {
+                    PosingSession::with_humanoid(humanoid).map_err(|error| error.to_string())?
+                };
                 Ok((avatar, session))
             });
         let (avatar, session) = match loaded {
@@ -121,15 +133,40 @@ impl EditorModel {
         if let Some(note) = mapping_note {
             text.push_str(&format!(" {note}"));
         }
-        self.replace_session(session, SessionChange::NewBody);
+        if swap {
+            text.push_str(&format!(
+                " The posture and {} task(s) carried over (undo takes them back).",
+                session.tasks().len()
+            ));
+            if !dropped.is_empty() {
+                text.push_str(&format!(
+                    " Dropped, this body lacks their joints: {}.",
+                    dropped.join(", ")
+                ));
+            }
+            self.record(EditKind::Command);
+            self.replace_session(session, SessionChange::Rebuilt);
+        } else {
+            self.replace_session(session, SessionChange::NewBody);
+        }
         self.avatar = Some(avatar);
         self.avatar_url = crate::avatar::is_url(name).then(|| name.to_owned());
-        self.inform(text);
-        if let Some(document) = self.pending_document.take()
-            && let Err(error) = self.session.restore_document(&document)
-        {
-            self.warn(format!("The posture does not fit this avatar: {error}"));
+        if let Some(document) = self.pending_document.take() {
+            // Written before postures meant the same pose on every body: its values are
+            // relative to this avatar's own rest.
+            let own_rest = document.rest == stance_document::PostureRest::Avatar;
+            let document = document.in_standard_rest(self.session.humanoid());
+            if let Err(error) = self.session.restore_document(&document) {
+                self.warn(format!("The posture does not fit this avatar: {error}"));
+                return;
+            }
+            if own_rest {
+                text.push_str(
+                    " This document was made before a posture meant the same pose on every body: its values, relative to this avatar's own rest, were converted and show the pose it was saved with.",
+                );
+            }
         }
+        self.inform(text);
         if let Some(avatar) = &mut self.avatar {
             avatar.load.session_ms = started.elapsed().as_secs_f64() * 1e3 - avatar.load.build_ms;
         }
@@ -140,19 +177,27 @@ impl EditorModel {
         self.pending_import.as_deref()
     }
 
-    /// Back to the built-in mannequin (the posture carries over by joint name).
+    /// Back to the built-in mannequin: the document carries over as in an avatar swap (one
+    /// undoable edit; tasks whose joints the mannequin lacks are named).
     pub(super) fn use_mannequin(&mut self) {
-        let document = self.session.document();
-        match PosingSession::new(self.session.level_of_articulation()) {
-            Ok(mut session) => {
-                let fits = session.restore_document(&document).is_ok();
-                self.replace_session(session, SessionChange::NewBody);
+        let built = PosingSession::new(self.session.level_of_articulation())
+            .map_err(|error| error.to_string())
+            .and_then(|session| {
+                super::mapping::rebuilt_session(&self.session, session.humanoid().clone())
+            });
+        match built {
+            Ok((session, dropped)) => {
+                self.record(EditKind::Command);
+                self.replace_session(session, SessionChange::Rebuilt);
                 self.avatar = None;
                 self.avatar_url = None;
                 // An import still under way no longer replaces the body.
                 self.pending_import = None;
-                if !fits {
-                    self.inform("The posture did not fit the mannequin; it stands at rest.");
+                if !dropped.is_empty() {
+                    self.inform(format!(
+                        "The mannequin lacks the joints of these tasks, dropped (undo brings them back): {}.",
+                        dropped.join(", ")
+                    ));
                 }
             }
             Err(error) => self.warn(format!("The mannequin could not be built: {error}")),
