@@ -45,7 +45,8 @@ fn all_kinds() -> Document {
         interval: None,
     };
     Document {
-        rest: Default::default(),
+        // Made on an avatar before `rest` existed: the oldest formats hold it.
+        rest: stance_document::PostureRest::Avatar,
         avatar: AvatarReference::Url("https://example.org/models/Jin.glb?x=1#frag".to_owned()),
         posture: posture.clone(),
         tasks: vec![
@@ -349,7 +350,7 @@ fn broken_links_give_distinct_clear_errors() {
     );
     assert_eq!(
         e.to_string(),
-        "this link was made by a newer version of Stance (format 5); this version reads format 4"
+        "this link was made by a newer version of Stance (format 6); this version reads format 5"
     );
     // Valid checksum, nonsense inside.
     let e = link::decode(&reframe(vec![1, 3, 0xFF, 0xFF, 0xFF])).unwrap_err();
@@ -681,4 +682,40 @@ fn posed_fingers_round_trip_within_the_quantisation() {
             );
         }
     }
+}
+
+/// What a link's values are relative to travels from format 5: a document made on an avatar
+/// in the standard pose (what the editor writes) takes format 5; one made on an avatar before
+/// (its own rest) keeps the oldest format that holds it and opens as such, as a format 1-4
+/// link on an avatar does; on the mannequin both rests are one and older formats hold it.
+#[test]
+fn the_rest_of_the_values_travels_in_a_format_5_link() {
+    use stance_document::PostureRest;
+    let mut d = Document::from_json(
+        r#"{"avatar": {"url": "https://example.org/a.vrm"}, "rest": "standard",
+            "posture": {"l_elbow": {"rx": -0.5}}}"#,
+    )
+    .unwrap();
+    assert_eq!(d.rest, PostureRest::Standard);
+    let text = link::encode(&d);
+    assert_eq!(URL_SAFE_NO_PAD.decode(&text).unwrap()[0], 5);
+    assert_eq!(link::decode(&text).unwrap().rest, PostureRest::Standard);
+    d.rest = PostureRest::Avatar;
+    let text = link::encode(&d);
+    assert_eq!(URL_SAFE_NO_PAD.decode(&text).unwrap()[0], 1);
+    assert_eq!(link::decode(&text).unwrap().rest, PostureRest::Avatar);
+    d.avatar = AvatarReference::Default;
+    d.rest = PostureRest::Standard;
+    let text = link::encode(&d);
+    assert_eq!(URL_SAFE_NO_PAD.decode(&text).unwrap()[0], 1);
+    assert_eq!(link::decode(&text).unwrap().rest, PostureRest::Standard);
+    // In JSON: absent with an avatar URL is the avatar's own rest; a wrong word is named.
+    let old = Document::from_json(r#"{"avatar": {"url": "https://example.org/a.vrm"}}"#).unwrap();
+    assert_eq!(old.rest, PostureRest::Avatar);
+    assert_eq!(
+        Document::from_json("{}").unwrap().rest,
+        PostureRest::Standard
+    );
+    let e = Document::from_json(r#"{"rest": "t-pose"}"#).unwrap_err();
+    assert!(e.to_string().contains("rest"), "{e}");
 }

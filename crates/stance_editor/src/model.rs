@@ -23,7 +23,7 @@ mod tasks;
 
 use glam::DVec3;
 use serde_json::Value;
-use stance_document::{AvatarReference, Document, TaskSpec, link};
+use stance_document::{AvatarReference, Document, PostureRest, TaskSpec, link};
 use stance_hanim::{LevelOfArticulation, Mapping, readable_name};
 use stance_ik::Clock;
 use stance_render::MannequinBone;
@@ -31,6 +31,10 @@ use stance_render::MannequinBone;
 pub use self::clips::{AnimationFormat, CLIP_FPS, PickPurpose};
 pub use self::comfort::{ComfortView, heat_color};
 use self::command::goals_moved;
+/// Said when a document made on the avatar before a posture meant the same pose on every body
+/// (its values relative to the avatar's own rest) was converted to the standard pose.
+pub(crate) const CONVERTED_NOTE: &str = " The document was made before a posture meant the same pose on every body: its values, relative to this avatar's own rest, were converted and show the pose it was saved with.";
+
 pub use self::command::{Command, Gesture, Notice, SessionChange};
 pub use self::hands::{HandCommand, Hands};
 pub use self::image::{IMAGE_FILE_NAME, ImageExport, ImageRequest};
@@ -605,7 +609,18 @@ impl EditorModel {
     /// Opens `document` in the session as one undoable edit; `Err` says why it does not fit.
     /// A document with a posture opens exactly as it was saved; one with tasks and no
     /// posture (written by hand or by a script) is posed by the solver from the rest pose.
-    fn open_document(&mut self, document: &Document) -> Result<(), PosingError> {
+    /// Opens `document` as one undoable edit. A document made on the avatar now loaded before
+    /// postures meant the same pose on every body ([`PostureRest::Avatar`]) is converted
+    /// from that avatar's own rest; returns whether it was (say so: [`CONVERTED_NOTE`]).
+    fn open_document(&mut self, document: &Document) -> Result<bool, PosingError> {
+        let on_this_avatar = matches!(&document.avatar, AvatarReference::Url(url)
+            if self.avatar.is_some() && self.avatar_url.as_ref() == Some(url));
+        let converted = document.rest == PostureRest::Avatar && on_this_avatar;
+        let document = &if converted {
+            document.in_standard_rest(self.session.humanoid())
+        } else {
+            document.clone()
+        };
         let current = self.session.document();
         if document.posture.joints.is_empty() {
             self.session.load_document(document)?;
@@ -617,7 +632,7 @@ impl EditorModel {
         if document.camera.is_some() {
             self.view_requests += 1;
         }
-        Ok(())
+        Ok(converted)
     }
 
     fn pin(&mut self, joint: usize) {
@@ -893,12 +908,15 @@ impl EditorModel {
                 return false;
             }
         };
-        if let Err(error) = self.open_document(&document) {
-            self.warn(format!(
-                "This posture link does not fit the humanoid: {error}. The editor opened normally."
-            ));
-            return false;
-        }
+        let converted = match self.open_document(&document) {
+            Ok(converted) => converted,
+            Err(error) => {
+                self.warn(format!(
+                    "This posture link does not fit the humanoid: {error}. The editor opened normally."
+                ));
+                return false;
+            }
+        };
         self.selected_joint = None;
         self.trace.clear();
         match &document.avatar {
@@ -910,7 +928,10 @@ impl EditorModel {
                 self.pending_document = Some(document);
                 self.fetch_avatar(&url);
             }
-            _ => self.inform("Opened the posture link."),
+            _ => self.inform(format!(
+                "Opened the posture link.{}",
+                if converted { CONVERTED_NOTE } else { "" }
+            )),
         }
         true
     }
@@ -952,7 +973,10 @@ impl EditorModel {
         }
         match Document::from_json(text) {
             Ok(document) => match self.open_document(&document) {
-                Ok(()) => self.inform(format!("Opened {name}.")),
+                Ok(converted) => self.inform(format!(
+                    "Opened {name}.{}",
+                    if converted { CONVERTED_NOTE } else { "" }
+                )),
                 Err(error) => self.warn(format!("{name} does not fit the humanoid: {error}")),
             },
             Err(error) => self.warn(format!("{name} is not a Stance document: {error}")),

@@ -213,3 +213,58 @@ fn swapping_the_avatar_keeps_the_posture_and_tasks_as_one_undoable_edit() {
         }
     }
 }
+
+/// A document saved on this avatar before a posture meant the same pose on every body (no
+/// `rest`: its values relative to the avatar's own T-pose) opens in the pose it was saved
+/// with, and the notice says it was converted.
+#[test]
+fn an_old_document_made_on_the_avatar_opens_as_it_was_saved() {
+    let mut editor = Clocked::new();
+    let url = "https://example.org/avatars/t-pose.glb";
+    editor.apply(Command::LoadAvatar {
+        name: url.to_owned(),
+        bytes: t_pose_glb(),
+    });
+    assert!(editor.model.avatar().is_some());
+    // Saved then: the left arm lowered from the T-pose by a quarter turn about the body's
+    // front axis (straight down), the right arm as it was at rest (out to the side).
+    let old = format!(
+        r#"{{"avatar": {{"url": "{url}"}},
+            "posture": {{"l_shoulder": {{"rz": -1.5707963267948966}}}}}}"#
+    );
+    editor.apply(Command::OpenFile {
+        name: "old.json".to_owned(),
+        bytes: old.into_bytes(),
+    });
+    let notice = editor.model.notice().unwrap().text.clone();
+    assert!(notice.contains("converted"), "{notice}");
+    // By hand: the file's arms are the default centres' arms turned a quarter about z (out to
+    // the sides); the old values turn the left one back, the right one stays out.
+    let table = stance_hanim::humanoid_joints(stance_hanim::LevelOfArticulation::Loa2);
+    let centre = |name: &str| {
+        table
+            .iter()
+            .find(|j| j.definition.name == name)
+            .unwrap()
+            .rest_centre
+    };
+    let arm = |side: &str| {
+        (centre(&format!("{side}_elbow")) - centre(&format!("{side}_shoulder"))).normalize()
+    };
+    let quarter = |degrees: f64| DQuat::from_rotation_z(degrees.to_radians());
+    let left_then = quarter(-90.0) * (quarter(90.0) * arm("l"));
+    let right_then = quarter(-90.0) * arm("r");
+    for (side, then) in [("l", left_then), ("r", right_then)] {
+        let now = bone(
+            &editor,
+            &format!("{side}_shoulder"),
+            &format!("{side}_elbow"),
+        );
+        let angle = now.angle_between(then).to_degrees();
+        assert!(angle < 1.0, "{side} upper arm {angle} degrees off");
+    }
+    assert!(right_then.x < -0.9, "the right arm is out to the side");
+    // Saved again, the document says its values are relative to the standard pose.
+    let saved = editor.model.document();
+    assert_eq!(saved.rest, stance_document::PostureRest::Standard);
+}

@@ -161,9 +161,7 @@ impl EditorModel {
                 return;
             }
             if own_rest {
-                text.push_str(
-                    " This document was made before a posture meant the same pose on every body: its values, relative to this avatar's own rest, were converted and show the pose it was saved with.",
-                );
+                text.push_str(super::CONVERTED_NOTE);
             }
         }
         self.inform(text);
