@@ -1,6 +1,7 @@
 //! One meaning for posture values: the same document posed on the generated mannequin and on
 //! avatars whose rests differ (T-pose with the bones carrying the turn, A-pose with legs
-//! apart, bones carrying roll, a Mixamo-named Z-up rig in centimetres, VRM 0.x and 1.0) gives the same world directions of the upper arms, forearms, thighs
+//! apart, bones carrying roll, a Mixamo-named Z-up rig in centimetres, VRM 0.x and 1.0, the
+//! vendored real avatar) gives the same world directions of the upper arms, forearms, thighs
 //! and shins. The directions are read back from the exported GLB by the `gltf` crate with this
 //! file's own matrix product, not by the importer; each file's frame is turned into the H-Anim
 //! frame by the rotation this file built it with.
@@ -242,13 +243,47 @@ fn bodies() -> Vec<Body> {
             },
         });
     }
+    // The vendored real avatar (tests/fixtures/avatars, MIT): Mixamo names without the
+    // prefix, Y up and facing +Z as glTF has it, its own rest; its nodes found by name here.
+    let glb = include_bytes!("../../../tests/fixtures/avatars/Black_F_2_Casual.glb").to_vec();
+    let json = common::split(&glb).0;
+    let index = |name: &str| {
+        json["nodes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .position(|n| n["name"] == name)
+            .unwrap()
+    };
+    let names = [
+        ("l_shoulder", "LeftArm"),
+        ("l_elbow", "LeftForeArm"),
+        ("l_radiocarpal", "LeftHand"),
+        ("r_shoulder", "RightArm"),
+        ("r_elbow", "RightForeArm"),
+        ("r_radiocarpal", "RightHand"),
+        ("l_hip", "LeftUpLeg"),
+        ("l_knee", "LeftLeg"),
+        ("l_talocrural", "LeftFoot"),
+        ("r_hip", "RightUpLeg"),
+        ("r_knee", "RightLeg"),
+        ("r_talocrural", "RightFoot"),
+    ];
+    out.push(Body {
+        name: "vendored avatar",
+        nodes: names.iter().map(|(h, n)| (*h, index(n))).collect(),
+        glb,
+        hanim_from_file: DQuat::IDENTITY,
+    });
     out
 }
 
 /// World transforms of every node of a GLB, by the `gltf` crate's reading of the node
 /// transforms and this file's own products down the scene's hierarchy.
 fn node_worlds(glb: &[u8]) -> Vec<DMat4> {
-    let gltf = gltf::Gltf::from_slice(glb).unwrap();
+    // (The vendored file requires extensions the `gltf` crate does not know; node
+    // transforms need none.)
+    let gltf = gltf::Gltf::from_slice_without_validation(glb).unwrap();
     let document = &gltf.document;
     let mut world = vec![DMat4::IDENTITY; document.nodes().count()];
     fn walk(node: gltf::Node, parent: DMat4, world: &mut [DMat4]) {
