@@ -11,13 +11,14 @@
 //! posture shows the same pose on the mannequin and on a T-pose, A-pose or any other avatar.
 //!
 //! Joint frames are parallel to the body frame at rest (the `stance_ik` convention), so the
-//! anatomical ranges of [`crate::anatomy`] are re-expressed for the avatar's rest pose: the
-//! rotation that takes each H-Anim default segment direction onto the avatar's (e.g. arms
-//! horizontal in a T-pose) shifts the ranges of that joint, and the frame of the segment
-//! above it permutes the DOF axes of the joints below (the elbow of a T-pose flexes about
-//! world y). Where that frame is within 45 degrees of axis-aligned, the nearest world axes
-//! are used (with a note); beyond (rare: no frame is further than about 63 degrees from
-//! one), the joint gets all three rotational DOF with the envelope of its ranges.
+//! anatomical ranges of [`crate::anatomy`] are re-expressed for the skeleton's rest: the
+//! rotation that takes each H-Anim default segment direction (towards the segment's first
+//! distal joint) onto the skeleton's shifts the ranges of that joint, and the frame of the
+//! segment above it permutes the DOF axes of the joints below. In the standard pose these
+//! rotations are small (the rest match turns each bone towards the mean of its children, and a
+//! body's proportions differ from the default's), so the default axes are kept; where a frame
+//! is within 45 degrees of axis-aligned, the nearest world axes are used (with a note); beyond,
+//! the joint gets all three rotational DOF with the envelope of its ranges.
 
 use glam::{DMat3, DQuat, DVec3};
 use stance_ik::{Dof, Frames, IkError, JointDef, Posture, Skeleton};
