@@ -66,6 +66,11 @@ pub struct EditorModel {
     pub(crate) avatar: Option<LoadedAvatar>,
     /// The URL the avatar came from (links and autosave name it); `None` for local files.
     pub(crate) avatar_url: Option<String>,
+    /// Earlier bodies that undo or redo of a change of body brings back, by the id the
+    /// history names them with (see `model/avatars.rs`).
+    kept_bodies: Vec<(u64, avatars::KeptBody)>,
+    /// The id of the next kept body.
+    next_body: u64,
     /// Texture images the host decoded for the avatar file it opens next (file, images).
     decoded_images: Option<(String, Vec<stance_asset::DecodedImage>)>,
     /// A document waiting for its avatar to arrive (a link or autosave naming a URL).
@@ -128,6 +133,8 @@ impl EditorModel {
             gesture: None,
             avatar: None,
             avatar_url: None,
+            kept_bodies: Vec::new(),
+            next_body: 0,
             decoded_images: None,
             pending_document: None,
             pending_import: None,
@@ -563,19 +570,34 @@ impl EditorModel {
     fn undo(&mut self) {
         self.end_gesture();
         let current = self.session.document();
-        match self.history.undo(&current) {
-            Some(previous) => self.restore(&previous, "undo"),
+        // A change of body goes back: the current body is kept for redo.
+        let body = self.history.undo_changes_body().then(|| self.keep_body());
+        match self.history.undo(&current, body) {
+            Some((previous, back)) => {
+                if let Some(back) = back {
+                    self.bring_back_body(back, body);
+                }
+                self.restore(&previous, "undo");
+            }
             None => self.inform("Nothing to undo."),
         }
+        self.forget_unreferenced_bodies();
     }
 
     fn redo(&mut self) {
         self.end_gesture();
         let current = self.session.document();
-        match self.history.redo(&current) {
-            Some(next) => self.restore(&next, "redo"),
+        let body = self.history.redo_changes_body().then(|| self.keep_body());
+        match self.history.redo(&current, body) {
+            Some((next, back)) => {
+                if let Some(back) = back {
+                    self.bring_back_body(back, body);
+                }
+                self.restore(&next, "redo");
+            }
             None => self.inform("Nothing to redo."),
         }
+        self.forget_unreferenced_bodies();
     }
 
     /// Undo or redo: `document` on the current body, which may lack some of its joints (the
@@ -731,6 +753,7 @@ impl EditorModel {
         self.trace.clear();
         if change == SessionChange::NewBody {
             self.history = History::default();
+            self.kept_bodies.clear();
         }
         self.session_generation += 1;
         self.motion_session_replaced(motion);

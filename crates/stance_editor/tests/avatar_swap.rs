@@ -89,6 +89,7 @@ fn swapping_the_avatar_keeps_the_posture_and_tasks_as_one_undoable_edit() {
     let before = editor.model.document();
     let undo_steps = editor.model.history().undo_steps();
     let reach = bone(&editor, "r_shoulder", "r_elbow");
+    let reach_on_mannequin = reach;
     let forearm = bone(&editor, "r_elbow", "r_radiocarpal");
     let lifted = bone(&editor, "l_shoulder", "l_elbow");
 
@@ -185,23 +186,34 @@ fn swapping_the_avatar_keeps_the_posture_and_tasks_as_one_undoable_edit() {
     let elbow = editor.joint("r_elbow");
     assert!((frames.joint_position[elbow] - node("r_elbow")).length() < 1e-6);
 
-    // Undo takes the edit back: the finger's task returns (on this body, which lacks its
-    // joint), the history keeps the earlier steps.
+    // Undo brings the mannequin back with the document as it was (the finger's task too);
+    // the earlier steps are kept.
     editor.apply(Command::Undo);
     assert!(
         !editor.model.notice().is_some_and(|n| n.is_error),
         "{:?}",
         editor.model.notice()
     );
+    assert!(editor.model.avatar().is_none(), "the mannequin is back");
     assert_eq!(editor.model.document().tasks, tasks);
+    assert_eq!(editor.model.document().posture, before.posture);
     assert_eq!(editor.model.history().undo_steps(), undo_steps);
+    assert!(bone(&editor, "r_shoulder", "r_elbow").angle_between(reach_on_mannequin) < 1e-9);
+    // Redo brings the avatar back (its GPU model made again for the renderer), with the
+    // document carried over.
+    editor.apply(Command::Redo);
+    let again = editor.model.avatar().expect("the avatar is back");
+    assert_eq!(again.name, "t-pose.glb");
+    assert!(again.model.is_some());
+    assert_eq!(editor.model.document().tasks, tasks[..tasks.len() - 1]);
+    assert_eq!(editor.model.history().undo_steps(), undo_steps + 1);
 
-    // Back to the mannequin: the same document again, one more undoable edit.
+    // Back to the mannequin: the same document again, one more undoable edit, whose undo
+    // brings the avatar back.
     let posture = editor.model.document().posture;
     editor.apply(Command::UseMannequin);
     assert!(editor.model.avatar().is_none());
-    assert_eq!(editor.model.history().undo_steps(), undo_steps + 1);
-    assert_eq!(editor.model.document().tasks, tasks);
+    assert_eq!(editor.model.history().undo_steps(), undo_steps + 2);
     let back = editor.model.document().posture;
     for joint in ["r_shoulder", "r_elbow", "l_shoulder"] {
         for (dof, value) in posture.joints[joint].iter() {
@@ -212,6 +224,11 @@ fn swapping_the_avatar_keeps_the_posture_and_tasks_as_one_undoable_edit() {
             );
         }
     }
+    editor.apply(Command::Undo);
+    assert_eq!(
+        editor.model.avatar().map(|a| a.name.as_str()),
+        Some("t-pose.glb")
+    );
 }
 
 /// A document saved on this avatar before a posture meant the same pose on every body (no

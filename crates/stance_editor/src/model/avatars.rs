@@ -5,7 +5,6 @@ use serde_json::Value;
 
 use super::{EditorModel, SessionChange};
 use crate::avatar::LoadedAvatar;
-use crate::history::EditKind;
 use crate::host::{AvatarImport, ImportedAvatar};
 use crate::posing::PosingSession;
 
@@ -135,7 +134,7 @@ impl EditorModel {
         }
         if swap {
             text.push_str(&format!(
-                " The posture and {} task(s) carried over (undo takes them back).",
+                " The posture and {} task(s) carried over (undo brings the previous body back).",
                 session.tasks().len()
             ));
             if !dropped.is_empty() {
@@ -144,8 +143,12 @@ impl EditorModel {
                     dropped.join(", ")
                 ));
             }
-            self.record(EditKind::Command);
+            let before = self.session.document();
+            let kept = self.keep_body();
+            self.history
+                .record_body_change(&before, kept, self.now_secs);
             self.replace_session(session, SessionChange::Rebuilt);
+            self.forget_unreferenced_bodies();
         } else {
             self.replace_session(session, SessionChange::NewBody);
         }
@@ -176,8 +179,14 @@ impl EditorModel {
     }
 
     /// Back to the built-in mannequin: the document carries over as in an avatar swap (one
-    /// undoable edit; tasks whose joints the mannequin lacks are named).
+    /// edit, whose undo brings the avatar back; tasks whose joints the mannequin lacks are
+    /// named).
     pub(super) fn use_mannequin(&mut self) {
+        // An import still under way no longer replaces the body.
+        self.pending_import = None;
+        if self.avatar.is_none() {
+            return;
+        }
         let built = PosingSession::new(self.session.level_of_articulation())
             .map_err(|error| error.to_string())
             .and_then(|session| {
@@ -185,15 +194,15 @@ impl EditorModel {
             });
         match built {
             Ok((session, dropped)) => {
-                self.record(EditKind::Command);
+                let before = self.session.document();
+                let kept = self.keep_body();
+                self.history
+                    .record_body_change(&before, kept, self.now_secs);
                 self.replace_session(session, SessionChange::Rebuilt);
-                self.avatar = None;
-                self.avatar_url = None;
-                // An import still under way no longer replaces the body.
-                self.pending_import = None;
+                self.forget_unreferenced_bodies();
                 if !dropped.is_empty() {
                     self.inform(format!(
-                        "The mannequin lacks the joints of these tasks, dropped (undo brings them back): {}.",
+                        "The mannequin lacks the joints of these tasks, dropped (undo brings them and the avatar back): {}.",
                         dropped.join(", ")
                     ));
                 }
@@ -207,6 +216,87 @@ impl EditorModel {
         if let Err(error) = self.hooks.fetch(url) {
             self.pending_document = None;
             self.warn(format!("The avatar at {url} could not be fetched: {error}"));
+        }
+    }
+}
+
+/// How many earlier bodies undo and redo can bring back (each holds an imported avatar).
+const MAX_KEPT_BODIES: usize = 3;
+
+/// A body taken off by a change of body, kept for undo or redo: an avatar (`None`: the
+/// mannequin) and the URL it came from.
+pub(crate) struct KeptBody {
+    avatar: Option<LoadedAvatar>,
+    url: Option<String>,
+}
+
+impl EditorModel {
+    /// Takes the current body off (the avatar, or the mannequin) and keeps it; returns its id.
+    /// Only the [`MAX_KEPT_BODIES`] latest are kept.
+    pub(super) fn keep_body(&mut self) -> u64 {
+        let id = self.next_body;
+        self.next_body += 1;
+        let body = KeptBody {
+            avatar: self.avatar.take(),
+            url: self.avatar_url.take(),
+        };
+        self.kept_bodies.push((id, body));
+        if self.kept_bodies.len() > MAX_KEPT_BODIES {
+            self.kept_bodies.remove(0);
+        }
+        id
+    }
+
+    /// Forgets the kept bodies no undo or redo step names.
+    pub(super) fn forget_unreferenced_bodies(&mut self) {
+        let named: Vec<u64> = self.history.bodies().collect();
+        self.kept_bodies.retain(|(id, _)| named.contains(id));
+    }
+
+    /// The kept body `id`, taken out, with an empty session on its skeleton at `loa`.
+    fn take_kept_body(
+        &mut self,
+        id: u64,
+        loa: stance_hanim::LevelOfArticulation,
+    ) -> Option<(KeptBody, PosingSession)> {
+        let at = self.kept_bodies.iter().position(|(kept, _)| *kept == id)?;
+        let (_, body) = self.kept_bodies.remove(at);
+        let humanoid = match &body.avatar {
+            Some(avatar) => avatar.skeleton(loa),
+            None => stance_hanim::default_skeleton(&stance_hanim::SkeletonOptions {
+                loa,
+                ..stance_hanim::SkeletonOptions::default()
+            })
+            .map_err(|error| error.to_string()),
+        };
+        let session = humanoid
+            .and_then(|h| PosingSession::with_humanoid(h).map_err(|error| error.to_string()))
+            .ok()?;
+        Some((body, session))
+    }
+
+    /// Undo or redo of a change of body: the kept body `id` comes back at the current level of
+    /// articulation (its skeleton and an empty session, which the step's document then fills).
+    /// When it is no longer kept, the body just taken off (`instead`) comes back and the
+    /// notice says so.
+    pub(super) fn bring_back_body(&mut self, id: u64, instead: Option<u64>) {
+        let loa = self.session.level_of_articulation();
+        let (body, session, found) = match self.take_kept_body(id, loa) {
+            Some((body, session)) => (body, session, true),
+            None => match instead.and_then(|instead| self.take_kept_body(instead, loa)) {
+                Some((body, session)) => (body, session, false),
+                None => return,
+            },
+        };
+        self.replace_session(session, SessionChange::Rebuilt);
+        // An import still under way no longer replaces the body.
+        self.pending_import = None;
+        self.avatar = body.avatar.map(LoadedAvatar::shown_again);
+        self.avatar_url = body.url;
+        if !found {
+            self.warn(
+                "The earlier body is no longer kept (only the last three are): the document went back on this one.",
+            );
         }
     }
 }
