@@ -4,9 +4,9 @@
 //!
 //! **One meaning for posture values.** A built skeleton's rest is the H-Anim standard pose
 //! (standing, arms at the sides: the default mannequin's), whatever the avatar's own rest: the
-//! avatar's rest is matched onto it once, bone by bone, with the bone-direction rest match of
-//! [`crate::rest_match`] (the rest match of retargeting), and each joint keeps its segment
-//! lengths. [`BuiltJoint::rest_match`] is that world rotation: a posture's world rotation
+//! avatar's limbs are matched onto it once, bone by bone, with the bone-direction rest match of
+//! [`crate::rest_match`] (the rest match of retargeting; the trunk, neck and head keep their
+//! rest, their curve being the body's shape), and each joint keeps its segment lengths. [`BuiltJoint::rest_match`] is that world rotation: a posture's world rotation
 //! `G` of a joint poses the avatar's node as `G · rest_match · (the node's rest)`. So the same
 //! posture shows the same pose on the mannequin and on a T-pose, A-pose or any other avatar.
 //!
@@ -25,6 +25,7 @@ use stance_ik::{Dof, Frames, IkError, JointDef, Posture, Skeleton};
 
 use crate::anatomy::{self, JointClass};
 use crate::mapping::{Mapping, MatchMethod};
+use crate::names::Side;
 use crate::{LevelOfArticulation, humanoid_joints};
 
 /// Options of [`build_skeleton`].
@@ -72,10 +73,11 @@ pub struct BuiltJoint {
     pub axes: Vec<AnatomicalAxis>,
     /// The world rotation (H-Anim frame) that turns the source joint's bone at the avatar's
     /// own rest onto the standard pose, the skeleton's rest: the avatar's node is posed as
-    /// `world_from_joint · rest_match · (its rest world rotation)`. Identity on the default
-    /// body and on avatars whose rest is the standard pose, and for the root. A joint without
-    /// a bone of its own (nothing mapped below it) turns with its parent, except a joint whose
-    /// children all lie on other sides (the pelvis), which keeps its rest.
+    /// `world_from_joint · rest_match · (its rest world rotation)`. Only the limbs are matched
+    /// (the joints on the body's sides: arms, hands, legs, feet); the trunk, neck and head
+    /// keep their rest (identity), as on the default body and on avatars whose rest is the
+    /// standard pose. A limb joint without a bone of its own (nothing mapped below it: a hand
+    /// at LOA1) turns with its parent.
     pub rest_match: DQuat,
     /// The joint's position at the avatar's own rest (H-Anim frame, metres): its source
     /// joint's; the skeleton's rest position on the default body.
@@ -207,9 +209,15 @@ fn standard_pose(
         let parent = joint
             .parent
             .and_then(|p| matched.get(p).copied().zip(positions.get(p)));
+        let limb = own_rest
+            .joints
+            .get(k)
+            .is_some_and(|j| Side::of(j.hanim) != Side::Centre);
         let m = match (bones.get(k).copied().flatten(), parent) {
-            // The root keeps its rest: the trunk stands as the avatar stands (its short
-            // offset to the spine is no limb direction, and the pelvis shares its node).
+            // The trunk, neck and head keep their rest: a spine's curve is the body's shape,
+            // not a pose (a T-pose and an A-pose differ in the limbs), and the root's short
+            // offset to the spine is no limb direction.
+            _ if !limb => DQuat::IDENTITY,
             (_, None) => DQuat::IDENTITY,
             (Some(m), _) => m,
             (None, Some((m, _))) if !has_children[k] => m,
