@@ -74,6 +74,8 @@ async function start() {
   );
   const names = skeleton.jointNames;
   const boneOf = skeleton.skinJoints; // skeleton joint -> bone index (-1: none)
+  // Per joint, the rotation from the skin's rest onto the standard pose (qx qy qz qw).
+  const restMatch = skeleton.restMatch;
   const jointOfBone = new Int32Array(skin.bones.length).fill(-1);
   boneOf.forEach((b, j) => {
     // Joints come parents first: the last one on a bone (the most distal, whose world
@@ -138,17 +140,17 @@ async function start() {
     state.pulling = false;
   });
 
-  // The solved pose onto the bones: a mapped bone turns by its joint's rotation from rest
-  // (Stance's joint frames are parallel to the body frame at rest); the others keep their
-  // rest local rotation; the root bone also takes the root joint's position.
+  // The solved pose onto the bones: a mapped bone takes its joint's world rotation (from the
+  // standard pose, where Stance's joint frames are parallel to the body frame) times the
+  // joint's rest match times the bone's rest world rotation; the others keep their rest local
+  // rotation; the root bone goes to the root joint's position.
   const rootJoint = names.indexOf("humanoid_root");
   const rootBone = boneOf[rootJoint];
   const worldRotation = skin.bones.map(() => new THREE.Quaternion());
   const parentWorld = new THREE.Quaternion();
   const jointRotation = new THREE.Quaternion();
+  const matchRotation = new THREE.Quaternion();
   const restLocal = skin.bones.map((b) => b.quaternion.clone());
-  const restRootPosition = rootBone >= 0 ? skin.bones[rootBone].getWorldPosition(new THREE.Vector3()) : null;
-  const restRootJoint = position("humanoid_root");
   function applyPose() {
     for (const i of skin.order) {
       const bone = skin.bones[i];
@@ -158,7 +160,8 @@ async function start() {
       const j = jointOfBone[i];
       if (j >= 0) {
         jointRotation.fromArray(transforms, 7 * j + 3);
-        worldRotation[i].copy(jointRotation).multiply(skin.restRotation[i]);
+        matchRotation.fromArray(restMatch, 4 * j);
+        worldRotation[i].copy(jointRotation).multiply(matchRotation).multiply(skin.restRotation[i]);
         bone.quaternion.copy(parentWorld).invert().multiply(worldRotation[i]);
       } else {
         bone.quaternion.copy(restLocal[i]);
@@ -167,7 +170,7 @@ async function start() {
     }
     if (rootBone >= 0) {
       const bone = skin.bones[rootBone];
-      const moved = position("humanoid_root").sub(restRootJoint).add(restRootPosition);
+      const moved = position("humanoid_root");
       bone.parent.updateWorldMatrix(true, false);
       bone.position.copy(bone.parent.worldToLocal(moved));
     }

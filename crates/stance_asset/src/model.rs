@@ -527,13 +527,21 @@ impl Avatar {
         let frames = Frames::new(s, posture);
         let rest_frames = Frames::new(s, &Posture::rest(s));
         let file_from_hanim = self.hanim_from_file.inverse();
-        // Per skeleton joint: the rigid motion in H-Anim space, conjugated into file space.
+        // Per skeleton joint: the rigid motion in H-Anim space from the avatar's own rest (its
+        // bone turned onto the standard pose by the rest match, then posed), conjugated into
+        // file space.
         let deltas: Vec<DMat4> = (0..s.joint_count())
             .map(|k| {
                 let rot = DQuat::from_mat3(&frames.world_from_joint_rotation[k]).normalize();
+                let (rest_match, own_rest) = skeleton
+                    .joints
+                    .get(k)
+                    .map_or((DQuat::IDENTITY, rest_frames.joint_position[k]), |j| {
+                        (j.rest_match, j.own_rest)
+                    });
                 let d = DMat4::from_translation(frames.joint_position[k])
-                    * DMat4::from_quat(rot)
-                    * DMat4::from_translation(-rest_frames.joint_position[k]);
+                    * DMat4::from_quat(rot * rest_match)
+                    * DMat4::from_translation(-own_rest);
                 file_from_hanim * d * self.hanim_from_file
             })
             .collect();
@@ -582,23 +590,32 @@ impl Avatar {
         let s = &skeleton.skeleton;
         let rest = self.rest_world();
         let pose = self.world_from_locals(&self.pose_locals());
+        let standard = Frames::new(s, &Posture::rest(s)).joint_position;
         let hanim = self.hanim_from_file;
         let file = hanim.inverse();
+        let carrier = self.carrier(skeleton);
         let mut world_rot = vec![DQuat::IDENTITY; s.joint_count()];
         let mut root_translation = DVec3::ZERO;
         for (k, j) in skeleton.joints.iter().enumerate() {
             let Some(n) = j.source.filter(|&n| n < rest.len()) else {
                 continue;
             };
-            // H-Anim space rigid motion of this node.
+            // A joint on another joint's node (the pelvis implied at the hips) shows nothing
+            // of its own: it turns with its parent.
+            if carrier.get(n).copied().flatten() != Some(k) {
+                if let Some(p) = s.joints().get(k).and_then(|joint| joint.parent) {
+                    world_rot[k] = world_rot[p];
+                }
+                continue;
+            }
+            // H-Anim space rigid motion of this node, less its rest match.
             let d = hanim * pose[n] * rest[n].inverse() * file;
             let m = DMat3::from_mat4(d);
             let rot = DQuat::from_mat3(&orthonormalize(m)).normalize();
-            world_rot[k] = rot;
+            world_rot[k] = (rot * j.rest_match.inverse()).normalize();
             if k == 0 {
-                let p_rest = hanim.transform_point3(rest[n].w_axis.truncate());
                 let p_pose = hanim.transform_point3(pose[n].w_axis.truncate());
-                root_translation = p_pose - p_rest;
+                root_translation = p_pose - standard[k];
             }
         }
         let locals: Vec<DQuat> = s

@@ -14,4 +14,5 @@ mod fuzz_seeds;
 mod hostile_sizes;
 mod malformed;
 mod shared_avatar;
+mod standard_pose;
 mod vrm;

@@ -6,7 +6,10 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, anyhow, bail};
 use serde_json::{Map, Value, json};
 use stance_asset::{Avatar, LoadOptions, export_glb, load_avatar_with, make_default_avatar};
-use stance_hanim::{LevelOfArticulation, MatchMethod, SkeletonOptions, joint_by_name};
+use stance_document::{Document, PostureRest, PostureValues};
+use stance_hanim::{
+    HumanoidSkeleton, LevelOfArticulation, MatchMethod, SkeletonOptions, joint_by_name,
+};
 use stance_ik::{Dof, Posture};
 
 /// `stance inspect FILE`.
@@ -170,6 +173,34 @@ fn parse_posture(skeleton: &stance_ik::Skeleton, v: &Value) -> Result<(Posture, 
     Ok((posture, warnings))
 }
 
+/// The posture input with its values relative to the H-Anim standard pose: a document made on
+/// an avatar before a posture meant the same pose on every body (`"rest": "avatar"`, or an
+/// avatar URL without `rest`) has its `posture` converted from `body`'s own rest, as the
+/// editor converts it (docs/document-format.md); anything else is taken as it is.
+fn in_standard_rest(v: &Value, body: &HumanoidSkeleton) -> Result<Value> {
+    let own_rest = match v.get("rest") {
+        Some(Value::String(rest)) if rest == "avatar" => true,
+        Some(Value::String(rest)) if rest == "standard" => false,
+        Some(other) => bail!("rest: {other} (expected \"standard\" or \"avatar\")"),
+        None => v.get("avatar").is_some_and(Value::is_object),
+    };
+    let Some(posture) = v.get("posture").filter(|_| own_rest) else {
+        return Ok(v.clone());
+    };
+    let document = Document {
+        posture: PostureValues::from_json_value(posture, "posture")?,
+        rest: PostureRest::Avatar,
+        ..Document::default()
+    };
+    let converted = document.in_standard_rest(body);
+    eprintln!(
+        "note: the posture's values are relative to this avatar's own rest (made before a posture meant the same pose on every body); converted to the H-Anim standard pose"
+    );
+    let mut out = v.clone();
+    out["posture"] = serde_json::to_value(&converted.posture)?;
+    Ok(out)
+}
+
 pub fn export_posed(args: ExportPosedArgs) -> Result<()> {
     let mut avatar = load(&args.avatar, &LoadOptions::default())?;
     let text = std::fs::read_to_string(&args.posture)
@@ -185,6 +216,7 @@ pub fn export_posed(args: ExportPosedArgs) -> Result<()> {
         loa,
         ..SkeletonOptions::default()
     })?;
+    let v = in_standard_rest(&v, &body)?;
     let (posture, warnings) = parse_posture(&body.skeleton, &v)?;
     for w in warnings {
         eprintln!("warning: {w}");

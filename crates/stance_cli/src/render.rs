@@ -8,7 +8,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, anyhow, bail};
 use glam::{DVec3, Vec3};
 use stance_asset::{LoadOptions, make_default_avatar};
-use stance_document::Document;
+use stance_document::{Document, PostureRest};
 use stance_hanim::{HumanoidSkeleton, LevelOfArticulation, SkeletonOptions, default_skeleton};
 use stance_ik::{Frames, Posture};
 use stance_render::{
@@ -194,6 +194,16 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let document = Document::from_json(&text)
         .map_err(|e| anyhow!("invalid document {}: {e}", args.document.display()))?;
     let figure = figure(&args)?;
+    // Made on an avatar before a posture meant the same pose on every body: relative to that
+    // avatar's own rest, taken to be the one drawn (as `export-posed` takes it).
+    let document = if args.avatar.is_some() && document.rest == PostureRest::Avatar {
+        eprintln!(
+            "note: the document's values are relative to the avatar's own rest (made before a posture meant the same pose on every body); converted to the H-Anim standard pose"
+        );
+        document.in_standard_rest(&figure.humanoid)
+    } else {
+        document
+    };
     let skeleton = &figure.humanoid.skeleton;
     let posture = document
         .to_posture(skeleton)

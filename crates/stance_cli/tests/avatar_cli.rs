@@ -147,3 +147,154 @@ fn inspect_reports_match_methods_and_confidence() {
         "{v}"
     );
 }
+
+/// The JSON chunk of a GLB.
+fn glb_json(bytes: &[u8]) -> Value {
+    let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    serde_json::from_slice(&bytes[20..20 + len]).unwrap()
+}
+
+/// A GLB with its JSON chunk replaced (the BIN chunk kept).
+fn with_json(bytes: &[u8], json: &Value) -> Vec<u8> {
+    let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let mut text = serde_json::to_vec(json).unwrap();
+    while !text.len().is_multiple_of(4) {
+        text.push(b' ');
+    }
+    let rest = &bytes[20 + len..];
+    let mut out = b"glTF".to_vec();
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&((20 + text.len() + rest.len()) as u32).to_le_bytes());
+    out.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&text);
+    out.extend_from_slice(rest);
+    out
+}
+
+/// World positions of the named nodes of a GLB, from the node transforms in its JSON (this
+/// test's own products, not the importer).
+fn node_positions(bytes: &[u8]) -> std::collections::HashMap<String, glam::DVec3> {
+    use glam::{DMat4, DQuat, DVec3};
+    let json = glb_json(bytes);
+    let nodes = json["nodes"].as_array().unwrap();
+    let v = |n: &Value, key: &str, default: &[f64]| -> Vec<f64> {
+        n.get(key)
+            .and_then(Value::as_array)
+            .map_or(default.to_vec(), |a| {
+                a.iter().map(|x| x.as_f64().unwrap()).collect()
+            })
+    };
+    let local = |n: &Value| {
+        let t = v(n, "translation", &[0.0; 3]);
+        let r = v(n, "rotation", &[0.0, 0.0, 0.0, 1.0]);
+        let s = v(n, "scale", &[1.0; 3]);
+        DMat4::from_scale_rotation_translation(
+            DVec3::new(s[0], s[1], s[2]),
+            DQuat::from_xyzw(r[0], r[1], r[2], r[3]),
+            DVec3::new(t[0], t[1], t[2]),
+        )
+    };
+    let mut out = std::collections::HashMap::new();
+    let mut stack: Vec<(usize, DMat4)> = json["scenes"][0]["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|i| (i.as_u64().unwrap() as usize, DMat4::IDENTITY))
+        .collect();
+    while let Some((i, parent)) = stack.pop() {
+        let world = parent * local(&nodes[i]);
+        out.insert(
+            nodes[i]["name"].as_str().unwrap_or_default().to_owned(),
+            world.w_axis.truncate(),
+        );
+        for c in nodes[i]["children"].as_array().into_iter().flatten() {
+            stack.push((c.as_u64().unwrap() as usize, world));
+        }
+    }
+    out
+}
+
+/// `stance export-posed` poses the same document alike on the mannequin and on a T-pose avatar
+/// (the shoulder nodes carrying the quarter turn), and a document made on that avatar before a
+/// posture meant the same pose on every body (`"rest": "avatar"`) in the pose it was saved with.
+#[test]
+fn export_posed_poses_every_rest_alike_and_old_documents_as_they_were() {
+    use glam::{DQuat, DVec3};
+    let mannequin = temp("standard-mannequin.glb");
+    let (ok, _, err) = stance(&["make-avatar", &mannequin]);
+    assert!(ok, "{err}");
+    let bytes = std::fs::read(&mannequin).unwrap();
+    let mut json = glb_json(&bytes);
+    for node in json["nodes"].as_array_mut().unwrap() {
+        node.as_object_mut().unwrap().remove("extras");
+        let turn = match node["name"].as_str().unwrap() {
+            "l_shoulder" => 90f64,
+            "r_shoulder" => -90.0,
+            _ => continue,
+        };
+        let q = DQuat::from_rotation_z(turn.to_radians());
+        node["rotation"] = serde_json::json!([q.x, q.y, q.z, q.w]);
+    }
+    let t_pose = temp("standard-t-pose.glb");
+    std::fs::write(&t_pose, with_json(&bytes, &json)).unwrap();
+    let document = temp("standard-reach.json");
+    std::fs::write(
+        &document,
+        r#"{"rest": "standard", "posture": {"humanoid_root": {"ry": 0.4},
+            "r_shoulder": {"rx": -1.3, "rz": -0.3}, "r_elbow": {"rx": -0.9},
+            "l_shoulder": {"rz": 0.6}, "l_hip": {"rx": -0.6}, "l_knee": {"rx": 1.0}}}"#,
+    )
+    .unwrap();
+    let bones = [
+        ("r_shoulder", "r_elbow"),
+        ("r_elbow", "r_radiocarpal"),
+        ("l_shoulder", "l_elbow"),
+        ("l_hip", "l_knee"),
+        ("l_knee", "l_talocrural"),
+    ];
+    let posed = |avatar: &str, doc: &str, name: &str| {
+        let out = temp(name);
+        let (ok, _, err) = stance(&["export-posed", avatar, doc, &out]);
+        assert!(ok, "{err}");
+        (node_positions(&std::fs::read(&out).unwrap()), err)
+    };
+    let direction = |p: &std::collections::HashMap<String, DVec3>, (a, b): (&str, &str)| {
+        (p[b] - p[a]).normalize()
+    };
+    let (on_mannequin, _) = posed(&mannequin, &document, "standard-1.glb");
+    let (on_t_pose, _) = posed(&t_pose, &document, "standard-2.glb");
+    for bone in bones {
+        let angle = direction(&on_mannequin, bone)
+            .angle_between(direction(&on_t_pose, bone))
+            .to_degrees();
+        assert!(angle < 2.0, "{bone:?}: {angle} degrees");
+    }
+    // Made on the T-pose avatar before: the left arm lowered by a quarter turn (back where
+    // the mannequin's hangs), the right one left out to the side.
+    let old = temp("standard-old.json");
+    std::fs::write(
+        &old,
+        r#"{"avatar": {"url": "https://example.org/t-pose.glb"},
+            "posture": {"l_shoulder": {"rz": -1.5707963267948966}}}"#,
+    )
+    .unwrap();
+    let (then, note) = posed(&t_pose, &old, "standard-3.glb");
+    assert!(note.contains("converted"), "{note}");
+    let rest = node_positions(&bytes);
+    let arm = |side: &str| {
+        direction(
+            &rest,
+            (&format!("{side}_shoulder"), &format!("{side}_elbow")),
+        )
+    };
+    let quarter = |d: f64| DQuat::from_rotation_z(d.to_radians());
+    for (side, want) in [("l", arm("l")), ("r", quarter(-90.0) * arm("r"))] {
+        let got = direction(
+            &then,
+            (&format!("{side}_shoulder"), &format!("{side}_elbow")),
+        );
+        let angle = got.angle_between(want).to_degrees();
+        assert!(angle < 1.0, "{side} upper arm: {angle} degrees");
+    }
+}

@@ -10,7 +10,8 @@ use stance_ik::{Axes, Effector, Limb, LimbGoal, Posture, Skeleton, Task, TaskKin
 
 use crate::DocumentError;
 use crate::document::{
-    CONTACT_HEIGHT, Document, DofValues, LimbName, PostureValues, TaskKindSpec, TaskSpec,
+    CONTACT_HEIGHT, Document, DofValues, LimbName, PostureRest, PostureValues, TaskKindSpec,
+    TaskSpec,
 };
 
 pub use stance_hanim::resolve_joint;
@@ -42,6 +43,27 @@ impl PostureValues {
             Ok(())
         })?;
         Ok(p)
+    }
+
+    /// The values whose joint and DOF `skeleton` has (H-Anim aliases find joints too), the
+    /// others left out: a document made on another body (undo across an avatar swap or a
+    /// level of articulation) restored on this one.
+    pub fn fitted(&self, skeleton: &Skeleton) -> PostureValues {
+        let mut out = PostureValues::default();
+        for (name, dofs) in &self.joints {
+            let Some(joint) = resolve_joint(skeleton, name).and_then(|j| skeleton.joints().get(j))
+            else {
+                continue;
+            };
+            let mut kept = DofValues::default();
+            for (d, value) in dofs.iter() {
+                if joint.dofs.contains(&d) {
+                    kept.set(d, value);
+                }
+            }
+            out.joints.insert(name.clone(), kept);
+        }
+        out
     }
 
     /// Calls `f(dof, value, path)` for every value, its joint and DOF found on `skeleton`
@@ -559,5 +581,86 @@ impl Document {
             }
         }
         Ok(out)
+    }
+}
+
+impl Document {
+    /// The document with its posture values relative to the H-Anim standard pose on `body`
+    /// (built from the avatar the document was made on): a document whose values are relative
+    /// to the avatar's own rest ([`PostureRest::Avatar`], written before Stance wrote `rest`)
+    /// shows on `body` the pose it showed then. Each joint's world rotation from the avatar's
+    /// rest is turned back by its rest match (`G · rest_match⁻¹`), the local rotations are
+    /// projected onto the joint's DOF, the root keeps its place. The posture, the keys and
+    /// the posture tasks' references are converted; joints the body lacks are left out. A
+    /// document already relative to the standard pose comes back as it is.
+    pub fn in_standard_rest(&self, body: &HumanoidSkeleton) -> Document {
+        if self.rest == PostureRest::Standard {
+            return self.clone();
+        }
+        let mut out = self.clone();
+        out.rest = PostureRest::Standard;
+        out.posture = standard_values(&self.posture, body);
+        if let Some(motion) = &mut out.motion {
+            for key in &mut motion.keys {
+                key.posture = standard_values(&key.posture, body);
+            }
+        }
+        for task in &mut out.tasks {
+            if let TaskKindSpec::Posture {
+                reference: Some(reference),
+                ..
+            } = &mut task.kind
+            {
+                *reference = standard_values(reference, body);
+            }
+        }
+        out
+    }
+}
+
+/// `values` relative to the avatar's own rest, relative to the standard pose of `body`.
+fn standard_values(values: &PostureValues, body: &HumanoidSkeleton) -> PostureValues {
+    let skeleton = &body.skeleton;
+    let joints = skeleton.joints();
+    let standard_rest = stance_ik::Frames::new(skeleton, &Posture::rest(skeleton)).joint_position;
+    let mut own = Vec::with_capacity(joints.len());
+    let mut standard: Vec<DQuat> = Vec::with_capacity(joints.len());
+    let mut translation = DVec3::ZERO;
+    for (k, joint) in joints.iter().enumerate() {
+        let dofs = values.joints.get(&joint.name).copied().unwrap_or_default();
+        let r = |d: stance_ik::Dof| dofs.get(d).unwrap_or(0.0);
+        let local = DQuat::from_scaled_axis(DVec3::new(
+            r(stance_ik::Dof::Rx),
+            r(stance_ik::Dof::Ry),
+            r(stance_ik::Dof::Rz),
+        ));
+        let parent = joint.parent.and_then(|p| own.get(p).copied());
+        let world = parent.map_or(local, |p: DQuat| p * local).normalize();
+        own.push(world);
+        let rest_match = body.joints.get(k).map_or(DQuat::IDENTITY, |j| j.rest_match);
+        standard.push((world * rest_match.inverse()).normalize());
+        if joint.parent.is_none() {
+            let t = DVec3::new(
+                r(stance_ik::Dof::Tx),
+                r(stance_ik::Dof::Ty),
+                r(stance_ik::Dof::Tz),
+            );
+            let own_root = body.joints.get(k).map_or(standard_rest[k], |j| j.own_rest);
+            translation = t + own_root - standard_rest[k];
+        }
+    }
+    let locals: Vec<DQuat> = joints
+        .iter()
+        .zip(&standard)
+        .map(
+            |(joint, world)| match joint.parent.and_then(|p| standard.get(p)) {
+                Some(parent) => (parent.inverse() * *world).normalize(),
+                None => *world,
+            },
+        )
+        .collect();
+    match Posture::from_rotations(skeleton, translation, &locals) {
+        Ok(posture) => PostureValues::from_posture(skeleton, &posture),
+        Err(_) => values.clone(),
     }
 }

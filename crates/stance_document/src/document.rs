@@ -34,6 +34,33 @@ pub struct Document {
     /// Joint stiffness that replaces the body's anatomical defaults (see
     /// [`crate::stiffness`]); empty: the defaults.
     pub stiffness: StiffnessValues,
+    /// What the posture values are relative to.
+    pub rest: PostureRest,
+}
+
+/// What a document's posture values (its posture, keys and posture-task references) are
+/// relative to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PostureRest {
+    /// The H-Anim standard pose (the default mannequin's rest), on every body: the same
+    /// values show the same pose on any avatar (`"rest": "standard"`).
+    #[default]
+    Standard,
+    /// The avatar's own rest, as documents and links made on an avatar before Stance wrote
+    /// `rest` were (`"rest": "avatar"`; on the default mannequin both are the same). Opened
+    /// on that avatar, the values are converted
+    /// ([`crate::Document::in_standard_rest`]).
+    Avatar,
+}
+
+impl PostureRest {
+    /// The JSON word.
+    pub fn name(self) -> &'static str {
+        match self {
+            PostureRest::Standard => "standard",
+            PostureRest::Avatar => "avatar",
+        }
+    }
 }
 
 /// The avatar a document is posed on.
@@ -526,6 +553,22 @@ impl Document {
             None | Some(Value::Null) => StiffnessValues::default(),
             Some(p) => PostureValues::from_json_value(p, "stiffness")?,
         };
+        // Absent: written before `rest` existed, when values were relative to the body's own
+        // rest (the standard pose on the mannequin).
+        let rest = match o.get("rest") {
+            None | Some(Value::Null) => match avatar {
+                AvatarReference::Default => PostureRest::Standard,
+                AvatarReference::Url(_) => PostureRest::Avatar,
+            },
+            Some(Value::String(s)) if s == "standard" => PostureRest::Standard,
+            Some(Value::String(s)) if s == "avatar" => PostureRest::Avatar,
+            Some(_) => {
+                return Err(DocumentError::field(
+                    "rest",
+                    "expected \"standard\" or \"avatar\"",
+                ));
+            }
+        };
         let doc = Document {
             avatar,
             posture,
@@ -533,6 +576,7 @@ impl Document {
             motion,
             camera,
             stiffness,
+            rest,
         };
         doc.validate()?;
         Ok(doc)
@@ -897,6 +941,7 @@ impl Serialize for Document {
         let mut st = s.serialize_struct("Document", 4)?;
         st.serialize_field("version", &DOCUMENT_VERSION)?;
         st.serialize_field("avatar", &self.avatar)?;
+        st.serialize_field("rest", self.rest.name())?;
         st.serialize_field("posture", &self.posture)?;
         st.serialize_field("tasks", &self.tasks)?;
         if let Some(motion) = &self.motion {

@@ -31,7 +31,7 @@ pub use convert::{
 };
 pub use document::{
     AvatarReference, CONTACT_HEIGHT, DEFAULT_BALANCE_MARGIN, DEFAULT_COMFORT, DOCUMENT_VERSION,
-    Document, DofValues, LimbName, PostureValues, TaskKindSpec, TaskSpec,
+    Document, DofValues, LimbName, PostureRest, PostureValues, TaskKindSpec, TaskSpec,
 };
 pub use error::DocumentError;
 pub use link::LinkError;

@@ -58,8 +58,8 @@ fn a_comfort_task_on_a_t_pose_body_gives_the_elbow_its_flexors() {
     .unwrap();
     let s = &body.skeleton;
     let elbow = s.joint_index("l_elbow").unwrap();
-    // The T-pose elbow flexes about world y.
-    let flexion = s.joints()[elbow].rotation_dof[Dof::Ry.axis_index()].unwrap();
+    // The T-pose body is built in the standard pose: its elbow flexes about world x.
+    let flexion = s.joints()[elbow].rotation_dof[Dof::Rx.axis_index()].unwrap();
     let peak = |kind: &TaskKind| match kind {
         TaskKind::Comfort { model } => {
             let strength = model.strength[flexion].unwrap();
@@ -72,9 +72,62 @@ fn a_comfort_task_on_a_t_pose_body_gives_the_elbow_its_flexors() {
     // Elbow flexors hold about 0.78 N m per kg of a 70 kg body (55 N m); pronators 13 N m.
     let flexors = peak(&on_body.kind);
     assert!(flexors > 40.0, "{flexors} N m");
+    // Its joint frames are the standard pose's: the skeleton alone gives the same axes.
     let as_rest_frame = spec.to_task(s, &[]).unwrap();
-    assert!(
-        peak(&as_rest_frame.kind) < 20.0,
-        "the skeleton alone cannot know its axes"
-    );
+    assert!(peak(&as_rest_frame.kind) > 40.0);
+}
+
+/// A document written before `rest` (values relative to the avatar's own rest) made on a
+/// T-pose avatar, its arm lowered by a quarter turn about the body's front axis and the
+/// forearm bent about world y: converted, the standard pose's arm points where the T-pose arm
+/// did (straight down), and so does the forearm.
+#[test]
+fn an_old_document_made_on_a_t_pose_avatar_keeps_its_pose() {
+    let joints = t_pose_joints();
+    let positions: Vec<DVec3> = joints.iter().map(|j| j.position).collect();
+    let body = build_skeleton(
+        &Mapping::auto(&joints, &[], false),
+        &positions,
+        &SkeletonOptions::default(),
+    )
+    .unwrap();
+    let old = stance_document::Document::from_json(
+        r#"{"avatar": {"url": "https://example.org/t.glb"},
+            "posture": {"l_shoulder": {"rz": -1.5707963267948966}, "l_elbow": {"ry": 0.5}}}"#,
+    )
+    .unwrap();
+    assert_eq!(old.rest, stance_document::PostureRest::Avatar);
+    let new = old.in_standard_rest(&body);
+    assert_eq!(new.rest, stance_document::PostureRest::Standard);
+    let rotation = |joint: &str| {
+        let v = new.posture.joints.get(joint).copied().unwrap_or_default();
+        let r = |dof: Dof| v.get(dof).unwrap_or(0.0);
+        glam::DQuat::from_scaled_axis(DVec3::new(r(Dof::Rx), r(Dof::Ry), r(Dof::Rz)))
+    };
+    // The old meaning, by hand: the T-pose arm (+x) turned by the old values.
+    let lowered = glam::DQuat::from_rotation_z(-std::f64::consts::FRAC_PI_2);
+    let old_upper = lowered * DVec3::X;
+    let old_fore = lowered * glam::DQuat::from_rotation_y(0.5) * DVec3::X;
+    // The new meaning: the standard pose's bones (the default centres) turned by the values.
+    let table = stance_hanim::humanoid_joints(LevelOfArticulation::Loa1);
+    let centre = |name: &str| {
+        table
+            .iter()
+            .find(|j| j.definition.name == name)
+            .unwrap()
+            .rest_centre
+    };
+    let upper = (centre("l_elbow") - centre("l_shoulder")).normalize();
+    let fore = (centre("l_radiocarpal") - centre("l_elbow")).normalize();
+    let shoulder = rotation("l_shoulder");
+    let elbow = shoulder * rotation("l_elbow");
+    assert!((shoulder * upper).angle_between(old_upper) < 1e-6);
+    // The elbow has no twist DOF: the projection onto its two leaves a small error.
+    let off = (elbow * fore).angle_between(old_fore).to_degrees();
+    assert!(off < 2.0, "{off} degrees");
+    // A document that says `"rest": "standard"` is kept as it is.
+    let text = new.to_json(false);
+    assert!(text.contains(r#""rest":"standard""#), "{text}");
+    let again = stance_document::Document::from_json(&text).unwrap();
+    assert_eq!(again.in_standard_rest(&body), again);
 }

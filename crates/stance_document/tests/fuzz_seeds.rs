@@ -61,6 +61,11 @@ const EVERYTHING: &str = r#"{
 /// comfort task either; 1: no timeline nor interval either).
 fn document(format: u8) -> Document {
     let mut d = Document::from_json(EVERYTHING).unwrap();
+    // Made on an avatar: before format 5 relative to its own rest, from 5 to the standard
+    // pose (which older formats cannot say).
+    if format >= 5 {
+        d.rest = stance_document::PostureRest::Standard;
+    }
     if format < 4 {
         d.stiffness = Default::default();
     }

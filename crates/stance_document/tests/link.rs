@@ -45,6 +45,8 @@ fn all_kinds() -> Document {
         interval: None,
     };
     Document {
+        // Made on an avatar before `rest` existed: the oldest formats hold it.
+        rest: stance_document::PostureRest::Avatar,
         avatar: AvatarReference::Url("https://example.org/models/Jin.glb?x=1#frag".to_owned()),
         posture: posture.clone(),
         tasks: vec![
@@ -200,6 +202,7 @@ fn a_full_loa2_posture_with_six_tasks_fits_in_600_characters() {
     let n = 50;
     for _ in 0..n {
         let d = Document {
+            rest: Default::default(),
             avatar: AvatarReference::Default,
             posture: loa2_posture(&mut r, 0.6),
             tasks: table1_tasks(&mut r),
@@ -214,6 +217,7 @@ fn a_full_loa2_posture_with_six_tasks_fits_in_600_characters() {
         round_trip(&d);
     }
     let d0 = Document {
+        rest: Default::default(),
         avatar: AvatarReference::Default,
         posture: loa2_posture(&mut r, 0.6),
         tasks: vec![],
@@ -245,6 +249,7 @@ fn report_link_lengths_and_the_general_compressors() {
     let body = stance_hanim::scenarios::loa2_body40().unwrap();
     let standing = stance_hanim::scenarios::standing_posture(&body);
     let table1 = Document {
+        rest: Default::default(),
         avatar: AvatarReference::Default,
         posture: PostureValues::from_posture(&body, &standing),
         tasks: table1_tasks(&mut r),
@@ -261,6 +266,7 @@ fn report_link_lengths_and_the_general_compressors() {
     );
     for spread in [0.2, 0.6, 1.0, std::f64::consts::PI] {
         let d = Document {
+            rest: Default::default(),
             avatar: AvatarReference::Default,
             posture: loa2_posture(&mut r, spread),
             tasks: table1_tasks(&mut r),
@@ -344,7 +350,7 @@ fn broken_links_give_distinct_clear_errors() {
     );
     assert_eq!(
         e.to_string(),
-        "this link was made by a newer version of Stance (format 5); this version reads format 4"
+        "this link was made by a newer version of Stance (format 6); this version reads format 5"
     );
     // Valid checksum, nonsense inside.
     let e = link::decode(&reframe(vec![1, 3, 0xFF, 0xFF, 0xFF])).unwrap_err();
@@ -676,4 +682,40 @@ fn posed_fingers_round_trip_within_the_quantisation() {
             );
         }
     }
+}
+
+/// What a link's values are relative to travels from format 5: a document made on an avatar
+/// in the standard pose (what the editor writes) takes format 5; one made on an avatar before
+/// (its own rest) keeps the oldest format that holds it and opens as such, as a format 1-4
+/// link on an avatar does; on the mannequin both rests are one and older formats hold it.
+#[test]
+fn the_rest_of_the_values_travels_in_a_format_5_link() {
+    use stance_document::PostureRest;
+    let mut d = Document::from_json(
+        r#"{"avatar": {"url": "https://example.org/a.vrm"}, "rest": "standard",
+            "posture": {"l_elbow": {"rx": -0.5}}}"#,
+    )
+    .unwrap();
+    assert_eq!(d.rest, PostureRest::Standard);
+    let text = link::encode(&d);
+    assert_eq!(URL_SAFE_NO_PAD.decode(&text).unwrap()[0], 5);
+    assert_eq!(link::decode(&text).unwrap().rest, PostureRest::Standard);
+    d.rest = PostureRest::Avatar;
+    let text = link::encode(&d);
+    assert_eq!(URL_SAFE_NO_PAD.decode(&text).unwrap()[0], 1);
+    assert_eq!(link::decode(&text).unwrap().rest, PostureRest::Avatar);
+    d.avatar = AvatarReference::Default;
+    d.rest = PostureRest::Standard;
+    let text = link::encode(&d);
+    assert_eq!(URL_SAFE_NO_PAD.decode(&text).unwrap()[0], 1);
+    assert_eq!(link::decode(&text).unwrap().rest, PostureRest::Standard);
+    // In JSON: absent with an avatar URL is the avatar's own rest; a wrong word is named.
+    let old = Document::from_json(r#"{"avatar": {"url": "https://example.org/a.vrm"}}"#).unwrap();
+    assert_eq!(old.rest, PostureRest::Avatar);
+    assert_eq!(
+        Document::from_json("{}").unwrap().rest,
+        PostureRest::Standard
+    );
+    let e = Document::from_json(r#"{"rest": "t-pose"}"#).unwrap_err();
+    assert!(e.to_string().contains("rest"), "{e}");
 }

@@ -149,6 +149,17 @@ impl LoadedAvatar {
         })
     }
 
+    /// The avatar to be shown again (undo or redo brings it back): its GPU model made again
+    /// when the renderer took it.
+    pub fn shown_again(mut self) -> Self {
+        if self.model.is_none() {
+            let (model, palettes, _) = avatar_model(&self.avatar);
+            self.model = Some(model);
+            self.palettes = palettes;
+        }
+        self
+    }
+
     /// The skeleton of this avatar at another level of articulation.
     pub fn skeleton(&self, loa: LevelOfArticulation) -> Result<HumanoidSkeleton, String> {
         self.avatar

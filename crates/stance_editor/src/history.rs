@@ -32,11 +32,20 @@ pub enum EditKind {
     HandCurl(Hands, Option<Finger>),
 }
 
+/// One step back or forward: the document, and for a change of body (an avatar swap, back to
+/// the mannequin) the body to bring back, as the editor stored it (see
+/// [`crate::model::EditorModel`]'s kept bodies).
+#[derive(Debug, Clone, PartialEq)]
+struct Step {
+    document: Document,
+    body: Option<u64>,
+}
+
 /// The undo and redo stacks.
 #[derive(Debug, Default)]
 pub struct History {
-    undo: Vec<Document>,
-    redo: Vec<Document>,
+    undo: Vec<Step>,
+    redo: Vec<Step>,
     last_edit: Option<(EditKind, f64)>,
 }
 
@@ -57,14 +66,36 @@ impl History {
         if merges {
             return false;
         }
-        if self.undo.last() == Some(before) {
+        if self
+            .undo
+            .last()
+            .is_some_and(|step| step.body.is_none() && step.document == *before)
+        {
             return false;
         }
-        self.undo.push(before.clone());
+        self.push_undo(Step {
+            document: before.clone(),
+            body: None,
+        });
+        true
+    }
+
+    /// Records a change of body: `before`, the document before it, and `body`, the stored
+    /// body that undo brings back. Always a step of its own.
+    pub fn record_body_change(&mut self, before: &Document, body: u64, now_secs: f64) {
+        self.last_edit = Some((EditKind::Command, now_secs));
+        self.redo.clear();
+        self.push_undo(Step {
+            document: before.clone(),
+            body: Some(body),
+        });
+    }
+
+    fn push_undo(&mut self, step: Step) {
+        self.undo.push(step);
         if self.undo.len() > MAX_UNDO_STEPS {
             self.undo.remove(0);
         }
-        true
     }
 
     /// Ends the current gesture: the next edit starts a new undo step even if of the same kind.
@@ -72,20 +103,56 @@ impl History {
         self.last_edit = None;
     }
 
-    /// The document to go back to; `current` becomes redoable.
-    pub fn undo(&mut self, current: &Document) -> Option<Document> {
-        let previous = self.undo.pop()?;
-        self.redo.push(current.clone());
-        self.last_edit = None;
-        Some(previous)
+    /// Whether the next undo changes the body back (the caller stores the current body and
+    /// passes it to [`History::undo`]).
+    pub fn undo_changes_body(&self) -> bool {
+        self.undo.last().is_some_and(|step| step.body.is_some())
     }
 
-    /// The document to go forward to; `current` becomes undoable.
-    pub fn redo(&mut self, current: &Document) -> Option<Document> {
-        let next = self.redo.pop()?;
-        self.undo.push(current.clone());
+    /// Whether the next redo changes the body again.
+    pub fn redo_changes_body(&self) -> bool {
+        self.redo.last().is_some_and(|step| step.body.is_some())
+    }
+
+    /// The document to go back to, and the body to bring back when the step changed the body;
+    /// `current` (on `current_body`, stored by the caller when the step changes the body)
+    /// becomes redoable.
+    pub fn undo(
+        &mut self,
+        current: &Document,
+        current_body: Option<u64>,
+    ) -> Option<(Document, Option<u64>)> {
+        let previous = self.undo.pop()?;
+        self.redo.push(Step {
+            document: current.clone(),
+            body: current_body,
+        });
         self.last_edit = None;
-        Some(next)
+        Some((previous.document, previous.body))
+    }
+
+    /// The document to go forward to, and the body to bring back; `current` (on
+    /// `current_body`) becomes undoable.
+    pub fn redo(
+        &mut self,
+        current: &Document,
+        current_body: Option<u64>,
+    ) -> Option<(Document, Option<u64>)> {
+        let next = self.redo.pop()?;
+        self.undo.push(Step {
+            document: current.clone(),
+            body: current_body,
+        });
+        self.last_edit = None;
+        Some((next.document, next.body))
+    }
+
+    /// The stored bodies the steps refer to.
+    pub fn bodies(&self) -> impl Iterator<Item = u64> + '_ {
+        self.undo
+            .iter()
+            .chain(&self.redo)
+            .filter_map(|step| step.body)
     }
 
     /// Whether there is an edit to take back.
@@ -129,11 +196,11 @@ mod tests {
         let (zero, one, two) = (document_with(0), document_with(1), document_with(2));
         history.record(&zero, EditKind::Command, 0.0);
         history.record(&one, EditKind::Command, 0.1);
-        assert_eq!(history.undo(&two), Some(one.clone()));
-        assert_eq!(history.undo(&one), Some(zero.clone()));
-        assert_eq!(history.undo(&zero), None);
-        assert_eq!(history.redo(&zero), Some(one.clone()));
-        assert_eq!(history.redo(&one), Some(two));
+        assert_eq!(history.undo(&two, None), Some((one.clone(), None)));
+        assert_eq!(history.undo(&one, None), Some((zero.clone(), None)));
+        assert_eq!(history.undo(&zero, None), None);
+        assert_eq!(history.redo(&zero, None), Some((one.clone(), None)));
+        assert_eq!(history.redo(&one, None), Some((two, None)));
         assert!(!history.can_redo());
     }
 
@@ -151,10 +218,29 @@ mod tests {
             assert!(merged);
         }
         assert_eq!(history.undo_steps(), 1);
-        let undone = history.undo(&document_with(30));
-        assert_eq!(undone, Some(zero.clone()));
+        let undone = history.undo(&document_with(30), None);
+        assert_eq!(undone, Some((zero.clone(), None)));
         history.record(&zero, EditKind::Command, 5.0);
         assert!(!history.can_redo());
+    }
+
+    /// A change of body is a step of its own that names the body to bring back, and the
+    /// body the caller stored when undoing it is the one redo brings back.
+    #[test]
+    fn a_change_of_body_carries_its_bodies_back_and_forth() {
+        let mut history = History::default();
+        let (zero, one) = (document_with(0), document_with(1));
+        history.record(&zero, EditKind::Joint(3), 0.0);
+        history.record_body_change(&one, 7, 0.1);
+        history.record_body_change(&one, 8, 0.2);
+        assert_eq!(history.undo_steps(), 3);
+        assert!(history.undo_changes_body());
+        assert_eq!(history.undo(&one, Some(9)), Some((one.clone(), Some(8))));
+        assert!(history.redo_changes_body());
+        assert_eq!(history.bodies().collect::<Vec<_>>(), [7, 9]);
+        assert_eq!(history.redo(&one, Some(10)), Some((one.clone(), Some(9))));
+        history.record(&one, EditKind::Command, 1.0);
+        assert_eq!(history.bodies().collect::<Vec<_>>(), [7, 10]);
     }
 
     #[test]

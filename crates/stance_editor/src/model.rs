@@ -23,7 +23,7 @@ mod tasks;
 
 use glam::DVec3;
 use serde_json::Value;
-use stance_document::{AvatarReference, Document, TaskSpec, link};
+use stance_document::{AvatarReference, Document, PostureRest, TaskSpec, link};
 use stance_hanim::{LevelOfArticulation, Mapping, readable_name};
 use stance_ik::Clock;
 use stance_render::MannequinBone;
@@ -31,6 +31,10 @@ use stance_render::MannequinBone;
 pub use self::clips::{AnimationFormat, CLIP_FPS, PickPurpose};
 pub use self::comfort::{ComfortView, heat_color};
 use self::command::goals_moved;
+/// Said when a document made on the avatar before a posture meant the same pose on every body
+/// (its values relative to the avatar's own rest) was converted to the standard pose.
+pub(crate) const CONVERTED_NOTE: &str = " The document was made before a posture meant the same pose on every body: its values, relative to this avatar's own rest, were converted and show the pose it was saved with.";
+
 pub use self::command::{Command, Gesture, Notice, SessionChange};
 pub use self::hands::{HandCommand, Hands};
 pub use self::image::{IMAGE_FILE_NAME, ImageExport, ImageRequest};
@@ -62,6 +66,11 @@ pub struct EditorModel {
     pub(crate) avatar: Option<LoadedAvatar>,
     /// The URL the avatar came from (links and autosave name it); `None` for local files.
     pub(crate) avatar_url: Option<String>,
+    /// Earlier bodies that undo or redo of a change of body brings back, by the id the
+    /// history names them with (see `model/avatars.rs`).
+    kept_bodies: Vec<(u64, avatars::KeptBody)>,
+    /// The id of the next kept body.
+    next_body: u64,
     /// Texture images the host decoded for the avatar file it opens next (file, images).
     decoded_images: Option<(String, Vec<stance_asset::DecodedImage>)>,
     /// A document waiting for its avatar to arrive (a link or autosave naming a URL).
@@ -124,6 +133,8 @@ impl EditorModel {
             gesture: None,
             avatar: None,
             avatar_url: None,
+            kept_bodies: Vec::new(),
+            next_body: 0,
             decoded_images: None,
             pending_document: None,
             pending_import: None,
@@ -559,25 +570,51 @@ impl EditorModel {
     fn undo(&mut self) {
         self.end_gesture();
         let current = self.session.document();
-        match self.history.undo(&current) {
-            Some(previous) => self.restore(&previous, "undo"),
+        // A change of body goes back: the current body is kept for redo.
+        let body = self.history.undo_changes_body().then(|| self.keep_body());
+        match self.history.undo(&current, body) {
+            Some((previous, back)) => {
+                if let Some(back) = back {
+                    self.bring_back_body(back, body);
+                }
+                self.restore(&previous, "undo");
+            }
             None => self.inform("Nothing to undo."),
         }
+        self.forget_unreferenced_bodies();
     }
 
     fn redo(&mut self) {
         self.end_gesture();
         let current = self.session.document();
-        match self.history.redo(&current) {
-            Some(next) => self.restore(&next, "redo"),
+        let body = self.history.redo_changes_body().then(|| self.keep_body());
+        match self.history.redo(&current, body) {
+            Some((next, back)) => {
+                if let Some(back) = back {
+                    self.bring_back_body(back, body);
+                }
+                self.restore(&next, "redo");
+            }
             None => self.inform("Nothing to redo."),
         }
+        self.forget_unreferenced_bodies();
     }
 
+    /// Undo or redo: `document` on the current body, which may lack some of its joints (the
+    /// step crossed an avatar swap or a change of level of articulation): their values are
+    /// left out.
     fn restore(&mut self, document: &Document, what: &str) {
         self.motion_restored();
         let camera = self.session.camera();
-        if let Err(error) = self.session.restore_document(document) {
+        let skeleton = self.session.skeleton();
+        let mut document = document.clone();
+        document.posture = document.posture.fitted(skeleton);
+        if let Some(motion) = &mut document.motion {
+            for key in &mut motion.keys {
+                key.posture = key.posture.fitted(skeleton);
+            }
+        }
+        if let Err(error) = self.session.restore_document(&document) {
             self.warn(format!("Could not {what}: {error}"));
         }
         if self.session.camera() != camera {
@@ -594,7 +631,18 @@ impl EditorModel {
     /// Opens `document` in the session as one undoable edit; `Err` says why it does not fit.
     /// A document with a posture opens exactly as it was saved; one with tasks and no
     /// posture (written by hand or by a script) is posed by the solver from the rest pose.
-    fn open_document(&mut self, document: &Document) -> Result<(), PosingError> {
+    /// Opens `document` as one undoable edit. A document made on the avatar now loaded before
+    /// postures meant the same pose on every body ([`PostureRest::Avatar`]) is converted
+    /// from that avatar's own rest; returns whether it was (say so: [`CONVERTED_NOTE`]).
+    fn open_document(&mut self, document: &Document) -> Result<bool, PosingError> {
+        let on_this_avatar = matches!(&document.avatar, AvatarReference::Url(url)
+            if self.avatar.is_some() && self.avatar_url.as_ref() == Some(url));
+        let converted = document.rest == PostureRest::Avatar && on_this_avatar;
+        let document = &if converted {
+            document.in_standard_rest(self.session.humanoid())
+        } else {
+            document.clone()
+        };
         let current = self.session.document();
         if document.posture.joints.is_empty() {
             self.session.load_document(document)?;
@@ -606,7 +654,7 @@ impl EditorModel {
         if document.camera.is_some() {
             self.view_requests += 1;
         }
-        Ok(())
+        Ok(converted)
     }
 
     fn pin(&mut self, joint: usize) {
@@ -705,6 +753,7 @@ impl EditorModel {
         self.trace.clear();
         if change == SessionChange::NewBody {
             self.history = History::default();
+            self.kept_bodies.clear();
         }
         self.session_generation += 1;
         self.motion_session_replaced(motion);
@@ -882,12 +931,15 @@ impl EditorModel {
                 return false;
             }
         };
-        if let Err(error) = self.open_document(&document) {
-            self.warn(format!(
-                "This posture link does not fit the humanoid: {error}. The editor opened normally."
-            ));
-            return false;
-        }
+        let converted = match self.open_document(&document) {
+            Ok(converted) => converted,
+            Err(error) => {
+                self.warn(format!(
+                    "This posture link does not fit the humanoid: {error}. The editor opened normally."
+                ));
+                return false;
+            }
+        };
         self.selected_joint = None;
         self.trace.clear();
         match &document.avatar {
@@ -899,7 +951,10 @@ impl EditorModel {
                 self.pending_document = Some(document);
                 self.fetch_avatar(&url);
             }
-            _ => self.inform("Opened the posture link."),
+            _ => self.inform(format!(
+                "Opened the posture link.{}",
+                if converted { CONVERTED_NOTE } else { "" }
+            )),
         }
         true
     }
@@ -941,7 +996,10 @@ impl EditorModel {
         }
         match Document::from_json(text) {
             Ok(document) => match self.open_document(&document) {
-                Ok(()) => self.inform(format!("Opened {name}.")),
+                Ok(converted) => self.inform(format!(
+                    "Opened {name}.{}",
+                    if converted { CONVERTED_NOTE } else { "" }
+                )),
                 Err(error) => self.warn(format!("{name} does not fit the humanoid: {error}")),
             },
             Err(error) => self.warn(format!("{name} is not a Stance document: {error}")),

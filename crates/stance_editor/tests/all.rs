@@ -4,6 +4,7 @@
 
 mod avatar_mapping;
 mod avatar_render;
+mod avatar_swap;
 mod clips;
 mod clocked;
 mod common;

@@ -122,15 +122,18 @@ fn swapping_the_elbows_in_the_mapping_window_rebuilds_the_skeleton() {
 
     assert_eq!(source_node(&harness, "l_elbow").as_deref(), Some("r_elbow"));
     assert_eq!(source_node(&harness, "r_elbow").as_deref(), Some("l_elbow"));
-    // The rebuilt skeleton, at rest (the solver then poses it as its tasks ask).
+    // The rebuilt skeleton's left elbow is the node on the other arm (its own rest); the
+    // skeleton's rest is still the standard pose, the elbow below its shoulder.
     let session = harness.state().model().session();
     let skeleton = session.skeleton();
-    let rest = stance_ik::Frames::new(skeleton, &stance_ik::Posture::rest(skeleton));
-    let swapped_x = rest.joint_position[skeleton.joint_index("l_elbow").unwrap()].x;
+    let elbow = skeleton.joint_index("l_elbow").unwrap();
+    let swapped_x = session.humanoid().joints[elbow].own_rest.x;
     assert!(
         swapped_x < -0.1,
         "the left elbow now sits on the other arm: x = {swapped_x}"
     );
+    let rest = stance_ik::Frames::new(skeleton, &stance_ik::Posture::rest(skeleton));
+    assert!(rest.joint_position[elbow].x > 0.1);
     assert_eq!(session.skeleton().joint_count(), joints_before);
     assert_eq!(
         session.tasks().len(),

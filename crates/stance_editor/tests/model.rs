@@ -289,6 +289,10 @@ fn there_is_one_gesture_at_a_time() {
 #[test]
 fn switching_the_level_of_articulation_replaces_the_session_and_keeps_the_history() {
     let mut editor = Clocked::new();
+    // A finger bent: a joint the LOA 1 body lacks.
+    let finger = editor.joint("l_metacarpophalangeal_2");
+    let dof = editor.model.session().skeleton().joints()[finger].dof_start;
+    editor.apply(Command::SetDof { dof, value: 0.4 });
     let wrist = editor.joint("r_radiocarpal");
     editor.apply(Command::Select(Some(wrist)));
     editor.apply(Command::BeginPull {
@@ -315,6 +319,13 @@ fn switching_the_level_of_articulation_replaces_the_session_and_keeps_the_histor
     let owners: Vec<usize> = editor.model.bones().iter().map(|bone| bone.owner).collect();
     let joints = editor.model.session().skeleton().joint_count();
     assert!(owners.iter().all(|&owner| owner < joints));
+    // Undo restores the LOA 2 document on the LOA 1 body, its joints the body lacks left out.
+    editor.apply(Command::Undo);
+    assert!(
+        !editor.model.notice().is_some_and(|notice| notice.is_error),
+        "{:?}",
+        editor.model.notice()
+    );
 }
 
 #[test]

@@ -2,20 +2,30 @@
 //! (levels of mobility: the same avatar can be solved at LOA1 or LOA2), or from the H-Anim
 //! default joint centres.
 //!
+//! **One meaning for posture values.** A built skeleton's rest is the H-Anim standard pose
+//! (standing, arms at the sides: the default mannequin's), whatever the avatar's own rest: the
+//! avatar's limbs are matched onto it once, bone by bone, with the bone-direction rest match of
+//! [`crate::rest_match`] (the rest match of retargeting; the trunk, neck and head keep their
+//! rest, their curve being the body's shape), and each joint keeps its segment lengths. [`BuiltJoint::rest_match`] is that world rotation: a posture's world rotation
+//! `G` of a joint poses the avatar's node as `G · rest_match · (the node's rest)`. So the same
+//! posture shows the same pose on the mannequin and on a T-pose, A-pose or any other avatar.
+//!
 //! Joint frames are parallel to the body frame at rest (the `stance_ik` convention), so the
-//! anatomical ranges of [`crate::anatomy`] are re-expressed for the avatar's rest pose: the
-//! rotation that takes each H-Anim default segment direction onto the avatar's (e.g. arms
-//! horizontal in a T-pose) shifts the ranges of that joint, and the frame of the segment
-//! above it permutes the DOF axes of the joints below (the elbow of a T-pose flexes about
-//! world y). Where that frame is within 45 degrees of axis-aligned, the nearest world axes
-//! are used (with a note); beyond (rare: no frame is further than about 63 degrees from
-//! one), the joint gets all three rotational DOF with the envelope of its ranges.
+//! anatomical ranges of [`crate::anatomy`] are re-expressed for the skeleton's rest: the
+//! rotation that takes each H-Anim default segment direction (towards the segment's first
+//! distal joint) onto the skeleton's shifts the ranges of that joint, and the frame of the
+//! segment above it permutes the DOF axes of the joints below. In the standard pose these
+//! rotations are small (the rest match turns each bone towards the mean of its children, and a
+//! body's proportions differ from the default's), so the default axes are kept; where a frame
+//! is within 45 degrees of axis-aligned, the nearest world axes are used (with a note); beyond,
+//! the joint gets all three rotational DOF with the envelope of its ranges.
 
 use glam::{DMat3, DQuat, DVec3};
-use stance_ik::{Dof, IkError, JointDef, Skeleton};
+use stance_ik::{Dof, Frames, IkError, JointDef, Posture, Skeleton};
 
 use crate::anatomy::{self, JointClass};
 use crate::mapping::{Mapping, MatchMethod};
+use crate::names::Side;
 use crate::{LevelOfArticulation, humanoid_joints};
 
 /// Options of [`build_skeleton`].
@@ -61,6 +71,17 @@ pub struct BuiltJoint {
     /// The anatomical axis of each rotation DOF (empty: unknown, e.g. a joint far from any
     /// axis-aligned frame given envelope ranges).
     pub axes: Vec<AnatomicalAxis>,
+    /// The world rotation (H-Anim frame) that turns the source joint's bone at the avatar's
+    /// own rest onto the standard pose, the skeleton's rest: the avatar's node is posed as
+    /// `world_from_joint · rest_match · (its rest world rotation)`. Only the limbs are matched
+    /// (the joints on the body's sides: arms, hands, legs, feet); the trunk, neck and head
+    /// keep their rest (identity), as on the default body and on avatars whose rest is the
+    /// standard pose. A limb joint without a bone of its own (nothing mapped below it: a hand
+    /// at LOA1) turns with its parent.
+    pub rest_match: DQuat,
+    /// The joint's position at the avatar's own rest (H-Anim frame, metres): its source
+    /// joint's; the skeleton's rest position on the default body.
+    pub own_rest: DVec3,
 }
 
 /// A built skeleton and how its joints relate to the avatar.
@@ -103,8 +124,9 @@ struct Input {
     parent: Option<usize>,
 }
 
-/// Builds the skeleton of a mapped avatar. `rest_positions[i]`: world rest position of source
-/// joint `i` in the H-Anim frame (+Y up, +Z front, +X left, metres).
+/// Builds the skeleton of a mapped avatar in the H-Anim standard pose (see the module
+/// documentation). `rest_positions[i]`: world rest position of source joint `i` at the
+/// avatar's own rest, in the H-Anim frame (+Y up, +Z front, +X left, metres).
 pub fn build_skeleton(
     mapping: &Mapping,
     rest_positions: &[DVec3],
@@ -127,12 +149,105 @@ pub fn build_skeleton(
             .ok_or(BuildError::BadPosition(m.source))?;
         lookup.push((m.hanim, p, m.source, m.method == MatchMethod::Implied));
     }
-    build(options, |name| {
+    let own_rest = build(options, |name| {
         lookup
             .iter()
             .find(|(h, ..)| *h == name)
             .map(|&(_, p, s, implied)| (p, Some(s), implied))
-    })
+    })?;
+    let (standard, rest_match) = standard_pose(&own_rest, options.loa);
+    let mut body = build(options, |name| {
+        let k = own_rest.skeleton.joint_index(name)?;
+        let implied = lookup
+            .iter()
+            .find(|(h, ..)| *h == name)
+            .is_some_and(|l| l.3);
+        Some((*standard.get(k)?, own_rest.joints.get(k)?.source, implied))
+    })?;
+    let own_positions =
+        Frames::new(&own_rest.skeleton, &Posture::rest(&own_rest.skeleton)).joint_position;
+    for joint in &mut body.joints {
+        if let Some(k) = own_rest.skeleton.joint_index(joint.hanim)
+            && let (Some(m), Some(p)) = (rest_match.get(k), own_positions.get(k))
+        {
+            joint.rest_match = *m;
+            joint.own_rest = *p;
+        }
+    }
+    Ok(body)
+}
+
+/// The joint positions of `own_rest` (a skeleton built at an avatar's own rest) in the
+/// H-Anim standard pose, and per joint the world rotation that takes its bone there (see
+/// [`BuiltJoint::rest_match`]). The segments keep their lengths; the ankles keep their mean
+/// height (the feet stay on the floor).
+fn standard_pose(
+    own_rest: &HumanoidSkeleton,
+    loa: LevelOfArticulation,
+) -> (Vec<DVec3>, Vec<DQuat>) {
+    let skeleton = &own_rest.skeleton;
+    let rest = Frames::new(skeleton, &Posture::rest(skeleton)).joint_position;
+    let table = humanoid_joints(loa);
+    let standard: Vec<Option<DVec3>> = own_rest
+        .joints
+        .iter()
+        .map(|j| {
+            table
+                .iter()
+                .find(|t| t.definition.name == j.hanim)
+                .map(|t| t.rest_centre)
+        })
+        .collect();
+    let bones = crate::rest_match::bone_directions(own_rest, &rest, &standard);
+    let joints = skeleton.joints();
+    let has_children: Vec<bool> = (0..joints.len())
+        .map(|k| joints.iter().any(|j| j.parent == Some(k)))
+        .collect();
+    let mut matched: Vec<DQuat> = Vec::with_capacity(joints.len());
+    let mut positions: Vec<DVec3> = Vec::with_capacity(joints.len());
+    for (k, joint) in joints.iter().enumerate() {
+        let parent = joint
+            .parent
+            .and_then(|p| matched.get(p).copied().zip(positions.get(p)));
+        let limb = own_rest
+            .joints
+            .get(k)
+            .is_some_and(|j| Side::of(j.hanim) != Side::Centre);
+        let m = match (bones.get(k).copied().flatten(), parent) {
+            // The trunk, neck and head keep their rest: a spine's curve is the body's shape,
+            // not a pose (a T-pose and an A-pose differ in the limbs), and the root's short
+            // offset to the spine is no limb direction.
+            _ if !limb => DQuat::IDENTITY,
+            (_, None) => DQuat::IDENTITY,
+            (Some(m), _) => m,
+            (None, Some((m, _))) if !has_children[k] => m,
+            _ => DQuat::IDENTITY,
+        };
+        let own = rest.get(k).copied().unwrap_or_default();
+        let position = match (joint.parent, parent) {
+            (Some(p), Some((parent_match, parent_position))) => {
+                *parent_position + parent_match * (own - rest.get(p).copied().unwrap_or_default())
+            }
+            _ => own,
+        };
+        matched.push(m);
+        positions.push(position);
+    }
+    let ankles = |p: &[DVec3]| {
+        let ys: Vec<f64> = ["l_talocrural", "r_talocrural"]
+            .iter()
+            .filter_map(|n| skeleton.joint_index(n).and_then(|k| p.get(k)))
+            .map(|v| v.y)
+            .collect();
+        (!ys.is_empty()).then(|| ys.iter().sum::<f64>() / ys.len() as f64)
+    };
+    if let (Some(own), Some(now)) = (ankles(&rest), ankles(&positions)) {
+        let lift = DVec3::new(0.0, own - now, 0.0);
+        for p in &mut positions {
+            *p += lift;
+        }
+    }
+    (positions, matched)
 }
 
 /// The skeleton of the H-Anim default body (default joint centres) at `options.loa`.
@@ -427,6 +542,10 @@ fn build(
                 axes: at
                     .and_then(|k| axes_by_joint.get(k).cloned())
                     .unwrap_or_default(),
+                rest_match: DQuat::IDENTITY,
+                own_rest: at
+                    .and_then(|k| inputs.get(k))
+                    .map_or(DVec3::ZERO, |i| i.position),
             }
         })
         .collect();
@@ -492,10 +611,12 @@ mod tests {
         }
     }
 
-    /// A T-pose body: the left elbow flexes about world y, the shoulder's abduction range is
-    /// shifted by the 90 degrees of the rest pose.
+    /// A T-pose body is built in the standard pose: its arms hang along the default body's
+    /// (the default joint centres), each segment keeps its T-pose length, the left shoulder's
+    /// rest match is the quarter turn that lowers the arm, and the joints get the default
+    /// body's DOF and ranges.
     #[test]
-    fn t_pose_permutes_the_elbow_axes() {
+    fn a_t_pose_is_built_in_the_standard_pose() {
         let loa1 = humanoid_joints(LevelOfArticulation::Loa1);
         let mut joints = Vec::new();
         for j in &loa1 {
@@ -533,37 +654,58 @@ mod tests {
         )
         .unwrap();
         let s = &body.skeleton;
-        let elbow = s.joint_index("l_elbow").unwrap();
-        assert!(
-            s.joints()[elbow].dofs.contains(&Dof::Ry),
-            "{:?}",
-            s.joints()[elbow].dofs
-        );
-        let shoulder = s.joint_index("l_shoulder").unwrap();
-        let rz = s.joints()[shoulder].rotation_dof[2].unwrap();
-        // No range wraps around (the shortest rotation is used for the rest-pose shift).
-        for d in 0..s.dof_count() {
-            if s.dof_kinds()[d].is_rotation() && s.lower_limits()[d].is_finite() {
-                let (lo, hi) = (s.lower_limits()[d], s.upper_limits()[d]);
+        let rest = Frames::new(s, &Posture::rest(s)).joint_position;
+        let default = default_skeleton(&SkeletonOptions {
+            loa: LevelOfArticulation::Loa1,
+            ..Default::default()
+        })
+        .unwrap();
+        let at = |name: &str| s.joint_index(name).unwrap();
+        let centre = |name: &str| {
+            loa1.iter()
+                .find(|x| x.definition.name == name)
+                .unwrap()
+                .rest_centre
+        };
+        for side in ["l_", "r_"] {
+            let [shoulder, elbow, wrist] =
+                ["shoulder", "elbow", "radiocarpal"].map(|j| format!("{side}{j}"));
+            for (a, b) in [(&shoulder, &elbow), (&elbow, &wrist)] {
+                let built = rest[at(b)] - rest[at(a)];
+                let standard = centre(b) - centre(a);
+                let t_pose = positions[joints.iter().position(|j| j.name == *b).unwrap()]
+                    - positions[joints.iter().position(|j| j.name == *a).unwrap()];
                 assert!(
-                    lo >= -3.2 && hi <= 3.2 && lo <= 0.0 && hi >= 0.0,
-                    "{}",
-                    s.dof_name(d)
+                    built.angle_between(standard).to_degrees() < 0.01,
+                    "{a} -> {b}: {built} against {standard}"
+                );
+                assert!((built.length() - t_pose.length()).abs() < 1e-9);
+            }
+        }
+        // The left arm points along +x in the T-pose; its rest match lowers it.
+        let lowered = body.joints[at("l_shoulder")].rest_match * DVec3::X;
+        let down = (centre("l_elbow") - centre("l_shoulder")).normalize();
+        assert!(lowered.angle_between(down).to_degrees() < 0.01, "{lowered}");
+        for name in ["l_elbow", "r_elbow", "l_shoulder", "l_knee"] {
+            let (k, d) = (at(name), default.skeleton.joint_index(name).unwrap());
+            assert_eq!(
+                s.joints()[k].dofs,
+                default.skeleton.joints()[d].dofs,
+                "{name}"
+            );
+            let (start, dstart) = (
+                s.joints()[k].dof_start,
+                default.skeleton.joints()[d].dof_start,
+            );
+            for i in 0..s.joints()[k].dofs.len() {
+                assert!(
+                    (s.upper_limits()[start + i] - default.skeleton.upper_limits()[dstart + i])
+                        .abs()
+                        < 0.05,
+                    "{name}"
                 );
             }
         }
-        let r_elbow = s.joint_index("r_elbow").unwrap();
-        let ry = s.joints()[r_elbow].rotation_dof[1].unwrap();
-        assert!(
-            s.upper_limits()[ry] > 2.4,
-            "right elbow flexes forward: +ry"
-        );
-        // Abduction up to 170 degrees from arm-down: 80 more from the T-pose.
-        assert!(
-            (s.upper_limits()[rz] - 80f64.to_radians()).abs() < 0.05,
-            "{}",
-            s.upper_limits()[rz]
-        );
     }
 
     #[test]

@@ -21,6 +21,7 @@ pub mod hands;
 mod joint_table;
 pub mod mapping;
 pub mod names;
+pub mod rest_match;
 pub mod scenarios;
 pub mod strength;
 

@@ -110,6 +110,14 @@ impl JsSkeleton {
     pub fn skin_joints(&self) -> Vec<i32> {
         self.body.source.clone()
     }
+
+    /// Per joint, `qx qy qz qw`: the world rotation that turns its skin bone at the skin's
+    /// rest onto the H-Anim standard pose (the skeleton's rest). A bone's world rotation at a
+    /// posture is `worldTransforms`' rotation × `restMatch` × its rest world rotation.
+    #[wasm_bindgen(getter, js_name = restMatch)]
+    pub fn rest_match(&self) -> Vec<f64> {
+        self.body.rest_match.clone()
+    }
 }
 
 /// A BVH clip (text) retargeted onto an H-Anim `skeleton` (`Skeleton.hanim` or

@@ -56,6 +56,12 @@ pub struct Body {
     pub skeleton: Skeleton,
     /// Per skeleton joint, the skin joint index it was built from (`-1`: none).
     pub source: Vec<i32>,
+    /// Per skeleton joint, `qx qy qz qw` (4 numbers): the world rotation that turns its skin
+    /// bone at the skin's rest onto the H-Anim standard pose, the skeleton's rest (identity
+    /// but for a skin whose rest is another pose). A posture poses the bone as
+    /// `world_from_joint · rest_match · (the bone's rest world rotation)`: the same posture
+    /// shows the same pose on any skin (docs/avatars.md).
+    pub rest_match: Vec<f64>,
     /// The H-Anim skeleton it was built as (H-Anim and skin bodies; `None` for a problem
     /// file's joints): what retargeting needs.
     pub humanoid: Option<HumanoidSkeleton>,
@@ -73,6 +79,7 @@ impl Body {
         Ok(Self {
             skeleton: body.skeleton.clone(),
             source,
+            rest_match: rest_match(&body),
             humanoid: Some(body),
         })
     }
@@ -81,9 +88,11 @@ impl Body {
     pub fn from_joints(skeleton: &str) -> JsResult<Self> {
         let skeleton = parse_skeleton(&json(skeleton)?).map_err(|e| e.to_string())?;
         let source = vec![-1; skeleton.joint_count()];
+        let rest_match = [0.0, 0.0, 0.0, 1.0].repeat(skeleton.joint_count());
         Ok(Self {
             skeleton,
             source,
+            rest_match,
             humanoid: None,
         })
     }
@@ -133,6 +142,7 @@ impl Body {
         Ok(Self {
             skeleton: body.skeleton.clone(),
             source,
+            rest_match: rest_match(&body),
             humanoid: Some(body),
         })
     }
@@ -158,6 +168,17 @@ impl Body {
             })
             .collect()
     }
+}
+
+/// Per joint of `body`, its rest match as `qx qy qz qw`.
+fn rest_match(body: &HumanoidSkeleton) -> Vec<f64> {
+    body.joints
+        .iter()
+        .flat_map(|j| {
+            let q = j.rest_match;
+            [q.x, q.y, q.z, q.w]
+        })
+        .collect()
 }
 
 /// Tasks by level on a body, solved every frame without re-parsing.

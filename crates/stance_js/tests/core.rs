@@ -255,3 +255,72 @@ fn a_bvh_clip_is_retargeted_onto_an_hanim_body() {
     let e = stance_js::retarget_bvh(&body, "HIERARCHY\nROOT Hips\n{\n", true).unwrap_err();
     assert!(e.starts_with("bvh: line"), "{e}");
 }
+
+/// `Skeleton.fromSkin` poses a skin as the editor poses the avatar: by the three.js example's
+/// rule (a mapped bone's world rotation is its joint's `worldTransforms` rotation times the
+/// joint's `restMatch` times the bone's rest world rotation; the last joint on a bone drives
+/// it), a document's posture turns the vendored avatar's bones (a T-pose) as `posed_locals`
+/// turns its nodes for the editor and `stance export-posed`.
+#[test]
+fn a_skin_posed_through_the_rest_match_shows_what_the_editor_shows() {
+    use glam::{DMat3, DMat4};
+    let avatar = load_avatar(AVATAR, &LoadOptions::default()).unwrap();
+    let names: Vec<String> = avatar.nodes.iter().map(|n| n.name.clone()).collect();
+    let parents: Vec<i32> = avatar
+        .nodes
+        .iter()
+        .map(|n| n.parent.map_or(-1, |p| p as i32))
+        .collect();
+    let rest: Vec<f64> = avatar
+        .hanim_rest_positions()
+        .iter()
+        .flat_map(|p| p.to_array())
+        .collect();
+    let body = Body::from_skin(&names, &parents, &rest, 2).unwrap();
+    let editor = avatar.skeleton(&SkeletonOptions::default()).unwrap();
+    let document = stance_document::Document::from_json(
+        r#"{"posture": {"humanoid_root": {"ry": 0.4}, "r_shoulder": {"rx": -1.2, "rz": -0.3},
+            "r_elbow": {"rx": -0.9}, "l_shoulder": {"rz": 0.6}, "l_hip": {"rx": -0.5},
+            "l_knee": {"rx": 0.8}, "vl5": {"rx": 0.2}}}"#,
+    )
+    .unwrap();
+    let posture = document.posture.to_posture(&body.skeleton).unwrap();
+    let solver = PoseSolver::new(&body, "").unwrap();
+    let n = body.skeleton.joint_count();
+    let mut out = vec![0.0; 7 * n];
+    solver.world_transforms(posture.values(), &mut out).unwrap();
+    // The editor's nodes, in the H-Anim frame.
+    let locals = avatar.posed_locals(&editor, &posture).unwrap();
+    let posed = avatar.world_from_locals(&locals);
+    let rest_world = avatar.rest_world();
+    let rotation = |m: &DMat4| {
+        let r = DMat3::from_mat4(avatar.hanim_from_file * *m);
+        DQuat::from_mat3(&DMat3::from_cols(
+            r.x_axis.normalize(),
+            r.y_axis.normalize(),
+            r.z_axis.normalize(),
+        ))
+    };
+    let mut driver = vec![None; avatar.nodes.len()];
+    for (j, &s) in body.source.iter().enumerate() {
+        if s >= 0 {
+            driver[s as usize] = Some(j);
+        }
+    }
+    let mut compared = 0;
+    let mut moved = 0;
+    for (node, j) in driver.iter().enumerate() {
+        let Some(j) = *j else { continue };
+        let joint = DQuat::from_slice(&out[7 * j + 3..7 * j + 7]);
+        let rest_match = DQuat::from_slice(&body.rest_match[4 * j..4 * j + 4]);
+        let three = joint * rest_match * rotation(&rest_world[node]);
+        let editor = rotation(&posed[node]);
+        let angle = three.angle_between(editor).to_degrees();
+        // (Within the noise of composing and decomposing the node transforms.)
+        assert!(angle < 0.05, "{}: {angle} degrees", names[node]);
+        compared += 1;
+        moved += usize::from(rest_match.angle_between(DQuat::IDENTITY) > 0.1);
+    }
+    assert!(compared > 40, "{compared} bones");
+    assert!(moved > 4, "the T-pose's arms are matched: {moved} bones");
+}

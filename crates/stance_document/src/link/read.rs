@@ -7,14 +7,15 @@ use stance_ik::{Axes, Dof};
 use super::models::{
     ACTIVE, AVATAR_URL, AXES_XYZ, AXIS_Y, AXIS_Z, HANIM_JOINT, HAS_INTERVAL, HAS_JOINTS, HAS_LIMB,
     HAS_MOTION, HAS_ORIENTATION, HAS_REFERENCE, HAS_SWIVEL, JOINT_MASK_DEFAULT, KINDS,
-    MASKS_DEFAULT, MAX_QUANTISED, Models, POINT_ZERO, WEIGHT_DECIMAL, WEIGHT_ONE, default_mask,
-    dequantise, from_decimal, in_loa_base,
+    MASKS_DEFAULT, MAX_QUANTISED, Models, POINT_ZERO, STANDARD_REST, WEIGHT_DECIMAL, WEIGHT_ONE,
+    default_mask, dequantise, from_decimal, in_loa_base,
 };
 use super::{
     DIRECTION_STEP, MAX_COUNT, MAX_OVERRUN, MAX_STRING_BYTES, POSITION_STEP_M, ROTATION_STEP_RAD,
 };
 use crate::document::{
-    AvatarReference, Document, DofValues, LimbName, PostureValues, TaskKindSpec, TaskSpec, dof_slot,
+    AvatarReference, Document, DofValues, LimbName, PostureRest, PostureValues, TaskKindSpec,
+    TaskSpec, dof_slot,
 };
 use crate::motion::{MAX_FRAME_COUNT, MotionKey, MotionSection, TaskInterval};
 use crate::range_coder::{Decoder, UintModel};
@@ -419,6 +420,19 @@ pub(super) fn decode_payload(bytes: &[u8], format: u8) -> R<Document> {
     } else {
         StiffnessValues::default()
     };
+    // Before format 5 a link did not say: its values were relative to its body's own rest
+    // (the standard pose on the mannequin).
+    let rest = if format >= 5 {
+        if r.flag(STANDARD_REST) {
+            PostureRest::Standard
+        } else {
+            PostureRest::Avatar
+        }
+    } else if avatar == AvatarReference::Default {
+        PostureRest::Standard
+    } else {
+        PostureRest::Avatar
+    };
     r.check()?;
     Ok(Document {
         avatar,
@@ -427,5 +441,6 @@ pub(super) fn decode_payload(bytes: &[u8], format: u8) -> R<Document> {
         motion,
         camera: None,
         stiffness,
+        rest,
     })
 }

@@ -6,12 +6,13 @@ use stance_ik::Axes;
 use super::models::{
     ACTIVE, AVATAR_URL, AXES_XYZ, AXIS_Y, AXIS_Z, HANIM_JOINT, HAS_INTERVAL, HAS_JOINTS, HAS_LIMB,
     HAS_MOTION, HAS_ORIENTATION, HAS_REFERENCE, HAS_SWIVEL, JOINT_MASK_DEFAULT, KINDS,
-    MASKS_DEFAULT, Models, POINT_ZERO, WEIGHT_DECIMAL, WEIGHT_ONE, default_mask, hanim_index,
-    in_loa_base, mask_of, quantise, short_decimal, unit,
+    MASKS_DEFAULT, Models, POINT_ZERO, STANDARD_REST, WEIGHT_DECIMAL, WEIGHT_ONE, default_mask,
+    hanim_index, in_loa_base, mask_of, quantise, short_decimal, unit,
 };
 use super::{DIRECTION_STEP, POSITION_STEP_M, ROTATION_STEP_RAD};
 use crate::document::{
-    AvatarReference, Document, DofValues, LimbName, PostureValues, TaskKindSpec, TaskSpec,
+    AvatarReference, Document, DofValues, LimbName, PostureRest, PostureValues, TaskKindSpec,
+    TaskSpec,
 };
 use crate::range_coder::Encoder;
 
@@ -369,6 +370,9 @@ pub(super) fn encode_payload(d: &Document, format: u8) -> Vec<u8> {
     }
     if format >= 4 {
         w.posture(&d.stiffness);
+    }
+    if format >= 5 {
+        w.flag(STANDARD_REST, d.rest == PostureRest::Standard);
     }
     w.e.finish()
 }

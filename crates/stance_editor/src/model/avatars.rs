@@ -84,19 +84,30 @@ impl EditorModel {
     }
 
     /// The avatar file `name` imported (by the host or here): its skeleton, model and posing
-    /// session replace the current ones; on failure the notice says why.
+    /// session replace the current ones; on failure the notice says why. A document that
+    /// waited for this avatar (opened with it) is restored on it; otherwise the avatar is
+    /// swapped under the current document: its posture (which means the same pose on every
+    /// body) and the tasks whose joints the new body has carry over as one undoable edit, the
+    /// others are named.
     fn open_imported_avatar(&mut self, name: &str, result: Result<Box<ImportedAvatar>, String>) {
         let started = web_time::Instant::now();
         let loa = self.session.level_of_articulation();
         let mut mapping_note = None;
+        let swap = self.pending_document.is_none();
+        let mut dropped = Vec::new();
         let loaded = result
             .and_then(|imported| LoadedAvatar::from_imported(name, *imported, loa))
             .and_then(|(mut avatar, mut humanoid)| {
                 mapping_note = self
                     .mapping_corrections
                     .reapply(&mut avatar, loa, &mut humanoid);
-                let session =
-                    PosingSession::with_humanoid(humanoid).map_err(|error| error.to_string())?;
+                let session = if swap {
+                    let (session, gone) = super::mapping::rebuilt_session(&self.session, humanoid)?;
+                    dropped = gone;
+                    session
+                } else {
+                    PosingSession::with_humanoid(humanoid).map_err(|error| error.to_string())?
+                };
                 Ok((avatar, session))
             });
         let (avatar, session) = match loaded {
@@ -121,15 +132,42 @@ impl EditorModel {
         if let Some(note) = mapping_note {
             text.push_str(&format!(" {note}"));
         }
-        self.replace_session(session, SessionChange::NewBody);
+        if swap {
+            text.push_str(&format!(
+                " The posture and {} task(s) carried over (undo brings the previous body back).",
+                session.tasks().len()
+            ));
+            if !dropped.is_empty() {
+                text.push_str(&format!(
+                    " Dropped, this body lacks their joints: {}.",
+                    dropped.join(", ")
+                ));
+            }
+            let before = self.session.document();
+            let kept = self.keep_body();
+            self.history
+                .record_body_change(&before, kept, self.now_secs);
+            self.replace_session(session, SessionChange::Rebuilt);
+            self.forget_unreferenced_bodies();
+        } else {
+            self.replace_session(session, SessionChange::NewBody);
+        }
         self.avatar = Some(avatar);
         self.avatar_url = crate::avatar::is_url(name).then(|| name.to_owned());
-        self.inform(text);
-        if let Some(document) = self.pending_document.take()
-            && let Err(error) = self.session.restore_document(&document)
-        {
-            self.warn(format!("The posture does not fit this avatar: {error}"));
+        if let Some(document) = self.pending_document.take() {
+            // Written before postures meant the same pose on every body: its values are
+            // relative to this avatar's own rest.
+            let own_rest = document.rest == stance_document::PostureRest::Avatar;
+            let document = document.in_standard_rest(self.session.humanoid());
+            if let Err(error) = self.session.restore_document(&document) {
+                self.warn(format!("The posture does not fit this avatar: {error}"));
+                return;
+            }
+            if own_rest {
+                text.push_str(super::CONVERTED_NOTE);
+            }
         }
+        self.inform(text);
         if let Some(avatar) = &mut self.avatar {
             avatar.load.session_ms = started.elapsed().as_secs_f64() * 1e3 - avatar.load.build_ms;
         }
@@ -140,19 +178,33 @@ impl EditorModel {
         self.pending_import.as_deref()
     }
 
-    /// Back to the built-in mannequin (the posture carries over by joint name).
+    /// Back to the built-in mannequin: the document carries over as in an avatar swap (one
+    /// edit, whose undo brings the avatar back; tasks whose joints the mannequin lacks are
+    /// named).
     pub(super) fn use_mannequin(&mut self) {
-        let document = self.session.document();
-        match PosingSession::new(self.session.level_of_articulation()) {
-            Ok(mut session) => {
-                let fits = session.restore_document(&document).is_ok();
-                self.replace_session(session, SessionChange::NewBody);
-                self.avatar = None;
-                self.avatar_url = None;
-                // An import still under way no longer replaces the body.
-                self.pending_import = None;
-                if !fits {
-                    self.inform("The posture did not fit the mannequin; it stands at rest.");
+        // An import still under way no longer replaces the body.
+        self.pending_import = None;
+        if self.avatar.is_none() {
+            return;
+        }
+        let built = PosingSession::new(self.session.level_of_articulation())
+            .map_err(|error| error.to_string())
+            .and_then(|session| {
+                super::mapping::rebuilt_session(&self.session, session.humanoid().clone())
+            });
+        match built {
+            Ok((session, dropped)) => {
+                let before = self.session.document();
+                let kept = self.keep_body();
+                self.history
+                    .record_body_change(&before, kept, self.now_secs);
+                self.replace_session(session, SessionChange::Rebuilt);
+                self.forget_unreferenced_bodies();
+                if !dropped.is_empty() {
+                    self.inform(format!(
+                        "The mannequin lacks the joints of these tasks, dropped (undo brings them and the avatar back): {}.",
+                        dropped.join(", ")
+                    ));
                 }
             }
             Err(error) => self.warn(format!("The mannequin could not be built: {error}")),
@@ -164,6 +216,87 @@ impl EditorModel {
         if let Err(error) = self.hooks.fetch(url) {
             self.pending_document = None;
             self.warn(format!("The avatar at {url} could not be fetched: {error}"));
+        }
+    }
+}
+
+/// How many earlier bodies undo and redo can bring back (each holds an imported avatar).
+const MAX_KEPT_BODIES: usize = 3;
+
+/// A body taken off by a change of body, kept for undo or redo: an avatar (`None`: the
+/// mannequin) and the URL it came from.
+pub(crate) struct KeptBody {
+    avatar: Option<LoadedAvatar>,
+    url: Option<String>,
+}
+
+impl EditorModel {
+    /// Takes the current body off (the avatar, or the mannequin) and keeps it; returns its id.
+    /// Only the [`MAX_KEPT_BODIES`] latest are kept.
+    pub(super) fn keep_body(&mut self) -> u64 {
+        let id = self.next_body;
+        self.next_body += 1;
+        let body = KeptBody {
+            avatar: self.avatar.take(),
+            url: self.avatar_url.take(),
+        };
+        self.kept_bodies.push((id, body));
+        if self.kept_bodies.len() > MAX_KEPT_BODIES {
+            self.kept_bodies.remove(0);
+        }
+        id
+    }
+
+    /// Forgets the kept bodies no undo or redo step names.
+    pub(super) fn forget_unreferenced_bodies(&mut self) {
+        let named: Vec<u64> = self.history.bodies().collect();
+        self.kept_bodies.retain(|(id, _)| named.contains(id));
+    }
+
+    /// The kept body `id`, taken out, with an empty session on its skeleton at `loa`.
+    fn take_kept_body(
+        &mut self,
+        id: u64,
+        loa: stance_hanim::LevelOfArticulation,
+    ) -> Option<(KeptBody, PosingSession)> {
+        let at = self.kept_bodies.iter().position(|(kept, _)| *kept == id)?;
+        let (_, body) = self.kept_bodies.remove(at);
+        let humanoid = match &body.avatar {
+            Some(avatar) => avatar.skeleton(loa),
+            None => stance_hanim::default_skeleton(&stance_hanim::SkeletonOptions {
+                loa,
+                ..stance_hanim::SkeletonOptions::default()
+            })
+            .map_err(|error| error.to_string()),
+        };
+        let session = humanoid
+            .and_then(|h| PosingSession::with_humanoid(h).map_err(|error| error.to_string()))
+            .ok()?;
+        Some((body, session))
+    }
+
+    /// Undo or redo of a change of body: the kept body `id` comes back at the current level of
+    /// articulation (its skeleton and an empty session, which the step's document then fills).
+    /// When it is no longer kept, the body just taken off (`instead`) comes back and the
+    /// notice says so.
+    pub(super) fn bring_back_body(&mut self, id: u64, instead: Option<u64>) {
+        let loa = self.session.level_of_articulation();
+        let (body, session, found) = match self.take_kept_body(id, loa) {
+            Some((body, session)) => (body, session, true),
+            None => match instead.and_then(|instead| self.take_kept_body(instead, loa)) {
+                Some((body, session)) => (body, session, false),
+                None => return,
+            },
+        };
+        self.replace_session(session, SessionChange::Rebuilt);
+        // An import still under way no longer replaces the body.
+        self.pending_import = None;
+        self.avatar = body.avatar.map(LoadedAvatar::shown_again);
+        self.avatar_url = body.url;
+        if !found {
+            self.warn(
+                "The earlier body is no longer kept (only the last three are): the document went back on this one.",
+            );
         }
     }
 }

@@ -264,9 +264,11 @@ pub enum Command {
 /// Why a session is replaced: what carries over.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SessionChange {
-    /// Another body (avatar, mannequin): the history starts again.
+    /// Another body with a document of its own (a document or link that names its avatar):
+    /// the history starts again.
     NewBody,
-    /// The same body rebuilt (LOA switch, mapping correction): the history stays.
+    /// The same document on a rebuilt or another body (LOA switch, mapping correction, avatar
+    /// swap, back to the mannequin): the history stays.
     Rebuilt,
 }
 

@@ -70,7 +70,11 @@ impl EditorModel {
             return;
         };
         match self.open_document(&entry.document) {
-            Ok(()) => self.inform(format!("Loaded the pose \"{}\".", entry.name)),
+            Ok(converted) => self.inform(format!(
+                "Loaded the pose \"{}\".{}",
+                entry.name,
+                if converted { super::CONVERTED_NOTE } else { "" }
+            )),
             Err(error) => self.warn(format!(
                 "The pose \"{}\" does not fit the humanoid: {error}",
                 entry.name

@@ -2,7 +2,7 @@
 
 use glam::{DQuat, DVec3};
 use serde::{Deserialize, Serialize};
-use stance_hanim::{HumanoidSkeleton, Side};
+use stance_hanim::HumanoidSkeleton;
 use stance_ik::{Frames, Posture, nearest_rotation_vector};
 
 use super::{CONTACT_JOINTS, MotionError, RetargetOptions};
@@ -63,66 +63,6 @@ impl Placement {
     }
 }
 
-/// Per target joint, its children.
-fn children(target: &HumanoidSkeleton) -> Vec<Vec<usize>> {
-    let joints = target.skeleton.joints();
-    let mut out = vec![Vec::new(); joints.len()];
-    for (k, j) in joints.iter().enumerate() {
-        if let Some(p) = j.parent {
-            out[p].push(k);
-        }
-    }
-    out
-}
-
-/// The bone of target joint `k` at rest in both skeletons: from the joint to the mean of the
-/// nearest joints below it that the clip maps, on its own side (a centre joint looks only at
-/// centre joints), at least 1 mm away in both. `None` for a joint with nothing below.
-fn rest_bone(
-    k: usize,
-    target: &HumanoidSkeleton,
-    children: &[Vec<usize>],
-    target_rest: &[DVec3],
-    source: &[Option<usize>],
-    source_rest: &[DVec3],
-) -> Option<(DVec3, DVec3)> {
-    let sk = source[k]?;
-    let side = Side::of(target.joints.get(k)?.hanim);
-    let same_side = |c: &usize| {
-        target
-            .joints
-            .get(*c)
-            .is_some_and(|j| Side::of(j.hanim) == side)
-    };
-    let mut level: Vec<usize> = children[k].iter().copied().filter(same_side).collect();
-    for _ in 0..64 {
-        if level.is_empty() {
-            break;
-        }
-        let ends: Vec<(DVec3, DVec3)> = level
-            .iter()
-            .filter_map(|&c| {
-                let s = source[c]?;
-                let t = target_rest[c] - target_rest[k];
-                let d = *source_rest.get(s)? - *source_rest.get(sk)?;
-                (t.length() > 1e-3 && d.length() > 1e-3).then_some((t, d))
-            })
-            .collect();
-        if !ends.is_empty() {
-            let n = ends.len() as f64;
-            let t: DVec3 = ends.iter().map(|e| e.0).sum::<DVec3>() / n;
-            let s: DVec3 = ends.iter().map(|e| e.1).sum::<DVec3>() / n;
-            return Some((t, s));
-        }
-        level = level
-            .iter()
-            .flat_map(|&c| children[c].iter().copied())
-            .filter(same_side)
-            .collect();
-    }
-    None
-}
-
 /// Mean rest height of the mapped ankles, from positions by H-Anim name.
 fn ankle_height(position: impl Fn(&str) -> Option<DVec3>) -> Option<f64> {
     let ys: Vec<f64> = CONTACT_JOINTS
@@ -156,7 +96,12 @@ impl RotationCopy {
             .first()
             .map(|f| clip.world(f))
             .unwrap_or_default();
-        let kids = children(target);
+        let source_by_target: Vec<Option<DVec3>> = source
+            .iter()
+            .map(|s| s.and_then(|s| source_rest.get(s).copied()))
+            .collect();
+        let bones =
+            stance_hanim::rest_match::bone_directions(target, &target_rest, &source_by_target);
         let mut notes = Vec::new();
         let adjust = |k: usize| {
             options
@@ -174,10 +119,7 @@ impl RotationCopy {
                         first.get(s).map_or(DQuat::IDENTITY, |w| w.0.inverse())
                     }
                     (RestMatch::Directions, Some(_)) => {
-                        rest_bone(k, target, &kids, &target_rest, &source, &source_rest)
-                            .map_or(DQuat::IDENTITY, |(t, s)| {
-                                DQuat::from_rotation_arc(t.normalize(), s.normalize())
-                            })
+                        bones.get(k).copied().flatten().unwrap_or(DQuat::IDENTITY)
                     }
                 };
                 c * adjust(k)
