@@ -41,12 +41,16 @@ pub struct RotationCopy {
 }
 
 /// Where clip positions land in the target's space: scaled about the vertical through the
-/// origin by hip height, the clip's lowest ankle at the target's ankle height.
+/// origin by hip height, the clip's ankle floor at the target's ankle height.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Placement {
     /// Root motion scale (target hip height over the clip's).
     pub root_scale: f64,
-    /// Lowest ankle height of the clip over all frames (clip metres).
+    /// Horizontal root motion scale: the root scale, or the one under which the feet in
+    /// contact slide least (see [`crate::retarget`]).
+    pub stride_scale: f64,
+    /// The clip's ankle floor: the 5th percentile of its ankles' heights over the motion
+    /// (clip metres).
     pub lowest_ankle: f64,
     /// The target's ankle height standing at rest (m): the floor contact height.
     pub ankle_height: f64,
@@ -56,9 +60,9 @@ impl Placement {
     /// A clip position in the target's space.
     pub fn place(&self, p: DVec3) -> DVec3 {
         DVec3::new(
-            self.root_scale * p.x,
+            self.stride_scale * p.x,
             self.ankle_height + self.root_scale * (p.y - self.lowest_ankle),
-            self.root_scale * p.z,
+            self.stride_scale * p.z,
         )
     }
 }
@@ -165,6 +169,11 @@ impl RotationCopy {
                 .find(|(n, _)| target.joints.get(k).is_some_and(|j| j.hanim == n.as_str()))
                 .map_or(DQuat::IDENTITY, |(_, q)| q.normalize())
         };
+        let ankles: Vec<usize> = CONTACT_JOINTS
+            .iter()
+            .filter_map(|n| skeleton.joint_index(n))
+            .collect();
+        let in_foot = |k: usize| ankles.iter().any(|&a| skeleton.is_ancestor_or_self(a, k));
         let matched: Vec<DQuat> = (0..source.len())
             .map(|k| {
                 let c = match (options.rest_match, source[k]) {
@@ -174,10 +183,24 @@ impl RotationCopy {
                         first.get(s).map_or(DQuat::IDENTITY, |w| w.0.inverse())
                     }
                     (RestMatch::Directions, Some(_)) => {
-                        rest_bone(k, target, &kids, &target_rest, &source, &source_rest)
-                            .map_or(DQuat::IDENTITY, |(t, s)| {
+                        rest_bone(k, target, &kids, &target_rest, &source, &source_rest).map_or(
+                            DQuat::IDENTITY,
+                            |(t, s)| {
+                                // Both rests stand on flat soles: a foot's bone is matched
+                                // by its heading alone (an ankle-to-toe bone slopes down by
+                                // the foot's own shape, which differs between skeletons).
+                                let flat = |v: DVec3| DVec3::new(v.x, 0.0, v.z);
+                                let (t, s) = if in_foot(k)
+                                    && flat(t).length() > 1e-3
+                                    && flat(s).length() > 1e-3
+                                {
+                                    (flat(t), flat(s))
+                                } else {
+                                    (t, s)
+                                };
                                 DQuat::from_rotation_arc(t.normalize(), s.normalize())
-                            })
+                            },
+                        )
                     }
                 };
                 c * adjust(k)
@@ -239,6 +262,7 @@ impl RotationCopy {
             target_hips,
             placement: Placement {
                 root_scale,
+                stride_scale: root_scale,
                 lowest_ankle,
                 ankle_height: ankle_t,
             },
@@ -320,7 +344,9 @@ impl RotationCopy {
     }
 }
 
-/// The lowest height of the clip's mapped ankles over all frames.
+/// The floor of the clip's mapped ankles: the 5th percentile of their heights over the
+/// motion (the reference frames at the start left out), so that a T-pose frame at another
+/// height or a stray frame does not set it.
 fn lowest_ankle(clip: &Clip) -> Option<f64> {
     let ankles: Vec<usize> = CONTACT_JOINTS
         .iter()
@@ -329,9 +355,11 @@ fn lowest_ankle(clip: &Clip) -> Option<f64> {
     if ankles.is_empty() {
         return None;
     }
-    let low = clip
+    let start = crate::contacts::reference_frames(clip);
+    let mut heights: Vec<f64> = clip
         .frames
         .iter()
+        .skip(start)
         .flat_map(|f| {
             let w = clip.world(f);
             ankles
@@ -339,6 +367,11 @@ fn lowest_ankle(clip: &Clip) -> Option<f64> {
                 .filter_map(move |&a| w.get(a).map(|x| x.1.y))
                 .collect::<Vec<_>>()
         })
-        .fold(f64::INFINITY, f64::min);
-    low.is_finite().then_some(low)
+        .filter(|y| y.is_finite())
+        .collect();
+    if heights.is_empty() {
+        return None;
+    }
+    let k = heights.len() / 20;
+    Some(*heights.select_nth_unstable_by(k, f64::total_cmp).1)
 }
