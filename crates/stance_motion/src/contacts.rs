@@ -531,6 +531,9 @@ mod tests {
             pace: 4.0,
             start: 0,
         });
-        assert!((run.speed - 0.35 * 4.0 / REFERENCE_PACE).abs() < 1e-12, "{run:?}");
+        assert!(
+            (run.speed - 0.35 * 4.0 / REFERENCE_PACE).abs() < 1e-12,
+            "{run:?}"
+        );
     }
 }

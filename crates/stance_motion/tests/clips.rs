@@ -235,6 +235,13 @@ fn the_corpus_footfalls_are_found_and_held_on_legs_0_7_to_1_3() {
                 row.push_str(&format!(" {:6.2} ({:5.1})", d * 1e3, plain * 1e3));
             }
             let name = path.rsplit("tests/").next().unwrap_or(path);
+            // The reference frames at the start (a T-pose cut or blended into the motion)
+            // are the annotation's, within a frame.
+            assert!(
+                reference.abs_diff(truth.start) <= 1,
+                "{name}: reference frames {reference}, annotated from {}",
+                truth.start
+            );
             println!(
                 "{name:35} {:5.0} {:5} {:3}/{:3}  {:3}/{:3}  {:3}/{:3} {row}  {:5.2}",
                 clip.fps(),
@@ -280,5 +287,66 @@ fn the_corpus_footfalls_are_found_and_held_on_legs_0_7_to_1_3() {
             output < plain,
             "{clip} legs {legs}: {output} against the copy's {plain}"
         );
+    }
+}
+
+/// A Rokoko export lays every bone along its own X axis at rest: read with the first frame as
+/// the rest, it is a centimetre, Y-up body whose joints move where the file puts them.
+#[test]
+fn a_rest_pose_that_is_no_pose_is_taken_from_the_first_frame() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let bytes = std::fs::read(root.join("tests/clips/rokoko/jesse_dance_a.bvh")).unwrap();
+    let clip = read_bvh(&bytes, "dance", &BvhLimits::default()).unwrap();
+    assert!(
+        clip.notes
+            .iter()
+            .any(|n| n.starts_with("units: centimetres")),
+        "{:?}",
+        clip.notes
+    );
+    assert!(
+        clip.notes.iter().all(|n| !n.starts_with("axes:")),
+        "{:?}",
+        clip.notes
+    );
+    // Frame 0 is the rest: every joint's rotation is the identity there.
+    for q in &clip.frames[0].rotations {
+        assert!(q.angle_between(glam::DQuat::IDENTITY) < 1e-9);
+    }
+    // The head is above the ankles by a person's height: 1.47 m standing in frame 0, a
+    // median of 0.94 m over the low dance, never under 0.3 m.
+    let (head, ankle) = (
+        clip.joint_of("skullbase").unwrap(),
+        clip.joint_of("l_talocrural").unwrap(),
+    );
+    let mut heights: Vec<f64> = clip
+        .frames
+        .iter()
+        .map(|f| {
+            let w = clip.world(f);
+            w[head].1.y - w[ankle].1.y
+        })
+        .collect();
+    heights.sort_by(f64::total_cmp);
+    let median = heights[heights.len() / 2];
+    assert!((0.8..1.8).contains(&median) && heights[0] > 0.3, "{median}");
+}
+
+/// Taking another frame as the rest moves no joint in any frame.
+#[test]
+fn a_clip_rested_on_one_of_its_frames_moves_the_same() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let bytes = std::fs::read(root.join("../../tests/fixtures/motion/walk.bvh")).unwrap();
+    let clip = read_bvh(&bytes, "walk", &BvhLimits::default()).unwrap();
+    let mut rested = clip.clone();
+    rested.rest_on_frame(40);
+    for q in &rested.frames[40].rotations {
+        assert!(q.angle_between(glam::DQuat::IDENTITY) < 1e-9);
+    }
+    for f in [0, 40, 100, 259] {
+        let (a, b) = (clip.world(&clip.frames[f]), rested.world(&rested.frames[f]));
+        for (p, q) in a.iter().zip(&b) {
+            assert!((p.1 - q.1).length() < 1e-9, "frame {f}: {} {}", p.1, q.1);
+        }
     }
 }

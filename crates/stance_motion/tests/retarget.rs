@@ -406,3 +406,130 @@ fn lifting_the_arms_raises_both_upper_arms_outward() {
         );
     }
 }
+
+/// A clip (made with the solver on the default body) that kneels on the left knee for a
+/// second and gets up again: the knee gets a contact of its own over the kneel, held on a
+/// body with longer legs where the plain copy slides it, and the hands, high above the floor
+/// throughout, get none.
+#[test]
+fn a_knee_on_the_floor_is_a_contact_of_its_own() {
+    use stance_ik::{Solver, SolverSettings, Task};
+    let s = body(LevelOfArticulation::Loa1);
+    let sk = &s.skeleton;
+    let j = |n: &str| sk.joint_index(n).unwrap();
+    let stand = Posture::rest(sk);
+    let rest = Frames::new(sk, &stand);
+    let floor = rest.joint_position[j("l_talocrural")].y - 0.07;
+    // Kneeling: the left knee 6 cm over the floor, the right foot where it stands, the left
+    // foot's toes behind on the floor; the trunk upright.
+    let mut kneel = stand.clone();
+    let tasks = vec![
+        Task::position(
+            j("r_talocrural"),
+            DVec3::ZERO,
+            rest.joint_position[j("r_talocrural")],
+        ),
+        Task::orientation(j("r_talocrural"), rest.rotation(j("r_talocrural"))),
+        Task::position(
+            j("l_knee"),
+            DVec3::ZERO,
+            DVec3::new(rest.joint_position[j("l_knee")].x, floor + 0.06, -0.05),
+        ),
+        Task::position(
+            j("l_talocrural"),
+            DVec3::ZERO,
+            DVec3::new(
+                rest.joint_position[j("l_talocrural")].x,
+                floor + 0.12,
+                -0.45,
+            ),
+        )
+        .at_level(2),
+        Task::orientation(0, DQuat::IDENTITY).at_level(2),
+    ];
+    let mut solver = Solver::new(SolverSettings {
+        max_iterations: 400,
+        ..SolverSettings::default()
+    })
+    .unwrap();
+    solver.solve(sk, &tasks, &mut kneel).unwrap();
+    let knee_at = Frames::new(sk, &kneel).joint_position[j("l_knee")];
+    assert!((knee_at.y - floor - 0.06).abs() < 0.01, "{knee_at}");
+    let blend = |t: f64| {
+        let values: Vec<f64> = stand
+            .values()
+            .iter()
+            .zip(kneel.values())
+            .map(|(a, b)| a + (b - a) * t)
+            .collect();
+        Posture::from_values(sk, values).unwrap()
+    };
+    let postures: Vec<Posture> = (0..90usize)
+        .map(|f| {
+            let t = match f {
+                0..10 => 0.0,
+                10..30 => (f - 10) as f64 / 20.0,
+                30..70 => 1.0,
+                70..90 => 1.0 - (f - 70) as f64 / 20.0,
+                _ => 0.0,
+            };
+            blend(t)
+        })
+        .collect();
+    let clip = Clip::from_postures("kneel", &s, &postures, 1.0 / 30.0);
+    let long = reshaped(LevelOfArticulation::Loa1, |name, p| {
+        if name.contains("knee") || name.contains("talocrural") {
+            let hip = if name.starts_with("l_") {
+                "l_hip"
+            } else {
+                "r_hip"
+            };
+            let h = rest.joint_position[j(hip)];
+            h + (p - h) * 1.2
+        } else {
+            p
+        }
+    });
+    let r = retarget(&clip, &long, &RetargetOptions::default()).unwrap();
+    let knees: Vec<_> = r
+        .contacts
+        .iter()
+        .filter(|c| c.part == ContactPart::Knee)
+        .collect();
+    assert_eq!(knees.len(), 1, "{:?}", r.contacts);
+    assert_eq!(knees[0].joint, "l_knee");
+    // The kneel holds from frame 30 to 69; the contact covers its middle (39 to 61).
+    assert!(knees[0].start <= 40 && knees[0].end >= 60, "{:?}", knees[0]);
+    assert!(
+        r.contacts.iter().all(|c| c.part != ContactPart::Hand),
+        "{:?}",
+        r.contacts
+    );
+    let k = long.skeleton.joint_index("l_knee").unwrap();
+    let at = |postures: &[Posture], f: usize| {
+        Frames::new(&long.skeleton, &postures[f]).joint_position[k]
+    };
+    // Held where the contact holds it over the whole contact; the plain copy has the knee
+    // elsewhere (the longer shin lifts it off the floor or sinks it).
+    let (mut held, mut copied) = (0.0f64, f64::INFINITY);
+    for f in knees[0].start..=knees[0].end {
+        held = held.max((at(&r.postures, f) - knees[0].position).length());
+        copied = copied.min((at(&r.copy, f) - knees[0].position).length());
+    }
+    println!("held {held}, copy {copied}");
+    assert!(held < 0.002 && copied > 0.01, "held {held}, copy {copied}");
+    // Without contacts for the other parts, only the feet are held.
+    let feet_only = retarget(
+        &clip,
+        &long,
+        &RetargetOptions {
+            contacts: Some(ContactSettings {
+                body_parts: false,
+                ..ContactSettings::default()
+            }),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(feet_only.contacts.iter().all(|c| c.part.is_foot()));
+}
