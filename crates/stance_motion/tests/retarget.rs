@@ -533,3 +533,39 @@ fn a_knee_on_the_floor_is_a_contact_of_its_own() {
     .unwrap();
     assert!(feet_only.contacts.iter().all(|c| c.part.is_foot()));
 }
+
+/// A clip that moves and leaves a foot without contact says so, with the thresholds to
+/// change; one whose feet are held says nothing of the kind.
+#[test]
+fn a_moving_clip_with_a_foot_never_held_says_which_and_what_to_change() {
+    use stance_motion::bvh::{BvhLimits, read_bvh};
+    let bytes = include_bytes!("../../../tests/fixtures/motion/walk.bvh");
+    let clip = read_bvh(bytes, "walk", &BvhLimits::default()).unwrap();
+    let s = body(LevelOfArticulation::Loa1);
+    let held = retarget(&clip, &s, &RetargetOptions::default()).unwrap();
+    assert!(
+        held.notes.iter().all(|n| !n.contains("got no contact")),
+        "{:?}",
+        held.notes
+    );
+    let strict = RetargetOptions {
+        contacts: Some(ContactSettings {
+            speed: 0.001,
+            ..ContactSettings::default()
+        }),
+        ..Default::default()
+    };
+    let none = retarget(&clip, &s, &strict).unwrap();
+    assert!(none.contacts.iter().all(|c| !c.part.is_foot()));
+    for side in ["left", "right"] {
+        let note = none
+            .notes
+            .iter()
+            .find(|n| n.contains(&format!("the {side} foot got no contact")))
+            .unwrap_or_else(|| panic!("{side}: {:?}", none.notes));
+        assert!(
+            note.contains("contact height (0.050 m") && note.contains("speed (0.00 m/s"),
+            "{note}"
+        );
+    }
+}
