@@ -104,7 +104,7 @@ pub struct ContactSettings {
     pub speed: f64,
     /// Shortest contact kept (s, default 0.05).
     pub min_duration: f64,
-    /// Ease-in and ease-out time around a contact (s, default 0.1).
+    /// Ease-in and ease-out time around a contact (s, default 0.05).
     pub ease: f64,
     /// Time over which speeds are measured (s, default 0.08).
     pub window: f64,
@@ -118,7 +118,7 @@ impl Default for ContactSettings {
             height: 0.05,
             speed: 0.35,
             min_duration: 0.05,
-            ease: 0.1,
+            ease: 0.05,
             window: 0.08,
             body_parts: true,
         }

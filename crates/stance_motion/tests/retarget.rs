@@ -286,14 +286,10 @@ fn cmu_walk_and_run_keep_their_contacts_on_legs_from_0_7_to_1_3_times() {
                 );
             }
             // Measured with the heel and the ball held (printed above; the ankle alone held
-            // to 0.01 mm before, see docs/motion.md): up to 8 mm at the contacts' first
-            // frames where both feet are held and the legs cannot reach both goals, 0.5 mm
-            // on average, no sinking past 2 mm. Where the legs cannot reach both goals the
-            // solver jumps: a hip turns by up to 0.86 rad in one frame next to a boundary on
-            // the walk (0.49, 0.73, 0.86 on legs 0.7, 1.0, 1.3; the clip's own largest frame
-            // step is 0.33), 0.37 on the run (its own 0.37): a regression of the two-point
-            // hold, bounded here so that it does not grow.
-            assert!(m.output.max_drift <= 0.008, "{name} {legs}: {:?}", m.output);
+            // to 0.01 mm before, see docs/motion.md): up to 1.8 mm, 0.13 mm on average, no
+            // sinking past 2 mm, and a joint jump next to a boundary of at most 0.47 rad on
+            // the walk (its own largest frame step is 0.33), 0.37 on the run (its own 0.37).
+            assert!(m.output.max_drift <= 0.002, "{name} {legs}: {:?}", m.output);
             assert!(
                 m.output.mean_drift <= 0.0005,
                 "{name} {legs}: {:?}",
@@ -301,12 +297,12 @@ fn cmu_walk_and_run_keep_their_contacts_on_legs_from_0_7_to_1_3_times() {
             );
             assert!(m.output.max_sink <= 0.002, "{name} {legs}: {:?}", m.output);
             assert!(
-                m.smoothness.worst_boundary_jump <= 0.9,
+                m.smoothness.worst_boundary_jump <= 0.5,
                 "{name} {legs}: {:?}",
                 m.smoothness
             );
-            // The plain copy slides several times as far.
-            assert!(m.copy.max_drift > m.output.max_drift * 5.0, "{:?}", m.copy);
+            // The plain copy slides ten times as far.
+            assert!(m.copy.max_drift > m.output.max_drift * 10.0, "{:?}", m.copy);
         }
     }
 }
