@@ -27,7 +27,7 @@ use stance_ik::{Frames, IkError, Iteration, Posture, Solver, SolverSettings, Tas
 use crate::clip::{Clip, ClipError};
 use crate::contacts::{
     ClipScale, Contact, ContactPart, ContactSettings, PointTrack, Thresholds, contact_weight,
-    detect_contacts, ground, reference_frames,
+    detect_contacts, reference_frames,
 };
 pub use copy::{Placement, RestMatch, RotationCopy};
 pub use report::{
@@ -437,16 +437,28 @@ fn held_contacts(
     let thresholds = settings.thresholds(&scale);
     let mut contacts = detect_contacts(&tracks, clip.frame_time, &scale, settings);
     contacts.sort_by_key(|c| c.start);
-    // The clip's ground as a whole, against which each contact's own floor is measured.
-    let mut grounds: Vec<f64> = ground(&tracks, clip.frame_time, &scale)
-        .into_iter()
-        .skip(reference)
-        .collect();
-    let main_ground = if grounds.is_empty() {
-        0.0
-    } else {
-        let k = grounds.len() / 2;
-        *grounds.select_nth_unstable_by(k, f64::total_cmp).1
+    // Each point's own floor over the clip (the 10th percentile of its height less its
+    // clearance, the reference frames left out), against which a contact's floor is
+    // measured: the height of the step it stands on.
+    let own_floor = |c: &Contact| -> f64 {
+        let Some(track) = tracks
+            .iter()
+            .find(|t| t.joint == c.joint && t.part == c.part)
+        else {
+            return c.floor;
+        };
+        let clearance = c.part.clearance() * clip_leg;
+        let mut heights: Vec<f64> = track
+            .positions
+            .iter()
+            .skip(reference)
+            .map(|p| p.y - clearance)
+            .collect();
+        if heights.is_empty() {
+            return c.floor;
+        }
+        let k = heights.len() / 10;
+        *heights.select_nth_unstable_by(k, f64::total_cmp).1
     };
     // On the target: the copy's points over each contact, the standing height of each point.
     let target_rest = Frames::new(skeleton, &Posture::rest(skeleton));
@@ -476,14 +488,23 @@ fn held_contacts(
             .map_or(DVec3::ZERO, |fr| fr.point(j, c.point))
     };
     let all = contacts.clone();
+    // The copy puts the clip's ankle floor (its lower ankle's) at the target's mean ankle
+    // height: its ground is that much above the target's rest ground.
+    let lift = CONTACT_JOINTS
+        .iter()
+        .filter_map(|n| skeleton.joint_index(n))
+        .map(|j| target_rest.joint_position[j].y)
+        .reduce(f64::min)
+        .map_or(0.0, |low| placement.ankle_height - low);
     let mut held: Vec<Contact> = Vec::with_capacity(contacts.len());
     for mut c in contacts {
-        let standing = if c.part.is_foot() {
-            let j = skeleton.joint_index(&c.joint).unwrap_or(0);
-            target_rest.point(j, c.point).y
-        } else {
-            target_floor + c.part.clearance() * target_leg
-        };
+        let standing = lift
+            + if c.part.is_foot() {
+                let j = skeleton.joint_index(&c.joint).unwrap_or(0);
+                target_rest.point(j, c.point).y
+            } else {
+                target_floor + c.part.clearance() * target_leg
+            };
         // The other point of the same foot, held when this one lands: this one is held where
         // the copy's foot puts it from there, so that the two goals fit the foot.
         let partner = held.iter().rev().find(|h| {
@@ -517,7 +538,7 @@ fn held_contacts(
                     .sum::<DVec3>()
                     / (end + 1 - c.start) as f64;
                 let at = on_copy(&c, c.start) + slide;
-                let y = standing + placement.root_scale * (c.floor - main_ground);
+                let y = standing + placement.root_scale * (c.floor - own_floor(&c)).max(0.0);
                 DVec3::new(at.x, y, at.z)
             }
         };
@@ -707,6 +728,9 @@ fn frame_tasks(
     tasks
 }
 
+/// Iterations of the first frame's solve.
+const FIRST_FRAME_ITERATIONS: usize = 100;
+
 /// The contacts' residual (m) over which a frame is solved again from the copy.
 const RETRY_RESIDUAL: f64 = 1e-3;
 
@@ -724,6 +748,13 @@ fn solve_frames(
         iteration: Iteration::Textbook,
         restarts: false,
         stall_window: 2,
+        ..SolverSettings::default()
+    })?;
+    let mut first_solver = Solver::new(SolverSettings {
+        max_iterations: max_iterations.max(FIRST_FRAME_ITERATIONS),
+        tolerance: 1e-5,
+        iteration: Iteration::Guarded,
+        restarts: false,
         ..SolverSettings::default()
     })?;
     let dofs = posture_dofs(skeleton);
@@ -749,7 +780,13 @@ fn solve_frames(
                 .collect()
         };
         let mut posture = Posture::from_values(skeleton, start)?;
-        let report = solver.solve(skeleton, &tasks, &mut posture)?;
+        // The first frame starts from the copy itself, however far its contacts are held
+        // from it: it gets the iterations to get there.
+        let report = if f == 0 {
+            first_solver.solve(skeleton, &tasks, &mut posture)?
+        } else {
+            solver.solve(skeleton, &tasks, &mut posture)?
+        };
         out.iterations += report.iterations;
         let mut residual = residuals(&report);
         // A correction carried from earlier frames can lead the solver astray (a held foot
