@@ -254,7 +254,11 @@ fn bench_suite_counts_per_family_and_beside_a_peer() {
     // What bench/placo/compare.py reads of each result.
     assert_ne!(results[1]["status"], "converged", "{v}");
     assert_eq!(results[0]["status"], "converged", "{v}");
-    assert!(results[0]["residuals"].as_array().is_some_and(|r| !r.is_empty()));
+    assert!(
+        results[0]["residuals"]
+            .as_array()
+            .is_some_and(|r| !r.is_empty())
+    );
     // Without --json: a table with a line per family.
     let (ok, stdout, _) = stance(&["bench", "--suite", dir.to_str().unwrap()]);
     assert!(ok);

@@ -36,6 +36,35 @@ fn a_dropped_bvh_goes_on_the_timeline_and_a_broken_one_keeps_it() {
     assert!((model.frame_time() - 0.0083333).abs() < 1e-12);
     assert_eq!(model.timeline().clip_name(), Some("walk"));
     assert!(model.timeline().contacts().len() >= 4);
+    let opened = model.notice().unwrap().text.clone();
+    assert!(
+        opened.contains("contacts held: ")
+            && opened.contains(" heel")
+            && !opened.contains("the clip moves"),
+        "{opened}"
+    );
+    // A speed threshold no foot meets: the walk moves, and the notice says which feet got no
+    // contact and which thresholds to change.
+    model.apply(Command::Motion(MotionCommand::SetRetargetOptions(
+        Box::new(RetargetOptions {
+            contacts: Some(ContactSettings {
+                speed: 0.001,
+                ..Default::default()
+            }),
+            ..Default::default()
+        }),
+    )));
+    let text = model.notice().unwrap().text.clone();
+    for words in [
+        "the left foot got no contact",
+        "the right foot got no contact",
+        "speed (0.00 m/s",
+    ] {
+        assert!(text.contains(words), "{words}: {text}");
+    }
+    model.apply(Command::Motion(MotionCommand::SetRetargetOptions(
+        Box::default(),
+    )));
     let broken = String::from_utf8_lossy(WALK).replacen("CHANNELS 3", "CHANNELS 4", 1);
     open(&mut model, "broken.bvh", broken.as_bytes());
     let notice = model.notice().unwrap();

@@ -356,14 +356,9 @@ pub fn sole(skeleton: &Skeleton, ankle: usize) -> [DVec3; 4] {
     let leg = skeleton.joints()[ankle]
         .parent
         .and_then(|knee| skeleton.joints()[knee].parent)
-        .map(|hip| (at(hip) - at(ankle)).length())
-        .filter(|&l| l > 0.0);
-    let stature = leg.map_or(1.7, |l| l / HIP_TO_ANKLE);
-    let length = if ahead > 0.02 {
-        ahead / BALL_SHARE
-    } else {
-        FOOT_LENGTH * stature
-    };
+        .map(|hip| (at(hip) - at(ankle)).length());
+    let stature = stature_of(leg);
+    let length = foot_length(ahead, stature);
     let half = 0.5 * FOOT_BREADTH * stature;
     let (heel, toe) = (-HEEL_SHARE * length, (1.0 - HEEL_SHARE) * length);
     [
@@ -372,6 +367,51 @@ pub fn sole(skeleton: &Skeleton, ankle: usize) -> [DVec3; 4] {
         DVec3::new(half, 0.0, toe),
         DVec3::new(-half, 0.0, toe),
     ]
+}
+
+/// Stature from the hip-to-ankle length (1.7 m without one).
+fn stature_of(hip_to_ankle: Option<f64>) -> f64 {
+    hip_to_ankle
+        .filter(|l| l.is_finite() && *l > 0.0)
+        .map_or(1.7, |l| l / HIP_TO_ANKLE)
+}
+
+/// The foot's length: from the ball of the foot `ahead` of the ankle when the foot has toe
+/// joints (over 2 cm), else from the stature.
+fn foot_length(ahead: f64, stature: f64) -> f64 {
+    if ahead > 0.02 {
+        ahead / BALL_SHARE
+    } else {
+        FOOT_LENGTH * stature
+    }
+}
+
+/// Ankle height above the sole as a fraction of stature (Drillis & Contini 1966).
+const ANKLE_HEIGHT: f64 = 0.039;
+
+/// The two points of a foot that touch the ground in a stance, on the sole, as offsets from
+/// the ankle in its rest frame (the body frame: +Y up, +Z ahead): the heel (below the ankle,
+/// [`HEEL_SHARE`] of the foot's length behind it) and the ball of the foot (the mean of the
+/// foot's toe joints `toes` when it has them, else [`BALL_SHARE`] of the length ahead). The
+/// sole is as far below the ankle as the lowest of `foot` (every joint and end point below the
+/// ankle), or [`ANKLE_HEIGHT`] of the stature without one 2 cm lower. Metres; `hip_to_ankle`
+/// (the leg's length) sizes a foot without toes.
+pub fn heel_and_ball(toes: &[DVec3], foot: &[DVec3], hip_to_ankle: f64) -> [DVec3; 2] {
+    let stature = stature_of(Some(hip_to_ankle));
+    let toe = (!toes.is_empty()).then(|| toes.iter().copied().sum::<DVec3>() / toes.len() as f64);
+    let length = foot_length(toe.map_or(0.0, |t| t.z), stature);
+    let lowest = foot.iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
+    let depth = if lowest < -0.02 {
+        lowest
+    } else {
+        -ANKLE_HEIGHT * stature
+    };
+    let ball = toe
+        .filter(|t| t.z > 0.02)
+        .map_or(DVec3::new(0.0, depth, BALL_SHARE * length), |t| {
+            DVec3::new(t.x, depth, t.z)
+        });
+    [DVec3::new(0.0, depth, -HEEL_SHARE * length), ball]
 }
 
 #[cfg(test)]

@@ -8,7 +8,8 @@
 //! A bone goes from the joint to the mean of the nearest joints below it that both bodies
 //! have, on its own side (a centre joint looks only at centre joints), each at least 1 mm away
 //! in both. The rotation is the shortest arc between the two directions: no twist about the
-//! bone is added.
+//! bone is added. A foot's bones (the ankle and below) are matched by their heading alone:
+//! both rests stand on flat soles.
 
 use glam::{DQuat, DVec3};
 
@@ -41,10 +42,26 @@ pub fn bone_directions(
     other_rest: &[Option<DVec3>],
 ) -> Vec<Option<DQuat>> {
     let kids = children(target);
+    let skeleton = &target.skeleton;
+    let ankles: Vec<usize> = ["l_talocrural", "r_talocrural"]
+        .iter()
+        .filter_map(|n| skeleton.joint_index(n))
+        .collect();
+    let in_foot = |k: usize| ankles.iter().any(|&a| skeleton.is_ancestor_or_self(a, k));
     (0..target.joints.len())
         .map(|k| {
-            rest_bone(k, target, &kids, target_rest, other_rest)
-                .map(|(t, s)| DQuat::from_rotation_arc(t.normalize(), s.normalize()))
+            rest_bone(k, target, &kids, target_rest, other_rest).map(|(t, s)| {
+                // Both rests stand on flat soles: a foot's bone is matched by its heading
+                // alone (an ankle-to-toe bone slopes down by the foot's own shape, which
+                // differs between skeletons).
+                let flat = |v: DVec3| DVec3::new(v.x, 0.0, v.z);
+                let (t, s) = if in_foot(k) && flat(t).length() > 1e-3 && flat(s).length() > 1e-3 {
+                    (flat(t), flat(s))
+                } else {
+                    (t, s)
+                };
+                DQuat::from_rotation_arc(t.normalize(), s.normalize())
+            })
         })
         .collect()
 }

@@ -396,7 +396,7 @@ pub fn retarget_bvh(body: &Body, bvh: &str, contacts: bool) -> JsResult<Retarget
         .collect();
     let report = serde_json::json!({
         "contacts": result.contacts.iter().map(|c| serde_json::json!({
-            "joint": c.joint, "start": c.start, "end": c.end,
+            "joint": c.joint, "part": c.part, "start": c.start, "end": c.end,
         })).collect::<Vec<_>>(),
         "iterations": result.iterations,
         "notes": clip.notes.iter().chain(&result.notes).collect::<Vec<_>>(),

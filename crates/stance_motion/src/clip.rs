@@ -226,6 +226,60 @@ impl Clip {
         out
     }
 
+    /// The same motion on a skeleton whose rest pose is frame `f`'s pose, with joint frames
+    /// parallel to the world there: for files whose rest pose is no pose (a Rokoko export's
+    /// bones all laid along their own X axes), `f`'s offsets become `G_parent(f) o`, each
+    /// world rotation `G(t)` becomes `G(t) G(f)⁻¹`, so that every frame's joint positions stay
+    /// where they were. Nothing changes when `f` is not a frame.
+    pub fn rest_on_frame(&mut self, f: usize) {
+        let Some(at) = self.frames.get(f).map(|fr| self.world(fr)) else {
+            return;
+        };
+        let posed = |k: usize| at.get(k).map_or(DQuat::IDENTITY, |w| w.0);
+        let parent_rotation = |k: usize| {
+            self.joints
+                .get(k)
+                .and_then(|j| j.parent)
+                .map_or(DQuat::IDENTITY, posed)
+        };
+        let turns: Vec<DQuat> = (0..self.joints.len()).map(parent_rotation).collect();
+        for frame in &mut self.frames {
+            let world = {
+                let mut out: Vec<DQuat> = Vec::with_capacity(self.joints.len());
+                for (k, j) in self.joints.iter().enumerate() {
+                    let r = frame.rotations.get(k).copied().unwrap_or(DQuat::IDENTITY);
+                    let w = j
+                        .parent
+                        .and_then(|p| out.get(p).copied())
+                        .map_or(r, |p| p * r);
+                    out.push(w.normalize());
+                }
+                out
+            };
+            let new_world: Vec<DQuat> = world
+                .iter()
+                .enumerate()
+                .map(|(k, w)| (*w * posed(k).inverse()).normalize())
+                .collect();
+            for (k, j) in self.joints.iter().enumerate() {
+                let parent = j.parent.and_then(|p| new_world.get(p).copied());
+                if let Some(q) = frame.rotations.get_mut(k) {
+                    *q = parent.map_or(new_world[k], |p| (p.inverse() * new_world[k]).normalize());
+                }
+                if j.parent.is_some()
+                    && let Some(t) = frame.translations.get_mut(k)
+                {
+                    *t = turns[k] * *t;
+                }
+            }
+        }
+        for (k, j) in self.joints.iter_mut().enumerate() {
+            if j.parent.is_some() {
+                j.offset = turns[k] * j.offset;
+            }
+        }
+    }
+
     /// World positions of every joint at rest.
     pub fn rest_positions(&self) -> Vec<DVec3> {
         self.world(&self.rest_frame())

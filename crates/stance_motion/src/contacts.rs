@@ -1,22 +1,115 @@
-//! Foot contacts: when a foot rests on the floor (low and slow), and how firmly each frame
-//! holds it (ease-in and ease-out weights, so a constraint never pops on or off).
+//! Contacts with the ground: when a part of the body rests on it (low and still), and how
+//! firmly each frame holds it (ease-in and ease-out weights, so a constraint never pops on or
+//! off).
+//!
+//! Detection works on the clip's own motion (metres, H-Anim frame), one point track per part
+//! that can touch the ground ([`ContactPart`]: the heel and the ball of each foot, the hands,
+//! the knees, the pelvis):
+//!
+//! 1. **Reference frames** at the start (a T-pose or an A-pose followed by a cut or a blend
+//!    into the motion, as the cgspeed releases of the CMU database have) are left out
+//!    ([`reference_frames`]).
+//! 2. **The ground** near each frame is a robust statistic, not the minimum: the 10th
+//!    percentile, within half a second, of the lowest point of the body (each part's point
+//!    less its clearance, [`ContactPart::clearance`]), so that a stray frame does not set it,
+//!    and each contact finds its own floor (slopes, steps).
+//! 3. A point is **low** within `height` of that ground and **still** while its horizontal
+//!    speed, measured over `window` seconds (a central difference, so that 120-240 fps capture
+//!    noise does not break a stance), is at most `speed`.
+//! 4. **Thresholds scale** with the body and the clip: `height` and `speed` are given for a
+//!    leg (hip to ankle) of [`REFERENCE_LEG`] and scale with the clip's leg; `speed` also
+//!    scales with the clip's pace (its median root speed) over [`REFERENCE_PACE`] (runs). Runs of
+//!    low and still frames shorter than `min_duration` are dropped, gaps shorter than the
+//!    window are bridged.
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-/// Thresholds of the contact detection (all editable; defaults suit walks and runs).
+use crate::clip::Clip;
+
+/// The leg length (hip to ankle, m) for which [`ContactSettings::height`] and
+/// [`ContactSettings::speed`] are given; a clip's thresholds scale with its own leg.
+pub const REFERENCE_LEG: f64 = 0.9;
+/// The pace (median horizontal root speed, m/s) up to which [`ContactSettings::speed`] holds
+/// as given; a faster clip (a run) scales it up in proportion to its pace.
+pub const REFERENCE_PACE: f64 = 1.2;
+/// Half the width of the window over which the ground is taken (s).
+const GROUND_WINDOW: f64 = 0.5;
+
+/// A part of the body that can rest on the ground.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactPart {
+    /// The heel: the sole below the ankle, at its back.
+    Heel,
+    /// The ball of the foot (the metatarsophalangeal joints), on the sole.
+    Ball,
+    /// The hand (the wrist's centre).
+    Hand,
+    /// The knee.
+    Knee,
+    /// The pelvis (between the hip joints): sitting on the floor.
+    Pelvis,
+}
+
+impl ContactPart {
+    /// Every part, feet first.
+    pub const ALL: [ContactPart; 5] = [
+        ContactPart::Heel,
+        ContactPart::Ball,
+        ContactPart::Hand,
+        ContactPart::Knee,
+        ContactPart::Pelvis,
+    ];
+
+    /// Whether the part is a point of a foot's sole.
+    pub fn is_foot(self) -> bool {
+        matches!(self, ContactPart::Heel | ContactPart::Ball)
+    }
+
+    /// How high the part's point is above the ground it rests on, as a share of the leg
+    /// (hip to ankle): 0 for the sole's points, the wrist's centre over the palm, the knee's
+    /// centre over the kneecap, the hip joints over the seat.
+    pub fn clearance(self) -> f64 {
+        match self {
+            ContactPart::Heel | ContactPart::Ball => 0.0,
+            ContactPart::Hand => 0.04,
+            ContactPart::Knee => 0.07,
+            ContactPart::Pelvis => 0.12,
+        }
+    }
+
+    /// The part in words.
+    pub fn label(self) -> &'static str {
+        match self {
+            ContactPart::Heel => "heel",
+            ContactPart::Ball => "ball of the foot",
+            ContactPart::Hand => "hand",
+            ContactPart::Knee => "knee",
+            ContactPart::Pelvis => "pelvis",
+        }
+    }
+}
+
+/// Thresholds of the contact detection (all editable; defaults suit walks, runs and jumps).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct ContactSettings {
-    /// A foot joint at most this high above its height standing at rest is low enough (m,
-    /// default 0.05).
+    /// A point at most this high above the ground is low enough (m for a leg of
+    /// [`REFERENCE_LEG`], scaled with the clip's leg; default 0.05).
     pub height: f64,
-    /// ... and moving horizontally at most this fast is still enough (m/s, default 0.35).
+    /// ... and moving horizontally at most this fast is still (m/s for a leg of
+    /// [`REFERENCE_LEG`] at a pace up to [`REFERENCE_PACE`], scaled with the clip's leg and
+    /// faster pace; default 0.35).
     pub speed: f64,
     /// Shortest contact kept (s, default 0.05).
     pub min_duration: f64,
-    /// Ease-in and ease-out time around a contact (s, default 0.1).
+    /// Ease-in and ease-out time around a contact (s, default 0.05).
     pub ease: f64,
+    /// Time over which speeds are measured (s, default 0.08).
+    pub window: f64,
+    /// Whether hands, knees and the pelvis get contacts too (default true); feet always do.
+    pub body_parts: bool,
 }
 
 impl Default for ContactSettings {
@@ -25,7 +118,9 @@ impl Default for ContactSettings {
             height: 0.05,
             speed: 0.35,
             min_duration: 0.05,
-            ease: 0.1,
+            ease: 0.05,
+            window: 0.08,
+            body_parts: true,
         }
     }
 }
@@ -33,77 +128,286 @@ impl Default for ContactSettings {
 impl ContactSettings {
     /// The ease time in frames at `frame_time` seconds per frame.
     pub fn ease_frames(&self, frame_time: f64) -> usize {
-        let frames = self.ease / frame_time;
-        if frames.is_finite() && frames > 0.0 {
-            frames.round().min(1e6) as usize
+        frames_of(self.ease, frame_time)
+    }
+
+    /// The thresholds as they apply to a clip of this leg and pace.
+    pub fn thresholds(&self, scale: &ClipScale) -> Thresholds {
+        let s = if scale.leg.is_finite() && scale.leg > 0.0 {
+            scale.leg / REFERENCE_LEG
         } else {
-            0
+            1.0
+        };
+        let pace = if scale.pace.is_finite() {
+            scale.pace
+        } else {
+            0.0
+        };
+        Thresholds {
+            height: self.height * s,
+            speed: self.speed * s * (pace / REFERENCE_PACE).max(1.0),
         }
     }
 }
 
-/// One contact of a joint with the floor over a window of frames.
+/// `seconds` in whole frames of `frame_time` (0 when not finite or not positive).
+fn frames_of(seconds: f64, frame_time: f64) -> usize {
+    let frames = seconds / frame_time;
+    if frames.is_finite() && frames > 0.0 {
+        frames.round().min(1e6) as usize
+    } else {
+        0
+    }
+}
+
+/// The detection's thresholds as applied to one clip.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Thresholds {
+    /// Height above the ground (m).
+    pub height: f64,
+    /// Horizontal speed (m/s).
+    pub speed: f64,
+}
+
+/// What the detection needs to know of the clip as a whole.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct ClipScale {
+    /// Leg length, hip to knee to ankle at rest (m).
+    pub leg: f64,
+    /// Median horizontal speed of the root over the motion (m/s).
+    pub pace: f64,
+    /// First frame of the motion (the reference frames before it are left out).
+    pub start: usize,
+}
+
+/// The track of one point that can rest on the ground.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointTrack {
+    /// The H-Anim joint the point belongs to.
+    pub joint: String,
+    /// Which part.
+    pub part: ContactPart,
+    /// The point's offset in the joint's frame on the body being posed (what a contact
+    /// holds).
+    pub point: DVec3,
+    /// World positions of the point on the clip, per frame (m).
+    pub positions: Vec<DVec3>,
+}
+
+/// One contact of a point with the ground over a window of frames.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Contact {
     /// The H-Anim joint held (e.g. `l_talocrural`).
     pub joint: String,
+    /// Which part of the body.
+    pub part: ContactPart,
+    /// The point held, in the joint's frame (m).
+    pub point: DVec3,
     /// First frame of the contact.
     pub start: usize,
     /// Last frame of the contact (inclusive).
     pub end: usize,
-    /// Where the joint is held (m, H-Anim frame).
+    /// Where the point is held (m; on the clip as detected, on the body once retargeted).
     pub position: DVec3,
+    /// The ground under the contact: the median height of the point less its clearance over
+    /// the contact (m, on the clip).
+    pub floor: f64,
 }
 
-/// Contacts of one joint from its trajectory (`positions[f]`, m), its height standing at
-/// rest (`rest_height`, m) and the frame time (s). Frames that are low and slow form runs;
-/// runs shorter than `min_duration` are dropped; the joint is held at the mean horizontal
-/// position of its run, at the run's mean height but never below `rest_height`.
+/// The ground near each frame: the 10th percentile, within [`GROUND_WINDOW`] seconds and
+/// from `start` on, of the lowest of the tracks' points less their clearances (m).
+pub fn ground(tracks: &[PointTrack], frame_time: f64, scale: &ClipScale) -> Vec<f64> {
+    let n = tracks.iter().map(|t| t.positions.len()).min().unwrap_or(0);
+    let lowest: Vec<f64> = (0..n)
+        .map(|f| {
+            tracks
+                .iter()
+                .map(|t| t.positions[f].y - t.part.clearance() * scale.leg)
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect();
+    let half = frames_of(GROUND_WINDOW, frame_time).max(1);
+    let start = scale.start.min(n.saturating_sub(1));
+    let mut window = Vec::with_capacity(2 * half + 1);
+    (0..n)
+        .map(|f| {
+            let a = f.saturating_sub(half).max(start);
+            let b = (f + half).min(n - 1).max(a);
+            window.clear();
+            window.extend(lowest[a..=b].iter().copied().filter(|y| y.is_finite()));
+            if window.is_empty() {
+                return 0.0;
+            }
+            let k = window.len() / 10;
+            *window.select_nth_unstable_by(k, f64::total_cmp).1
+        })
+        .collect()
+}
+
+/// Horizontal speed of `positions` at each frame, over `half` frames on either side (within
+/// `start..`), m/s.
+fn speeds(positions: &[DVec3], start: usize, half: usize, frame_time: f64) -> Vec<f64> {
+    let n = positions.len();
+    (0..n)
+        .map(|f| {
+            let a = f.saturating_sub(half).max(start.min(f));
+            let b = (f + half).min(n - 1);
+            if b <= a {
+                return 0.0;
+            }
+            let d = positions[b] - positions[a];
+            DVec3::new(d.x, 0.0, d.z).length() / (frame_time * (b - a) as f64)
+        })
+        .collect()
+}
+
+/// The contacts of every track (see the module documentation); each holds its point at its
+/// mean position over the contact (on the clip; the retargeting places it on the body).
 pub fn detect_contacts(
-    joint: &str,
-    positions: &[DVec3],
-    rest_height: f64,
+    tracks: &[PointTrack],
     frame_time: f64,
+    scale: &ClipScale,
     settings: &ContactSettings,
 ) -> Vec<Contact> {
-    let n = positions.len();
-    let speed = |f: usize| -> f64 {
-        let (a, b) = match (f.checked_sub(1), f + 1 < n) {
-            (Some(p), true) => (p, f + 1),
-            (Some(p), false) => (p, f),
-            (None, true) => (f, f + 1),
-            (None, false) => return 0.0,
-        };
-        let d = positions[b] - positions[a];
-        DVec3::new(d.x, 0.0, d.z).length() / (frame_time * (b - a) as f64)
-    };
-    let low =
-        |f: usize| positions[f].y - rest_height <= settings.height && speed(f) <= settings.speed;
-    let min_frames = (settings.min_duration / frame_time).round().max(1.0) as usize;
+    let limits = settings.thresholds(scale);
+    let ground = ground(tracks, frame_time, scale);
+    let half = frames_of(settings.window * 0.5, frame_time).max(1);
+    let min_frames = frames_of(settings.min_duration, frame_time).max(1);
     let mut contacts = Vec::new();
-    let mut f = 0;
-    while f < n {
-        if !low(f) {
-            f += 1;
-            continue;
+    for track in tracks {
+        let positions = &track.positions[..ground.len().min(track.positions.len())];
+        let clearance = track.part.clearance() * scale.leg;
+        let speed = speeds(positions, scale.start, half, frame_time);
+        let rest = |f: usize| {
+            f >= scale.start
+                && positions[f].y - clearance - ground[f] <= limits.height
+                && speed[f] <= limits.speed
+        };
+        let mut runs: Vec<(usize, usize)> = Vec::new();
+        let mut f = 0;
+        while f < positions.len() {
+            if !rest(f) {
+                f += 1;
+                continue;
+            }
+            let start = f;
+            while f < positions.len() && rest(f) {
+                f += 1;
+            }
+            match runs.last_mut() {
+                Some(last) if start - last.1 <= half => last.1 = f - 1,
+                _ => runs.push((start, f - 1)),
+            }
         }
-        let start = f;
-        while f < n && low(f) {
-            f += 1;
-        }
-        let end = f - 1;
-        if end + 1 - start >= min_frames {
+        for (start, end) in runs {
+            // The run's own floor (its lower quartile); frames at either end that have
+            // risen over a third of `height` above it are no longer resting (a heel lifting
+            // while the ball holds, a ball lifting after the heel strike).
+            let mut heights: Vec<f64> = positions[start..=end]
+                .iter()
+                .map(|p| p.y - clearance)
+                .collect();
+            let quarter = heights.len() / 4;
+            let floor = *heights.select_nth_unstable_by(quarter, f64::total_cmp).1;
+            let up = |f: usize| positions[f].y - clearance - floor > limits.height / 3.0;
+            let (mut start, mut end) = (start, end);
+            while start < end && up(start) {
+                start += 1;
+            }
+            while end > start && up(end) {
+                end -= 1;
+            }
+            if end + 1 - start < min_frames {
+                continue;
+            }
             let run = &positions[start..=end];
             let mean = run.iter().copied().sum::<DVec3>() / run.len() as f64;
             contacts.push(Contact {
-                joint: joint.to_owned(),
+                joint: track.joint.clone(),
+                part: track.part,
+                point: track.point,
                 start,
                 end,
-                position: DVec3::new(mean.x, mean.y.max(rest_height), mean.z),
+                position: mean,
+                floor,
             });
         }
     }
     contacts
+}
+
+/// The frames at the start of `clip` that are a reference rather than motion: a T-pose or an
+/// A-pose (both upper arms at most 55 degrees below horizontal, both legs straight within 15
+/// degrees) from the first frame on, when it ends in a cut or a blend into the motion (a
+/// frame-to-frame change of the joints' rotations over three times the clip's median), then
+/// the frames of that blend (at most a second). 0 when the clip starts in motion or lacks
+/// the arms and legs to tell.
+pub fn reference_frames(clip: &Clip) -> usize {
+    let n = clip.frames.len();
+    let names = [
+        "l_shoulder",
+        "l_elbow",
+        "r_shoulder",
+        "r_elbow",
+        "l_hip",
+        "l_knee",
+        "l_talocrural",
+        "r_hip",
+        "r_knee",
+        "r_talocrural",
+    ];
+    let Some(joints) = names
+        .iter()
+        .map(|name| clip.joint_of(name))
+        .collect::<Option<Vec<usize>>>()
+    else {
+        return 0;
+    };
+    if n < 3 {
+        return 0;
+    }
+    let reference_pose = |f: usize| {
+        let w = clip.world(&clip.frames[f]);
+        let at = |k: usize| w.get(joints[k]).map_or(DVec3::ZERO, |x| x.1);
+        let arm_up = |s: usize, e: usize| {
+            let d = (at(e) - at(s)).normalize_or_zero();
+            (-d.y).asin().to_degrees() <= 55.0
+        };
+        let straight = |h: usize, k: usize, a: usize| {
+            (at(k) - at(h)).angle_between(at(a) - at(k)).to_degrees() <= 15.0
+        };
+        arm_up(0, 1) && arm_up(2, 3) && straight(4, 5, 6) && straight(7, 8, 9)
+    };
+    let mapped: Vec<usize> = (0..clip.joints.len())
+        .filter(|&j| clip.mapping.hanim_of(j).is_some())
+        .collect();
+    let change = |f: usize| -> f64 {
+        let (a, b) = (&clip.frames[f - 1], &clip.frames[f]);
+        mapped
+            .iter()
+            .map(|&j| match (a.rotations.get(j), b.rotations.get(j)) {
+                (Some(p), Some(q)) => p.angle_between(*q),
+                _ => 0.0,
+            })
+            .sum()
+    };
+    let changes: Vec<f64> = (1..n).map(change).collect();
+    let mut sorted = changes.clone();
+    sorted.sort_by(f64::total_cmp);
+    let sharp = 3.0 * sorted[sorted.len() / 2];
+    let limit = frames_of(2.0, clip.frame_time).clamp(1, n / 2);
+    let mut start = 0;
+    while start < limit && reference_pose(start) {
+        start += 1;
+    }
+    if start == 0 || start >= limit || changes[start - 1] <= sharp {
+        return 0;
+    }
+    let blend_end = (start + frames_of(1.0, clip.frame_time)).min(n / 2);
+    while start < blend_end && changes[start - 1] > sharp {
+        start += 1;
+    }
+    start
 }
 
 /// How much a contact holds at `frame`: 1 inside it, easing to 0 over `ease_frames` on both
@@ -127,29 +431,57 @@ pub fn contact_weight(contact: &Contact, frame: usize, ease_frames: usize) -> f6
 mod tests {
     use super::*;
 
+    fn track(positions: Vec<DVec3>) -> PointTrack {
+        PointTrack {
+            joint: "l_talocrural".into(),
+            part: ContactPart::Heel,
+            point: DVec3::ZERO,
+            positions,
+        }
+    }
+
+    fn scale(leg: f64) -> ClipScale {
+        ClipScale {
+            leg,
+            pace: 0.0,
+            start: 0,
+        }
+    }
+
     #[test]
-    fn a_foot_that_stops_on_the_floor_is_one_contact_held_where_it_rested() {
-        // 1 m/s swing, rest 10 frames at x = 0.5 on the floor, swing again.
+    fn a_heel_that_stops_on_the_floor_is_one_contact_held_where_it_rested() {
+        // 1 m/s swing 12 cm up, rest 20 frames at x = 0.5 on the floor, swing again; the
+        // other foot stands on the floor throughout (it sets the ground).
         let dt = 0.01;
         let mut p = Vec::new();
-        for f in 0..10 {
-            p.push(DVec3::new(f as f64 * 0.05, 0.2, 0.0));
+        for f in 0..20 {
+            p.push(DVec3::new(f as f64 * 0.025, 0.12, 0.0));
         }
-        for _ in 0..10 {
-            p.push(DVec3::new(0.5, 0.08, 0.0));
+        for _ in 0..20 {
+            p.push(DVec3::new(0.5, 0.0, 0.0));
         }
-        for f in 0..10 {
-            p.push(DVec3::new(0.5 + f as f64 * 0.05, 0.2, 0.0));
+        for f in 0..20 {
+            p.push(DVec3::new(0.5 + f as f64 * 0.025, 0.12, 0.0));
         }
-        let c = detect_contacts("l_talocrural", &p, 0.08, dt, &ContactSettings::default());
-        assert_eq!(c.len(), 1);
-        // Frame 10 moves 2.5 m/s by the central difference: not in contact. Frame 19 is
-        // still (frame 20 lifts off straight up) and low: in contact.
-        assert_eq!((c[0].start, c[0].end), (11, 19));
-        assert!((c[0].position - DVec3::new(0.5, 0.08, 0.0)).length() < 1e-12);
-        assert_eq!(contact_weight(&c[0], 15, 5), 1.0);
-        assert_eq!(contact_weight(&c[0], 5, 5), 0.0);
-        let w: Vec<f64> = (5..=11).map(|f| contact_weight(&c[0], f, 5)).collect();
+        let standing = PointTrack {
+            joint: "r_talocrural".into(),
+            ..track(vec![DVec3::new(0.0, 0.0, 0.3); 60])
+        };
+        let s = ContactSettings {
+            window: 0.02,
+            ..ContactSettings::default()
+        };
+        let c = detect_contacts(&[track(p), standing], dt, &scale(0.9), &s);
+        let left: Vec<&Contact> = c.iter().filter(|c| c.joint == "l_talocrural").collect();
+        assert_eq!(left.len(), 1, "{c:?}");
+        // The central difference over one frame each side: frame 20 moves 1.25 m/s, frame
+        // 39 is still (frame 40 lifts off straight up, 12 cm: too high).
+        assert_eq!((left[0].start, left[0].end), (21, 39));
+        assert!((left[0].position - DVec3::new(0.5, 0.0, 0.0)).length() < 1e-12);
+        assert_eq!(left[0].floor, 0.0);
+        assert_eq!(contact_weight(left[0], 30, 5), 1.0);
+        assert_eq!(contact_weight(left[0], 10, 5), 0.0);
+        let w: Vec<f64> = (15..=21).map(|f| contact_weight(left[0], f, 5)).collect();
         assert!(w.windows(2).all(|p| p[0] < p[1]), "{w:?}");
     }
 
@@ -157,16 +489,51 @@ mod tests {
     fn a_low_but_sliding_foot_and_a_short_touch_are_no_contacts() {
         let dt = 1.0 / 30.0;
         let slide: Vec<DVec3> = (0..20)
-            .map(|f| DVec3::new(f as f64 * 0.05, 0.08, 0.0))
+            .map(|f| DVec3::new(f as f64 * 0.05, 0.0, 0.0))
             .collect();
-        assert!(detect_contacts("l", &slide, 0.08, dt, &ContactSettings::default()).is_empty());
+        assert!(
+            detect_contacts(
+                &[track(slide)],
+                dt,
+                &scale(0.9),
+                &ContactSettings::default()
+            )
+            .is_empty()
+        );
         let mut touch = vec![DVec3::new(0.0, 0.3, 0.0); 10];
-        touch[5] = DVec3::new(0.0, 0.08, 0.0);
+        touch[5] = DVec3::new(0.0, 0.0, 0.0);
         let s = ContactSettings {
             speed: 100.0,
             min_duration: 0.1,
             ..Default::default()
         };
-        assert!(detect_contacts("l", &touch, 0.08, dt, &s).is_empty());
+        // The other foot stands on the ground; the touch is one frame long.
+        let standing = PointTrack {
+            joint: "r_talocrural".into(),
+            ..track(vec![DVec3::ZERO; 10])
+        };
+        let c = detect_contacts(&[track(touch), standing], dt, &scale(0.9), &s);
+        assert!(c.iter().all(|c| c.joint == "r_talocrural"), "{c:?}");
+        assert_eq!(c.len(), 1);
+    }
+
+    #[test]
+    fn thresholds_scale_with_the_leg_and_rise_with_the_pace() {
+        let s = ContactSettings::default();
+        let t = s.thresholds(&ClipScale {
+            leg: 0.45,
+            pace: 0.0,
+            start: 0,
+        });
+        assert!((t.height - 0.025).abs() < 1e-12 && (t.speed - 0.175).abs() < 1e-12);
+        let run = s.thresholds(&ClipScale {
+            leg: 0.9,
+            pace: 4.0,
+            start: 0,
+        });
+        assert!(
+            (run.speed - 0.35 * 4.0 / REFERENCE_PACE).abs() < 1e-12,
+            "{run:?}"
+        );
     }
 }

@@ -24,5 +24,5 @@ pub use clip::{Clip, ClipError, ClipFrame, ClipJoint};
 pub mod contacts;
 pub mod retarget;
 
-pub use contacts::{Contact, ContactSettings};
+pub use contacts::{Contact, ContactPart, ContactSettings};
 pub use retarget::{MotionError, RestMatch, RetargetOptions, Retargeted, retarget};

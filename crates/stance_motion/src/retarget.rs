@@ -9,12 +9,13 @@
 //! 2. **Root motion** scaled by hip height (hips above the ankles, target over source); the
 //!    lowest ankle of the clip lands at the target's ankle height standing at rest.
 //! 3. The result is the **plain rotation copy** (what three.js's `retargetClip` does).
-//! 4. **Tasks over time**: foot contacts (detected on the copy, [`crate::contacts`]) as
-//!    level-1 position tasks eased in and out, the root's path at level 2, the wrists at
-//!    level 3, and the copied frame as the reference of a posture task at level 4 (the
-//!    original motion as the null-space attraction). Each frame starts from the previous
-//!    solution: the previous frame's correction of the copy is carried onto this frame's
-//!    copy.
+//! 4. **Tasks over time**: contacts with the ground (detected on the clip,
+//!    [`crate::contacts`]: the heel and the ball of each foot, hands, knees, pelvis) as
+//!    level-1 position tasks on those points eased in and out, the root's path at level 2,
+//!    the wrists at level 3, and the copied frame as the reference of a posture task at
+//!    level 4 (the original motion as the null-space attraction: the foot's roll about a
+//!    held heel or ball is the clip's). Each frame starts from the previous solution: the
+//!    previous frame's correction of the copy is carried onto this frame's copy.
 
 mod copy;
 mod report;
@@ -24,14 +25,19 @@ use stance_hanim::HumanoidSkeleton;
 use stance_ik::{Frames, IkError, Iteration, Posture, Solver, SolverSettings, Task};
 
 use crate::clip::{Clip, ClipError};
-use crate::contacts::{Contact, ContactSettings, contact_weight, detect_contacts};
+use crate::contacts::{
+    ClipScale, Contact, ContactPart, ContactSettings, PointTrack, Thresholds, contact_weight,
+    detect_contacts, reference_frames,
+};
 pub use copy::{Placement, RestMatch, RotationCopy};
 pub use report::{
     ContactMetrics, Deviation, Metrics, Smoothness, contact_metrics, deviation, metrics, smoothness,
 };
 
-/// The H-Anim feet held by contacts.
+/// The H-Anim feet (ankles) whose heel and ball are held by contacts.
 pub const CONTACT_JOINTS: [&str; 2] = ["l_talocrural", "r_talocrural"];
+/// The H-Anim knees held by contacts.
+const KNEES: [&str; 2] = ["l_knee", "r_knee"];
 /// The H-Anim wrists kept at level 3.
 const WRISTS: [&str; 2] = ["l_radiocarpal", "r_radiocarpal"];
 
@@ -128,6 +134,11 @@ pub struct Retargeted {
     pub copy: Vec<Posture>,
     /// The contacts held.
     pub contacts: Vec<Contact>,
+    /// Frames at the start left out of the contacts as a reference pose
+    /// ([`crate::contacts::reference_frames`]).
+    pub reference_frames: usize,
+    /// The contact thresholds as applied to this clip (scaled with its leg and pace).
+    pub thresholds: Thresholds,
     /// The levels of the problem, in order.
     pub levels: Vec<u32>,
     /// Per frame, per level: the residual norm after the solve (m or rad; 0 where the level
@@ -169,23 +180,52 @@ pub fn retarget(
         return Err(MotionError::Empty);
     }
     let copier = RotationCopy::new(clip, target, options)?;
-    let copy: Vec<Posture> = (0..clip.frame_count())
-        .map(|f| copier.frame(clip, target, f))
-        .collect::<Result<_, _>>()?;
-    let contacts = match options.contacts {
-        Some(settings) => held_contacts(clip, target, &copy, &copier.placement, &settings),
-        None => Vec::new(),
+    let mut copier = copier;
+    let copy_all = |copier: &RotationCopy| -> Result<Vec<Posture>, MotionError> {
+        (0..clip.frame_count())
+            .map(|f| copier.frame(clip, target, f))
+            .collect()
     };
+    let mut copy = copy_all(&copier)?;
+    let reference = reference_frames(clip);
+    let mut notes = copier.notes.clone();
+    let (contacts, thresholds) = match options.contacts {
+        Some(settings) => {
+            let mut found =
+                held_contacts(clip, target, &copy, &copier.placement, reference, &settings);
+            // The stride: the horizontal root scale under which the copy's feet slide least
+            // over their contacts, when the user gave no root scale.
+            if options.root_scale.is_none()
+                && let Some(stride) =
+                    stride_scale(clip, target, &copy, &copier.placement, &found.contacts)
+            {
+                copier.placement.stride_scale = stride;
+                copy = copy_all(&copier)?;
+                found = held_contacts(clip, target, &copy, &copier.placement, reference, &settings);
+            }
+            notes.extend(found.notes);
+            (found.contacts, found.thresholds)
+        }
+        None => (Vec::new(), Thresholds::default()),
+    };
+    if reference > 0 {
+        notes.push(format!(
+            "the first {reference} frame(s) are a reference pose (a T-pose or an A-pose and \
+             the blend out of it): left out of the contacts and the floor"
+        ));
+    }
     let mut out = Retargeted {
         postures: Vec::with_capacity(copy.len()),
         copy,
         contacts,
+        reference_frames: reference,
+        thresholds,
         levels: vec![CONTACT_LEVEL, ROOT_LEVEL, WRIST_LEVEL, POSTURE_LEVEL],
         residuals: Vec::new(),
         iterations: 0,
         frame_time: clip.frame_time,
         placement: copier.placement,
-        notes: copier.notes.clone(),
+        notes,
     };
     if options.contacts.is_none() {
         out.postures = out.copy.clone();
@@ -199,52 +239,419 @@ pub fn retarget(
     Ok(out)
 }
 
-/// The contacts of the clip's own feet (detected on the clip, so that every target gets the
-/// same ones: low and slow as the clip moves), each held where the copy puts that foot on
-/// average over the contact, never below the target's ankle height.
+/// The contacts found on a clip and held on a body.
+struct Found {
+    contacts: Vec<Contact>,
+    thresholds: Thresholds,
+    notes: Vec<String>,
+}
+
+/// Leg length (hip to knee to ankle, both sides' mean) from rest positions by H-Anim name.
+fn leg_length(at: impl Fn(&str) -> Option<DVec3>) -> Option<f64> {
+    let legs: Vec<f64> = ["l", "r"]
+        .iter()
+        .filter_map(|s| {
+            let (h, k, a) = (
+                at(&format!("{s}_hip"))?,
+                at(&format!("{s}_knee"))?,
+                at(&format!("{s}_talocrural"))?,
+            );
+            Some((k - h).length() + (a - k).length())
+        })
+        .filter(|l| *l > 1e-3)
+        .collect();
+    (!legs.is_empty()).then(|| legs.iter().sum::<f64>() / legs.len() as f64)
+}
+
+/// The heel and ball of the foot whose ankle is `ankle` (offsets in its rest frame) from the
+/// rest positions of a skeleton given as (name, parent, position) rows.
+fn foot_points(
+    ankle: usize,
+    parents: &[Option<usize>],
+    rest: &[DVec3],
+    toe: Option<usize>,
+    leg: f64,
+) -> [DVec3; 2] {
+    let below = |mut j: usize| {
+        while let Some(p) = parents[j] {
+            if p == ankle {
+                return true;
+            }
+            j = p;
+        }
+        false
+    };
+    let foot: Vec<DVec3> = (0..rest.len())
+        .filter(|&j| below(j))
+        .map(|j| rest[j] - rest[ankle])
+        .collect();
+    let toes: Vec<DVec3> = toe
+        .filter(|&t| below(t))
+        .map(|t| rest[t] - rest[ankle])
+        .into_iter()
+        .collect();
+    stance_hanim::anatomy::heel_and_ball(&toes, &foot, leg)
+}
+
+/// Where a part's point is on each skeleton: the joint carrying it on the target with the
+/// point's offset there, and how to find it on the clip (a clip joint and offset in its
+/// frame, or the midpoint of the hips for the pelvis).
+struct PartPoint {
+    part: ContactPart,
+    target_joint: usize,
+    target_point: DVec3,
+    clip: ClipPoint,
+}
+
+enum ClipPoint {
+    Joint(usize, DVec3),
+    Between(usize, usize),
+}
+
+/// The points that can rest on the ground, on both skeletons (parts the clip or the target
+/// lacks are left out).
+fn part_points(
+    clip: &Clip,
+    target: &HumanoidSkeleton,
+    settings: &ContactSettings,
+) -> Vec<PartPoint> {
+    let skeleton = &target.skeleton;
+    let target_rest = Frames::new(skeleton, &Posture::rest(skeleton)).joint_position;
+    let target_parents: Vec<Option<usize>> = skeleton.joints().iter().map(|j| j.parent).collect();
+    let clip_rest = clip.rest_positions();
+    let clip_parents: Vec<Option<usize>> = clip.joints.iter().map(|j| j.parent).collect();
+    let target_at = |n: &str| skeleton.joint_index(n).map(|j| target_rest[j]);
+    let clip_at = |n: &str| clip.joint_of(n).and_then(|j| clip_rest.get(j).copied());
+    let target_leg = leg_length(target_at).unwrap_or(0.9);
+    let clip_leg = leg_length(clip_at).unwrap_or(0.9);
+    let mut points = Vec::new();
+    for (side, ankle) in ["l", "r"].iter().zip(CONTACT_JOINTS) {
+        let (Some(t), Some(c)) = (skeleton.joint_index(ankle), clip.joint_of(ankle)) else {
+            continue;
+        };
+        let toe = format!("{side}_metatarsophalangeal_2");
+        let on_target = foot_points(
+            t,
+            &target_parents,
+            &target_rest,
+            skeleton.joint_index(&toe),
+            target_leg,
+        );
+        let on_clip = foot_points(c, &clip_parents, &clip_rest, clip.joint_of(&toe), clip_leg);
+        for (k, part) in [ContactPart::Heel, ContactPart::Ball]
+            .into_iter()
+            .enumerate()
+        {
+            points.push(PartPoint {
+                part,
+                target_joint: t,
+                target_point: on_target[k],
+                clip: ClipPoint::Joint(c, on_clip[k]),
+            });
+        }
+    }
+    if !settings.body_parts {
+        return points;
+    }
+    for (part, names) in [(ContactPart::Hand, WRISTS), (ContactPart::Knee, KNEES)] {
+        for name in names {
+            if let (Some(t), Some(c)) = (skeleton.joint_index(name), clip.joint_of(name)) {
+                points.push(PartPoint {
+                    part,
+                    target_joint: t,
+                    target_point: DVec3::ZERO,
+                    clip: ClipPoint::Joint(c, DVec3::ZERO),
+                });
+            }
+        }
+    }
+    let hips = |idx: &dyn Fn(&str) -> Option<usize>| Some((idx("l_hip")?, idx("r_hip")?));
+    if let (Some((tl, tr)), Some((cl, cr))) = (
+        hips(&|n| skeleton.joint_index(n)),
+        hips(&|n| clip.joint_of(n)),
+    ) && let Some(pelvis) = target_parents[tl]
+    {
+        points.push(PartPoint {
+            part: ContactPart::Pelvis,
+            target_joint: pelvis,
+            target_point: (target_rest[tl] + target_rest[tr]) * 0.5 - target_rest[pelvis],
+            clip: ClipPoint::Between(cl, cr),
+        });
+    }
+    points
+}
+
+/// The contacts of the clip (detected on the clip, so that every target gets the same ones),
+/// each held on the target where the copy puts its point (its mean over the contact, or, for
+/// a heel or ball that lands while the other point of that foot is held, at the copy's
+/// distance from it), at the target's own standing height for that point over the contact's
+/// floor.
 fn held_contacts(
     clip: &Clip,
     target: &HumanoidSkeleton,
     copy: &[Posture],
     placement: &Placement,
+    reference: usize,
     settings: &ContactSettings,
-) -> Vec<Contact> {
+) -> Found {
     let skeleton = &target.skeleton;
-    let feet: Vec<(&str, usize, usize)> = CONTACT_JOINTS
+    let points = part_points(clip, target, settings);
+    // Every point's track on the clip, and the root's (hips' midpoint) for the pace.
+    let worlds: Vec<Vec<(glam::DQuat, DVec3)>> =
+        clip.frames.iter().map(|f| clip.world(f)).collect();
+    let clip_point = |w: &[(glam::DQuat, DVec3)], p: &ClipPoint| match *p {
+        ClipPoint::Joint(j, offset) => w.get(j).map_or(DVec3::ZERO, |x| x.1 + x.0 * offset),
+        ClipPoint::Between(a, b) => match (w.get(a), w.get(b)) {
+            (Some(a), Some(b)) => (a.1 + b.1) * 0.5,
+            _ => DVec3::ZERO,
+        },
+    };
+    let tracks: Vec<PointTrack> = points
         .iter()
-        .filter_map(|&foot| Some((foot, clip.joint_of(foot)?, skeleton.joint_index(foot)?)))
-        .collect();
-    // Both feet's tracks in one pass: on the clip (for the detection) and on the target's
-    // copy (where each contact is held).
-    let on_clip: Vec<Vec<DVec3>> = clip
-        .frames
-        .iter()
-        .map(|f| {
-            let world = clip.world(f);
-            feet.iter()
-                .map(|&(_, s, _)| world.get(s).map_or(DVec3::ZERO, |x| x.1))
-                .collect()
+        .map(|p| PointTrack {
+            joint: skeleton.joints()[p.target_joint].name.clone(),
+            part: p.part,
+            point: p.target_point,
+            positions: worlds.iter().map(|w| clip_point(w, &p.clip)).collect(),
         })
         .collect();
-    let joints: Vec<usize> = feet.iter().map(|&(_, _, j)| j).collect();
-    let on_target = joint_positions(target, copy, &joints);
-    let mut contacts = Vec::new();
-    for (i, &(foot, _, _)) in feet.iter().enumerate() {
-        let track: Vec<DVec3> = on_clip.iter().map(|f| f[i]).collect();
-        for mut c in detect_contacts(
-            foot,
-            &track,
-            placement.lowest_ankle,
-            clip.frame_time,
-            settings,
-        ) {
-            let run = &on_target[c.start..=c.end.min(on_target.len() - 1)];
-            let mean = run.iter().map(|p| p[i]).sum::<DVec3>() / run.len().max(1) as f64;
-            c.position = DVec3::new(mean.x, mean.y.max(placement.ankle_height), mean.z);
-            contacts.push(c);
+    let clip_rest = clip.rest_positions();
+    let clip_leg =
+        leg_length(|n| clip.joint_of(n).and_then(|j| clip_rest.get(j).copied())).unwrap_or(0.9);
+    let root: Vec<DVec3> = match (clip.joint_of("l_hip"), clip.joint_of("r_hip")) {
+        (Some(a), Some(b)) => worlds
+            .iter()
+            .map(|w| clip_point(w, &ClipPoint::Between(a, b)))
+            .collect(),
+        _ => worlds
+            .iter()
+            .map(|w| w.first().map_or(DVec3::ZERO, |x| x.1))
+            .collect(),
+    };
+    let pace = pace(&root, reference, clip.frame_time);
+    let scale = ClipScale {
+        leg: clip_leg,
+        pace,
+        start: reference,
+    };
+    let thresholds = settings.thresholds(&scale);
+    let mut contacts = detect_contacts(&tracks, clip.frame_time, &scale, settings);
+    contacts.sort_by_key(|c| c.start);
+    // Each point's own floor over the clip (the 10th percentile of its height less its
+    // clearance, the reference frames left out), against which a contact's floor is
+    // measured: the height of the step it stands on.
+    let own_floor = |c: &Contact| -> f64 {
+        let Some(track) = tracks
+            .iter()
+            .find(|t| t.joint == c.joint && t.part == c.part)
+        else {
+            return c.floor;
+        };
+        let clearance = c.part.clearance() * clip_leg;
+        let mut heights: Vec<f64> = track
+            .positions
+            .iter()
+            .skip(reference)
+            .map(|p| p.y - clearance)
+            .collect();
+        if heights.is_empty() {
+            return c.floor;
+        }
+        let k = heights.len() / 10;
+        *heights.select_nth_unstable_by(k, f64::total_cmp).1
+    };
+    // On the target: the copy's points over each contact, the standing height of each point.
+    let target_rest = Frames::new(skeleton, &Posture::rest(skeleton));
+    let target_leg = leg_length(|n| {
+        skeleton
+            .joint_index(n)
+            .map(|j| target_rest.joint_position[j])
+    })
+    .unwrap_or(0.9);
+    let target_floor = {
+        let soles: Vec<f64> = points
+            .iter()
+            .filter(|p| p.part.is_foot())
+            .map(|p| target_rest.point(p.target_joint, p.target_point).y)
+            .collect();
+        if soles.is_empty() {
+            placement.ankle_height
+        } else {
+            soles.iter().sum::<f64>() / soles.len() as f64
+        }
+    };
+    let copy_frames: Vec<Frames> = copy.iter().map(|p| Frames::new(skeleton, p)).collect();
+    let on_copy = |c: &Contact, f: usize| {
+        let j = skeleton.joint_index(&c.joint).unwrap_or(0);
+        copy_frames
+            .get(f)
+            .map_or(DVec3::ZERO, |fr| fr.point(j, c.point))
+    };
+    let all = contacts.clone();
+    // The copy puts the clip's ankle floor (its lower ankle's) at the target's mean ankle
+    // height: its ground is that much above the target's rest ground.
+    let lift = CONTACT_JOINTS
+        .iter()
+        .filter_map(|n| skeleton.joint_index(n))
+        .map(|j| target_rest.joint_position[j].y)
+        .reduce(f64::min)
+        .map_or(0.0, |low| placement.ankle_height - low);
+    let mut held: Vec<Contact> = Vec::with_capacity(contacts.len());
+    for mut c in contacts {
+        let standing = lift
+            + if c.part.is_foot() {
+                let j = skeleton.joint_index(&c.joint).unwrap_or(0);
+                target_rest.point(j, c.point).y
+            } else {
+                target_floor + c.part.clearance() * target_leg
+            };
+        // The other point of the same foot, held when this one lands: this one is held where
+        // the copy's foot puts it from there, so that the two goals fit the foot.
+        let partner = held.iter().rev().find(|h| {
+            h.joint == c.joint
+                && h.part != c.part
+                && h.part.is_foot()
+                && c.part.is_foot()
+                && h.start <= c.start
+                && h.end >= c.start
+        });
+        c.position = match partner {
+            Some(h) => h.position + (on_copy(&c, c.start) - on_copy(h, c.start)),
+            None => {
+                // The first point of a stance: where the copy lands it, moved by the copy's
+                // mean slide over the whole stance (this contact and those of the foot's
+                // other point that follow on from it), so that the held foot is as far from
+                // the copy's at its landing as at its lift-off.
+                let mut end = c.end;
+                for o in contacts_after(&all, &c) {
+                    end = end.max(o.end);
+                }
+                let end = end.min(copy.len().saturating_sub(1)).max(c.start);
+                let j = skeleton.joint_index(&c.joint).unwrap_or(0);
+                let origin = |f: usize| {
+                    copy_frames
+                        .get(f)
+                        .map_or(DVec3::ZERO, |fr| fr.joint_position[j])
+                };
+                let slide = (c.start..=end)
+                    .map(|f| origin(f) - origin(c.start))
+                    .sum::<DVec3>()
+                    / (end + 1 - c.start) as f64;
+                let at = on_copy(&c, c.start) + slide;
+                let y = standing + placement.root_scale * (c.floor - own_floor(&c)).max(0.0);
+                DVec3::new(at.x, y, at.z)
+            }
+        };
+        held.push(c);
+    }
+    let mut notes = Vec::new();
+    let travel = root
+        .iter()
+        .skip(reference)
+        .zip(root.iter().skip(reference + 1))
+        .map(|(a, b)| DVec3::new(b.x - a.x, 0.0, b.z - a.z).length())
+        .sum::<f64>();
+    if travel > clip_leg {
+        for (side, ankle) in ["left", "right"].iter().zip(CONTACT_JOINTS) {
+            if clip.joint_of(ankle).is_some() && !held.iter().any(|c| c.joint == ankle) {
+                notes.push(format!(
+                    "the clip moves ({travel:.1} m) but the {side} foot got no contact: raise \
+                     the contact height ({:.3} m, {:.3} m on this clip's legs) or speed ({:.2} \
+                     m/s, {:.2} m/s on this clip's legs and pace)",
+                    settings.height, thresholds.height, settings.speed, thresholds.speed
+                ));
+            }
         }
     }
-    contacts
+    Found {
+        contacts: held,
+        thresholds,
+        notes,
+    }
+}
+
+/// The horizontal root scale under which the copy's points in contact slide least: the
+/// copy moves a point over a contact by the root's displacement `R` (the clip's, times the
+/// scale) plus what the legs' rotations do `L` (the same under any scale), so the least
+/// squares scale is `-Σ L·R / Σ R·R`. `None` when the contacts hardly move the root (under a
+/// leg's length over all of them) or the fit is over half again or under half the root
+/// scale.
+fn stride_scale(
+    clip: &Clip,
+    target: &HumanoidSkeleton,
+    copy: &[Posture],
+    placement: &Placement,
+    contacts: &[Contact],
+) -> Option<f64> {
+    let skeleton = &target.skeleton;
+    let hips = (clip.joint_of("l_hip")?, clip.joint_of("r_hip")?);
+    let root = |f: usize| {
+        let w = clip.world(clip.frames.get(f)?);
+        let p = (w.get(hips.0)?.1 + w.get(hips.1)?.1) * 0.5;
+        Some(DVec3::new(p.x, 0.0, p.z))
+    };
+    let point = |c: &Contact, f: usize| {
+        let j = skeleton.joint_index(&c.joint)?;
+        let p = Frames::new(skeleton, copy.get(f)?).point(j, c.point);
+        Some(DVec3::new(p.x, 0.0, p.z))
+    };
+    let s0 = placement.stride_scale;
+    let (mut lr, mut rr) = (0.0, 0.0);
+    for c in contacts.iter().filter(|c| c.part.is_foot()) {
+        let r = root(c.end)? - root(c.start)?;
+        let d = point(c, c.end)? - point(c, c.start)?;
+        let l = d - r * s0;
+        lr += l.dot(r);
+        rr += r.dot(r);
+    }
+    let leg = leg_length(|n| {
+        let rest = clip.rest_positions();
+        clip.joint_of(n).and_then(|j| rest.get(j).copied())
+    })?;
+    if rr < leg * leg {
+        return None;
+    }
+    let s = -lr / rr;
+    (s.is_finite() && s > 0.5 * s0 && s < 1.5 * s0).then_some(s)
+}
+
+/// The contacts of the other point of `c`'s foot that follow on from it: each starts within
+/// the previous one (a ball contact starting within the heel's, a heel contact within that
+/// ball's...), in start order.
+fn contacts_after<'a>(all: &'a [Contact], c: &Contact) -> Vec<&'a Contact> {
+    let mut chain: Vec<&Contact> = Vec::new();
+    let mut end = c.end;
+    let mut from = c.start;
+    for o in all {
+        if o.joint == c.joint
+            && o.part.is_foot()
+            && c.part.is_foot()
+            && o.start > from
+            && o.start <= end
+        {
+            chain.push(o);
+            end = end.max(o.end);
+            from = o.start;
+        }
+    }
+    chain
+}
+
+/// Median horizontal speed of the root over the motion (from `start`), measured over a
+/// quarter of a second (m/s).
+fn pace(root: &[DVec3], start: usize, frame_time: f64) -> f64 {
+    let span = ((0.25 / frame_time).round() as usize).max(1);
+    let mut speeds: Vec<f64> = (start..root.len().saturating_sub(span))
+        .map(|f| {
+            let d = root[f + span] - root[f];
+            DVec3::new(d.x, 0.0, d.z).length() / (span as f64 * frame_time)
+        })
+        .collect();
+    if speeds.is_empty() {
+        return 0.0;
+    }
+    let k = speeds.len() / 2;
+    *speeds.select_nth_unstable_by(k, f64::total_cmp).1
 }
 
 /// The rotations the tasks above the posture level can move (the feet's, the root's and the
@@ -275,19 +682,40 @@ fn frame_tasks(
     let skeleton = &target.skeleton;
     let frames = Frames::new(skeleton, copy);
     let mut tasks = Vec::new();
-    for foot in CONTACT_JOINTS {
-        let Some(j) = skeleton.joint_index(foot) else {
+    // Per held point (joint and part), the firmest of its contacts at this frame.
+    let mut firmest: Vec<(&Contact, f64)> = Vec::new();
+    for c in contacts {
+        let w = contact_weight(c, frame, ease);
+        if w <= 0.0 {
+            continue;
+        }
+        match firmest
+            .iter_mut()
+            .find(|(h, _)| h.joint == c.joint && h.part == c.part)
+        {
+            Some(slot) if slot.1 < w => *slot = (c, w),
+            Some(_) => {}
+            None => firmest.push((c, w)),
+        }
+    }
+    // Firmest first: a point easing in or out on a foot whose other point is held more
+    // firmly eases from where the copy's foot puts it relative to that point's goal (not
+    // from the copy's own position), so that the goals fit the foot and it rolls about the
+    // held point as the clip's does.
+    firmest.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let mut goals: Vec<(&Contact, usize, DVec3)> = Vec::with_capacity(firmest.len());
+    for (c, w) in firmest {
+        let Some(j) = skeleton.joint_index(&c.joint) else {
             continue;
         };
-        let held = contacts
+        let own = frames.point(j, c.point);
+        let from = goals
             .iter()
-            .filter(|c| c.joint == foot)
-            .map(|c| (contact_weight(c, frame, ease), c.position))
-            .max_by(|a, b| a.0.total_cmp(&b.0));
-        if let Some((w, at)) = held.filter(|(w, _)| *w > 0.0) {
-            let goal = frames.joint_position[j].lerp(at, w);
-            tasks.push(Task::position(j, DVec3::ZERO, goal).at_level(CONTACT_LEVEL));
-        }
+            .find(|(h, k, _)| *k == j && h.part.is_foot() && c.part.is_foot())
+            .map_or(own, |(h, _, goal)| *goal + (own - frames.point(j, h.point)));
+        let goal = from.lerp(c.position, w);
+        goals.push((c, j, goal));
+        tasks.push(Task::position(j, c.point, goal).at_level(CONTACT_LEVEL));
     }
     tasks.push(Task::position(0, DVec3::ZERO, frames.joint_position[0]).at_level(ROOT_LEVEL));
     for wrist in WRISTS {
@@ -299,6 +727,12 @@ fn frame_tasks(
     tasks.push(Task::posture(copy.values().to_vec(), dofs.to_vec()).at_level(POSTURE_LEVEL));
     tasks
 }
+
+/// Iterations of the first frame's solve.
+const FIRST_FRAME_ITERATIONS: usize = 100;
+
+/// The contacts' residual (m) over which a frame is solved again from the copy.
+const RETRY_RESIDUAL: f64 = 1e-3;
 
 /// Solves every frame from the previous frame's correction of the copy.
 fn solve_frames(
@@ -316,6 +750,13 @@ fn solve_frames(
         stall_window: 2,
         ..SolverSettings::default()
     })?;
+    let mut first_solver = Solver::new(SolverSettings {
+        max_iterations: max_iterations.max(FIRST_FRAME_ITERATIONS),
+        tolerance: 1e-5,
+        iteration: Iteration::Guarded,
+        restarts: false,
+        ..SolverSettings::default()
+    })?;
     let dofs = posture_dofs(skeleton);
     let mut correction = vec![0.0; skeleton.dof_count()];
     for (f, copy) in out.copy.iter().enumerate() {
@@ -326,10 +767,7 @@ fn solve_frames(
             .zip(&correction)
             .map(|(c, d)| c + d)
             .collect();
-        let mut posture = Posture::from_values(skeleton, start)?;
-        let report = solver.solve(skeleton, &tasks, &mut posture)?;
-        out.iterations += report.iterations;
-        out.residuals.push(
+        let residuals = |report: &stance_ik::SolveReport| -> Vec<f64> {
             out.levels
                 .iter()
                 .map(|l| {
@@ -339,8 +777,32 @@ fn solve_frames(
                         .find(|r| r.level == *l)
                         .map_or(0.0, |r| r.residual_after)
                 })
-                .collect(),
-        );
+                .collect()
+        };
+        let mut posture = Posture::from_values(skeleton, start)?;
+        // The first frame starts from the copy itself, however far its contacts are held
+        // from it: it gets the iterations to get there.
+        let report = if f == 0 {
+            first_solver.solve(skeleton, &tasks, &mut posture)?
+        } else {
+            solver.solve(skeleton, &tasks, &mut posture)?
+        };
+        out.iterations += report.iterations;
+        let mut residual = residuals(&report);
+        // A correction carried from earlier frames can lead the solver astray (a held foot
+        // against a joint's range): when the contacts are not met, the frame is solved again
+        // from the copy itself and the better of the two kept.
+        if residual.first().is_some_and(|&r| r > RETRY_RESIDUAL) {
+            let mut again = copy.clone();
+            let report = solver.solve(skeleton, &tasks, &mut again)?;
+            out.iterations += report.iterations;
+            let second = residuals(&report);
+            if second.first() < residual.first() {
+                posture = again;
+                residual = second;
+            }
+        }
+        out.residuals.push(residual);
         for ((d, p), c) in correction
             .iter_mut()
             .zip(posture.values())

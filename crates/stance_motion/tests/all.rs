@@ -9,5 +9,7 @@ mod bvh_fixtures;
 mod bvh_malformed;
 mod bvh_proptest;
 mod bvh_read;
+#[cfg(not(target_arch = "wasm32"))]
+mod clips;
 mod common;
 mod retarget;

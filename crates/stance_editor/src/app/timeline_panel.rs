@@ -186,8 +186,10 @@ impl TimelinePanel<'_> {
             }
             ui.separator();
             let mut held = changed.contacts.is_some();
-            ui.checkbox(&mut held, "Foot contacts")
-                .on_hover_text("detected on the clip, held by level-1 tasks");
+            ui.checkbox(&mut held, "Contacts").on_hover_text(
+                "detected on the clip (heel and ball of each foot), held by level-1 tasks; \
+                     height and speed are for a 0.9 m leg at walking pace and scale with the clip",
+            );
             let mut settings = changed.contacts.unwrap_or_default();
             ui.add_enabled_ui(held, |ui| {
                 ui.label("height");
@@ -204,6 +206,8 @@ impl TimelinePanel<'_> {
                         .speed(0.01)
                         .suffix(" m/s"),
                 );
+                ui.checkbox(&mut settings.body_parts, "hands, knees, pelvis")
+                    .on_hover_text("contacts of their own for these parts too");
             });
             changed.contacts = held.then_some(settings);
         });
@@ -401,7 +405,7 @@ impl TimelinePanel<'_> {
         if self.model.timeline().contacts().is_empty() {
             return;
         }
-        let (row, _) = Self::row(ui, "Foot contacts", track.frames, track.frame_time);
+        let (row, _) = Self::row(ui, "Contacts", track.frames, track.frame_time);
         for contact in self.model.timeline().contacts() {
             let left = contact.joint.starts_with("l_");
             let (top, bottom) = if left {

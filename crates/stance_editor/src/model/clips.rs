@@ -101,6 +101,9 @@ impl EditorModel {
         self.timeline.options = options;
         self.retarget_clip();
         self.show_playhead();
+        if let Some(words) = self.timeline.contact_words() {
+            self.inform(format!("The clip is put on the body again: {words}."));
+        }
     }
 
     /// The clip's mapping corrected: the clip is put on the body again with it.

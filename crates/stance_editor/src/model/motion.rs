@@ -207,6 +207,11 @@ impl Timeline {
         self.position
     }
 
+    /// The open clip's contacts in words (see `contact_words`).
+    pub(super) fn contact_words(&self) -> Option<String> {
+        self.retargeted.as_ref().map(contact_words)
+    }
+
     /// The clip's foot contacts on this body (frames, inclusive).
     pub fn contacts(&self) -> &[Contact] {
         self.retargeted
@@ -359,16 +364,15 @@ impl EditorModel {
             }
         };
         let (frames, fps) = (retargeted.postures.len(), 1.0 / retargeted.frame_time);
-        let contacts = retargeted.contacts.len();
+        let contacts = contact_words(&retargeted);
         let name = clip.name.clone();
         self.timeline.clip = Some(clip);
         self.timeline.retargeted = Some(retargeted);
         self.timeline.base_revision += 1;
         self.timeline.playing = false;
         let set_aside = self.set_aside_standing_tasks();
-        let mut text = format!(
-            "Opened the clip {name}: {frames} frames at {fps:.3} fps, {contacts} foot contact(s) held."
-        );
+        let mut text =
+            format!("Opened the clip {name}: {frames} frames at {fps:.3} fps, {contacts}.");
         if set_aside > 0 {
             text.push_str(&format!(
                 " {set_aside} task(s) without an active interval were set aside: they would hold the body as it stands against the clip (undo brings them back)."
@@ -704,4 +708,36 @@ impl EditorModel {
         }
         self.inform(text);
     }
+}
+
+/// The contacts of a retargeted clip in words: how many of each part are held, then what the
+/// retargeting said of missing ones (a moving clip with a foot that got no contact, and the
+/// thresholds to change) and of reference frames left out.
+fn contact_words(retargeted: &Retargeted) -> String {
+    use stance_motion::ContactPart;
+    let counts: Vec<String> = ContactPart::ALL
+        .iter()
+        .filter_map(|part| {
+            let n = retargeted
+                .contacts
+                .iter()
+                .filter(|c| c.part == *part)
+                .count();
+            (n > 0).then(|| format!("{n} {}", part.label()))
+        })
+        .collect();
+    let mut text = if counts.is_empty() {
+        "no contact held".to_owned()
+    } else {
+        format!("contacts held: {}", counts.join(", "))
+    };
+    for note in retargeted
+        .notes
+        .iter()
+        .filter(|n| n.starts_with("the clip moves") || n.starts_with("the first "))
+    {
+        text.push_str("; ");
+        text.push_str(note);
+    }
+    text
 }

@@ -213,6 +213,28 @@ pub fn read_bvh(bytes: &[u8], name: &str, limits: &BvhLimits) -> Result<Clip, Bv
         notes: Vec::new(),
     };
     clip.mapping = Mapping::auto(&clip.source_joints(), &[], false);
+    // A rest pose that is no pose (the legs laid the way the spine goes, as in a Rokoko
+    // export whose bones all lie along their own X axes): the first frame is the rest.
+    let rest = clip.rest_positions();
+    let at = |h: &str| clip.joint_of(h).and_then(|i| rest.get(i).copied());
+    if let (Some(lh), Some(rh), Some(la), Some(ra), Some(head)) = (
+        at("l_hip"),
+        at("r_hip"),
+        at("l_talocrural"),
+        at("r_talocrural"),
+        at("skullbase"),
+    ) {
+        let hips = (lh + rh) * 0.5;
+        if (head - hips).dot((la + ra) * 0.5 - hips) > 0.0 && !clip.frames.is_empty() {
+            clip.rest_on_frame(0);
+            clip.mapping = Mapping::auto(&clip.source_joints(), &[], false);
+            notes.push(
+                "the file's rest pose lays the legs the way the spine goes (bones along their \
+                 own axes): the first frame is taken as the rest"
+                    .to_owned(),
+            );
+        }
+    }
 
     // The body's axes and unit.
     let rest = clip.rest_positions();

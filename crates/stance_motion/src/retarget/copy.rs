@@ -41,12 +41,16 @@ pub struct RotationCopy {
 }
 
 /// Where clip positions land in the target's space: scaled about the vertical through the
-/// origin by hip height, the clip's lowest ankle at the target's ankle height.
+/// origin by hip height, the clip's ankle floor at the target's ankle height.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Placement {
     /// Root motion scale (target hip height over the clip's).
     pub root_scale: f64,
-    /// Lowest ankle height of the clip over all frames (clip metres).
+    /// Horizontal root motion scale: the root scale, or the one under which the feet in
+    /// contact slide least (see [`crate::retarget`]).
+    pub stride_scale: f64,
+    /// The clip's ankle floor: the 5th percentile of its ankles' heights over the motion
+    /// (clip metres).
     pub lowest_ankle: f64,
     /// The target's ankle height standing at rest (m): the floor contact height.
     pub ankle_height: f64,
@@ -56,9 +60,9 @@ impl Placement {
     /// A clip position in the target's space.
     pub fn place(&self, p: DVec3) -> DVec3 {
         DVec3::new(
-            self.root_scale * p.x,
+            self.stride_scale * p.x,
             self.ankle_height + self.root_scale * (p.y - self.lowest_ankle),
-            self.root_scale * p.z,
+            self.stride_scale * p.z,
         )
     }
 }
@@ -181,6 +185,7 @@ impl RotationCopy {
             target_hips,
             placement: Placement {
                 root_scale,
+                stride_scale: root_scale,
                 lowest_ankle,
                 ankle_height: ankle_t,
             },
@@ -262,7 +267,9 @@ impl RotationCopy {
     }
 }
 
-/// The lowest height of the clip's mapped ankles over all frames.
+/// The floor of the clip's mapped ankles: the 5th percentile of their heights over the
+/// motion (the reference frames at the start left out), so that a T-pose frame at another
+/// height or a stray frame does not set it.
 fn lowest_ankle(clip: &Clip) -> Option<f64> {
     let ankles: Vec<usize> = CONTACT_JOINTS
         .iter()
@@ -271,9 +278,11 @@ fn lowest_ankle(clip: &Clip) -> Option<f64> {
     if ankles.is_empty() {
         return None;
     }
-    let low = clip
+    let start = crate::contacts::reference_frames(clip);
+    let mut heights: Vec<f64> = clip
         .frames
         .iter()
+        .skip(start)
         .flat_map(|f| {
             let w = clip.world(f);
             ankles
@@ -281,6 +290,11 @@ fn lowest_ankle(clip: &Clip) -> Option<f64> {
                 .filter_map(move |&a| w.get(a).map(|x| x.1.y))
                 .collect::<Vec<_>>()
         })
-        .fold(f64::INFINITY, f64::min);
-    low.is_finite().then_some(low)
+        .filter(|y| y.is_finite())
+        .collect();
+    if heights.is_empty() {
+        return None;
+    }
+    let k = heights.len() / 20;
+    Some(*heights.select_nth_unstable_by(k, f64::total_cmp).1)
 }

@@ -10,36 +10,35 @@ use crate::contacts::Contact;
 /// How firmly contacts held.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct ContactMetrics {
-    /// Largest horizontal distance of a foot from where its contact began (m).
+    /// Largest horizontal distance of a held point from where its contact began (m).
     pub max_drift: f64,
     /// Mean of that distance over the contact frames (m).
     pub mean_drift: f64,
-    /// Deepest the foot went below its height standing on the floor (m, 0 if never).
+    /// Deepest a held point went below the height it is held at (m, 0 if never).
     pub max_sink: f64,
     /// Contact frames measured.
     pub frames: usize,
 }
 
-/// Contact metrics of foot tracks: `track(joint_name, frame)` gives the foot's world
-/// position; `floor_height` the foot joint's height when standing on the floor.
+/// Contact metrics of point tracks: `track(contact, frame)` gives the world position of the
+/// contact's point at that frame; it sinks where it is below the contact's held height.
 pub fn contact_metrics(
     contacts: &[Contact],
-    floor_height: f64,
-    track: impl Fn(&str, usize) -> Option<DVec3>,
+    track: impl Fn(&Contact, usize) -> Option<DVec3>,
 ) -> ContactMetrics {
     let mut m = ContactMetrics::default();
     let mut sum = 0.0;
     for c in contacts {
-        let Some(first) = track(&c.joint, c.start) else {
+        let Some(first) = track(c, c.start) else {
             continue;
         };
         for f in c.start..=c.end {
-            let Some(p) = track(&c.joint, f) else {
+            let Some(p) = track(c, f) else {
                 continue;
             };
             let d = DVec3::new(p.x - first.x, 0.0, p.z - first.z).length();
             m.max_drift = m.max_drift.max(d);
-            m.max_sink = m.max_sink.max(floor_height - p.y);
+            m.max_sink = m.max_sink.max(c.position.y - p.y);
             sum += d;
             m.frames += 1;
         }
@@ -166,21 +165,24 @@ pub fn metrics(
     ease: usize,
 ) -> Metrics {
     let skeleton = &target.skeleton;
-    let floor = result.placement.ankle_height;
     let on_target = |postures: &[Posture]| {
-        contact_metrics(&result.contacts, floor, |joint, f| {
-            let j = skeleton.joint_index(joint)?;
-            let p = postures.get(f)?;
-            stance_ik::Frames::new(skeleton, p)
-                .joint_position
-                .get(j)
-                .copied()
+        let frames: Vec<stance_ik::Frames> = postures
+            .iter()
+            .map(|p| stance_ik::Frames::new(skeleton, p))
+            .collect();
+        contact_metrics(&result.contacts, |c, f| {
+            let j = skeleton.joint_index(&c.joint)?;
+            Some(frames.get(f)?.point(j, c.point))
         })
     };
-    let source = contact_metrics(&result.contacts, floor, |joint, f| {
-        let j = clip.joint_of(joint)?;
+    // The clip's own joint carrying the target's point (scaled back to the clip's size),
+    // placed on the target.
+    let scale = result.placement.root_scale.max(1e-9);
+    let source = contact_metrics(&result.contacts, |c, f| {
+        let j = clip.joint_of(&c.joint)?;
         let w = clip.world(clip.frames.get(f)?);
-        w.get(j).map(|x| result.placement.place(x.1))
+        w.get(j)
+            .map(|x| result.placement.place(x.1 + x.0 * (c.point / scale)))
     });
     Metrics {
         source,

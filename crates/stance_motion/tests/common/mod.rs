@@ -1,5 +1,6 @@
-//! A humanoid BVH in any naming, unit and up axis, for the tests.
-#![allow(dead_code)]
+//! For the tests: a humanoid BVH in any naming, unit and up axis; the default H-Anim body,
+//! reshaped or with its legs scaled.
+#![allow(dead_code, clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 /// Joint names of a rig, by role.
 pub struct Names {
@@ -165,4 +166,88 @@ pub fn humanoid(names: &Names, unit: f64, z_up: bool, frames: usize) -> String {
         out.push('\n');
     }
     out
+}
+
+use glam::DVec3;
+use stance_hanim::{
+    HumanoidSkeleton, LevelOfArticulation, Mapping, SkeletonOptions, SourceJoint, build_skeleton,
+    default_skeleton,
+};
+use stance_ik::{Frames, Posture};
+
+/// The default H-Anim body at `loa`.
+pub fn body(loa: LevelOfArticulation) -> HumanoidSkeleton {
+    default_skeleton(&SkeletonOptions {
+        loa,
+        ..Default::default()
+    })
+    .unwrap()
+}
+
+/// A body from the default one with each rest position moved by `f`.
+pub fn reshaped(loa: LevelOfArticulation, f: impl Fn(&str, DVec3) -> DVec3) -> HumanoidSkeleton {
+    let base = body(loa);
+    let rest = Frames::new(&base.skeleton, &Posture::rest(&base.skeleton)).joint_position;
+    let joints: Vec<SourceJoint> = base
+        .skeleton
+        .joints()
+        .iter()
+        .zip(&rest)
+        .map(|(j, p)| SourceJoint {
+            name: j.name.clone(),
+            parent: j.parent,
+            position: f(&j.name, *p),
+        })
+        .collect();
+    let mapping = Mapping::auto(&joints, &[], false);
+    let positions: Vec<DVec3> = joints.iter().map(|j| j.position).collect();
+    build_skeleton(
+        &mapping,
+        &positions,
+        &SkeletonOptions {
+            loa,
+            ..Default::default()
+        },
+    )
+    .unwrap()
+}
+
+/// The default body with its legs scaled by `legs` about the hips, lowered or raised so
+/// that the ankles stand where they did.
+pub fn legs_scaled(legs: f64) -> HumanoidSkeleton {
+    let base = body(LevelOfArticulation::Loa2);
+    let rest = Frames::new(&base.skeleton, &Posture::rest(&base.skeleton)).joint_position;
+    let at = |n: &str| rest[base.skeleton.joint_index(n).unwrap()];
+    let ankle_y = at("l_talocrural").y;
+    let leg_joint = |name: &str| {
+        [
+            "hip",
+            "knee",
+            "talocrural",
+            "tarsal",
+            "subtalar",
+            "midtarsal",
+            "metatars",
+            "tarsometa",
+        ]
+        .iter()
+        .any(|k| name.contains(k))
+            && (name.starts_with("l_") || name.starts_with("r_"))
+    };
+    let scaled = |name: &str, p: DVec3| {
+        if leg_joint(name) && !name.ends_with("_hip") {
+            let hip = at(if name.starts_with("l_") {
+                "l_hip"
+            } else {
+                "r_hip"
+            });
+            hip + (p - hip) * legs
+        } else {
+            p
+        }
+    };
+    let drop = scaled("l_talocrural", at("l_talocrural")).y - ankle_y;
+    reshaped(LevelOfArticulation::Loa2, |name, p| {
+        scaled(name, p) - DVec3::Y * drop
+    })
 }

@@ -1,0 +1,352 @@
+//! The clip corpus (`tests/clips/<source>/`, licences and provenance beside them; the CMU
+//! walk and run of `tests/fixtures/motion/` too): contacts found against footfalls annotated
+//! apart from the detector (`scripts/annotate-footfalls.mjs`: its own BVH reader, footfalls
+//! from the heel's and toe's heights alone), and the held points' drift and sinking within
+//! each annotated footfall on legs 0.7, 1.0 and 1.3 times the default body's, the plain
+//! copy's drift beside them. Native only (files read at run time).
+//!
+//! Matching: the heel and ball contacts of a foot that overlap or touch count as one
+//! detected footfall; an annotated footfall is found when a detected footfall of that foot
+//! overlaps it, and a detected footfall is right when it overlaps an annotated one.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use glam::DVec3;
+use stance_ik::{Frames, Posture};
+use stance_motion::bvh::{BvhLimits, read_bvh};
+use stance_motion::contacts::Contact;
+use stance_motion::{RetargetOptions, retarget};
+
+use crate::common::legs_scaled;
+
+/// The corpus: path from the crate, and whether the clip was kept out of tuning the
+/// detector (its figures are printed apart).
+const CLIPS: [(&str, bool); 21] = [
+    ("../../tests/fixtures/motion/walk.bvh", false),
+    ("../../tests/fixtures/motion/run.bvh", false),
+    ("tests/clips/cmu/131_01_metres.bvh", false),
+    ("tests/clips/cmu/131_02_a.bvh", false),
+    ("tests/clips/cmu/131_02_b.bvh", true),
+    ("tests/clips/cmu/131_03_a.bvh", false),
+    ("tests/clips/cmu/131_03_b.bvh", true),
+    ("tests/clips/cmu/jumping_jacks.bvh", false),
+    ("tests/clips/cmu/mb_walk.bvh", false),
+    ("tests/clips/cmu/run_240fps.bvh", false),
+    ("tests/clips/cmu/walk_tpose_blend.bvh", false),
+    ("tests/clips/cmu/walk_zup_inches_60fps.bvh", false),
+    ("tests/clips/adelaide/louise.bvh", false),
+    ("tests/clips/fair/dab.bvh", true),
+    ("tests/clips/fair/jumping_a.bvh", false),
+    ("tests/clips/fair/jumping_b.bvh", true),
+    ("tests/clips/fair/wave_hello.bvh", false),
+    ("tests/clips/fair/zombie_a.bvh", false),
+    ("tests/clips/fair/zombie_b.bvh", true),
+    ("tests/clips/rokoko/jesse_dance_a.bvh", false),
+    ("tests/clips/rokoko/jesse_dance_b.bvh", true),
+];
+
+const FEET: [(&str, &str); 2] = [("l", "l_talocrural"), ("r", "r_talocrural")];
+
+/// A clip's annotation: per foot, footfalls as inclusive frame ranges.
+struct Annotation {
+    start: usize,
+    feet: Vec<Vec<(usize, usize)>>,
+}
+
+fn annotation(clip: &Path) -> Annotation {
+    let path = clip.with_extension("footfalls.json");
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path:?}: {e}"));
+    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let runs = |side: &str| -> Vec<(usize, usize)> {
+        json["feet"][side]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|r| {
+                (
+                    r[0].as_u64().unwrap() as usize,
+                    r[1].as_u64().unwrap() as usize,
+                )
+            })
+            .collect()
+    };
+    Annotation {
+        start: json["start"].as_u64().unwrap() as usize,
+        feet: FEET.iter().map(|(side, _)| runs(side)).collect(),
+    }
+}
+
+/// Contacts of one foot merged into footfalls (overlapping or touching ranges as one).
+fn footfalls(contacts: &[Contact], ankle: &str) -> Vec<(usize, usize)> {
+    let mut runs: Vec<(usize, usize)> = contacts
+        .iter()
+        .filter(|c| c.joint == ankle)
+        .map(|c| (c.start, c.end))
+        .collect();
+    runs.sort_unstable();
+    let mut merged: Vec<(usize, usize)> = Vec::new();
+    for (a, b) in runs {
+        match merged.last_mut() {
+            Some(last) if a <= last.1 + 1 => last.1 = last.1.max(b),
+            _ => merged.push((a, b)),
+        }
+    }
+    merged
+}
+
+fn overlap(a: (usize, usize), b: (usize, usize)) -> usize {
+    (a.1.min(b.1) + 1).saturating_sub(a.0.max(b.0))
+}
+
+/// Footfalls annotated, found, detected and right for one clip.
+#[derive(Default, Clone, Copy)]
+struct Counts {
+    annotated: usize,
+    found: usize,
+    detected: usize,
+    right: usize,
+}
+
+impl Counts {
+    fn add(&mut self, o: Counts) {
+        self.annotated += o.annotated;
+        self.found += o.found;
+        self.detected += o.detected;
+        self.right += o.right;
+    }
+    fn recall(&self) -> f64 {
+        self.found as f64 / self.annotated.max(1) as f64
+    }
+    fn precision(&self) -> f64 {
+        self.right as f64 / self.detected.max(1) as f64
+    }
+}
+
+fn counts(contacts: &[Contact], annotation: &Annotation) -> Counts {
+    let mut n = Counts::default();
+    for ((_, ankle), annotated) in FEET.iter().zip(&annotation.feet) {
+        let detected = footfalls(contacts, ankle);
+        n.annotated += annotated.len();
+        n.found += annotated
+            .iter()
+            .filter(|&&a| detected.iter().any(|&d| overlap(a, d) > 0))
+            .count();
+        n.detected += detected.len();
+        n.right += detected
+            .iter()
+            .filter(|&&d| annotated.iter().any(|&a| overlap(a, d) > 0))
+            .count();
+    }
+    n
+}
+
+/// Largest horizontal drift and sinking of the held points within the annotated footfalls,
+/// on the result and on the plain copy (m): per contact of a foot, over the frames it shares
+/// with a footfall of that foot, from where the point is on the first of them.
+fn drift(
+    target: &stance_hanim::HumanoidSkeleton,
+    contacts: &[Contact],
+    annotation: &Annotation,
+    postures: &[Posture],
+    copy: &[Posture],
+) -> (f64, f64, f64) {
+    let skeleton = &target.skeleton;
+    let frames: Vec<Frames> = postures.iter().map(|p| Frames::new(skeleton, p)).collect();
+    let copied: Vec<Frames> = copy.iter().map(|p| Frames::new(skeleton, p)).collect();
+    let (mut out, mut sink, mut plain) = (0.0f64, 0.0f64, 0.0f64);
+    for ((_, ankle), annotated) in FEET.iter().zip(&annotation.feet) {
+        let j = skeleton.joint_index(ankle).unwrap();
+        for c in contacts.iter().filter(|c| c.joint == *ankle) {
+            for &(a, b) in annotated {
+                let (from, to) = (a.max(c.start), b.min(c.end));
+                if from > to {
+                    continue;
+                }
+                let horizontal = |d: DVec3| DVec3::new(d.x, 0.0, d.z).length();
+                let first = frames[from].point(j, c.point);
+                let first_copy = copied[from].point(j, c.point);
+                for f in from..=to {
+                    let p = frames[f].point(j, c.point);
+                    out = out.max(horizontal(p - first));
+                    sink = sink.max(c.position.y - p.y);
+                    plain = plain.max(horizontal(copied[f].point(j, c.point) - first_copy));
+                }
+            }
+        }
+    }
+    (out, sink, plain)
+}
+
+#[test]
+fn the_corpus_footfalls_are_found_and_held_on_legs_0_7_to_1_3() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let bodies: Vec<(f64, stance_hanim::HumanoidSkeleton)> = [0.7, 1.0, 1.3]
+        .into_iter()
+        .map(|legs| (legs, legs_scaled(legs)))
+        .collect();
+    let options = RetargetOptions::default();
+    let mut totals = [Counts::default(); 2];
+    let mut worst = [(0.0f64, 0.0f64); 2];
+    let (mut frames, mut seconds) = (0usize, 0.0f64);
+    let mut worse: Vec<(String, f64, f64, f64)> = Vec::new();
+    println!(
+        "clip                                fps  frames reference (annotated/found)  footfalls annotated/found  \
+         detected/right  drift mm max 0.7/1.0/1.3 (plain copy)  sink mm max"
+    );
+    for (kept_out, title) in [(false, "tuned on"), (true, "kept out of tuning")] {
+        println!("-- {title}");
+        for (path, holdout) in CLIPS.iter().filter(|c| c.1 == kept_out) {
+            let file = root.join(path);
+            let bytes = std::fs::read(&file).unwrap_or_else(|e| panic!("{file:?}: {e}"));
+            let clip = read_bvh(&bytes, "clip", &BvhLimits::default()).unwrap();
+            let truth = annotation(&file);
+            let mut row = String::new();
+            let mut sinks = 0.0f64;
+            let mut n = Counts::default();
+            let mut reference = 0;
+            for (k, (_, body)) in bodies.iter().enumerate() {
+                let t = Instant::now();
+                let r = retarget(&clip, body, &options).unwrap();
+                seconds += t.elapsed().as_secs_f64();
+                frames += clip.frame_count();
+                if k == 1 && !holdout && std::env::var("CLIPS_DETAIL").is_ok() {
+                    for ((side, ankle), annotated) in FEET.iter().zip(&truth.feet) {
+                        println!(
+                            "  {side}: annotated {annotated:?}\n     detected {:?}",
+                            footfalls(&r.contacts, ankle)
+                        );
+                    }
+                }
+                if k == 1 {
+                    reference = r.reference_frames;
+                    n = counts(&r.contacts, &truth);
+                    totals[usize::from(*holdout)].add(n);
+                }
+                let (d, s, plain) = drift(body, &r.contacts, &truth, &r.postures, &r.copy);
+                if plain > 0.005 {
+                    worse.push((path.to_string(), bodies[k].0, d, plain));
+                }
+                let w = &mut worst[usize::from(*holdout)];
+                w.0 = w.0.max(d);
+                w.1 = w.1.max(s);
+                sinks = sinks.max(s);
+                row.push_str(&format!(" {:6.2} ({:5.1})", d * 1e3, plain * 1e3));
+            }
+            let name = path.rsplit("tests/").next().unwrap_or(path);
+            // The reference frames at the start (a T-pose cut or blended into the motion)
+            // are the annotation's, within a frame.
+            assert!(
+                reference.abs_diff(truth.start) <= 1,
+                "{name}: reference frames {reference}, annotated from {}",
+                truth.start
+            );
+            println!(
+                "{name:35} {:5.0} {:5} {:3}/{:3}  {:3}/{:3}  {:3}/{:3} {row}  {:5.2}",
+                clip.fps(),
+                clip.frame_count(),
+                truth.start,
+                reference,
+                n.annotated,
+                n.found,
+                n.detected,
+                n.right,
+                sinks * 1e3
+            );
+        }
+    }
+    for (k, title) in ["tuned on", "kept out"].iter().enumerate() {
+        println!(
+            "{title}: recall {:.1} % ({}/{}), precision {:.1} % ({}/{}), drift max {:.2} mm, \
+             sink max {:.2} mm",
+            totals[k].recall() * 100.0,
+            totals[k].found,
+            totals[k].annotated,
+            totals[k].precision() * 100.0,
+            totals[k].right,
+            totals[k].detected,
+            worst[k].0 * 1e3,
+            worst[k].1 * 1e3
+        );
+    }
+    println!(
+        "{frames} frames retargeted in {seconds:.2} s ({:.0} frames/s, test build)",
+        frames as f64 / seconds
+    );
+    // The issue's targets (recall and precision 95 %, drift and sinking 2 mm) are not met
+    // yet (docs/motion.md has the table); these bounds hold what is measured so that it does
+    // not get worse: recall 87 %, precision 95 %, and on every clip and body the held points
+    // drift less than the plain copy's.
+    let mut all = totals[0];
+    all.add(totals[1]);
+    assert!(all.recall() >= 0.85, "recall {}", all.recall());
+    assert!(all.precision() >= 0.93, "precision {}", all.precision());
+    for (clip, legs, output, plain) in &worse {
+        assert!(
+            output < plain,
+            "{clip} legs {legs}: {output} against the copy's {plain}"
+        );
+    }
+}
+
+/// A Rokoko export lays every bone along its own X axis at rest: read with the first frame as
+/// the rest, it is a centimetre, Y-up body whose joints move where the file puts them.
+#[test]
+fn a_rest_pose_that_is_no_pose_is_taken_from_the_first_frame() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let bytes = std::fs::read(root.join("tests/clips/rokoko/jesse_dance_a.bvh")).unwrap();
+    let clip = read_bvh(&bytes, "dance", &BvhLimits::default()).unwrap();
+    assert!(
+        clip.notes
+            .iter()
+            .any(|n| n.starts_with("units: centimetres")),
+        "{:?}",
+        clip.notes
+    );
+    assert!(
+        clip.notes.iter().all(|n| !n.starts_with("axes:")),
+        "{:?}",
+        clip.notes
+    );
+    // Frame 0 is the rest: every joint's rotation is the identity there.
+    for q in &clip.frames[0].rotations {
+        assert!(q.angle_between(glam::DQuat::IDENTITY) < 1e-9);
+    }
+    // The head is above the ankles by a person's height: 1.47 m standing in frame 0, a
+    // median of 0.94 m over the low dance, never under 0.3 m.
+    let (head, ankle) = (
+        clip.joint_of("skullbase").unwrap(),
+        clip.joint_of("l_talocrural").unwrap(),
+    );
+    let mut heights: Vec<f64> = clip
+        .frames
+        .iter()
+        .map(|f| {
+            let w = clip.world(f);
+            w[head].1.y - w[ankle].1.y
+        })
+        .collect();
+    heights.sort_by(f64::total_cmp);
+    let median = heights[heights.len() / 2];
+    assert!((0.8..1.8).contains(&median) && heights[0] > 0.3, "{median}");
+}
+
+/// Taking another frame as the rest moves no joint in any frame.
+#[test]
+fn a_clip_rested_on_one_of_its_frames_moves_the_same() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let bytes = std::fs::read(root.join("../../tests/fixtures/motion/walk.bvh")).unwrap();
+    let clip = read_bvh(&bytes, "walk", &BvhLimits::default()).unwrap();
+    let mut rested = clip.clone();
+    rested.rest_on_frame(40);
+    for q in &rested.frames[40].rotations {
+        assert!(q.angle_between(glam::DQuat::IDENTITY) < 1e-9);
+    }
+    for f in [0, 40, 100, 259] {
+        let (a, b) = (clip.world(&clip.frames[f]), rested.world(&rested.frames[f]));
+        for (p, q) in a.iter().zip(&b) {
+            assert!((p.1 - q.1).length() < 1e-9, "frame {f}: {} {}", p.1, q.1);
+        }
+    }
+}
