@@ -143,12 +143,7 @@ impl EditorModel {
                     dropped.join(", ")
                 ));
             }
-            let before = self.session.document();
-            let kept = self.keep_body();
-            self.history
-                .record_body_change(&before, kept, self.now_secs);
-            self.replace_session(session, SessionChange::Rebuilt);
-            self.forget_unreferenced_bodies();
+            self.change_body(session);
         } else {
             self.replace_session(session, SessionChange::NewBody);
         }
@@ -194,12 +189,7 @@ impl EditorModel {
             });
         match built {
             Ok((session, dropped)) => {
-                let before = self.session.document();
-                let kept = self.keep_body();
-                self.history
-                    .record_body_change(&before, kept, self.now_secs);
-                self.replace_session(session, SessionChange::Rebuilt);
-                self.forget_unreferenced_bodies();
+                self.change_body(session);
                 if !dropped.is_empty() {
                     self.inform(format!(
                         "The mannequin lacks the joints of these tasks, dropped (undo brings them and the avatar back): {}.",
@@ -231,6 +221,17 @@ pub(crate) struct KeptBody {
 }
 
 impl EditorModel {
+    /// Puts `session`'s body on in place of the current one as one step of the history: the
+    /// body taken off is kept for its undo.
+    fn change_body(&mut self, session: PosingSession) {
+        let before = self.session.document();
+        let kept = self.keep_body();
+        self.history
+            .record_body_change(&before, kept, self.now_secs);
+        self.replace_session(session, SessionChange::Rebuilt);
+        self.forget_unreferenced_bodies();
+    }
+
     /// Takes the current body off (the avatar, or the mannequin) and keeps it; returns its id.
     /// Only the [`MAX_KEPT_BODIES`] latest are kept.
     pub(super) fn keep_body(&mut self) -> u64 {
