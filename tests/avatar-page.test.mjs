@@ -131,7 +131,8 @@ describe("avatars in the page", () => {
     const pixels = avatarPixels(image, shown, isAvatarPixel);
     assert.ok(pixels > 1500, `only ${pixels} avatar pixels in the viewport`);
 
-    // Pull the right forearm toward the upper left; the feet hold.
+    // Pull the right forearm up and out to the side (screen left: the avatar faces the
+    // camera), away from the body, which stands with its arms at its sides; the feet hold.
     const [wx, wy] = shown.screen.r_radiocarpal;
     const [ex, ey] = shown.screen.r_elbow;
     const grabX = ex + (wx - ex) * 0.5;
@@ -144,7 +145,7 @@ describe("avatars in the page", () => {
     const sceneMs = [];
     const renderMs = [];
     for (let step = 1; step <= 20; step += 1) {
-      await page.mouse.move(grabX + step * 2, grabY - step * 5);
+      await page.mouse.move(grabX - step * 3, grabY - step * 5);
       const sample = await state(page);
       sceneMs.push(sample.scene_ms);
       renderMs.push(sample.render_ms);

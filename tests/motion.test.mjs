@@ -167,14 +167,22 @@ describe("motion", () => {
       // world transforms: x y z qx qy qz qw per joint).
       const solver = new ik.Solver(body);
       const transforms = new Float64Array(7 * body.jointNames.length);
+      // The held point (heel, ball, ...: `point` in the joint's frame) in the world.
+      const rotate = ([x, y, z], [qx, qy, qz, qw]) => {
+        const tx = 2 * (qy * z - qz * y), ty = 2 * (qz * x - qx * z), tz = 2 * (qx * y - qy * x);
+        return [x + qw * tx + (qy * tz - qz * ty), y + qw * ty + (qz * tx - qx * tz),
+          z + qw * tz + (qx * ty - qy * tx)];
+      };
       const contacts = result.contacts.map((c) => {
         const joint = body.jointNames.indexOf(c.joint);
         const held = [];
         for (let frame = c.start; frame <= c.end; frame++) {
           solver.worldTransforms(result.values.subarray(frame * body.dofCount, (frame + 1) * body.dofCount), transforms);
-          held.push([...transforms.subarray(7 * joint, 7 * joint + 3)]);
+          const at = transforms.subarray(7 * joint, 7 * joint + 7);
+          const offset = rotate(c.point, [...at.subarray(3, 7)]);
+          held.push([at[0] + offset[0], at[1] + offset[1], at[2] + offset[2]]);
         }
-        return { joint: c.joint, start: c.start, end: c.end, held };
+        return { joint: c.joint, part: c.part, start: c.start, end: c.end, held };
       });
       solver.free();
       return { ms: runs[1], frames: result.frameCount, contacts,
@@ -187,8 +195,8 @@ describe("motion", () => {
       "--report", join(work, "w.json"));
     assert.equal(native.status, 0, native.stderr);
     const nativeContacts = JSON.parse(readFileSync(join(work, "w.json"), "utf8")).contacts;
-    // The same list: which foot, first and last frame (inclusive) of each contact.
-    const list = (contacts) => contacts.map((c) => `${c.joint} ${c.start}-${c.end}`).sort();
+    // The same list: which foot and part (heel, ball), first and last frame (inclusive).
+    const list = (contacts) => contacts.map((c) => `${c.joint} ${c.part} ${c.start}-${c.end}`).sort();
     assert.deepEqual(list(r.contacts), list(nativeContacts), "the page's contacts and the CLI's");
     assert.ok(r.contacts.length >= 4, `${r.contacts.length} contacts: the walk's steps`);
     // Held where the CLI holds it: the page's foot within 1 mm of the native contact's
@@ -196,7 +204,8 @@ describe("motion", () => {
     // avatar the CLI retargets onto have the same proportions; they agree within 0.01 mm).
     let worst = 0;
     for (const c of r.contacts) {
-      const goal = nativeContacts.find((n) => n.joint === c.joint && n.start === c.start).position;
+      const goal = nativeContacts.find((n) => n.joint === c.joint && n.part === c.part
+        && n.start === c.start).position;
       c.held.forEach((position, k) => {
         const off = distance(position, goal);
         worst = Math.max(worst, off);

@@ -397,6 +397,7 @@ pub fn retarget_bvh(body: &Body, bvh: &str, contacts: bool) -> JsResult<Retarget
     let report = serde_json::json!({
         "contacts": result.contacts.iter().map(|c| serde_json::json!({
             "joint": c.joint, "part": c.part, "start": c.start, "end": c.end,
+            "point": [c.point.x, c.point.y, c.point.z],
         })).collect::<Vec<_>>(),
         "iterations": result.iterations,
         "notes": clip.notes.iter().chain(&result.notes).collect::<Vec<_>>(),
