@@ -124,6 +124,10 @@ describe("avatars in the page", () => {
     assert.ok(progressShown, "a progress bar shows while the avatar loads");
     assert.ok(shown.avatar.mapped >= 18, `${shown.avatar.mapped} joints mapped`);
     assert.equal(shown.notice?.error, false, shown.notice?.text);
+    // The document's tasks (feet, balance, comfort) carried over onto the avatar, as one
+    // undoable edit.
+    assert.match(shown.notice.text, /4 task\(s\) carried over/);
+    assert.equal(shown.tasks.length, 4);
     const shot = await page.screenshot();
     saveArtifact("avatar-webgl2.png", shot);
     const image = decodePng(shot);
@@ -193,6 +197,13 @@ describe("avatars in the page", () => {
     const kept = await state(page);
     assert.match(kept.notice.text, /broken\.glb could not be opened/);
     assert.equal(kept.avatar.name, "Black_F_2_Casual.glb", "the previous avatar stays");
+    // Undo takes the pull back, then the avatar: the mannequin returns with the tasks the
+    // document had, which the avatar carried over.
+    await page.keyboard.press("Control+z");
+    await page.keyboard.press("Control+z");
+    const undone = await waitForState(page, (s) => s.avatar === null && s.settled,
+      { what: "two undos bring the mannequin back" });
+    assert.deepEqual(undone.tasks.map((t) => t.description), shown.tasks.map((t) => t.description));
     assert.deepEqual(errors, [], `console errors: ${errors.join(" / ")}`);
     await page.close();
   });
