@@ -32,6 +32,9 @@ function settled(page, timeout = 20_000) {
   return waitForSettled(page, { timeout });
 }
 
+// The Table 1 example's click has taken effect: its seven tasks are in the document.
+const TABLE1_SET_UP = { until: (s) => s.tasks.length === 7 };
+
 const distance = (a, b) => Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
 const percentile = (values, p) => {
   const sorted = [...values].sort((a, b) => a - b);
@@ -123,7 +126,7 @@ describe("posing in the browser", () => {
 
   test("the Table 1 example set up from the tasks panel reaches its level-1 goals", async () => {
     const { page, errors } = await freshEditor();
-    await clickButton(page, "table1");
+    await clickButton(page, "table1", TABLE1_SET_UP);
     const result = await settled(page);
     const levelOne = result.tasks.filter((task) => task.level === 1);
     assert.equal(levelOne.length, 4, "left foot position and orientation, gaze, right hand");
@@ -138,7 +141,7 @@ describe("posing in the browser", () => {
 
   test("frame time while pulling the body with the Table 1 tasks active (measured, not asserted)", async () => {
     const { page, errors } = await freshEditor();
-    await clickButton(page, "table1");
+    await clickButton(page, "table1", TABLE1_SET_UP);
     const start = await settled(page);
     // Grab the left knee (a level-4 drag in the paper's example) and pull it forward and up.
     const [kx, ky] = start.screen.l_knee;
@@ -191,7 +194,7 @@ describe("posing in the browser", () => {
 
   test("a copied posture link opens the same posture and tasks; a tampered link says so", async () => {
     const { page } = await freshEditor();
-    await clickButton(page, "table1");
+    await clickButton(page, "table1", TABLE1_SET_UP);
     const original = await settled(page);
     await clickButton(page, "copy_link");
     await page.waitForFunction(() => window.location.hash.length > 1);
@@ -226,7 +229,7 @@ describe("posing in the browser", () => {
     assert.match(shown.notice.text, /could not be opened/);
     assert.equal(shown.tasks.length, 4, "the editor opened normally with its default tasks");
     // Still usable: the Table 1 button works.
-    await clickButton(damaged, "table1");
+    await clickButton(damaged, "table1", TABLE1_SET_UP);
     assert.equal((await settled(damaged)).tasks.length, 7);
     saveArtifact("tampered-link-webgl2.png", await damaged.screenshot());
     await damaged.close();
@@ -234,7 +237,7 @@ describe("posing in the browser", () => {
 
   test("work survives a page reload (autosave)", async () => {
     const { page } = await freshEditor();
-    await clickButton(page, "table1");
+    await clickButton(page, "table1", TABLE1_SET_UP);
     const edited = await settled(page);
     await page.waitForTimeout(1500);
     await page.reload();
@@ -246,13 +249,17 @@ describe("posing in the browser", () => {
 
   test("File > Save image downloads a PNG of the posture drawn by the page's GPU", async () => {
     const { page, errors } = await freshEditor();
-    await clickButton(page, "file_menu");
-    await page.waitForTimeout(300);
-    await clickButton(page, "save_image_menu");
-    await page.waitForTimeout(300);
+    await clickButton(page, "file_menu", { until: (s) => Boolean(s.buttons.save_image_menu) });
+    await clickButton(page, "save_image_menu", { until: (s) => Boolean(s.buttons.save_image) });
     const download = page.waitForEvent("download", { timeout: 30_000 });
     await clickButton(page, "save_image");
-    const file = await download;
+    // A click egui dropped (see clickButton) starts no download: made once more after 10 s.
+    let file = await Promise.race([download, page.waitForTimeout(10_000).then(() => null)]);
+    if (!file) {
+      console.log("[click] save_image: no download within 10 s, clicked again");
+      await clickButton(page, "save_image");
+      file = await download;
+    }
     assert.equal(file.suggestedFilename(), "stance-posture.png");
     const bytes = readFileSync(await file.path());
     saveArtifact("saved-image-webgl2.png", bytes);
