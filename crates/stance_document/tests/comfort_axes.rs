@@ -109,14 +109,7 @@ fn an_old_document_made_on_a_t_pose_avatar_keeps_its_pose() {
     let old_upper = lowered * DVec3::X;
     let old_fore = lowered * glam::DQuat::from_rotation_y(0.5) * DVec3::X;
     // The new meaning: the standard pose's bones (the default centres) turned by the values.
-    let table = stance_hanim::humanoid_joints(LevelOfArticulation::Loa1);
-    let centre = |name: &str| {
-        table
-            .iter()
-            .find(|j| j.definition.name == name)
-            .unwrap()
-            .rest_centre
-    };
+    let centre = |name: &str| stance_hanim::scenarios::hanim_centre(name).unwrap();
     let upper = (centre("l_elbow") - centre("l_shoulder")).normalize();
     let fore = (centre("l_radiocarpal") - centre("l_elbow")).normalize();
     let shoulder = rotation("l_shoulder");

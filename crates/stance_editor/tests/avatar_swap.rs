@@ -257,14 +257,7 @@ fn an_old_document_made_on_the_avatar_opens_as_it_was_saved() {
     assert!(notice.contains("converted"), "{notice}");
     // By hand: the file's arms are the default centres' arms turned a quarter about z (out to
     // the sides); the old values turn the left one back, the right one stays out.
-    let table = stance_hanim::humanoid_joints(stance_hanim::LevelOfArticulation::Loa2);
-    let centre = |name: &str| {
-        table
-            .iter()
-            .find(|j| j.definition.name == name)
-            .unwrap()
-            .rest_centre
-    };
+    let centre = |name: &str| stance_hanim::scenarios::hanim_centre(name).unwrap();
     let arm = |side: &str| {
         (centre(&format!("{side}_elbow")) - centre(&format!("{side}_shoulder"))).normalize()
     };

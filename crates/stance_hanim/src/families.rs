@@ -259,7 +259,7 @@ impl Family {
             seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ (index as u64).wrapping_add(1),
         );
         let spread = r.random_range(self.spread.0..=self.spread.1);
-        let goal = self.goal_posture(&mut r, skeleton, spread);
+        let goal = random_posture(&mut r, skeleton, spread, self.beyond_limits);
         let levels = r.random_range(self.levels.clone());
         let count = r.random_range(self.tasks.clone()).max(levels as usize);
         let frames = Frames::new(skeleton, &goal);
@@ -288,10 +288,6 @@ impl Family {
             start,
             goal,
         })
-    }
-
-    fn goal_posture(&self, r: &mut XorShiftRng, skeleton: &Skeleton, spread: f64) -> Posture {
-        random_posture(r, skeleton, spread, self.beyond_limits)
     }
 
     fn task(

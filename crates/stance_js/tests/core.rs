@@ -76,17 +76,7 @@ fn bodies_from_hanim_joints_and_a_real_skin() {
     // The vendored avatar's nodes, as a three.js page would pass a skin's bones: the same
     // H-Anim skeleton as the editor builds from the file.
     let avatar = load_avatar(AVATAR, &LoadOptions::default()).unwrap();
-    let names: Vec<String> = avatar.nodes.iter().map(|n| n.name.clone()).collect();
-    let parents: Vec<i32> = avatar
-        .nodes
-        .iter()
-        .map(|n| n.parent.map_or(-1, |p| p as i32))
-        .collect();
-    let rest: Vec<f64> = avatar
-        .hanim_rest_positions()
-        .iter()
-        .flat_map(|p| p.to_array())
-        .collect();
+    let (names, parents, rest) = skin_of(&avatar);
     let body = Body::from_skin(&names, &parents, &rest, 2).unwrap();
     let editor = avatar
         .skeleton(&SkeletonOptions {
@@ -264,19 +254,7 @@ fn a_bvh_clip_is_retargeted_onto_an_hanim_body() {
 #[test]
 fn a_skin_posed_through_the_rest_match_shows_what_the_editor_shows() {
     use glam::{DMat3, DMat4};
-    let avatar = load_avatar(AVATAR, &LoadOptions::default()).unwrap();
-    let names: Vec<String> = avatar.nodes.iter().map(|n| n.name.clone()).collect();
-    let parents: Vec<i32> = avatar
-        .nodes
-        .iter()
-        .map(|n| n.parent.map_or(-1, |p| p as i32))
-        .collect();
-    let rest: Vec<f64> = avatar
-        .hanim_rest_positions()
-        .iter()
-        .flat_map(|p| p.to_array())
-        .collect();
-    let body = Body::from_skin(&names, &parents, &rest, 2).unwrap();
+    let (avatar, body) = vendored_avatar_as_skin();
     let editor = avatar.skeleton(&SkeletonOptions::default()).unwrap();
     let document = stance_document::Document::from_json(
         r#"{"posture": {"humanoid_root": {"ry": 0.4}, "r_shoulder": {"rx": -1.2, "rz": -0.3},
@@ -317,10 +295,36 @@ fn a_skin_posed_through_the_rest_match_shows_what_the_editor_shows() {
         let editor = rotation(&posed[node]);
         let angle = three.angle_between(editor).to_degrees();
         // (Within the noise of composing and decomposing the node transforms.)
-        assert!(angle < 0.05, "{}: {angle} degrees", names[node]);
+        assert!(angle < 0.05, "{}: {angle} degrees", avatar.nodes[node].name);
         compared += 1;
         moved += usize::from(rest_match.angle_between(DQuat::IDENTITY) > 0.1);
     }
     assert!(compared > 40, "{compared} bones");
     assert!(moved > 4, "the T-pose's arms are matched: {moved} bones");
+}
+
+/// The vendored avatar, and its nodes passed to `Body::from_skin` as a three.js page passes a
+/// skin's bones.
+fn vendored_avatar_as_skin() -> (stance_asset::Avatar, Body) {
+    let avatar = load_avatar(AVATAR, &LoadOptions::default()).unwrap();
+    let (names, parents, rest) = skin_of(&avatar);
+    let body = Body::from_skin(&names, &parents, &rest, 2).unwrap();
+    (avatar, body)
+}
+
+/// An avatar's nodes as `Body::from_skin` takes them: names, parent indices (-1: none), H-Anim
+/// rest positions (x y z per node).
+fn skin_of(avatar: &stance_asset::Avatar) -> (Vec<String>, Vec<i32>, Vec<f64>) {
+    let names = avatar.nodes.iter().map(|n| n.name.clone()).collect();
+    let parents = avatar
+        .nodes
+        .iter()
+        .map(|n| n.parent.map_or(-1, |p| p as i32))
+        .collect();
+    let rest = avatar
+        .hanim_rest_positions()
+        .iter()
+        .flat_map(|p| p.to_array())
+        .collect();
+    (names, parents, rest)
 }
