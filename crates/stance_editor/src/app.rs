@@ -85,6 +85,7 @@ impl StanceApp {
         creation: &eframe::CreationContext<'_>,
         hooks: Box<dyn HostHooks>,
     ) -> Result<Self, PosingError> {
+        crate::fonts::install(&creation.egui_ctx);
         let mut app = Self::without_gpu(hooks)?;
         app.viewport = ViewportPanel::new(creation.wgpu_render_state.as_ref());
         Ok(app)

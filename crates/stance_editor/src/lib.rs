@@ -7,6 +7,7 @@
 mod app;
 pub mod avatar;
 pub mod figure;
+pub mod fonts;
 pub mod history;
 mod host;
 pub mod library;

@@ -9,6 +9,7 @@ mod clips;
 mod clocked;
 mod common;
 mod editor_ui;
+mod fonts;
 mod frame_cost;
 mod hands;
 mod image;

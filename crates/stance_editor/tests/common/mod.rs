@@ -17,6 +17,7 @@ pub fn harness_sized(app: StanceApp, size: egui::Vec2) -> Harness<'static, Stanc
     let frame = eframe::Frame::_new_kittest();
     let mut harness = Harness::builder()
         .with_size(size)
+        .with_context_setup(stance_editor::fonts::install)
         .build_ui_state(move |ui, app: &mut StanceApp| app.show(ui, &frame), app);
     settle(&mut harness);
     harness
