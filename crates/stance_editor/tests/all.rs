@@ -12,6 +12,7 @@ mod editor_ui;
 mod frame_cost;
 mod hands;
 mod image;
+mod kept_clips;
 mod model;
 mod motion;
 mod sensors;
