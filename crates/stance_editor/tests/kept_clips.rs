@@ -86,6 +86,11 @@ fn a_saved_document_reopens_in_a_fresh_editor_with_its_clip_and_keys() {
     assert_eq!(json["clip"]["file"], "walk.bvh");
     assert_eq!(json["clip"]["size"], WALK.len());
     let compressed = json["clip"]["deflate"].as_str().unwrap().len();
+    println!(
+        "[kept_clips] walk.bvh: {} bytes, embedded in {compressed} characters, hash {}",
+        WALK.len(),
+        json["clip"]["hash"]
+    );
     assert!(
         compressed < WALK.len() / 2,
         "the clip is compressed: {compressed} characters for {} bytes",
