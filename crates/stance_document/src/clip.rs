@@ -4,7 +4,7 @@
 //! A posture link carries the reference only (a clip does not fit in a URL): opened without
 //! the clip, the editor says which file to load and accepts it when it is loaded.
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use base64::Engine as _;
 use serde::ser::SerializeMap;
@@ -33,11 +33,18 @@ pub fn content_hash(bytes: &[u8]) -> u64 {
 }
 
 /// A clip file carried in the document: its bytes, and their DEFLATE form in base64 as the
-/// JSON holds it (made once: a document is written often, by the autosave too).
-#[derive(Debug, Clone, PartialEq)]
+/// JSON holds it, made when the document is first written (not when a clip opens: a long clip
+/// takes a few hundred milliseconds to compress) and shared by the document's copies.
+#[derive(Debug, Clone)]
 pub struct EmbeddedClip {
     bytes: Arc<[u8]>,
-    deflate_base64: Arc<str>,
+    deflate_base64: Arc<OnceLock<Arc<str>>>,
+}
+
+impl PartialEq for EmbeddedClip {
+    fn eq(&self, other: &Self) -> bool {
+        self.bytes == other.bytes
+    }
 }
 
 impl EmbeddedClip {
@@ -46,9 +53,14 @@ impl EmbeddedClip {
         &self.bytes
     }
 
-    /// Characters of the compressed form in the JSON.
-    pub fn compressed_chars(&self) -> usize {
-        self.deflate_base64.len()
+    /// The compressed form as the JSON holds it (compressed on the first call).
+    pub fn deflate_base64(&self) -> &str {
+        self.deflate_base64.get_or_init(|| {
+            let deflated = miniz_oxide::deflate::compress_to_vec(&self.bytes, DEFLATE_LEVEL);
+            base64::engine::general_purpose::STANDARD
+                .encode(deflated)
+                .into()
+        })
     }
 }
 
@@ -67,17 +79,15 @@ pub struct ClipReference {
 }
 
 impl ClipReference {
-    /// The file `name` with `bytes`, embedded (compressed here, once).
+    /// The file `name` with `bytes`, embedded (compressed when first written).
     pub fn embed(name: &str, bytes: &[u8]) -> Self {
-        let deflated = miniz_oxide::deflate::compress_to_vec(bytes, DEFLATE_LEVEL);
-        let deflate_base64 = base64::engine::general_purpose::STANDARD.encode(deflated);
         Self {
             name: name.to_owned(),
             size: bytes.len() as u64,
             hash: content_hash(bytes),
             embedded: Some(EmbeddedClip {
                 bytes: bytes.into(),
-                deflate_base64: deflate_base64.into(),
+                deflate_base64: Arc::default(),
             }),
         }
     }
@@ -199,7 +209,7 @@ impl ClipReference {
         }
         Ok(EmbeddedClip {
             bytes: bytes.into(),
-            deflate_base64: text.trim().into(),
+            deflate_base64: Arc::new(OnceLock::from(Arc::from(text.trim()))),
         })
     }
 }
@@ -211,7 +221,7 @@ impl Serialize for ClipReference {
         m.serialize_entry("size", &self.size)?;
         m.serialize_entry("hash", &self.hash_text())?;
         if let Some(embedded) = &self.embedded {
-            m.serialize_entry("deflate", &*embedded.deflate_base64)?;
+            m.serialize_entry("deflate", embedded.deflate_base64())?;
         }
         m.end()
     }

@@ -17,10 +17,10 @@ use super::motion::MotionCommand;
 
 /// Frames per second of a recorded clip.
 pub const CLIP_FPS: f64 = 30.0;
-/// Most characters an embedded clip may take in the autosave (the browser's storage holds a
-/// few megabytes): a larger clip is autosaved as a reference, and the restored work asks for
-/// its file.
-pub const AUTOSAVE_CLIP_CHARS: usize = 1 << 20;
+/// Largest clip file the autosave embeds (bytes; compressed, about 1 MiB of characters: the
+/// browser's storage holds a few megabytes): a larger clip is autosaved as a reference, and
+/// the restored work asks for its file.
+pub const AUTOSAVE_CLIP_BYTES: u64 = 2 << 20;
 
 /// The clip's file as a document keeps it when it was not read from a BVH file (a glTF
 /// animation, a recording): the clip written as BVH (`<name>.bvh`), which reads back as the
@@ -316,11 +316,7 @@ impl super::Timeline {
     /// the browser's storage, else named only.
     pub(super) fn autosaved_clip(&self) -> Option<ClipReference> {
         self.document_clip().map(|clip| {
-            let small = clip
-                .embedded
-                .as_ref()
-                .is_some_and(|e| e.compressed_chars() <= AUTOSAVE_CLIP_CHARS);
-            if small {
+            if clip.embedded.is_some() && clip.size <= AUTOSAVE_CLIP_BYTES {
                 clip.clone()
             } else {
                 clip.without_file()
