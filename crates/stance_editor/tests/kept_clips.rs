@@ -8,6 +8,7 @@
 use stance_document::{
     Document, MotionKey, MotionSection, PostureValues, TaskInterval, TaskSpec, link,
 };
+use stance_editor::model::MotionCommand;
 use stance_editor::{Command, EditorModel, MemoryHost};
 use stance_ik::Dof;
 use stance_motion::{BvhLimits, read_bvh};
@@ -252,4 +253,42 @@ fn a_document_without_a_clip_opens_over_the_open_clip() {
     assert!(!model.notice().unwrap().is_error, "{:?}", model.notice());
     assert_eq!(model.timeline().clip_name(), Some("walk"));
     assert_eq!(model.frame_count(), 260);
+}
+
+// Catches a clip that did not come from a BVH file (a recording) lost on saving, or written
+// as a BVH that reads back as another motion (units or axes guessed wrong).
+#[test]
+fn a_recorded_clip_is_kept_as_bvh_and_reopens_with_the_same_motion() {
+    let host = MemoryHost::default();
+    let mut model = editor_on(&host);
+    let elbow = model.session().skeleton().joint_index("l_elbow").unwrap();
+    let dof = model.session().skeleton().joints()[elbow].dof_start;
+    model.apply(Command::Motion(MotionCommand::Record(true)));
+    for k in 1..=30 {
+        let now = f64::from(k) / 30.0;
+        model.apply(Command::SetDof { dof, value: -now });
+        model.step(now, None);
+    }
+    model.apply(Command::Motion(MotionCommand::Record(false)));
+    assert_eq!(model.timeline().clip_name(), Some("recording"));
+    model.apply(Command::ExportDocument);
+    let text = host.inner.borrow().downloads.last().cloned().unwrap().1;
+    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(json["clip"]["file"], "recording.bvh");
+
+    let mut fresh = editor_on(&MemoryHost::default());
+    open(&mut fresh, "recorded.json", text.as_bytes());
+    assert!(!fresh.notice().unwrap().is_error, "{:?}", fresh.notice());
+    assert_eq!(fresh.frame_count(), model.frame_count());
+    assert!((fresh.frame_time() - model.frame_time()).abs() < 1e-9);
+    for frame in 0..model.frame_count() {
+        let (a, b) = (model.frame_posture(frame), fresh.frame_posture(frame));
+        let most = a
+            .values()
+            .iter()
+            .zip(b.values())
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max);
+        assert!(most < 1e-6, "frame {frame}: {most}");
+    }
 }

@@ -124,10 +124,15 @@ impl EditorModel {
         read: Option<DocumentClip>,
     ) -> (String, bool) {
         if let Some(DocumentClip { clip, source }) = read {
+            let reference = source.without_file();
             self.timeline.wanted = None;
             return match self.open_clip(clip, source, false) {
                 Ok(text) => (format!(" With its clip: {text}"), false),
-                Err(error) => (format!(" {error}"), true),
+                Err(error) => {
+                    // Saved again, the document still names its clip.
+                    self.timeline.wanted = Some(reference);
+                    (format!(" {error}"), true)
+                }
             };
         }
         let Some(reference) = &document.clip else {
