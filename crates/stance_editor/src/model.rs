@@ -28,7 +28,7 @@ use stance_hanim::{LevelOfArticulation, Mapping, readable_name};
 use stance_ik::Clock;
 use stance_render::MannequinBone;
 
-pub use self::clips::{AnimationFormat, CLIP_FPS, PickPurpose};
+pub use self::clips::{AUTOSAVE_CLIP_BYTES, AnimationFormat, CLIP_FPS, PickPurpose};
 pub use self::comfort::{ComfortView, heat_color};
 use self::command::goals_moved;
 /// Said when a document made on the avatar before a posture meant the same pose on every body
@@ -920,9 +920,12 @@ impl EditorModel {
                     }
                     Ok(clip) => {
                         self.view_requests += u64::from(document.camera.is_some());
-                        let (clip_words, _) = self.follow_document_clip(&document, clip);
-                        if !clip_words.is_empty() {
-                            self.inform(format!("Restored the autosaved work.{clip_words}"));
+                        let (clip_words, warning) = self.follow_document_clip(&document, clip);
+                        let text = format!("Restored the autosaved work.{clip_words}");
+                        if warning {
+                            self.warn(text);
+                        } else if !clip_words.is_empty() {
+                            self.inform(text);
                         }
                         self.autosave.saved(self.autosaved_document());
                     }

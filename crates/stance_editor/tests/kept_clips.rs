@@ -292,3 +292,65 @@ fn a_recorded_clip_is_kept_as_bvh_and_reopens_with_the_same_motion() {
         assert!(most < 1e-6, "frame {frame}: {most}");
     }
 }
+
+// Catches a large clip that broke the autosave (the browser's storage is a few megabytes) or
+// was dropped from it silently: it is autosaved by name and the restored work asks for it.
+#[test]
+fn a_clip_too_large_for_the_autosave_is_named_and_asked_for() {
+    let text = String::from_utf8_lossy(WALK).into_owned();
+    let (head, motion) = text.split_at(text.find("MOTION").unwrap());
+    let rows: Vec<&str> = motion.lines().skip(3).collect();
+    let mut long = format!("{head}MOTION\nFrames: 3200\nFrame Time: .0083333\n");
+    for f in 0..3200 {
+        long.push_str(rows[f % rows.len()]);
+        long.push('\n');
+    }
+    assert!(long.len() as u64 > stance_editor::model::AUTOSAVE_CLIP_BYTES);
+    let host = MemoryHost::default();
+    let mut model = editor_on(&host);
+    // The plain copy: the contacts' solve would take seconds here and changes nothing kept.
+    let plain = stance_motion::RetargetOptions {
+        contacts: None,
+        ..Default::default()
+    };
+    model.apply(Command::Motion(MotionCommand::SetRetargetOptions(
+        Box::new(plain.clone()),
+    )));
+    open(&mut model, "long.bvh", long.as_bytes());
+    assert_eq!(model.frame_count(), 3200);
+    model.step(5.0, None);
+    let saved = host
+        .inner
+        .borrow()
+        .storage
+        .values()
+        .cloned()
+        .collect::<Vec<_>>();
+    assert!(
+        saved.iter().all(|v| v.len() < 64 * 1024),
+        "the clip is named, not carried: {:?}",
+        saved.iter().map(String::len).collect::<Vec<_>>()
+    );
+    let mut reloaded = EditorModel::new(Box::new(host.clone())).unwrap();
+    reloaded.apply(Command::Motion(MotionCommand::SetRetargetOptions(
+        Box::new(plain),
+    )));
+    reloaded.open_startup(None);
+    let notice = reloaded.notice().unwrap().clone();
+    assert!(notice.is_error, "{}", notice.text);
+    assert!(
+        notice.text.contains("long.bvh") && notice.text.contains("open that file"),
+        "{}",
+        notice.text
+    );
+    open(&mut reloaded, "long.bvh", long.as_bytes());
+    assert!(
+        reloaded
+            .notice()
+            .unwrap()
+            .text
+            .contains("It is the clip the document was made over"),
+        "{:?}",
+        reloaded.notice()
+    );
+}
