@@ -11,6 +11,7 @@ use stance_ik::{Axes, Dof};
 
 use crate::DocumentError;
 use crate::camera::CameraSpec;
+use crate::clip::ClipReference;
 use crate::json::{arr, field, number, numbers, obj, string, vec3};
 use crate::motion::{MotionSection, TaskInterval};
 use crate::stiffness::{StiffnessValues, validate_stiffness};
@@ -36,6 +37,9 @@ pub struct Document {
     pub stiffness: StiffnessValues,
     /// What the posture values are relative to.
     pub rest: PostureRest,
+    /// The motion clip the keys and timed tasks were made over; `None`: none (the keys are
+    /// over the rest posture, or the document was written before clips were kept).
+    pub clip: Option<ClipReference>,
 }
 
 /// What a document's posture values (its posture, keys and posture-task references) are
@@ -492,6 +496,9 @@ impl Document {
             camera.validate()?;
         }
         validate_stiffness(&self.stiffness, "stiffness")?;
+        if let Some(clip) = &self.clip {
+            clip.validate()?;
+        }
         Ok(())
     }
 
@@ -569,6 +576,10 @@ impl Document {
                 ));
             }
         };
+        let clip = match o.get("clip") {
+            None | Some(Value::Null) => None,
+            Some(c) => Some(ClipReference::from_json_value(c)?),
+        };
         let doc = Document {
             avatar,
             posture,
@@ -577,6 +588,7 @@ impl Document {
             camera,
             stiffness,
             rest,
+            clip,
         };
         doc.validate()?;
         Ok(doc)
@@ -952,6 +964,9 @@ impl Serialize for Document {
         }
         if !self.stiffness.joints.is_empty() {
             st.serialize_field("stiffness", &self.stiffness)?;
+        }
+        if let Some(clip) = &self.clip {
+            st.serialize_field("clip", clip)?;
         }
         st.end()
     }

@@ -6,6 +6,8 @@
 //!   with the field names of the `stance solve` problem format.
 //! - [`TaskSpec::to_task`], [`PostureValues::to_posture`], [`PostureValues::from_posture`]:
 //!   to and from the solver's types; errors name the field (`tasks[2].joint: unknown joint ...`).
+//! - [`ClipReference`]: the motion clip the keys were made over, named by content hash and,
+//!   in a saved document, embedded (compressed).
 //! - [`link`]: the compact, versioned, checksummed URL-fragment form of a document.
 //! - [`Problem`]: the one way from tasks to a solver problem (tasks by level, closed-form limb
 //!   starts, settings), from a problem file (`stance solve`) or a document on a skeleton.
@@ -13,6 +15,7 @@
 #![warn(missing_docs)]
 
 pub mod camera;
+pub mod clip;
 pub mod comfort;
 mod convert;
 mod document;
@@ -26,6 +29,7 @@ pub mod stiffness;
 mod words;
 
 pub use camera::CameraSpec;
+pub use clip::{ClipReference, EmbeddedClip, content_hash};
 pub use convert::{
     LimbStartSpec, limb_joint_indices, pinned_contacts, resolve_joint, solver_tasks,
 };

@@ -35,9 +35,10 @@ use crate::document::{Document, TaskKindSpec};
 /// The newest link format this version writes and reads: 2 adds the tasks' active intervals
 /// and the timeline (frame rate, length, keys), 3 the comfort task (a 16-symbol model of the
 /// task kinds), 4 the joint stiffness, 5 what the posture values are relative to (a document
-/// made on an avatar, whose values are relative to the H-Anim standard pose). A document is
+/// made on an avatar, whose values are relative to the H-Anim standard pose), 6 the clip the
+/// keys were made over (its file name, size and content hash; never the file). A document is
 /// written in the oldest format that holds it.
-pub const LINK_FORMAT: u8 = 5;
+pub const LINK_FORMAT: u8 = 6;
 /// Longest link [`encode_for_sharing`] makes with the timeline in it, in characters: beyond,
 /// the keys are left out (a link is pasted into chats and mails).
 pub const MAX_SHARE_CHARS: usize = 8 * 1024;
@@ -118,7 +119,7 @@ fn engine() -> GeneralPurpose {
 
 /// The URL fragment (without `#`) that carries `document`. Values are quantised (see the module
 /// documentation); non-finite numbers, which a validated document never holds, are written as 0.
-/// Format 5 when the document names an avatar and its values are relative to the standard pose
+/// Format 6 when the document names a clip, else 5 when the document names an avatar and its values are relative to the standard pose
 /// (what the editor writes), else 4 when the document sets a joint stiffness, else 3 when a task is a comfort task,
 /// else 2 when the document has a timeline or a task interval, else 1 (the oldest format that
 /// holds it, for older readers).
@@ -132,7 +133,9 @@ pub fn encode(document: &Document) -> String {
     // the mannequin that rest is the standard pose.
     let standard_on_avatar = document.avatar != crate::document::AvatarReference::Default
         && document.rest == crate::document::PostureRest::Standard;
-    let format = if standard_on_avatar {
+    let format = if document.clip.is_some() {
+        6
+    } else if standard_on_avatar {
         5
     } else if !document.stiffness.joints.is_empty() {
         4

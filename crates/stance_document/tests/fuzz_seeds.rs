@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use base64::Engine as _;
 use base64::engine::general_purpose::URL_SAFE_NO_PAD;
-use stance_document::{Document, Problem, TaskKindSpec, link};
+use stance_document::{ClipReference, Document, Problem, TaskKindSpec, link};
 use stance_hanim::{LevelOfArticulation, SkeletonOptions, default_skeleton};
 use stance_ik::Skeleton;
 
@@ -57,7 +57,10 @@ const EVERYTHING: &str = r#"{
   "stiffness": {"vl5": {"rx": 0.6, "rz": 0.3}, "l_elbow": {"rx": 0}}
 }"#;
 
-/// `EVERYTHING` cut down to what link format `format` holds (4: all; 3: no stiffness; 2: no
+/// A two-frame clip of one joint, embedded in the `clip` document seed.
+const TINY_BVH: &str = "HIERARCHY\nROOT Hips\n{\n\tOFFSET 0 0 0\n\tCHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n\tEnd Site\n\t{\n\t\tOFFSET 0 10 0\n\t}\n}\nMOTION\nFrames: 2\nFrame Time: 0.033333\n0 90 0 0 0 0\n1 90 0 0 5 0\n";
+
+/// `EVERYTHING` cut down to what link format `format` holds (6: with a clip; 4: no clip; 3: no stiffness; 2: no
 /// comfort task either; 1: no timeline nor interval either).
 fn document(format: u8) -> Document {
     let mut d = Document::from_json(EVERYTHING).unwrap();
@@ -65,6 +68,10 @@ fn document(format: u8) -> Document {
     // pose (which older formats cannot say).
     if format >= 5 {
         d.rest = stance_document::PostureRest::Standard;
+    }
+    // From format 6 the clip the keys were made over (a link names it, never carries it).
+    if format >= 6 {
+        d.clip = Some(ClipReference::embed("tiny.bvh", TINY_BVH.as_bytes()));
     }
     if format < 4 {
         d.stiffness = Default::default();
@@ -193,6 +200,11 @@ fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
         document(1).to_json(false).into_bytes(),
     ));
     out.push(("document", "empty.json".into(), b"{}".to_vec()));
+    out.push((
+        "document",
+        "clip.json".into(),
+        document(link::LINK_FORMAT).to_json(false).into_bytes(),
+    ));
     out.push(("problem", "arm.json".into(), ARM.into()));
     out.push(("problem", "loa1.json".into(), loa1_problem().into_bytes()));
     out

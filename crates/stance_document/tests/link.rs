@@ -47,6 +47,7 @@ fn all_kinds() -> Document {
     Document {
         // Made on an avatar before `rest` existed: the oldest formats hold it.
         rest: stance_document::PostureRest::Avatar,
+        clip: None,
         avatar: AvatarReference::Url("https://example.org/models/Jin.glb?x=1#frag".to_owned()),
         posture: posture.clone(),
         tasks: vec![
@@ -203,6 +204,7 @@ fn a_full_loa2_posture_with_six_tasks_fits_in_600_characters() {
     for _ in 0..n {
         let d = Document {
             rest: Default::default(),
+            clip: None,
             avatar: AvatarReference::Default,
             posture: loa2_posture(&mut r, 0.6),
             tasks: table1_tasks(&mut r),
@@ -218,6 +220,7 @@ fn a_full_loa2_posture_with_six_tasks_fits_in_600_characters() {
     }
     let d0 = Document {
         rest: Default::default(),
+        clip: None,
         avatar: AvatarReference::Default,
         posture: loa2_posture(&mut r, 0.6),
         tasks: vec![],
@@ -250,6 +253,7 @@ fn report_link_lengths_and_the_general_compressors() {
     let standing = stance_hanim::scenarios::standing_posture(&body);
     let table1 = Document {
         rest: Default::default(),
+        clip: None,
         avatar: AvatarReference::Default,
         posture: PostureValues::from_posture(&body, &standing),
         tasks: table1_tasks(&mut r),
@@ -267,6 +271,7 @@ fn report_link_lengths_and_the_general_compressors() {
     for spread in [0.2, 0.6, 1.0, std::f64::consts::PI] {
         let d = Document {
             rest: Default::default(),
+            clip: None,
             avatar: AvatarReference::Default,
             posture: loa2_posture(&mut r, spread),
             tasks: table1_tasks(&mut r),
@@ -350,7 +355,7 @@ fn broken_links_give_distinct_clear_errors() {
     );
     assert_eq!(
         e.to_string(),
-        "this link was made by a newer version of Stance (format 6); this version reads format 5"
+        "this link was made by a newer version of Stance (format 7); this version reads format 6"
     );
     // Valid checksum, nonsense inside.
     let e = link::decode(&reframe(vec![1, 3, 0xFF, 0xFF, 0xFF])).unwrap_err();

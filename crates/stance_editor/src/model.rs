@@ -28,7 +28,7 @@ use stance_hanim::{LevelOfArticulation, Mapping, readable_name};
 use stance_ik::Clock;
 use stance_render::MannequinBone;
 
-pub use self::clips::{AnimationFormat, CLIP_FPS, PickPurpose};
+pub use self::clips::{AUTOSAVE_CLIP_BYTES, AnimationFormat, CLIP_FPS, PickPurpose};
 pub use self::comfort::{ComfortView, heat_color};
 use self::command::goals_moved;
 /// Said when a document made on the avatar before a posture meant the same pose on every body
@@ -249,9 +249,12 @@ impl EditorModel {
         self.now_secs
     }
 
-    /// The document: the session's posture and tasks, and the avatar they are for.
+    /// The document: the session's posture and tasks, the avatar they are for, and the clip
+    /// the keys are over (embedded; named only when its file is not loaded).
     pub fn document(&self) -> Document {
-        document_of(&self.session, self.avatar_url.as_deref())
+        let mut document = document_of(&self.session, self.avatar_url.as_deref());
+        document.clip = self.timeline.document_clip().cloned();
+        document
     }
 
     /// Whether anything still moves: the solver has not settled, a gesture or a replay goes
@@ -907,11 +910,25 @@ impl EditorModel {
                     let url = url.clone();
                     self.fetch_avatar(&url);
                 }
-                if let Err(error) = self.session.restore_document(&document) {
-                    self.warn(format!("The autosaved work could not be restored: {error}"));
-                } else {
-                    self.view_requests += u64::from(document.camera.is_some());
-                    self.autosave.saved(document);
+                let restored = self.read_document_clip(&document).and_then(|clip| {
+                    let restored = self.session.restore_document(&document);
+                    restored.map(|()| clip).map_err(|error| error.to_string())
+                });
+                match restored {
+                    Err(error) => {
+                        self.warn(format!("The autosaved work could not be restored: {error}"));
+                    }
+                    Ok(clip) => {
+                        self.view_requests += u64::from(document.camera.is_some());
+                        let (clip_words, warning) = self.follow_document_clip(&document, clip);
+                        let text = format!("Restored the autosaved work.{clip_words}");
+                        if warning {
+                            self.warn(text);
+                        } else if !clip_words.is_empty() {
+                            self.inform(text);
+                        }
+                        self.autosave.saved(self.autosaved_document());
+                    }
                 }
             }
             Err(error) => self.warn(format!("The autosaved work could not be read: {error}")),
@@ -942,19 +959,26 @@ impl EditorModel {
         };
         self.selected_joint = None;
         self.trace.clear();
-        match &document.avatar {
+        // A link names its clip, never carries it.
+        let (clip_words, warning) = self.follow_document_clip(&document, None);
+        let text = match &document.avatar {
             AvatarReference::Url(url) if self.avatar_url.as_ref() != Some(url) => {
-                self.inform(format!(
-                    "Opened the posture link; loading its avatar {url}…"
-                ));
+                let text =
+                    format!("Opened the posture link; loading its avatar {url}…{clip_words}");
                 let url = url.clone();
                 self.pending_document = Some(document);
                 self.fetch_avatar(&url);
+                text
             }
-            _ => self.inform(format!(
-                "Opened the posture link.{}",
+            _ => format!(
+                "Opened the posture link.{}{clip_words}",
                 if converted { CONVERTED_NOTE } else { "" }
-            )),
+            ),
+        };
+        if warning {
+            self.warn(text);
+        } else {
+            self.inform(text);
         }
         true
     }
@@ -994,15 +1018,36 @@ impl EditorModel {
             self.import_library(name, text);
             return;
         }
-        match Document::from_json(text) {
-            Ok(document) => match self.open_document(&document) {
-                Ok(converted) => self.inform(format!(
-                    "Opened {name}.{}",
+        let document = match Document::from_json(text) {
+            Ok(document) => document,
+            Err(error) => {
+                self.warn(format!("{name} is not a Stance document: {error}"));
+                return;
+            }
+        };
+        let clip = match self.read_document_clip(&document) {
+            Ok(clip) => clip,
+            Err(error) => {
+                self.warn(format!(
+                    "{name} could not be opened: {error}. The document stays as it was."
+                ));
+                return;
+            }
+        };
+        match self.open_document(&document) {
+            Ok(converted) => {
+                let (clip_words, warning) = self.follow_document_clip(&document, clip);
+                let text = format!(
+                    "Opened {name}.{}{clip_words}",
                     if converted { CONVERTED_NOTE } else { "" }
-                )),
-                Err(error) => self.warn(format!("{name} does not fit the humanoid: {error}")),
-            },
-            Err(error) => self.warn(format!("{name} is not a Stance document: {error}")),
+                );
+                if warning {
+                    self.warn(text);
+                } else {
+                    self.inform(text);
+                }
+            }
+            Err(error) => self.warn(format!("{name} does not fit the humanoid: {error}")),
         }
     }
 }

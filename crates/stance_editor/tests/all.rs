@@ -13,6 +13,7 @@ mod fonts;
 mod frame_cost;
 mod hands;
 mod image;
+mod kept_clips;
 mod model;
 mod motion;
 mod sensors;

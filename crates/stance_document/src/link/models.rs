@@ -23,7 +23,7 @@ pub(super) const ANGLE_PRIOR: [u32; 8] = [15, 16, 14, 15, 16, 13, 15, 14];
 /// Adaptive contexts, one per kind of value; the encoder and the decoder evolve them alike.
 #[derive(Debug)]
 pub(super) struct Models {
-    pub(super) flags: [Bit; 19],
+    pub(super) flags: [Bit; 20],
     pub(super) rotation: UintModel,
     pub(super) translation: UintModel,
     pub(super) position: UintModel,
@@ -90,6 +90,8 @@ pub(super) const HAS_INTERVAL: usize = 16;
 pub(super) const HAS_MOTION: usize = 17;
 // Format 5.
 pub(super) const STANDARD_REST: usize = 18;
+// Format 6.
+pub(super) const HAS_CLIP: usize = 19;
 
 /// `m / 10^k`, correctly rounded (both are exact in f64 for the ranges used).
 pub(super) fn from_decimal(m: u64, k: i32) -> f64 {

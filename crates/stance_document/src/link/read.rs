@@ -5,14 +5,15 @@ use glam::{DQuat, DVec3};
 use stance_ik::{Axes, Dof};
 
 use super::models::{
-    ACTIVE, AVATAR_URL, AXES_XYZ, AXIS_Y, AXIS_Z, HANIM_JOINT, HAS_INTERVAL, HAS_JOINTS, HAS_LIMB,
-    HAS_MOTION, HAS_ORIENTATION, HAS_REFERENCE, HAS_SWIVEL, JOINT_MASK_DEFAULT, KINDS,
+    ACTIVE, AVATAR_URL, AXES_XYZ, AXIS_Y, AXIS_Z, HANIM_JOINT, HAS_CLIP, HAS_INTERVAL, HAS_JOINTS,
+    HAS_LIMB, HAS_MOTION, HAS_ORIENTATION, HAS_REFERENCE, HAS_SWIVEL, JOINT_MASK_DEFAULT, KINDS,
     MASKS_DEFAULT, MAX_QUANTISED, Models, POINT_ZERO, STANDARD_REST, WEIGHT_DECIMAL, WEIGHT_ONE,
     default_mask, dequantise, from_decimal, in_loa_base,
 };
 use super::{
     DIRECTION_STEP, MAX_COUNT, MAX_OVERRUN, MAX_STRING_BYTES, POSITION_STEP_M, ROTATION_STEP_RAD,
 };
+use crate::clip::ClipReference;
 use crate::document::{
     AvatarReference, Document, DofValues, LimbName, PostureRest, PostureValues, TaskKindSpec,
     TaskSpec, dof_slot,
@@ -433,6 +434,19 @@ pub(super) fn decode_payload(bytes: &[u8], format: u8) -> R<Document> {
     } else {
         PostureRest::Avatar
     };
+    let clip = if format >= 6 && r.flag(HAS_CLIP) {
+        let name = r.string()?;
+        let size = r.d.direct(32);
+        let hash = r.d.direct(64);
+        Some(ClipReference {
+            name,
+            size,
+            hash,
+            embedded: None,
+        })
+    } else {
+        None
+    };
     r.check()?;
     Ok(Document {
         avatar,
@@ -442,5 +456,6 @@ pub(super) fn decode_payload(bytes: &[u8], format: u8) -> R<Document> {
         camera: None,
         stiffness,
         rest,
+        clip,
     })
 }

@@ -4,8 +4,8 @@ use glam::{DQuat, DVec3};
 use stance_ik::Axes;
 
 use super::models::{
-    ACTIVE, AVATAR_URL, AXES_XYZ, AXIS_Y, AXIS_Z, HANIM_JOINT, HAS_INTERVAL, HAS_JOINTS, HAS_LIMB,
-    HAS_MOTION, HAS_ORIENTATION, HAS_REFERENCE, HAS_SWIVEL, JOINT_MASK_DEFAULT, KINDS,
+    ACTIVE, AVATAR_URL, AXES_XYZ, AXIS_Y, AXIS_Z, HANIM_JOINT, HAS_CLIP, HAS_INTERVAL, HAS_JOINTS,
+    HAS_LIMB, HAS_MOTION, HAS_ORIENTATION, HAS_REFERENCE, HAS_SWIVEL, JOINT_MASK_DEFAULT, KINDS,
     MASKS_DEFAULT, Models, POINT_ZERO, STANDARD_REST, WEIGHT_DECIMAL, WEIGHT_ONE, default_mask,
     hanim_index, in_loa_base, mask_of, quantise, short_decimal, unit,
 };
@@ -346,7 +346,8 @@ fn motion(w: &mut Writer, d: &Document) {
 
 /// The payload of `format` (1: posture and tasks; 2: also the intervals and the timeline; 3:
 /// the task kinds in a 16-symbol model, comfort among them; 4: also the joint stiffness, in
-/// the shape and quantisation of a posture).
+/// the shape and quantisation of a posture; 5: the rest flag; 6: the clip's reference: file
+/// name, size and content hash, never the file).
 pub(super) fn encode_payload(d: &Document, format: u8) -> Vec<u8> {
     let mut w = Writer {
         e: Encoder::new(),
@@ -373,6 +374,18 @@ pub(super) fn encode_payload(d: &Document, format: u8) -> Vec<u8> {
     }
     if format >= 5 {
         w.flag(STANDARD_REST, d.rest == PostureRest::Standard);
+    }
+    if format >= 6 {
+        match &d.clip {
+            Some(clip) => {
+                w.flag(HAS_CLIP, true);
+                w.string(&clip.name);
+                // At most MAX_CLIP_BYTES in a valid document, below 2^32.
+                w.e.direct(clip.size.min(u64::from(u32::MAX)), 32);
+                w.e.direct(clip.hash, 64);
+            }
+            None => w.flag(HAS_CLIP, false),
+        }
     }
     w.e.finish()
 }

@@ -227,6 +227,7 @@ fn nonzero3(a: [f64; 3]) -> [f64; 3] {
 pub fn random_document(r: &mut StdRng) -> Document {
     Document {
         rest: Default::default(),
+        clip: None,
         avatar: if r.random_bool(0.5) {
             AvatarReference::Default
         } else {

@@ -1,11 +1,14 @@
 //! Clips in and out of the editor: a BVH file or a glTF animation (another file's, or the
 //! loaded avatar's own) onto the timeline, the live session recorded into a clip (sensors
 //! driving it, a replay, or hand posing), the retargeting settings (rest match, contact
-//! thresholds), and the timeline baked out as a glTF animation on the avatar or as BVH.
+//! thresholds), the timeline baked out as a glTF animation on the avatar or as BVH, and the
+//! clip kept with the document (embedded in a saved file, named by content hash in a link).
 
 use stance_asset::{
-    ANIMATION_SAMPLE_FPS, LoadOptions, clip_from_animation, export_glb_animation, read_clip,
+    ANIMATION_SAMPLE_FPS, LoadOptions, clip_from_animation, export_glb_animation, is_bvh_file,
+    read_clip,
 };
+use stance_document::{ClipReference, Document};
 use stance_ik::{Posture, Solver, SolverSettings};
 use stance_motion::{BvhWriteOptions, Clip, RetargetOptions, write_bvh};
 
@@ -14,6 +17,35 @@ use super::motion::MotionCommand;
 
 /// Frames per second of a recorded clip.
 pub const CLIP_FPS: f64 = 30.0;
+/// Largest clip file the autosave embeds (bytes; compressed, about 1 MiB of characters: the
+/// browser's storage holds a few megabytes): a larger clip is autosaved as a reference, and
+/// the restored work asks for its file.
+pub const AUTOSAVE_CLIP_BYTES: u64 = 2 << 20;
+
+/// The clip's file as a document keeps it when it was not read from a BVH file (a glTF
+/// animation, a recording): the clip written as BVH (`<name>.bvh`), which reads back as the
+/// same clip.
+pub(super) fn written_source(clip: &Clip) -> ClipReference {
+    let text = write_bvh(clip, &BvhWriteOptions::default());
+    ClipReference::embed(&format!("{}.bvh", clip.name), text.as_bytes())
+}
+
+/// The clip read from the file `name`, as a document keeps it: a BVH file as it is, other
+/// files (a glTF file's animation: the whole file would be kept) as [`written_source`].
+fn file_source(name: &str, bytes: &[u8], clip: &Clip) -> ClipReference {
+    if is_bvh_file(name) {
+        ClipReference::embed(name, bytes)
+    } else {
+        written_source(clip)
+    }
+}
+
+/// A clip a document carries, read before the document is opened (a clip that cannot be
+/// read leaves everything as it was).
+pub(super) struct DocumentClip {
+    clip: Box<Clip>,
+    source: ClipReference,
+}
 
 /// What the next picked file is for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -38,9 +70,89 @@ impl EditorModel {
     /// timeline stays as it was.
     pub(super) fn open_clip_file(&mut self, name: &str, bytes: &[u8]) {
         match read_clip(name, bytes, &LoadOptions::default(), &mut |_| None) {
-            Ok(clip) => self.apply_motion(MotionCommand::OpenClip(Box::new(clip))),
+            Ok(clip) => {
+                let source = file_source(name, bytes, &clip);
+                match self.open_clip(Box::new(clip), source, true) {
+                    Ok(text) => self.inform(format!("Opened {text}")),
+                    Err(error) => self.warn(error),
+                }
+            }
             Err(error) => self.warn(format!("{name} could not be opened as a clip: {error}.")),
         }
+    }
+
+    /// The clip `document` carries, read; `None` when it carries none, only names one, or
+    /// names the clip already open. `Err`: the embedded file is not a clip (what to say).
+    pub(super) fn read_document_clip(
+        &self,
+        document: &Document,
+    ) -> Result<Option<DocumentClip>, String> {
+        let Some(reference) = &document.clip else {
+            return Ok(None);
+        };
+        let Some(embedded) = &reference.embedded else {
+            return Ok(None);
+        };
+        if self.is_open_clip(reference) {
+            return Ok(None);
+        }
+        let name = &reference.name;
+        let clip = read_clip(name, embedded.bytes(), &LoadOptions::default(), &mut |_| {
+            None
+        })
+        .map_err(|error| format!("its clip {name} could not be read: {error}"))?;
+        Ok(Some(DocumentClip {
+            clip: Box::new(clip),
+            source: reference.clone(),
+        }))
+    }
+
+    /// Whether `reference` is the open clip's file.
+    fn is_open_clip(&self, reference: &ClipReference) -> bool {
+        self.timeline
+            .source
+            .as_ref()
+            .is_some_and(|open| open.hash == reference.hash && open.size == reference.size)
+    }
+
+    /// After a document opened: its clip goes on the timeline (`read`, from
+    /// [`Self::read_document_clip`]), or, named without its file, is asked for. Returns what
+    /// to add to the notice, and whether it is a warning.
+    pub(super) fn follow_document_clip(
+        &mut self,
+        document: &Document,
+        read: Option<DocumentClip>,
+    ) -> (String, bool) {
+        if let Some(DocumentClip { clip, source }) = read {
+            let reference = source.without_file();
+            self.timeline.wanted = None;
+            return match self.open_clip(clip, source, false) {
+                Ok(text) => (format!(" With its clip: {text}"), false),
+                Err(error) => {
+                    // Saved again, the document still names its clip.
+                    self.timeline.wanted = Some(reference);
+                    (format!(" {error}"), true)
+                }
+            };
+        }
+        let Some(reference) = &document.clip else {
+            return (String::new(), false);
+        };
+        if self.is_open_clip(reference) {
+            self.timeline.wanted = None;
+            return (
+                format!(" Its clip {} is the one open.", reference.name),
+                false,
+            );
+        }
+        self.timeline.wanted = Some(reference.without_file());
+        (
+            format!(
+                " Its keys were made over the clip {} ({} bytes), which is not loaded: open that file (Motion > Open clip) to see them over it.",
+                reference.name, reference.size
+            ),
+            true,
+        )
     }
 
     /// Puts the loaded avatar's animation `index` on the timeline.
@@ -201,5 +313,19 @@ impl EditorModel {
             )),
             Err(error) => self.warn(format!("{file_name} could not be exported: {error}")),
         }
+    }
+}
+
+impl super::Timeline {
+    /// The clip the document keeps, for the autosave: embedded while it is small enough for
+    /// the browser's storage, else named only.
+    pub(super) fn autosaved_clip(&self) -> Option<ClipReference> {
+        self.document_clip().map(|clip| {
+            if clip.embedded.is_some() && clip.size <= AUTOSAVE_CLIP_BYTES {
+                clip.clone()
+            } else {
+                clip.without_file()
+            }
+        })
     }
 }

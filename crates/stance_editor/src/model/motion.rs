@@ -13,7 +13,7 @@ mod layer;
 
 use glam::DVec3;
 use stance_document::motion::{DEFAULT_FRAME_COUNT, DEFAULT_FRAME_TIME};
-use stance_document::{MotionKey, MotionSection, PostureValues, TaskInterval};
+use stance_document::{ClipReference, MotionKey, MotionSection, PostureValues, TaskInterval};
 use stance_hanim::resolve_joint;
 use stance_ik::{Frames, Posture};
 use stance_motion::{Clip, Contact, RetargetOptions, Retargeted, retarget};
@@ -131,6 +131,12 @@ pub struct Timeline {
     pub(super) options: RetargetOptions,
     /// The body captured every frame while recording: `(seconds, posture)`.
     pub(super) recording: Option<Vec<(f64, Posture)>>,
+    /// The open clip's file as the document keeps it (embedded): the file read, or the clip
+    /// written as BVH when it came from elsewhere.
+    pub(super) source: Option<ClipReference>,
+    /// The clip a document or link was made over whose file is not loaded yet: the next
+    /// clip opened is compared with it.
+    pub(super) wanted: Option<ClipReference>,
 }
 
 impl Default for Timeline {
@@ -152,6 +158,8 @@ impl Default for Timeline {
             base_revision: 0,
             options: RetargetOptions::default(),
             recording: None,
+            source: None,
+            wanted: None,
         }
     }
 }
@@ -160,6 +168,17 @@ impl Timeline {
     /// The clip's name, when one is open.
     pub fn clip_name(&self) -> Option<&str> {
         self.clip.as_ref().map(|clip| clip.name.as_str())
+    }
+
+    /// The clip the document keeps: the open clip's file (embedded), else the clip a document
+    /// or link named whose file is not loaded yet (a reference).
+    pub fn document_clip(&self) -> Option<&ClipReference> {
+        self.source.as_ref().or(self.wanted.as_ref())
+    }
+
+    /// The clip a document or link named whose file is not loaded yet.
+    pub fn wanted_clip(&self) -> Option<&ClipReference> {
+        self.wanted.as_ref()
     }
 
     /// How clips are put on the body (rest match, contact thresholds).
@@ -306,10 +325,18 @@ impl EditorModel {
     /// Carries out a timeline command.
     pub(crate) fn apply_motion(&mut self, command: MotionCommand) {
         match command {
-            MotionCommand::OpenClip(clip) => self.open_clip(clip),
+            MotionCommand::OpenClip(clip) => {
+                let source = super::clips::written_source(&clip);
+                match self.open_clip(clip, source, true) {
+                    Ok(text) => self.inform(format!("Opened {text}")),
+                    Err(error) => self.warn(error),
+                }
+            }
             MotionCommand::CloseClip => {
                 self.timeline.clip = None;
                 self.timeline.retargeted = None;
+                self.timeline.source = None;
+                self.timeline.wanted = None;
                 self.timeline.playing = false;
                 self.timeline.base_revision += 1;
                 self.timeline.shown = None;
@@ -352,34 +379,60 @@ impl EditorModel {
         }
     }
 
-    fn open_clip(&mut self, clip: Box<Clip>) {
-        let retargeted = match retarget(&clip, self.session.humanoid(), &self.timeline.options) {
-            Ok(retargeted) => retargeted,
-            Err(error) => {
-                self.warn(format!(
+    /// Retargets `clip` onto the body and puts it on the timeline, kept in the document as
+    /// `source`; `set_aside`: the tasks without an interval are set aside (a clip opened by
+    /// the user; not one a document brings back with its own tasks). Returns what to say
+    /// after "Opened " (`the clip walk: 260 frames...`), or why it could not be put on the
+    /// body (the timeline then stays as it was).
+    pub(super) fn open_clip(
+        &mut self,
+        clip: Box<Clip>,
+        source: ClipReference,
+        set_aside: bool,
+    ) -> Result<String, String> {
+        let retargeted =
+            retarget(&clip, self.session.humanoid(), &self.timeline.options).map_err(|error| {
+                format!(
                     "The clip {} could not be put on this body: {error}.",
                     clip.name
-                ));
-                return;
-            }
-        };
+                )
+            })?;
         let (frames, fps) = (retargeted.postures.len(), 1.0 / retargeted.frame_time);
         let contacts = contact_words(&retargeted);
         let name = clip.name.clone();
+        let mut text = format!("the clip {name}: {frames} frames at {fps:.3} fps, {contacts}.");
+        if let Some(wanted) = self.timeline.wanted.take() {
+            if wanted.hash == source.hash && wanted.size == source.size {
+                text.push_str(&format!(
+                    " It is the clip the document was made over ({}): its keys are over it again.",
+                    wanted.name
+                ));
+            } else {
+                text.push_str(&format!(
+                    " The document was made over another clip, {} ({} bytes, {}): its keys may not fit this one.",
+                    wanted.name,
+                    wanted.size,
+                    wanted.hash_text()
+                ));
+            }
+        }
         self.timeline.clip = Some(clip);
         self.timeline.retargeted = Some(retargeted);
+        self.timeline.source = Some(source);
         self.timeline.base_revision += 1;
         self.timeline.playing = false;
-        let set_aside = self.set_aside_standing_tasks();
-        let mut text =
-            format!("Opened the clip {name}: {frames} frames at {fps:.3} fps, {contacts}.");
+        let set_aside = if set_aside {
+            self.set_aside_standing_tasks()
+        } else {
+            0
+        };
         if set_aside > 0 {
             text.push_str(&format!(
                 " {set_aside} task(s) without an active interval were set aside: they would hold the body as it stands against the clip (undo brings them back)."
             ));
         }
-        self.inform(text);
         self.seek(0);
+        Ok(text)
     }
 
     /// Removes the tasks without an interval (the standing pins, balance, comfort) as one
@@ -496,6 +549,7 @@ impl EditorModel {
                 let text = format!("The clip does not fit the body: {error}.");
                 self.timeline.clip = None;
                 self.timeline.retargeted = None;
+                self.timeline.source = None;
                 self.warn(text);
             }
         }
@@ -681,7 +735,7 @@ impl EditorModel {
 
     /// The page shared a posture link of the document (`characters` long): says so, what of
     /// the timeline it carries (the keys and intervals fit in short links; `keys_left_out`:
-    /// the length they would have made), and that a clip is never in it.
+    /// the length they would have made), and that a clip is only named in it.
     pub fn link_shared(&mut self, characters: usize, keys_left_out: Option<usize>) {
         let mut text = format!(
             "Link copied to the clipboard ({characters} characters): opening it shows exactly this posture and these tasks"
@@ -701,9 +755,10 @@ impl EditorModel {
             }
             None => text.push('.'),
         }
-        if let Some(name) = self.timeline.clip_name() {
+        if let Some(clip) = self.timeline.document_clip() {
             text.push_str(&format!(
-                " The clip {name} itself is not in the link: open the same file after the link."
+                " The clip file {} is not in the link, only named by its content: whoever opens the link is asked to open that file (a saved document carries it).",
+                clip.name
             ));
         }
         self.inform(text);

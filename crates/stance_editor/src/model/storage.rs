@@ -1,5 +1,7 @@
 //! The pose library and the autosave of the model.
 
+use stance_document::Document;
+
 use super::{EditorModel, document_of};
 use crate::library::PoseLibrary;
 
@@ -88,12 +90,23 @@ impl EditorModel {
         }
     }
 
+    /// The document as the autosave keeps it (see [`Self::autosaved_clip`]).
+    pub(super) fn autosaved_document(&self) -> Document {
+        Document {
+            clip: self.timeline.autosaved_clip(),
+            ..document_of(&self.session, self.avatar_url.as_deref())
+        }
+    }
+
     pub(super) fn autosave(&mut self) {
         if self.is_pulling() {
             return;
         }
-        let (session, avatar_url) = (&self.session, &self.avatar_url);
-        let document = || document_of(session, avatar_url.as_deref());
+        let (session, avatar_url, timeline) = (&self.session, &self.avatar_url, &self.timeline);
+        let document = || Document {
+            clip: timeline.autosaved_clip(),
+            ..document_of(session, avatar_url.as_deref())
+        };
         if let Some(error) = self
             .autosave
             .tick(self.now_secs, document, self.hooks.as_ref())
