@@ -135,16 +135,14 @@ fn clean_skin(joints: &[u16; 4], weights: &[f32; 4]) -> ([u16; 4], [f32; 4]) {
 }
 
 fn encode_png(width: u32, height: u32, rgba: &[u8]) -> Result<Vec<u8>, AssetError> {
+    let error = |e: png::EncodingError| AssetError::Export(format!("PNG encoding: {e}"));
     let mut out = Vec::new();
-    let encoder = image::codecs::png::PngEncoder::new(&mut out);
-    image::ImageEncoder::write_image(
-        encoder,
-        rgba,
-        width,
-        height,
-        image::ExtendedColorType::Rgba8,
-    )
-    .map_err(|e| AssetError::Export(format!("PNG encoding: {e}")))?;
+    let mut encoder = png::Encoder::new(&mut out, width, height);
+    encoder.set_color(png::ColorType::Rgba);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header().map_err(error)?;
+    writer.write_image_data(rgba).map_err(error)?;
+    writer.finish().map_err(error)?;
     Ok(out)
 }
 

@@ -8,6 +8,7 @@ mod animations;
 mod buffers;
 mod materials;
 mod meshes;
+mod raster;
 
 use animations::import_animations;
 use materials::{import_materials, import_textures};

@@ -183,3 +183,157 @@ fn arbitrary_scale_is_brought_to_human_height() {
         }
     }
 }
+
+/// A glTF whose first material's base colour is `bytes` (one image, one texture).
+fn with_texture(bytes: &[u8], mime: &str) -> Vec<u8> {
+    let (mut j, mut bin) = common::split(&common::default_glb());
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let views = j["bufferViews"].as_array_mut().unwrap();
+    views.push(json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len()}));
+    let view = views.len() - 1;
+    bin.extend_from_slice(bytes);
+    j["images"] = json!([{"bufferView": view, "mimeType": mime}]);
+    j["textures"] = json!([{"source": 0}]);
+    j["buffers"][0]["byteLength"] = json!(bin.len() + (4 - bin.len() % 4) % 4);
+    j["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 0});
+    common::join(&j, &bin)
+}
+
+/// A 2 x 1 PNG of `color` and `depth` with `data` as its rows (and `palette`, `trns` chunks).
+fn png_of(
+    color: png::ColorType,
+    depth: png::BitDepth,
+    data: &[u8],
+    palette: Option<&[u8]>,
+    trns: Option<&[u8]>,
+) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut encoder = png::Encoder::new(&mut out, 2, 1);
+    encoder.set_color(color);
+    encoder.set_depth(depth);
+    if let Some(palette) = palette {
+        encoder.set_palette(palette.to_vec());
+    }
+    if let Some(trns) = trns {
+        encoder.set_trns(trns.to_vec());
+    }
+    let mut writer = encoder.write_header().unwrap();
+    writer.write_image_data(data).unwrap();
+    writer.finish().unwrap();
+    out
+}
+
+/// Every PNG colour type a texture comes in is read as the RGBA the file means, computed by
+/// hand: grey expanded to three channels, a palette with its transparency chunk, 16-bit
+/// channels to their high byte, and opaque alpha where the file has none. Catches a decoder
+/// that hands grey or palette indices through as if they were RGBA (textures smeared or
+/// transparent), or drops the tRNS chunk (cut-out hair drawn opaque).
+#[test]
+fn png_colour_types_are_read_as_rgba() {
+    use png::{BitDepth, ColorType};
+    let cases: [(&str, Vec<u8>, [u8; 8]); 5] = [
+        (
+            "grey",
+            png_of(
+                ColorType::Grayscale,
+                BitDepth::Eight,
+                &[10, 250],
+                None,
+                None,
+            ),
+            [10, 10, 10, 255, 250, 250, 250, 255],
+        ),
+        (
+            "grey and alpha",
+            png_of(
+                ColorType::GrayscaleAlpha,
+                BitDepth::Eight,
+                &[10, 128, 250, 0],
+                None,
+                None,
+            ),
+            [10, 10, 10, 128, 250, 250, 250, 0],
+        ),
+        (
+            "palette with transparency",
+            png_of(
+                ColorType::Indexed,
+                BitDepth::Eight,
+                &[1, 0],
+                Some(&[255, 0, 0, 0, 0, 255]),
+                Some(&[0, 200]),
+            ),
+            [0, 0, 255, 200, 255, 0, 0, 0],
+        ),
+        (
+            "16-bit RGBA",
+            png_of(
+                ColorType::Rgba,
+                BitDepth::Sixteen,
+                &[
+                    0xAB, 0xCD, 0x12, 0x34, 0xFF, 0xFF, 0x80, 0x00, 0, 0, 0, 0, 0, 0, 0x40, 0x01,
+                ],
+                None,
+                None,
+            ),
+            [0xAB, 0x12, 0xFF, 0x80, 0, 0, 0, 0x40],
+        ),
+        (
+            "RGB",
+            png_of(
+                ColorType::Rgb,
+                BitDepth::Eight,
+                &[1, 2, 3, 4, 5, 6],
+                None,
+                None,
+            ),
+            [1, 2, 3, 255, 4, 5, 6, 255],
+        ),
+    ];
+    for (name, bytes, expected) in cases {
+        let avatar = load_avatar(&with_texture(&bytes, "image/png"), &LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let texture = &avatar.textures[avatar.materials[0].base_color_texture.unwrap()];
+        assert_eq!((texture.width, texture.height), (2, 1), "{name}");
+        assert_eq!(&texture.rgba8[..], &expected, "{name}");
+    }
+}
+
+/// A PNG whose header reads and whose pixel data is cut short, and bytes that are no image at
+/// all: the texture is drawn white and a warning names the image and what is wrong; the
+/// avatar still loads. Catches a decoder error that fails the whole import, or a warning that
+/// does not say which image.
+#[test]
+fn a_broken_or_unknown_image_is_named_and_drawn_white() {
+    let whole = png_of(
+        png::ColorType::Rgb,
+        png::BitDepth::Eight,
+        &[1, 2, 3, 4, 5, 6],
+        None,
+        None,
+    );
+    let truncated = &whole[..whole.len() - 20];
+    for (name, bytes, says) in [
+        ("truncated PNG", truncated, "PNG"),
+        (
+            "not an image",
+            &b"GIF89a not a texture"[..],
+            "not a PNG, JPEG or WebP",
+        ),
+    ] {
+        let avatar = load_avatar(&with_texture(bytes, "image/png"), &LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let texture = &avatar.textures[avatar.materials[0].base_color_texture.unwrap()];
+        assert_eq!(&texture.rgba8[..], &[255; 4], "{name}");
+        assert!(
+            avatar
+                .warnings
+                .iter()
+                .any(|w| w.contains("image 0") && w.contains(says)),
+            "{name}: {:?}",
+            avatar.warnings
+        );
+    }
+}

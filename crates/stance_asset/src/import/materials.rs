@@ -5,9 +5,10 @@ use gltf::json::{self, validation::Checked};
 use serde_json::Value;
 
 use super::buffers::decode_data_uri;
+use super::raster::decode_image_bytes;
 use super::{Ctx, Resolver, bad_index, sz};
+use crate::AssetError;
 use crate::model::{AlphaMode, Material, Texture, Wrap};
-use crate::{AssetError, Limits};
 
 pub(super) fn import_textures(
     ctx: &mut Ctx<'_>,
@@ -185,62 +186,6 @@ fn decode_image(
     let image = decode_image_bytes(bytes, index, ctx.limits, ctx.decoded_bytes, size_only)?;
     ctx.charge(image.2.len(), &what)?;
     Ok(image)
-}
-
-/// Decodes an encoded image to RGBA8 after checking its declared size against the side
-/// limit and against what is left of the decoded-bytes budget (`already` spent); with
-/// `size_only`, the checked size and no pixels.
-fn decode_image_bytes(
-    bytes: &[u8],
-    index: usize,
-    limits: &Limits,
-    already: u64,
-    size_only: bool,
-) -> Result<(u32, u32, Vec<u8>), AssetError> {
-    let format = image::guess_format(bytes).map_err(|e| AssetError::Image {
-        index,
-        reason: e.to_string(),
-    })?;
-    let mut reader = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
-    let mut lim = image::Limits::default();
-    lim.max_image_width = Some(limits.max_texture_side);
-    lim.max_image_height = Some(limits.max_texture_side);
-    lim.max_alloc = Some(
-        (limits.max_texture_side as u64)
-            .saturating_mul(limits.max_texture_side as u64)
-            .saturating_mul(8),
-    );
-    reader.limits(lim.clone());
-    let (w, h) = reader.into_dimensions().map_err(|e| AssetError::Image {
-        index,
-        reason: e.to_string(),
-    })?;
-    if w > limits.max_texture_side || h > limits.max_texture_side {
-        return Err(AssetError::TooLarge {
-            what: format!("image {index} side"),
-            size: w.max(h) as u64,
-            limit: limits.max_texture_side as u64,
-        });
-    }
-    let total = already.saturating_add(u64::from(w) * u64::from(h) * 4);
-    if total > limits.max_decoded_bytes {
-        return Err(AssetError::TooLarge {
-            what: format!("decoded data (at image {index})"),
-            size: total,
-            limit: limits.max_decoded_bytes,
-        });
-    }
-    if size_only {
-        return Ok((w, h, Vec::new()));
-    }
-    let mut reader = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
-    reader.limits(lim);
-    let decoded = reader.decode().map_err(|e| AssetError::Image {
-        index,
-        reason: e.to_string(),
-    })?;
-    let rgba = decoded.into_rgba8();
-    Ok((rgba.width(), rgba.height(), rgba.into_raw()))
 }
 
 pub(super) fn import_materials(
