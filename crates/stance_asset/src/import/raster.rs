@@ -176,6 +176,10 @@ fn decode_other(
 ) -> Result<(u32, u32, Vec<u8>), AssetError> {
     Err(image_error(
         index,
-        format!("the browser could not decode this {} image", format.name()),
+        format!(
+            "{0} not decoded: in the page {0} textures are decoded by the browser, which did \
+             not decode this one",
+            format.name()
+        ),
     ))
 }
