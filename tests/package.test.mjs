@@ -65,6 +65,11 @@ describe("stance-ik", () => {
     }
     const wrist = fromObject.joints.wrist;
     [0.1, 0.4, 0.2].forEach((x, i) => assert.ok(Math.abs(wrist[i] - x) < 1e-6, `${wrist}`));
+    // Which task gave way and why, as stance solve says it (the levels conflict here).
+    assert.deepEqual(fromObject.tasks.map((t) => [t.level, t.met, t.gave_way]),
+      native.tasks.map((t) => [t.level, t.met, t.gave_way]));
+    assert.equal(fromObject.tasks[0].met, true);
+    assert.match(fromObject.tasks[1].gave_way ?? "", /^(conflicts with level 1: |limited by joint limits)/);
   });
 
   test("a malformed problem throws an Error that names the field", () => {

@@ -97,11 +97,27 @@ export interface Report {
   analytic_restarts: unknown[];
 }
 
+/** How one task of the problem fares in the solution (one per task, in the problem's order). */
+export interface TaskStatus {
+  level: number;
+  /** The task in words, as the editor's task list writes it. */
+  description: string;
+  /** The norm of its error (m or rad); null when it cannot be evaluated. */
+  residual: number | null;
+  /** Residual within 1e-3. */
+  met: boolean;
+  /** Why it is not met: "conflicts with level L: TASK", "limited by joint limits" or "out of reach". */
+  gave_way: string | null;
+  /** Why it could not be evaluated. */
+  problem: string | null;
+}
+
 /** What `solve` returns (the output of `stance solve`). */
 export interface Solution {
   joints: Record<string, Vec3>;
   posture: Posture;
   report: Report;
+  tasks: TaskStatus[];
   limbs?: Array<{ joints: [string, string, string]; swivel: number; start_swivel: number; reached: boolean; within_limits: boolean }>;
 }
 

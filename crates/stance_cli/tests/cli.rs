@@ -381,3 +381,51 @@ fn direction_and_balance_in_problem_files() {
         &["tasks[0].target", "zero-length"],
     );
 }
+
+/// `stance solve` says which task gave way and why, in the words of the editor's task list:
+/// the wrist pinned at level 1 and pulled elsewhere at level 2 holds its pin, and the pull
+/// names the pin it conflicts with. Its residual is the distance, computed here from the
+/// printed wrist position, between the wrist and the pull's target. Catches a report that only
+/// gives the level (`gave_way: 2`) without the task and the reason, a residual that is not the
+/// task's error, or statuses out of the file's task order.
+#[test]
+fn solve_says_which_task_gave_way_and_why() {
+    let problem = EXAMPLE.replacen(
+        r#""tasks":["#,
+        r#""tasks":[
+ {"level":2,"kind":"position","joint":"l_wrist","point":[0,0,0],"axes":"xyz","target":[0.1,1.4,0.4]},"#,
+        1,
+    );
+    let path = write_temp("gave_way.json", &problem);
+    let (ok, stdout, stderr) = stance(&["solve", path.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    let v: Value = serde_json::from_str(&stdout).expect("one JSON object");
+    let tasks = v["tasks"].as_array().expect("tasks");
+    assert_eq!(tasks.len(), 6, "one status per task of the file");
+    let pull = &tasks[0];
+    let pin = &tasks[1];
+    assert_eq!(pin["level"], 1);
+    assert_eq!(pin["met"], true, "{pin}");
+    assert!(pin["gave_way"].is_null(), "{pin}");
+    assert_eq!(pull["level"], 2);
+    assert_eq!(pull["met"], false, "{pull}");
+    let reason = pull["gave_way"].as_str().expect("a reason");
+    let pin_words = pin["description"].as_str().unwrap();
+    assert_eq!(pin_words, "left wrist position");
+    assert_eq!(reason, format!("conflicts with level 1: {pin_words}"));
+    let wrist: Vec<f64> = v["joints"]["l_wrist"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    let distance =
+        ((wrist[0] - 0.1).powi(2) + (wrist[1] - 1.4).powi(2) + (wrist[2] - 0.4).powi(2)).sqrt();
+    let residual = pull["residual"].as_f64().unwrap();
+    assert!(
+        (residual - distance).abs() < 1e-6,
+        "{residual} vs {distance}"
+    );
+    // The comfort (posture) task is minimised, never "given way".
+    assert!(tasks[5]["gave_way"].is_null(), "{}", tasks[5]);
+}

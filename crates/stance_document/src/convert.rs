@@ -253,7 +253,7 @@ impl TaskSpec {
         self.solver_tasks_with(&body.skeleton, Some(body), problem)
     }
 
-    fn solver_tasks_with(
+    pub(crate) fn solver_tasks_with(
         &self,
         skeleton: &Skeleton,
         body: Option<&HumanoidSkeleton>,
@@ -309,7 +309,7 @@ impl TaskSpec {
 
     /// The solver task; a comfort task's anatomical axes are `body`'s, or without one those
     /// of a skeleton whose joint frames are the H-Anim rest frame ([`aligned_axes`]).
-    fn task_with(
+    pub(crate) fn task_with(
         &self,
         skeleton: &Skeleton,
         body: Option<&HumanoidSkeleton>,

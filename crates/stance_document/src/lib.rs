@@ -25,6 +25,7 @@ pub mod link;
 pub mod motion;
 mod problem;
 mod range_coder;
+mod status;
 pub mod stiffness;
 mod words;
 
@@ -43,4 +44,5 @@ pub use motion::{MotionKey, MotionSection, TaskInterval};
 pub use problem::{
     LimbStart, Problem, ProblemSettings, parse_skeleton, problem_json, skeleton_json,
 };
+pub use status::{MET_TOLERANCE, TaskStatus, task_statuses};
 pub use stiffness::{StiffnessValues, apply_stiffness};

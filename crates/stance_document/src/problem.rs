@@ -174,7 +174,9 @@ impl Problem {
     }
 
     /// The solution as `stance solve` prints it: `{"joints": {name: [x, y, z]}, "posture":
-    /// {joint: {dof: value}}, "report": {...}}`, and with limb tasks `"limbs"`: per limb task
+    /// {joint: {dof: value}}, "report": {...}, "tasks": [...]}` (per task of the file, in its
+    /// order: level, description, residual, met, and why it gave way; see [`crate::TaskStatus`]),
+    /// and with limb tasks `"limbs"`: per limb task
     /// its joints, final swivel, the closed-form start's swivel and whether that start reached
     /// the goal within the limits.
     pub fn solution_json(&self, posture: &Posture, report: &SolveReport) -> Value {
@@ -196,10 +198,28 @@ impl Problem {
                 comfort_json(&self.skeleton, posture, &self.comfort),
             );
         }
+        let statuses =
+            crate::task_statuses(&self.skeleton, None, posture, &frames, &self.specs, true);
+        let tasks: Vec<Value> = self
+            .specs
+            .iter()
+            .zip(statuses)
+            .map(|(spec, status)| {
+                json!({
+                    "level": spec.level,
+                    "description": spec.description(),
+                    "residual": status.residual,
+                    "met": status.residual.is_some_and(|r| r <= crate::MET_TOLERANCE),
+                    "gave_way": status.gave_way,
+                    "problem": status.problem,
+                })
+            })
+            .collect();
         let mut out = json!({
             "joints": joints,
             "posture": PostureValues::from_posture(&self.skeleton, posture),
             "report": report,
+            "tasks": tasks,
         });
         if !self.limb_starts.is_empty()
             && let Some(o) = out.as_object_mut()

@@ -14,7 +14,6 @@ use stance_hanim::hands::{HandError, HandRig};
 use stance_hanim::{
     HumanoidSkeleton, LevelOfArticulation, Side, SkeletonOptions, default_skeleton, mirror_name,
 };
-use stance_ik::conflict::Unmet;
 use stance_ik::{
     Clock, Frames, Iteration, Limb, LimbGoal, Posture, Skeleton, SolveReport, SolveStatus, Solver,
     SolverSettings, SwivelInterval, TEXTBOOK_ANGULAR_STEP, TEXTBOOK_LINEAR_STEP, Task,
@@ -33,19 +32,7 @@ pub struct Grab {
     pub target_world: DVec3,
 }
 
-/// How one task of the document fares in the current posture.
-#[derive(Debug, Clone, PartialEq)]
-pub struct TaskStatus {
-    /// Norm of the task's error (m or rad); `None` when the task cannot be evaluated.
-    pub residual: Option<f64>,
-    /// Why the task is not met, in words; `None` when it is met or inactive.
-    pub gave_way: Option<String>,
-    /// The document task cannot be turned into a solver task (e.g. unknown joint).
-    pub problem: Option<String>,
-}
-
-/// Residual below which a task counts as met in the panels (m or rad).
-pub const MET_TOLERANCE: f64 = 1e-3;
+pub use stance_document::{MET_TOLERANCE, TaskStatus};
 
 /// Iterations per frame and the time they may take: the page stays interactive. The time
 /// bounds a frame; the count is enough for the Table 1 example to converge in one frame
@@ -720,81 +707,14 @@ impl PosingSession {
     fn refresh(&mut self) {
         self.revision = self.revision.wrapping_add(1);
         self.frames = Frames::new(&self.humanoid.skeleton, &self.posture);
-        let skeleton = &self.humanoid.skeleton;
-        let values = self.posture.values();
-        let evaluated: Vec<(Option<f64>, Option<String>)> = self
-            .tasks
-            .iter()
-            .map(
-                |spec| match spec.to_solver_tasks_on(&self.humanoid, &self.tasks) {
-                    Ok(converted) => {
-                        let squares: f64 = converted
-                            .iter()
-                            .map(|task| task.residual(skeleton, &self.frames, values).powi(2))
-                            .sum();
-                        (Some(squares.sqrt()), None)
-                    }
-                    Err(error) => (None, Some(error.to_string())),
-                },
-            )
-            .collect();
-        let statuses = self
-            .tasks
-            .iter()
-            .zip(&evaluated)
-            .map(|(spec, (residual, problem))| {
-                let unmet = spec.active
-                    && !spec.kind.is_soft()
-                    && residual.is_some_and(|r| r > MET_TOLERANCE);
-                let gave_way = unmet.then(|| self.why_unmet(spec, &evaluated));
-                TaskStatus {
-                    residual: *residual,
-                    gave_way,
-                    problem: problem.clone(),
-                }
-            })
-            .collect();
-        self.statuses = statuses;
-    }
-
-    /// Names the higher-priority tasks a task really gave way to (those that, held, take away
-    /// its progress; see `conflict`), or says the goal is out of reach or stopped by the joint
-    /// limits.
-    fn why_unmet(&self, spec: &TaskSpec, evaluated: &[(Option<f64>, Option<String>)]) -> String {
-        if !self.settled {
-            return "still moving".to_owned();
-        }
-        let skeleton = self.skeleton();
-        let Ok(task) = spec.to_task_on(&self.humanoid, &self.tasks) else {
-            return "out of reach".to_owned();
-        };
-        let higher: Vec<(&TaskSpec, Task)> = self
-            .tasks
-            .iter()
-            .zip(evaluated)
-            .filter(|(other, (residual, _))| {
-                other.active
-                    && other.level < spec.level
-                    && !other.kind.is_soft()
-                    && residual.is_some()
-            })
-            .filter_map(|(other, _)| {
-                Some((other, other.to_task_on(&self.humanoid, &self.tasks).ok()?))
-            })
-            .collect();
-        let solver_tasks: Vec<Task> = higher.iter().map(|(_, task)| task.clone()).collect();
-        match stance_ik::conflict::diagnose(skeleton, &self.posture, &task, &solver_tasks) {
-            Unmet::Conflicts(indices) => {
-                let names: Vec<String> = indices
-                    .iter()
-                    .filter_map(|&index| higher.get(index))
-                    .map(|(other, _)| format!("level {}: {}", other.level, other.description()))
-                    .collect();
-                format!("conflicts with {}", names.join(", "))
-            }
-            Unmet::JointLimits => "limited by joint limits".to_owned(),
-            Unmet::OutOfReach => "out of reach".to_owned(),
-        }
+        self.statuses = stance_document::task_statuses(
+            &self.humanoid.skeleton,
+            Some(&self.humanoid),
+            &self.posture,
+            &self.frames,
+            &self.tasks,
+            self.settled,
+        );
     }
 }
 
