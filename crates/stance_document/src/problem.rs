@@ -119,7 +119,7 @@ impl Problem {
         }
         let mut hybrid_limbs: Vec<Limb> = limb_starts.iter().map(|l| l.limb.clone()).collect();
         if hybrid {
-            for limb in LimbName::ALL.iter().filter_map(|l| l.on(&skeleton).ok()) {
+            for limb in LimbName::all_on(&skeleton) {
                 if !hybrid_limbs.iter().any(|h| h.joints() == limb.joints()) {
                     hybrid_limbs.push(limb);
                 }

@@ -147,18 +147,7 @@ impl PosingSession {
         let frames = Frames::new(&humanoid.skeleton, &posture);
         // The hybrid of the paper's conclusion: a pull stuck in a local minimum restarts the
         // limb from its closed-form solution.
-        let limbs = [
-            LimbName::LeftArm,
-            LimbName::RightArm,
-            LimbName::LeftLeg,
-            LimbName::RightLeg,
-        ]
-        .iter()
-        .filter_map(|limb| {
-            let [upper, middle, end] = limb.joints();
-            Limb::from_names(&humanoid.skeleton, [upper, middle, end]).ok()
-        })
-        .collect();
+        let limbs = LimbName::all_on(&humanoid.skeleton);
         let anatomical_stiffness = humanoid.skeleton.stiffness().to_vec();
         let hands = [Side::Left, Side::Right].map(|side| HandRig::new(&humanoid.skeleton, side));
         let mut session = Self {

@@ -206,6 +206,16 @@ impl LimbName {
         });
         Limb::from_names(skeleton, names)
     }
+
+    /// The limbs of [`LimbName::ALL`] that `skeleton` has, for the solver's hybrid restarts
+    /// (the paper's conclusion: a stalled solve restarts a limb from its closed form). The one
+    /// list the editor, problem files and the `stance-ik` package give the solver.
+    pub fn all_on(skeleton: &Skeleton) -> Vec<Limb> {
+        Self::ALL
+            .iter()
+            .filter_map(|limb| limb.on(skeleton).ok())
+            .collect()
+    }
 }
 
 #[cfg(test)]

@@ -212,11 +212,7 @@ impl PoseSolver {
         let mut solver = Solver::new(settings.solver).map_err(|e| format!("settings: {e}"))?;
         solver.level_damping = settings.level_damping;
         if settings.hybrid {
-            let limbs = LimbName::ALL
-                .iter()
-                .filter_map(|l| limb(&body.skeleton, l.name()).ok())
-                .collect();
-            solver = solver.with_limbs(limbs);
+            solver = solver.with_limbs(LimbName::all_on(&body.skeleton));
         }
         Ok(Self {
             skeleton: body.skeleton.clone(),
