@@ -93,12 +93,13 @@ describe("stance-ik", () => {
     solver.worldTransforms(values, transforms);
     const ankle = at("l_talocrural");
     const hand = at("r_radiocarpal").map((x, i) => x + [0, 0.35, 0.3][i]);
-    solver.setTasks([
-      { kind: "position", joint: "l_talocrural", target: ankle },
-      { kind: "position", joint: "r_talocrural", target: at("r_talocrural") },
-      { kind: "balance", level: 2 },
-      { kind: "position", joint: "r_radiocarpal", target: hand, level: 3 },
+    // The editor's defaults (feet pinned where they stand, balance, comfort) and a reach.
+    const defaults = skeleton.defaultTasks(values);
+    assert.deepEqual(defaults.map((t) => [t.kind, t.joint ?? null, t.level ?? 1]), [
+      ["position", "l_talocrural", 1], ["position", "r_talocrural", 1], ["balance", null, 2], ["comfort", null, 10],
     ]);
+    defaults[0].target.forEach((x, i) => assert.ok(Math.abs(x - ankle[i]) < 1e-12));
+    solver.setTasks([...defaults.slice(0, 3), { kind: "position", joint: "r_radiocarpal", target: hand, level: 3 }]);
     const report = solver.solve(values);
     assert.equal(report.status, "converged");
     assert.equal(report.levels.length, 3);

@@ -3,7 +3,7 @@
 //! reflects), and the tasks every editor makes (a pin, the comfort).
 
 use stance_hanim::{mirror_name, readable_name};
-use stance_ik::Axes;
+use stance_ik::{Axes, Frames, Skeleton};
 
 use crate::{DEFAULT_BALANCE_MARGIN, DEFAULT_COMFORT, PostureValues, TaskKindSpec, TaskSpec};
 
@@ -43,6 +43,24 @@ impl TaskSpec {
         });
         balance.level = 2;
         balance
+    }
+
+    /// The tasks a new body starts with: feet on the floor before balance, balance before
+    /// comfort. Each ankle (`l_talocrural`, `r_talocrural`) the skeleton has is pinned where
+    /// `frames` put it; balance is the support polygon of the pinned feet (an inequality: the
+    /// body leans freely while its centre of mass stays over them); comfort settles the rest.
+    /// The editor's new session and the `stance-ik` package's `defaultTasks` alike.
+    pub fn defaults(skeleton: &Skeleton, frames: &Frames) -> Vec<TaskSpec> {
+        let mut tasks: Vec<TaskSpec> = ["l_talocrural", "r_talocrural"]
+            .into_iter()
+            .filter_map(|foot| {
+                let position = frames.joint_position.get(skeleton.joint_index(foot)?)?;
+                Some(TaskSpec::pin(foot, position.to_array()))
+            })
+            .collect();
+        tasks.push(TaskSpec::balance());
+        tasks.push(TaskSpec::comfort());
+        tasks
     }
 
     /// A light attraction of every joint toward the rest posture, at level 10.

@@ -177,22 +177,9 @@ impl PosingSession {
         Ok(session)
     }
 
-    /// Feet on the floor before balance, balance before comfort.
+    /// Feet on the floor before balance, balance before comfort ([`TaskSpec::defaults`]).
     pub fn default_tasks(&self) -> Vec<TaskSpec> {
-        let mut tasks = Vec::new();
-        for foot in ["l_talocrural", "r_talocrural"] {
-            if let Some(position) = self.joint_position(foot) {
-                tasks.push(TaskSpec::pin(foot, position.to_array()));
-            }
-        }
-        // Balance as the support polygon of the pinned feet (an inequality): the body leans
-        // freely as long as its centre of mass stays over them.
-        tasks.push(TaskSpec::balance());
-        // Comfort at the lowest level: it settles the posture after every change of tasks
-        // (never after a direct edit, see `Wake`); the rest-posture attraction is one click
-        // away in Add task.
-        tasks.push(TaskSpec::comfort());
-        tasks
+        TaskSpec::defaults(self.skeleton(), &self.frames)
     }
 
     /// The kinematic skeleton the solver works on: joints, DOFs and their limits.

@@ -86,6 +86,14 @@ impl JsSkeleton {
         })
     }
 
+    /// The tasks a new body starts with at the posture `values` (a task array, as
+    /// `Solver.setTasks` takes it): each ankle pinned where it is, balance over the pinned
+    /// feet, then comfort; the editor's defaults.
+    #[wasm_bindgen(js_name = defaultTasks)]
+    pub fn default_tasks(&self, values: &[f64]) -> Result<JsValue, JsError> {
+        parsed(&self.body.default_tasks(values).map_err(error)?)
+    }
+
     /// Joint names, in skeleton order.
     #[wasm_bindgen(getter, js_name = jointNames)]
     pub fn joint_names(&self) -> Vec<String> {

@@ -147,6 +147,17 @@ impl Body {
         })
     }
 
+    /// The tasks a new body starts with at the posture `values` (JSON text of a task array,
+    /// as `Solver::set_tasks` takes it): each ankle pinned where it is, balance over the
+    /// pinned feet, comfort ([`TaskSpec::defaults`], the editor's defaults).
+    pub fn default_tasks(&self, values: &[f64]) -> JsResult<String> {
+        let posture = Posture::from_values(&self.skeleton, values.to_vec())
+            .map_err(|e| format!("values: {e}"))?;
+        let frames = Frames::new(&self.skeleton, &posture);
+        let tasks = TaskSpec::defaults(&self.skeleton, &frames);
+        serde_json::to_string(&tasks).map_err(|e| e.to_string())
+    }
+
     /// Joint names, in skeleton order.
     pub fn joint_names(&self) -> Vec<String> {
         self.skeleton

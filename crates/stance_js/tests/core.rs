@@ -328,3 +328,82 @@ fn skin_of(avatar: &stance_asset::Avatar) -> (Vec<String>, Vec<i32>, Vec<f64>) {
         .collect();
     (names, parents, rest)
 }
+
+/// The package's default tasks are the editor's (feet pinned where they stand, balance,
+/// comfort) at the posture given: a kneeling posture's ankles are pinned where that posture
+/// puts them (from `worldTransforms`, not the rest), and solving the defaults with a pull on the
+/// hand keeps both feet within a micrometre. Catches defaults pinned at the rest posture's
+/// ankles (the body jumps back), the wrong levels, or a second list drifting from the editor's.
+#[test]
+fn default_tasks_pin_the_feet_where_they_stand() {
+    let body = Body::hanim(2).unwrap();
+    let s = &body.skeleton;
+    let mut values = vec![0.0; s.dof_count()];
+    let dof = |joint: &str| {
+        let j = s.joint_index(joint).unwrap();
+        s.joints()[..j]
+            .iter()
+            .map(|joint| joint.dofs.len())
+            .sum::<usize>()
+    };
+    values[dof("l_knee")] = 0.8;
+    values[dof("r_hip")] = -0.4;
+    let tasks: Value = serde_json::from_str(&body.default_tasks(&values).unwrap()).unwrap();
+    let tasks = tasks.as_array().unwrap();
+    let kinds: Vec<(&str, u64)> = tasks
+        .iter()
+        .map(|t| {
+            (
+                t["kind"].as_str().unwrap(),
+                t["level"].as_u64().unwrap_or(1),
+            )
+        })
+        .collect();
+    assert_eq!(
+        kinds,
+        [
+            ("position", 1),
+            ("position", 1),
+            ("balance", 2),
+            ("comfort", 10)
+        ]
+    );
+    let mut solver = PoseSolver::new(&body, r#"{"max_iterations": 300}"#).unwrap();
+    let mut out = vec![0.0; 7 * s.joint_count()];
+    solver.world_transforms(&values, &mut out).unwrap();
+    let position = |out: &[f64], name: &str| {
+        let j = s.joint_index(name).unwrap();
+        DVec3::new(out[7 * j], out[7 * j + 1], out[7 * j + 2])
+    };
+    for (task, foot) in tasks.iter().zip(["l_talocrural", "r_talocrural"]) {
+        assert_eq!(task["joint"], foot);
+        let target = DVec3::from_array(at(task, "target").try_into().expect("three coordinates"));
+        assert!(
+            (target - position(&out, foot)).length() < 1e-9,
+            "{foot}: {target}"
+        );
+    }
+    let before = [
+        position(&out, "l_talocrural"),
+        position(&out, "r_talocrural"),
+    ];
+    let hand = position(&out, "r_radiocarpal") + DVec3::new(0.1, 0.2, 0.2);
+    let mut with_pull = tasks.clone();
+    with_pull.push(
+        serde_json::json!({"kind": "position", "joint": "r_radiocarpal",
+        "target": hand.to_array(), "level": 3}),
+    );
+    solver
+        .set_tasks(&Value::Array(with_pull).to_string())
+        .unwrap();
+    solver.solve(&mut values).unwrap();
+    solver.world_transforms(&values, &mut out).unwrap();
+    for (foot, was) in ["l_talocrural", "r_talocrural"].iter().zip(before) {
+        assert!((position(&out, foot) - was).length() < 1e-6, "{foot} moved");
+    }
+    assert!(
+        body.default_tasks(&[0.0; 3])
+            .unwrap_err()
+            .contains("values")
+    );
+}
