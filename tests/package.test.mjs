@@ -158,7 +158,8 @@ describe("stance-ik", () => {
     // dependency that makes the download grow. With wasm-opt -Oz it was 328 KiB (2026-11), 356 KiB
     // once retargeting held heel, ball, hands, knees and pelvis and bodies matched their
     // rests onto the standard pose, 369 KiB with the task statuses of solve, 355 KiB with the
-    // bindings and the file formats at opt-level "z" (retargeting kept at "s").
+    // bindings and the file formats at opt-level "z" (retargeting kept at "s"), 358 KiB with
+    // defaultTasks. stance_hanim at "z" would be 344 KiB, but Table 1 solves 1.5x slower.
     const customSections = (bytes) => {
       const names = [];
       let at = 8;
