@@ -94,6 +94,22 @@ pub enum MotionCommand {
     /// The clip's joints mapped onto H-Anim this way (the mapping window's corrections):
     /// the clip is retargeted with it.
     SetClipMapping(Box<stance_hanim::Mapping>),
+    /// How far the host has got with the clip being opened (request `id`).
+    ClipProgress {
+        /// The host's request.
+        id: u64,
+        /// From 0 to 1.
+        fraction: f64,
+    },
+    /// The clip being opened (request `id`), read and retargeted by the host, or why not.
+    ClipOpened {
+        /// The host's request.
+        id: u64,
+        /// The clip and its retargeting, or what is wrong (in words).
+        result: Result<Box<stance_asset::OpenedClip>, String>,
+    },
+    /// Stop opening the clip: the document and the timeline stay as they were.
+    CancelOpening,
 }
 
 /// One end of an active interval.
@@ -137,6 +153,10 @@ pub struct Timeline {
     /// The clip a document or link was made over whose file is not loaded yet: the next
     /// clip opened is compared with it.
     pub(super) wanted: Option<ClipReference>,
+    /// The clip file the host is reading and retargeting ([`HostHooks::retarget_clip`](crate::HostHooks::retarget_clip)).
+    pub(super) opening: Option<super::clips::Opening>,
+    /// The id of the next clip request to the host.
+    pub(super) next_request: u64,
 }
 
 impl Default for Timeline {
@@ -160,6 +180,8 @@ impl Default for Timeline {
             recording: None,
             source: None,
             wanted: None,
+            opening: None,
+            next_request: 0,
         }
     }
 }
@@ -179,6 +201,14 @@ impl Timeline {
     /// The clip a document or link named whose file is not loaded yet.
     pub fn wanted_clip(&self) -> Option<&ClipReference> {
         self.wanted.as_ref()
+    }
+
+    /// The clip file being opened off the editor's thread, if any: its name and how far it
+    /// has got (0 to 1).
+    pub fn opening(&self) -> Option<(&str, f64)> {
+        self.opening
+            .as_ref()
+            .map(|opening| (opening.name.as_str(), opening.progress))
     }
 
     /// How clips are put on the body (rest match, contact thresholds).
@@ -376,6 +406,9 @@ impl EditorModel {
             MotionCommand::Record(on) => self.record_motion(on),
             MotionCommand::SetRetargetOptions(options) => self.set_retarget_options(*options),
             MotionCommand::SetClipMapping(mapping) => self.set_clip_mapping(*mapping),
+            MotionCommand::ClipProgress { id, fraction } => self.clip_progress(id, fraction),
+            MotionCommand::ClipOpened { id, result } => self.clip_opened(id, result),
+            MotionCommand::CancelOpening => self.cancel_opening(),
         }
     }
 
@@ -397,6 +430,17 @@ impl EditorModel {
                     clip.name
                 )
             })?;
+        Ok(self.put_clip(clip, retargeted, source, set_aside))
+    }
+
+    /// Puts `clip`, retargeted onto the body, on the timeline (see [`Self::open_clip`]).
+    pub(super) fn put_clip(
+        &mut self,
+        clip: Box<Clip>,
+        retargeted: Retargeted,
+        source: ClipReference,
+        set_aside: bool,
+    ) -> String {
         let (frames, fps) = (retargeted.postures.len(), 1.0 / retargeted.frame_time);
         let contacts = contact_words(&retargeted);
         let name = clip.name.clone();
@@ -432,7 +476,7 @@ impl EditorModel {
             ));
         }
         self.seek(0);
-        Ok(text)
+        text
     }
 
     /// Removes the tasks without an interval (the standing pins, balance, comfort) as one
@@ -535,6 +579,7 @@ impl EditorModel {
         self.retarget_clip();
         self.timeline.playing = false;
         self.show_playhead();
+        self.reopen_pending();
     }
 
     /// Puts the clip on the current body again (after a change of body or of settings); a
