@@ -40,7 +40,9 @@ pub use self::hands::{HandCommand, Hands};
 pub use self::image::{IMAGE_FILE_NAME, ImageExport, ImageRequest};
 use self::mapping::MappingCorrections;
 pub use self::mapping::{Correction, carry_posture};
-pub use self::motion::{IntervalEdge, MotionCommand, SPEED_RANGE, Timeline};
+pub use self::motion::{
+    IntervalEdge, MotionCommand, SPEED_RANGE, TRAJECTORY_FRAMES_PER_STEP, Timeline,
+};
 pub use self::tasks::{NewTask, make_task, table1_example};
 use crate::avatar::LoadedAvatar;
 use crate::history::{EditKind, History};
@@ -258,12 +260,13 @@ impl EditorModel {
     }
 
     /// Whether anything still moves: the solver has not settled, a gesture or a replay goes
-    /// on (the UI keeps drawing frames).
+    /// on, the trajectory is being computed (the UI keeps drawing frames).
     pub fn is_busy(&self) -> bool {
         !self.session.is_settled()
             || self.gesture.is_some()
             || self.sensors.replay_progress().is_some()
             || self.timeline.is_playing()
+            || self.trajectory_pending()
     }
 
     // -----------------------------------------------------------------------------------------

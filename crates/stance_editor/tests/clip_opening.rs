@@ -214,3 +214,55 @@ fn the_progress_strip_shows_and_its_cancel_button_stops_the_opening() {
     assert_eq!(host.inner.borrow().cancelled_clips, vec![id]);
     assert!(state(&harness)["buttons"]["cancel_clip"].is_null());
 }
+
+/// The walk's rows repeated to `frames` frames.
+fn long_walk(frames: usize) -> Vec<u8> {
+    let text = String::from_utf8_lossy(WALK).into_owned();
+    let (head, motion) = text.split_at(text.find("MOTION").unwrap());
+    let rows: Vec<&str> = motion.lines().skip(3).collect();
+    let mut long = format!("{head}MOTION\nFrames: {frames}\nFrame Time: .0083333\n");
+    for f in 0..frames {
+        long.push_str(rows[f % rows.len()]);
+        long.push('\n');
+    }
+    long.into_bytes()
+}
+
+// Catches the trajectory of a long clip computed in one frame (10,000 frames held up the
+// page's frame for about 100 ms): it grows by a thousand frames a step, the editor stays busy
+// (drawing frames) until it is whole, and it is the same as the frames' own positions.
+#[test]
+fn a_long_clips_trajectory_is_computed_a_thousand_frames_a_step() {
+    use stance_editor::model::TRAJECTORY_FRAMES_PER_STEP;
+    let mut model = editor_on(&MemoryHost::default());
+    let plain = stance_motion::RetargetOptions {
+        contacts: None,
+        ..Default::default()
+    };
+    model.apply(Command::Motion(MotionCommand::SetRetargetOptions(
+        Box::new(plain),
+    )));
+    open(&mut model, "long.bvh", &long_walk(2500));
+    assert_eq!(model.frame_count(), 2500);
+    let wrist = model.session().skeleton().joint_index("l_radiocarpal");
+    model.apply(Command::Select(wrist));
+    let mut lengths = Vec::new();
+    for step in 1..=4 {
+        model.step(step as f64, None);
+        lengths.push(model.timeline().trajectory().len());
+        if lengths.last() == Some(&2500) {
+            assert!(!model.is_busy() || !model.session().is_settled());
+        } else {
+            assert!(model.is_busy(), "busy while the trajectory grows");
+        }
+    }
+    assert_eq!(lengths[0], TRAJECTORY_FRAMES_PER_STEP);
+    assert_eq!(lengths[2..], [2500, 2500]);
+    let skeleton = model.session().skeleton();
+    let at = |frame: usize| {
+        stance_ik::Frames::new(skeleton, &model.frame_posture(frame)).joint_position[wrist.unwrap()]
+    };
+    for frame in [0, 999, 1000, 2499] {
+        assert!((model.timeline().trajectory()[frame] - at(frame)).length() < 1e-12);
+    }
+}

@@ -22,6 +22,9 @@ use self::layer::{KeyDelta, apply_delta, delta_at, key_delta, key_deltas};
 use super::EditorModel;
 use crate::history::EditKind;
 
+/// Frames of the trajectory computed per step (see `refresh_trajectory`).
+pub const TRAJECTORY_FRAMES_PER_STEP: usize = 1000;
+
 /// Slowest and fastest playback.
 pub const SPEED_RANGE: (f64, f64) = (0.1, 4.0);
 
@@ -734,7 +737,8 @@ impl EditorModel {
     }
 
     /// The trajectory joint's world positions over every frame, when the keys, the clip,
-    /// the body or the joint changed.
+    /// the body or the joint changed: [`TRAJECTORY_FRAMES_PER_STEP`] frames a step (a
+    /// 10,000-frame clip's would hold up one frame of the page for about 100 ms).
     fn refresh_trajectory(&mut self) {
         let skeleton = self.session.skeleton();
         let joint = match &self.timeline.trajectory_joint {
@@ -746,36 +750,41 @@ impl EditorModel {
             self.timeline.trajectory_for = None;
             return;
         };
-        let fresh =
-            self.timeline
-                .trajectory_for
-                .as_ref()
-                .is_some_and(|&(j, base, generation, keys)| {
-                    j == joint
-                        && base == self.timeline.base_revision
-                        && generation == self.session_generation
-                        && keys == self.session.motion_revision()
-                });
-        if fresh {
+        let wanted = (
+            joint,
+            self.timeline.base_revision,
+            self.session_generation,
+            self.session.motion_revision(),
+        );
+        if self.timeline.trajectory_for != Some(wanted) {
+            self.timeline.trajectory.clear();
+            self.timeline.trajectory_for = Some(wanted);
+        }
+        let from = self.timeline.trajectory.len();
+        let to = self
+            .frame_count()
+            .min(from.saturating_add(TRAJECTORY_FRAMES_PER_STEP));
+        if from >= to {
             return;
         }
         let deltas = self.key_layer();
-        let trajectory = (0..self.frame_count())
-            .filter_map(|frame| {
+        let more: Vec<DVec3> = (from..to)
+            .map(|frame| {
                 let posture = self.layered_posture(&deltas, frame);
                 Frames::new(skeleton, &posture)
                     .joint_position
                     .get(joint)
                     .copied()
+                    .unwrap_or_default()
             })
             .collect();
-        self.timeline.trajectory = trajectory;
-        self.timeline.trajectory_for = Some((
-            joint,
-            self.timeline.base_revision,
-            self.session_generation,
-            self.session.motion_revision(),
-        ));
+        self.timeline.trajectory.extend(more);
+    }
+
+    /// Whether the trajectory has frames still to compute (the next steps add them).
+    pub(super) fn trajectory_pending(&self) -> bool {
+        self.timeline.trajectory_for.is_some()
+            && self.timeline.trajectory.len() < self.frame_count()
     }
 
     /// The page shared a posture link of the document (`characters` long): says so, what of
