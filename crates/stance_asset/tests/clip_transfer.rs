@@ -147,3 +147,30 @@ fn a_file_that_is_not_a_clip_says_why() {
         "{error}"
     );
 }
+
+/// Writes the seeds of the `clip_transfer` fuzz target (see its header): a 10-frame walk's
+/// job, and its opened clip on the LOA1 mannequin as a transfer.
+#[cfg(not(target_arch = "wasm32"))]
+#[test]
+#[ignore = "writes fuzz/seeds/clip_transfer/"]
+fn write_clip_transfer_seeds() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/seeds/clip_transfer");
+    std::fs::create_dir_all(&dir).unwrap();
+    let job = ClipJob {
+        name: "walk.bvh".into(),
+        bytes: long_walk(10),
+        body: mannequin(),
+        options: RetargetOptions::default(),
+    };
+    let mut seed = vec![0];
+    seed.extend(job.to_bytes().unwrap());
+    std::fs::write(dir.join("job.bin"), seed).unwrap();
+    let dofs = u8::try_from(job.body.skeleton.dof_count()).unwrap();
+    let transfer = ClipTransfer::new(&job.run(&mut |_| {}).unwrap()).unwrap();
+    let mut seed = vec![1, dofs];
+    for part in std::iter::once(&transfer.head).chain(&transfer.parts) {
+        seed.extend_from_slice(&u32::try_from(part.len()).unwrap().to_le_bytes());
+        seed.extend_from_slice(part);
+    }
+    std::fs::write(dir.join("opened.bin"), seed).unwrap();
+}

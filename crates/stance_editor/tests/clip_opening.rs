@@ -179,6 +179,11 @@ fn a_documents_clip_is_opened_by_the_host_and_cancel_keeps_it_named() {
             assert_eq!(named.hash, saved.clip.as_ref().unwrap().hash);
         } else {
             model.receive(answer(request));
+            let notice = model.notice().unwrap().text.clone();
+            assert!(
+                notice.starts_with("The document's clip is on the timeline: the clip walk"),
+                "{notice}"
+            );
             assert_eq!(model.timeline().clip_name(), Some("walk"));
             assert_eq!(model.document().tasks, saved.tasks, "none set aside");
             assert_eq!(model.frame_posture(40), maker.frame_posture(40));

@@ -171,7 +171,9 @@ impl EditorModel {
         };
         let from_document = opening.from_document;
         match self.finish_opening(opening, result.map(|opened| *opened)) {
-            Ok(text) if from_document => self.inform(format!("Opened the document's {text}")),
+            Ok(text) if from_document => {
+                self.inform(format!("The document's clip is on the timeline: {text}"));
+            }
             Ok(text) => self.inform(format!("Opened {text}")),
             Err(error) => self.warn(error),
         }
