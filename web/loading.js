@@ -251,13 +251,16 @@ export function openClip(handle, id, job) {
         if (reply?.parts) {
           const [head, ...parts] = reply.parts;
           timed("stance:clip-head", () => handle.clip_head(id, head));
+          // Cancelled meanwhile: the parts taken so far are let go (the editor ignores the
+          // reply to a request it cancelled).
+          const dropped = () => handle.clip_failed(id, "cancelled");
           for (const part of parts) {
             await nextTask();
-            if (clipRequest !== id) return;
+            if (clipRequest !== id) return dropped();
             timed("stance:clip-part", () => handle.clip_part(id, part));
           }
           await nextTask();
-          if (clipRequest !== id) return;
+          if (clipRequest !== id) return dropped();
           clipRequest = null;
           timed("stance:clip-opened", () => handle.clip_opened(id));
           console.log(`clip ${id} read and retargeted in the worker in ${reply.ms.toFixed(0)} ms`);
