@@ -5,12 +5,17 @@
 // - and, once the page has given it the editor's compiled WebAssembly module, imports the
 //   whole avatar (glTF parsing, meshopt, skins, the H-Anim mapping) with the editor's own
 //   importer and returns it split for the trip: the avatar's bytes and each texture's pixels
-//   (WebHandle.avatar_texture, then WebHandle.avatar_imported).
+//   (WebHandle.avatar_texture, then WebHandle.avatar_imported);
+// - and reads and retargets the clip files the editor asks for (stanceHost.openClip) with the
+//   editor's own code in steps, reporting its progress between them, and returns the clip
+//   and its retargeting in parts of frames (WebHandle.clip_head, clip_part, clip_opened).
 //
 // In:  { type: "init", module }                      -> { type: "ready", ok, error }
 //      { type: "decode", id, files: [{ name, bytes }] } -> { id, file, images, skipped }
 //      { type: "import", id, files, images?, follow? }  -> { id, avatar, textures, pixels:
 //                          [Uint8Array], importMs, imagesFromHost } or { id, error }
+//      { type: "clip", id, job: Uint8Array }           -> { type: "progress", id, fraction }...
+//                          then { id, parts: [Uint8Array] (head, frames...), ms } or { id, error }
 //      (images: those a "decode" request returned; follow: the page decodes them meanwhile
 //      and fills the textures' empty pixels, textures giving image, width and height of
 //      each; else they are decoded here first)
@@ -18,7 +23,7 @@
 // OffscreenCanvas, an unknown format, a missing file) is left out: the importer decodes it
 // itself and names the problem.
 
-import init, { import_avatar_file } from "./pkg/stance_web.js";
+import init, { import_avatar_file, open_clip_job } from "./pkg/stance_web.js";
 import { isModel } from "./model-files.js";
 import { concat, describe } from "./common.js";
 
@@ -28,10 +33,14 @@ const BIN_CHUNK = 0x004e4942;
 // Larger images are left to the importer, which refuses them by name.
 const MAX_SIDE = 8192;
 
+// The editor's module instantiated (a promise), once "init" came.
+let initialized = null;
+
 self.onmessage = async ({ data }) => {
   if (data.type === "init") {
     try {
-      await init({ module_or_path: data.module });
+      initialized = init({ module_or_path: data.module });
+      await initialized;
       self.postMessage({ type: "ready", ok: true });
     } catch (error) {
       self.postMessage({ type: "ready", ok: false, error: describe(error) });
@@ -39,6 +48,11 @@ self.onmessage = async ({ data }) => {
     return;
   }
   const { id, files } = data;
+  if (data.type === "clip") {
+    const reply = await openClip(id, data.job);
+    self.postMessage(reply, reply.parts ? reply.parts.map((part) => part.buffer) : []);
+    return;
+  }
   if (data.type === "import") {
     // The images decoded before come with the import; with `follow`, the page is decoding
     // them meanwhile and the import leaves their pixels out; else they are decoded here.
@@ -89,6 +103,27 @@ function importAvatar(id, files, images, toFollow) {
       // Those that follow count once the page has filled them.
       imagesFromHost: images.length,
     };
+  } catch (error) {
+    return { id, error: describe(error) };
+  }
+}
+
+// The clip job `job` read and retargeted, its progress posted as it goes (each whole per
+// cent); the parts to hand over, or what is wrong.
+async function openClip(id, job) {
+  const started = performance.now();
+  try {
+    if (!initialized) throw new Error("the loading worker has no module");
+    await initialized;
+    let shown = -1;
+    const parts = open_clip_job(job, (fraction) => {
+      const percent = Math.floor(fraction * 100);
+      if (percent > shown) {
+        shown = percent;
+        self.postMessage({ type: "progress", id, fraction });
+      }
+    });
+    return { id, parts, ms: performance.now() - started };
   } catch (error) {
     return { id, error: describe(error) };
   }

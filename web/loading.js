@@ -5,7 +5,10 @@
 // asks for (stanceHost.importAvatar) meanwhile, leaving those textures' pixels to follow, so
 // that the main thread only receives the imported avatar and uploads it to the GPU in tasks
 // of its own (stanceHost.uploadAvatar). Before that (or where no worker can run) the editor
-// receives the file with its decoded pixels and imports it itself.
+// receives the file with its decoded pixels and imports it itself. A third one, with the
+// same module, reads and retargets the clip files the editor asks for (stanceHost.openClip),
+// its progress going to the editor as it goes; Cancel (stanceHost.cancelClip) stops it (the
+// worker is ended; the next clip starts another).
 
 import { isModel } from "./model-files.js";
 import { concat, describe } from "./common.js";
@@ -51,12 +54,18 @@ function startWorker(onReady) {
     return null;
   }
   const pending = new Map();
+  const progress = new Map();
   let nextRequest = 0;
   worker.onmessage = ({ data }) => {
     if (data.type === "ready") {
       onReady?.(data);
       return;
     }
+    if (data.type === "progress") {
+      progress.get(data.id)?.(data.fraction);
+      return;
+    }
+    progress.delete(data.id);
     pending.get(data.id)?.(data);
     pending.delete(data.id);
   };
@@ -68,12 +77,21 @@ function startWorker(onReady) {
   };
   return {
     post: (message) => worker.postMessage(message),
-    request(message, transfer = []) {
+    // `onProgress`: called with what the worker reports of this request before its reply.
+    request(message, transfer = [], onProgress = null) {
       const id = nextRequest++;
+      if (onProgress) progress.set(id, onProgress);
       return new Promise((resolve) => {
         pending.set(id, resolve);
         worker.postMessage({ ...message, id }, transfer);
       });
+    },
+    // Ends the worker: its requests under way resolve with null.
+    stop() {
+      worker.terminate();
+      for (const resolve of pending.values()) resolve(null);
+      pending.clear();
+      progress.clear();
     },
   };
 }
@@ -102,10 +120,14 @@ function textureDecoder() {
 // editor looks at the file: its import request (if it comes) takes them.
 let prefetched = null;
 
+// The editor's compiled module, for the workers that run its code.
+let editorModule = null;
+
 // Gives the loading worker the editor's compiled module: from then on it imports avatars.
 // The texture decoder starts with it, so that the first file does not wait for a worker to
 // load (a few hundred ms while the page is busy).
 export function startImporter(module) {
+  editorModule = module;
   loader()?.post({ type: "init", module });
   textureDecoder();
 }
@@ -191,6 +213,90 @@ function fillTextures(reply, decoded) {
 
 let delivery = Promise.resolve();
 
+// The worker that opens clips (undefined: none started; null: none can run), and the editor's
+// request it works on.
+let clipper;
+let clipRequest = null;
+
+function clipWorker() {
+  if (clipper === undefined) {
+    clipper = startWorker(null);
+    clipper?.post({ type: "init", module: editorModule });
+  }
+  return clipper;
+}
+
+// stanceHost.openClip: the editor asks for the clip job `job` (stance_asset::ClipJob as
+// bytes: the file, the body, the settings) to be read and retargeted off the main thread,
+// as its request `id`. The progress goes to the editor as it comes; the result in parts,
+// each in a task of its own (the frames of a long clip are tens of megabytes). False when
+// no worker can: the editor does it itself.
+export function openClip(handle, id, job) {
+  if (!editorModule || !workerImports) return false;
+  // Another clip asked for: the one under way is not wanted any more.
+  if (clipRequest !== null) cancelClip(clipRequest);
+  const worker = clipWorker();
+  if (!worker) return false;
+  clipRequest = id;
+  performance.mark("stance:clip-requested");
+  // A copy: `job` is a view of the editor's memory.
+  const bytes = job.slice();
+  worker.request({ type: "clip", job: bytes }, [bytes.buffer], (fraction) => {
+    if (clipRequest === id) timed("stance:clip-progress", () => handle.clip_progress(id, fraction));
+  }).then((reply) => {
+    performance.mark("stance:clip-retargeted");
+    delivery = delivery.then(async () => {
+      if (clipRequest !== id) return;
+      try {
+        if (reply?.parts) {
+          const [head, ...parts] = reply.parts;
+          timed("stance:clip-head", () => handle.clip_head(id, head));
+          // Cancelled meanwhile: the parts taken so far are let go (the editor ignores the
+          // reply to a request it cancelled).
+          const dropped = () => handle.clip_failed(id, "cancelled");
+          for (const part of parts) {
+            await nextTask();
+            if (clipRequest !== id) return dropped();
+            timed("stance:clip-part", () => handle.clip_part(id, part));
+          }
+          await nextTask();
+          if (clipRequest !== id) return dropped();
+          clipRequest = null;
+          timed("stance:clip-opened", () => handle.clip_opened(id));
+          console.log(`clip ${id} read and retargeted in the worker in ${reply.ms.toFixed(0)} ms`);
+        } else {
+          clipRequest = null;
+          handle.clip_failed(id, reply?.error ?? "the loading worker stopped");
+        }
+      } catch (error) {
+        clipRequest = null;
+        handle.clip_failed(id, describe(error));
+      }
+    });
+  });
+  return true;
+}
+
+// Runs `work` (a call into the editor) as a performance measure named `name`: the tests
+// tell the page's own tasks from the editor's frames by them.
+function timed(name, work) {
+  const start = performance.now();
+  try {
+    work();
+  } finally {
+    performance.measure(name, { start });
+  }
+}
+
+// stanceHost.cancelClip: the editor no longer wants its request `id`: the worker working on
+// it is ended (its steps run without a break), and the next clip starts another.
+export function cancelClip(id) {
+  if (clipRequest !== id) return;
+  clipRequest = null;
+  clipper?.stop();
+  clipper = undefined;
+}
+
 // stanceHost.uploadAvatar: the editor began putting an avatar on the GPU. The page steps the
 // upload (a few MB of texture per task, WebHandle.upload_avatar_step) in tasks back to back
 // instead of the editor's frames: a frame that repaints the canvas can take a few hundred ms
@@ -257,7 +363,7 @@ async function deliver(handle, files) {
     progress("Building the avatar…");
   }
   if (files.length === 1) {
-    handle.open_file(files[0].name, files[0].bytes);
+    timed("stance:open-file", () => handle.open_file(files[0].name, files[0].bytes));
   } else if (files.length > 1) {
     const lengths = new Uint32Array(files.map((f) => f.bytes.length));
     handle.open_files(files.map((f) => f.name), lengths, concat(files.map((f) => f.bytes)));

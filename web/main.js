@@ -2,7 +2,9 @@
 // readable error screen instead of a blank page when it cannot start.
 import init, { WebHandle } from "./pkg/stance_web.js";
 import { connectSensor, disconnectSensor } from "./sensors.js";
-import { fetchWithProgress, importAvatar, openFiles, startImporter, uploadAvatar } from "./loading.js";
+import {
+  cancelClip, fetchWithProgress, importAvatar, openClip, openFiles, startImporter, uploadAvatar,
+} from "./loading.js";
 import { createAccessibilityMirror } from "./accessibility.js";
 import { describe } from "./common.js";
 
@@ -96,6 +98,14 @@ window.stanceHost = {
   importAvatar(name, names, lengths, bytes) {
     if (!window.stance) return false;
     return importAvatar(window.stance, name, names, lengths, bytes);
+  },
+  // Reads and retargets a clip in the loading worker; false when it cannot (see loading.js).
+  openClip(id, job) {
+    if (!window.stance) return false;
+    return openClip(window.stance, id, job);
+  },
+  cancelClip(id) {
+    cancelClip(id);
   },
 };
 

@@ -32,6 +32,7 @@
 
 pub mod animation;
 mod clip_file;
+mod clip_transfer;
 mod error;
 mod export;
 mod export_animation;
@@ -47,6 +48,9 @@ pub use animation::{
     Animation, AnimationChannel, AnimationPath, Interpolation, clip_from_animation,
 };
 pub use clip_file::{ANIMATION_SAMPLE_FPS, ClipFileError, is_bvh_file, read_clip};
+pub use clip_transfer::{
+    ClipJob, ClipTransfer, FRAMES_PER_PART, FRAMES_PER_STEP, FramesPart, OpenedClip,
+};
 pub use error::AssetError;
 pub use export::export_glb;
 pub use export_animation::export_glb_animation;

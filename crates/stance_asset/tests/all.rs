@@ -6,6 +6,7 @@
 wasm_bindgen_test::wasm_bindgen_test_configure!(run_in_browser);
 
 mod animation;
+mod clip_transfer;
 mod common;
 mod decoded_images;
 mod external_files;

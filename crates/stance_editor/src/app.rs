@@ -483,6 +483,38 @@ impl StanceApp {
         });
     }
 
+    /// While the host opens a clip (off the editor's thread): its progress and *Cancel*.
+    fn opening_strip(&mut self, ui: &mut egui::Ui) {
+        let Some((name, progress)) = self
+            .model
+            .timeline()
+            .opening()
+            .map(|(name, progress)| (name.to_owned(), progress))
+        else {
+            return;
+        };
+        egui::Frame::new()
+            .fill(Color32::from_rgb(30, 60, 90))
+            .inner_margin(egui::Margin::symmetric(8, 4))
+            .show(ui, |ui| {
+                ui.horizontal(|ui| {
+                    let cancel = ui
+                        .button("Cancel")
+                        .on_hover_text("stop opening the clip: the document stays as it is");
+                    self.button_rects.push(("cancel_clip", cancel.rect));
+                    if cancel.clicked() {
+                        self.model
+                            .apply(Command::Motion(crate::model::MotionCommand::CancelOpening));
+                    }
+                    let file = name.rsplit('/').next().unwrap_or(&name);
+                    ui.add(egui::ProgressBar::new(progress as f32).text(format!(
+                        "Opening {file}: {:.0} %",
+                        (progress * 100.0).floor()
+                    )));
+                });
+            });
+    }
+
     fn notice_strip(&mut self, ui: &mut egui::Ui) {
         let Some(notice) = self.model.notice().cloned() else {
             return;
@@ -637,6 +669,7 @@ impl StanceApp {
         egui::CentralPanel::default()
             .frame(egui::Frame::NONE)
             .show(ui, |ui| {
+                self.opening_strip(ui);
                 self.notice_strip(ui);
                 self.viewport.follow_document_camera(&self.model);
                 self.viewport.show(ui, frame, &mut self.model, &clock);

@@ -67,6 +67,16 @@ pub struct ImportedAvatar {
     pub images_from_host: usize,
 }
 
+/// A clip file for the host to read and retarget off the editor's thread
+/// ([`HostHooks::retarget_clip`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ClipRetarget {
+    /// Names the request: the reply and the progress reports carry it.
+    pub id: u64,
+    /// The file, the body and the settings.
+    pub job: Box<stance_asset::ClipJob>,
+}
+
 /// What the editor asks of its host. Every method but the first has a do-nothing default.
 pub trait HostHooks {
     /// Called once, after the first frame with the 3D scene has been rendered.
@@ -134,6 +144,18 @@ pub trait HostHooks {
     fn import_avatar(&self, request: AvatarImport) -> Result<(), AvatarImport> {
         Err(request)
     }
+
+    /// Reads a clip file and retargets it off the editor's thread (the page's loading
+    /// worker, in steps), so that a long clip does not hold up the frames; its progress
+    /// arrives as [`HostMessage::ClipProgress`], the result as [`HostMessage::ClipOpened`].
+    /// Gives the request back when this host cannot: the editor then does it itself.
+    fn retarget_clip(&self, request: ClipRetarget) -> Result<(), ClipRetarget> {
+        Err(request)
+    }
+
+    /// Stops the clip request `id` ([`HostHooks::retarget_clip`]): nothing more of it
+    /// arrives (a reply already on its way is ignored by its id).
+    fn cancel_retarget(&self, _id: u64) {}
 }
 
 /// What the host tells the editor, through the sender given to `StanceApp::with_inbox`.
@@ -168,6 +190,21 @@ pub enum HostMessage {
         name: String,
         /// The avatar, or what is wrong with the file.
         result: Result<Box<ImportedAvatar>, String>,
+    },
+    /// How far the clip request `id` ([`HostHooks::retarget_clip`]) has got.
+    ClipProgress {
+        /// The request.
+        id: u64,
+        /// From 0 to 1.
+        fraction: f64,
+    },
+    /// The clip asked for with [`HostHooks::retarget_clip`], read and retargeted, or what is
+    /// wrong with it (in words).
+    ClipOpened {
+        /// The request.
+        id: u64,
+        /// The clip and its retargeting, or why not.
+        result: Result<Box<stance_asset::OpenedClip>, String>,
     },
     /// The sensor device is open.
     SensorConnected {
@@ -238,6 +275,12 @@ pub struct MemoryHostState {
     pub imports_avatars: bool,
     /// The avatar imports it took, in order (a test answers them).
     pub avatar_imports: Vec<AvatarImport>,
+    /// Whether it takes clips to retarget ([`HostHooks::retarget_clip`]; default no).
+    pub retargets_clips: bool,
+    /// The clip requests it took, in order (a test answers them).
+    pub clip_requests: Vec<ClipRetarget>,
+    /// The clip requests cancelled, in order.
+    pub cancelled_clips: Vec<u64>,
 }
 
 impl HostHooks for MemoryHost {
@@ -307,5 +350,18 @@ impl HostHooks for MemoryHost {
         }
         inner.avatar_imports.push(request);
         Ok(())
+    }
+
+    fn retarget_clip(&self, request: ClipRetarget) -> Result<(), ClipRetarget> {
+        let mut inner = self.inner.borrow_mut();
+        if !inner.retargets_clips {
+            return Err(request);
+        }
+        inner.clip_requests.push(request);
+        Ok(())
+    }
+
+    fn cancel_retarget(&self, id: u64) {
+        self.inner.borrow_mut().cancelled_clips.push(id);
     }
 }

@@ -18,7 +18,7 @@ mod viewport;
 
 pub use app::StanceApp;
 pub use host::{
-    AvatarImport, BackendSummary, HostHooks, HostMessage, ImportedAvatar, MemoryHost,
+    AvatarImport, BackendSummary, ClipRetarget, HostHooks, HostMessage, ImportedAvatar, MemoryHost,
     MemoryHostState, NoHostHooks,
 };
 pub use model::{Command, EditorModel, Gesture, Notice, SessionChange};

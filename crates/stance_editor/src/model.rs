@@ -40,7 +40,9 @@ pub use self::hands::{HandCommand, Hands};
 pub use self::image::{IMAGE_FILE_NAME, ImageExport, ImageRequest};
 use self::mapping::MappingCorrections;
 pub use self::mapping::{Correction, carry_posture};
-pub use self::motion::{IntervalEdge, MotionCommand, SPEED_RANGE, Timeline};
+pub use self::motion::{
+    IntervalEdge, MotionCommand, SPEED_RANGE, TRAJECTORY_FRAMES_PER_STEP, Timeline,
+};
 pub use self::tasks::{NewTask, make_task, table1_example};
 use crate::avatar::LoadedAvatar;
 use crate::history::{EditKind, History};
@@ -258,12 +260,13 @@ impl EditorModel {
     }
 
     /// Whether anything still moves: the solver has not settled, a gesture or a replay goes
-    /// on (the UI keeps drawing frames).
+    /// on, the trajectory is being computed (the UI keeps drawing frames).
     pub fn is_busy(&self) -> bool {
         !self.session.is_settled()
             || self.gesture.is_some()
             || self.sensors.replay_progress().is_some()
             || self.timeline.is_playing()
+            || self.trajectory_pending()
     }
 
     // -----------------------------------------------------------------------------------------
@@ -910,17 +913,13 @@ impl EditorModel {
                     let url = url.clone();
                     self.fetch_avatar(&url);
                 }
-                let restored = self.read_document_clip(&document).and_then(|clip| {
-                    let restored = self.session.restore_document(&document);
-                    restored.map(|()| clip).map_err(|error| error.to_string())
-                });
-                match restored {
+                match self.session.restore_document(&document) {
                     Err(error) => {
                         self.warn(format!("The autosaved work could not be restored: {error}"));
                     }
-                    Ok(clip) => {
+                    Ok(()) => {
                         self.view_requests += u64::from(document.camera.is_some());
-                        let (clip_words, warning) = self.follow_document_clip(&document, clip);
+                        let (clip_words, warning) = self.follow_document_clip(&document);
                         let text = format!("Restored the autosaved work.{clip_words}");
                         if warning {
                             self.warn(text);
@@ -960,7 +959,7 @@ impl EditorModel {
         self.selected_joint = None;
         self.trace.clear();
         // A link names its clip, never carries it.
-        let (clip_words, warning) = self.follow_document_clip(&document, None);
+        let (clip_words, warning) = self.follow_document_clip(&document);
         let text = match &document.avatar {
             AvatarReference::Url(url) if self.avatar_url.as_ref() != Some(url) => {
                 let text =
@@ -1025,18 +1024,9 @@ impl EditorModel {
                 return;
             }
         };
-        let clip = match self.read_document_clip(&document) {
-            Ok(clip) => clip,
-            Err(error) => {
-                self.warn(format!(
-                    "{name} could not be opened: {error}. The document stays as it was."
-                ));
-                return;
-            }
-        };
         match self.open_document(&document) {
             Ok(converted) => {
-                let (clip_words, warning) = self.follow_document_clip(&document, clip);
+                let (clip_words, warning) = self.follow_document_clip(&document);
                 let text = format!(
                     "Opened {name}.{}{clip_words}",
                     if converted { CONVERTED_NOTE } else { "" }

@@ -5,6 +5,7 @@
 mod avatar_mapping;
 mod avatar_render;
 mod avatar_swap;
+mod clip_opening;
 mod clips;
 mod clocked;
 mod common;

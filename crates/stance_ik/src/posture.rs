@@ -73,6 +73,18 @@ impl Posture {
         Ok(Self { values })
     }
 
+    /// A posture from raw DOF values checked only to be finite, for a skeleton not at hand
+    /// (a posture handed over from another thread): whoever uses it checks its length
+    /// against the skeleton first.
+    pub fn from_finite_values(values: Vec<f64>) -> Result<Self, IkError> {
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            return Err(IkError::NotFinite {
+                what: format!("posture value {i}"),
+            });
+        }
+        Ok(Self { values })
+    }
+
     /// A posture from a root translation and one local rotation per joint (the logarithm of
     /// each rotation is projected onto the joint's rotational DOF; DOF it lacks are dropped).
     pub fn from_rotations(

@@ -347,6 +347,45 @@ impl Skeleton {
         })
     }
 
+    /// The joint list that builds this skeleton again with [`Skeleton::new`] (parents
+    /// first; limits where a DOF has them, stiffness where it is not 0): to hand a skeleton
+    /// to another thread as plain data.
+    pub fn joint_defs(&self) -> Vec<JointDef> {
+        self.joints
+            .iter()
+            .map(|joint| {
+                let range = joint.dof_range();
+                let limits = joint
+                    .dofs
+                    .iter()
+                    .zip(range.clone())
+                    .filter(|&(_, d)| self.lower[d].is_finite() && self.upper[d].is_finite())
+                    .map(|(&dof, d)| (dof, self.lower[d], self.upper[d]))
+                    .collect();
+                let stiffness = joint
+                    .dofs
+                    .iter()
+                    .zip(range)
+                    .filter(|&(_, d)| self.stiffness[d] != 0.0)
+                    .map(|(&dof, d)| (dof, self.stiffness[d]))
+                    .collect();
+                JointDef {
+                    name: joint.name.clone(),
+                    parent: joint
+                        .parent
+                        .and_then(|p| self.joints.get(p))
+                        .map(|p| p.name.clone()),
+                    offset: joint.offset,
+                    dofs: joint.dofs.clone(),
+                    limits,
+                    mass: joint.mass,
+                    com: joint.com,
+                    stiffness,
+                }
+            })
+            .collect()
+    }
+
     /// Per DOF: its stiffness in [0, 1) (H-Anim's `stiffness`; 0 for translations).
     pub fn stiffness(&self) -> &[f64] {
         &self.stiffness

@@ -25,4 +25,4 @@ pub mod contacts;
 pub mod retarget;
 
 pub use contacts::{Contact, ContactPart, ContactSettings};
-pub use retarget::{MotionError, RestMatch, RetargetOptions, Retargeted, retarget};
+pub use retarget::{MotionError, RestMatch, RetargetOptions, Retargeted, Retargeting, retarget};

@@ -65,6 +65,9 @@ pub enum MotionError {
     /// The solver refused the problem.
     #[error("solver: {0}")]
     Ik(#[from] IkError),
+    /// [`Retargeting::finish`] before its steps were done.
+    #[error("the retargeting is not finished")]
+    Unfinished,
 }
 
 /// How to retarget.
@@ -169,77 +172,252 @@ pub fn joint_positions(
         .collect()
 }
 
-/// Retargets `clip` onto `target` (see the module documentation).
+/// Retargets `clip` onto `target` (see the module documentation): [`Retargeting`] run to
+/// the end in one call.
 pub fn retarget(
     clip: &Clip,
     target: &HumanoidSkeleton,
     options: &RetargetOptions,
 ) -> Result<Retargeted, MotionError> {
-    clip.validate()?;
-    if clip.frames.is_empty() {
-        return Err(MotionError::Empty);
-    }
-    let copier = RotationCopy::new(clip, target, options)?;
-    let mut copier = copier;
-    let copy_all = |copier: &RotationCopy| -> Result<Vec<Posture>, MotionError> {
-        (0..clip.frame_count())
-            .map(|f| copier.frame(clip, target, f))
-            .collect()
-    };
-    let mut copy = copy_all(&copier)?;
-    let reference = reference_frames(clip);
-    let mut notes = copier.notes.clone();
-    let (contacts, thresholds) = match options.contacts {
-        Some(settings) => {
-            let mut found =
-                held_contacts(clip, target, &copy, &copier.placement, reference, &settings);
-            // The stride: the horizontal root scale under which the copy's feet slide least
-            // over their contacts, when the user gave no root scale.
-            if options.root_scale.is_none()
-                && let Some(stride) =
-                    stride_scale(clip, target, &copy, &copier.placement, &found.contacts)
-            {
-                copier.placement.stride_scale = stride;
-                copy = copy_all(&copier)?;
-                found = held_contacts(clip, target, &copy, &copier.placement, reference, &settings);
-            }
-            notes.extend(found.notes);
-            (found.contacts, found.thresholds)
+    let mut job = Retargeting::new(clip.clone(), target.clone(), options.clone())?;
+    while !job.step(usize::MAX)? {}
+    job.finish().map(|(_, retargeted)| retargeted)
+}
+
+/// Work of one frame of the copy, relative to one frame of the solve (progress weights).
+const COPY_WORK: f64 = 0.05;
+/// Work of finding the contacts, per frame, relative to one frame of the solve.
+const CONTACT_WORK: f64 = 0.1;
+
+/// Where a [`Retargeting`] is.
+#[derive(Debug)]
+enum Stage {
+    /// Copying frame `next` (`pass` 0: first copy; 1: again with the stride's scale).
+    Copy { pass: u8, next: usize },
+    /// Finding the contacts over the copy of `pass`.
+    Contacts { pass: u8 },
+    /// Solving frame `next`.
+    Solve(Box<FrameSolver>),
+    /// The result is ready.
+    Done,
+    /// The solver refused its settings.
+    Failed(MotionError),
+}
+
+/// A retargeting run in steps, so that a caller can report its progress between them and
+/// stop it (dropping it leaves nothing behind): the same result as [`retarget`], which runs
+/// one. Steps copy the clip's frames onto the body (twice when the stride's scale is fitted),
+/// find the contacts, then solve the frames one by one, each from the previous one's.
+#[derive(Debug)]
+pub struct Retargeting {
+    clip: Clip,
+    target: HumanoidSkeleton,
+    options: RetargetOptions,
+    copier: RotationCopy,
+    stage: Stage,
+    reference: usize,
+    copy: Vec<Posture>,
+    found: Option<Found>,
+    out: Option<Retargeted>,
+    /// Work done and expected in all (in frames of the solve).
+    done: f64,
+    total: f64,
+}
+
+impl Retargeting {
+    /// Prepares the retargeting of `clip` onto `target` (the rest match); the frames are
+    /// worked on by [`Retargeting::step`].
+    pub fn new(
+        clip: Clip,
+        target: HumanoidSkeleton,
+        options: RetargetOptions,
+    ) -> Result<Self, MotionError> {
+        clip.validate()?;
+        if clip.frames.is_empty() {
+            return Err(MotionError::Empty);
         }
-        None => (Vec::new(), Thresholds::default()),
-    };
-    if reference > 0 {
-        notes.push(format!(
-            "the first {reference} frame(s) are a reference pose (a T-pose or an A-pose and \
-             the blend out of it): left out of the contacts and the floor"
-        ));
+        let copier = RotationCopy::new(&clip, &target, &options)?;
+        let n = clip.frame_count() as f64;
+        let total = match options.contacts {
+            None => n * COPY_WORK,
+            // The copy and the contacts a second time when the stride's scale is fitted.
+            Some(_) if options.root_scale.is_none() => 2.0 * n * (COPY_WORK + CONTACT_WORK) + n,
+            Some(_) => n * (COPY_WORK + CONTACT_WORK) + n,
+        };
+        Ok(Self {
+            reference: reference_frames(&clip),
+            copy: Vec::with_capacity(clip.frame_count()),
+            clip,
+            target,
+            options,
+            copier,
+            stage: Stage::Copy { pass: 0, next: 0 },
+            found: None,
+            out: None,
+            done: 0.0,
+            total,
+        })
     }
-    let mut out = Retargeted {
-        postures: Vec::with_capacity(copy.len()),
-        copy,
-        contacts,
-        reference_frames: reference,
-        thresholds,
-        levels: vec![CONTACT_LEVEL, ROOT_LEVEL, WRIST_LEVEL, POSTURE_LEVEL],
-        residuals: Vec::new(),
-        iterations: 0,
-        frame_time: clip.frame_time,
-        placement: copier.placement,
-        notes,
-    };
-    if options.contacts.is_none() {
-        out.postures = out.copy.clone();
-        out.residuals = vec![vec![0.0; out.levels.len()]; out.postures.len()];
-        return Ok(out);
+
+    /// The clip's frame count.
+    pub fn frame_count(&self) -> usize {
+        self.clip.frame_count()
     }
-    let ease = options
-        .contacts
-        .map_or(0, |s| s.ease_frames(clip.frame_time));
-    solve_frames(target, &mut out, ease, options.max_iterations)?;
-    Ok(out)
+
+    /// How much of the work is done, from 0 to 1 (never decreasing).
+    pub fn progress(&self) -> f64 {
+        if matches!(self.stage, Stage::Done) {
+            return 1.0;
+        }
+        (self.done / self.total).clamp(0.0, 1.0)
+    }
+
+    /// Works on at most `frames` frames (of the copy or of the solve; finding the contacts
+    /// is one step). Returns whether the work is done ([`Retargeting::finish`] then).
+    pub fn step(&mut self, frames: usize) -> Result<bool, MotionError> {
+        let frames = frames.max(1);
+        let n = self.clip.frame_count();
+        match &mut self.stage {
+            Stage::Copy { pass, next } => {
+                let pass = *pass;
+                let end = next.saturating_add(frames).min(n);
+                for f in *next..end {
+                    self.copy
+                        .push(self.copier.frame(&self.clip, &self.target, f)?);
+                }
+                self.done += (end - *next) as f64 * COPY_WORK;
+                *next = end;
+                if end == n {
+                    match self.options.contacts {
+                        Some(_) => self.stage = Stage::Contacts { pass },
+                        None => self.finish_setup(),
+                    }
+                }
+            }
+            Stage::Contacts { pass } => {
+                let pass = *pass;
+                self.find_contacts(pass);
+            }
+            Stage::Solve(solver) => {
+                let Some(out) = self.out.as_mut() else {
+                    self.stage = Stage::Done;
+                    return Ok(true);
+                };
+                let end = solver.next.saturating_add(frames).min(n);
+                for f in solver.next..end {
+                    solver.solve_frame(&self.target, out, f)?;
+                }
+                self.done += (end - solver.next) as f64;
+                solver.next = end;
+                if end == n {
+                    self.stage = Stage::Done;
+                }
+            }
+            Stage::Done => {}
+            Stage::Failed(error) => return Err(error.clone()),
+        }
+        Ok(matches!(self.stage, Stage::Done))
+    }
+
+    /// The contacts over the copy of `pass`; after the first, the stride's scale is fitted
+    /// to them and the copy made again with it (when the user gave no root scale).
+    fn find_contacts(&mut self, pass: u8) {
+        let Some(settings) = self.options.contacts else {
+            self.finish_setup();
+            return;
+        };
+        let (clip, target) = (&self.clip, &self.target);
+        let found = held_contacts(
+            clip,
+            target,
+            &self.copy,
+            &self.copier.placement,
+            self.reference,
+            &settings,
+        );
+        let n = clip.frame_count() as f64;
+        self.done += n * CONTACT_WORK;
+        if pass == 0 && self.options.root_scale.is_none() {
+            if let Some(stride) = stride_scale(
+                clip,
+                target,
+                &self.copy,
+                &self.copier.placement,
+                &found.contacts,
+            ) {
+                self.copier.placement.stride_scale = stride;
+                self.copy.clear();
+                self.stage = Stage::Copy { pass: 1, next: 0 };
+                return;
+            }
+            // No second copy.
+            self.done += n * (COPY_WORK + CONTACT_WORK);
+        }
+        self.found = Some(found);
+        self.finish_setup();
+    }
+
+    /// The copy and contacts are ready: the result takes them, and the solve starts (or,
+    /// without contacts, the copy is the result).
+    fn finish_setup(&mut self) {
+        let mut notes = self.copier.notes.clone();
+        let (contacts, thresholds) = match self.found.take() {
+            Some(found) => {
+                notes.extend(found.notes);
+                (found.contacts, found.thresholds)
+            }
+            None => (Vec::new(), Thresholds::default()),
+        };
+        let reference = self.reference;
+        if reference > 0 {
+            notes.push(format!(
+                "the first {reference} frame(s) are a reference pose (a T-pose or an A-pose and \
+                 the blend out of it): left out of the contacts and the floor"
+            ));
+        }
+        let copy = std::mem::take(&mut self.copy);
+        let mut out = Retargeted {
+            postures: Vec::with_capacity(copy.len()),
+            copy,
+            contacts,
+            reference_frames: reference,
+            thresholds,
+            levels: vec![CONTACT_LEVEL, ROOT_LEVEL, WRIST_LEVEL, POSTURE_LEVEL],
+            residuals: Vec::new(),
+            iterations: 0,
+            frame_time: self.clip.frame_time,
+            placement: self.copier.placement,
+            notes,
+        };
+        match self.options.contacts {
+            None => {
+                out.postures = out.copy.clone();
+                out.residuals = vec![vec![0.0; out.levels.len()]; out.postures.len()];
+                self.stage = Stage::Done;
+            }
+            Some(settings) => {
+                let ease = settings.ease_frames(self.clip.frame_time);
+                match FrameSolver::new(&self.target, ease, self.options.max_iterations) {
+                    Ok(solver) => self.stage = Stage::Solve(Box::new(solver)),
+                    // Settings the solver refuses: the next step says so.
+                    Err(error) => self.stage = Stage::Failed(error),
+                }
+            }
+        }
+        self.out = Some(out);
+    }
+
+    /// The clip and its retargeting, once [`Retargeting::step`] said it is done.
+    pub fn finish(self) -> Result<(Clip, Retargeted), MotionError> {
+        match (self.stage, self.out) {
+            (Stage::Done, Some(out)) => Ok((self.clip, out)),
+            _ => Err(MotionError::Unfinished),
+        }
+    }
 }
 
 /// The contacts found on a clip and held on a body.
+#[derive(Debug)]
 struct Found {
     contacts: Vec<Contact>,
     thresholds: Thresholds,
@@ -734,41 +912,71 @@ const FIRST_FRAME_ITERATIONS: usize = 100;
 /// The contacts' residual (m) over which a frame is solved again from the copy.
 const RETRY_RESIDUAL: f64 = 1e-3;
 
-/// Solves every frame from the previous frame's correction of the copy.
-fn solve_frames(
-    target: &HumanoidSkeleton,
-    out: &mut Retargeted,
+/// Solves the frames one by one, each from the previous frame's correction of the copy.
+#[derive(Debug)]
+struct FrameSolver {
+    solver: Solver,
+    first_solver: Solver,
+    dofs: Vec<usize>,
+    correction: Vec<f64>,
     ease: usize,
-    max_iterations: usize,
-) -> Result<(), MotionError> {
-    let skeleton = &target.skeleton;
-    let mut solver = Solver::new(SolverSettings {
-        max_iterations,
-        tolerance: 1e-5,
-        iteration: Iteration::Textbook,
-        restarts: false,
-        stall_window: 2,
-        ..SolverSettings::default()
-    })?;
-    let mut first_solver = Solver::new(SolverSettings {
-        max_iterations: max_iterations.max(FIRST_FRAME_ITERATIONS),
-        tolerance: 1e-5,
-        iteration: Iteration::Guarded,
-        restarts: false,
-        ..SolverSettings::default()
-    })?;
-    let dofs = posture_dofs(skeleton);
-    let mut correction = vec![0.0; skeleton.dof_count()];
-    for (f, copy) in out.copy.iter().enumerate() {
-        let tasks = frame_tasks(target, copy, &out.contacts, (f, ease), &dofs);
+    /// The next frame to solve.
+    next: usize,
+}
+
+impl FrameSolver {
+    fn new(
+        target: &HumanoidSkeleton,
+        ease: usize,
+        max_iterations: usize,
+    ) -> Result<Self, MotionError> {
+        let skeleton = &target.skeleton;
+        let solver = Solver::new(SolverSettings {
+            max_iterations,
+            tolerance: 1e-5,
+            iteration: Iteration::Textbook,
+            restarts: false,
+            stall_window: 2,
+            ..SolverSettings::default()
+        })?;
+        let first_solver = Solver::new(SolverSettings {
+            max_iterations: max_iterations.max(FIRST_FRAME_ITERATIONS),
+            tolerance: 1e-5,
+            iteration: Iteration::Guarded,
+            restarts: false,
+            ..SolverSettings::default()
+        })?;
+        Ok(Self {
+            solver,
+            first_solver,
+            dofs: posture_dofs(skeleton),
+            correction: vec![0.0; skeleton.dof_count()],
+            ease,
+            next: 0,
+        })
+    }
+
+    /// Solves frame `f` (the one after the last solved) into `out`.
+    fn solve_frame(
+        &mut self,
+        target: &HumanoidSkeleton,
+        out: &mut Retargeted,
+        f: usize,
+    ) -> Result<(), MotionError> {
+        let skeleton = &target.skeleton;
+        let Some(copy) = out.copy.get(f) else {
+            return Ok(());
+        };
+        let tasks = frame_tasks(target, copy, &out.contacts, (f, self.ease), &self.dofs);
         let start: Vec<f64> = copy
             .values()
             .iter()
-            .zip(&correction)
+            .zip(&self.correction)
             .map(|(c, d)| c + d)
             .collect();
+        let levels = &out.levels;
         let residuals = |report: &stance_ik::SolveReport| -> Vec<f64> {
-            out.levels
+            levels
                 .iter()
                 .map(|l| {
                     report
@@ -783,9 +991,9 @@ fn solve_frames(
         // The first frame starts from the copy itself, however far its contacts are held
         // from it: it gets the iterations to get there.
         let report = if f == 0 {
-            first_solver.solve(skeleton, &tasks, &mut posture)?
+            self.first_solver.solve(skeleton, &tasks, &mut posture)?
         } else {
-            solver.solve(skeleton, &tasks, &mut posture)?
+            self.solver.solve(skeleton, &tasks, &mut posture)?
         };
         out.iterations += report.iterations;
         let mut residual = residuals(&report);
@@ -794,7 +1002,7 @@ fn solve_frames(
         // from the copy itself and the better of the two kept.
         if residual.first().is_some_and(|&r| r > RETRY_RESIDUAL) {
             let mut again = copy.clone();
-            let report = solver.solve(skeleton, &tasks, &mut again)?;
+            let report = self.solver.solve(skeleton, &tasks, &mut again)?;
             out.iterations += report.iterations;
             let second = residuals(&report);
             if second.first() < residual.first() {
@@ -802,15 +1010,16 @@ fn solve_frames(
                 residual = second;
             }
         }
-        out.residuals.push(residual);
-        for ((d, p), c) in correction
+        for ((d, p), c) in self
+            .correction
             .iter_mut()
             .zip(posture.values())
             .zip(copy.values())
         {
             *d = p - c;
         }
+        out.residuals.push(residual);
         out.postures.push(posture);
+        Ok(())
     }
-    Ok(())
 }

@@ -605,3 +605,69 @@ fn a_moving_clip_with_a_foot_never_held_says_which_and_what_to_change() {
         );
     }
 }
+
+/// Retargeting in steps (as the page's loading worker runs it, reporting progress between
+/// them) gives exactly the one-shot result, whatever the step size: catches a step that
+/// restarts the solve's carried correction, skips or repeats a frame at a step's edge, or
+/// loses the second copy made with the stride's scale.
+#[test]
+fn retargeting_in_steps_gives_the_one_shot_result_with_progress_that_only_grows() {
+    use stance_motion::Retargeting;
+    use stance_motion::bvh::{BvhLimits, read_bvh};
+    let bytes = include_bytes!("../../../tests/fixtures/motion/walk.bvh");
+    let clip = read_bvh(bytes, "walk", &BvhLimits::default()).unwrap();
+    let s = body(LevelOfArticulation::Loa1);
+    for options in [
+        RetargetOptions::default(),
+        RetargetOptions {
+            contacts: None,
+            ..Default::default()
+        },
+    ] {
+        let whole = retarget(&clip, &s, &options).unwrap();
+        assert!(options.contacts.is_none() || !whole.contacts.is_empty());
+        for frames in [1, 37] {
+            let mut job = Retargeting::new(clip.clone(), s.clone(), options.clone()).unwrap();
+            assert_eq!(job.progress(), 0.0);
+            let mut seen = vec![0.0];
+            let mut steps = 0;
+            while !job.step(frames).unwrap() {
+                steps += 1;
+                seen.push(job.progress());
+                assert!(steps < 10 * clip.frame_count(), "the steps never end");
+            }
+            seen.push(job.progress());
+            assert!(
+                seen.windows(2).all(|w| w[1] >= w[0]),
+                "progress went back: {seen:?}"
+            );
+            assert_eq!(job.progress(), 1.0);
+            // Steps of one frame report progress many times on the way, not all at the end.
+            let halfway = seen.iter().filter(|p| **p > 0.2 && **p < 0.8).count();
+            assert!(
+                frames > 1 || halfway > 50,
+                "{halfway} reports between 20 and 80 %"
+            );
+            let (back, stepped) = job.finish().unwrap();
+            assert_eq!(back, clip);
+            assert_eq!(stepped, whole, "steps of {frames} frame(s)");
+        }
+    }
+}
+
+/// Asking for the result of a retargeting stopped half-way is an error, not a half-solved
+/// clip (catches a cancelled or unfinished run put on the timeline).
+#[test]
+fn an_unfinished_retargeting_gives_no_result() {
+    use stance_motion::bvh::{BvhLimits, read_bvh};
+    use stance_motion::{MotionError, Retargeting};
+    let bytes = include_bytes!("../../../tests/fixtures/motion/walk.bvh");
+    let clip = read_bvh(bytes, "walk", &BvhLimits::default()).unwrap();
+    let s = body(LevelOfArticulation::Loa1);
+    let mut job = Retargeting::new(clip, s, RetargetOptions::default()).unwrap();
+    for _ in 0..3 {
+        assert!(!job.step(10).unwrap());
+    }
+    assert!(job.progress() > 0.0 && job.progress() < 1.0);
+    assert_eq!(job.finish().unwrap_err(), MotionError::Unfinished);
+}

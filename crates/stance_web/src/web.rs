@@ -11,7 +11,7 @@ use eframe::wasm_bindgen::{self, prelude::*};
 use stance_editor::avatar::LoadedAvatar;
 use stance_editor::sensors::SensorConnection;
 use stance_editor::{
-    AvatarImport, BackendSummary, HostHooks, HostMessage, ImportedAvatar, StanceApp,
+    AvatarImport, BackendSummary, ClipRetarget, HostHooks, HostMessage, ImportedAvatar, StanceApp,
 };
 
 use crate::accessibility::{AccessibilityBridge, PageAction, PendingActions};
@@ -45,6 +45,10 @@ extern "C" {
         lengths: Vec<u32>,
         bytes: &[u8],
     ) -> Result<bool, JsValue>;
+    #[wasm_bindgen(js_namespace = stanceHost, js_name = openClip, catch)]
+    fn host_open_clip(id: f64, job: &[u8]) -> Result<bool, JsValue>;
+    #[wasm_bindgen(js_namespace = stanceHost, js_name = cancelClip, catch)]
+    fn host_cancel_clip(id: f64) -> Result<(), JsValue>;
     #[wasm_bindgen(js_namespace = stanceHost, js_name = accessibility, catch)]
     fn host_accessibility(tree_json: &str) -> Result<(), JsValue>;
 }
@@ -159,6 +163,28 @@ impl HostHooks for PageHooks {
             }
         }
     }
+
+    fn retarget_clip(&self, request: ClipRetarget) -> Result<(), ClipRetarget> {
+        // The job as bytes for the page's loading worker (the file, the body, the settings);
+        // a page that cannot take it gives the request back.
+        let Ok(job) = request.job.to_bytes() else {
+            return Err(request);
+        };
+        match host_open_clip(request.id as f64, &job) {
+            Ok(true) => Ok(()),
+            Ok(false) => Err(request),
+            Err(error) => {
+                log::warn!("the page could not open the clip: {}", describe(&error));
+                Err(request)
+            }
+        }
+    }
+
+    fn cancel_retarget(&self, id: u64) {
+        if let Err(error) = host_cancel_clip(id as f64) {
+            log::warn!("cancelling the clip: {}", describe(&error));
+        }
+    }
 }
 
 /// Runs in the page's loading worker (`web/load-worker.js`), not in the editor: imports the
@@ -214,6 +240,39 @@ pub fn import_avatar_file(
     Ok(out)
 }
 
+/// Reads and retargets a clip in the page's loading worker: `job` is the request the editor
+/// gave the page (`stanceHost.openClip`: `stance_asset::ClipJob` as bytes); `progress` is
+/// called with the fraction done between steps. Returns the clip and its retargeting split
+/// for the trip (`stance_asset::ClipTransfer`): `[head, frames of part 0, ...]`, for
+/// [`WebHandle::clip_head`], [`WebHandle::clip_part`] and [`WebHandle::clip_opened`]. Throws
+/// what is wrong (the file, or the clip on this body), in the editor's words.
+#[wasm_bindgen]
+pub fn open_clip_job(job: Vec<u8>, progress: &js_sys::Function) -> Result<js_sys::Array, String> {
+    let job = stance_asset::ClipJob::from_bytes(&job).map_err(|error| error.to_string())?;
+    let opened = job.run(&mut |fraction| {
+        let _ = progress.call1(&JsValue::NULL, &JsValue::from_f64(fraction));
+    })?;
+    let transfer = stance_asset::ClipTransfer::new(&opened).map_err(|error| error.to_string())?;
+    let out = js_sys::Array::new();
+    out.push(&js_sys::Uint8Array::from(transfer.head.as_slice()));
+    for part in &transfer.parts {
+        out.push(&js_sys::Uint8Array::from(part.as_slice()));
+    }
+    Ok(out)
+}
+
+/// A clip arriving from the loading worker, part by part (one task of the page each).
+struct ArrivingClip {
+    id: u64,
+    head: Vec<u8>,
+    /// The clip's joints and the body's DOF, to decode the parts with.
+    joints: usize,
+    dofs: usize,
+    parts: Vec<stance_asset::FramesPart>,
+    /// What went wrong with a part: the clip is refused with it.
+    error: Option<String>,
+}
+
 /// Images `indices[i]` of `widths[i] x heights[i]` RGBA8 pixels, one after the other in
 /// `rgba`; `None` when the sizes do not add up.
 fn decoded_images(
@@ -257,6 +316,8 @@ pub struct WebHandle {
     accessibility: PendingActions,
     /// Texture pixels of the avatar the loading worker imported, until its bytes arrive.
     arriving_pixels: RefCell<Vec<Vec<u8>>>,
+    /// The clip the loading worker opened, until its last part arrives.
+    arriving_clip: RefCell<Option<ArrivingClip>>,
 }
 
 #[wasm_bindgen]
@@ -273,6 +334,7 @@ impl WebHandle {
             context: Rc::new(RefCell::new(None)),
             accessibility: PendingActions::default(),
             arriving_pixels: RefCell::new(Vec::new()),
+            arriving_clip: RefCell::new(None),
         }
     }
 
@@ -475,6 +537,93 @@ impl WebHandle {
         self.arriving_pixels.borrow_mut().clear();
         self.send(HostMessage::AvatarImported {
             name,
+            result: Err(reason),
+        });
+    }
+
+    /// How far the loading worker has got with the clip request `id` (0 to 1).
+    #[wasm_bindgen]
+    pub fn clip_progress(&self, id: f64, fraction: f64) {
+        self.send(HostMessage::ClipProgress {
+            id: id as u64,
+            fraction,
+        });
+    }
+
+    /// The head of the clip the loading worker opened for the request `id`
+    /// ([`open_clip_job`]); its parts follow ([`WebHandle::clip_part`]), one task each.
+    #[wasm_bindgen]
+    pub fn clip_head(&self, id: f64, head: Vec<u8>) {
+        let dofs = self
+            .runner
+            .app_mut::<StanceApp>()
+            .map(|app| app.model().session().skeleton().dof_count());
+        let joints = stance_asset::ClipTransfer::head_joints(&head);
+        let error = match (&joints, dofs) {
+            (Err(error), _) => Some(error.to_string()),
+            (_, None) => Some("the editor was busy".to_owned()),
+            _ => None,
+        };
+        *self.arriving_clip.borrow_mut() = Some(ArrivingClip {
+            id: id as u64,
+            head,
+            joints: joints.unwrap_or(0),
+            dofs: dofs.unwrap_or(0),
+            parts: Vec::new(),
+            error,
+        });
+    }
+
+    /// The next part of frames of the clip request `id`, decoded now (a task of the page).
+    #[wasm_bindgen]
+    pub fn clip_part(&self, id: f64, part: Vec<u8>) {
+        let mut arriving = self.arriving_clip.borrow_mut();
+        let Some(clip) = arriving.as_mut().filter(|clip| clip.id == id as u64) else {
+            return;
+        };
+        if clip.error.is_some() {
+            return;
+        }
+        match stance_asset::ClipTransfer::decode_part(&part, clip.joints, clip.dofs) {
+            Ok(part) => clip.parts.push(part),
+            Err(error) => clip.error = Some(error.to_string()),
+        }
+    }
+
+    /// The clip request `id` has all its parts: the clip goes to the editor.
+    #[wasm_bindgen]
+    pub fn clip_opened(&self, id: f64) {
+        let Some(clip) = self
+            .arriving_clip
+            .borrow_mut()
+            .take()
+            .filter(|clip| clip.id == id as u64)
+        else {
+            return;
+        };
+        let result = match clip.error {
+            Some(error) => Err(error),
+            None => stance_asset::ClipTransfer::assemble(&clip.head, clip.parts, clip.dofs)
+                .map(Box::new)
+                .map_err(|error| error.to_string()),
+        }
+        .map_err(|error| format!("The clip could not be handed over: {error}."));
+        self.deliver_now(HostMessage::ClipOpened {
+            id: clip.id,
+            result,
+        });
+    }
+
+    /// The clip request `id` could not be read or retargeted: `reason` says why.
+    #[wasm_bindgen]
+    pub fn clip_failed(&self, id: f64, reason: String) {
+        let mut arriving = self.arriving_clip.borrow_mut();
+        if arriving.as_ref().is_some_and(|clip| clip.id == id as u64) {
+            *arriving = None;
+        }
+        drop(arriving);
+        self.send(HostMessage::ClipOpened {
+            id: id as u64,
             result: Err(reason),
         });
     }

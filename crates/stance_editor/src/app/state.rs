@@ -186,6 +186,7 @@ impl PageState<'_> {
             "keys": model.key_frames(),
             "contacts": timeline.contacts().len(),
             "clip": timeline.clip_name(),
+            "opening": timeline.opening().map(|(name, progress)| json!({"name": name, "progress": progress})),
         })
     }
 

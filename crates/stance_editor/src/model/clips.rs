@@ -5,8 +5,8 @@
 //! clip kept with the document (embedded in a saved file, named by content hash in a link).
 
 use stance_asset::{
-    ANIMATION_SAMPLE_FPS, LoadOptions, clip_from_animation, export_glb_animation, is_bvh_file,
-    read_clip,
+    ANIMATION_SAMPLE_FPS, ClipJob, OpenedClip, clip_from_animation, export_glb_animation,
+    is_bvh_file,
 };
 use stance_document::{ClipReference, Document};
 use stance_ik::{Posture, Solver, SolverSettings};
@@ -14,6 +14,7 @@ use stance_motion::{BvhWriteOptions, Clip, RetargetOptions, write_bvh};
 
 use super::EditorModel;
 use super::motion::MotionCommand;
+use crate::host::ClipRetarget;
 
 /// Frames per second of a recorded clip.
 pub const CLIP_FPS: f64 = 30.0;
@@ -30,21 +31,24 @@ pub(super) fn written_source(clip: &Clip) -> ClipReference {
     ClipReference::embed(&format!("{}.bvh", clip.name), text.as_bytes())
 }
 
-/// The clip read from the file `name`, as a document keeps it: a BVH file as it is, other
-/// files (a glTF file's animation: the whole file would be kept) as [`written_source`].
-fn file_source(name: &str, bytes: &[u8], clip: &Clip) -> ClipReference {
-    if is_bvh_file(name) {
-        ClipReference::embed(name, bytes)
-    } else {
-        written_source(clip)
-    }
-}
-
-/// A clip a document carries, read before the document is opened (a clip that cannot be
-/// read leaves everything as it was).
-pub(super) struct DocumentClip {
-    clip: Box<Clip>,
-    source: ClipReference,
+/// A clip file the host is reading and retargeting off the editor's thread
+/// ([`HostHooks::retarget_clip`](crate::HostHooks::retarget_clip)).
+#[derive(Debug)]
+pub(super) struct Opening {
+    /// The host's request.
+    pub(super) id: u64,
+    /// The file's name.
+    pub(super) name: String,
+    /// How far it has got (0 to 1).
+    pub(super) progress: f64,
+    /// The file, asked for again when the body or the settings change meanwhile.
+    bytes: Vec<u8>,
+    /// The file as the document keeps it; `None`: the clip written as BVH (not a BVH file:
+    /// the whole glTF file would be kept).
+    source: Option<ClipReference>,
+    /// A document's clip: the document's own tasks stay (none set aside), and it stays
+    /// named when the clip cannot be opened.
+    from_document: bool,
 }
 
 /// What the next picked file is for.
@@ -67,44 +71,151 @@ pub enum AnimationFormat {
 
 impl EditorModel {
     /// Opens a picked or dropped clip file; a file that cannot be read says why and the
-    /// timeline stays as it was.
+    /// timeline stays as it was. Read and retargeted by the host where it can (off the
+    /// editor's thread, the timeline shows the progress and *Cancel*), else here.
     pub(super) fn open_clip_file(&mut self, name: &str, bytes: &[u8]) {
-        match read_clip(name, bytes, &LoadOptions::default(), &mut |_| None) {
-            Ok(clip) => {
-                let source = file_source(name, bytes, &clip);
-                match self.open_clip(Box::new(clip), source, true) {
-                    Ok(text) => self.inform(format!("Opened {text}")),
-                    Err(error) => self.warn(error),
-                }
-            }
-            Err(error) => self.warn(format!("{name} could not be opened as a clip: {error}.")),
+        let source = is_bvh_file(name).then(|| ClipReference::embed(name, bytes));
+        match self.start_opening(name, bytes.to_vec(), source, false) {
+            None => {}
+            Some(Ok(text)) => self.inform(format!("Opened {text}")),
+            Some(Err(error)) => self.warn(error),
         }
     }
 
-    /// The clip `document` carries, read; `None` when it carries none, only names one, or
-    /// names the clip already open. `Err`: the embedded file is not a clip (what to say).
-    pub(super) fn read_document_clip(
-        &self,
-        document: &Document,
-    ) -> Result<Option<DocumentClip>, String> {
-        let Some(reference) = &document.clip else {
-            return Ok(None);
-        };
-        let Some(embedded) = &reference.embedded else {
-            return Ok(None);
-        };
-        if self.is_open_clip(reference) {
-            return Ok(None);
+    /// Asks the host to read and retarget the clip file `name` (a request before it is
+    /// cancelled); where it cannot, does it here. `None`: under way (the result arrives as
+    /// [`MotionCommand::ClipOpened`]); else what to say after "Opened ", or why not.
+    fn start_opening(
+        &mut self,
+        name: &str,
+        bytes: Vec<u8>,
+        source: Option<ClipReference>,
+        from_document: bool,
+    ) -> Option<Result<String, String>> {
+        if let Some(previous) = self.timeline.opening.take() {
+            self.hooks.cancel_retarget(previous.id);
         }
-        let name = &reference.name;
-        let clip = read_clip(name, embedded.bytes(), &LoadOptions::default(), &mut |_| {
-            None
-        })
-        .map_err(|error| format!("its clip {name} could not be read: {error}"))?;
-        Ok(Some(DocumentClip {
-            clip: Box::new(clip),
-            source: reference.clone(),
-        }))
+        let id = self.timeline.next_request;
+        self.timeline.next_request += 1;
+        let job = Box::new(ClipJob {
+            name: name.to_owned(),
+            bytes: bytes.clone(),
+            body: self.session.humanoid().clone(),
+            options: self.timeline.options.clone(),
+        });
+        let opening = Opening {
+            id,
+            name: name.to_owned(),
+            progress: 0.0,
+            bytes,
+            source,
+            from_document,
+        };
+        match self.hooks.retarget_clip(ClipRetarget { id, job }) {
+            Ok(()) => {
+                self.timeline.opening = Some(opening);
+                None
+            }
+            Err(request) => {
+                let result = request.job.run(&mut |_| {});
+                Some(self.finish_opening(opening, result))
+            }
+        }
+    }
+
+    /// The clip read and retargeted (`result`) goes on the timeline; returns what to say
+    /// after "Opened ", or why it could not (the timeline then stays as it was, and a
+    /// document's clip stays named).
+    fn finish_opening(
+        &mut self,
+        opening: Opening,
+        result: Result<OpenedClip, String>,
+    ) -> Result<String, String> {
+        let OpenedClip { clip, retargeted } = result?;
+        // Made for this body (a change of body meanwhile asks again): a result that does
+        // not fit it is refused rather than shown.
+        let dofs = self.session.skeleton().dof_count();
+        if retargeted.postures.len() != clip.frames.len()
+            || retargeted.postures.iter().any(|p| p.values().len() != dofs)
+        {
+            return Err(format!(
+                "The clip {} came back for another body: open it again.",
+                clip.name
+            ));
+        }
+        let source = opening.source.unwrap_or_else(|| written_source(&clip));
+        if opening.from_document {
+            self.timeline.wanted = None;
+        }
+        Ok(self.put_clip(Box::new(clip), retargeted, source, !opening.from_document))
+    }
+
+    /// The host's progress with the clip request `id`.
+    pub(super) fn clip_progress(&mut self, id: u64, fraction: f64) {
+        if let Some(opening) = self.timeline.opening.as_mut()
+            && opening.id == id
+            && fraction.is_finite()
+        {
+            opening.progress = fraction.clamp(opening.progress, 1.0);
+        }
+    }
+
+    /// The host's result for the clip request `id`: put on the timeline if it is the one
+    /// awaited (dropped if it was cancelled or another clip opened since).
+    pub(super) fn clip_opened(&mut self, id: u64, result: Result<Box<OpenedClip>, String>) {
+        if self.timeline.opening.as_ref().is_none_or(|o| o.id != id) {
+            return;
+        }
+        let Some(opening) = self.timeline.opening.take() else {
+            return;
+        };
+        let from_document = opening.from_document;
+        match self.finish_opening(opening, result.map(|opened| *opened)) {
+            Ok(text) if from_document => {
+                self.inform(format!("The document's clip is on the timeline: {text}"));
+            }
+            Ok(text) => self.inform(format!("Opened {text}")),
+            Err(error) => self.warn(error),
+        }
+    }
+
+    /// *Cancel*: the clip being opened is dropped; the document and the timeline stay as
+    /// they were (a document's clip stays named, to be opened again).
+    pub(super) fn cancel_opening(&mut self) {
+        let Some(opening) = self.timeline.opening.take() else {
+            return;
+        };
+        self.hooks.cancel_retarget(opening.id);
+        let text = if opening.from_document {
+            format!(
+                "Opening the clip {} was cancelled: the document's keys stay without it (open the file with Motion > Open clip).",
+                opening.name
+            )
+        } else {
+            format!(
+                "Opening {} was cancelled: the document and the timeline are as they were.",
+                opening.name
+            )
+        };
+        self.inform(text);
+    }
+
+    /// The body or the settings changed while a clip is being opened: it is asked for again
+    /// on the body as it is now.
+    pub(super) fn reopen_pending(&mut self) {
+        if let Some(opening) = self.timeline.opening.take() {
+            self.hooks.cancel_retarget(opening.id);
+            let progress = self.start_opening(
+                &opening.name,
+                opening.bytes,
+                opening.source,
+                opening.from_document,
+            );
+            match progress {
+                None | Some(Ok(_)) => {}
+                Some(Err(error)) => self.warn(error),
+            }
+        }
     }
 
     /// Whether `reference` is the open clip's file.
@@ -115,26 +226,10 @@ impl EditorModel {
             .is_some_and(|open| open.hash == reference.hash && open.size == reference.size)
     }
 
-    /// After a document opened: its clip goes on the timeline (`read`, from
-    /// [`Self::read_document_clip`]), or, named without its file, is asked for. Returns what
-    /// to add to the notice, and whether it is a warning.
-    pub(super) fn follow_document_clip(
-        &mut self,
-        document: &Document,
-        read: Option<DocumentClip>,
-    ) -> (String, bool) {
-        if let Some(DocumentClip { clip, source }) = read {
-            let reference = source.without_file();
-            self.timeline.wanted = None;
-            return match self.open_clip(clip, source, false) {
-                Ok(text) => (format!(" With its clip: {text}"), false),
-                Err(error) => {
-                    // Saved again, the document still names its clip.
-                    self.timeline.wanted = Some(reference);
-                    (format!(" {error}"), true)
-                }
-            };
-        }
+    /// After a document opened: the clip it carries is opened (by the host where it can:
+    /// it follows), or, named without its file, is asked for. Returns what to add to the
+    /// notice, and whether it is a warning.
+    pub(super) fn follow_document_clip(&mut self, document: &Document) -> (String, bool) {
         let Some(reference) = &document.clip else {
             return (String::new(), false);
         };
@@ -145,7 +240,21 @@ impl EditorModel {
                 false,
             );
         }
+        // Saved again before the clip is open (or when it cannot be), the document still
+        // names its clip.
         self.timeline.wanted = Some(reference.without_file());
+        if let Some(embedded) = &reference.embedded {
+            let name = reference.name.clone();
+            let bytes = embedded.bytes().to_vec();
+            return match self.start_opening(&name, bytes, Some(reference.clone()), true) {
+                None => (
+                    format!(" Its clip {name} is being read and put on the body…"),
+                    false,
+                ),
+                Some(Ok(text)) => (format!(" With its clip: {text}"), false),
+                Some(Err(error)) => (format!(" {error}"), true),
+            };
+        }
         (
             format!(
                 " Its keys were made over the clip {} ({} bytes), which is not loaded: open that file (Motion > Open clip) to see them over it.",
@@ -212,6 +321,7 @@ impl EditorModel {
     pub(super) fn set_retarget_options(&mut self, options: RetargetOptions) {
         self.timeline.options = options;
         self.retarget_clip();
+        self.reopen_pending();
         self.show_playhead();
         if let Some(words) = self.timeline.contact_words() {
             self.inform(format!("The clip is put on the body again: {words}."));

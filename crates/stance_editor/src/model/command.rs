@@ -366,6 +366,12 @@ impl From<HostMessage> for Command {
             HostMessage::AvatarImported { name, result } => {
                 Command::AvatarImported { name, result }
             }
+            HostMessage::ClipProgress { id, fraction } => {
+                Command::Motion(MotionCommand::ClipProgress { id, fraction })
+            }
+            HostMessage::ClipOpened { id, result } => {
+                Command::Motion(MotionCommand::ClipOpened { id, result })
+            }
             HostMessage::SensorConnected { device } => {
                 Command::Sensors(SensorCommand::Connected { device })
             }

@@ -22,6 +22,9 @@ use self::layer::{KeyDelta, apply_delta, delta_at, key_delta, key_deltas};
 use super::EditorModel;
 use crate::history::EditKind;
 
+/// Frames of the trajectory computed per step (see `refresh_trajectory`).
+pub const TRAJECTORY_FRAMES_PER_STEP: usize = 1000;
+
 /// Slowest and fastest playback.
 pub const SPEED_RANGE: (f64, f64) = (0.1, 4.0);
 
@@ -94,6 +97,22 @@ pub enum MotionCommand {
     /// The clip's joints mapped onto H-Anim this way (the mapping window's corrections):
     /// the clip is retargeted with it.
     SetClipMapping(Box<stance_hanim::Mapping>),
+    /// How far the host has got with the clip being opened (request `id`).
+    ClipProgress {
+        /// The host's request.
+        id: u64,
+        /// From 0 to 1.
+        fraction: f64,
+    },
+    /// The clip being opened (request `id`), read and retargeted by the host, or why not.
+    ClipOpened {
+        /// The host's request.
+        id: u64,
+        /// The clip and its retargeting, or what is wrong (in words).
+        result: Result<Box<stance_asset::OpenedClip>, String>,
+    },
+    /// Stop opening the clip: the document and the timeline stay as they were.
+    CancelOpening,
 }
 
 /// One end of an active interval.
@@ -137,6 +156,10 @@ pub struct Timeline {
     /// The clip a document or link was made over whose file is not loaded yet: the next
     /// clip opened is compared with it.
     pub(super) wanted: Option<ClipReference>,
+    /// The clip file the host is reading and retargeting ([`HostHooks::retarget_clip`](crate::HostHooks::retarget_clip)).
+    pub(super) opening: Option<super::clips::Opening>,
+    /// The id of the next clip request to the host.
+    pub(super) next_request: u64,
 }
 
 impl Default for Timeline {
@@ -160,6 +183,8 @@ impl Default for Timeline {
             recording: None,
             source: None,
             wanted: None,
+            opening: None,
+            next_request: 0,
         }
     }
 }
@@ -179,6 +204,14 @@ impl Timeline {
     /// The clip a document or link named whose file is not loaded yet.
     pub fn wanted_clip(&self) -> Option<&ClipReference> {
         self.wanted.as_ref()
+    }
+
+    /// The clip file being opened off the editor's thread, if any: its name and how far it
+    /// has got (0 to 1).
+    pub fn opening(&self) -> Option<(&str, f64)> {
+        self.opening
+            .as_ref()
+            .map(|opening| (opening.name.as_str(), opening.progress))
     }
 
     /// How clips are put on the body (rest match, contact thresholds).
@@ -376,6 +409,9 @@ impl EditorModel {
             MotionCommand::Record(on) => self.record_motion(on),
             MotionCommand::SetRetargetOptions(options) => self.set_retarget_options(*options),
             MotionCommand::SetClipMapping(mapping) => self.set_clip_mapping(*mapping),
+            MotionCommand::ClipProgress { id, fraction } => self.clip_progress(id, fraction),
+            MotionCommand::ClipOpened { id, result } => self.clip_opened(id, result),
+            MotionCommand::CancelOpening => self.cancel_opening(),
         }
     }
 
@@ -397,6 +433,17 @@ impl EditorModel {
                     clip.name
                 )
             })?;
+        Ok(self.put_clip(clip, retargeted, source, set_aside))
+    }
+
+    /// Puts `clip`, retargeted onto the body, on the timeline (see [`Self::open_clip`]).
+    pub(super) fn put_clip(
+        &mut self,
+        clip: Box<Clip>,
+        retargeted: Retargeted,
+        source: ClipReference,
+        set_aside: bool,
+    ) -> String {
         let (frames, fps) = (retargeted.postures.len(), 1.0 / retargeted.frame_time);
         let contacts = contact_words(&retargeted);
         let name = clip.name.clone();
@@ -432,7 +479,7 @@ impl EditorModel {
             ));
         }
         self.seek(0);
-        Ok(text)
+        text
     }
 
     /// Removes the tasks without an interval (the standing pins, balance, comfort) as one
@@ -535,6 +582,7 @@ impl EditorModel {
         self.retarget_clip();
         self.timeline.playing = false;
         self.show_playhead();
+        self.reopen_pending();
     }
 
     /// Puts the clip on the current body again (after a change of body or of settings); a
@@ -689,7 +737,8 @@ impl EditorModel {
     }
 
     /// The trajectory joint's world positions over every frame, when the keys, the clip,
-    /// the body or the joint changed.
+    /// the body or the joint changed: [`TRAJECTORY_FRAMES_PER_STEP`] frames a step (a
+    /// 10,000-frame clip's would hold up one frame of the page for about 100 ms).
     fn refresh_trajectory(&mut self) {
         let skeleton = self.session.skeleton();
         let joint = match &self.timeline.trajectory_joint {
@@ -701,36 +750,41 @@ impl EditorModel {
             self.timeline.trajectory_for = None;
             return;
         };
-        let fresh =
-            self.timeline
-                .trajectory_for
-                .as_ref()
-                .is_some_and(|&(j, base, generation, keys)| {
-                    j == joint
-                        && base == self.timeline.base_revision
-                        && generation == self.session_generation
-                        && keys == self.session.motion_revision()
-                });
-        if fresh {
+        let wanted = (
+            joint,
+            self.timeline.base_revision,
+            self.session_generation,
+            self.session.motion_revision(),
+        );
+        if self.timeline.trajectory_for != Some(wanted) {
+            self.timeline.trajectory.clear();
+            self.timeline.trajectory_for = Some(wanted);
+        }
+        let from = self.timeline.trajectory.len();
+        let to = self
+            .frame_count()
+            .min(from.saturating_add(TRAJECTORY_FRAMES_PER_STEP));
+        if from >= to {
             return;
         }
         let deltas = self.key_layer();
-        let trajectory = (0..self.frame_count())
-            .filter_map(|frame| {
+        let more: Vec<DVec3> = (from..to)
+            .map(|frame| {
                 let posture = self.layered_posture(&deltas, frame);
                 Frames::new(skeleton, &posture)
                     .joint_position
                     .get(joint)
                     .copied()
+                    .unwrap_or_default()
             })
             .collect();
-        self.timeline.trajectory = trajectory;
-        self.timeline.trajectory_for = Some((
-            joint,
-            self.timeline.base_revision,
-            self.session_generation,
-            self.session.motion_revision(),
-        ));
+        self.timeline.trajectory.extend(more);
+    }
+
+    /// Whether the trajectory has frames still to compute (the next steps add them).
+    pub(super) fn trajectory_pending(&self) -> bool {
+        self.timeline.trajectory_for.is_some()
+            && self.timeline.trajectory.len() < self.frame_count()
     }
 
     /// The page shared a posture link of the document (`characters` long): says so, what of
