@@ -19,17 +19,17 @@ pub const MAX_CLIP_BYTES: u64 = 256 << 20;
 /// Longest clip file name (bytes).
 pub const MAX_CLIP_NAME_BYTES: usize = 1024;
 /// The prefix of the `hash` field: the hash function, so that another can come later.
-const HASH_PREFIX: &str = "fnv1a64:";
+const HASH_PREFIX: &str = "crc32:";
 /// DEFLATE level of embedded clips (miniz's default; a BVH takes about half its size in
 /// base64 characters).
 const DEFLATE_LEVEL: u8 = 6;
 
-/// 64-bit FNV-1a of `bytes`: the content hash of a clip file (identifies the file a
-/// document was made over; not a defence against a crafted collision).
+/// CRC-32 (IEEE, as zlib and PNG compute it) of `bytes`: the content hash of a clip file
+/// (with its size, identifies the file a document was made over; not a defence against a
+/// crafted collision). `crc32fast` takes a 9 MB clip in a few milliseconds where a byte-wise
+/// hash took tens: the page computes it when a clip opens.
 pub fn content_hash(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |hash, &byte| {
-        (hash ^ u64::from(byte)).wrapping_mul(0x0100_0000_01b3)
-    })
+    u64::from(crc32fast::hash(bytes))
 }
 
 /// A clip file carried in the document: its bytes, and their DEFLATE form in base64 as the
@@ -105,9 +105,9 @@ impl ClipReference {
         bytes.len() as u64 == self.size && content_hash(bytes) == self.hash
     }
 
-    /// The hash as written in the JSON (`fnv1a64:` and 16 hexadecimal digits).
+    /// The hash as written in the JSON (`crc32:` and 8 hexadecimal digits).
     pub fn hash_text(&self) -> String {
-        format!("{HASH_PREFIX}{:016x}", self.hash)
+        format!("{HASH_PREFIX}{:08x}", self.hash)
     }
 
     /// Checks the name and size (paths from `clip`).
@@ -147,12 +147,13 @@ impl ClipReference {
         let hash_text = string(field(o, "hash", at)?, "clip.hash")?;
         let hash = hash_text
             .strip_prefix(HASH_PREFIX)
-            .filter(|hex| hex.len() == 16)
-            .and_then(|hex| u64::from_str_radix(hex, 16).ok())
+            .filter(|hex| hex.len() == 8)
+            .and_then(|hex| u32::from_str_radix(hex, 16).ok())
+            .map(u64::from)
             .ok_or_else(|| {
                 DocumentError::field(
                     "clip.hash",
-                    format!("expected \"{HASH_PREFIX}\" and 16 hexadecimal digits"),
+                    format!("expected \"{HASH_PREFIX}\" and 8 hexadecimal digits"),
                 )
             })?;
         let mut clip = Self {
@@ -231,11 +232,12 @@ impl Serialize for ClipReference {
 mod tests {
     use super::*;
 
-    // Catches a hash that is not FNV-1a 64 (a document written elsewhere would not match).
+    // Catches a hash that is not CRC-32/IEEE (a document written elsewhere would not match):
+    // the standard check values.
     #[test]
-    fn the_content_hash_is_fnv1a_64() {
-        assert_eq!(content_hash(b""), 0xcbf2_9ce4_8422_2325);
-        assert_eq!(content_hash(b"a"), 0xaf63_dc4c_8601_ec8c);
-        assert_eq!(content_hash(b"foobar"), 0x8594_4171_f739_67e8);
+    fn the_content_hash_is_crc32() {
+        assert_eq!(content_hash(b""), 0);
+        assert_eq!(content_hash(b"a"), 0xe8b7_be43);
+        assert_eq!(content_hash(b"123456789"), 0xcbf4_3926);
     }
 }

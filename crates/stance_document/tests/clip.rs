@@ -38,7 +38,7 @@ fn an_embedded_clip_round_trips_compressed_through_the_json() {
     assert_eq!(clip["size"], clip_text().len());
     assert_eq!(
         clip["hash"],
-        format!("fnv1a64:{:016x}", content_hash(clip_text().as_bytes()))
+        format!("crc32:{:08x}", content_hash(clip_text().as_bytes()))
     );
     let compressed = clip["deflate"].as_str().unwrap().len();
     assert!(
@@ -93,7 +93,7 @@ fn a_damaged_embedded_clip_is_refused_with_the_field_and_the_file_named() {
         ),
         (
             "another hash",
-            text.replace("\"hash\":\"fnv1a64:", "\"hash\":\"fnv1a64:0"),
+            text.replace("\"hash\":\"crc32:", "\"hash\":\"crc32:0"),
             "clip.hash",
         ),
     ];
@@ -106,8 +106,8 @@ fn a_damaged_embedded_clip_is_refused_with_the_field_and_the_file_named() {
         }
     }
     let hash_changed = text.replacen(
-        &format!("{:016x}", content_hash(clip_text().as_bytes())),
-        "0123456789abcdef",
+        &format!("{:08x}", content_hash(clip_text().as_bytes())),
+        "01234567",
         1,
     );
     let error = Document::from_json(&hash_changed).unwrap_err().to_string();
@@ -118,8 +118,7 @@ fn a_damaged_embedded_clip_is_refused_with_the_field_and_the_file_named() {
 // file that are refused.
 #[test]
 fn a_reference_without_the_file_and_a_document_without_a_clip_open() {
-    let reference =
-        r#"{"clip": {"file": "walk.bvh", "size": 12, "hash": "fnv1a64:00000000000000ff"}}"#;
+    let reference = r#"{"clip": {"file": "walk.bvh", "size": 12, "hash": "crc32:000000ff"}}"#;
     let clip = Document::from_json(reference).unwrap().clip.unwrap();
     assert_eq!(
         (clip.name.as_str(), clip.size, clip.hash),
@@ -134,11 +133,11 @@ fn a_reference_without_the_file_and_a_document_without_a_clip_open() {
     );
     for (bad, field) in [
         (
-            r#"{"clip": {"size": 1, "hash": "fnv1a64:00000000000000ff"}}"#,
+            r#"{"clip": {"size": 1, "hash": "crc32:000000ff"}}"#,
             "clip.file",
         ),
         (
-            r#"{"clip": {"file": "a.bvh", "size": -1, "hash": "fnv1a64:00000000000000ff"}}"#,
+            r#"{"clip": {"file": "a.bvh", "size": -1, "hash": "crc32:000000ff"}}"#,
             "clip.size",
         ),
         (
@@ -146,7 +145,7 @@ fn a_reference_without_the_file_and_a_document_without_a_clip_open() {
             "clip.hash",
         ),
         (
-            r#"{"clip": {"file": " ", "size": 1, "hash": "fnv1a64:00000000000000ff"}}"#,
+            r#"{"clip": {"file": " ", "size": 1, "hash": "crc32:000000ff"}}"#,
             "clip.file",
         ),
     ] {

@@ -437,7 +437,7 @@ pub(super) fn decode_payload(bytes: &[u8], format: u8) -> R<Document> {
     let clip = if format >= 6 && r.flag(HAS_CLIP) {
         let name = r.string()?;
         let size = r.d.direct(32);
-        let hash = r.d.direct(64);
+        let hash = r.d.direct(32);
         Some(ClipReference {
             name,
             size,

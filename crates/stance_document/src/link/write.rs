@@ -382,7 +382,7 @@ pub(super) fn encode_payload(d: &Document, format: u8) -> Vec<u8> {
                 w.string(&clip.name);
                 // At most MAX_CLIP_BYTES in a valid document, below 2^32.
                 w.e.direct(clip.size.min(u64::from(u32::MAX)), 32);
-                w.e.direct(clip.hash, 64);
+                w.e.direct(clip.hash, 32);
             }
             None => w.flag(HAS_CLIP, false),
         }
