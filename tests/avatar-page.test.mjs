@@ -11,7 +11,7 @@ import zlib from "node:zlib";
 import {
   CONFIGURATIONS, assertDrawnAtJoints, assertNotDrawnAt, decodePng, describeLongTasks,
   isAvatarPixel, isFigureColour, launch, longTasks, openEditor, pointsAwayFromFigure,
-  saveArtifact, freshStoragePerTab, serve, viewportRect, waitForSettled, waitForState,
+  pressKeys, saveArtifact, freshStoragePerTab, serve, viewportRect, waitForSettled, waitForState,
 } from "./browser.mjs";
 
 const SHARED_AVATAR = fileURLToPath(new URL("./fixtures/avatars/Black_F_2_Casual.glb", import.meta.url));
@@ -199,10 +199,14 @@ describe("avatars in the page", () => {
     assert.equal(kept.avatar.name, "Black_F_2_Casual.glb", "the previous avatar stays");
     // Undo takes the pull back, then the avatar: the mannequin returns with the tasks the
     // document had, which the avatar carried over.
-    await page.keyboard.press("Control+z");
-    await page.keyboard.press("Control+z");
-    const undone = await waitForState(page, (s) => s.avatar === null && s.settled,
-      { what: "two undos bring the mannequin back" });
+    // Each undo is one step of the history: the first takes the pull back (the avatar
+    // stays), the second the avatar.
+    const steps = kept.undo_steps;
+    const first = await pressKeys(page, "Control+z", { until: (s) => s.undo_steps === steps - 1,
+      what: "the first undo takes one step back" });
+    assert.equal(first.avatar?.name, "Black_F_2_Casual.glb", "the first undo takes the pull back, not the avatar");
+    const undone = await pressKeys(page, "Control+z", { until: (s) => s.avatar === null && s.settled,
+      started: (s) => s.undo_steps === steps - 2, what: "two undos bring the mannequin back" });
     assert.deepEqual(undone.tasks.map((t) => t.description), shown.tasks.map((t) => t.description));
     assert.deepEqual(errors, [], `console errors: ${errors.join(" / ")}`);
     await page.close();

@@ -147,6 +147,25 @@ export async function clickButton(page, name, { until = null, started = until,
   return waitForState(page, until, { timeout, what });
 }
 
+/**
+ * Presses `keys` (Playwright's notation, e.g. "Control+z") and waits for `until`. A press
+ * with no effect at all within 5 s (`started` false; egui can drop input that arrives during
+ * a long frame, as with clicks) is made once more, and logged; a press that had an effect is
+ * never repeated, so a test still sees each effective press's outcome.
+ */
+export async function pressKeys(page, keys, { until, started = until, timeout = 20_000,
+  what = `the effect of ${keys}` } = {}) {
+  await page.keyboard.press(keys);
+  try {
+    const state = await waitForState(page, (s) => until(s) || started(s), { timeout: 5_000, what });
+    if (until(state)) return state;
+  } catch {
+    console.log(`[keys] ${keys}: no effect within 5 s, pressed again (${what})`);
+    await page.keyboard.press(keys);
+  }
+  return waitForState(page, until, { timeout, what });
+}
+
 const sameScreen = (a, b) => Object.entries(a.screen).every(([joint, [x, y]]) => b.screen[joint]
   && Math.abs(b.screen[joint][0] - x) < 0.01 && Math.abs(b.screen[joint][1] - y) < 0.01);
 
