@@ -9,8 +9,9 @@
 // (a requestAnimationFrame callback). On this machine the canvas is drawn by SwiftShader and
 // every frame of the editor is a long task (about 250 ms, clip or no clip: the baseline is
 // measured first and printed). So the test asserts what the retargeting's move off the main
-// thread is about: no call of the page into the editor for the clip takes 50 ms, and every
-// long task is an editor frame with under 50 ms of those calls in it.
+// thread is about: no call of the page into the editor for the clip takes 50 ms, every long
+// task with such calls in it is an editor frame with under 50 ms of them, and the long tasks
+// that are neither (the baseline has them too) are at most two, each under 100 ms.
 import { after, before, describe, test } from "node:test";
 import assert from "node:assert/strict";
 import { mkdtempSync, readFileSync, writeFileSync } from "node:fs";
@@ -194,9 +195,20 @@ describe("a long clip opens in the loading worker", () => {
     // frame is a few milliseconds.)
     const slowCalls = calls.filter((c) => c.duration > 50);
     assert.deepEqual(slowCalls, [], "no call of the page into the editor over 50 ms");
-    const notFrames = tasks.filter((t) => !t.frame || t.callsMs > 50);
-    assert.deepEqual(notFrames.map((t) => describeTask(t, started)), [],
-      "every main-thread task over 50 ms is an editor frame with under 50 ms of the clip's calls");
+    const withCalls = tasks.filter((t) => t.calls.length > 0 && (!t.frame || t.callsMs > 50));
+    assert.deepEqual(withCalls.map((t) => describeTask(t, started)), [],
+      "every main-thread task over 50 ms with the clip's calls in it is an editor frame with under 50 ms of them");
+    // Tasks that are neither a frame nor hold a call of the clip's happen without a clip too
+    // (the baseline has them: a fresh-clone run saw one of 51 ms in each): at most two, none
+    // near a frame's cost. Catches clip work done on the main thread outside the measured calls
+    // (a parse or a copy of the result in the page's message handler).
+    const others = tasks.filter((t) => !t.frame && t.calls.length === 0);
+    const baselineOthers = baseline.tasks.filter((t) => !t.frame);
+    console.log(`# tasks over 50 ms that are neither an editor frame nor a call of the clip's: `
+      + `${others.map((t) => `${t.duration.toFixed(0)} ms`).join(", ") || "none"} (baseline: `
+      + `${baselineOthers.map((t) => `${t.duration.toFixed(0)} ms`).join(", ") || "none"})`);
+    assert.ok(others.length <= 2 && others.every((t) => t.duration < 100),
+      `other long tasks while opening: ${others.map((t) => describeTask(t, started)).join("; ")}`);
     assert.deepEqual(errors, []);
     await page.close();
   });
