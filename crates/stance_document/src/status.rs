@@ -46,17 +46,16 @@ pub fn task_statuses(
             Err(error) => Err(error.to_string()),
         })
         .collect();
-    let evaluated_all = evaluated.as_slice();
     specs
         .iter()
-        .zip(evaluated_all)
-        .map(|(spec, evaluated)| {
-            let residual = evaluated.as_ref().ok().copied();
+        .zip(&evaluated)
+        .map(|(spec, own)| {
+            let residual = own.as_ref().ok().copied();
             let unmet =
                 spec.active && !spec.kind.is_soft() && residual.is_some_and(|r| r > MET_TOLERANCE);
             let gave_way = unmet.then(|| {
                 if settled {
-                    why_unmet(skeleton, body, posture, spec, specs, evaluated_all)
+                    why_unmet(skeleton, body, posture, spec, specs, &evaluated)
                 } else {
                     "still moving".to_owned()
                 }
@@ -64,7 +63,7 @@ pub fn task_statuses(
             TaskStatus {
                 residual,
                 gave_way,
-                problem: evaluated.as_ref().err().cloned(),
+                problem: own.as_ref().err().cloned(),
             }
         })
         .collect()

@@ -6,12 +6,12 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use stance_editor::model::MotionCommand;
-use stance_editor::{ClipRetarget, Command, EditorModel, HostMessage, MemoryHost, StanceApp};
+use stance_editor::{ClipRetarget, Command, HostMessage, MemoryHost, StanceApp};
 use stance_hanim::LevelOfArticulation;
 
 use egui_kittest::kittest::Queryable;
 
-use crate::common::{click_button, harness_for, state};
+use crate::common::{click_button, editor_on, harness_for, open, state};
 
 const WALK: &[u8] = include_bytes!("../../../tests/fixtures/motion/walk.bvh");
 const RUN: &[u8] = include_bytes!("../../../tests/fixtures/motion/run.bvh");
@@ -21,19 +21,6 @@ fn worker_host() -> MemoryHost {
     let host = MemoryHost::default();
     host.inner.borrow_mut().retargets_clips = true;
     host
-}
-
-fn editor_on(host: &MemoryHost) -> EditorModel {
-    let mut model = EditorModel::new(Box::new(host.clone())).unwrap();
-    model.step(0.0, None);
-    model
-}
-
-fn open(model: &mut EditorModel, name: &str, bytes: &[u8]) {
-    model.apply(Command::OpenFile {
-        name: name.into(),
-        bytes: bytes.to_vec(),
-    });
 }
 
 /// The last request the host took.

@@ -12,20 +12,13 @@ use stance_editor::{Command, EditorModel, MemoryHost};
 use stance_ik::Frames;
 use stance_motion::{BvhLimits, ContactSettings, RestMatch, RetargetOptions, read_bvh};
 
+use crate::common::{editor_on, open};
+
 const WALK: &[u8] = include_bytes!("../../../tests/fixtures/motion/walk.bvh");
 
 fn editor() -> (EditorModel, MemoryHost, f64) {
     let host = MemoryHost::default();
-    let mut model = EditorModel::new(Box::new(host.clone())).unwrap();
-    model.step(0.0, None);
-    (model, host, 0.0)
-}
-
-fn open(model: &mut EditorModel, name: &str, bytes: &[u8]) {
-    model.apply(Command::OpenFile {
-        name: name.into(),
-        bytes: bytes.to_vec(),
-    });
+    (editor_on(&host), host, 0.0)
 }
 
 #[test]

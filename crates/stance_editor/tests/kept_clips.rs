@@ -13,21 +13,10 @@ use stance_editor::{Command, EditorModel, MemoryHost};
 use stance_ik::Dof;
 use stance_motion::{BvhLimits, read_bvh};
 
+use crate::common::{editor_on, open};
+
 const WALK: &[u8] = include_bytes!("../../../tests/fixtures/motion/walk.bvh");
 const RUN: &[u8] = include_bytes!("../../../tests/fixtures/motion/run.bvh");
-
-fn editor_on(host: &MemoryHost) -> EditorModel {
-    let mut model = EditorModel::new(Box::new(host.clone())).unwrap();
-    model.step(0.0, None);
-    model
-}
-
-fn open(model: &mut EditorModel, name: &str, bytes: &[u8]) {
-    model.apply(Command::OpenFile {
-        name: name.into(),
-        bytes: bytes.to_vec(),
-    });
-}
 
 /// The walk on the timeline, a key at frame 40 (the left shoulder raised over the clip) and a
 /// right-hand pin active from 0.1 s to 0.2 s: the keys and constraints over a clip.
