@@ -473,6 +473,7 @@ fn parse_settings(v: &Value) -> Result<Settings, DocumentError> {
     set("max_angular_step", &mut s.max_angular_step)?;
     set("max_dof_step", &mut s.max_dof_step)?;
     set("trust_region", &mut s.trust_region)?;
+    set("priority_budget", &mut s.priority_budget)?;
     if let Some(n) = num("time_budget_ms")? {
         s.time_budget_secs = Some(n / 1000.0);
     }

@@ -140,7 +140,7 @@ const ARM: &str = r#"{
   ],
   "settings": {"max_iterations": 50, "tolerance": 1e-6, "stall_window": 5, "stall_step": 1e-9,
     "stall_improvement": 0.01, "rank_tolerance": 1e-9, "max_linear_step": 0.1,
-    "max_angular_step": 0.3, "max_dof_step": 0.3, "trust_region": 0.5, "time_budget_ms": 50,
+    "max_angular_step": 0.3, "max_dof_step": 0.3, "trust_region": 0.5, "priority_budget": 1.0, "time_budget_ms": 50,
     "adaptive_damping": {"lambda_max": 0.1, "epsilon": 0.05},
     "levels": {"3": {"lambda": 0.05}}, "enforce_limits": true, "restarts": false,
     "iteration": "guarded", "hybrid": true},

@@ -83,12 +83,18 @@ fn problem_file_errors_name_the_field() {
             "error_scale",
         ),
         (r#""settings":{"tolerance":-1}"#, "settings"),
+        (r#""settings":{"priority_budget":0}"#, "priority_budget"),
         (r#""posture":{"l_knee":{"rq":1}}"#, "posture.l_knee"),
     ] {
         let text = format!(r#"{{"skeleton":{skeleton},{tail}}}"#);
         let e = Problem::from_json(&text).unwrap_err().to_string();
         assert!(e.contains(want), "{e} (wanted {want})");
     }
+    let read = Problem::from_json(&format!(
+        r#"{{"skeleton":{skeleton},"settings":{{"priority_budget":2.5}}}}"#
+    ))
+    .unwrap();
+    assert_eq!(read.settings.priority_budget, 2.5);
     let e = Problem::from_json(r#"{"skeleton":{"joints":[{"name":"a","dofs":["rq"]}]}}"#)
         .unwrap_err()
         .to_string();

@@ -210,6 +210,7 @@ impl Solver {
             self.settings.stall_window = stage.stall_window;
             self.settings.max_linear_step = stage.max_linear_step;
             self.settings.max_angular_step = stage.max_angular_step;
+            self.settings.damping = stage.damping;
             self.settings.max_iterations = iterations_left;
             if stage.from_start {
                 values.copy_from_slice(&initial);

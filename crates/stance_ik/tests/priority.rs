@@ -179,8 +179,9 @@ fn strict_priority_holds_through_solver_iterations() {
 }
 
 /// Strict priority over whole solves, per residual vector: at every iteration of a solve
-/// (the textbook iteration, in its trust region), the move the solver takes changes no row of
-/// a higher level's linearised error compared with the step of the higher levels alone
+/// (the textbook iteration: each level's share within what the levels above left of the
+/// priority budget, the whole in its trust region), the move the solver takes changes no row
+/// of a higher level's linearised error compared with the step of the higher levels alone
 /// (scaled by the same factor). On problems where every
 /// level has work left all along (three points of one chain pulled out of reach in different
 /// directions) and not vacuously: the lower levels do change the move.
@@ -208,7 +209,7 @@ fn strict_priority_holds_per_residual_vector_over_whole_solves() {
         let params = StepParams {
             damping: settings.damping,
             rank_tolerance: settings.rank_tolerance,
-            max_dof_step: f64::INFINITY,
+            max_dof_step: settings.priority_budget,
         };
         let mut solver = Solver::new(settings).unwrap();
         let n = s.dof_count();
@@ -251,7 +252,10 @@ fn strict_priority_holds_per_residual_vector_over_whole_solves() {
         }
     }
     assert_eq!(checked, 30 * 20 * 3);
-    assert!(lower_levels_moved > 30 * 20, "{lower_levels_moved}");
+    // Not vacuous: the lower levels change the move in a good share of the 1,200 (iteration,
+    // level) pairs (566 with the default priority budget; where the levels above spend all of
+    // it, the lower ones wait their turn; all 1,200 with the plain recursion's unlimited budget).
+    assert!(lower_levels_moved > 30 * 20 / 2, "{lower_levels_moved}");
 }
 
 #[test]

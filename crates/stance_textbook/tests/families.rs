@@ -15,15 +15,16 @@ use crate::common::{all_families, problems};
 /// Cases per family (the figures of `docs/solver-families.md`, seed 1).
 const CASES: usize = 40;
 
-/// Per family: (name, cases Stance meets with restarts, without), as the docs state them.
-const STATED: &[(&str, usize, usize)] = &[
-    ("reach", 40, 40),
-    ("partial", 38, 38),
-    ("mixed", 40, 40),
-    ("loa1", 40, 40),
-    ("loa2", 33, 33),
-    ("limits", 34, 32),
-    ("wide", 28, 28),
+/// Per family: (name, cases Stance meets with restarts, without, cases the oracle meets that
+/// Stance with restarts misses), as the docs state them.
+const STATED: &[(&str, usize, usize, usize)] = &[
+    ("reach", 40, 40, 0),
+    ("partial", 40, 38, 0),
+    ("mixed", 40, 40, 0),
+    ("loa1", 40, 40, 0),
+    ("loa2", 38, 37, 0),
+    ("limits", 35, 33, 1),
+    ("wide", 31, 28, 1),
 ];
 
 /// Stance's solve of `text`, the posture as the oracle reads postures (by joint and DOF
@@ -82,11 +83,17 @@ fn stance_meets_every_level_wherever_the_textbook_oracle_does_on_every_family() 
         }
         let stated = STATED.iter().find(|s| s.0 == family.name);
         match stated {
-            Some(&(_, with, without)) => {
+            Some(&(_, with, without, misses)) => {
                 if met[0].abs_diff(with) > 1 || met[1].abs_diff(without) > 1 {
                     failures.push(format!(
                         "{}: met {}/{} (restarts / none), the docs state {with}/{without}",
                         family.name, met[0], met[1]
+                    ));
+                }
+                if missed_where_oracle_met[0] > misses {
+                    failures.push(format!(
+                        "{}: misses {} of the oracle's cases, the docs state {misses}",
+                        family.name, missed_where_oracle_met[0]
                     ));
                 }
             }

@@ -1,8 +1,10 @@
 //! The multi-start's later runs of a stalled solve, and the hybrid's closed-form restart of a
 //! limb (the paper's conclusion).
 
+use super::settings::{TEXTBOOK_DAMPING, TEXTBOOK_TRUST_REGION};
 use super::{AnalyticRestart, Iteration, Solver, TEXTBOOK_ANGULAR_STEP, TEXTBOOK_LINEAR_STEP};
 use crate::limb::LimbGoal;
+use crate::priority::Damping;
 use crate::{Posture, Skeleton, Task, TaskKind};
 
 /// The stall window of the multi-start's plain recursion from the start posture.
@@ -20,14 +22,17 @@ pub(super) struct RestartStage {
     pub(super) max_angular_step: f64,
     /// From the start posture (else from the best posture so far).
     pub(super) from_start: bool,
+    /// The damping of the levels without their own.
+    pub(super) damping: Damping,
 }
 
 impl Solver {
     /// The runs a stalled solve goes on with, in order (none without `settings.restarts`):
     /// after textbook iterations, guarded ones from the best posture so far (their line
     /// search settles what whole steps leave oscillating), then the plain recursion from the
-    /// start posture; after guarded ones, the plain recursion. Both with the textbook's task
-    /// clamps where the settings' are longer.
+    /// start posture with the textbook's damping (0.01) and trust region (pi/4); after guarded
+    /// ones, that plain recursion. Both with the textbook's task clamps where the settings' are
+    /// longer.
     pub(super) fn restart_stages(&self) -> Vec<RestartStage> {
         if !self.settings.restarts {
             return Vec::new();
@@ -41,14 +46,18 @@ impl Solver {
             max_linear_step,
             max_angular_step,
             from_start: false,
+            damping: self.settings.damping,
         };
         let plain = RestartStage {
             iteration: Iteration::Textbook,
-            trust_region: f64::INFINITY,
+            trust_region: TEXTBOOK_TRUST_REGION,
             stall_window: RESTART_STALL_WINDOW,
             max_linear_step,
             max_angular_step,
             from_start: true,
+            damping: Damping::Constant {
+                lambda: TEXTBOOK_DAMPING,
+            },
         };
         match self.settings.iteration {
             Iteration::Guarded => vec![plain],

@@ -68,6 +68,13 @@ pub struct SolverSettings {
     /// problem into another basin. Infinity gives the plain recursion. Guarded iterations use
     /// `max_dof_step` instead.
     pub trust_region: f64,
+    /// Largest DOF change the levels of a textbook iteration take together, spent in priority
+    /// order (rad or m, default 1.0): a level's step longer than what the levels above it left
+    /// is scaled down alone, so that a lower level's long step near its algorithmic singularity
+    /// no longer shortens the whole step (and the higher levels' progress) through the trust
+    /// region. Infinity gives the plain recursion. Guarded iterations share `max_dof_step`
+    /// instead.
+    pub priority_budget: f64,
     /// Wall-clock budget in seconds (needs a [`Clock`]; default none).
     pub time_budget_secs: Option<f64>,
     /// Damping of every level without its own (default constant 0.002; see
@@ -86,10 +93,11 @@ pub struct SolverSettings {
     pub enforce_limits: bool,
     /// Linear-algebra implementation of the step (default: the slice kernel).
     pub backend: Backend,
-    /// When a solve stalls with a level unmet (and at least half the time budget is left),
-    /// solve once more from the start posture as the plain textbook recursion (no trust
-    /// region; within what is left of the iteration budget) and keep the better result in
-    /// priority order (default true).
+    /// When a solve stalls with a level unmet (and at least half the time budget is left), go
+    /// on with guarded iterations, then solve once more from the start posture with the
+    /// textbook's recipe (damping 0.01, trust region pi/4, task clamps 0.1 m / 0.3 rad),
+    /// within what is left of the iteration budget, each run kept only if better in priority
+    /// order (default true).
     pub restarts: bool,
 }
 
@@ -134,6 +142,7 @@ impl Default for SolverSettings {
             iteration: Iteration::Textbook,
             stall_window: STALL_WINDOW,
             trust_region: 0.5,
+            priority_budget: 1.0,
             time_budget_secs: None,
             damping: Damping::default(),
             rank_tolerance: 1e-9,
@@ -181,6 +190,9 @@ impl SolverSettings {
         if self.trust_region.is_nan() || self.trust_region <= 0.0 {
             return Err(IkError::BadSetting("trust_region"));
         }
+        if self.priority_budget.is_nan() || self.priority_budget <= 0.0 {
+            return Err(IkError::BadSetting("priority_budget"));
+        }
         Ok(())
     }
 
@@ -190,7 +202,7 @@ impl SolverSettings {
             rank_tolerance: self.rank_tolerance,
             max_dof_step: match self.iteration {
                 Iteration::Guarded => self.max_dof_step,
-                Iteration::Textbook => f64::INFINITY,
+                Iteration::Textbook => self.priority_budget,
             },
         }
     }
@@ -234,6 +246,14 @@ pub(super) fn validate_damping(damping: Damping) -> Result<(), IkError> {
 pub const TEXTBOOK_LINEAR_STEP: f64 = 0.1;
 /// The textbook's per-iteration task clamp of orientations, gazes and postures (rad).
 pub const TEXTBOOK_ANGULAR_STEP: f64 = 0.3;
+
+/// The textbook's trust region (rad): Buss & Kim's whole step scaled so that no DOF moves more
+/// than a quarter turn's half. The plain recursion's restart of a stalled solve uses it.
+pub const TEXTBOOK_TRUST_REGION: f64 = std::f64::consts::FRAC_PI_4;
+/// The textbook's damping of every level's pseudo-inverse ([MAC 90]'s order of magnitude): more
+/// than the default 0.002, so steps near a singularity are shorter and fall into the basin
+/// nearest the start more often. The plain recursion's restart of a stalled solve uses it.
+pub const TEXTBOOK_DAMPING: f64 = 0.01;
 
 /// Iterations without a meaningful new best (in priority order) before "stalled".
 const STALL_WINDOW: usize = 40;
