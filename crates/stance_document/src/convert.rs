@@ -153,9 +153,11 @@ impl TaskSpec {
                 axes: *axes,
                 target: target.to_array(),
             },
-            TaskKind::Balance { .. }
-            | TaskKind::Comfort { .. }
-            | TaskKind::PostureAttraction { .. } => return None,
+            TaskKind::Balance { support, margin } => TaskKindSpec::Balance {
+                support: Some(support_names(skeleton, support)?),
+                margin: *margin,
+            },
+            TaskKind::Comfort { .. } | TaskKind::PostureAttraction { .. } => return None,
         };
         Some(Self {
             level: task.level,
@@ -165,6 +167,37 @@ impl TaskSpec {
             interval: None,
         })
     }
+}
+
+/// The problem-file names of a balance task's support points: a foot's four sole corners
+/// ([`stance_hanim::anatomy::sole`], in that order) give its ankle, the centre of a joint that is
+/// not a foot's gives the joint; `None` for any other point (a foot joint's name in a file
+/// stands for its whole sole: a point of the foot alone has no problem-file form).
+fn support_names(skeleton: &Skeleton, support: &[Effector]) -> Option<Vec<String>> {
+    let mut names = Vec::new();
+    let mut rest = support;
+    while let Some(first) = rest.first() {
+        let name = skeleton.joints().get(first.joint)?.name.clone();
+        let foot = stance_hanim::anatomy::ankle_of(skeleton, first.joint);
+        let corners =
+            (foot == Some(first.joint)).then(|| stance_hanim::anatomy::sole(skeleton, first.joint));
+        let sole_here = corners.filter(|corners| {
+            rest.len() >= 4
+                && rest[..4]
+                    .iter()
+                    .zip(corners)
+                    .all(|(e, c)| e.joint == first.joint && e.point.distance(*c) < 1e-12)
+        });
+        if sole_here.is_some() {
+            rest = &rest[4..];
+        } else if foot.is_none() && first.point == DVec3::ZERO {
+            rest = &rest[1..];
+        } else {
+            return None;
+        }
+        names.push(name);
+    }
+    Some(names)
 }
 
 /// A `limb` task resolved on a skeleton: the closed-form limb, its goal and the requested

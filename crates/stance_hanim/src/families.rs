@@ -17,9 +17,10 @@ use std::ops::RangeInclusive;
 use glam::DVec3;
 use rand::{RngExt, SeedableRng};
 use rand_xorshift::XorShiftRng;
-use stance_ik::{Axes, Frames, IkError, Posture, Skeleton, Task, TaskKind};
+use stance_ik::{Axes, Effector, Frames, IkError, Posture, Skeleton, Task, TaskKind};
 
 use crate::LevelOfArticulation;
+use crate::anatomy::sole;
 use crate::builder::{BuildError, SkeletonOptions, default_skeleton};
 use crate::scenarios::{humanoid50, standing_posture};
 
@@ -61,7 +62,19 @@ pub enum Kinds {
     PartialPositions,
     /// Positions (some partial), orientations, directions, one gaze, centres of mass.
     Mixed,
+    /// Standing: both ankles held where they stand (level 1), balance over the soles of both
+    /// feet (level 2, [`STANDING_MARGIN`] inside), then mixed kinds on the levels below; the
+    /// goal posture is drawn again until its centre of mass stands over its soles.
+    Standing,
 }
+
+/// The balance margin of the standing families (m).
+pub const STANDING_MARGIN: f64 = 0.02;
+/// How far inside the shrunk support polygon a standing family's goal posture keeps its
+/// centre of mass (m): the goal is balanced, not on the edge.
+const STANDING_SLACK: f64 = 0.01;
+/// Goal postures drawn for a standing problem before its spread is halved.
+const STANDING_DRAWS: usize = 50;
 
 /// Where the solve starts.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -187,6 +200,18 @@ pub fn families() -> Vec<Family> {
             start: Start::Rest,
         },
         Family {
+            name: "stand",
+            description: "50 DOF, 3-5 levels, feet held, balance over their soles, 8-16 tasks",
+            tuned: false,
+            body: Body::Humanoid50,
+            levels: 3..=5,
+            tasks: 8..=16,
+            kinds: Kinds::Standing,
+            spread: (0.3, 0.5),
+            beyond_limits: 0.0,
+            start: Start::Random(0.2),
+        },
+        Family {
             name: "wide",
             description: "50 DOF, 6 levels, 15-25 partial positions, spread 0.5-0.7",
             tuned: false,
@@ -259,18 +284,27 @@ impl Family {
             seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ (index as u64).wrapping_add(1),
         );
         let spread = r.random_range(self.spread.0..=self.spread.1);
-        let goal = random_posture(&mut r, skeleton, spread, self.beyond_limits);
+        let standing = self.kinds == Kinds::Standing;
+        let (goal, mut tasks) = if standing {
+            standing_goal(&mut r, skeleton, spread)?
+        } else {
+            let goal = random_posture(&mut r, skeleton, spread, self.beyond_limits);
+            (goal, Vec::new())
+        };
         let levels = r.random_range(self.levels.clone());
         let count = r.random_range(self.tasks.clone()).max(levels as usize);
         let frames = Frames::new(skeleton, &goal);
         let mut used_gaze = false;
-        let mut tasks = Vec::with_capacity(count);
-        for i in 0..count {
+        // A standing problem's feet and balance take levels 1 and 2.
+        let first_free = if standing { 3 } else { 1 };
+        let preset = tasks.len();
+        for i in preset..count {
             // Every level gets one task, the rest fall on random levels.
-            let level = if i < levels as usize {
-                i as u32 + 1
+            let next = first_free + (i - preset) as u32;
+            let level = if next <= levels {
+                next
             } else {
-                r.random_range(1..=levels)
+                r.random_range(first_free.min(levels)..=levels)
             };
             tasks.push(
                 self.task(&mut r, skeleton, &frames, &mut used_gaze)?
@@ -332,7 +366,7 @@ impl Family {
                 let partial = r.random_bool(0.5);
                 position(r, partial)
             }
-            Kinds::Mixed => match r.random_range(0..10) {
+            Kinds::Mixed | Kinds::Standing => match r.random_range(0..10) {
                 0..=4 => {
                     let partial = r.random_bool(0.3);
                     position(r, partial)
@@ -366,6 +400,58 @@ impl Family {
             },
         })
     }
+}
+
+/// A standing problem's goal posture (drawn until its centre of mass stands over the soles of
+/// its feet, [`STANDING_SLACK`] inside the balance margin; the spread halved after
+/// [`STANDING_DRAWS`] draws) and its first tasks: both ankles held where they are (level 1),
+/// balance over both soles (level 2).
+fn standing_goal(
+    r: &mut XorShiftRng,
+    skeleton: &Skeleton,
+    spread: f64,
+) -> Result<(Posture, Vec<Task>), IkError> {
+    let ankles = [
+        skeleton.require_joint("l_talocrural")?,
+        skeleton.require_joint("r_talocrural")?,
+    ];
+    let support: Vec<Effector> = ankles
+        .iter()
+        .flat_map(|&ankle| {
+            sole(skeleton, ankle).map(|point| Effector {
+                joint: ankle,
+                point,
+            })
+        })
+        .collect();
+    let stricter = Task::balance(support.clone(), STANDING_MARGIN + STANDING_SLACK);
+    let mut amplitude = spread;
+    let mut draws = 0;
+    let goal = loop {
+        let goal = random_posture(r, skeleton, amplitude, 0.0);
+        let frames = Frames::new(skeleton, &goal);
+        if stricter.residual(skeleton, &frames, goal.values()) == 0.0 {
+            break goal;
+        }
+        draws += 1;
+        if draws % STANDING_DRAWS == 0 {
+            amplitude *= 0.5;
+        }
+        if draws > 8 * STANDING_DRAWS {
+            return Err(IkError::BadTask {
+                index: 2,
+                reason: "no balanced goal posture: the body does not stand over its feet"
+                    .to_owned(),
+            });
+        }
+    };
+    let frames = Frames::new(skeleton, &goal);
+    let mut tasks: Vec<Task> = ankles
+        .iter()
+        .map(|&ankle| Task::position(ankle, DVec3::ZERO, frames.joint_position[ankle]))
+        .collect();
+    tasks.push(Task::balance(support, STANDING_MARGIN).at_level(2));
+    Ok((goal, tasks))
 }
 
 /// A random unit vector.

@@ -14,6 +14,8 @@
 //! & Kim); the joint values clamped into their limits after the step. The Jacobians are
 //! analytic; the tests check them against central differences of the forward kinematics.
 
+mod balance;
+
 use std::collections::HashMap;
 
 use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, SVD, UnitQuaternion, Vector3};
@@ -43,6 +45,7 @@ enum Dof {
 
 #[derive(Debug, Clone)]
 struct Joint {
+    name: String,
     parent: Option<usize>,
     offset: Vector3<f64>,
     /// (DOF, its index in the posture).
@@ -78,6 +81,12 @@ enum Goal {
     Com {
         axes: [bool; 3],
         target: Vector3<f64>,
+    },
+    /// The centre of mass over the support polygon (an inequality): support points (joint,
+    /// point in its frame) and the margin.
+    Balance {
+        support: Vec<(usize, Vector3<f64>)>,
+        margin: f64,
     },
 }
 
@@ -315,6 +324,7 @@ impl Problem {
                 };
                 by_name.insert(name.to_owned(), joints.len());
                 joints.push(Joint {
+                    name: name.to_owned(),
                     parent,
                     offset,
                     dofs,
@@ -349,6 +359,29 @@ impl Problem {
                 .get(name)
                 .copied()
                 .ok_or_else(|| bad(format!("{at}.joint: unknown joint `{name}`")))
+        };
+        let mut owner = vec![0; lower.len()];
+        let mut rotational = vec![false; lower.len()];
+        for (j, joint) in joints.iter().enumerate() {
+            for &(dof, i) in &joint.dofs {
+                owner[i] = j;
+                rotational[i] = matches!(dof, Dof::Rotation(_));
+            }
+        }
+        let mut problem = Self {
+            owner,
+            rotational,
+            joints,
+            ancestor,
+            lower,
+            upper,
+            dof_names,
+            levels: Vec::new(),
+            start: Vec::new(),
+            tolerance: root
+                .pointer("/settings/tolerance")
+                .and_then(Value::as_f64)
+                .unwrap_or(1e-6),
         };
         let mut by_level: Vec<(u64, Weighted)> = Vec::new();
         for (i, t) in root
@@ -414,6 +447,27 @@ impl Problem {
                         axes: axes(t.get("axes"), &at)?,
                         target: target()?,
                     },
+                    Some("balance") => {
+                        let names: Vec<&str> = t
+                            .get("support")
+                            .and_then(Value::as_array)
+                            .ok_or_else(|| {
+                                bad(format!(
+                                    "{at}.support: the oracle reads listed supports only"
+                                ))
+                            })?
+                            .iter()
+                            .map(|v| v.as_str().unwrap_or(""))
+                            .collect();
+                        Goal::Balance {
+                            support: problem.support_points(&names).ok_or_else(|| {
+                                bad(format!(
+                                    "{at}.support: an unknown joint or a foot without an ankle"
+                                ))
+                            })?,
+                            margin: t.get("margin").and_then(Value::as_f64).unwrap_or(0.02),
+                        }
+                    }
                     other => return Err(bad(format!("{at}.kind: {other:?} is not read here"))),
                 };
             let weight = t.get("weight").and_then(Value::as_f64).unwrap_or(1.0);
@@ -438,29 +492,7 @@ impl Problem {
                 l.push(task);
             }
         }
-        let mut owner = vec![0; lower.len()];
-        let mut rotational = vec![false; lower.len()];
-        for (j, joint) in joints.iter().enumerate() {
-            for &(dof, i) in &joint.dofs {
-                owner[i] = j;
-                rotational[i] = matches!(dof, Dof::Rotation(_));
-            }
-        }
-        let mut problem = Self {
-            owner,
-            rotational,
-            joints,
-            ancestor,
-            lower,
-            upper,
-            dof_names,
-            levels,
-            start: Vec::new(),
-            tolerance: root
-                .pointer("/settings/tolerance")
-                .and_then(Value::as_f64)
-                .unwrap_or(1e-6),
-        };
+        problem.levels = levels;
         problem.start = match root.get("posture") {
             Some(p) if !p.is_null() => problem.posture_from_json(p)?,
             _ => vec![0.0; problem.dof_count()],
@@ -590,6 +622,9 @@ impl Problem {
                     .sum::<f64>()
                     .sqrt()
             }
+            Goal::Balance { support, margin } => self
+                .standing(f, support, *margin)
+                .map_or(0.0, |s| s.violation.max(0.0)),
         }
     }
 
@@ -726,41 +761,85 @@ impl Problem {
                 (e, rows)
             }
             Goal::Com { axes, target } => {
-                let total: f64 = self.joints.iter().map(|j| j.mass).sum();
                 let c = self.com(f);
-                let cols: Vec<Vector3<f64>> = if total > 0.0 {
-                    let centres: Vec<Vector3<f64>> = self
-                        .joints
-                        .iter()
-                        .enumerate()
-                        .map(|(j, joint)| f.position[j] + f.rotation[j] * joint.com)
-                        .collect();
-                    (0..n)
-                        .map(|i| {
-                            let a = owner[i];
-                            let mut col = Vector3::zeros();
-                            for (j, joint) in self.joints.iter().enumerate() {
-                                if joint.mass > 0.0 && self.moves(a, j) {
-                                    col += joint.mass
-                                        * if self.is_rotation(i) {
-                                            f.axis[i].cross(&(centres[j] - f.position[a]))
-                                        } else {
-                                            f.axis[i]
-                                        };
-                                }
-                            }
-                            col / total
-                        })
-                        .collect()
-                } else {
-                    point_columns(0, &f.position[0])
-                };
-                let (mut e, rows) = select(axes, target - c, cols);
+                let (mut e, rows) = select(axes, target - c, self.com_columns(f));
                 let size = e.iter().map(|x| x * x).sum::<f64>().sqrt();
                 clamp_to(&mut e, size, settings.max_linear);
                 (e, rows)
             }
+            Goal::Balance { support, margin } => {
+                // The violation's derivative: the centre of mass moving away from the nearest
+                // boundary point, which moves with the support points it lies between. In a
+                // solve (`clamp`) the row holds from `BAND` inside and pulls back only what is
+                // outside; unclamped (for the tests) it is the signed distance everywhere.
+                let Some(at) = self.standing(f, support, *margin) else {
+                    return (Vec::new(), Vec::new());
+                };
+                if clamp && at.violation <= -balance::BAND {
+                    return (vec![0.0], vec![vec![0.0; n]]);
+                }
+                let com = self.com_columns(f);
+                let point = |k: usize| {
+                    let (j, p) = &support[k];
+                    point_columns(*j, &(f.position[*j] + f.rotation[*j] * p))
+                };
+                let (pa, pb) = (point(at.a), point(at.b));
+                let row = (0..n)
+                    .map(|i| {
+                        let d = com[i] - (1.0 - at.t) * pa[i] - at.t * pb[i];
+                        at.normal[0] * d.x + at.normal[1] * d.z
+                    })
+                    .collect();
+                let e = if clamp {
+                    -at.violation.max(0.0).min(settings.max_linear)
+                } else {
+                    -at.violation
+                };
+                (vec![e], vec![row])
+            }
         }
+    }
+
+    /// The centre of mass's derivative per DOF (the root's point's without mass).
+    fn com_columns(&self, f: &Frames) -> Vec<Vector3<f64>> {
+        let n = self.dof_count();
+        let total: f64 = self.joints.iter().map(|j| j.mass).sum();
+        if total <= 0.0 {
+            return (0..n)
+                .map(|i| {
+                    if !self.moves(self.owner[i], 0) {
+                        Vector3::zeros()
+                    } else if self.is_rotation(i) {
+                        f.axis[i].cross(&(f.position[0] - f.position[self.owner[i]]))
+                    } else {
+                        f.axis[i]
+                    }
+                })
+                .collect();
+        }
+        let centres: Vec<Vector3<f64>> = self
+            .joints
+            .iter()
+            .enumerate()
+            .map(|(j, joint)| f.position[j] + f.rotation[j] * joint.com)
+            .collect();
+        (0..n)
+            .map(|i| {
+                let a = self.owner[i];
+                let mut col = Vector3::zeros();
+                for (j, joint) in self.joints.iter().enumerate() {
+                    if joint.mass > 0.0 && self.moves(a, j) {
+                        col += joint.mass
+                            * if self.is_rotation(i) {
+                                f.axis[i].cross(&(centres[j] - f.position[a]))
+                            } else {
+                                f.axis[i]
+                            };
+                    }
+                }
+                col / total
+            })
+            .collect()
     }
 
     /// Every level's error and Jacobian at `q` (clamped errors when `clamp`).

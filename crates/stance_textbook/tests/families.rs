@@ -24,6 +24,7 @@ const STATED: &[(&str, usize, usize, usize)] = &[
     ("loa1", 40, 40, 0),
     ("loa2", 38, 37, 0),
     ("limits", 35, 33, 1),
+    ("stand", 38, 38, 1),
     ("wide", 31, 28, 1),
 ];
 
