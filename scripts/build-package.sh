@@ -29,6 +29,8 @@ if [ -f "$pkg/stance_ik_bg.wasm" ] && [ -f "$pkg/stance_ik.js" ] && [ ! "$wasm" 
 else
   say "wasm-pack build crates/stance_js (release)"
   rm -f "$pkg/stance_ik_bg.wasm"
+  # A build that stops half way leaves no wasm behind (else the next run reads it as done).
+  trap 'rm -f "$pkg/stance_ik_bg.wasm"' ERR
   wasm-pack --quiet build crates/stance_js --release --target web --no-pack \
     --out-dir ../../packages/stance-ik/pkg --out-name stance_ik
   # The features rustc's wasm32 target emits with the workspace's flags (simd128 from
@@ -37,6 +39,7 @@ else
     --enable-sign-ext --enable-mutable-globals --enable-nontrapping-float-to-int \
     --enable-reference-types --enable-multivalue --enable-call-indirect-overlong \
     "$pkg/stance_ik_bg.wasm" -o "$pkg/stance_ik_bg.wasm"
+  trap - ERR
 fi
 gzip_size=$(gzip -9 -c "$pkg/stance_ik_bg.wasm" | wc -c)
 say "packages/stance-ik ready: wasm $((gzip_size / 1024)) KiB gzipped"
