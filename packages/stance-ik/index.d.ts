@@ -95,6 +95,8 @@ export interface Report {
   clamped_dofs: number;
   elapsed_secs: number | null;
   analytic_restarts: unknown[];
+  /** Per task of `setTasks` (in its order), from `Solver.solve`: how it fares. */
+  tasks?: TaskStatus[];
 }
 
 /** How one task of the problem fares in the solution (one per task, in the problem's order). */

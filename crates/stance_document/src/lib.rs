@@ -10,7 +10,9 @@
 //!   in a saved document, embedded (compressed).
 //! - [`link`]: the compact, versioned, checksummed URL-fragment form of a document.
 //! - [`Problem`]: the one way from tasks to a solver problem (tasks by level, closed-form limb
-//!   starts, settings), from a problem file (`stance solve`) or a document on a skeleton.
+//!   starts, settings), from a problem file (`stance solve`) or a document on a skeleton;
+//!   [`FrameProblem`]: one frame of interactive posing (the tasks, a part held, a pull), for
+//!   the editor and the package's per-frame solver; [`task_statuses`]: how each task fares.
 
 #![warn(missing_docs)]
 
@@ -20,6 +22,7 @@ pub mod comfort;
 mod convert;
 mod document;
 mod error;
+mod frame;
 mod json;
 pub mod link;
 pub mod motion;
@@ -39,10 +42,11 @@ pub use document::{
     Document, DofValues, LimbName, PostureRest, PostureValues, TaskKindSpec, TaskSpec,
 };
 pub use error::DocumentError;
+pub use frame::{FrameProblem, Grab};
 pub use link::LinkError;
 pub use motion::{MotionKey, MotionSection, TaskInterval};
 pub use problem::{
     LimbStart, Problem, ProblemSettings, parse_skeleton, problem_json, skeleton_json,
 };
-pub use status::{MET_TOLERANCE, TaskStatus, task_statuses};
+pub use status::{MET_TOLERANCE, TaskStatus, statuses_json, task_statuses};
 pub use stiffness::{StiffnessValues, apply_stiffness};

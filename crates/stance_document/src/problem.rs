@@ -200,21 +200,7 @@ impl Problem {
         }
         let statuses =
             crate::task_statuses(&self.skeleton, None, posture, &frames, &self.specs, true);
-        let tasks: Vec<Value> = self
-            .specs
-            .iter()
-            .zip(statuses)
-            .map(|(spec, status)| {
-                json!({
-                    "level": spec.level,
-                    "description": spec.description(),
-                    "residual": status.residual,
-                    "met": status.residual.is_some_and(|r| r <= crate::MET_TOLERANCE),
-                    "gave_way": status.gave_way,
-                    "problem": status.problem,
-                })
-            })
-            .collect();
+        let tasks = crate::status::statuses_json(&self.specs, &statuses);
         let mut out = json!({
             "joints": joints,
             "posture": PostureValues::from_posture(&self.skeleton, posture),

@@ -3,6 +3,7 @@
 //! reach). One status for the editor's task list, `stance solve` and the `stance-ik` package.
 
 use serde::Serialize;
+use serde_json::{Value, json};
 use stance_hanim::HumanoidSkeleton;
 use stance_ik::conflict::{Unmet, diagnose};
 use stance_ik::{Frames, Posture, Skeleton, Task};
@@ -65,6 +66,26 @@ pub fn task_statuses(
                 gave_way,
                 problem: own.as_ref().err().cloned(),
             }
+        })
+        .collect()
+}
+
+/// The statuses of `specs` as `stance solve` and the package print them: per task its level,
+/// description, residual, whether it is met ([`MET_TOLERANCE`]), why it gave way and what
+/// keeps it from the solver.
+pub fn statuses_json(specs: &[TaskSpec], statuses: &[TaskStatus]) -> Value {
+    specs
+        .iter()
+        .zip(statuses)
+        .map(|(spec, status)| {
+            json!({
+                "level": spec.level,
+                "description": spec.description(),
+                "residual": status.residual,
+                "met": status.residual.is_some_and(|r| r <= MET_TOLERANCE),
+                "gave_way": status.gave_way,
+                "problem": status.problem,
+            })
         })
         .collect()
 }

@@ -7,7 +7,7 @@ mod stiffness;
 mod timed;
 
 use stance_document::{
-    CameraSpec, Document, LimbName, MotionSection, PostureValues, StiffnessValues, TaskKindSpec,
+    CameraSpec, Document, FrameProblem, LimbName, MotionSection, PostureValues, StiffnessValues,
     TaskSpec,
 };
 use stance_hanim::hands::{HandError, HandRig};
@@ -16,23 +16,12 @@ use stance_hanim::{
 };
 use stance_ik::{
     Clock, Frames, Iteration, Limb, LimbGoal, Posture, Skeleton, SolveReport, SolveStatus, Solver,
-    SolverSettings, SwivelInterval, TEXTBOOK_ANGULAR_STEP, TEXTBOOK_LINEAR_STEP, Task,
+    SolverSettings, SwivelInterval, TEXTBOOK_ANGULAR_STEP, TEXTBOOK_LINEAR_STEP,
 };
 
 pub use self::timed::{TimedFrame, blended, timed_tasks, timed_tasks_at};
 
-/// The temporary lowest-priority task of grab-and-pull: a point of a segment, pulled along.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Grab {
-    /// The joint whose segment was grabbed.
-    pub joint: usize,
-    /// The grabbed point in that joint's frame (m).
-    pub point_local: DVec3,
-    /// Where the cursor wants the point (m, world).
-    pub target_world: DVec3,
-}
-
-pub use stance_document::{MET_TOLERANCE, TaskStatus};
+pub use stance_document::{Grab, MET_TOLERANCE, TaskStatus};
 
 /// Iterations per frame and the time they may take: the page stays interactive. The time
 /// bounds a frame; the count is enough for the Table 1 example to converge in one frame
@@ -623,35 +612,14 @@ impl PosingSession {
         if self.settled {
             return false;
         }
-        let mut tasks = Vec::with_capacity(self.tasks.len() + 1);
         let specs = self.timed_tasks();
-        // While a part is pulled or held the body follows the pointer; comfort settles the
-        // posture once it is let go, and leaves a posture edited directly as it is.
-        let comfort = self.comfort_armed && self.grab.is_none() && self.held.is_none();
-        for spec in &specs {
-            if !comfort && matches!(spec.kind, TaskKindSpec::Comfort { .. }) {
-                continue;
-            }
-            if let Ok(converted) = spec.to_solver_tasks_on(&self.humanoid, &specs) {
-                tasks.extend(converted);
-            }
+        let tasks = FrameProblem {
+            specs: &specs,
+            comfort: self.comfort_armed && self.grab.is_none() && self.held.is_none(),
+            held: self.held,
+            grab: self.grab,
         }
-        if let Some((joint, position)) = self.held {
-            tasks.push(Task::position(joint, DVec3::ZERO, position).at_level(1));
-        }
-        if let Some(grab) = self.grab {
-            let level = self
-                .tasks
-                .iter()
-                .filter(|task| !task.kind.is_soft())
-                .map(|task| task.level)
-                .max()
-                .unwrap_or(0)
-                + 1;
-            tasks.push(
-                Task::position(grab.joint, grab.point_local, grab.target_world).at_level(level),
-            );
-        }
+        .tasks(&self.humanoid.skeleton, Some(&self.humanoid));
         let before = self.posture.values().to_vec();
         match self.solver.solve_with_clock(
             &self.humanoid.skeleton,

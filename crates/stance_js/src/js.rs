@@ -171,8 +171,20 @@ impl JsSolver {
         self.inner.set_tasks(&text_of(tasks)?).map_err(error)
     }
 
+    /// Grab-and-pull: pulls `point` (in the frame of `joint`) toward `target` (world), one
+    /// level below every task, from the next `solve` on (comfort waits meanwhile).
+    pub fn pull(&mut self, joint: &str, point: &[f64], target: &[f64]) -> Result<(), JsError> {
+        self.inner.pull(joint, point, target).map_err(error)
+    }
+
+    /// Lets go of the pulled point.
+    pub fn release(&mut self) {
+        self.inner.release();
+    }
+
     /// Solves from `values` (one per DOF), writes the solution into them and returns the
-    /// report (`status`, `iterations`, `levels`, `gave_way`...).
+    /// report (`status`, `iterations`, `levels`, `gave_way`, and `tasks`: per task its level,
+    /// residual, whether it is met and why it gave way).
     pub fn solve(&mut self, values: &mut [f64]) -> Result<JsValue, JsError> {
         let clock = || performance_now_ms() / 1000.0;
         parsed(

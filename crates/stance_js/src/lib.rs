@@ -18,13 +18,16 @@ mod js;
 
 use glam::{DQuat, DVec3};
 use serde_json::Value;
-use stance_document::{LimbName, Problem, ProblemSettings, TaskSpec, parse_skeleton, solver_tasks};
+use stance_document::{
+    FrameProblem, Grab, LimbName, Problem, ProblemSettings, TaskSpec, parse_skeleton, solver_tasks,
+    statuses_json, task_statuses,
+};
 use stance_hanim::{
     HumanoidSkeleton, LevelOfArticulation, Mapping, SkeletonOptions, SourceJoint, build_skeleton,
     default_skeleton,
 };
 use stance_ik::{
-    Clock, Frames, Iteration, Limb, LimbGoal, Posture, Skeleton, SolveReport, Solver, Task,
+    Clock, Frames, Iteration, Limb, LimbGoal, Posture, Skeleton, SolveReport, SolveStatus, Solver,
 };
 
 /// Guarded iterations without a meaningful gain before a frame's solve ends.
@@ -196,9 +199,12 @@ fn rest_match(body: &HumanoidSkeleton) -> Vec<f64> {
 #[derive(Debug, Clone)]
 pub struct PoseSolver {
     skeleton: Skeleton,
+    /// The built body, when there is one: its comfort tasks read its own anatomical axes.
+    humanoid: Option<HumanoidSkeleton>,
     solver: Solver,
     specs: Vec<TaskSpec>,
-    tasks: Vec<Task>,
+    /// The point being pulled (grab-and-pull), below every task.
+    grab: Option<Grab>,
     report: Option<SolveReport>,
 }
 
@@ -227,20 +233,51 @@ impl PoseSolver {
         }
         Ok(Self {
             skeleton: body.skeleton.clone(),
+            humanoid: body.humanoid.clone(),
             solver,
             specs: Vec::new(),
-            tasks: Vec::new(),
+            grab: None,
             report: None,
         })
     }
 
-    /// Sets the tasks (JSON text: an array of tasks as in a problem file's `tasks`).
+    /// Sets the tasks (JSON text: an array of tasks as in a problem file's `tasks`); a task
+    /// the body cannot hold (an unknown joint...) is an error naming it.
     pub fn set_tasks(&mut self, tasks: &str) -> JsResult<()> {
         let specs =
             TaskSpec::list_from_json_value(&json(tasks)?, "tasks").map_err(|e| e.to_string())?;
-        self.tasks = solver_tasks(&self.skeleton, &specs).map_err(|e| e.to_string())?;
+        solver_tasks(&self.skeleton, &specs).map_err(|e| e.to_string())?;
         self.specs = specs;
         Ok(())
+    }
+
+    /// Grab-and-pull: pulls the point `point` (3 numbers, in the frame of `joint`) toward
+    /// `target` (world), one level below every task, from the next solve on; the editor's
+    /// pull. Comfort tasks wait while a point is pulled.
+    pub fn pull(&mut self, joint: &str, point: &[f64], target: &[f64]) -> JsResult<()> {
+        let joint = self
+            .skeleton
+            .joint_index(joint)
+            .ok_or_else(|| format!("joint: unknown joint `{joint}`"))?;
+        let vector = |what: &str, v: &[f64]| -> JsResult<DVec3> {
+            let [x, y, z] =
+                <[f64; 3]>::try_from(v).map_err(|_| format!("{what}: expected 3 numbers"))?;
+            let v = DVec3::new(x, y, z);
+            v.is_finite()
+                .then_some(v)
+                .ok_or_else(|| format!("{what}: not a finite number"))
+        };
+        self.grab = Some(Grab {
+            joint,
+            point_local: vector("point", point)?,
+            target_world: vector("target", target)?,
+        });
+        Ok(())
+    }
+
+    /// Lets go of the pulled point.
+    pub fn release(&mut self) {
+        self.grab = None;
     }
 
     fn posture(&self, values: &[f64]) -> JsResult<Posture> {
@@ -248,7 +285,9 @@ impl PoseSolver {
     }
 
     /// Solves from `values` (one per DOF) and writes the solution into them; returns the
-    /// report (JSON text: status, iterations, per-level residuals, the level that gave way).
+    /// report (JSON text: status, iterations, per-level residuals, the level that gave way,
+    /// and `tasks`: per task its level, residual, whether it is met and why it gave way, as
+    /// `stance solve` prints them).
     pub fn solve(&mut self, values: &mut [f64]) -> JsResult<String> {
         self.solve_with_clock(values, None)
     }
@@ -261,18 +300,39 @@ impl PoseSolver {
         clock: Option<&dyn Clock>,
     ) -> JsResult<String> {
         let mut posture = self.posture(values)?;
+        let body = self.humanoid.as_ref();
+        let tasks = FrameProblem {
+            specs: &self.specs,
+            comfort: self.grab.is_none(),
+            held: None,
+            grab: self.grab,
+        }
+        .tasks(&self.skeleton, body);
         let report = match clock {
             Some(clock) => {
                 self.solver
-                    .solve_with_clock(&self.skeleton, &self.tasks, &mut posture, Some(clock))
+                    .solve_with_clock(&self.skeleton, &tasks, &mut posture, Some(clock))
             }
-            None => self.solver.solve(&self.skeleton, &self.tasks, &mut posture),
+            None => self.solver.solve(&self.skeleton, &tasks, &mut posture),
         }
         .map_err(|e| e.to_string())?;
         values.copy_from_slice(posture.values());
-        let text = serde_json::to_string(&report).map_err(|e| e.to_string())?;
+        let settled = matches!(report.status, SolveStatus::Converged | SolveStatus::Stalled);
+        let frames = Frames::new(&self.skeleton, &posture);
+        let statuses = task_statuses(
+            &self.skeleton,
+            body,
+            &posture,
+            &frames,
+            &self.specs,
+            settled,
+        );
+        let mut out = serde_json::to_value(&report).map_err(|e| e.to_string())?;
+        if let Some(o) = out.as_object_mut() {
+            o.insert("tasks".to_owned(), statuses_json(&self.specs, &statuses));
+        }
         self.report = Some(report);
-        Ok(text)
+        Ok(out.to_string())
     }
 
     /// World transforms of every joint at `values` into `out`: 7 numbers per joint, the

@@ -407,3 +407,99 @@ fn default_tasks_pin_the_feet_where_they_stand() {
             .contains("values")
     );
 }
+
+/// Grab-and-pull through the package: a point pulled out of reach moves toward the pointer
+/// while the pinned feet stay where they are; the report says per task how it fares, and a
+/// task that conflicts with a higher one names it; released, the pull is gone.
+#[test]
+fn a_pull_moves_the_body_below_every_task_and_the_report_says_why_a_task_gave_way() {
+    let body = Body::hanim(2).unwrap();
+    let s = &body.skeleton;
+    let mut values = vec![0.0; s.dof_count()];
+    let mut out = vec![0.0; 7 * s.joint_count()];
+    let mut solver = PoseSolver::new(&body, r#"{"max_iterations": 60}"#).unwrap();
+    solver.world_transforms(&values, &mut out).unwrap();
+    let position = |out: &[f64], name: &str| {
+        let j = s.joint_index(name).unwrap();
+        DVec3::new(out[7 * j], out[7 * j + 1], out[7 * j + 2])
+    };
+    let feet = [
+        position(&out, "l_talocrural"),
+        position(&out, "r_talocrural"),
+    ];
+    let wrist = position(&out, "l_radiocarpal");
+    // The left wrist pinned at level 1 and asked elsewhere at level 2: a conflict.
+    solver
+        .set_tasks(&format!(
+            r#"[{{"kind":"position","joint":"l_talocrural","target":{:?}}},
+                {{"kind":"position","joint":"r_talocrural","target":{:?}}},
+                {{"kind":"position","joint":"l_radiocarpal","target":{:?}}},
+                {{"kind":"position","joint":"l_radiocarpal","target":{:?},"level":2}}]"#,
+            feet[0].to_array(),
+            feet[1].to_array(),
+            wrist.to_array(),
+            (wrist + DVec3::new(0.0, 0.3, 0.0)).to_array(),
+        ))
+        .unwrap();
+    let head = position(&out, "skullbase");
+    let target = head + DVec3::new(0.0, 0.0, 2.0);
+    solver
+        .pull("skullbase", &[0.0; 3], &target.to_array())
+        .unwrap();
+    let mut last = f64::INFINITY;
+    for _ in 0..5 {
+        solver.solve(&mut values).unwrap();
+        solver.world_transforms(&values, &mut out).unwrap();
+        let gap = (position(&out, "skullbase") - target).length();
+        assert!(
+            gap <= last + 1e-9,
+            "the pulled head comes no closer: {gap} after {last}"
+        );
+        last = gap;
+    }
+    assert!(
+        last < 2.0 - 0.1,
+        "the head followed the pull: {last} m left of 2 m"
+    );
+    for (foot, name) in feet.iter().zip(["l_talocrural", "r_talocrural"]) {
+        assert!(
+            (position(&out, name) - *foot).length() < 1e-6,
+            "{name} moved"
+        );
+    }
+    assert!((position(&out, "l_radiocarpal") - wrist).length() < 1e-6);
+    solver.release();
+    let report: Value = serde_json::from_str(&solver.solve(&mut values).unwrap()).unwrap();
+    let tasks = report["tasks"].as_array().unwrap();
+    assert_eq!(tasks.len(), 4, "{report}");
+    assert!(tasks[..3].iter().all(|t| t["met"] == true), "{report}");
+    assert_eq!(tasks[3]["met"], false);
+    let why = tasks[3]["gave_way"].as_str().unwrap();
+    assert!(
+        why.contains("conflicts with level 1") && why.contains("wrist"),
+        "{why}"
+    );
+    let residual = tasks[3]["residual"].as_f64().unwrap();
+    assert!(
+        (residual - 0.3).abs() < 1e-3,
+        "the wrist is 0.3 m from its level-2 goal: {residual}"
+    );
+    assert!(
+        solver
+            .pull("l_tail", &[0.0; 3], &[0.0; 3])
+            .unwrap_err()
+            .contains("l_tail")
+    );
+    assert!(
+        solver
+            .pull("skullbase", &[0.0; 2], &[0.0; 3])
+            .unwrap_err()
+            .contains("point")
+    );
+    assert!(
+        solver
+            .pull("skullbase", &[0.0; 3], &[f64::NAN, 0.0, 0.0])
+            .unwrap_err()
+            .contains("target")
+    );
+}

@@ -1,6 +1,7 @@
 //! The posing session's unit tests.
 
 use super::*;
+use stance_document::TaskKindSpec;
 
 fn session() -> PosingSession {
     PosingSession::new(LevelOfArticulation::Loa2).unwrap()
