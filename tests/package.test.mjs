@@ -80,7 +80,7 @@ describe("stance-ik", () => {
     assert.throws(() => ik.Skeleton.hanim(9), /loa/);
   });
 
-  test("the per-frame API solves into a Float64Array and reports by level", () => {
+  test("the per-frame API solves into a Float64Array, reports by level and task, and pulls", () => {
     const skeleton = ik.Skeleton.hanim(2);
     const solver = new ik.Solver(skeleton, { max_iterations: 200 });
     const values = new Float64Array(skeleton.dofCount);
@@ -103,6 +103,7 @@ describe("stance-ik", () => {
     const report = solver.solve(values);
     assert.equal(report.status, "converged");
     assert.equal(report.levels.length, 3);
+    assert.deepEqual(report.tasks.map((t) => [t.level, t.met]), [[1, true], [1, true], [2, true], [3, true]]);
     assert.ok(values.some((v) => v !== 0), "the values hold the solution");
     solver.worldTransforms(values, transforms);
     at("r_radiocarpal").forEach((x, i) => assert.ok(Math.abs(x - hand[i]) < 1e-6));
@@ -111,6 +112,19 @@ describe("stance-ik", () => {
     const limb = solver.solveLimb(values, "l_arm", [0.35, 1.1, 0.25], 0.4);
     assert.equal(limb.reached, true);
     assert.ok(Math.abs(solver.swivelAngle(values, "l_arm") - limb.swivel) < 1e-6);
+    // Grab-and-pull: the free left hand pulled forward follows, the pinned feet stay.
+    const wrist = at("l_radiocarpal");
+    const pulledTo = [wrist[0], wrist[1] + 0.3, wrist[2] + 0.5];
+    const gap = () => Math.hypot(...at("l_radiocarpal").map((x, i) => x - pulledTo[i]));
+    const before = gap();
+    solver.pull("l_radiocarpal", [0, 0, 0], pulledTo);
+    for (let k = 0; k < 3; k++) solver.solve(values);
+    solver.worldTransforms(values, transforms);
+    assert.ok(gap() < 0.5 * before, `the hand followed the pull: ${gap()} m left of ${before}`);
+    at("l_talocrural").forEach((x, i) => assert.ok(Math.abs(x - ankle[i]) < 1e-6));
+    solver.release();
+    assert.throws(() => solver.pull("l_tail", [0, 0, 0], pulledTo), /l_tail/);
+    assert.throws(() => solver.pull("l_radiocarpal", [0, 0], pulledTo), /point/);
     assert.throws(() => solver.setTasks([{ kind: "gaze" }]), /tasks\[0\]\.joint/);
     assert.throws(() => solver.solve(new Float64Array(3)), /values/);
     solver.free();
