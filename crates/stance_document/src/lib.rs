@@ -30,6 +30,7 @@ mod problem;
 mod range_coder;
 mod status;
 pub mod stiffness;
+mod task_json;
 mod words;
 
 pub use camera::CameraSpec;
