@@ -192,6 +192,10 @@ pub struct PointTrack {
     pub point: DVec3,
     /// World positions of the point on the clip, per frame (m).
     pub positions: Vec<DVec3>,
+    /// For the ball of a foot: the tip of the toes on the clip, per frame (m), where the clip
+    /// has toes. The ball is low also when the tip is (standing on tiptoe, the toes bent
+    /// under a raised ball).
+    pub tip: Option<Vec<DVec3>>,
 }
 
 /// One contact of a point with the ground over a window of frames.
@@ -278,9 +282,18 @@ pub fn detect_contacts(
         let positions = &track.positions[..ground.len().min(track.positions.len())];
         let clearance = track.part.clearance() * scale.leg;
         let speed = speeds(positions, scale.start, half, frame_time);
+        // The height that makes the point low: its own, or the toes' tip's under a ball.
+        let low_height = |f: usize| {
+            let own = positions[f].y - clearance;
+            track
+                .tip
+                .as_ref()
+                .and_then(|t| t.get(f))
+                .map_or(own, |t| own.min(t.y))
+        };
         let rest = |f: usize| {
             f >= scale.start
-                && positions[f].y - clearance - ground[f] <= limits.height
+                && low_height(f) - ground[f] <= limits.height
                 && speed[f] <= limits.speed
         };
         let mut runs: Vec<(usize, usize)> = Vec::new();
@@ -437,6 +450,7 @@ mod tests {
             part: ContactPart::Heel,
             point: DVec3::ZERO,
             positions,
+            tip: None,
         }
     }
 
