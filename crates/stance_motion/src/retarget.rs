@@ -26,7 +26,9 @@ use stance_hanim::HumanoidSkeleton;
 use stance_ik::{Frames, IkError, Iteration, Posture, Solver, SolverSettings, Task};
 
 use crate::clip::{Clip, ClipError};
-use crate::contacts::{Contact, ContactSettings, Thresholds, contact_weight, reference_frames};
+use crate::contacts::{
+    Contact, ContactPart, ContactSettings, Thresholds, contact_weight, reference_frames,
+};
 pub use copy::{Placement, RestMatch, RotationCopy};
 use held::{Found, held_contacts, stride_scale};
 pub use report::{
@@ -42,12 +44,15 @@ const WRISTS: [&str; 2] = ["l_radiocarpal", "r_radiocarpal"];
 
 /// Levels of the retargeting problem.
 pub const CONTACT_LEVEL: u32 = 1;
+/// The point of a foot that gives way where the leg cannot hold both its heel and its ball
+/// (the one whose contact ends first: the heel at heel-off), below the other.
+pub const YIELDING_CONTACT_LEVEL: u32 = 2;
 /// The root's path.
-pub const ROOT_LEVEL: u32 = 2;
+pub const ROOT_LEVEL: u32 = 3;
 /// The wrists.
-pub const WRIST_LEVEL: u32 = 3;
+pub const WRIST_LEVEL: u32 = 4;
 /// The copied frame as a posture reference.
-pub const POSTURE_LEVEL: u32 = 4;
+pub const POSTURE_LEVEL: u32 = 5;
 
 /// Errors of retargeting.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -381,7 +386,13 @@ impl Retargeting {
             contacts,
             reference_frames: reference,
             thresholds,
-            levels: vec![CONTACT_LEVEL, ROOT_LEVEL, WRIST_LEVEL, POSTURE_LEVEL],
+            levels: vec![
+                CONTACT_LEVEL,
+                YIELDING_CONTACT_LEVEL,
+                ROOT_LEVEL,
+                WRIST_LEVEL,
+                POSTURE_LEVEL,
+            ],
             residuals: Vec::new(),
             iterations: 0,
             frame_time: self.clip.frame_time,
@@ -476,7 +487,24 @@ fn frame_tasks(
             .map_or(own, |(h, _, goal)| *goal + (own - frames.point(j, h.point)));
         let goal = from.lerp(c.position, w);
         goals.push((c, j, goal));
-        tasks.push(Task::position(j, c.point, goal).at_level(CONTACT_LEVEL));
+    }
+    // Where both points of a foot are held, the one whose contact ends first (the heel
+    // before heel-off, a ball that lands after the heel and lifts before it) gives way to
+    // the other where the leg cannot reach both: the foot rolls about the point that stays.
+    for &(c, j, goal) in &goals {
+        let yields = c.part.is_foot()
+            && goals.iter().any(|&(o, k, _)| {
+                k == j
+                    && o.part.is_foot()
+                    && o.part != c.part
+                    && (o.end > c.end || (o.end == c.end && c.part == ContactPart::Heel))
+            });
+        let level = if yields {
+            YIELDING_CONTACT_LEVEL
+        } else {
+            CONTACT_LEVEL
+        };
+        tasks.push(Task::position(j, c.point, goal).at_level(level));
     }
     tasks.push(Task::position(0, DVec3::ZERO, frames.joint_position[0]).at_level(ROOT_LEVEL));
     for wrist in WRISTS {
@@ -489,17 +517,21 @@ fn frame_tasks(
     tasks
 }
 
-/// Iterations of the first frame's solve.
+/// Iterations of the guarded solve (the first frame's, and a frame's whose short solve
+/// left its contacts unmet).
 const FIRST_FRAME_ITERATIONS: usize = 100;
 
-/// The contacts' residual (m) over which a frame is solved again from the copy.
+/// The firm contacts' residual (m) over which a frame is solved on (guarded), then again
+/// from the copy.
 const RETRY_RESIDUAL: f64 = 1e-3;
 
 /// Solves the frames one by one, each from the previous frame's correction of the copy.
 #[derive(Debug)]
 struct FrameSolver {
+    /// The short solve of each frame.
     solver: Solver,
-    first_solver: Solver,
+    /// The first frame's, and the frames' whose short solve leaves their contacts unmet.
+    guarded: Solver,
     dofs: Vec<usize>,
     correction: Vec<f64>,
     ease: usize,
@@ -526,7 +558,7 @@ impl FrameSolver {
             stall_window: 2,
             ..SolverSettings::default()
         })?;
-        let first_solver = Solver::new(SolverSettings {
+        let guarded = Solver::new(SolverSettings {
             max_iterations: max_iterations.max(FIRST_FRAME_ITERATIONS),
             tolerance: 1e-5,
             iteration: Iteration::Guarded,
@@ -535,7 +567,7 @@ impl FrameSolver {
         })?;
         Ok(Self {
             solver,
-            first_solver,
+            guarded,
             dofs: posture_dofs(skeleton),
             correction: vec![0.0; skeleton.dof_count()],
             ease,
@@ -578,15 +610,30 @@ impl FrameSolver {
         // The first frame starts from the copy itself, however far its contacts are held
         // from it: it gets the iterations to get there.
         let report = if f == 0 {
-            self.first_solver.solve(skeleton, &tasks, &mut posture)?
+            self.guarded.solve(skeleton, &tasks, &mut posture)?
         } else {
             self.solver.solve(skeleton, &tasks, &mut posture)?
         };
         out.iterations += report.iterations;
         let mut residual = residuals(&report);
-        // A correction carried from earlier frames can lead the solver astray (a held foot
-        // against a joint's range): when the contacts are not met, the frame is solved again
-        // from the copy itself and the better of the two kept.
+        // The frame's short solve (textbook steps, stopped after two iterations without
+        // gain) stalls where the goals move fast (a jump's crouch and take-off: held points
+        // 15 to 54 mm off on the FAIR jump); a correction carried from earlier frames can lead
+        // it astray (a held foot against a joint's range). When the contacts are not met,
+        // the guarded iteration goes on from there, then the frame is solved again from the
+        // copy itself; the best is kept. (Solving from the copy with the guarded iteration
+        // holds as well but takes another branch: joint jumps over 0.55 rad at contact
+        // boundaries on the CMU walk.)
+        if residual.first().is_some_and(|&r| r > RETRY_RESIDUAL) {
+            let mut more = posture.clone();
+            let report = self.guarded.solve(skeleton, &tasks, &mut more)?;
+            out.iterations += report.iterations;
+            let second = residuals(&report);
+            if second.first() < residual.first() {
+                posture = more;
+                residual = second;
+            }
+        }
         if residual.first().is_some_and(|&r| r > RETRY_RESIDUAL) {
             let mut again = copy.clone();
             let report = self.solver.solve(skeleton, &tasks, &mut again)?;

@@ -179,6 +179,66 @@ fn drift(
     (out, sink, plain)
 }
 
+/// Per contact whose held point drifts or sinks over 2 mm within an annotated footfall: where
+/// and with which other points held (diagnostics).
+fn drift_detail(
+    target: &stance_hanim::HumanoidSkeleton,
+    r: &stance_motion::Retargeted,
+    annotation: &Annotation,
+    legs: f64,
+) {
+    let skeleton = &target.skeleton;
+    let frames: Vec<Frames> = r
+        .postures
+        .iter()
+        .map(|p| Frames::new(skeleton, p))
+        .collect();
+    for ((_, ankle), annotated) in FEET.iter().zip(&annotation.feet) {
+        let j = skeleton.joint_index(ankle).unwrap();
+        for c in r.contacts.iter().filter(|c| c.joint == *ankle) {
+            for &(a, b) in annotated {
+                let (from, to) = (a.max(c.start), b.min(c.end));
+                if from > to {
+                    continue;
+                }
+                let first = frames[from].point(j, c.point);
+                let (mut worst, mut at, mut sink) = (0.0f64, from, 0.0f64);
+                for f in from..=to {
+                    let p = frames[f].point(j, c.point);
+                    let d = DVec3::new(p.x - first.x, 0.0, p.z - first.z).length();
+                    if d > worst {
+                        worst = d;
+                        at = f;
+                    }
+                    sink = sink.max(c.position.y - p.y);
+                }
+                if worst > 0.002 || sink > 0.002 {
+                    let held: Vec<String> = r
+                        .contacts
+                        .iter()
+                        .filter(|o| o.start <= at && o.end >= at)
+                        .map(|o| format!("{}{:?}", &o.joint[..1], o.part))
+                        .collect();
+                    let goal = frames[at].point(j, c.point) - c.position;
+                    println!(
+                        "    legs {legs}: {}{:?} {}..{} (footfall {a}..{b}) drift {:.1} mm at {at} \
+                         (off goal {:.1} mm, residual {:.1} mm) sink {:.1}; held then: {}",
+                        &c.joint[..1],
+                        c.part,
+                        c.start,
+                        c.end,
+                        worst * 1e3,
+                        goal.length() * 1e3,
+                        r.residuals[at][0] * 1e3,
+                        sink * 1e3,
+                        held.join(" ")
+                    );
+                }
+            }
+        }
+    }
+}
+
 #[test]
 fn the_corpus_footfalls_are_found_and_held_on_legs_0_7_to_1_3() {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
@@ -186,7 +246,10 @@ fn the_corpus_footfalls_are_found_and_held_on_legs_0_7_to_1_3() {
         .into_iter()
         .map(|legs| (legs, legs_scaled(legs)))
         .collect();
-    let options = RetargetOptions::default();
+    let mut options = RetargetOptions::default();
+    if let Ok(n) = std::env::var("ITER") {
+        options.max_iterations = n.parse().unwrap();
+    }
     let mut totals = [Counts::default(); 2];
     let mut worst = [(0.0f64, 0.0f64); 2];
     let (mut frames, mut seconds) = (0usize, 0.0f64);
@@ -225,6 +288,9 @@ fn the_corpus_footfalls_are_found_and_held_on_legs_0_7_to_1_3() {
                     totals[usize::from(*holdout)].add(n);
                 }
                 let (d, s, plain) = drift(body, &r.contacts, &truth, &r.postures, &r.copy);
+                if std::env::var("DRIFT_DETAIL").is_ok() && (d > 0.002 || s > 0.002) {
+                    drift_detail(body, &r, &truth, bodies[k].0);
+                }
                 if plain > 0.005 {
                     worse.push((path.to_string(), bodies[k].0, d, plain));
                 }
