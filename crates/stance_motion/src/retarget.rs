@@ -475,7 +475,7 @@ fn frame_tasks(
     // from the copy's own position), so that the goals fit the foot and it rolls about the
     // held point as the clip's does.
     firmest.sort_by(|a, b| b.1.total_cmp(&a.1));
-    let mut goals: Vec<(&Contact, usize, DVec3)> = Vec::with_capacity(firmest.len());
+    let mut goals: Vec<(&Contact, f64, usize, DVec3)> = Vec::with_capacity(firmest.len());
     for (c, w) in firmest {
         let Some(j) = skeleton.joint_index(&c.joint) else {
             continue;
@@ -483,21 +483,27 @@ fn frame_tasks(
         let own = frames.point(j, c.point);
         let from = goals
             .iter()
-            .find(|(h, k, _)| *k == j && h.part.is_foot() && c.part.is_foot())
-            .map_or(own, |(h, _, goal)| *goal + (own - frames.point(j, h.point)));
+            .find(|(h, _, k, _)| *k == j && h.part.is_foot() && c.part.is_foot())
+            .map_or(own, |(h, _, _, goal)| {
+                *goal + (own - frames.point(j, h.point))
+            });
         let goal = from.lerp(c.position, w);
-        goals.push((c, j, goal));
+        goals.push((c, w, j, goal));
     }
-    // Where both points of a foot are held, the one whose contact ends first (the heel
-    // before heel-off, a ball that lands after the heel and lifts before it) gives way to
-    // the other where the leg cannot reach both: the foot rolls about the point that stays.
-    for &(c, j, goal) in &goals {
+    // Where both points of a foot are held, one gives way to the other where the leg cannot
+    // reach both, so that the foot rolls about the point that stays: the one held less
+    // firmly (easing in or out: its goal is partly the copy's), or, both held in full, the
+    // one whose contact ends first (the heel before heel-off, a ball that lands after the
+    // heel and lifts before it).
+    for &(c, w, j, goal) in &goals {
         let yields = c.part.is_foot()
-            && goals.iter().any(|&(o, k, _)| {
+            && goals.iter().any(|&(o, v, k, _)| {
                 k == j
                     && o.part.is_foot()
                     && o.part != c.part
-                    && (o.end > c.end || (o.end == c.end && c.part == ContactPart::Heel))
+                    && (v > w
+                        || (v == w
+                            && (o.end > c.end || (o.end == c.end && c.part == ContactPart::Heel))))
             });
         let level = if yields {
             YIELDING_CONTACT_LEVEL
