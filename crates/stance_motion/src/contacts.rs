@@ -532,6 +532,31 @@ mod tests {
     }
 
     #[test]
+    fn a_ball_raised_over_toes_on_the_floor_rests_on_them() {
+        // On tiptoe: the ball still, 6 cm up (over the 5 cm height), the toes' tip under it
+        // on the floor; the other foot stands on the floor and sets the ground.
+        let dt = 0.01;
+        let ball = PointTrack {
+            part: ContactPart::Ball,
+            tip: Some(vec![DVec3::new(0.05, 0.0, 0.0); 30]),
+            ..track(vec![DVec3::new(0.0, 0.06, 0.0); 30])
+        };
+        let standing = PointTrack {
+            joint: "r_talocrural".into(),
+            ..track(vec![DVec3::new(0.0, 0.0, 0.3); 30])
+        };
+        let s = ContactSettings::default();
+        let c = detect_contacts(&[ball.clone(), standing.clone()], dt, &scale(0.9), &s);
+        let on_toes: Vec<&Contact> = c.iter().filter(|c| c.part == ContactPart::Ball).collect();
+        assert_eq!(on_toes.len(), 1, "{c:?}");
+        assert_eq!((on_toes[0].start, on_toes[0].end), (0, 29));
+        // Without the tip the raised ball is no contact.
+        let bare = PointTrack { tip: None, ..ball };
+        let c = detect_contacts(&[bare, standing], dt, &scale(0.9), &s);
+        assert!(c.iter().all(|c| c.part != ContactPart::Ball), "{c:?}");
+    }
+
+    #[test]
     fn thresholds_scale_with_the_leg_and_rise_with_the_pace() {
         let s = ContactSettings::default();
         let t = s.thresholds(&ClipScale {

@@ -246,14 +246,12 @@ fn the_corpus_footfalls_are_found_and_held_on_legs_0_7_to_1_3() {
         .into_iter()
         .map(|legs| (legs, legs_scaled(legs)))
         .collect();
-    let mut options = RetargetOptions::default();
-    if let Ok(n) = std::env::var("ITER") {
-        options.max_iterations = n.parse().unwrap();
-    }
+    let options = RetargetOptions::default();
     let mut totals = [Counts::default(); 2];
     let mut worst = [(0.0f64, 0.0f64); 2];
     let (mut frames, mut seconds) = (0usize, 0.0f64);
     let mut worse: Vec<(String, f64, f64, f64)> = Vec::new();
+    let mut held: Vec<(String, f64, f64, f64)> = Vec::new();
     println!(
         "clip                                fps  frames reference (annotated/found)  footfalls annotated/found  \
          detected/right  drift mm max 0.7/1.0/1.3 (plain copy)  sink mm max"
@@ -276,9 +274,18 @@ fn the_corpus_footfalls_are_found_and_held_on_legs_0_7_to_1_3() {
                 frames += clip.frame_count();
                 if k == 1 && std::env::var("CLIPS_DETAIL").is_ok() {
                     for ((side, ankle), annotated) in FEET.iter().zip(&truth.feet) {
+                        let detected = footfalls(&r.contacts, ankle);
+                        let apart = |of: &[(usize, usize)], from: &[(usize, usize)]| {
+                            of.iter()
+                                .filter(|&&a| from.iter().all(|&d| overlap(a, d) == 0))
+                                .copied()
+                                .collect::<Vec<_>>()
+                        };
                         println!(
-                            "  {side}: annotated {annotated:?}\n     detected {:?}",
-                            footfalls(&r.contacts, ankle)
+                            "  {side}: annotated {annotated:?}\n     detected {detected:?}\n     \
+                             missed {:?}, detected apart from any footfall {:?}",
+                            apart(annotated, &detected),
+                            apart(&detected, annotated)
                         );
                     }
                 }
@@ -294,6 +301,7 @@ fn the_corpus_footfalls_are_found_and_held_on_legs_0_7_to_1_3() {
                 if plain > 0.005 {
                     worse.push((path.to_string(), bodies[k].0, d, plain));
                 }
+                held.push((path.to_string(), bodies[k].0, d, s));
                 let w = &mut worst[usize::from(*holdout)];
                 w.0 = w.0.max(d);
                 w.1 = w.1.max(s);
@@ -340,14 +348,20 @@ fn the_corpus_footfalls_are_found_and_held_on_legs_0_7_to_1_3() {
         "{frames} frames retargeted in {seconds:.2} s ({:.0} frames/s, test build)",
         frames as f64 / seconds
     );
-    // The issue's targets (recall and precision 95 %, drift and sinking 2 mm) are not met
-    // yet (docs/motion.md has the table); these bounds hold what is measured so that it does
-    // not get worse: recall 87 %, precision 95 %, and on every clip and body the held points
-    // drift less than the plain copy's.
+    // The issue's targets: recall and precision 95 % (not met: recall 88.5 %, precision
+    // 95.5 % over the corpus; the misses are feet low but moving, docs/motion.md), and
+    // within each annotated footfall the held points drift and sink at most 2 mm on every
+    // clip and body (met: at most 0.95 and 0.92 mm), less than the plain copy drifts.
     let mut all = totals[0];
     all.add(totals[1]);
-    assert!(all.recall() >= 0.85, "recall {}", all.recall());
-    assert!(all.precision() >= 0.93, "precision {}", all.precision());
+    assert!(all.recall() >= 0.88, "recall {}", all.recall());
+    assert!(all.precision() >= 0.95, "precision {}", all.precision());
+    for (clip, legs, output, sink) in &held {
+        assert!(
+            *output <= 0.002 && *sink <= 0.002,
+            "{clip} legs {legs}: drift {output}, sink {sink}"
+        );
+    }
     for (clip, legs, output, plain) in &worse {
         assert!(
             output < plain,
