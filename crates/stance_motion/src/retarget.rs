@@ -11,11 +11,12 @@
 //! 3. The result is the **plain rotation copy** (what three.js's `retargetClip` does).
 //! 4. **Tasks over time**: contacts with the ground (detected on the clip,
 //!    [`crate::contacts`]: the heel and the ball of each foot, hands, knees, pelvis) as
-//!    level-1 position tasks on those points eased in and out, the root's path at level 2,
-//!    the wrists at level 3, and the copied frame as the reference of a posture task at
-//!    level 4 (the original motion as the null-space attraction: the foot's roll about a
-//!    held heel or ball is the clip's). Each frame starts from the previous solution: the
-//!    previous frame's correction of the copy is carried onto this frame's copy.
+//!    level-1 position tasks on those points eased in and out (where both points of a foot
+//!    are held, the one that gives way at level 2), the root's path at level 3, the wrists
+//!    at level 4, and the copied frame as the reference of a posture task at level 5 (the
+//!    original motion as the null-space attraction: the foot's roll about a held heel or
+//!    ball is the clip's). Each frame starts from the previous solution: the previous
+//!    frame's correction of the copy is carried onto this frame's copy.
 
 mod copy;
 mod held;
