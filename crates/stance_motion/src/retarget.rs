@@ -664,3 +664,89 @@ impl FrameSolver {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use stance_hanim::{SkeletonOptions, default_skeleton};
+
+    use super::*;
+
+    fn contact(part: ContactPart, start: usize, end: usize) -> Contact {
+        Contact {
+            joint: "l_talocrural".into(),
+            part,
+            point: DVec3::ZERO,
+            start,
+            end,
+            position: DVec3::ZERO,
+            floor: 0.0,
+        }
+    }
+
+    /// The level each of the foot's held points gets at `frame`.
+    fn levels_at(contacts: &[Contact], frame: usize) -> Vec<(ContactPart, u32)> {
+        let Ok(body) = default_skeleton(&SkeletonOptions::default()) else {
+            panic!("the default body");
+        };
+        let copy = Posture::rest(&body.skeleton);
+        let dofs = posture_dofs(&body.skeleton);
+        let tasks = frame_tasks(&body, &copy, contacts, (frame, 4), &dofs);
+        let mut levels: Vec<(ContactPart, u32)> = tasks
+            .iter()
+            .filter(|t| t.level <= YIELDING_CONTACT_LEVEL)
+            .filter_map(|t| match &t.kind {
+                stance_ik::TaskKind::Position { effector, .. } => contacts
+                    .iter()
+                    .find(|c| c.point == effector.point)
+                    .map(|c| (c.part, t.level)),
+                _ => None,
+            })
+            .collect();
+        levels.sort_by_key(|l| l.1);
+        levels
+    }
+
+    #[test]
+    fn of_a_foot_held_at_heel_and_ball_the_point_that_lifts_first_or_eases_gives_way() {
+        // The heel from frame 10 to 30, the ball from 20 to 50 (points told apart by their
+        // offsets).
+        let mut heel = contact(ContactPart::Heel, 10, 30);
+        heel.point = DVec3::new(0.0, -0.08, -0.05);
+        let mut ball = contact(ContactPart::Ball, 20, 50);
+        ball.point = DVec3::new(0.0, -0.08, 0.15);
+        let both = [heel, ball];
+        // The heel alone: firm.
+        assert_eq!(
+            levels_at(&both, 12),
+            vec![(ContactPart::Heel, CONTACT_LEVEL)]
+        );
+        // The ball easing in while the heel is held in full: the ball gives way.
+        assert_eq!(
+            levels_at(&both, 18),
+            vec![
+                (ContactPart::Heel, CONTACT_LEVEL),
+                (ContactPart::Ball, YIELDING_CONTACT_LEVEL)
+            ]
+        );
+        // Both in full: the heel, whose contact ends first, gives way.
+        assert_eq!(
+            levels_at(&both, 25),
+            vec![
+                (ContactPart::Ball, CONTACT_LEVEL),
+                (ContactPart::Heel, YIELDING_CONTACT_LEVEL)
+            ]
+        );
+        // The heel easing out: it gives way; then the ball alone is firm.
+        assert_eq!(
+            levels_at(&both, 32),
+            vec![
+                (ContactPart::Ball, CONTACT_LEVEL),
+                (ContactPart::Heel, YIELDING_CONTACT_LEVEL)
+            ]
+        );
+        assert_eq!(
+            levels_at(&both, 40),
+            vec![(ContactPart::Ball, CONTACT_LEVEL)]
+        );
+    }
+}
