@@ -56,7 +56,7 @@ pub struct BenchArgs {
     #[arg(long, value_name = "N", num_args = 0..=1, default_missing_value = "40")]
     pub comfort: Option<usize>,
     /// Time retargeting this clip (.bvh, .glb) onto the H-Anim default body at LOA2 (50
-    /// DOF): the plain rotation copy and the four-level problem with contacts, frames per
+    /// DOF): the plain rotation copy and the five-level problem with contacts, frames per
     /// second on one core.
     #[arg(long)]
     pub clip: Option<PathBuf>,

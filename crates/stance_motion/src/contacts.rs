@@ -192,6 +192,10 @@ pub struct PointTrack {
     pub point: DVec3,
     /// World positions of the point on the clip, per frame (m).
     pub positions: Vec<DVec3>,
+    /// For the ball of a foot: the tip of the toes on the clip, per frame (m), where the clip
+    /// has toes. The ball is low also when the tip is (standing on tiptoe, the toes bent
+    /// under a raised ball).
+    pub tip: Option<Vec<DVec3>>,
 }
 
 /// One contact of a point with the ground over a window of frames.
@@ -278,9 +282,18 @@ pub fn detect_contacts(
         let positions = &track.positions[..ground.len().min(track.positions.len())];
         let clearance = track.part.clearance() * scale.leg;
         let speed = speeds(positions, scale.start, half, frame_time);
+        // The height that makes the point low: its own, or the toes' tip's under a ball.
+        let low_height = |f: usize| {
+            let own = positions[f].y - clearance;
+            track
+                .tip
+                .as_ref()
+                .and_then(|t| t.get(f))
+                .map_or(own, |t| own.min(t.y))
+        };
         let rest = |f: usize| {
             f >= scale.start
-                && positions[f].y - clearance - ground[f] <= limits.height
+                && low_height(f) - ground[f] <= limits.height
                 && speed[f] <= limits.speed
         };
         let mut runs: Vec<(usize, usize)> = Vec::new();
@@ -437,6 +450,7 @@ mod tests {
             part: ContactPart::Heel,
             point: DVec3::ZERO,
             positions,
+            tip: None,
         }
     }
 
@@ -515,6 +529,31 @@ mod tests {
         let c = detect_contacts(&[track(touch), standing], dt, &scale(0.9), &s);
         assert!(c.iter().all(|c| c.joint == "r_talocrural"), "{c:?}");
         assert_eq!(c.len(), 1);
+    }
+
+    #[test]
+    fn a_ball_raised_over_toes_on_the_floor_rests_on_them() {
+        // On tiptoe: the ball still, 6 cm up (over the 5 cm height), the toes' tip under it
+        // on the floor; the other foot stands on the floor and sets the ground.
+        let dt = 0.01;
+        let ball = PointTrack {
+            part: ContactPart::Ball,
+            tip: Some(vec![DVec3::new(0.05, 0.0, 0.0); 30]),
+            ..track(vec![DVec3::new(0.0, 0.06, 0.0); 30])
+        };
+        let standing = PointTrack {
+            joint: "r_talocrural".into(),
+            ..track(vec![DVec3::new(0.0, 0.0, 0.3); 30])
+        };
+        let s = ContactSettings::default();
+        let c = detect_contacts(&[ball.clone(), standing.clone()], dt, &scale(0.9), &s);
+        let on_toes: Vec<&Contact> = c.iter().filter(|c| c.part == ContactPart::Ball).collect();
+        assert_eq!(on_toes.len(), 1, "{c:?}");
+        assert_eq!((on_toes[0].start, on_toes[0].end), (0, 29));
+        // Without the tip the raised ball is no contact.
+        let bare = PointTrack { tip: None, ..ball };
+        let c = detect_contacts(&[bare, standing], dt, &scale(0.9), &s);
+        assert!(c.iter().all(|c| c.part != ContactPart::Ball), "{c:?}");
     }
 
     #[test]

@@ -179,6 +179,66 @@ fn drift(
     (out, sink, plain)
 }
 
+/// Per contact whose held point drifts or sinks over 2 mm within an annotated footfall: where
+/// and with which other points held (diagnostics).
+fn drift_detail(
+    target: &stance_hanim::HumanoidSkeleton,
+    r: &stance_motion::Retargeted,
+    annotation: &Annotation,
+    legs: f64,
+) {
+    let skeleton = &target.skeleton;
+    let frames: Vec<Frames> = r
+        .postures
+        .iter()
+        .map(|p| Frames::new(skeleton, p))
+        .collect();
+    for ((_, ankle), annotated) in FEET.iter().zip(&annotation.feet) {
+        let j = skeleton.joint_index(ankle).unwrap();
+        for c in r.contacts.iter().filter(|c| c.joint == *ankle) {
+            for &(a, b) in annotated {
+                let (from, to) = (a.max(c.start), b.min(c.end));
+                if from > to {
+                    continue;
+                }
+                let first = frames[from].point(j, c.point);
+                let (mut worst, mut at, mut sink) = (0.0f64, from, 0.0f64);
+                for f in from..=to {
+                    let p = frames[f].point(j, c.point);
+                    let d = DVec3::new(p.x - first.x, 0.0, p.z - first.z).length();
+                    if d > worst {
+                        worst = d;
+                        at = f;
+                    }
+                    sink = sink.max(c.position.y - p.y);
+                }
+                if worst > 0.002 || sink > 0.002 {
+                    let held: Vec<String> = r
+                        .contacts
+                        .iter()
+                        .filter(|o| o.start <= at && o.end >= at)
+                        .map(|o| format!("{}{:?}", &o.joint[..1], o.part))
+                        .collect();
+                    let goal = frames[at].point(j, c.point) - c.position;
+                    println!(
+                        "    legs {legs}: {}{:?} {}..{} (footfall {a}..{b}) drift {:.1} mm at {at} \
+                         (off goal {:.1} mm, residual {:.1} mm) sink {:.1}; held then: {}",
+                        &c.joint[..1],
+                        c.part,
+                        c.start,
+                        c.end,
+                        worst * 1e3,
+                        goal.length() * 1e3,
+                        r.residuals[at][0] * 1e3,
+                        sink * 1e3,
+                        held.join(" ")
+                    );
+                }
+            }
+        }
+    }
+}
+
 #[test]
 fn the_corpus_footfalls_are_found_and_held_on_legs_0_7_to_1_3() {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
@@ -189,8 +249,9 @@ fn the_corpus_footfalls_are_found_and_held_on_legs_0_7_to_1_3() {
     let options = RetargetOptions::default();
     let mut totals = [Counts::default(); 2];
     let mut worst = [(0.0f64, 0.0f64); 2];
-    let (mut frames, mut seconds) = (0usize, 0.0f64);
+    let (mut frames, mut seconds, mut iterations) = (0usize, 0.0f64, 0usize);
     let mut worse: Vec<(String, f64, f64, f64)> = Vec::new();
+    let mut held: Vec<(String, f64, f64, f64)> = Vec::new();
     println!(
         "clip                                fps  frames reference (annotated/found)  footfalls annotated/found  \
          detected/right  drift mm max 0.7/1.0/1.3 (plain copy)  sink mm max"
@@ -211,11 +272,21 @@ fn the_corpus_footfalls_are_found_and_held_on_legs_0_7_to_1_3() {
                 let r = retarget(&clip, body, &options).unwrap();
                 seconds += t.elapsed().as_secs_f64();
                 frames += clip.frame_count();
-                if k == 1 && !holdout && std::env::var("CLIPS_DETAIL").is_ok() {
+                iterations += r.iterations;
+                if k == 1 && std::env::var("CLIPS_DETAIL").is_ok() {
                     for ((side, ankle), annotated) in FEET.iter().zip(&truth.feet) {
+                        let detected = footfalls(&r.contacts, ankle);
+                        let apart = |of: &[(usize, usize)], from: &[(usize, usize)]| {
+                            of.iter()
+                                .filter(|&&a| from.iter().all(|&d| overlap(a, d) == 0))
+                                .copied()
+                                .collect::<Vec<_>>()
+                        };
                         println!(
-                            "  {side}: annotated {annotated:?}\n     detected {:?}",
-                            footfalls(&r.contacts, ankle)
+                            "  {side}: annotated {annotated:?}\n     detected {detected:?}\n     \
+                             missed {:?}, detected apart from any footfall {:?}",
+                            apart(annotated, &detected),
+                            apart(&detected, annotated)
                         );
                     }
                 }
@@ -225,9 +296,13 @@ fn the_corpus_footfalls_are_found_and_held_on_legs_0_7_to_1_3() {
                     totals[usize::from(*holdout)].add(n);
                 }
                 let (d, s, plain) = drift(body, &r.contacts, &truth, &r.postures, &r.copy);
+                if std::env::var("DRIFT_DETAIL").is_ok() && (d > 0.002 || s > 0.002) {
+                    drift_detail(body, &r, &truth, bodies[k].0);
+                }
                 if plain > 0.005 {
                     worse.push((path.to_string(), bodies[k].0, d, plain));
                 }
+                held.push((path.to_string(), bodies[k].0, d, s));
                 let w = &mut worst[usize::from(*holdout)];
                 w.0 = w.0.max(d);
                 w.1 = w.1.max(s);
@@ -271,17 +346,25 @@ fn the_corpus_footfalls_are_found_and_held_on_legs_0_7_to_1_3() {
         );
     }
     println!(
-        "{frames} frames retargeted in {seconds:.2} s ({:.0} frames/s, test build)",
-        frames as f64 / seconds
+        "{frames} frames retargeted in {seconds:.2} s ({:.0} frames/s, test build), {:.2} \
+         solver iterations a frame",
+        frames as f64 / seconds,
+        iterations as f64 / frames as f64
     );
-    // The issue's targets (recall and precision 95 %, drift and sinking 2 mm) are not met
-    // yet (docs/motion.md has the table); these bounds hold what is measured so that it does
-    // not get worse: recall 87 %, precision 95 %, and on every clip and body the held points
-    // drift less than the plain copy's.
+    // The issue's targets: recall and precision 95 % (not met: recall 88.5 %, precision
+    // 95.5 % over the corpus; the misses are feet low but moving, docs/motion.md), and
+    // within each annotated footfall the held points drift and sink at most 2 mm on every
+    // clip and body (met: at most 0.95 and 0.92 mm), less than the plain copy drifts.
     let mut all = totals[0];
     all.add(totals[1]);
-    assert!(all.recall() >= 0.85, "recall {}", all.recall());
-    assert!(all.precision() >= 0.93, "precision {}", all.precision());
+    assert!(all.recall() >= 0.88, "recall {}", all.recall());
+    assert!(all.precision() >= 0.95, "precision {}", all.precision());
+    for (clip, legs, output, sink) in &held {
+        assert!(
+            *output <= 0.002 && *sink <= 0.002,
+            "{clip} legs {legs}: drift {output}, sink {sink}"
+        );
+    }
     for (clip, legs, output, plain) in &worse {
         assert!(
             output < plain,

@@ -67,6 +67,26 @@ pub(super) fn foot_points(
     stance_hanim::anatomy::heel_and_ball(&toes, &foot, leg)
 }
 
+/// The joint below `ankle` that reaches furthest forward at rest (the tip of the toes),
+/// when it is at least 2 cm ahead of the ball (`ball`, in the ankle's rest frame).
+fn toe_tip(ankle: usize, parents: &[Option<usize>], rest: &[DVec3], ball: DVec3) -> Option<usize> {
+    let below = |mut j: usize| {
+        while let Some(p) = parents[j] {
+            if p == ankle {
+                return true;
+            }
+            j = p;
+        }
+        false
+    };
+    (0..rest.len())
+        .filter(|&j| below(j))
+        .map(|j| (j, rest[j].z - rest[ankle].z))
+        .filter(|&(_, z)| z > ball.z + 0.02)
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(j, _)| j)
+}
+
 /// Where a part's point is on each skeleton: the joint carrying it on the target with the
 /// point's offset there, and how to find it on the clip (a clip joint and offset in its
 /// frame, or the midpoint of the hips for the pelvis).
@@ -75,6 +95,10 @@ pub(super) struct PartPoint {
     pub(super) target_joint: usize,
     pub(super) target_point: DVec3,
     pub(super) clip: ClipPoint,
+    /// For the ball: the clip's joint at the tip of the toes (the one below the ankle that
+    /// reaches furthest forward at rest, an End Site where the file has one), when it is
+    /// ahead of the ball.
+    pub(super) tip: Option<usize>,
 }
 
 pub(super) enum ClipPoint {
@@ -112,6 +136,7 @@ pub(super) fn part_points(
             target_leg,
         );
         let on_clip = foot_points(c, &clip_parents, &clip_rest, clip.joint_of(&toe), clip_leg);
+        let tip = toe_tip(c, &clip_parents, &clip_rest, on_clip[1]);
         for (k, part) in [ContactPart::Heel, ContactPart::Ball]
             .into_iter()
             .enumerate()
@@ -121,6 +146,7 @@ pub(super) fn part_points(
                 target_joint: t,
                 target_point: on_target[k],
                 clip: ClipPoint::Joint(c, on_clip[k]),
+                tip: tip.filter(|_| part == ContactPart::Ball),
             });
         }
     }
@@ -135,6 +161,7 @@ pub(super) fn part_points(
                     target_joint: t,
                     target_point: DVec3::ZERO,
                     clip: ClipPoint::Joint(c, DVec3::ZERO),
+                    tip: None,
                 });
             }
         }
@@ -150,6 +177,7 @@ pub(super) fn part_points(
             target_joint: pelvis,
             target_point: (target_rest[tl] + target_rest[tr]) * 0.5 - target_rest[pelvis],
             clip: ClipPoint::Between(cl, cr),
+            tip: None,
         });
     }
     points
@@ -187,6 +215,12 @@ pub(super) fn held_contacts(
             part: p.part,
             point: p.target_point,
             positions: worlds.iter().map(|w| clip_point(w, &p.clip)).collect(),
+            tip: p.tip.map(|t| {
+                worlds
+                    .iter()
+                    .map(|w| clip_point(w, &ClipPoint::Joint(t, DVec3::ZERO)))
+                    .collect()
+            }),
         })
         .collect();
     let clip_rest = clip.rest_positions();
