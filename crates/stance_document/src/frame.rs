@@ -34,18 +34,19 @@ pub struct FrameProblem<'a> {
     pub grab: Option<Grab>,
 }
 
-impl FrameProblem<'_> {
-    /// The level of a pull: one below the lowest hard (not soft) task.
-    pub fn grab_level(specs: &[TaskSpec]) -> u32 {
-        specs
-            .iter()
-            .filter(|task| !task.kind.is_soft())
-            .map(|task| task.level)
-            .max()
-            .unwrap_or(0)
-            + 1
-    }
+/// The level just below every hard (not soft) task of `specs`: where a pull goes, and a task
+/// the user adds.
+pub fn level_below_hard_tasks(specs: &[TaskSpec]) -> u32 {
+    specs
+        .iter()
+        .filter(|task| !task.kind.is_soft())
+        .map(|task| task.level)
+        .max()
+        .unwrap_or(0)
+        + 1
+}
 
+impl FrameProblem<'_> {
     /// The solver tasks on `skeleton` (on a built `body` when given: its comfort tasks read its
     /// own anatomical axes): every task that converts (one that does not is left out; its
     /// status says why), the held joint at level 1, the pull one level below every hard task.
@@ -65,7 +66,7 @@ impl FrameProblem<'_> {
         if let Some(grab) = self.grab {
             tasks.push(
                 Task::position(grab.joint, grab.point_local, grab.target_world)
-                    .at_level(Self::grab_level(self.specs)),
+                    .at_level(level_below_hard_tasks(self.specs)),
             );
         }
         tasks

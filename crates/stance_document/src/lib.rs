@@ -43,7 +43,7 @@ pub use document::{
     Document, DofValues, LimbName, PostureRest, PostureValues, TaskKindSpec, TaskSpec,
 };
 pub use error::DocumentError;
-pub use frame::{FrameProblem, Grab};
+pub use frame::{FrameProblem, Grab, level_below_hard_tasks};
 pub use link::LinkError;
 pub use motion::{MotionKey, MotionSection, TaskInterval};
 pub use problem::{

@@ -36,14 +36,7 @@ pub enum NewTask {
 
 /// The level for a new task: below every task but the posture attraction and comfort.
 fn next_level(session: &PosingSession) -> u32 {
-    session
-        .tasks()
-        .iter()
-        .filter(|task| !task.kind.is_soft())
-        .map(|task| task.level)
-        .max()
-        .unwrap_or(0)
-        + 1
+    stance_document::level_below_hard_tasks(session.tasks())
 }
 
 /// The task `what` on `session`'s body as it stands; `Err` says why it cannot be made.

@@ -46,15 +46,7 @@ pub(super) fn foot_points(
     toe: Option<usize>,
     leg: f64,
 ) -> [DVec3; 2] {
-    let below = |mut j: usize| {
-        while let Some(p) = parents[j] {
-            if p == ankle {
-                return true;
-            }
-            j = p;
-        }
-        false
-    };
+    let below = |j: usize| is_below(j, ankle, parents);
     let foot: Vec<DVec3> = (0..rest.len())
         .filter(|&j| below(j))
         .map(|j| rest[j] - rest[ankle])
@@ -70,15 +62,7 @@ pub(super) fn foot_points(
 /// The joint below `ankle` that reaches furthest forward at rest (the tip of the toes),
 /// when it is at least 2 cm ahead of the ball (`ball`, in the ankle's rest frame).
 fn toe_tip(ankle: usize, parents: &[Option<usize>], rest: &[DVec3], ball: DVec3) -> Option<usize> {
-    let below = |mut j: usize| {
-        while let Some(p) = parents[j] {
-            if p == ankle {
-                return true;
-            }
-            j = p;
-        }
-        false
-    };
+    let below = |j: usize| is_below(j, ankle, parents);
     (0..rest.len())
         .filter(|&j| below(j))
         .map(|j| (j, rest[j].z - rest[ankle].z))
@@ -460,4 +444,15 @@ pub(super) fn pace(root: &[DVec3], start: usize, frame_time: f64) -> f64 {
     }
     let k = speeds.len() / 2;
     *speeds.select_nth_unstable_by(k, f64::total_cmp).1
+}
+
+/// Whether joint `j` hangs below `ankle` (a descendant of it) in the tree of `parents`.
+fn is_below(mut j: usize, ankle: usize, parents: &[Option<usize>]) -> bool {
+    while let Some(p) = parents[j] {
+        if p == ankle {
+            return true;
+        }
+        j = p;
+    }
+    false
 }
