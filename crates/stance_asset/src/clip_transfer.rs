@@ -40,6 +40,9 @@ pub struct ClipJob {
     pub body: HumanoidSkeleton,
     /// How.
     pub options: RetargetOptions,
+    /// The clip's mapping onto H-Anim as the user corrected it (`None`: the one found when
+    /// the file is read).
+    pub mapping: Option<Mapping>,
 }
 
 /// A clip read and retargeted.
@@ -58,8 +61,18 @@ impl ClipJob {
     /// body), in words.
     pub fn run(self, progress: &mut dyn FnMut(f64)) -> Result<OpenedClip, String> {
         let name = self.name;
-        let clip = read_clip(&name, &self.bytes, &LoadOptions::default(), &mut |_| None)
+        let mut clip = read_clip(&name, &self.bytes, &LoadOptions::default(), &mut |_| None)
             .map_err(|error| format!("{name} could not be opened as a clip: {error}."))?;
+        if let Some(mapping) = self.mapping {
+            if mapping.source_count() != clip.joints.len() {
+                return Err(format!(
+                    "{name}: the corrected mapping is for a clip of {} joints, the file has {}.",
+                    mapping.source_count(),
+                    clip.joints.len()
+                ));
+            }
+            clip.mapping = mapping;
+        }
         let clip_name = clip.name.clone();
         let cannot = |error: stance_motion::MotionError| {
             format!("The clip {clip_name} could not be put on this body: {error}.")
@@ -80,6 +93,7 @@ impl ClipJob {
             bytes: self.bytes.clone(),
             body: BodyWire::of(&self.body),
             options: OptionsWire::of(&self.options),
+            mapping: self.mapping.clone(),
         };
         postcard::to_allocvec(&wire).map_err(|error| AssetError::Transfer(error.to_string()))
     }
@@ -92,6 +106,7 @@ impl ClipJob {
             bytes: wire.bytes,
             body: wire.body.into_body()?,
             options: wire.options.into_options()?,
+            mapping: wire.mapping,
         })
     }
 }
@@ -322,6 +337,7 @@ struct JobWire {
     bytes: Vec<u8>,
     body: BodyWire,
     options: OptionsWire,
+    mapping: Option<Mapping>,
 }
 
 #[derive(Serialize, Deserialize)]

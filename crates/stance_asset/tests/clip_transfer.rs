@@ -44,10 +44,40 @@ fn the_job_crosses_with_the_same_body_and_settings() {
             bytes: WALK.to_vec(),
             body,
             options: RetargetOptions::default().with_arm_lift(12.0),
+            mapping: None,
         };
         let back = ClipJob::from_bytes(&job.to_bytes().unwrap()).unwrap();
         assert_eq!(back, job);
     }
+}
+
+// Catches a corrected mapping lost on the way or not applied: the worker would put the clip
+// on the body as the file maps it, not as the user corrected it; and a mapping made for
+// another clip taken as it is.
+#[test]
+fn a_corrected_mapping_crosses_and_is_applied() {
+    let clip =
+        stance_asset::read_clip("walk.bvh", WALK, &LoadOptions::default(), &mut |_| None).unwrap();
+    let mut mapping = clip.mapping.clone();
+    assert!(mapping.remove("l_elbow"), "the walk maps an elbow");
+    let job = ClipJob {
+        name: "walk.bvh".into(),
+        bytes: WALK.to_vec(),
+        body: mannequin(),
+        options: RetargetOptions::default(),
+        mapping: Some(mapping.clone()),
+    };
+    let back = ClipJob::from_bytes(&job.to_bytes().unwrap()).unwrap();
+    assert_eq!(back, job);
+    let opened = back.run(&mut |_| {}).unwrap();
+    assert_eq!(opened.clip.mapping, mapping);
+    assert_eq!(opened.clip.mapping.get("l_elbow"), None);
+    let other = ClipJob {
+        mapping: Some(stance_hanim::Mapping::empty(clip.joints.len() + 1)),
+        ..job
+    };
+    let error = other.run(&mut |_| {}).unwrap_err();
+    assert!(error.contains("corrected mapping"), "{error}");
 }
 
 // Catches a worker whose clip differs from the one the editor would open itself: the same
@@ -66,6 +96,7 @@ fn the_opened_clip_crosses_in_parts_and_is_the_one_shot_retargeting() {
         bytes: bytes.clone(),
         body: mannequin(),
         options: options.clone(),
+        mapping: None,
     };
     let dofs = job.body.skeleton.dof_count();
     let mut reports = Vec::new();
@@ -103,6 +134,7 @@ fn damaged_transfers_are_refused_by_name() {
             contacts: None,
             ..Default::default()
         },
+        mapping: None,
     };
     let dofs = job.body.skeleton.dof_count();
     let encoded = job.to_bytes().unwrap();
@@ -140,6 +172,7 @@ fn a_file_that_is_not_a_clip_says_why() {
         bytes: b"HIERARCHY\nROOT hips\n{".to_vec(),
         body: mannequin(),
         options: RetargetOptions::default(),
+        mapping: None,
     };
     let error = job.run(&mut |_| {}).unwrap_err();
     assert!(
@@ -161,6 +194,7 @@ fn write_clip_transfer_seeds() {
         bytes: long_walk(10),
         body: mannequin(),
         options: RetargetOptions::default(),
+        mapping: None,
     };
     let mut seed = vec![0];
     seed.extend(job.to_bytes().unwrap());

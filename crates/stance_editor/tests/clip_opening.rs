@@ -258,3 +258,91 @@ fn a_long_clips_trajectory_is_computed_a_thousand_frames_a_step() {
         assert!((model.timeline().trajectory()[frame] - at(frame)).length() < 1e-12);
     }
 }
+
+// Catches an open clip put on a new body on the editor's thread (a long clip froze the page
+// for seconds after an avatar or LOA change): the file goes back to the host with the new
+// body, the clip is hidden meanwhile (made for the old body) but still named by the document
+// with its keys, and the host's result is the editor's own on that body, the playhead where
+// it was.
+#[test]
+fn a_change_of_body_puts_the_open_clip_on_it_again_through_the_host() {
+    let host = worker_host();
+    let mut model = editor_on(&host);
+    open(&mut model, "walk.bvh", WALK);
+    model.receive(answer(last_request(&host)));
+    model.apply(Command::Motion(MotionCommand::Seek(40)));
+    let named = model.document().clip.unwrap();
+    let requests = host.inner.borrow().clip_requests.len();
+
+    model.apply(Command::SetLevelOfArticulation(LevelOfArticulation::Loa1));
+    assert_eq!(host.inner.borrow().clip_requests.len(), requests + 1);
+    let request = last_request(&host);
+    assert_eq!(request.job.bytes, WALK);
+    assert_eq!(&request.job.body, model.session().humanoid());
+    assert_eq!(
+        request.job.mapping.as_ref(),
+        Some(&model.timeline().clip().unwrap().mapping)
+    );
+    assert!(
+        !model.timeline().has_clip(),
+        "hidden while it is put on the body"
+    );
+    assert_eq!(model.timeline().opening(), Some(("walk.bvh", 0.0)));
+    assert_eq!(model.document().clip.unwrap().hash, named.hash);
+
+    model.receive(answer(request));
+    let notice = model.notice().unwrap().text.clone();
+    assert!(
+        notice.starts_with("The clip walk is on the body again"),
+        "{notice}"
+    );
+    let mut own = editor_on(&MemoryHost::default());
+    own.apply(Command::SetLevelOfArticulation(LevelOfArticulation::Loa1));
+    open(&mut own, "walk.bvh", WALK);
+    assert_eq!(model.frame_count(), own.frame_count());
+    assert_eq!(model.timeline().contacts(), own.timeline().contacts());
+    for frame in [0, 100, 259] {
+        assert_eq!(model.frame_posture(frame), own.frame_posture(frame));
+    }
+    assert_eq!(model.timeline().frame(), 40, "the playhead stays");
+    assert_eq!(model.document().clip, Some(named));
+}
+
+// Catches a corrected mapping dropped when the clip goes back to the host (the clip would come
+// back mapped as the file says), and a cancelled re-targeting that leaves a clip made for
+// another body on the timeline or forgets the document's clip.
+#[test]
+fn a_mapping_correction_goes_with_the_file_and_cancel_closes_the_clip_but_keeps_it_named() {
+    let host = worker_host();
+    let mut model = editor_on(&host);
+    open(&mut model, "walk.bvh", WALK);
+    model.receive(answer(last_request(&host)));
+    model.apply(Command::Motion(MotionCommand::Seek(40)));
+    model.apply(Command::Motion(MotionCommand::SetKey));
+    let named = model.document().clip.unwrap();
+    let mut mapping = model.timeline().clip().unwrap().mapping.clone();
+    assert!(mapping.remove("l_elbow"));
+    model.apply(Command::Motion(MotionCommand::SetClipMapping(Box::new(
+        mapping.clone(),
+    ))));
+    let request = last_request(&host);
+    assert_eq!(request.job.mapping.as_ref(), Some(&mapping));
+    model.receive(answer(request));
+    assert_eq!(model.timeline().clip().unwrap().mapping, mapping);
+    assert!(model.timeline().has_clip());
+    assert_eq!(model.key_frames(), vec![40], "the keys stay");
+
+    model.apply(Command::SetLevelOfArticulation(LevelOfArticulation::Loa1));
+    let request = last_request(&host);
+    model.apply(Command::Motion(MotionCommand::CancelOpening));
+    model.receive(answer(request));
+    assert!(!model.timeline().has_clip());
+    assert!(model.timeline().clip().is_none());
+    let notice = model.notice().unwrap().text.clone();
+    assert!(
+        notice.contains("was cancelled") && notice.contains("still names it"),
+        "{notice}"
+    );
+    assert_eq!(model.document().clip.unwrap().hash, named.hash);
+    assert_eq!(model.key_frames(), vec![40]);
+}

@@ -9,6 +9,7 @@ use stance_asset::{
     is_bvh_file,
 };
 use stance_document::{ClipReference, Document};
+use stance_hanim::Mapping;
 use stance_ik::{Posture, Solver, SolverSettings};
 use stance_motion::{BvhWriteOptions, Clip, RetargetOptions, write_bvh};
 
@@ -49,6 +50,9 @@ pub(super) struct Opening {
     /// A document's clip: the document's own tasks stay (none set aside), and it stays
     /// named when the clip cannot be opened.
     from_document: bool,
+    /// The open clip put on the body again (after a change of body or settings) with its
+    /// mapping as corrected: the playhead, keys and tasks stay as they are.
+    again: Option<Mapping>,
 }
 
 /// What the next picked file is for.
@@ -75,7 +79,7 @@ impl EditorModel {
     /// editor's thread, the timeline shows the progress and *Cancel*), else here.
     pub(super) fn open_clip_file(&mut self, name: &str, bytes: &[u8]) {
         let source = is_bvh_file(name).then(|| ClipReference::embed(name, bytes));
-        match self.start_opening(name, bytes.to_vec(), source, false) {
+        match self.start_opening(name, bytes.to_vec(), source, false, None) {
             None => {}
             Some(Ok(text)) => self.inform(format!("Opened {text}")),
             Some(Err(error)) => self.warn(error),
@@ -83,14 +87,17 @@ impl EditorModel {
     }
 
     /// Asks the host to read and retarget the clip file `name` (a request before it is
-    /// cancelled); where it cannot, does it here. `None`: under way (the result arrives as
-    /// [`MotionCommand::ClipOpened`]); else what to say after "Opened ", or why not.
-    fn start_opening(
+    /// cancelled); where it cannot, does it here. `again`: the open clip put on the body
+    /// again, with this mapping. `None`: under way (the result arrives as
+    /// [`MotionCommand::ClipOpened`]); else what to say after "Opened " (or, `again`, the
+    /// whole notice), or why not.
+    pub(super) fn start_opening(
         &mut self,
         name: &str,
         bytes: Vec<u8>,
         source: Option<ClipReference>,
         from_document: bool,
+        again: Option<Mapping>,
     ) -> Option<Result<String, String>> {
         if let Some(previous) = self.timeline.opening.take() {
             self.hooks.cancel_retarget(previous.id);
@@ -102,6 +109,7 @@ impl EditorModel {
             bytes: bytes.clone(),
             body: self.session.humanoid().clone(),
             options: self.timeline.options.clone(),
+            mapping: again.clone(),
         });
         let opening = Opening {
             id,
@@ -110,6 +118,7 @@ impl EditorModel {
             bytes,
             source,
             from_document,
+            again,
         };
         match self.hooks.retarget_clip(ClipRetarget { id, job }) {
             Ok(()) => {
@@ -144,10 +153,29 @@ impl EditorModel {
             ));
         }
         let source = opening.source.unwrap_or_else(|| written_source(&clip));
+        let file = Some((opening.name, opening.bytes));
+        if opening.again.is_some() {
+            let name = clip.name.clone();
+            self.put_clip_again(Box::new(clip), retargeted, source, file);
+            let words = self.timeline.contact_words().unwrap_or_default();
+            return Ok(format!("The clip {name} is on the body again: {words}."));
+        }
         if opening.from_document {
             self.timeline.wanted = None;
         }
-        Ok(self.put_clip(Box::new(clip), retargeted, source, !opening.from_document))
+        let text = self.put_clip(Box::new(clip), retargeted, source, !opening.from_document);
+        self.timeline.file = file;
+        Ok(text)
+    }
+
+    /// The open clip could not be put on the body again (`why`): it is closed, the document
+    /// still names it (its keys stay; the file opens again with Motion > Open clip).
+    fn clip_lost(&mut self, why: String) {
+        self.close_clip_named();
+        self.warn(format!(
+            "{}: the clip is closed; the document still names it (open the file again with Motion > Open clip).",
+            why.trim_end_matches('.')
+        ));
     }
 
     /// The host's progress with the clip request `id`.
@@ -170,7 +198,10 @@ impl EditorModel {
             return;
         };
         let from_document = opening.from_document;
+        let again = opening.again.is_some();
         match self.finish_opening(opening, result.map(|opened| *opened)) {
+            Ok(text) if again => self.inform(text),
+            Err(error) if again => self.clip_lost(error),
             Ok(text) if from_document => {
                 self.inform(format!("The document's clip is on the timeline: {text}"));
             }
@@ -186,6 +217,13 @@ impl EditorModel {
             return;
         };
         self.hooks.cancel_retarget(opening.id);
+        if opening.again.is_some() {
+            self.clip_lost(format!(
+                "Putting the clip {} on the body again was cancelled",
+                opening.name
+            ));
+            return;
+        }
         let text = if opening.from_document {
             format!(
                 "Opening the clip {} was cancelled: the document's keys stay without it (open the file with Motion > Open clip).",
@@ -210,6 +248,7 @@ impl EditorModel {
                 opening.bytes,
                 opening.source,
                 opening.from_document,
+                opening.again,
             );
             match progress {
                 None | Some(Ok(_)) => {}
@@ -246,7 +285,7 @@ impl EditorModel {
         if let Some(embedded) = &reference.embedded {
             let name = reference.name.clone();
             let bytes = embedded.bytes().to_vec();
-            return match self.start_opening(&name, bytes, Some(reference.clone()), true) {
+            return match self.start_opening(&name, bytes, Some(reference.clone()), true, None) {
                 None => (
                     format!(" Its clip {name} is being read and put on the body…"),
                     false,
@@ -320,8 +359,8 @@ impl EditorModel {
     /// New retargeting settings: the clip is put on the body again with them.
     pub(super) fn set_retarget_options(&mut self, options: RetargetOptions) {
         self.timeline.options = options;
-        self.retarget_clip();
         self.reopen_pending();
+        self.retarget_clip();
         self.show_playhead();
         if let Some(words) = self.timeline.contact_words() {
             self.inform(format!("The clip is put on the body again: {words}."));

@@ -158,6 +158,10 @@ pub struct Timeline {
     pub(super) wanted: Option<ClipReference>,
     /// The clip file the host is reading and retargeting ([`HostHooks::retarget_clip`](crate::HostHooks::retarget_clip)).
     pub(super) opening: Option<super::clips::Opening>,
+    /// The file the open clip was read from (name, contents): after a change of body or
+    /// settings it goes back to the host to be put on the body again off the editor's
+    /// thread. `None` for a recording or an avatar's animation (put on the body here).
+    pub(super) file: Option<(String, Vec<u8>)>,
     /// The id of the next clip request to the host.
     pub(super) next_request: u64,
 }
@@ -185,6 +189,7 @@ impl Default for Timeline {
             wanted: None,
             opening: None,
             next_request: 0,
+            file: None,
         }
     }
 }
@@ -367,6 +372,7 @@ impl EditorModel {
             }
             MotionCommand::CloseClip => {
                 self.timeline.clip = None;
+                self.timeline.file = None;
                 self.timeline.retargeted = None;
                 self.timeline.source = None;
                 self.timeline.wanted = None;
@@ -466,6 +472,7 @@ impl EditorModel {
         self.timeline.clip = Some(clip);
         self.timeline.retargeted = Some(retargeted);
         self.timeline.source = Some(source);
+        self.timeline.file = None;
         self.timeline.base_revision += 1;
         self.timeline.playing = false;
         let set_aside = if set_aside {
@@ -579,18 +586,38 @@ impl EditorModel {
         if self.session.motion().is_none() && motion.is_some() {
             self.session.set_motion(motion);
         }
+        // A clip on its way is asked for again on the new body first; the open clip then
+        // goes back to the host too (or, while another is on its way, is put on it here).
+        self.reopen_pending();
         self.retarget_clip();
         self.timeline.playing = false;
         self.show_playhead();
-        self.reopen_pending();
     }
 
-    /// Puts the clip on the current body again (after a change of body or of settings); a
-    /// clip that does not fit is closed with a notice.
+    /// Puts the clip on the current body again (after a change of body or of settings). A clip
+    /// read from a file goes back to the host with the file, its mapping as corrected (off the
+    /// editor's thread where the host can: hidden meanwhile, as it was made for the old body;
+    /// the document still names it); a recording or an avatar's animation, or a clip while
+    /// another is on its way to replace it, is put on the body here. A clip that does not fit
+    /// is closed with a notice.
     pub(super) fn retarget_clip(&mut self) {
         let Some(clip) = &self.timeline.clip else {
             return;
         };
+        if self.timeline.opening.is_none()
+            && let Some((name, bytes)) = self.timeline.file.take()
+        {
+            let mapping = clip.mapping.clone();
+            let source = self.timeline.source.clone();
+            self.timeline.retargeted = None;
+            self.timeline.base_revision += 1;
+            self.timeline.shown = None;
+            if let Some(Err(error)) = self.start_opening(&name, bytes, source, false, Some(mapping))
+            {
+                self.warn(error);
+            }
+            return;
+        }
         match retarget(clip, self.session.humanoid(), &self.timeline.options) {
             Ok(retargeted) => self.timeline.retargeted = Some(retargeted),
             Err(error) => {
@@ -598,11 +625,42 @@ impl EditorModel {
                 self.timeline.clip = None;
                 self.timeline.retargeted = None;
                 self.timeline.source = None;
+                self.timeline.file = None;
                 self.warn(text);
             }
         }
         self.timeline.base_revision += 1;
         self.timeline.shown = None;
+    }
+
+    /// The open clip, put on the body again (`retargeted`), back on the timeline with its
+    /// file; the playhead, keys and tasks as they were.
+    pub(super) fn put_clip_again(
+        &mut self,
+        clip: Box<Clip>,
+        retargeted: Retargeted,
+        source: ClipReference,
+        file: Option<(String, Vec<u8>)>,
+    ) {
+        self.timeline.clip = Some(clip);
+        self.timeline.retargeted = Some(retargeted);
+        self.timeline.source = Some(source);
+        self.timeline.file = file;
+        self.timeline.base_revision += 1;
+        self.timeline.shown = None;
+        self.show_playhead();
+    }
+
+    /// Closes the clip and keeps it named by the document (its keys stay; its file opens
+    /// again with Motion > Open clip).
+    pub(super) fn close_clip_named(&mut self) {
+        self.timeline.clip = None;
+        self.timeline.retargeted = None;
+        self.timeline.file = None;
+        self.timeline.wanted = self.timeline.source.take().or(self.timeline.wanted.take());
+        self.timeline.base_revision += 1;
+        self.timeline.shown = None;
+        self.session.show_timed(None);
     }
 
     /// Shows the playhead's frame again (after the clip or the body changed).
