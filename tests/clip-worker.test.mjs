@@ -25,6 +25,7 @@ import {
 
 const root = join(dirname(fileURLToPath(import.meta.url)), "..");
 const corpus = join(root, "crates", "stance_motion", "tests", "clips", "cmu", "131_01_metres.bvh");
+const walk = join(root, "tests", "fixtures", "motion", "walk.bvh");
 const FRAMES = 10_000;
 let served;
 let context;
@@ -209,6 +210,33 @@ describe("a long clip opens in the loading worker", () => {
       + `${baselineOthers.map((t) => `${t.duration.toFixed(0)} ms`).join(", ") || "none"})`);
     assert.ok(others.length <= 2 && others.every((t) => t.duration < 100),
       `other long tasks while opening: ${others.map((t) => describeTask(t, started)).join("; ")}`);
+    assert.deepEqual(errors, []);
+    await page.close();
+  });
+});
+
+describe("the autosave's clip", () => {
+  // Catches the autosaved clip read and retargeted on the main thread as the editor starts
+  // (the page's workers were started after the editor, so the editor did it itself): after a
+  // reload the clip comes back through the loading worker (its request mark is in the
+  // reloaded page) and is the same clip on the timeline.
+  test("is restored in the loading worker after a reload", async () => {
+    const page = await context.newPage();
+    const { errors } = await openEditor(context, served.url, page);
+    await page.setInputFiles("input[type=file]", walk);
+    let s = await waitForState(page, (state) => state.motion.clip === "walk" && !state.motion.opening,
+      { timeout: 60_000, what: "the walk on the timeline" });
+    const frames = s.motion.frames;
+    assert.equal(frames, 260);
+    // The autosave writes a moment after the last change.
+    await page.waitForTimeout(2000);
+    await page.reload();
+    await page.waitForFunction(() => document.body.dataset.firstFrameMs, null, { timeout: 90_000 });
+    s = await waitForState(page, (state) => state.motion.clip === "walk" && !state.motion.opening,
+      { timeout: 60_000, what: "the autosaved walk back on the timeline" });
+    assert.equal(s.motion.frames, frames);
+    const requested = await page.evaluate(() => performance.getEntriesByName("stance:clip-requested").length);
+    assert.ok(requested >= 1, "the reloaded page asked its loading worker for the clip");
     assert.deepEqual(errors, []);
     await page.close();
   });

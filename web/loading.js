@@ -44,6 +44,8 @@ function done() {
 }
 
 let workerImports = false;
+// A loading worker said it cannot run the editor's code: none will.
+let workersFailed = false;
 
 // A loading worker (load-worker.js) and its requests, answered by id; null where none can run.
 function startWorker(onReady) {
@@ -105,6 +107,7 @@ function loader() {
   if (importer === undefined) {
     importer = startWorker((ready) => {
       workerImports = ready.ok;
+      workersFailed = !ready.ok;
       if (!ready.ok) console.warn("the loading worker cannot import avatars:", ready.error);
     });
   }
@@ -230,9 +233,11 @@ function clipWorker() {
 // bytes: the file, the body, the settings) to be read and retargeted off the main thread,
 // as its request `id`. The progress goes to the editor as it comes; the result in parts,
 // each in a task of its own (the frames of a long clip are tens of megabytes). False when
-// no worker can: the editor does it itself.
+// no worker can: the editor does it itself. While the first worker is still starting (the
+// autosave's clip, asked for as the editor starts) the request goes to the clip worker, which
+// takes it once it has compiled the editor's code.
 export function openClip(handle, id, job) {
-  if (!editorModule || !workerImports) return false;
+  if (!editorModule || workersFailed) return false;
   // Another clip asked for: the one under way is not wanted any more.
   if (clipRequest !== null) cancelClip(clipRequest);
   const worker = clipWorker();

@@ -197,6 +197,9 @@ async function main() {
   }
   const handle = new WebHandle();
   window.stance = handle;
+  // The loading workers start with the editor: the autosave's clip, asked for as the editor
+  // starts, is read and retargeted in one of them.
+  startImporter(module);
   try {
     await handle.start(
       document.getElementById("stance-canvas"),
@@ -207,7 +210,6 @@ async function main() {
     return;
   }
   connectPage(handle);
-  startImporter(module);
   // ?avatar=URL opens that avatar.
   const avatarUrl = new URLSearchParams(window.location.search).get("avatar");
   if (avatarUrl) window.stanceHost.fetchFile(avatarUrl);
