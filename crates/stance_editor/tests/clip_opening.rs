@@ -346,3 +346,62 @@ fn a_mapping_correction_goes_with_the_file_and_cancel_closes_the_clip_but_keeps_
     assert_eq!(model.document().clip.unwrap().hash, named.hash);
     assert_eq!(model.key_frames(), vec![40]);
 }
+
+// Catches the open clip lost while it is asked for again: another clip opened meanwhile and
+// cancelled leaves it hidden for good (it is asked for again); a mapping corrected meanwhile
+// dropped by the earlier request's reply (that reply is stale: the clip comes back with the
+// new mapping); a clip closed meanwhile brought back by the reply.
+#[test]
+fn the_open_clip_asked_for_again_survives_another_clip_a_new_mapping_and_close() {
+    let host = worker_host();
+    let mut model = editor_on(&host);
+    open(&mut model, "walk.bvh", WALK);
+    model.receive(answer(last_request(&host)));
+    let named = model.document().clip.unwrap();
+
+    // Another clip opened while the walk is asked for again on LOA 1, then cancelled.
+    model.apply(Command::SetLevelOfArticulation(LevelOfArticulation::Loa1));
+    let walk_again = last_request(&host);
+    open(&mut model, "run.bvh", RUN);
+    let run = last_request(&host);
+    assert!(host.inner.borrow().cancelled_clips.contains(&walk_again.id));
+    model.apply(Command::Motion(MotionCommand::CancelOpening));
+    let asked = last_request(&host);
+    assert_ne!(asked.id, run.id, "the walk is asked for again");
+    assert_eq!(asked.job.bytes, WALK);
+    assert_eq!(&asked.job.body, model.session().humanoid());
+    model.receive(answer(walk_again));
+    assert!(
+        !model.timeline().has_clip(),
+        "the cancelled request's reply is stale"
+    );
+    // A mapping corrected while that request is on its way: asked for with it.
+    let mut mapping = model.timeline().clip().unwrap().mapping.clone();
+    assert!(mapping.remove("r_elbow"));
+    model.apply(Command::Motion(MotionCommand::SetClipMapping(Box::new(
+        mapping.clone(),
+    ))));
+    let corrected = last_request(&host);
+    assert_eq!(corrected.job.mapping.as_ref(), Some(&mapping));
+    model.receive(answer(asked));
+    assert!(
+        !model.timeline().has_clip(),
+        "the request before the correction is stale"
+    );
+    model.receive(answer(corrected));
+    assert_eq!(model.timeline().clip_name(), Some("walk"));
+    assert_eq!(model.timeline().clip().unwrap().mapping, mapping);
+    assert_eq!(model.document().clip, Some(named));
+
+    // Closed while it is asked for again: the request is cancelled, its reply not taken.
+    model.apply(Command::SetLevelOfArticulation(LevelOfArticulation::Loa2));
+    let last = last_request(&host);
+    model.apply(Command::Motion(MotionCommand::CloseClip));
+    assert!(host.inner.borrow().cancelled_clips.contains(&last.id));
+    model.receive(answer(last));
+    assert!(model.timeline().clip().is_none() && !model.timeline().has_clip());
+    assert!(
+        model.document().clip.is_none(),
+        "closed: the document names no clip"
+    );
+}

@@ -79,10 +79,15 @@ impl EditorModel {
     /// editor's thread, the timeline shows the progress and *Cancel*), else here.
     pub(super) fn open_clip_file(&mut self, name: &str, bytes: &[u8]) {
         let source = is_bvh_file(name).then(|| ClipReference::embed(name, bytes));
+        // (An open clip hidden while it was asked for again waits for this one: asked for
+        // again if this one fails or is cancelled.)
         match self.start_opening(name, bytes.to_vec(), source, false, None) {
             None => {}
             Some(Ok(text)) => self.inform(format!("Opened {text}")),
-            Some(Err(error)) => self.warn(error),
+            Some(Err(error)) => {
+                self.warn(error);
+                self.bring_back_hidden_clip();
+            }
         }
     }
 
@@ -206,7 +211,10 @@ impl EditorModel {
                 self.inform(format!("The document's clip is on the timeline: {text}"));
             }
             Ok(text) => self.inform(format!("Opened {text}")),
-            Err(error) => self.warn(error),
+            Err(error) => {
+                self.warn(error);
+                self.bring_back_hidden_clip();
+            }
         }
     }
 
@@ -236,24 +244,73 @@ impl EditorModel {
             )
         };
         self.inform(text);
+        self.bring_back_hidden_clip();
     }
 
-    /// The body or the settings changed while a clip is being opened: it is asked for again
-    /// on the body as it is now.
-    pub(super) fn reopen_pending(&mut self) {
-        if let Some(opening) = self.timeline.opening.take() {
+    /// After a change of body, retargeting settings or clip mapping, every clip is asked for
+    /// again as things are now: a clip on its way (the open clip's own request with its
+    /// mapping as it is now; the open clip hidden meanwhile when another is on its way to
+    /// replace it, asked for again if that one fails or is cancelled), else the open clip
+    /// ([`Self::retarget_clip`]).
+    pub(super) fn put_clips_on_body_again(&mut self) {
+        let Some(opening) = self.timeline.opening.take() else {
+            self.retarget_clip();
+            return;
+        };
+        self.hooks.cancel_retarget(opening.id);
+        let again = opening.again.map(|old| {
+            self.timeline
+                .clip
+                .as_ref()
+                .map_or(old, |clip| clip.mapping.clone())
+        });
+        let is_again = again.is_some();
+        if !is_again {
+            self.hide_clip();
+        }
+        let progress = self.start_opening(
+            &opening.name,
+            opening.bytes,
+            opening.source,
+            opening.from_document,
+            again,
+        );
+        if is_again {
+            self.report_again(progress);
+        } else if let Some(Err(error)) = progress {
+            self.warn(error);
+            self.bring_back_hidden_clip();
+        }
+    }
+
+    /// What an `again` opening done at once (the host could not take it) gives: the notice,
+    /// or the clip closed and still named.
+    pub(super) fn report_again(&mut self, progress: Option<Result<String, String>>) {
+        match progress {
+            None => {}
+            Some(Ok(text)) => self.inform(text),
+            Some(Err(error)) => self.clip_lost(error),
+        }
+    }
+
+    /// The open clip was hidden while another was on its way, which failed or was cancelled:
+    /// it is asked for again on the body as it is.
+    fn bring_back_hidden_clip(&mut self) {
+        if self.timeline.opening.is_none() && self.clip_hidden() {
+            self.retarget_clip();
+        }
+    }
+
+    /// The open clip's own request (put on the body again) is cancelled, if one is on its way.
+    pub(super) fn cancel_reopening(&mut self) {
+        if self
+            .timeline
+            .opening
+            .as_ref()
+            .is_some_and(|opening| opening.again.is_some())
+            && let Some(opening) = self.timeline.opening.take()
+        {
             self.hooks.cancel_retarget(opening.id);
-            let progress = self.start_opening(
-                &opening.name,
-                opening.bytes,
-                opening.source,
-                opening.from_document,
-                opening.again,
-            );
-            match progress {
-                None | Some(Ok(_)) => {}
-                Some(Err(error)) => self.warn(error),
-            }
         }
     }
 
@@ -359,8 +416,7 @@ impl EditorModel {
     /// New retargeting settings: the clip is put on the body again with them.
     pub(super) fn set_retarget_options(&mut self, options: RetargetOptions) {
         self.timeline.options = options;
-        self.reopen_pending();
-        self.retarget_clip();
+        self.put_clips_on_body_again();
         self.show_playhead();
         if let Some(words) = self.timeline.contact_words() {
             self.inform(format!("The clip is put on the body again: {words}."));
@@ -379,7 +435,7 @@ impl EditorModel {
         }
         clip.mapping = mapping;
         let name = clip.name.clone();
-        self.retarget_clip();
+        self.put_clips_on_body_again();
         self.show_playhead();
         if self.timeline.has_clip() {
             self.inform(format!(

@@ -371,6 +371,7 @@ impl EditorModel {
                 }
             }
             MotionCommand::CloseClip => {
+                self.cancel_reopening();
                 self.timeline.clip = None;
                 self.timeline.file = None;
                 self.timeline.retargeted = None;
@@ -586,36 +587,26 @@ impl EditorModel {
         if self.session.motion().is_none() && motion.is_some() {
             self.session.set_motion(motion);
         }
-        // A clip on its way is asked for again on the new body first; the open clip then
-        // goes back to the host too (or, while another is on its way, is put on it here).
-        self.reopen_pending();
-        self.retarget_clip();
+        self.put_clips_on_body_again();
         self.timeline.playing = false;
         self.show_playhead();
     }
 
-    /// Puts the clip on the current body again (after a change of body or of settings). A clip
-    /// read from a file goes back to the host with the file, its mapping as corrected (off the
-    /// editor's thread where the host can: hidden meanwhile, as it was made for the old body;
-    /// the document still names it); a recording or an avatar's animation, or a clip while
-    /// another is on its way to replace it, is put on the body here. A clip that does not fit
-    /// is closed with a notice.
+    /// Puts the open clip on the current body again (no clip on its way). A clip read from a
+    /// file goes back to the host with the file and its mapping as corrected (off the editor's
+    /// thread where the host can: hidden meanwhile, as it was made for the old body; the
+    /// document still names it); a recording or an avatar's animation is put on the body here.
+    /// A clip that does not fit is closed with a notice.
     pub(super) fn retarget_clip(&mut self) {
         let Some(clip) = &self.timeline.clip else {
             return;
         };
-        if self.timeline.opening.is_none()
-            && let Some((name, bytes)) = self.timeline.file.take()
-        {
+        if let Some((name, bytes)) = self.timeline.file.clone() {
             let mapping = clip.mapping.clone();
             let source = self.timeline.source.clone();
-            self.timeline.retargeted = None;
-            self.timeline.base_revision += 1;
-            self.timeline.shown = None;
-            if let Some(Err(error)) = self.start_opening(&name, bytes, source, false, Some(mapping))
-            {
-                self.warn(error);
-            }
+            self.hide_clip();
+            let progress = self.start_opening(&name, bytes, source, false, Some(mapping));
+            self.report_again(progress);
             return;
         }
         match retarget(clip, self.session.humanoid(), &self.timeline.options) {
@@ -631,6 +622,20 @@ impl EditorModel {
         }
         self.timeline.base_revision += 1;
         self.timeline.shown = None;
+    }
+
+    /// The open clip hidden from the timeline (made for another body) while it is asked for
+    /// again or another clip on its way replaces it; the document still names it.
+    pub(super) fn hide_clip(&mut self) {
+        if self.timeline.retargeted.take().is_some() {
+            self.timeline.base_revision += 1;
+            self.timeline.shown = None;
+        }
+    }
+
+    /// Whether the open clip is hidden (see [`Self::hide_clip`]).
+    pub(super) fn clip_hidden(&self) -> bool {
+        self.timeline.clip.is_some() && self.timeline.retargeted.is_none()
     }
 
     /// The open clip, put on the body again (`retargeted`), back on the timeline with its
