@@ -289,6 +289,15 @@ fn a_change_of_body_puts_the_open_clip_on_it_again_through_the_host() {
     );
     assert_eq!(model.timeline().opening(), Some(("walk.bvh", 0.0)));
     assert_eq!(model.document().clip.unwrap().hash, named.hash);
+    // Meanwhile the timeline keeps the clip's length and takes no key over the rest posture.
+    assert_eq!(model.frame_count(), 260);
+    model.apply(Command::Motion(MotionCommand::SetKey));
+    assert!(model.key_frames().is_empty());
+    let notice = model.notice().unwrap().text.clone();
+    assert!(
+        notice.contains("keys can be edited once it is back"),
+        "{notice}"
+    );
 
     model.receive(answer(request));
     let notice = model.notice().unwrap().text.clone();

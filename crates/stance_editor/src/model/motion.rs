@@ -301,8 +301,12 @@ impl EditorModel {
         self.timeline.has_clip() || !self.key_frames().is_empty()
     }
 
-    /// Frames of the timeline: the clip's, else the document's (60 by default).
+    /// Frames of the timeline: the clip's (also while it is hidden, being put on the body
+    /// again: the same count), else the document's (60 by default).
     pub fn frame_count(&self) -> usize {
+        if let (None, Some(clip)) = (self.timeline.base_postures(), &self.timeline.clip) {
+            return clip.frames.len().max(1);
+        }
         match (self.timeline.base_postures(), self.session.motion()) {
             (Some(postures), _) => postures.len().max(1),
             (None, Some(motion)) => motion.frame_count.max(1),
@@ -312,6 +316,9 @@ impl EditorModel {
 
     /// Seconds per frame: the clip's, else the document's (30 fps by default).
     pub fn frame_time(&self) -> f64 {
+        if let (None, Some(clip)) = (&self.timeline.retargeted, &self.timeline.clip) {
+            return clip.frame_time;
+        }
         match (&self.timeline.retargeted, self.session.motion()) {
             (Some(retargeted), _) => retargeted.frame_time,
             (None, Some(motion)) => motion.frame_time,
@@ -398,6 +405,16 @@ impl EditorModel {
                 }
             }
             MotionCommand::SetFrameCount(count) => self.set_frame_count(count),
+            MotionCommand::SetKey
+            | MotionCommand::DeleteKey(_)
+            | MotionCommand::MoveKey { .. }
+            | MotionCommand::CopyKey { .. }
+                if self.clip_hidden() =>
+            {
+                self.inform(
+                    "The clip is being put on the body: keys can be edited once it is back.",
+                );
+            }
             MotionCommand::SetKey => self.set_key_here(true),
             MotionCommand::DeleteKey(frame) => self.edit_keys(|keys, _| {
                 keys.retain(|key| key.frame != frame);
@@ -677,7 +694,8 @@ impl EditorModel {
     }
 
     fn flush_pending_key(&mut self) {
-        if std::mem::take(&mut self.timeline.pending_key) {
+        // A key over a clip that is being put on the body would be taken over the rest posture.
+        if std::mem::take(&mut self.timeline.pending_key) && !self.clip_hidden() {
             self.set_key_here(false);
         }
     }
