@@ -184,6 +184,15 @@ impl Body {
     }
 }
 
+/// Three finite numbers as a vector; errors name `what`.
+fn vec3(what: &str, v: &[f64]) -> JsResult<DVec3> {
+    let [x, y, z] = <[f64; 3]>::try_from(v).map_err(|_| format!("{what}: expected 3 numbers"))?;
+    let v = DVec3::new(x, y, z);
+    v.is_finite()
+        .then_some(v)
+        .ok_or_else(|| format!("{what}: not a finite number"))
+}
+
 /// Per joint of `body`, its rest match as `qx qy qz qw`.
 fn rest_match(body: &HumanoidSkeleton) -> Vec<f64> {
     body.joints
@@ -259,18 +268,10 @@ impl PoseSolver {
             .skeleton
             .joint_index(joint)
             .ok_or_else(|| format!("joint: unknown joint `{joint}`"))?;
-        let vector = |what: &str, v: &[f64]| -> JsResult<DVec3> {
-            let [x, y, z] =
-                <[f64; 3]>::try_from(v).map_err(|_| format!("{what}: expected 3 numbers"))?;
-            let v = DVec3::new(x, y, z);
-            v.is_finite()
-                .then_some(v)
-                .ok_or_else(|| format!("{what}: not a finite number"))
-        };
         self.grab = Some(Grab {
             joint,
-            point_local: vector("point", point)?,
-            target_world: vector("target", target)?,
+            point_local: vec3("point", point)?,
+            target_world: vec3("target", target)?,
         });
         Ok(())
     }
@@ -369,8 +370,7 @@ impl PoseSolver {
         orientation: Option<Vec<f64>>,
     ) -> JsResult<String> {
         let limb = limb(&self.skeleton, name)?;
-        let [x, y, z] =
-            <[f64; 3]>::try_from(target).map_err(|_| "target: expected 3 numbers".to_owned())?;
+        let position = vec3("target", target)?;
         let orientation = match orientation {
             None => None,
             Some(q) => {
@@ -383,10 +383,6 @@ impl PoseSolver {
                 Some(q.normalize())
             }
         };
-        let position = DVec3::new(x, y, z);
-        if !position.is_finite() {
-            return Err("target: not a finite number".to_owned());
-        }
         let mut posture = self.posture(values)?;
         let frames = Frames::new(&self.skeleton, &posture);
         let base = limb.base(&self.skeleton, &frames);

@@ -81,13 +81,8 @@ impl EditorModel {
         let source = is_bvh_file(name).then(|| ClipReference::embed(name, bytes));
         // (An open clip hidden while it was asked for again waits for this one: asked for
         // again if this one fails or is cancelled.)
-        match self.start_opening(name, bytes.to_vec(), source, false, None) {
-            None => {}
-            Some(Ok(text)) => self.inform(format!("Opened {text}")),
-            Some(Err(error)) => {
-                self.warn(error);
-                self.bring_back_hidden_clip();
-            }
+        if let Some(result) = self.start_opening(name, bytes.to_vec(), source, false, None) {
+            self.report_opening(false, false, result);
         }
     }
 
@@ -161,22 +156,22 @@ impl EditorModel {
         let file = Some((opening.name, opening.bytes));
         if opening.again.is_some() {
             let name = clip.name.clone();
-            self.put_clip_again(Box::new(clip), retargeted, source, file);
+            self.set_clip(Box::new(clip), retargeted, source, file);
+            self.show_playhead();
             let words = self.timeline.contact_words().unwrap_or_default();
             return Ok(format!("The clip {name} is on the body again: {words}."));
         }
         if opening.from_document {
             self.timeline.wanted = None;
         }
-        let text = self.put_clip(Box::new(clip), retargeted, source, !opening.from_document);
-        self.timeline.file = file;
-        Ok(text)
+        let set_aside = !opening.from_document;
+        Ok(self.put_clip(Box::new(clip), retargeted, source, file, set_aside))
     }
 
     /// The open clip could not be put on the body again (`why`): it is closed, the document
     /// still names it (its keys stay; the file opens again with Motion > Open clip).
     fn clip_lost(&mut self, why: String) {
-        self.close_clip_named();
+        self.close_clip(true);
         self.warn(format!(
             "{}: the clip is closed; the document still names it (open the file again with Motion > Open clip).",
             why.trim_end_matches('.')
@@ -202,9 +197,21 @@ impl EditorModel {
         let Some(opening) = self.timeline.opening.take() else {
             return;
         };
-        let from_document = opening.from_document;
-        let again = opening.again.is_some();
-        match self.finish_opening(opening, result.map(|opened| *opened)) {
+        let (again, from_document) = (opening.again.is_some(), opening.from_document);
+        let result = self.finish_opening(opening, result.map(|opened| *opened));
+        self.report_opening(again, from_document, result);
+    }
+
+    /// Says how an opening ended (`again`: the open clip put on the body again;
+    /// `from_document`: a document's clip). A failure closes the open clip put on the body
+    /// again and keeps it named, or else brings back the open clip hidden meanwhile.
+    pub(super) fn report_opening(
+        &mut self,
+        again: bool,
+        from_document: bool,
+        result: Result<String, String>,
+    ) {
+        match result {
             Ok(text) if again => self.inform(text),
             Err(error) if again => self.clip_lost(error),
             Ok(text) if from_document => {
@@ -268,28 +275,16 @@ impl EditorModel {
         if !is_again {
             self.hide_clip();
         }
+        let from_document = opening.from_document;
         let progress = self.start_opening(
             &opening.name,
             opening.bytes,
             opening.source,
-            opening.from_document,
+            from_document,
             again,
         );
-        if is_again {
-            self.report_again(progress);
-        } else if let Some(Err(error)) = progress {
-            self.warn(error);
-            self.bring_back_hidden_clip();
-        }
-    }
-
-    /// What an `again` opening done at once (the host could not take it) gives: the notice,
-    /// or the clip closed and still named.
-    pub(super) fn report_again(&mut self, progress: Option<Result<String, String>>) {
-        match progress {
-            None => {}
-            Some(Ok(text)) => self.inform(text),
-            Some(Err(error)) => self.clip_lost(error),
+        if let Some(result) = progress {
+            self.report_opening(is_again, from_document, result);
         }
     }
 

@@ -304,25 +304,29 @@ impl EditorModel {
     /// Frames of the timeline: the clip's (also while it is hidden, being put on the body
     /// again: the same count), else the document's (60 by default).
     pub fn frame_count(&self) -> usize {
-        if let (None, Some(clip)) = (self.timeline.base_postures(), &self.timeline.clip) {
-            return clip.frames.len().max(1);
-        }
-        match (self.timeline.base_postures(), self.session.motion()) {
-            (Some(postures), _) => postures.len().max(1),
-            (None, Some(motion)) => motion.frame_count.max(1),
-            (None, None) => DEFAULT_FRAME_COUNT,
+        match (
+            self.timeline.base_postures(),
+            &self.timeline.clip,
+            self.session.motion(),
+        ) {
+            (Some(postures), _, _) => postures.len().max(1),
+            (None, Some(hidden), _) => hidden.frames.len().max(1),
+            (None, None, Some(motion)) => motion.frame_count.max(1),
+            (None, None, None) => DEFAULT_FRAME_COUNT,
         }
     }
 
     /// Seconds per frame: the clip's, else the document's (30 fps by default).
     pub fn frame_time(&self) -> f64 {
-        if let (None, Some(clip)) = (&self.timeline.retargeted, &self.timeline.clip) {
-            return clip.frame_time;
-        }
-        match (&self.timeline.retargeted, self.session.motion()) {
-            (Some(retargeted), _) => retargeted.frame_time,
-            (None, Some(motion)) => motion.frame_time,
-            (None, None) => DEFAULT_FRAME_TIME,
+        match (
+            &self.timeline.retargeted,
+            &self.timeline.clip,
+            self.session.motion(),
+        ) {
+            (Some(retargeted), _, _) => retargeted.frame_time,
+            (None, Some(hidden), _) => hidden.frame_time,
+            (None, None, Some(motion)) => motion.frame_time,
+            (None, None, None) => DEFAULT_FRAME_TIME,
         }
     }
 
@@ -377,18 +381,7 @@ impl EditorModel {
                     Err(error) => self.warn(error),
                 }
             }
-            MotionCommand::CloseClip => {
-                self.cancel_reopening();
-                self.timeline.clip = None;
-                self.timeline.file = None;
-                self.timeline.retargeted = None;
-                self.timeline.source = None;
-                self.timeline.wanted = None;
-                self.timeline.playing = false;
-                self.timeline.base_revision += 1;
-                self.timeline.shown = None;
-                self.session.show_timed(None);
-            }
+            MotionCommand::CloseClip => self.close_clip(false),
             MotionCommand::Play => self.play(true),
             MotionCommand::Pause => self.play(false),
             MotionCommand::TogglePlay => self.play(!self.timeline.playing),
@@ -457,7 +450,7 @@ impl EditorModel {
                     clip.name
                 )
             })?;
-        Ok(self.put_clip(clip, retargeted, source, set_aside))
+        Ok(self.put_clip(clip, retargeted, source, None, set_aside))
     }
 
     /// Puts `clip`, retargeted onto the body, on the timeline (see [`Self::open_clip`]).
@@ -466,6 +459,7 @@ impl EditorModel {
         clip: Box<Clip>,
         retargeted: Retargeted,
         source: ClipReference,
+        file: Option<(String, Vec<u8>)>,
         set_aside: bool,
     ) -> String {
         let (frames, fps) = (retargeted.postures.len(), 1.0 / retargeted.frame_time);
@@ -487,11 +481,7 @@ impl EditorModel {
                 ));
             }
         }
-        self.timeline.clip = Some(clip);
-        self.timeline.retargeted = Some(retargeted);
-        self.timeline.source = Some(source);
-        self.timeline.file = None;
-        self.timeline.base_revision += 1;
+        self.set_clip(clip, retargeted, source, file);
         self.timeline.playing = false;
         let set_aside = if set_aside {
             self.set_aside_standing_tasks()
@@ -622,19 +612,16 @@ impl EditorModel {
             let mapping = clip.mapping.clone();
             let source = self.timeline.source.clone();
             self.hide_clip();
-            let progress = self.start_opening(&name, bytes, source, false, Some(mapping));
-            self.report_again(progress);
+            if let Some(result) = self.start_opening(&name, bytes, source, false, Some(mapping)) {
+                self.report_opening(true, false, result);
+            }
             return;
         }
         match retarget(clip, self.session.humanoid(), &self.timeline.options) {
             Ok(retargeted) => self.timeline.retargeted = Some(retargeted),
             Err(error) => {
-                let text = format!("The clip does not fit the body: {error}.");
-                self.timeline.clip = None;
-                self.timeline.retargeted = None;
-                self.timeline.source = None;
-                self.timeline.file = None;
-                self.warn(text);
+                self.close_clip(false);
+                self.warn(format!("The clip does not fit the body: {error}."));
             }
         }
         self.timeline.base_revision += 1;
@@ -655,9 +642,9 @@ impl EditorModel {
         self.timeline.clip.is_some() && self.timeline.retargeted.is_none()
     }
 
-    /// The open clip, put on the body again (`retargeted`), back on the timeline with its
-    /// file; the playhead, keys and tasks as they were.
-    pub(super) fn put_clip_again(
+    /// `clip`, retargeted onto the body, on the timeline, kept in the document as `source`
+    /// and read from `file` (see [`Timeline::file`]).
+    pub(super) fn set_clip(
         &mut self,
         clip: Box<Clip>,
         retargeted: Retargeted,
@@ -670,16 +657,23 @@ impl EditorModel {
         self.timeline.file = file;
         self.timeline.base_revision += 1;
         self.timeline.shown = None;
-        self.show_playhead();
     }
 
-    /// Closes the clip and keeps it named by the document (its keys stay; its file opens
-    /// again with Motion > Open clip).
-    pub(super) fn close_clip_named(&mut self) {
+    /// Closes the clip (a request putting it on the body again is cancelled); `keep_named`:
+    /// the document still names it (its keys stay; its file opens again with Motion > Open
+    /// clip).
+    pub(super) fn close_clip(&mut self, keep_named: bool) {
+        self.cancel_reopening();
+        let source = self.timeline.source.take();
+        self.timeline.wanted = if keep_named {
+            source.or(self.timeline.wanted.take())
+        } else {
+            None
+        };
         self.timeline.clip = None;
         self.timeline.retargeted = None;
         self.timeline.file = None;
-        self.timeline.wanted = self.timeline.source.take().or(self.timeline.wanted.take());
+        self.timeline.playing = false;
         self.timeline.base_revision += 1;
         self.timeline.shown = None;
         self.session.show_timed(None);
