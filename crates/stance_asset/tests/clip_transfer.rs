@@ -19,18 +19,9 @@ fn mannequin() -> stance_hanim::HumanoidSkeleton {
     .unwrap()
 }
 
-/// A clip of `frames` frames: the walk's rows over and over (a long clip in parts).
-fn long_walk(frames: usize) -> Vec<u8> {
-    let text = String::from_utf8_lossy(WALK).into_owned();
-    let (head, motion) = text.split_at(text.find("MOTION").unwrap());
-    let rows: Vec<&str> = motion.lines().skip(3).collect();
-    let mut long = format!("{head}MOTION\nFrames: {frames}\nFrame Time: .0083333\n");
-    for f in 0..frames {
-        long.push_str(rows[f % rows.len()]);
-        long.push('\n');
-    }
-    long.into_bytes()
-}
+#[path = "../../../tests/fixtures/motion/long_walk.rs"]
+mod long_walk;
+use long_walk::long_walk;
 
 // Catches a body that changes on the trip (a limit, a stiffness, the joints' order or the
 // avatar's rest match lost): the worker would retarget onto another body than the editor's.
@@ -202,9 +193,8 @@ fn write_clip_transfer_seeds() {
     let dofs = u8::try_from(job.body.skeleton.dof_count()).unwrap();
     let transfer = ClipTransfer::new(&job.run(&mut |_| {}).unwrap()).unwrap();
     let mut seed = vec![1, dofs];
-    for part in std::iter::once(&transfer.head).chain(&transfer.parts) {
-        seed.extend_from_slice(&u32::try_from(part.len()).unwrap().to_le_bytes());
-        seed.extend_from_slice(part);
-    }
+    seed.extend(crate::common::parts::join_parts(
+        std::iter::once(&transfer.head).chain(&transfer.parts),
+    ));
     std::fs::write(dir.join("opened.bin"), seed).unwrap();
 }

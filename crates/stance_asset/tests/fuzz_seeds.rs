@@ -12,6 +12,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use crate::common;
+use crate::common::parts::{join_parts, split_parts};
 
 use std::collections::HashMap;
 
@@ -38,11 +39,9 @@ fn seed_dir() -> std::path::PathBuf {
 /// A seed of the `transfer` target: the avatar's bytes, then each texture's pixels, each
 /// part after its length (4 bytes, little-endian); see `fuzz_targets/transfer.rs`.
 fn transfer_seed(transfer: &stance_asset::AvatarTransfer) -> Vec<u8> {
-    let mut seed = Vec::new();
-    for part in std::iter::once(&transfer.avatar).chain(&transfer.pixels) {
-        seed.extend_from_slice(&u32::try_from(part.len()).unwrap().to_le_bytes());
-        seed.extend_from_slice(part);
-    }
+    let seed = join_parts(std::iter::once(&transfer.avatar).chain(&transfer.pixels));
+    // The target reads back the parts written.
+    assert_eq!(split_parts(&seed).len(), 1 + transfer.pixels.len());
     seed
 }
 

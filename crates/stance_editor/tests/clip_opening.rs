@@ -207,18 +207,9 @@ fn the_progress_strip_shows_and_its_cancel_button_stops_the_opening() {
     assert!(state(&harness)["buttons"]["cancel_clip"].is_null());
 }
 
-/// The walk's rows repeated to `frames` frames.
-fn long_walk(frames: usize) -> Vec<u8> {
-    let text = String::from_utf8_lossy(WALK).into_owned();
-    let (head, motion) = text.split_at(text.find("MOTION").unwrap());
-    let rows: Vec<&str> = motion.lines().skip(3).collect();
-    let mut long = format!("{head}MOTION\nFrames: {frames}\nFrame Time: .0083333\n");
-    for f in 0..frames {
-        long.push_str(rows[f % rows.len()]);
-        long.push('\n');
-    }
-    long.into_bytes()
-}
+#[path = "../../../tests/fixtures/motion/long_walk.rs"]
+mod long_walk;
+use long_walk::long_walk;
 
 // Catches the trajectory of a long clip computed in one frame (10,000 frames held up the
 // page's frame for about 100 ms): it grows by a thousand frames a step, the editor stays busy

@@ -9,6 +9,10 @@
 use libfuzzer_sys::fuzz_target;
 use stance_asset::{ClipJob, ClipTransfer};
 
+#[path = "../common/parts.rs"]
+mod parts;
+use parts::split_parts;
+
 fuzz_target!(|data: &[u8]| {
     let Some((&selector, rest)) = data.split_first() else {
         return;
@@ -23,16 +27,10 @@ fuzz_target!(|data: &[u8]| {
         }
         return;
     }
-    let Some((&dofs, mut rest)) = rest.split_first() else {
+    let Some((&dofs, rest)) = rest.split_first() else {
         return;
     };
-    let mut parts = Vec::new();
-    while let Some((length, tail)) = rest.split_first_chunk::<4>() {
-        let length = u32::from_le_bytes(*length) as usize;
-        let part = &tail[..length.min(tail.len())];
-        parts.push(part.to_vec());
-        rest = &tail[part.len()..];
-    }
+    let mut parts = split_parts(rest);
     if parts.is_empty() {
         return;
     }

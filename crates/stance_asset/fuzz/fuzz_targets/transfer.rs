@@ -11,15 +11,12 @@
 use libfuzzer_sys::fuzz_target;
 use stance_asset::{AvatarTransfer, export_glb};
 
+#[path = "../common/parts.rs"]
+mod parts;
+use parts::split_parts;
+
 fuzz_target!(|data: &[u8]| {
-    let mut parts = Vec::new();
-    let mut rest = data;
-    while let Some((length, tail)) = rest.split_first_chunk::<4>() {
-        let length = u32::from_le_bytes(*length) as usize;
-        let part = &tail[..length.min(tail.len())];
-        parts.push(part.to_vec());
-        rest = &tail[part.len()..];
-    }
+    let mut parts = split_parts(data);
     if parts.is_empty() {
         return;
     }

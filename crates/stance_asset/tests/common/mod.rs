@@ -4,6 +4,10 @@
 
 use serde_json::{Value, json};
 
+/// The fuzz targets' framing of parts, for the seeds the tests write.
+#[path = "../../fuzz/common/parts.rs"]
+pub mod parts;
+
 pub fn split(glb: &[u8]) -> (Value, Vec<u8>) {
     let json_len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
     let json: Value = serde_json::from_slice(&glb[20..20 + json_len]).unwrap();
