@@ -33,7 +33,9 @@ mkdir -p "$example/stance-ik/pkg" "$example/vendor/three/build" \
   "$example/vendor/three/examples/jsm/libs"
 cp examples/three/index.html examples/three/main.js "$example/"
 cp packages/stance-ik/index.js "$example/stance-ik/"
-cp packages/stance-ik/pkg/stance_ik.js packages/stance-ik/pkg/stance_ik_bg.wasm "$example/stance-ik/pkg/"
+cp packages/stance-ik/pkg/stance_ik.js packages/stance-ik/pkg/stance_ik_bg.wasm \
+  packages/stance-ik/pkg/stance_ik_motion.js packages/stance-ik/pkg/stance_ik_motion_bg.wasm \
+  "$example/stance-ik/pkg/"
 three=node_modules/three
 cp "$three/build/three.module.js" "$three/build/three.core.js" "$example/vendor/three/build/"
 cp "$three/examples/jsm/loaders/GLTFLoader.js" "$example/vendor/three/examples/jsm/loaders/"
@@ -41,7 +43,7 @@ cp "$three/examples/jsm/utils/BufferGeometryUtils.js" "$example/vendor/three/exa
 cp "$three/examples/jsm/libs/meshopt_decoder.module.js" "$example/vendor/three/examples/jsm/libs/"
 # Precompressed copies (brotli and gzip) that scripts/serve.mjs sends where accepted.
 node scripts/precompress.mjs dist/pkg/stance_web_bg.wasm dist/pkg/stance_web.js \
-  "$example/stance-ik/pkg/stance_ik_bg.wasm"
+  "$example/stance-ik/pkg/stance_ik_bg.wasm" "$example/stance-ik/pkg/stance_ik_motion_bg.wasm"
 size=$(stat -c %s dist/pkg/stance_web_bg.wasm)
 gzip_size=$(stat -c %s dist/pkg/stance_web_bg.wasm.gz)
 brotli_size=$(stat -c %s dist/pkg/stance_web_bg.wasm.br)

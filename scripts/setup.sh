@@ -1,12 +1,10 @@
 #!/usr/bin/env bash
 # Installs what Stance needs and is missing; fast when everything is there.
-#   scripts/setup.sh          build needs: rust wasm target, wasm-bindgen CLI, wasm-pack,
-#                             npm packages
+#   scripts/setup.sh          build needs: rust wasm target, wasm-bindgen CLI, npm packages
 #   scripts/setup.sh --test   also test needs: Debian chromium + chromium-driver, lavapipe
 set -euo pipefail
 cd "$(dirname "$0")/.."
 WASM_BINDGEN_VERSION=0.2.130
-WASM_PACK_VERSION=0.15.1
 
 say() { printf '\033[1;34m[setup]\033[0m %s\n' "$*"; }
 
@@ -22,10 +20,6 @@ if [ "$(wasm-bindgen --version 2>/dev/null | awk '{print $2}')" != "$WASM_BINDGE
   say "installing wasm-bindgen-cli $WASM_BINDGEN_VERSION (about 7 minutes, once)"
   # Not --locked: one locked dependency of this version is missing from the registry.
   cargo install wasm-bindgen-cli --version "$WASM_BINDGEN_VERSION"
-fi
-if [ "$(wasm-pack --version 2>/dev/null | awk '{print $2}')" != "$WASM_PACK_VERSION" ]; then
-  say "installing wasm-pack $WASM_PACK_VERSION (a few minutes, once)"
-  cargo install wasm-pack --version "$WASM_PACK_VERSION" --locked
 fi
 if [ ! -f node_modules/.package-lock.json ] || [ package-lock.json -nt node_modules/.package-lock.json ] \
    || [ package.json -nt node_modules/.package-lock.json ]; then

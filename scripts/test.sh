@@ -71,9 +71,10 @@ for crate in "${PURE_CRATES[@]}"; do packages+=(-p "$crate"); done
 CHROMEDRIVER="$(command -v chromedriver)" cargo test --target wasm32-unknown-unknown \
   "${packages[@]}" --lib --tests -- --nocapture
 
-step "clippy (wasm32): stance_js, the npm package's bindings"
+step "clippy (wasm32): stance_js and stance_js_motion, the npm package's bindings"
 env -u RUSTC_WORKSPACE_WRAPPER -u CLIPPY_ARGS \
-  cargo clippy --quiet --target wasm32-unknown-unknown -p stance_js --lib -- -D warnings
+  cargo clippy --quiet --target wasm32-unknown-unknown -p stance_js -p stance_js_motion --lib \
+  -- -D warnings
 
 step "site build (and the stance-ik package with its three.js example)"
 # What ships is compiled by plain rustc (see scripts/clippy-env.sh).

@@ -148,20 +148,25 @@ describe("motion", () => {
   });
 
   // Catches a page (wasm) retargeting that holds other contacts than the native one (another
-  // foot, other frames, the foot held elsewhere): it compared only the count, and at least 2.
+  // foot, other frames, the foot held elsewhere): it compared only the count, and at least 2;
+  // and a retargeting module the page downloads before it retargets (or never finds).
   test("the stance-ik package retargets the clip in the page (wasm) with the same contacts", async () => {
     const page = await context.newPage();
     await page.goto(`${served.url}examples/three/`);
     const text = readFileSync(walk, "utf8");
     const r = await page.evaluate(async (text) => {
       const ik = await import("stance-ik");
+      const fetched = () => performance.getEntriesByType("resource").map((e) => e.name)
+        .filter((name) => name.includes("stance_ik_motion"));
+      const beforeRetarget = fetched();
       const body = ik.Skeleton.hanim(2);
-      ik.retarget(body, text); // warm-up
+      await ik.retarget(body, text); // warm-up (loads the retargeting module)
+      const afterRetarget = fetched();
       const runs = [];
       let result;
       for (let i = 0; i < 3; i++) {
         const t0 = performance.now();
-        result = ik.retarget(body, text);
+        result = await ik.retarget(body, text);
         runs.push(performance.now() - t0);
       }
       runs.sort((a, b) => a - b);
@@ -188,9 +193,11 @@ describe("motion", () => {
       });
       solver.free();
       return { ms: runs[1], frames: result.frameCount, contacts,
-        values: result.values.length, dofs: body.dofCount };
+        values: result.values.length, dofs: body.dofCount, beforeRetarget, afterRetarget };
     }, text);
     await page.close();
+    assert.deepEqual(r.beforeRetarget, [], "the retargeting module was fetched before retarget was called");
+    assert.ok(r.afterRetarget.some((name) => name.endsWith("stance_ik_motion_bg.wasm")), `${r.afterRetarget}`);
     assert.equal(r.frames, report.frames);
     assert.equal(r.values, r.frames * r.dofs);
     const native = cli("retarget", walk, "--to", "default", "--out", join(work, "w.bvh"),

@@ -1,7 +1,7 @@
 // The `stance-ik` npm package (packages/stance-ik, built by scripts/build-package.sh) from
 // Node: `solve` gives what `stance solve` prints for the same problem file; errors are thrown
 // `Error`s naming the field; the per-frame Skeleton/Solver API solves into a Float64Array;
-// the closed-form limb; and `npm pack` gives a tarball that installs and solves in a
+// the closed-form limb; retargeting in its module loaded on demand; and `npm pack` gives a tarball that installs and solves in a
 // directory of its own. Prints the time per solve of the Table-1-like problem (the native
 // figure is printed by crates/stance_js/tests/core.rs).
 import { before, describe, test } from "node:test";
@@ -166,14 +166,63 @@ describe("stance-ik", () => {
     assert.equal(tsc.status, 0, tsc.stdout + tsc.stderr);
   });
 
-  test("the wasm that ships went through wasm-opt and is 350 KiB or less gzipped", () => {
+  test("a BVH clip is retargeted in the module loaded on demand, its contacts held", async () => {
+    // Catches: the retargeting module not found or not instantiated (a file left out of
+    // pkg/, a wrong URL), a skeleton rebuilt from its recipe with other DOF (the values would
+    // pose another body: the held points would slide), contacts not held (the plain copy
+    // slides them 7-120 mm on this walk), errors that do not say what is wrong.
+    const bvh = readFileSync(join(root, "tests", "fixtures", "motion", "walk.bvh"), "utf8");
+    const skeleton = ik.Skeleton.hanim(2);
+    const started = performance.now();
+    const held = await ik.retarget(skeleton, bvh);
+    console.log(`[package] first retarget (loads the module): ${(performance.now() - started).toFixed(0)} ms`);
+    const copy = await ik.retarget(skeleton, bvh, { contacts: false });
+    assert.equal(held.frameCount, 260);
+    assert.equal(held.values.length, 260 * skeleton.dofCount);
+    assert.deepEqual(copy.contacts, []);
+    const feet = new Set(held.contacts.map((c) => c.joint));
+    assert.deepEqual([...feet].sort(), ["l_talocrural", "r_talocrural"]);
+    // Each held point's world position over its contact, posed by the solver module's own
+    // kinematics (worldTransforms: x y z, then the rotation as qx qy qz qw).
+    const solver = new ik.Solver(skeleton, {});
+    const names = skeleton.jointNames;
+    const n = skeleton.dofCount;
+    const transforms = new Float64Array(7 * names.length);
+    const slide = (clip, contact) => {
+      const j = names.indexOf(contact.joint);
+      const [px, py, pz] = contact.point;
+      const points = [];
+      for (let f = contact.start; f <= contact.end; f++) {
+        solver.worldTransforms(clip.values.slice(f * n, (f + 1) * n), transforms);
+        const [x, y, z, qx, qy, qz, qw] = transforms.slice(7 * j, 7 * j + 7);
+        const tx = 2 * (qy * pz - qz * py), ty = 2 * (qz * px - qx * pz), tz = 2 * (qx * py - qy * px);
+        points.push([x + px + qw * tx + (qy * tz - qz * ty), y + py + qw * ty + (qz * tx - qx * tz), z + pz + qw * tz + (qx * ty - qy * tx)]);
+      }
+      return Math.max(...points.flatMap((p) => points.map((q) => Math.hypot(p[0] - q[0], p[1] - q[1], p[2] - q[2]))));
+    };
+    const heldSlide = Math.max(...held.contacts.map((c) => slide(held, c)));
+    const copySlide = Math.max(...held.contacts.map((c) => slide(copy, c)));
+    console.log(`[package] held points slide at most ${(heldSlide * 1000).toFixed(2)} mm (plain copy ${(copySlide * 1000).toFixed(0)} mm)`);
+    assert.ok(heldSlide <= 0.002, `a held point slid ${heldSlide} m`);
+    assert.ok(copySlide > 0.05, `the plain copy slid only ${copySlide} m`);
+    await assert.rejects(ik.retarget(skeleton, "HIERARCHY\nROOT Hips\n{\n"), /^Error: bvh: line 3/);
+    await assert.rejects(ik.retarget({}, bvh), TypeError);
+    const joints = ik.Skeleton.fromJoints({ joints: [{ name: "a", parent: null, offset: [0, 0, 0] }] });
+    await assert.rejects(ik.retarget(joints, bvh), /H-Anim body/);
+    solver.free();
+    skeleton.free();
+  });
+
+  test("each module that ships went through wasm-opt; the solver's is 300 KiB or less gzipped", () => {
     // Catches: the package built without wasm-opt (its step in scripts/build-package.sh skipped or failing
     // quietly: wasm-pack's output keeps a 116 KiB name section, checked below), or a
-    // dependency that makes the download grow. With wasm-opt -Oz it was 328 KiB (2026-11), 356 KiB
-    // once retargeting held heel, ball, hands, knees and pelvis and bodies matched their
-    // rests onto the standard pose, 369 KiB with the task statuses of solve, 355 KiB with the
-    // bindings and the file formats at opt-level "z" (retargeting kept at "s"), 358 KiB with
-    // defaultTasks. stance_hanim at "z" would be 344 KiB, but Table 1 solves 1.5x slower.
+    // dependency that makes the download grow. One module held solver and retargeting until
+    // 2026-11: 328 KiB gzipped, 356 KiB once retargeting held heel, ball, hands, knees and
+    // pelvis, 348 KiB with the package crates in one codegen unit. Retargeting moved to a
+    // module of its own, loaded by the first `retarget` call: the solver's is what an import
+    // downloads (283 KiB when split), retargeting's (265 KiB: it has its own solver) only
+    // what a page that retargets adds. stance_hanim at "z" would save 14 KiB, but Table 1
+    // solves 1.5x slower.
     const customSections = (bytes) => {
       const names = [];
       let at = 8;
@@ -194,11 +243,13 @@ describe("stance-ik", () => {
       }
       return names;
     };
-    const wasm = readFileSync(join(packageDir, "pkg", "stance_ik_bg.wasm"));
-    const gzipped = gzipSync(wasm, { level: 9 }).length;
-    console.log(`[package] wasm ${(wasm.length / 1024).toFixed(0)} KiB, ${(gzipped / 1024).toFixed(0)} KiB gzipped`);
-    assert.ok(!customSections(wasm).includes("name"), "the wasm keeps its name section");
-    assert.ok(gzipped <= 350 * 1024, `${gzipped} bytes gzipped`);
+    for (const [name, limit] of [["stance_ik", 300], ["stance_ik_motion", 280]]) {
+      const wasm = readFileSync(join(packageDir, "pkg", `${name}_bg.wasm`));
+      const gzipped = gzipSync(wasm, { level: 9 }).length;
+      console.log(`[package] ${name} wasm ${(wasm.length / 1024).toFixed(0)} KiB, ${(gzipped / 1024).toFixed(0)} KiB gzipped`);
+      assert.ok(!customSections(wasm).includes("name"), `${name} keeps its name section`);
+      assert.ok(gzipped <= limit * 1024, `${name}: ${gzipped} bytes gzipped`);
+    }
   });
 
   test("a copy of the package without its built wasm refuses to be packed", () => {
@@ -234,11 +285,17 @@ describe("stance-ik", () => {
       encoding: "utf8",
     });
     assert.equal(installed.status, 0, installed.stderr);
+    // Both modules are in the tarball: the solver at import, retargeting at its first call.
+    copyFileSync(join(root, "tests", "fixtures", "motion", "walk.bvh"), join(app, "walk.bvh"));
     writeFileSync(
       join(app, "main.js"),
-      `import { solve } from "stance-ik";\nconst r = solve(${JSON.stringify(problem)});\nconsole.log(JSON.stringify(r.joints.wrist));\n`,
+      `import { readFileSync } from "node:fs";\nimport { solve, retarget, Skeleton } from "stance-ik";\n`
+        + `const r = solve(${JSON.stringify(problem)});\n`
+        + `const clip = await retarget(Skeleton.hanim(1), readFileSync("walk.bvh", "utf8"));\n`
+        + `console.log(JSON.stringify([r.joints.wrist, clip.frameCount]));\n`,
     );
-    const out = execFileSync("node", ["main.js"], { cwd: app, encoding: "utf8" });
-    JSON.parse(out).forEach((x, i) => assert.ok(Math.abs(x - [0.1, 0.4, 0.2][i]) < 1e-6));
+    const [wrist, frames] = JSON.parse(execFileSync("node", ["main.js"], { cwd: app, encoding: "utf8" }));
+    wrist.forEach((x, i) => assert.ok(Math.abs(x - [0.1, 0.4, 0.2][i]) < 1e-6));
+    assert.equal(frames, 260);
   });
 });

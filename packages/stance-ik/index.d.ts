@@ -136,17 +136,20 @@ export interface RetargetedClip {
   frameCount: number;
   /** `frameCount * skeleton.dofCount` DOF values, frame after frame. */
   values: Float64Array;
-  /** Foot contacts held, in frames (inclusive). */
-  contacts: { joint: string; start: number; end: number }[];
+  /** Contacts held (heel, ball, hands, knees, pelvis), in frames (inclusive), at `point`. */
+  contacts: { joint: string; part: string; start: number; end: number; point: Vec3 }[];
   /** Solver iterations over the clip. */
   iterations: number;
   /** What the reader and retargeting noticed (units, unmapped joints...). */
   notes: string[];
 }
 
-/** Retargets a BVH clip (text) onto an H-Anim skeleton; foot contacts held unless `contacts: false`. */
+/**
+ * Retargets a BVH clip (text) onto an H-Anim skeleton; foot contacts held unless
+ * `contacts: false`. The first call loads the retargeting module (a second WebAssembly file).
+ */
 export function retarget(
   skeleton: import('./pkg/stance_ik.js').Skeleton,
   bvh: string,
   options?: { contacts?: boolean },
-): RetargetedClip;
+): Promise<RetargetedClip>;

@@ -126,27 +126,13 @@ impl JsSkeleton {
     pub fn rest_match(&self) -> Vec<f64> {
         self.body.rest_match.clone()
     }
-}
 
-/// A BVH clip (text) retargeted onto an H-Anim `skeleton` (`Skeleton.hanim` or
-/// `Skeleton.fromSkin`), foot contacts held unless `contacts` is false: `{frameTime,
-/// frameCount, values: Float64Array (frameCount * dofCount), contacts, iterations, notes}`.
-#[wasm_bindgen(js_name = retargetBvh)]
-pub fn retarget_bvh(skeleton: &JsSkeleton, bvh: &str, contacts: bool) -> Result<JsValue, JsError> {
-    let r = crate::retarget_bvh(&skeleton.body, bvh, contacts).map_err(error)?;
-    let out = parsed(&r.report.to_string())?;
-    let set = |key: &str, value: JsValue| {
-        js_sys::Reflect::set(&out, &key.into(), &value)
-            .map(|_| ())
-            .map_err(|_| JsError::new("internal: could not build the result"))
-    };
-    set("frameTime", r.frame_time.into())?;
-    set("frameCount", (r.frame_count as f64).into())?;
-    set(
-        "values",
-        js_sys::Float64Array::from(r.values.as_slice()).into(),
-    )?;
-    Ok(out)
+    /// How the skeleton was built (JSON text): the package's retargeting module builds the
+    /// same skeleton from it.
+    #[wasm_bindgen(getter)]
+    pub fn recipe(&self) -> String {
+        self.body.recipe_json()
+    }
 }
 
 /// Tasks by level on a skeleton, solved every frame into a reused `Float64Array`.

@@ -8,12 +8,12 @@
 //!   problem file's joints, or a skin's joints mapped onto H-Anim).
 //! - [`PoseSolver`]: tasks by level set once, solved every frame into a caller's array of DOF
 //!   values; world joint transforms; the closed-form limb and its swivel angle.
-//! - [`retarget_bvh`]: a BVH clip onto an H-Anim body (foot contacts kept), one posture per
-//!   frame.
+//! - [`Body::recipe_json`]: how a body was built, so that the package's retargeting
+//!   (`stance_js_motion`, a WebAssembly module of its own loaded on demand) builds the same.
 
 #![warn(missing_docs)]
 
-#[cfg(target_arch = "wasm32")]
+#[cfg(all(target_arch = "wasm32", feature = "bindings"))]
 mod js;
 
 use glam::{DQuat, DVec3};
@@ -47,6 +47,14 @@ pub fn solve_json(problem: &str) -> JsResult<String> {
     Ok(problem.solution_json(&posture, &report).to_string())
 }
 
+/// A level of articulation in a recipe (0 to 255; the body builder checks its range).
+fn small_number(what: &str, value: &Value) -> JsResult<u8> {
+    value
+        .as_u64()
+        .and_then(|n| u8::try_from(n).ok())
+        .ok_or_else(|| format!("{what}: {value} is not a level of articulation (1 to 4)"))
+}
+
 fn level_of_articulation(loa: u8) -> JsResult<LevelOfArticulation> {
     LevelOfArticulation::from_number(loa)
         .ok_or_else(|| format!("loa: {loa} is not a level of articulation (1 to 4)"))
@@ -68,6 +76,9 @@ pub struct Body {
     /// The H-Anim skeleton it was built as (H-Anim and skin bodies; `None` for a problem
     /// file's joints): what retargeting needs.
     pub humanoid: Option<HumanoidSkeleton>,
+    /// How it was built ([`Body::recipe_json`]): enough to build the same body again in
+    /// another WebAssembly module (the package's retargeting, loaded on demand).
+    recipe: Value,
 }
 
 impl Body {
@@ -84,12 +95,17 @@ impl Body {
             source,
             rest_match: rest_match(&body),
             humanoid: Some(body),
+            recipe: serde_json::json!({ "hanim": loa }),
         })
     }
 
     /// A problem file's `skeleton` (JSON text: `{"joints": [...]}`).
     pub fn from_joints(skeleton: &str) -> JsResult<Self> {
-        let skeleton = parse_skeleton(&json(skeleton)?).map_err(|e| e.to_string())?;
+        Self::from_joints_value(json(skeleton)?)
+    }
+
+    fn from_joints_value(value: Value) -> JsResult<Self> {
+        let skeleton = parse_skeleton(&value).map_err(|e| e.to_string())?;
         let source = vec![-1; skeleton.joint_count()];
         let rest_match = [0.0, 0.0, 0.0, 1.0].repeat(skeleton.joint_count());
         Ok(Self {
@@ -97,6 +113,7 @@ impl Body {
             source,
             rest_match,
             humanoid: None,
+            recipe: serde_json::json!({ "joints": value }),
         })
     }
 
@@ -147,7 +164,55 @@ impl Body {
             source,
             rest_match: rest_match(&body),
             humanoid: Some(body),
+            recipe: serde_json::json!({
+                "skin": { "names": names, "parents": parents, "rest": rest, "loa": loa }
+            }),
         })
+    }
+
+    /// How this body was built, as JSON text: `{"hanim": loa}`, `{"joints": skeleton}` or
+    /// `{"skin": {names, parents, rest, loa}}`. [`Body::from_recipe`] builds the same body
+    /// from it (same joints, DOF order and rest match: numbers round-trip exactly).
+    pub fn recipe_json(&self) -> String {
+        self.recipe.to_string()
+    }
+
+    /// The body [`Body::recipe_json`] describes.
+    pub fn from_recipe(recipe: &str) -> JsResult<Self> {
+        let recipe = json(recipe)?;
+        let field = |key: &str| recipe.get(key).cloned();
+        if let Some(loa) = field("hanim") {
+            return Self::hanim(small_number("recipe.hanim", &loa)?);
+        }
+        if let Some(joints) = field("joints") {
+            return Self::from_joints_value(joints);
+        }
+        let Some(skin) = field("skin") else {
+            return Err("recipe: neither hanim, joints nor skin".to_string());
+        };
+        let list = |key: &str| -> JsResult<Vec<Value>> {
+            skin.get(key)
+                .and_then(Value::as_array)
+                .cloned()
+                .ok_or_else(|| format!("recipe.skin.{key}: not an array"))
+        };
+        let names = list("names")?
+            .iter()
+            .map(|v| v.as_str().map(str::to_string))
+            .collect::<Option<Vec<_>>>()
+            .ok_or("recipe.skin.names: not all strings")?;
+        let parents = list("parents")?
+            .iter()
+            .map(|v| v.as_i64().and_then(|p| i32::try_from(p).ok()))
+            .collect::<Option<Vec<_>>>()
+            .ok_or("recipe.skin.parents: not all integers")?;
+        let rest = list("rest")?
+            .iter()
+            .map(Value::as_f64)
+            .collect::<Option<Vec<_>>>()
+            .ok_or("recipe.skin.rest: not all numbers")?;
+        let loa = small_number("recipe.skin.loa", skin.get("loa").unwrap_or(&Value::Null))?;
+        Self::from_skin(&names, &parents, &rest, loa)
     }
 
     /// The tasks a new body starts with at the posture `values` (JSON text of a task array,
@@ -417,58 +482,4 @@ fn limb(skeleton: &Skeleton, name: &str) -> JsResult<Limb> {
         })?
         .on(skeleton)
         .map_err(|e| e.to_string())
-}
-
-/// A clip retargeted onto a body: one posture (DOF values) per frame of the source.
-#[derive(Debug, Clone)]
-pub struct RetargetedClip {
-    /// Seconds per frame (the source's).
-    pub frame_time: f64,
-    /// Number of frames (the source's).
-    pub frame_count: usize,
-    /// DOF values, frame after frame (`frame_count * dof_count`).
-    pub values: Vec<f64>,
-    /// The contacts held and the run's figures (JSON: `contacts` as `{joint, start, end}`,
-    /// `iterations`, `notes`).
-    pub report: Value,
-}
-
-/// Retargets a BVH clip (text) onto an H-Anim body, holding foot contacts (`contacts`) or
-/// copying rotations only.
-pub fn retarget_bvh(body: &Body, bvh: &str, contacts: bool) -> JsResult<RetargetedClip> {
-    let humanoid = body
-        .humanoid
-        .as_ref()
-        .ok_or("retarget: the skeleton must be an H-Anim body (hanim or fromSkin)")?;
-    let clip = stance_motion::bvh::read_bvh(
-        bvh.as_bytes(),
-        "clip",
-        &stance_motion::bvh::BvhLimits::default(),
-    )
-    .map_err(|e| format!("bvh: {e}"))?;
-    let options = stance_motion::RetargetOptions {
-        contacts: contacts.then(stance_motion::ContactSettings::default),
-        ..Default::default()
-    };
-    let result =
-        stance_motion::retarget(&clip, humanoid, &options).map_err(|e| format!("retarget: {e}"))?;
-    let values = result
-        .postures
-        .iter()
-        .flat_map(|p| p.values().iter().copied())
-        .collect();
-    let report = serde_json::json!({
-        "contacts": result.contacts.iter().map(|c| serde_json::json!({
-            "joint": c.joint, "part": c.part, "start": c.start, "end": c.end,
-            "point": [c.point.x, c.point.y, c.point.z],
-        })).collect::<Vec<_>>(),
-        "iterations": result.iterations,
-        "notes": clip.notes.iter().chain(&result.notes).collect::<Vec<_>>(),
-    });
-    Ok(RetargetedClip {
-        frame_time: clip.frame_time,
-        frame_count: clip.frame_count(),
-        values,
-        report,
-    })
 }

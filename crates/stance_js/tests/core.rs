@@ -220,30 +220,54 @@ fn table1_on_the_hanim_body_is_solved_and_timed() {
     );
 }
 
+/// A body's recipe builds the same body again (what the package's retargeting module does
+/// with `Skeleton.recipe`): same joints, offsets, DOF order, limits, skin joints and rest
+/// match, bit for bit, for each way of building one. Catches a recipe that loses a field (the
+/// level of articulation, a parent) or rounds a rest position (the skin's proportions).
 #[test]
-fn a_bvh_clip_is_retargeted_onto_an_hanim_body() {
-    let walk = include_str!("../../../tests/fixtures/motion/walk.bvh");
-    let body = Body::hanim(2).unwrap();
-    let r = stance_js::retarget_bvh(&body, walk, true).unwrap();
-    assert_eq!(r.frame_count, 260);
-    assert!((r.frame_time - 0.0083333).abs() < 1e-12);
-    assert_eq!(r.values.len(), 260 * body.skeleton.dof_count());
-    let contacts = r.report["contacts"].as_array().unwrap();
-    for foot in ["l_talocrural", "r_talocrural"] {
-        assert!(contacts.iter().any(|c| c["joint"] == foot), "{contacts:?}");
+fn a_recipe_builds_the_same_body_again() {
+    let (_, skin) = vendored_avatar_as_skin();
+    let joints = Body::from_joints(
+        r#"{"joints":[{"name":"a","dofs":["rz"],"limits":{"rz":[-1,1]}},
+                      {"name":"b","parent":"a","offset":[0.1,0.2,0.30000000000000004]}]}"#,
+    )
+    .unwrap();
+    for body in [
+        Body::hanim(1).unwrap(),
+        Body::hanim(3).unwrap(),
+        skin,
+        joints,
+    ] {
+        let again = Body::from_recipe(&body.recipe_json()).unwrap();
+        assert_eq!(again.dof_names(), body.dof_names());
+        assert_eq!(again.source, body.source);
+        assert_eq!(again.rest_match, body.rest_match);
+        assert_eq!(again.humanoid.is_some(), body.humanoid.is_some());
+        for (a, b) in again.skeleton.joints().iter().zip(body.skeleton.joints()) {
+            assert_eq!((a.parent, a.offset, &a.dofs), (b.parent, b.offset, &b.dofs));
+            assert_eq!((a.mass, a.com), (b.mass, b.com));
+        }
+        assert_eq!(again.skeleton.lower_limits(), body.skeleton.lower_limits());
+        assert_eq!(again.skeleton.upper_limits(), body.skeleton.upper_limits());
+        assert_eq!(again.skeleton.stiffness(), body.skeleton.stiffness());
     }
-    // The plain copy moves differently from the held one.
-    let copy = stance_js::retarget_bvh(&body, walk, false).unwrap();
-    assert_eq!(copy.values.len(), r.values.len());
-    assert!(copy.report["contacts"].as_array().unwrap().is_empty());
-    assert_ne!(copy.values, r.values);
-    // Bodies without H-Anim names and malformed clips say why.
-    let joints =
-        Body::from_joints(r#"{"joints":[{"name":"a","parent":null,"offset":[0,0,0]}]}"#).unwrap();
-    let e = stance_js::retarget_bvh(&joints, walk, true).unwrap_err();
-    assert!(e.contains("H-Anim body"), "{e}");
-    let e = stance_js::retarget_bvh(&body, "HIERARCHY\nROOT Hips\n{\n", true).unwrap_err();
-    assert!(e.starts_with("bvh: line"), "{e}");
+    for (recipe, says) in [
+        ("{}", "neither hanim, joints nor skin"),
+        (r#"{"hanim": 9}"#, "loa"),
+        (r#"{"hanim": "x"}"#, "recipe.hanim"),
+        (
+            r#"{"skin": {"names": ["a"], "parents": [-1], "rest": [0, 0], "loa": 2}}"#,
+            "rest",
+        ),
+        (
+            r#"{"skin": {"names": [1], "parents": [-1], "rest": [0, 0, 0], "loa": 2}}"#,
+            "names",
+        ),
+        ("not json", "not valid JSON"),
+    ] {
+        let e = Body::from_recipe(recipe).unwrap_err();
+        assert!(e.contains(says), "{recipe}: {e}");
+    }
 }
 
 /// `Skeleton.fromSkin` poses a skin as the editor poses the avatar: by the three.js example's
