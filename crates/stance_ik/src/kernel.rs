@@ -15,6 +15,8 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::priority::{Damping, LevelSystem, StepParams, StepWorkspace, damped_solve};
 
+mod selection;
+
 /// Marks a clamped DOF in `Kernel::pos`.
 const NONE: usize = usize::MAX;
 
@@ -427,6 +429,19 @@ fn level_step(
     basis: Step,
 ) {
     let extend = basis == Step::Extend;
+    // The last level of a retargeting's frame (the clip's posture, one row per DOF): its
+    // step in closed form.
+    if basis == Step::Last
+        && !level.projection
+        && let Damping::Constant { lambda } = level
+            .damping
+            .unwrap_or(params.damping)
+            .at_error(level.dx.norm())
+        && lambda > 0.0
+        && selection::selection_step(kn, level, n, lambda)
+    {
+        return;
+    }
     let m = level.dx.len();
     let r = kn.rank;
     let nf = kn.free.len();
