@@ -40,6 +40,8 @@ pub(crate) struct Kernel {
     pos: Vec<usize>,
     /// The level's support rows of free DOF, and `J^T` on them (`s x m`).
     sup: Vec<usize>,
+    /// The reduced coordinate of each support row.
+    sup_at: Vec<usize>,
     jts: Vec<f64>,
     /// `Q^T J^T` in reduced coordinates (`nf x m`).
     z: Vec<f64>,
@@ -518,10 +520,14 @@ fn level_step(
         // Z = Q^T J^T in reduced coordinates; its rows r.. are the coordinates of Jh^T = P J^T.
         kn.z.clear();
         kn.z.resize(nf * m, 0.0);
-        for c in 0..m {
-            let dst = &mut kn.z[c * nf..(c + 1) * nf];
-            for (i, &d) in kn.sup.iter().enumerate() {
-                dst[kn.pos[d]] = kn.jts[c * s + i];
+        // The support rows' reduced coordinates, once (read through locals: the loop then
+        // keeps them in registers instead of reloading the kernel's fields per entry).
+        kn.sup_at.clear();
+        kn.sup_at.extend(kn.sup.iter().map(|&d| kn.pos[d]));
+        let (z, jts, sup_at) = (&mut kn.z, &kn.jts, &kn.sup_at);
+        for (dst, src) in z.chunks_exact_mut(nf).zip(jts.chunks_exact(s.max(1))) {
+            for (&at, &x) in sup_at.iter().zip(src) {
+                dst[at] = x;
             }
         }
         for j in 0..r {
