@@ -31,9 +31,9 @@ use self::state::PageState;
 use self::tasks_panel::TasksPanel;
 use self::timeline_panel::TimelinePanel;
 use self::viewport_panel::ViewportPanel;
-use crate::host::{HostHooks, HostMessage};
 use crate::model::{Command, EditorModel, MotionCommand};
 use crate::posing::PosingError;
+use stance_model::{HostHooks, HostMessage};
 
 /// The Stance editor.
 pub struct StanceApp {
@@ -463,8 +463,8 @@ impl StanceApp {
                 ui.label(format!("frame {:.1} ms", cpu_seconds * 1000.0));
             }
             ui.separator();
-            ui.label(format!("solver {:.2} ms", self.model.solver_ms));
-            if let Some(report) = self.model.session.report() {
+            ui.label(format!("solver {:.2} ms", self.model.solver_ms()));
+            if let Some(report) = self.model.session().report() {
                 ui.separator();
                 let status = match report.status {
                     stance_ik::SolveStatus::Converged => "converged",
@@ -675,12 +675,9 @@ impl StanceApp {
                 self.viewport.show(ui, frame, &mut self.model, &clock);
             });
         self.help_window(&ctx);
-        self.windows.image.show(
-            &ctx,
-            &mut self.model,
-            &self.viewport,
-            &mut self.button_rects,
-        );
+        self.windows
+            .image
+            .show(&ctx, &mut self.viewport, &mut self.button_rects);
         let mut sensors = SensorsWindow {
             model: &mut self.model,
             viewport_rect: self.viewport.rect,
@@ -702,7 +699,7 @@ impl StanceApp {
 /// Encodes the document into the address bar and the clipboard.
 fn copy_link(ctx: &egui::Context, model: &mut EditorModel) {
     let shared = link::encode_for_sharing(&model.document());
-    let url = model.hooks.share_link(&shared.fragment);
+    let url = model.hooks().share_link(&shared.fragment);
     ctx.copy_text(url);
     model.link_shared(shared.fragment.len(), shared.keys_left_out);
 }

@@ -53,10 +53,7 @@ impl Subject {
                     joints: avatar.joint_nodes(),
                     names: avatar.avatar.nodes.iter().map(|n| n.name.clone()).collect(),
                     original: avatar.avatar.mapping.clone(),
-                    can_revert: model
-                        .mapping_corrections
-                        .before_last(&avatar.name)
-                        .is_some(),
+                    can_revert: model.can_revert_mapping(&avatar.name),
                 })
             }
             SubjectKind::Clip => {

@@ -5,7 +5,7 @@ use egui::{Color32, RichText};
 use stance_hanim::comfort::rula::{RulaLoad, RulaVariant};
 use stance_hanim::readable_name;
 
-use crate::model::EditorModel;
+use crate::model::{ComfortCommand, Command, EditorModel};
 
 /// RULA's loads as the panel names them.
 const LOADS: [(RulaLoad, &str); 6] = [
@@ -90,13 +90,19 @@ pub(super) fn show(ui: &mut egui::Ui, model: &mut EditorModel) {
             "below 15 % of the joint's strength"
         });
     }
-    ui.checkbox(&mut model.comfort.heat_map, "Heat map of joint loads");
+    let mut heat_map = model.comfort().heat_map();
+    if ui
+        .checkbox(&mut heat_map, "Heat map of joint loads")
+        .changed()
+    {
+        model.apply(Command::Comfort(ComfortCommand::ShowHeatMap(heat_map)));
+    }
     settings(ui, model);
 }
 
 /// RULA's inputs that a posture does not show.
 fn settings(ui: &mut egui::Ui, model: &mut EditorModel) {
-    let mut settings = model.comfort.settings;
+    let mut settings = model.comfort().settings();
     let rula = &mut settings.rula_settings;
     egui::CollapsingHeader::new("RULA inputs").show(ui, |ui| {
         let current = LOADS
@@ -125,8 +131,7 @@ fn settings(ui: &mut egui::Ui, model: &mut EditorModel) {
             RulaVariant::Paper
         };
     });
-    if settings != model.comfort.settings {
-        model.comfort.settings = settings;
-        model.comfort.invalidate();
+    if settings != model.comfort().settings() {
+        model.apply(Command::Comfort(ComfortCommand::SetSettings(settings)));
     }
 }

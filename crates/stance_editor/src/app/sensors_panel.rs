@@ -48,11 +48,11 @@ impl SensorsWindow<'_> {
     }
 
     fn contents(&mut self, ui: &mut egui::Ui) {
-        let mut settings = self.model.sensors.settings().clone();
-        let busy =
-            self.model.sensors.link().is_live() || self.model.sensors.replay_progress().is_some();
+        let mut settings = self.model.sensors().settings().clone();
+        let busy = self.model.sensors().link().is_live()
+            || self.model.sensors().replay_progress().is_some();
         ui.add_enabled_ui(!busy, |ui| device_settings(ui, &mut settings));
-        if settings != *self.model.sensors.settings() {
+        if settings != *self.model.sensors().settings() {
             self.command(SensorCommand::SetSettings(Box::new(settings)));
         }
 
@@ -77,7 +77,7 @@ impl SensorsWindow<'_> {
     /// Connect or disconnect, replay or stop, record or save.
     fn connection_row(&mut self, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
-            if self.model.sensors.link().is_live() {
+            if self.model.sensors().link().is_live() {
                 let button = ui.button("Disconnect");
                 self.buttons.push(("sensors_disconnect", button.rect));
                 if button.clicked() {
@@ -86,7 +86,7 @@ impl SensorsWindow<'_> {
             } else {
                 let button = ui
                     .add_enabled(
-                        self.model.sensors.replay_progress().is_none(),
+                        self.model.sensors().replay_progress().is_none(),
                         egui::Button::new("Connect…"),
                     )
                     .on_hover_text("The browser asks which serial port or HID device to use");
@@ -95,14 +95,14 @@ impl SensorsWindow<'_> {
                     self.command(SensorCommand::Connect);
                 }
             }
-            if self.model.sensors.replay_progress().is_some() {
+            if self.model.sensors().replay_progress().is_some() {
                 if ui.button("Stop replay").clicked() {
                     self.command(SensorCommand::StopReplay);
                 }
             } else {
                 let button = ui
                     .add_enabled(
-                        !self.model.sensors.link().is_live(),
+                        !self.model.sensors().link().is_live(),
                         egui::Button::new("Replay file…"),
                     )
                     .on_hover_text("Play a recording (or `stance simulate-sensors` output)");
@@ -111,7 +111,7 @@ impl SensorsWindow<'_> {
                     self.model.apply(Command::PickRecording);
                 }
             }
-            let recording = self.model.sensors.is_recording();
+            let recording = self.model.sensors().is_recording();
             let button = ui.button(if recording { "Stop and save" } else { "Record" });
             self.buttons.push(("sensors_record", button.rect));
             if button.clicked() {
@@ -133,7 +133,7 @@ impl SensorsWindow<'_> {
         );
         ui.horizontal(|ui| {
             let button = ui.add_enabled(
-                !self.model.sensors.assignments().is_empty(),
+                !self.model.sensors().assignments().is_empty(),
                 egui::Button::new("Calibrate"),
             );
             self.buttons.push(("sensors_calibrate", button.rect));
@@ -141,7 +141,7 @@ impl SensorsWindow<'_> {
             if button.clicked() {
                 self.command(SensorCommand::Calibrate);
             }
-            let calibrated = self.model.sensors.is_calibrated();
+            let calibrated = self.model.sensors().is_calibrated();
             let button = ui
                 .add_enabled(calibrated, egui::Button::new("Reset heading"))
                 .on_hover_text("Face the front, then press: turns every sensor about the vertical");
@@ -157,20 +157,20 @@ impl SensorsWindow<'_> {
                 self.command(SensorCommand::ReleaseJoints);
             }
         });
-        if self.model.sensors.is_calibrated() {
+        if self.model.sensors().is_calibrated() {
             ui.label(format!(
                 "Driving {} joints.",
                 self.model
-                    .sensors
-                    .driven_joints(self.model.session.skeleton())
+                    .sensors()
+                    .driven_joints(self.model.session().skeleton())
                     .len()
             ));
         }
     }
 
     fn link_line(&self, ui: &mut egui::Ui) {
-        let stats = self.model.sensors.stats();
-        let (text, colour) = match self.model.sensors.link() {
+        let stats = self.model.sensors().stats();
+        let (text, colour) = match self.model.sensors().link() {
             SensorLink::Idle => ("Not connected".to_owned(), ui.visuals().weak_text_color()),
             SensorLink::Connecting => (
                 "Waiting for the device…".to_owned(),
@@ -181,7 +181,7 @@ impl SensorsWindow<'_> {
                 egui::Color32::from_rgb(60, 160, 80),
             ),
             SensorLink::Replaying { name } => {
-                let (done, total) = self.model.sensors.replay_progress().unwrap_or_default();
+                let (done, total) = self.model.sensors().replay_progress().unwrap_or_default();
                 (
                     format!(
                         "Replaying {name}: {}%",
@@ -195,19 +195,19 @@ impl SensorsWindow<'_> {
         ui.colored_label(colour, text);
         ui.label(format!(
             "{} samples, {} bad frames, {} bytes skipped",
-            self.model.sensors.sample_count(),
+            self.model.sensors().sample_count(),
             stats.bad_frames,
             stats.skipped_bytes
         ));
         if let Some(bytes) = self
             .model
-            .sensors
+            .sensors()
             .is_recording()
-            .then(|| self.model.sensors.stats().bytes_received)
+            .then(|| self.model.sensors().stats().bytes_received)
         {
             ui.label(format!("Recording ({} KiB received)", bytes / 1024));
         }
-        if self.model.sensors.is_recording_full() {
+        if self.model.sensors().is_recording_full() {
             ui.colored_label(
                 ui.visuals().warn_fg_color,
                 format!(
@@ -216,7 +216,7 @@ impl SensorsWindow<'_> {
                 ),
             );
         }
-        if let Some((median, max)) = self.model.sensors.latency_ms() {
+        if let Some((median, max)) = self.model.sensors().latency_ms() {
             ui.label(format!(
                 "Bytes to posture: {median:.1} ms median, {max:.1} ms max"
             ));
@@ -226,7 +226,7 @@ impl SensorsWindow<'_> {
     fn sensor_table(&mut self, ui: &mut egui::Ui) {
         let tracks: Vec<(SensorId, f64, Option<[f64; 3]>)> = self
             .model
-            .sensors
+            .sensors()
             .tracks()
             .iter()
             .map(|(sensor, track)| {
@@ -244,7 +244,7 @@ impl SensorsWindow<'_> {
         let mut segments: Vec<SensorAssignment> = vec![SensorAssignment::Spine];
         segments.extend(
             self.model
-                .session
+                .session()
                 .skeleton()
                 .joints()
                 .iter()
@@ -270,7 +270,7 @@ impl SensorsWindow<'_> {
                         }
                         None => ui.label("no orientation"),
                     };
-                    let current = self.model.sensors.assignments().get(&sensor).cloned();
+                    let current = self.model.sensors().assignments().get(&sensor).cloned();
                     let text = current
                         .as_ref()
                         .map_or_else(|| "nothing".to_owned(), assignment_label);

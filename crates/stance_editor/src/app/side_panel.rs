@@ -25,7 +25,7 @@ impl SidePanel<'_> {
     /// The whole panel.
     pub(super) fn show(&mut self, ui: &mut egui::Ui) {
         ui.heading("Humanoid");
-        match &self.model.avatar {
+        match self.model.avatar() {
             Some(avatar) => {
                 ui.label(RichText::new(&avatar.name).strong());
                 ui.label(format!(
@@ -39,7 +39,7 @@ impl SidePanel<'_> {
                 ui.label("H-Anim 2.0 mannequin (Avatar menu or drop a file to pose yours)");
             }
         }
-        let current = self.model.session.level_of_articulation();
+        let current = self.model.session().level_of_articulation();
         let mut chosen = current;
         egui::ComboBox::from_label("Articulation")
             .selected_text(format!("LOA {}", current.number()))
@@ -53,19 +53,19 @@ impl SidePanel<'_> {
         }
         ui.label(format!(
             "{} joints, {} DOF",
-            self.model.session.skeleton().joint_count(),
-            self.model.session.skeleton().dof_count()
+            self.model.session().skeleton().joint_count(),
+            self.model.session().skeleton().dof_count()
         ));
         ui.horizontal(|ui| {
             if ui
-                .add_enabled(self.model.history.can_undo(), egui::Button::new("Undo"))
+                .add_enabled(self.model.history().can_undo(), egui::Button::new("Undo"))
                 .on_hover_text("Ctrl+Z")
                 .clicked()
             {
                 self.model.apply(Command::Undo);
             }
             if ui
-                .add_enabled(self.model.history.can_redo(), egui::Button::new("Redo"))
+                .add_enabled(self.model.history().can_redo(), egui::Button::new("Redo"))
                 .on_hover_text("Ctrl+Shift+Z or Ctrl+Y")
                 .clicked()
             {
@@ -112,11 +112,11 @@ impl SidePanel<'_> {
 
     fn selection_section(&mut self, ui: &mut egui::Ui) {
         ui.heading("Selection");
-        let Some(joint_index) = self.model.selected_joint else {
+        let Some(joint_index) = self.model.selected_joint() else {
             ui.label("Click a body part to select it; drag it to pull it.");
             return;
         };
-        let skeleton = self.model.session.skeleton();
+        let skeleton = self.model.session().skeleton();
         let Some(joint) = skeleton.joints().get(joint_index).cloned() else {
             self.model.apply(Command::Select(None));
             return;
@@ -139,7 +139,7 @@ impl SidePanel<'_> {
             }
         });
         // Joint mode: each DOF within its anatomical limits.
-        let values = self.model.session.posture().values().to_vec();
+        let values = self.model.session().posture().values().to_vec();
         let mut edit: Option<(usize, f64)> = None;
         egui::Grid::new("joint_dofs").num_columns(2).show(ui, |ui| {
             for (offset, dof) in joint.dofs.iter().enumerate() {
@@ -192,7 +192,7 @@ impl SidePanel<'_> {
     /// Each rotation DOF's stiffness (H-Anim's `stiffness`): how much less it moves than a
     /// free DOF for the same task; its anatomical default until changed.
     fn stiffness_section(&mut self, ui: &mut egui::Ui, joint: &stance_ik::Joint) {
-        let session = &self.model.session;
+        let session = self.model.session();
         let stiffness = session.skeleton().stiffness().to_vec();
         let rotations: Vec<(usize, stance_ik::Dof)> = joint
             .dofs
@@ -246,7 +246,7 @@ impl SidePanel<'_> {
     }
 
     fn swivel_section(&mut self, ui: &mut egui::Ui, limb: LimbName) {
-        let Some((swivel, intervals)) = self.model.session.limb_swivel(limb) else {
+        let Some((swivel, intervals)) = self.model.session().limb_swivel(limb) else {
             return;
         };
         ui.separator();
@@ -298,7 +298,7 @@ impl SidePanel<'_> {
         });
         let mut load = None;
         let mut delete = None;
-        for (index, entry) in self.model.library.entries().iter().enumerate() {
+        for (index, entry) in self.model.library().entries().iter().enumerate() {
             ui.horizontal(|ui| {
                 if ui.button("Load").clicked() {
                     load = Some(index);
@@ -327,7 +327,7 @@ impl SidePanel<'_> {
 
     /// The side panel's line about guessed joints and the button that opens the window.
     fn avatar_mapping_button(&mut self, ui: &mut egui::Ui) {
-        let Some(avatar) = &self.model.avatar else {
+        let Some(avatar) = self.model.avatar() else {
             return;
         };
         let guesses = avatar

@@ -12,9 +12,10 @@ use super::handles::Handles;
 use super::lens::Lens;
 use super::overlay::Overlay;
 use crate::figure::MannequinFigure;
-use crate::host::BackendSummary;
-use crate::model::{Command, EditorModel, NewTask, heat_color};
+use crate::image::ImageExport;
+use crate::model::{AvatarCommand, Command, EditorModel, NewTask, heat_color};
 use crate::viewport::{ViewportInput, ViewportRenderer, apply_gestures};
+use stance_model::BackendSummary;
 
 /// The most a frame (or a host task) spends uploading an avatar, in ms, and the most texture
 /// bytes it writes (see `upload_meshes`): more would wait for the GPU process to drain the
@@ -70,14 +71,15 @@ pub(super) struct ViewportPanel {
     pub render_ms: f64,
     /// The model's view request last followed (see `EditorModel::view_request`).
     view_request: u64,
+    /// *Save image*: asked, rendering on this viewport's GPU, handed to the model.
+    pub image: ImageExport,
 }
 
 impl ViewportPanel {
     /// A viewport with the floor and the trace shown, drawing with eframe's wgpu
     /// `render_state` (none: the viewport says why it is empty).
     pub(super) fn new(render_state: Option<&egui_wgpu::RenderState>) -> Self {
-        let backend =
-            render_state.map(|state| BackendSummary::from_adapter(&state.adapter.get_info()));
+        let backend = render_state.map(|state| backend_summary(&state.adapter.get_info()));
         let renderer = render_state.map(|state| ViewportRenderer::new(&state.device));
         Self {
             camera: OrbitCamera::default(),
@@ -101,6 +103,7 @@ impl ViewportPanel {
             scene_ms: 0.0,
             render_ms: 0.0,
             view_request: 0,
+            image: ImageExport::default(),
         }
     }
 
@@ -345,7 +348,7 @@ impl ViewportPanel {
                 if !self.first_frame_reported {
                     self.first_frame_reported = true;
                     if let Some(backend) = &self.backend {
-                        model.hooks.first_frame_rendered(backend);
+                        model.hooks().first_frame_rendered(backend);
                     }
                 }
             }
@@ -409,7 +412,7 @@ impl ViewportPanel {
         }
         match MannequinFigure::new(loa) {
             Ok(mut figure) => {
-                renderer.set_avatar(render_state, figure.take_model().as_ref());
+                renderer.set_avatar(render_state, figure.take_model().as_deref());
                 self.figure = Some((figure, loa));
             }
             Err(error) => {
@@ -427,14 +430,15 @@ impl ViewportPanel {
         let Some(renderer) = &mut self.renderer else {
             return false;
         };
-        let Some(mesh) = model.avatar.as_mut().and_then(|avatar| avatar.model.take()) else {
+        let Some(mesh) = model.avatar().and_then(|avatar| avatar.mesh()).cloned() else {
             return false;
         };
         renderer.begin_avatar_upload(mesh);
+        model.apply(Command::Avatar(AvatarCommand::MeshTaken));
         self.avatar_uploaded = false;
         self.avatar_upload_ms = 0.0;
         self.avatar_upload_tasks = 0;
-        self.upload_in_tasks = model.hooks.upload_in_tasks();
+        self.upload_in_tasks = model.hooks().upload_in_tasks();
         self.upload_in_tasks
     }
 
@@ -491,7 +495,7 @@ impl ViewportPanel {
     /// *Save image* on this viewport's GPU (its renderer holds the avatar's mesh): the model
     /// renders an asked image and downloads it once the read-back completes, frames later.
     fn advance_image(&mut self, ui: &egui::Ui, frame: &eframe::Frame, model: &mut EditorModel) {
-        if !model.image.is_busy() {
+        if !self.image.is_busy() {
             return;
         }
         // The image shows the figure when the viewport does (its mesh is the renderer's).
@@ -505,7 +509,8 @@ impl ViewportPanel {
         {
             let queue = &render_state.queue;
             let renderer = renderer.scene_renderer_mut();
-            if model.advance_image(&render_state.device, queue, renderer, figure) {
+            let device = &render_state.device;
+            if self.image.advance(model, device, queue, renderer, figure) {
                 ui.ctx().request_repaint();
             }
         }
@@ -517,7 +522,7 @@ impl ViewportPanel {
         model.avatar().is_none()
             && self.show_figure
             && self.figure.is_some()
-            && !model.comfort.heat_map
+            && !model.comfort().heat_map()
     }
 
     /// What the renderer draws: the mannequin's figure, or its capsules (selection and hover
@@ -527,7 +532,7 @@ impl ViewportPanel {
         let show_figure = self.figure_shown(model);
         // With an avatar or the figure the capsules are hidden; the skeleton overlay shows the
         // bones of a selection.
-        let heat = model.comfort.heat_shares(model.session().skeleton());
+        let heat = model.comfort().heat_shares(model.session().skeleton());
         let capsules = if show_avatar || show_figure {
             Vec::new()
         } else {
@@ -611,4 +616,26 @@ fn context_menu(response: &egui::Response, model: &mut EditorModel) {
             ui.close();
         }
     });
+}
+
+/// The backend and adapter `info` names, as the status bar says them.
+fn backend_summary(info: &wgpu::AdapterInfo) -> BackendSummary {
+    let backend = match info.backend {
+        wgpu::Backend::BrowserWebGpu => "WebGPU",
+        wgpu::Backend::Gl if cfg!(target_arch = "wasm32") => "WebGL2",
+        wgpu::Backend::Gl => "OpenGL",
+        wgpu::Backend::Vulkan => "Vulkan",
+        wgpu::Backend::Metal => "Metal",
+        wgpu::Backend::Dx12 => "DirectX 12",
+        wgpu::Backend::Noop => "no GPU",
+    };
+    let adapter = if info.name.is_empty() {
+        "unnamed adapter".to_owned()
+    } else {
+        info.name.clone()
+    };
+    BackendSummary {
+        backend: backend.to_owned(),
+        adapter,
+    }
 }

@@ -6,17 +6,50 @@ use stance_hanim::strength::built_axes;
 
 use crate::posing::PosingSession;
 
+/// What the comfort panel asks of its model.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ComfortCommand {
+    /// Colour the body by joint load (the heat map), or not.
+    ShowHeatMap(bool),
+    /// RULA's inputs that a posture does not show, and the weights: the report is measured
+    /// again with them.
+    SetSettings(ComfortSettings),
+}
+
 /// The comfort of the session's posture, cached by session revision.
 #[derive(Debug, Default)]
 pub struct ComfortView {
     /// Colour the body by joint load (the heat map).
-    pub heat_map: bool,
+    heat_map: bool,
     /// RULA's inputs that a posture does not show, and the weights.
-    pub settings: ComfortSettings,
+    settings: ComfortSettings,
     report: Option<((u64, u64), ComfortReport)>,
 }
 
 impl ComfortView {
+    /// Carries out a command of the comfort panel (the view changes, not the document).
+    pub fn apply(&mut self, command: ComfortCommand) {
+        match command {
+            ComfortCommand::ShowHeatMap(on) => self.heat_map = on,
+            ComfortCommand::SetSettings(settings) => {
+                if settings != self.settings {
+                    self.settings = settings;
+                    self.report = None;
+                }
+            }
+        }
+    }
+
+    /// Whether the body is coloured by joint load.
+    pub fn heat_map(&self) -> bool {
+        self.heat_map
+    }
+
+    /// RULA's inputs that a posture does not show, and the weights.
+    pub fn settings(&self) -> ComfortSettings {
+        self.settings
+    }
+
     /// The report for the session's posture (`generation` tells sessions apart).
     pub fn report(&mut self, session: &PosingSession, generation: u64) -> &ComfortReport {
         let key = (generation, session.revision());
@@ -64,11 +97,6 @@ impl ComfortView {
                 })
                 .collect(),
         )
-    }
-
-    /// Forgets the cached report (the settings changed).
-    pub fn invalidate(&mut self) {
-        self.report = None;
     }
 }
 

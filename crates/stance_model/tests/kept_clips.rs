@@ -8,12 +8,12 @@
 use stance_document::{
     Document, MotionKey, MotionSection, PostureValues, TaskInterval, TaskSpec, link,
 };
-use stance_editor::model::MotionCommand;
-use stance_editor::{Command, EditorModel, MemoryHost};
 use stance_ik::Dof;
+use stance_model::model::MotionCommand;
+use stance_model::{Command, EditorModel, MemoryHost};
 use stance_motion::{BvhLimits, read_bvh};
 
-use crate::common::{editor_on, open};
+use crate::clocked::{editor_on, open};
 
 const WALK: &[u8] = include_bytes!("../../../tests/fixtures/motion/walk.bvh");
 const RUN: &[u8] = include_bytes!("../../../tests/fixtures/motion/run.bvh");
@@ -294,7 +294,7 @@ fn a_clip_too_large_for_the_autosave_is_named_and_asked_for() {
         long.push_str(rows[f % rows.len()]);
         long.push('\n');
     }
-    assert!(long.len() as u64 > stance_editor::model::AUTOSAVE_CLIP_BYTES);
+    assert!(long.len() as u64 > stance_model::model::AUTOSAVE_CLIP_BYTES);
     let host = MemoryHost::default();
     let mut model = editor_on(&host);
     // The plain copy: the contacts' solve would take seconds here and changes nothing kept.

@@ -6,8 +6,8 @@ use stance_document::{Document, LimbName, TaskKindSpec, TaskSpec};
 use stance_hanim::{LevelOfArticulation, Mapping};
 
 use super::clips::AnimationFormat;
+use super::comfort::ComfortCommand;
 use super::hands::HandCommand;
-use super::image::ImageRequest;
 use super::mapping::Correction;
 use super::motion::MotionCommand;
 use super::tasks::NewTask;
@@ -236,9 +236,16 @@ pub enum Command {
     ExportLibrary,
     /// Offer the avatar in the current posture as a GLB download.
     ExportPosedAvatar,
-    /// Render an image (PNG) of the posture and offer it as a download: the viewport's GPU
-    /// draws it on a following frame (see `EditorModel::advance_image`).
-    SaveImage(ImageRequest),
+    /// Offer an image of the posture (a PNG the views rendered with the GPU, `width` x
+    /// `height` pixels) as a download.
+    SaveImage {
+        /// The PNG file's bytes.
+        png: Vec<u8>,
+        /// Width, pixels.
+        width: u32,
+        /// Height, pixels.
+        height: u32,
+    },
     /// Ask the page for a sensor recording to replay.
     PickRecording,
     /// Ask the page for a motion clip (BVH, or a glTF file's animation).
@@ -259,6 +266,20 @@ pub enum Command {
     DismissNotice,
     /// A command for the timeline (clip, playhead, keys, intervals, trajectory).
     Motion(MotionCommand),
+    /// A command for the comfort panel (heat map, RULA inputs).
+    Comfort(ComfortCommand),
+    /// A command about the avatar.
+    Avatar(AvatarCommand),
+}
+
+/// What the views tell the model about the avatar.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum AvatarCommand {
+    /// The renderer took the avatar's GPU model for its upload ([`LoadedAvatar::mesh`]): the
+    /// model lets go of its copy.
+    ///
+    /// [`LoadedAvatar::mesh`]: crate::avatar::LoadedAvatar::mesh
+    MeshTaken,
 }
 
 /// Why a session is replaced: what carries over.

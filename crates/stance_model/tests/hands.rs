@@ -7,10 +7,10 @@ use crate::clocked;
 use clocked::Clocked;
 
 use stance_document::link;
-use stance_editor::Command;
-use stance_editor::model::{HandCommand, Hands};
 use stance_hanim::hands::{Finger, HandPreset};
 use stance_hanim::{LevelOfArticulation, Side};
+use stance_model::Command;
+use stance_model::model::{HandCommand, Hands};
 
 fn preset(hands: Hands, preset: HandPreset) -> Command {
     Command::Hands(HandCommand::Preset { hands, preset })

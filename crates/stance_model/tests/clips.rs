@@ -7,12 +7,12 @@
 
 use glam::DQuat;
 use stance_asset::{LoadOptions, export_glb, load_avatar, make_default_avatar};
-use stance_editor::model::{AnimationFormat, MotionCommand};
-use stance_editor::{Command, EditorModel, MemoryHost};
 use stance_ik::Frames;
+use stance_model::model::{AnimationFormat, MotionCommand};
+use stance_model::{Command, EditorModel, MemoryHost};
 use stance_motion::{BvhLimits, ContactSettings, RestMatch, RetargetOptions, read_bvh};
 
-use crate::common::{editor_on, open};
+use crate::clocked::{editor_on, open};
 
 const WALK: &[u8] = include_bytes!("../../../tests/fixtures/motion/walk.bvh");
 

@@ -15,7 +15,6 @@ mod clips;
 mod comfort;
 mod command;
 mod hands;
-mod image;
 mod mapping;
 mod motion;
 mod opening;
@@ -30,15 +29,14 @@ use stance_ik::Clock;
 use stance_render::MannequinBone;
 
 pub use self::clips::{AUTOSAVE_CLIP_BYTES, AnimationFormat, CLIP_FPS, PickPurpose};
-pub use self::comfort::{ComfortView, heat_color};
+pub use self::comfort::{ComfortCommand, ComfortView, heat_color};
 use self::command::goals_moved;
 /// Said when a document made on the avatar before a posture meant the same pose on every body
 /// (its values relative to the avatar's own rest) was converted to the standard pose.
 pub(crate) const CONVERTED_NOTE: &str = " The document was made before a posture meant the same pose on every body: its values, relative to this avatar's own rest, were converted and show the pose it was saved with.";
 
-pub use self::command::{Command, Gesture, Notice, SessionChange};
+pub use self::command::{AvatarCommand, Command, Gesture, Notice, SessionChange};
 pub use self::hands::{HandCommand, Hands};
-pub use self::image::{IMAGE_FILE_NAME, ImageExport, ImageRequest};
 use self::mapping::MappingCorrections;
 pub use self::mapping::{Correction, carry_posture};
 pub use self::motion::{
@@ -52,6 +50,8 @@ use crate::library::{Autosave, PoseLibrary};
 use crate::posing::{PosingError, PosingSession};
 use crate::sensors::{SensorCommand, SensorHub, SensorOutcome, SensorSettings};
 
+/// The name a *Save image* PNG downloads as.
+pub const IMAGE_FILE_NAME: &str = "stance-posture.png";
 /// Seconds an information notice stays (errors stay until dismissed).
 pub const NOTICE_SECS: f64 = 8.0;
 /// Points of the effector trace kept.
@@ -109,8 +109,6 @@ pub struct EditorModel {
     pub(crate) timeline: Timeline,
     /// The comfort panel: report and heat map.
     pub(crate) comfort: ComfortView,
-    /// *Save image*: asked, rendering, downloaded.
-    pub(crate) image: ImageExport,
 }
 
 impl std::fmt::Debug for EditorModel {
@@ -158,7 +156,6 @@ impl EditorModel {
             session_generation: 0,
             timeline: Timeline::default(),
             comfort: ComfortView::default(),
-            image: ImageExport::default(),
         };
         model.load_library();
         if let Some(settings) = SensorSettings::load(model.hooks.as_ref()) {
@@ -245,6 +242,26 @@ impl EditorModel {
     /// The comfort of the current posture (measured once per posture).
     pub fn comfort_report(&mut self) -> &stance_hanim::comfort::ComfortReport {
         self.comfort.report(&self.session, self.session_generation)
+    }
+
+    /// The comfort panel's view: heat map, settings, the last report measured.
+    pub fn comfort(&self) -> &ComfortView {
+        &self.comfort
+    }
+
+    /// CPU time of the last step's solve (ms).
+    pub fn solver_ms(&self) -> f64 {
+        self.solver_ms
+    }
+
+    /// What the editor needs from the page or the native shell.
+    pub fn hooks(&self) -> &dyn HostHooks {
+        self.hooks.as_ref()
+    }
+
+    /// Whether the avatar `name` has a mapping correction to revert.
+    pub fn can_revert_mapping(&self, name: &str) -> bool {
+        self.mapping_corrections.before_last(name).is_some()
     }
 
     /// Seconds since the editor started, as of the last step.
@@ -492,7 +509,7 @@ impl EditorModel {
             Command::PickFile => self.host_result(self.hooks.pick_file(), "Could not open a file"),
             Command::ExportDocument => self.export_document(),
             Command::ExportLibrary => self.export_library(),
-            Command::SaveImage(request) => self.image.request(request),
+            Command::SaveImage { png, width, height } => self.save_image(&png, width, height),
             Command::ExportPosedAvatar => self.export_posed_avatar(),
             Command::PickRecording => match self.hooks.pick_file() {
                 Ok(()) => self.pending_pick = Some(PickPurpose::Recording),
@@ -523,6 +540,12 @@ impl EditorModel {
             Command::Inform(text) => self.inform(text),
             Command::Warn(text) => self.warn(text),
             Command::DismissNotice => self.notice = None,
+            Command::Comfort(command) => self.comfort.apply(command),
+            Command::Avatar(AvatarCommand::MeshTaken) => {
+                if let Some(avatar) = self.avatar.as_mut() {
+                    avatar.take_mesh();
+                }
+            }
             Command::Motion(command) => self.apply_motion(command),
             // The gestures and edits are carried out above.
             _ => {}
@@ -818,6 +841,17 @@ impl EditorModel {
                 size.div_ceil(1024)
             )),
             Err(error) => self.warn(format!("{file_name} could not be exported: {error}")),
+        }
+    }
+
+    /// Hands a rendered image (PNG, `width` x `height` pixels) to the host as
+    /// [`IMAGE_FILE_NAME`].
+    fn save_image(&mut self, png: &[u8], width: u32, height: u32) {
+        match self.hooks.download_bytes(IMAGE_FILE_NAME, png) {
+            Ok(()) => self.inform(format!(
+                "Saved a {width}x{height} image as {IMAGE_FILE_NAME}."
+            )),
+            Err(error) => self.warn(format!("Could not save the image: {error}")),
         }
     }
 

@@ -13,9 +13,9 @@ use stance_document::motion::smoothstep;
 use stance_document::{
     Document, MotionKey, MotionSection, PostureValues, TaskInterval, TaskKindSpec, TaskSpec,
 };
-use stance_editor::Command;
-use stance_editor::model::{IntervalEdge, MotionCommand};
 use stance_ik::{Dof, Frames, Posture};
+use stance_model::Command;
+use stance_model::model::{IntervalEdge, MotionCommand};
 use stance_motion::Clip;
 
 /// `count` postures of the session's body: the left arm raises and the right elbow bends
@@ -216,7 +216,7 @@ fn keys_interpolate_with_ease_and_move_copy_delete_and_undo_change_that() {
 fn a_key_set_by_hand_is_the_posture_and_short_timelines_travel_in_links() {
     let mut editor = Clocked::new();
     editor.apply(Command::SetTasks {
-        kind: stance_editor::history::EditKind::Command,
+        kind: stance_model::history::EditKind::Command,
         tasks: Vec::new(),
     });
     editor.motion(MotionCommand::SetKey);
@@ -307,7 +307,7 @@ fn hand_goal_over_time(editor: &mut Clocked) -> DVec3 {
     open_clip(editor, 50, 0.05);
     let goal = own_wrist(editor, 15) + DVec3::new(0.1, 0.1, 0.1);
     editor.apply(Command::SetTasks {
-        kind: stance_editor::history::EditKind::Command,
+        kind: stance_model::history::EditKind::Command,
         tasks: vec![TaskSpec::pin("r_radiocarpal", goal.to_array())],
     });
     editor.motion(MotionCommand::SetInterval {

@@ -10,8 +10,8 @@ use std::f64::consts::FRAC_PI_4;
 
 use glam::DVec3;
 use stance_document::{Document, TaskKindSpec, TaskSpec};
-use stance_editor::{Command, Gesture, MemoryHost};
 use stance_hanim::{LevelOfArticulation, LimbName};
+use stance_model::{Command, Gesture, MemoryHost};
 
 #[test]
 fn a_pull_moves_the_hand_while_the_pinned_feet_hold_and_undo_restores_the_document() {
@@ -85,7 +85,7 @@ fn a_goal_drag_moves_the_goals_it_took_and_is_one_undo_step() {
     tasks.push(reach);
     let index = tasks.len() - 1;
     editor.apply(Command::SetTasks {
-        kind: stance_editor::history::EditKind::Command,
+        kind: stance_model::history::EditKind::Command,
         tasks,
     });
     let with_task = editor.model.document();
@@ -395,7 +395,7 @@ fn the_step_autosaves_the_document_once_it_changed() {
     let saved = storage
         .borrow()
         .storage
-        .get(stance_editor::library::AUTOSAVE_KEY)
+        .get(stance_model::library::AUTOSAVE_KEY)
         .cloned();
     let Some(saved) = saved else {
         panic!("the document was autosaved");
@@ -575,17 +575,15 @@ fn a_gltf_opens_with_its_bin_and_a_missing_bin_is_named() {
 
 /// What the page's worker does with an import request: the editor's own importer, the
 /// avatar handed back as transfer bytes.
-fn import_as_the_worker_does(
-    request: &stance_editor::AvatarImport,
-) -> stance_editor::ImportedAvatar {
-    let imported = stance_editor::avatar::LoadedAvatar::import(
+fn import_as_the_worker_does(request: &stance_model::AvatarImport) -> stance_model::ImportedAvatar {
+    let imported = stance_model::avatar::LoadedAvatar::import(
         &request.bytes,
         &request.resources,
         Default::default(),
     )
     .unwrap();
     let transfer = stance_asset::AvatarTransfer::new(imported.avatar.clone()).unwrap();
-    stance_editor::ImportedAvatar {
+    stance_model::ImportedAvatar {
         avatar: transfer.into_avatar().unwrap(),
         in_worker: true,
         ..imported

@@ -10,8 +10,8 @@ use clocked::Clocked;
 use glam::{DQuat, DVec3};
 use serde_json::{Value, json};
 use stance_document::{TaskKindSpec, TaskSpec};
-use stance_editor::Command;
 use stance_ik::{Axes, Frames};
+use stance_model::Command;
 
 /// The finger joint the T-pose avatar below lacks.
 const FINGER: &str = "l_metacarpophalangeal_3";
@@ -82,7 +82,7 @@ fn swapping_the_avatar_keeps_the_posture_and_tasks_as_one_undoable_edit() {
         target: editor.position(FINGER).to_array(),
     }));
     editor.apply(Command::SetTasks {
-        kind: stance_editor::history::EditKind::Command,
+        kind: stance_model::history::EditKind::Command,
         tasks: tasks.clone(),
     });
     editor.frames(1);
@@ -204,7 +204,7 @@ fn swapping_the_avatar_keeps_the_posture_and_tasks_as_one_undoable_edit() {
     editor.apply(Command::Redo);
     let again = editor.model.avatar().expect("the avatar is back");
     assert_eq!(again.name, "t-pose.glb");
-    assert!(again.model.is_some());
+    assert!(again.mesh().is_some());
     assert_eq!(editor.model.document().tasks, tasks[..tasks.len() - 1]);
     assert_eq!(editor.model.history().undo_steps(), undo_steps + 1);
 
