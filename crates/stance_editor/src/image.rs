@@ -6,6 +6,8 @@
 //! on a later frame), and the finished PNG goes to the model as a command
 //! ([`Command::SaveImage`]), which hands it to the host.
 
+use crate::model::Outbox;
+use crate::model::{FileCommand, NoticeCommand};
 use glam::DVec3;
 use stance_render::{
     BODY_COLOR_LINEAR, Capsule, GOAL_COLOR_LINEAR, ImageOptions, OrbitCamera, PendingImage, Scene,
@@ -57,7 +59,8 @@ impl ImageExport {
     /// when it holds its mesh (else the mannequin's capsules).
     pub fn advance(
         &mut self,
-        model: &mut EditorModel,
+        model: &EditorModel,
+        outbox: &mut Outbox,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         renderer: &mut SceneRenderer,
@@ -76,9 +79,9 @@ impl ImageExport {
             let camera = &request.camera;
             match render_image(device, queue, renderer, camera, &scene, &request.options) {
                 Ok(pending) => self.pending = Some(pending),
-                Err(error) => model.apply(Command::Warn(format!(
+                Err(error) => outbox.send(Command::Notice(NoticeCommand::Warn(format!(
                     "The image could not be made: {error}."
-                ))),
+                )))),
             }
         }
         let Some(result) = self.pending.as_mut().and_then(|p| p.poll(device)) else {
@@ -86,14 +89,14 @@ impl ImageExport {
         };
         self.pending = None;
         match result.and_then(|pixels| encode_png(&pixels).map(|png| (pixels, png))) {
-            Ok((pixels, png)) => model.apply(Command::SaveImage {
+            Ok((pixels, png)) => outbox.send(Command::File(FileCommand::SaveImage {
                 png,
                 width: pixels.width,
                 height: pixels.height,
-            }),
-            Err(error) => model.apply(Command::Warn(format!(
+            })),
+            Err(error) => outbox.send(Command::Notice(NoticeCommand::Warn(format!(
                 "The image could not be made: {error}."
-            ))),
+            )))),
         }
         false
     }

@@ -9,6 +9,7 @@ use clocked::Clocked;
 
 use stance_editor::MemoryHost;
 use stance_editor::image::{IMAGE_FILE_NAME, ImageExport, ImageRequest};
+use stance_editor::model::Outbox;
 use stance_render::{ImageOptions, OrbitCamera, SceneRenderer, headless_gpu};
 
 /// A decoded PNG: width, height, RGBA.
@@ -32,9 +33,11 @@ fn save_image(editor: &mut Clocked, host: &MemoryHost, options: ImageOptions) ->
         options,
         camera: OrbitCamera::default(),
     });
+    let mut outbox = Outbox::default();
     let mut frames = 0;
     while image.advance(
-        &mut editor.model,
+        &editor.model,
+        &mut outbox,
         &gpu.device,
         &gpu.queue,
         &mut renderer,
@@ -44,6 +47,7 @@ fn save_image(editor: &mut Clocked, host: &MemoryHost, options: ImageOptions) ->
         assert!(frames < 2000, "the image never came back");
         std::thread::sleep(std::time::Duration::from_millis(2));
     }
+    editor.model.apply_outbox(&mut outbox);
     let downloads = &host.inner.borrow().binary_downloads;
     assert_eq!(downloads.len(), before + 1, "{:?}", editor.model.notice());
     let (name, bytes) = downloads.last().unwrap();
@@ -123,13 +127,16 @@ fn an_impossible_size_is_refused_with_a_notice_and_nothing_downloads() {
         },
         camera: OrbitCamera::default(),
     });
+    let mut outbox = Outbox::default();
     assert!(!image.advance(
-        &mut editor.model,
+        &editor.model,
+        &mut outbox,
         &gpu.device,
         &gpu.queue,
         &mut renderer,
         None
     ));
+    editor.model.apply_outbox(&mut outbox);
     assert!(host.inner.borrow().binary_downloads.is_empty());
     let notice = editor.model.notice().unwrap();
     assert!(

@@ -17,4 +17,4 @@ pub use host::{
     AvatarImport, BackendSummary, ClipRetarget, HostHooks, HostMessage, ImportedAvatar, MemoryHost,
     MemoryHostState, NoHostHooks,
 };
-pub use model::{Command, EditorModel, Gesture, Notice, SessionChange};
+pub use model::{Change, Command, EditorModel, Gesture, Notice, Outbox, SessionChange};

@@ -10,3 +10,4 @@ mod hands;
 mod kept_clips;
 mod model;
 mod motion;
+mod tasks;

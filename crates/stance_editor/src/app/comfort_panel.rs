@@ -1,6 +1,7 @@
 //! The side panel's comfort section: the RULA score with its parts, the five highest joint
 //! loads against gravity, the heat map switch and RULA's inputs that a posture does not show.
 
+use crate::model::Outbox;
 use egui::{Color32, RichText};
 use stance_hanim::comfort::rula::{RulaLoad, RulaVariant};
 use stance_hanim::readable_name;
@@ -18,7 +19,7 @@ const LOADS: [(RulaLoad, &str); 6] = [
 ];
 
 /// Draws the section.
-pub(super) fn show(ui: &mut egui::Ui, model: &mut EditorModel) {
+pub(super) fn show(ui: &mut egui::Ui, model: &EditorModel, outbox: &mut Outbox) {
     ui.heading("Comfort");
     let report = model.comfort_report().clone();
     match &report.rula {
@@ -95,13 +96,13 @@ pub(super) fn show(ui: &mut egui::Ui, model: &mut EditorModel) {
         .checkbox(&mut heat_map, "Heat map of joint loads")
         .changed()
     {
-        model.apply(Command::Comfort(ComfortCommand::ShowHeatMap(heat_map)));
+        outbox.send(Command::Comfort(ComfortCommand::ShowHeatMap(heat_map)));
     }
-    settings(ui, model);
+    settings(ui, model, outbox);
 }
 
 /// RULA's inputs that a posture does not show.
-fn settings(ui: &mut egui::Ui, model: &mut EditorModel) {
+fn settings(ui: &mut egui::Ui, model: &EditorModel, outbox: &mut Outbox) {
     let mut settings = model.comfort().settings();
     let rula = &mut settings.rula_settings;
     egui::CollapsingHeader::new("RULA inputs").show(ui, |ui| {
@@ -132,6 +133,6 @@ fn settings(ui: &mut egui::Ui, model: &mut EditorModel) {
         };
     });
     if settings != model.comfort().settings() {
-        model.apply(Command::Comfort(ComfortCommand::SetSettings(settings)));
+        outbox.send(Command::Comfort(ComfortCommand::SetSettings(settings)));
     }
 }

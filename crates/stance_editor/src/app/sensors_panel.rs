@@ -1,6 +1,8 @@
 //! The sensors window: device, connection, per-sensor figures, assignment to segments,
 //! calibration, heading reset, recording and replay, as commands to the model's sensors.
 
+use crate::model::FileCommand;
+use crate::model::Outbox;
 use egui::RichText;
 use stance_mocap::SensorId;
 use stance_mocap::ascii::ComponentOrder;
@@ -18,7 +20,8 @@ const BAUD_RATES: [u32; 6] = [9_600, 19_200, 38_400, 57_600, 115_200, 230_400];
 
 /// The sensors window over the model.
 pub(super) struct SensorsWindow<'a> {
-    pub model: &'a mut EditorModel,
+    pub model: &'a EditorModel,
+    pub outbox: &'a mut Outbox,
     /// Where the viewport is (the window opens over it).
     pub viewport_rect: egui::Rect,
     pub buttons: &'a mut ButtonRects,
@@ -44,7 +47,7 @@ impl SensorsWindow<'_> {
     }
 
     fn command(&mut self, command: SensorCommand) {
-        self.model.apply(Command::Sensors(command));
+        self.outbox.send(Command::Sensors(command));
     }
 
     fn contents(&mut self, ui: &mut egui::Ui) {
@@ -108,7 +111,7 @@ impl SensorsWindow<'_> {
                     .on_hover_text("Play a recording (or `stance simulate-sensors` output)");
                 self.buttons.push(("sensors_replay", button.rect));
                 if button.clicked() {
-                    self.model.apply(Command::PickRecording);
+                    self.outbox.send(Command::File(FileCommand::PickRecording));
                 }
             }
             let recording = self.model.sensors().is_recording();

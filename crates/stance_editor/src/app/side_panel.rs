@@ -2,6 +2,11 @@
 //! undo and the posing commands, the selection (joint angles, swivel), the hands and the pose
 //! library.
 
+use crate::model::Outbox;
+use crate::model::{
+    AvatarCommand, FileCommand, HistoryCommand, LibraryCommand, PostureCommand, TaskCommand,
+    ViewCommand,
+};
 use egui::RichText;
 use stance_document::LimbName;
 use stance_hanim::{MatchMethod, readable_name};
@@ -12,7 +17,8 @@ use crate::model::{Command, EditorModel, NewTask};
 
 /// The side panel over the model.
 pub(super) struct SidePanel<'a> {
-    pub model: &'a mut EditorModel,
+    pub model: &'a EditorModel,
+    pub outbox: &'a mut Outbox,
     /// A click on the body pins it.
     pub pin_tool: &'a mut bool,
     pub windows: &'a mut Windows,
@@ -49,7 +55,10 @@ impl SidePanel<'_> {
                 }
             });
         if chosen != current {
-            self.model.apply(Command::SetLevelOfArticulation(chosen));
+            self.outbox
+                .send(Command::Avatar(AvatarCommand::SetLevelOfArticulation(
+                    chosen,
+                )));
         }
         ui.label(format!(
             "{} joints, {} DOF",
@@ -62,28 +71,29 @@ impl SidePanel<'_> {
                 .on_hover_text("Ctrl+Z")
                 .clicked()
             {
-                self.model.apply(Command::Undo);
+                self.outbox.send(Command::History(HistoryCommand::Undo));
             }
             if ui
                 .add_enabled(self.model.history().can_redo(), egui::Button::new("Redo"))
                 .on_hover_text("Ctrl+Shift+Z or Ctrl+Y")
                 .clicked()
             {
-                self.model.apply(Command::Redo);
+                self.outbox.send(Command::History(HistoryCommand::Redo));
             }
         });
         ui.horizontal(|ui| {
             if ui.button("Mirror").on_hover_text("M").clicked() {
-                self.model.apply(Command::Mirror);
+                self.outbox.send(Command::Posture(PostureCommand::Mirror));
             }
             if ui.button("Rest pose").on_hover_text("R").clicked() {
-                self.model.apply(Command::ResetToRest);
+                self.outbox
+                    .send(Command::Posture(PostureCommand::ResetToRest));
             }
         });
         let copy = ui.button("Copy posture link").on_hover_text("L");
         self.buttons.push(("copy_link", copy.rect));
         if copy.clicked() {
-            copy_link(ui.ctx(), self.model);
+            copy_link(ui.ctx(), self.model, self.outbox);
         }
         let pin_tool = ui
             .toggle_value(self.pin_tool, "Pin tool")
@@ -101,13 +111,13 @@ impl SidePanel<'_> {
         ui.separator();
         self.library_section(ui);
         ui.separator();
-        super::comfort_panel::show(ui, self.model);
+        super::comfort_panel::show(ui, self.model, self.outbox);
     }
 
     /// The selection and, on a body with fingers, the hands.
     fn selection_and_hands(&mut self, ui: &mut egui::Ui) {
         self.selection_section(ui);
-        super::hands_panel::show(ui, self.model);
+        super::hands_panel::show(ui, self.model, self.outbox);
     }
 
     fn selection_section(&mut self, ui: &mut egui::Ui) {
@@ -118,7 +128,7 @@ impl SidePanel<'_> {
         };
         let skeleton = self.model.session().skeleton();
         let Some(joint) = skeleton.joints().get(joint_index).cloned() else {
-            self.model.apply(Command::Select(None));
+            self.outbox.send(Command::View(ViewCommand::Select(None)));
             return;
         };
         let lower = skeleton.lower_limits().to_vec();
@@ -127,15 +137,18 @@ impl SidePanel<'_> {
         ui.label(RichText::new(&joint.name).small().weak());
         ui.horizontal(|ui| {
             if ui.button("Pin").on_hover_text("P").clicked() {
-                self.model.apply(Command::Pin(joint_index));
+                self.outbox
+                    .send(Command::Posture(PostureCommand::Pin(joint_index)));
             }
             if ui
                 .button("Hold orientation")
                 .on_hover_text("add an orientation task with the current orientation")
                 .clicked()
             {
-                self.model
-                    .apply(Command::AddTask(NewTask::Orientation(joint_index)));
+                self.outbox
+                    .send(Command::Task(TaskCommand::Add(NewTask::Orientation(
+                        joint_index,
+                    ))));
             }
         });
         // Joint mode: each DOF within its anatomical limits.
@@ -181,7 +194,8 @@ impl SidePanel<'_> {
             }
         });
         if let Some((dof, value)) = edit {
-            self.model.apply(Command::SetDof { dof, value });
+            self.outbox
+                .send(Command::Posture(PostureCommand::SetDof { dof, value }));
         }
         self.stiffness_section(ui, &joint);
         if let Some(limb) = LimbName::of_joint(&joint.name) {
@@ -241,7 +255,11 @@ impl SidePanel<'_> {
                 }
             });
         if let Some((dof, value)) = edit {
-            self.model.apply(Command::SetStiffness { dof, value });
+            self.outbox
+                .send(Command::Posture(PostureCommand::SetStiffness {
+                    dof,
+                    value,
+                }));
         }
     }
 
@@ -274,10 +292,11 @@ impl SidePanel<'_> {
             .small(),
         );
         if response.changed() {
-            self.model.apply(Command::SetSwivel {
-                limb,
-                swivel_angle: degrees.to_radians(),
-            });
+            self.outbox
+                .send(Command::Posture(PostureCommand::SetSwivel {
+                    limb,
+                    swivel_angle: degrees.to_radians(),
+                }));
         }
     }
 
@@ -293,7 +312,8 @@ impl SidePanel<'_> {
             .labelled_by(label.id);
             if ui.button("Save").clicked() {
                 let name = self.library_name.clone();
-                self.model.apply(Command::SaveToLibrary(name));
+                self.outbox
+                    .send(Command::Library(LibraryCommand::Save(name)));
             }
         });
         let mut load = None;
@@ -310,17 +330,19 @@ impl SidePanel<'_> {
             });
         }
         if let Some(index) = load {
-            self.model.apply(Command::LoadFromLibrary(index));
+            self.outbox
+                .send(Command::Library(LibraryCommand::Load(index)));
         }
         if let Some(index) = delete {
-            self.model.apply(Command::DeleteFromLibrary(index));
+            self.outbox
+                .send(Command::Library(LibraryCommand::Delete(index)));
         }
         ui.horizontal(|ui| {
             if ui.button("Import…").clicked() {
-                self.model.apply(Command::PickFile);
+                self.outbox.send(Command::File(FileCommand::PickFile));
             }
             if ui.button("Export…").clicked() {
-                self.model.apply(Command::ExportLibrary);
+                self.outbox.send(Command::Library(LibraryCommand::Export));
             }
         });
     }

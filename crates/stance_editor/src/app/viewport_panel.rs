@@ -1,11 +1,12 @@
 //! The 3D viewport: the camera, the pointer's gestures as commands to the model (pull, handles,
 //! selection, the context menu), and the picture of the model's posture with its overlays.
 
+use crate::model::Outbox;
+use crate::model::{GestureCommand, PostureCommand, TaskCommand, ViewCommand};
 use egui::{Color32, RichText, Sense};
 use glam::DVec3;
 use stance_document::CameraSpec;
 use stance_hanim::{LevelOfArticulation, LimbName, readable_name};
-use stance_ik::Clock;
 use stance_render::{BODY_COLOR_LINEAR, OrbitCamera, Scene, ViewPreset, pick_capsule};
 
 use super::handles::Handles;
@@ -171,8 +172,10 @@ impl ViewportPanel {
     }
 
     /// The current view saved with the document (undoable).
-    pub(super) fn save_camera(&self, model: &mut EditorModel) {
-        model.apply(Command::SaveCamera(Some(self.camera_spec())));
+    pub(super) fn save_camera(&self, outbox: &mut Outbox) {
+        outbox.send(Command::Posture(PostureCommand::SaveCamera(Some(
+            self.camera_spec(),
+        ))));
     }
 
     /// The camera looking through this frame's rectangle.
@@ -191,17 +194,15 @@ impl ViewportPanel {
         }
     }
 
-    /// The viewport in `ui`'s remaining space: input as commands to `model` (a gesture the
-    /// pointer moved is solved at once, within `clock`'s frame budget), then the picture of
-    /// the model's posture with its overlays: the body drawn follows the pointer read in
-    /// the same frame.
-    pub(super) fn show(
+    /// The viewport's input in `ui`'s remaining space: a gesture that starts, as a command
+    /// to `model` (the app carries it out before [`Self::follow_pointer`] moves it). Returns
+    /// the viewport's response and input.
+    pub(super) fn read_input(
         &mut self,
         ui: &mut egui::Ui,
-        frame: &eframe::Frame,
-        model: &mut EditorModel,
-        clock: &dyn Clock,
-    ) {
+        model: &EditorModel,
+        outbox: &mut Outbox,
+    ) -> (egui::Response, ViewportInput) {
         let rect = ui.available_rect_before_wrap();
         self.rect = rect;
         // A stable id: the notice strip above comes and goes (with its own widgets), and an
@@ -213,15 +214,26 @@ impl ViewportPanel {
             Sense::click_and_drag(),
         );
         let input = ViewportInput::read(ui, &response);
-        self.gestures(ui, &response, &input, model);
-        model.follow_input(Some(clock));
-        context_menu(&response, model);
+        self.begin_gesture(ui, &response, &input, model, outbox);
+        (response, input)
+    }
+
+    /// The picture of the model's posture with its overlays, after [`Self::read_input`]
+    /// (`response`): the body drawn follows the pointer read in the same frame.
+    pub(super) fn show(
+        &mut self,
+        ui: &mut egui::Ui,
+        frame: &eframe::Frame,
+        model: &EditorModel,
+        outbox: &mut Outbox,
+        response: &egui::Response,
+    ) {
+        context_menu(response, model, outbox);
         if model.is_busy() {
             ui.ctx().request_repaint();
         }
-        self.draw(ui, frame, model);
-        self.advance_image(ui, frame, model);
-        model.readings_shown();
+        self.draw(ui, frame, model, outbox);
+        self.advance_image(ui, frame, model, outbox);
         self.draw_overlays(ui, model, response.hover_pos());
     }
 
@@ -269,36 +281,52 @@ impl ViewportPanel {
     /// The pointer on the viewport, as commands: a drag with the primary button (no Shift,
     /// one finger) that starts on a handle (a task's goal, a ring or the swivel of the
     /// selected joint) moves it; on the body it pulls that point; elsewhere it moves the
-    /// camera. A click selects (and with the pin tool or Alt pins).
-    fn gestures(
-        &mut self,
+    /// camera ([`Self::follow_pointer`]). A click selects (and with the pin tool or Alt pins).
+    fn begin_gesture(
+        &self,
         ui: &egui::Ui,
         response: &egui::Response,
         input: &ViewportInput,
-        model: &mut EditorModel,
+        model: &EditorModel,
+        outbox: &mut Outbox,
     ) {
-        let pointer = response.hover_pos();
         let press_origin = ui.input(|input| input.pointer.press_origin());
-        let interact_pos = response.interact_pointer_pos();
         if response.drag_started_by(egui::PointerButton::Primary)
             && !input.shift_held
             && input.touch_count < 2
             && let Some(origin) = press_origin
         {
             if let Some(handle) = self.handles(model).pick_handle(origin) {
-                model.apply(Command::BeginHandle(handle));
+                outbox.send(Command::Gesture(GestureCommand::BeginHandle(handle)));
             } else if let Some((joint, point_world)) = self.pick(model, origin) {
-                model.apply(Command::BeginPull { joint, point_world });
+                outbox.send(Command::Gesture(GestureCommand::BeginPull {
+                    joint,
+                    point_world,
+                }));
             }
         }
+    }
+
+    /// The pointer moves the gesture in progress (the app carries it out and solves it at
+    /// once, before [`Self::show`] draws), or the camera; hover, click, select and pin.
+    pub(super) fn follow_pointer(
+        &mut self,
+        ui: &egui::Ui,
+        response: &egui::Response,
+        input: &ViewportInput,
+        model: &EditorModel,
+        outbox: &mut Outbox,
+    ) {
+        let pointer = response.hover_pos();
+        let interact_pos = response.interact_pointer_pos();
         let dragging = response.dragged() && input.touch_count < 2;
         match (model.gesture().cloned(), interact_pos) {
             (Some(gesture), Some(pointer)) if dragging => {
                 if let Some(command) = self.lens().follow(&gesture, pointer) {
-                    model.apply(command);
+                    outbox.send(command);
                 }
             }
-            (Some(_), _) => model.apply(Command::EndGesture),
+            (Some(_), _) => outbox.send(Command::Gesture(GestureCommand::EndGesture)),
             (None, _) => {
                 if apply_gestures(&mut self.camera, &input.gestures(), self.rect.height()) {
                     ui.ctx().request_repaint();
@@ -310,23 +338,29 @@ impl ViewportPanel {
         } else {
             pointer.and_then(|pointer| self.pick(model, pointer).map(|(joint, _)| joint))
         };
-        model.apply(Command::Hover(hovered));
+        outbox.send(Command::View(ViewCommand::Hover(hovered)));
         if response.clicked_by(egui::PointerButton::Primary) {
             let clicked =
                 interact_pos.and_then(|pointer| self.pick(model, pointer).map(|(joint, _)| joint));
-            model.apply(Command::Select(clicked));
+            outbox.send(Command::View(ViewCommand::Select(clicked)));
             // The pin tool (or Alt + click): one click pins the part where it is.
             let alt = ui.input(|input| input.modifiers.alt);
             if let Some(joint) = clicked
                 && (self.pin_tool || alt)
             {
-                model.apply(Command::Pin(joint));
+                outbox.send(Command::Posture(PostureCommand::Pin(joint)));
             }
         }
     }
 
     /// The 3D picture of this frame's posture.
-    fn draw(&mut self, ui: &mut egui::Ui, frame: &eframe::Frame, model: &mut EditorModel) {
+    fn draw(
+        &mut self,
+        ui: &mut egui::Ui,
+        frame: &eframe::Frame,
+        model: &EditorModel,
+        outbox: &mut Outbox,
+    ) {
         let rect = self.rect;
         let pixels_per_point = ui.ctx().pixels_per_point();
         self.size_px = [
@@ -334,7 +368,7 @@ impl ViewportPanel {
             (rect.height() * pixels_per_point).round().max(1.0) as u32,
         ];
         let ctx = ui.ctx().clone();
-        self.upload_meshes(&ctx, frame, model);
+        self.upload_meshes(&ctx, frame, model, outbox);
         let scene_started = web_time::Instant::now();
         let scene = self.scene(model);
         self.scene_ms = scene_started.elapsed().as_secs_f64() * 1000.0;
@@ -373,12 +407,13 @@ impl ViewportPanel {
         &mut self,
         ctx: &egui::Context,
         frame: &eframe::Frame,
-        model: &mut EditorModel,
+        model: &EditorModel,
+        outbox: &mut Outbox,
     ) {
         if self.renderer.is_none() || frame.wgpu_render_state().is_none() {
             return;
         }
-        self.begin_avatar_upload(model);
+        self.begin_avatar_upload(model, outbox);
         if self
             .renderer
             .as_ref()
@@ -426,7 +461,7 @@ impl ViewportPanel {
     /// Frames that repaint the canvas are slow to come while a large avatar arrives (a
     /// software-composited canvas is read back each time): the page steps the upload in tasks
     /// of its own where it can. Returns whether it does.
-    pub(super) fn begin_avatar_upload(&mut self, model: &mut EditorModel) -> bool {
+    pub(super) fn begin_avatar_upload(&mut self, model: &EditorModel, outbox: &mut Outbox) -> bool {
         let Some(renderer) = &mut self.renderer else {
             return false;
         };
@@ -434,7 +469,7 @@ impl ViewportPanel {
             return false;
         };
         renderer.begin_avatar_upload(mesh);
-        model.apply(Command::Avatar(AvatarCommand::MeshTaken));
+        outbox.send(Command::Avatar(AvatarCommand::MeshTaken));
         self.avatar_uploaded = false;
         self.avatar_upload_ms = 0.0;
         self.avatar_upload_tasks = 0;
@@ -494,7 +529,13 @@ impl ViewportPanel {
 
     /// *Save image* on this viewport's GPU (its renderer holds the avatar's mesh): the model
     /// renders an asked image and downloads it once the read-back completes, frames later.
-    fn advance_image(&mut self, ui: &egui::Ui, frame: &eframe::Frame, model: &mut EditorModel) {
+    fn advance_image(
+        &mut self,
+        ui: &egui::Ui,
+        frame: &eframe::Frame,
+        model: &EditorModel,
+        outbox: &mut Outbox,
+    ) {
         if !self.image.is_busy() {
             return;
         }
@@ -510,7 +551,10 @@ impl ViewportPanel {
             let queue = &render_state.queue;
             let renderer = renderer.scene_renderer_mut();
             let device = &render_state.device;
-            if self.image.advance(model, device, queue, renderer, figure) {
+            if self
+                .image
+                .advance(model, outbox, device, queue, renderer, figure)
+            {
                 ui.ctx().request_repaint();
             }
         }
@@ -574,7 +618,7 @@ impl ViewportPanel {
 }
 
 /// Right-click on the body: pin, select, add a task on that part.
-fn context_menu(response: &egui::Response, model: &mut EditorModel) {
+fn context_menu(response: &egui::Response, model: &EditorModel, outbox: &mut Outbox) {
     let context_joint = model.hovered_joint().or(model.selected_joint());
     response.context_menu(|ui| {
         let Some(joint) = context_joint else {
@@ -591,28 +635,28 @@ fn context_menu(response: &egui::Response, model: &mut EditorModel) {
         ui.label(RichText::new(readable_name(&name)).strong());
         let mut command = None;
         if ui.button("Pin here (level 1)").clicked() {
-            command = Some(Command::Pin(joint));
+            command = Some(Command::Posture(PostureCommand::Pin(joint)));
         }
         if ui.button("Select").clicked() {
-            command = Some(Command::Select(Some(joint)));
+            command = Some(Command::View(ViewCommand::Select(Some(joint))));
         }
         ui.separator();
         if ui.button("Add position task").clicked() {
-            command = Some(Command::AddTask(NewTask::Position(joint)));
+            command = Some(Command::Task(TaskCommand::Add(NewTask::Position(joint))));
         }
         if ui.button("Add orientation task").clicked() {
-            command = Some(Command::AddTask(NewTask::Orientation(joint)));
+            command = Some(Command::Task(TaskCommand::Add(NewTask::Orientation(joint))));
         }
         if let Some(limb) = LimbName::of_joint(&name)
             && ui.button("Add limb task (with swivel)").clicked()
         {
-            command = Some(Command::AddTask(NewTask::Limb(limb)));
+            command = Some(Command::Task(TaskCommand::Add(NewTask::Limb(limb))));
         }
         if let Some(command) = command {
-            if matches!(command, Command::AddTask(_)) {
-                model.apply(Command::Select(Some(joint)));
+            if matches!(command, Command::Task(TaskCommand::Add(_))) {
+                outbox.send(Command::View(ViewCommand::Select(Some(joint))));
             }
-            model.apply(command);
+            outbox.send(command);
             ui.close();
         }
     });

@@ -1,9 +1,12 @@
 //! The comfort panel's model: the posture's comfort report (RULA with its parts, the joint
 //! loads against gravity), measured once per posture, and the heat map's colours.
 
+use std::cell::RefCell;
+
 use stance_hanim::comfort::{ComfortReport, ComfortSettings, comfort_report};
 use stance_hanim::strength::built_axes;
 
+use super::Change;
 use crate::posing::PosingSession;
 
 /// What the comfort panel asks of its model.
@@ -16,28 +19,30 @@ pub enum ComfortCommand {
     SetSettings(ComfortSettings),
 }
 
-/// The comfort of the session's posture, cached by session revision.
+/// The comfort of the session's posture, cached by session revision (a cache the views fill
+/// as they read it: measuring is not a change of the model).
 #[derive(Debug, Default)]
 pub struct ComfortView {
     /// Colour the body by joint load (the heat map).
     heat_map: bool,
     /// RULA's inputs that a posture does not show, and the weights.
     settings: ComfortSettings,
-    report: Option<((u64, u64), ComfortReport)>,
+    report: RefCell<Option<((u64, u64), ComfortReport)>>,
 }
 
 impl ComfortView {
     /// Carries out a command of the comfort panel (the view changes, not the document).
-    pub fn apply(&mut self, command: ComfortCommand) {
+    pub fn apply(&mut self, command: ComfortCommand) -> Change {
         match command {
             ComfortCommand::ShowHeatMap(on) => self.heat_map = on,
             ComfortCommand::SetSettings(settings) => {
                 if settings != self.settings {
                     self.settings = settings;
-                    self.report = None;
+                    self.report = RefCell::new(None);
                 }
             }
         }
+        Change::View
     }
 
     /// Whether the body is coloured by joint load.
@@ -51,29 +56,22 @@ impl ComfortView {
     }
 
     /// The report for the session's posture (`generation` tells sessions apart).
-    pub fn report(&mut self, session: &PosingSession, generation: u64) -> &ComfortReport {
+    pub fn report(&self, session: &PosingSession, generation: u64) -> ComfortReport {
         let key = (generation, session.revision());
-        if self.report.as_ref().is_some_and(|(k, _)| *k != key) {
-            self.report = None;
+        let mut cached = self.report.borrow_mut();
+        if let Some((k, report)) = cached.as_ref()
+            && *k == key
+        {
+            return report.clone();
         }
-        let settings = &self.settings;
-        &self
-            .report
-            .get_or_insert_with(|| {
-                let report = comfort_report(
-                    session.skeleton(),
-                    &built_axes(session.humanoid()),
-                    session.posture(),
-                    settings,
-                );
-                (key, report)
-            })
-            .1
-    }
-
-    /// The last report measured, if any (the viewport's heat map reads it).
-    pub fn cached(&self) -> Option<&ComfortReport> {
-        self.report.as_ref().map(|(_, report)| report)
+        let report = comfort_report(
+            session.skeleton(),
+            &built_axes(session.humanoid()),
+            session.posture(),
+            &self.settings,
+        );
+        *cached = Some((key, report.clone()));
+        report
     }
 
     /// Per joint of `skeleton`, its load share for the heat map (0 where unknown); `None`
@@ -82,7 +80,8 @@ impl ComfortView {
         if !self.heat_map {
             return None;
         }
-        let report = self.cached()?;
+        let cached = self.report.borrow();
+        let (_, report) = cached.as_ref()?;
         Some(
             skeleton
                 .joints()
