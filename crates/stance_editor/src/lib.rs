@@ -4,6 +4,7 @@
 //! here): this crate holds the views, the viewport and what draws with the GPU.
 
 #![warn(missing_docs)]
+#![warn(clippy::too_many_lines)]
 
 mod app;
 pub mod figure;

@@ -4,6 +4,7 @@
 //! read [`EditorModel`] and send it [`Command`]s; the tests drive it the same way.
 
 #![warn(missing_docs)]
+#![warn(clippy::too_many_lines)]
 
 pub mod avatar;
 pub mod history;

@@ -3,7 +3,7 @@
 
 use crate::model::Outbox;
 use egui::{Color32, RichText};
-use stance_hanim::comfort::rula::{RulaLoad, RulaVariant};
+use stance_hanim::comfort::rula::{RulaLoad, RulaReport, RulaVariant};
 use stance_hanim::readable_name;
 
 use crate::model::{ComfortCommand, Command, EditorModel};
@@ -21,50 +21,9 @@ const LOADS: [(RulaLoad, &str); 6] = [
 /// Draws the section.
 pub(super) fn show(ui: &mut egui::Ui, model: &EditorModel, outbox: &mut Outbox) {
     ui.heading("Comfort");
-    let report = model.comfort_report().clone();
+    let report = model.comfort_report();
     match &report.rula {
-        Some(rula) => {
-            let colour = match rula.action_level {
-                1 => Color32::from_rgb(60, 160, 70),
-                2 => Color32::from_rgb(200, 160, 30),
-                3 => Color32::from_rgb(220, 110, 30),
-                _ => Color32::from_rgb(210, 40, 30),
-            };
-            ui.label(
-                RichText::new(format!(
-                    "RULA {} (action level {})",
-                    rula.score, rula.action_level
-                ))
-                .strong()
-                .color(colour),
-            )
-            .on_hover_text(
-                "1-2 acceptable; 3-4 investigate; 5-6 investigate and change soon; 7 change now",
-            );
-            egui::Grid::new("rula_parts").num_columns(3).show(ui, |ui| {
-                ui.label("");
-                ui.label("left");
-                ui.label("right");
-                ui.end_row();
-                let rows = [
-                    ("upper arm", rula.left.upper_arm, rula.right.upper_arm),
-                    ("lower arm", rula.left.lower_arm, rula.right.lower_arm),
-                    ("wrist", rula.left.wrist, rula.right.wrist),
-                    ("wrist twist", rula.left.wrist_twist, rula.right.wrist_twist),
-                    ("score C", rula.left.score_c, rula.right.score_c),
-                ];
-                for (name, left, right) in rows {
-                    ui.label(name);
-                    ui.label(left.to_string());
-                    ui.label(right.to_string());
-                    ui.end_row();
-                }
-            });
-            ui.label(format!(
-                "neck {}, trunk {}, legs {}; score D {}",
-                rula.body.neck, rula.body.trunk, rula.body.legs, rula.body.score_d
-            ));
-        }
+        Some(rula) => rula_section(ui, rula),
         None => {
             ui.label("RULA: this body lacks a joint RULA measures");
         }
@@ -135,4 +94,48 @@ fn settings(ui: &mut egui::Ui, model: &EditorModel, outbox: &mut Outbox) {
     if settings != model.comfort().settings() {
         outbox.send(Command::Comfort(ComfortCommand::SetSettings(settings)));
     }
+}
+
+/// The RULA score, its action level and its parts.
+fn rula_section(ui: &mut egui::Ui, rula: &RulaReport) {
+    let colour = match rula.action_level {
+        1 => Color32::from_rgb(60, 160, 70),
+        2 => Color32::from_rgb(200, 160, 30),
+        3 => Color32::from_rgb(220, 110, 30),
+        _ => Color32::from_rgb(210, 40, 30),
+    };
+    ui.label(
+        RichText::new(format!(
+            "RULA {} (action level {})",
+            rula.score, rula.action_level
+        ))
+        .strong()
+        .color(colour),
+    )
+    .on_hover_text(
+        "1-2 acceptable; 3-4 investigate; 5-6 investigate and change soon; 7 change now",
+    );
+    egui::Grid::new("rula_parts").num_columns(3).show(ui, |ui| {
+        ui.label("");
+        ui.label("left");
+        ui.label("right");
+        ui.end_row();
+        let rows = [
+            ("upper arm", rula.left.upper_arm, rula.right.upper_arm),
+            ("lower arm", rula.left.lower_arm, rula.right.lower_arm),
+            ("wrist", rula.left.wrist, rula.right.wrist),
+            ("wrist twist", rula.left.wrist_twist, rula.right.wrist_twist),
+            ("score C", rula.left.score_c, rula.right.score_c),
+        ];
+        for (name, left, right) in rows {
+            ui.label(name);
+            ui.label(left.to_string());
+            ui.label(right.to_string());
+            ui.end_row();
+        }
+    });
+    ui.label(format!(
+        "neck {}, trunk {}, legs {}; score D {}",
+        rula.body.neck, rula.body.trunk, rula.body.legs, rula.body.score_d
+    ));
 }

@@ -10,6 +10,7 @@ use crate::model::{
 use egui::RichText;
 use stance_document::LimbName;
 use stance_hanim::{MatchMethod, readable_name};
+use stance_ik::Joint;
 
 use super::avatar_panel::{GUESS_COLOR, LOW_CONFIDENCE};
 use super::{ButtonRects, Windows, copy_link};
@@ -30,6 +31,34 @@ pub(super) struct SidePanel<'a> {
 impl SidePanel<'_> {
     /// The whole panel.
     pub(super) fn show(&mut self, ui: &mut egui::Ui) {
+        self.humanoid_section(ui);
+        self.edit_buttons(ui);
+        let copy = ui.button("Copy posture link").on_hover_text("L");
+        self.buttons.push(("copy_link", copy.rect));
+        if copy.clicked() {
+            copy_link(ui.ctx(), self.model, self.outbox);
+        }
+        let pin_tool = ui
+            .toggle_value(self.pin_tool, "Pin tool")
+            .on_hover_text("While on, a click on the body pins that part (also Alt + click)");
+        self.buttons.push(("pin_tool", pin_tool.rect));
+        let sensors = ui
+            .button("Motion-capture sensors…")
+            .on_hover_text("S: connect serial or HID sensors, calibrate, record, replay");
+        self.buttons.push(("sensors_open", sensors.rect));
+        if sensors.clicked() {
+            self.windows.sensors = !self.windows.sensors;
+        }
+        ui.separator();
+        self.selection_and_hands(ui);
+        ui.separator();
+        self.library_section(ui);
+        ui.separator();
+        super::comfort_panel::show(ui, self.model, self.outbox);
+    }
+
+    /// The body: avatar or mannequin, its level of articulation, joints and DOF.
+    fn humanoid_section(&mut self, ui: &mut egui::Ui) {
         ui.heading("Humanoid");
         match self.model.avatar() {
             Some(avatar) => {
@@ -65,6 +94,10 @@ impl SidePanel<'_> {
             self.model.session().skeleton().joint_count(),
             self.model.session().skeleton().dof_count()
         ));
+    }
+
+    /// Undo and redo, mirror and rest.
+    fn edit_buttons(&mut self, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
             if ui
                 .add_enabled(self.model.history().can_undo(), egui::Button::new("Undo"))
@@ -90,28 +123,6 @@ impl SidePanel<'_> {
                     .send(Command::Posture(PostureCommand::ResetToRest));
             }
         });
-        let copy = ui.button("Copy posture link").on_hover_text("L");
-        self.buttons.push(("copy_link", copy.rect));
-        if copy.clicked() {
-            copy_link(ui.ctx(), self.model, self.outbox);
-        }
-        let pin_tool = ui
-            .toggle_value(self.pin_tool, "Pin tool")
-            .on_hover_text("While on, a click on the body pins that part (also Alt + click)");
-        self.buttons.push(("pin_tool", pin_tool.rect));
-        let sensors = ui
-            .button("Motion-capture sensors…")
-            .on_hover_text("S: connect serial or HID sensors, calibrate, record, replay");
-        self.buttons.push(("sensors_open", sensors.rect));
-        if sensors.clicked() {
-            self.windows.sensors = !self.windows.sensors;
-        }
-        ui.separator();
-        self.selection_and_hands(ui);
-        ui.separator();
-        self.library_section(ui);
-        ui.separator();
-        super::comfort_panel::show(ui, self.model, self.outbox);
     }
 
     /// The selection and, on a body with fingers, the hands.
@@ -131,8 +142,6 @@ impl SidePanel<'_> {
             self.outbox.send(Command::View(ViewCommand::Select(None)));
             return;
         };
-        let lower = skeleton.lower_limits().to_vec();
-        let upper = skeleton.upper_limits().to_vec();
         ui.label(RichText::new(readable_name(&joint.name)).strong());
         ui.label(RichText::new(&joint.name).small().weak());
         ui.horizontal(|ui| {
@@ -151,49 +160,7 @@ impl SidePanel<'_> {
                     ))));
             }
         });
-        // Joint mode: each DOF within its anatomical limits.
-        let values = self.model.session().posture().values().to_vec();
-        let mut edit: Option<(usize, f64)> = None;
-        egui::Grid::new("joint_dofs").num_columns(2).show(ui, |ui| {
-            for (offset, dof) in joint.dofs.iter().enumerate() {
-                let index = joint.dof_start + offset;
-                let (Some(&value), Some(&low), Some(&high)) =
-                    (values.get(index), lower.get(index), upper.get(index))
-                else {
-                    continue;
-                };
-                ui.label(dof.name());
-                if dof.is_rotation() {
-                    let mut degrees = value.to_degrees();
-                    let range = low.to_degrees().max(-360.0)..=high.to_degrees().min(360.0);
-                    let response = ui.add(
-                        egui::DragValue::new(&mut degrees)
-                            .range(range)
-                            .speed(0.5)
-                            .suffix("°")
-                            .max_decimals(1),
-                    );
-                    if response.changed() {
-                        edit = Some((index, degrees.to_radians()));
-                    }
-                } else {
-                    let mut metres = value;
-                    if ui
-                        .add(
-                            egui::DragValue::new(&mut metres)
-                                .speed(0.005)
-                                .suffix(" m")
-                                .max_decimals(3),
-                        )
-                        .changed()
-                    {
-                        edit = Some((index, metres));
-                    }
-                }
-                ui.end_row();
-            }
-        });
-        if let Some((dof, value)) = edit {
+        if let Some((dof, value)) = dof_editors(ui, self.model, &joint) {
             self.outbox
                 .send(Command::Posture(PostureCommand::SetDof { dof, value }));
         }
@@ -375,4 +342,53 @@ impl SidePanel<'_> {
             self.windows.mapping_subject = super::avatar_panel::SubjectKind::Avatar;
         }
     }
+}
+
+/// Joint mode: each DOF of `joint` within its anatomical limits; returns the DOF edited and
+/// its new value.
+fn dof_editors(ui: &mut egui::Ui, model: &EditorModel, joint: &Joint) -> Option<(usize, f64)> {
+    let skeleton = model.session().skeleton();
+    let (lower, upper) = (skeleton.lower_limits(), skeleton.upper_limits());
+    let values = model.session().posture().values();
+    let mut edit: Option<(usize, f64)> = None;
+    egui::Grid::new("joint_dofs").num_columns(2).show(ui, |ui| {
+        for (offset, dof) in joint.dofs.iter().enumerate() {
+            let index = joint.dof_start + offset;
+            let (Some(&value), Some(&low), Some(&high)) =
+                (values.get(index), lower.get(index), upper.get(index))
+            else {
+                continue;
+            };
+            ui.label(dof.name());
+            if dof.is_rotation() {
+                let mut degrees = value.to_degrees();
+                let range = low.to_degrees().max(-360.0)..=high.to_degrees().min(360.0);
+                let response = ui.add(
+                    egui::DragValue::new(&mut degrees)
+                        .range(range)
+                        .speed(0.5)
+                        .suffix("°")
+                        .max_decimals(1),
+                );
+                if response.changed() {
+                    edit = Some((index, degrees.to_radians()));
+                }
+            } else {
+                let mut metres = value;
+                if ui
+                    .add(
+                        egui::DragValue::new(&mut metres)
+                            .speed(0.005)
+                            .suffix(" m")
+                            .max_decimals(3),
+                    )
+                    .changed()
+                {
+                    edit = Some((index, metres));
+                }
+            }
+            ui.end_row();
+        }
+    });
+    edit
 }
