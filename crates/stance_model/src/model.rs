@@ -65,14 +65,14 @@ const TRACE_STEP_M: f64 = 0.002;
 
 /// The editor's model.
 pub struct EditorModel {
-    pub(crate) session: PosingSession,
-    pub(crate) history: History,
-    pub(crate) selected_joint: Option<usize>,
-    pub(crate) hovered_joint: Option<usize>,
-    pub(crate) gesture: Option<Gesture>,
-    pub(crate) avatar: Option<LoadedAvatar>,
+    session: PosingSession,
+    history: History,
+    selected_joint: Option<usize>,
+    hovered_joint: Option<usize>,
+    gesture: Option<Gesture>,
+    avatar: Option<LoadedAvatar>,
     /// The URL the avatar came from (links and autosave name it); `None` for local files.
-    pub(crate) avatar_url: Option<String>,
+    avatar_url: Option<String>,
     /// Earlier bodies that undo or redo of a change of body brings back, by the id the
     /// history names them with (see `model/avatars.rs`).
     kept_bodies: Vec<(u64, avatars::KeptBody)>,
@@ -84,18 +84,18 @@ pub struct EditorModel {
     pending_document: Option<Document>,
     /// The avatar file the host is importing for the editor (its name).
     pending_import: Option<String>,
-    pub(crate) mapping_corrections: MappingCorrections,
-    pub(crate) trace: Vec<DVec3>,
-    pub(crate) notice: Option<Notice>,
-    pub(crate) library: PoseLibrary,
-    pub(crate) sensors: SensorHub,
+    mapping_corrections: MappingCorrections,
+    trace: Vec<DVec3>,
+    notice: Option<Notice>,
+    library: PoseLibrary,
+    sensors: SensorHub,
     /// The next picked file is a sensor recording to replay.
     /// What the next picked file is for, when the user asked for one.
     pending_pick: Option<PickPurpose>,
     /// Counts the times the document's saved view should be shown (a document with one was
     /// opened, or undo and redo changed it): the viewport follows each new count.
     view_requests: u64,
-    pub(crate) hooks: Box<dyn HostHooks>,
+    hooks: Box<dyn HostHooks>,
     autosave: Autosave,
     /// Seconds since the editor started, as of the last step.
     now_secs: f64,
@@ -106,13 +106,13 @@ pub struct EditorModel {
     /// The session revision the bones were built for.
     bones_revision: Option<u64>,
     /// CPU time of the last step's solve (ms).
-    pub(crate) solver_ms: f64,
+    solver_ms: f64,
     /// How many times the session was replaced (views keep per-session state by it).
     session_generation: u64,
     /// The clip, the playhead and the trajectory (the keys are in the document).
-    pub(crate) timeline: Timeline,
+    timeline: Timeline,
     /// The comfort panel: report and heat map.
-    pub(crate) comfort: ComfortView,
+    comfort: ComfortView,
 }
 
 impl std::fmt::Debug for EditorModel {
