@@ -707,3 +707,45 @@ fn an_avatar_imported_by_the_host_opens_when_it_arrives_and_only_the_last_asked_
     );
     assert_eq!(editor.model.avatar().unwrap().name, "second.glb");
 }
+
+#[test]
+fn the_outbox_carries_the_views_commands_out_in_order_and_says_the_most_they_changed() {
+    // Catches: commands dropped or reordered (a select then a pin of that part), the outbox
+    // not emptied (a command carried out twice), the change of the last command reported
+    // instead of the largest.
+    let mut editor = Clocked::new();
+    editor.settle();
+    let joint = editor.joint("l_elbow");
+    let mut outbox = stance_model::Outbox::default();
+    outbox.send(Command::View(ViewCommand::Select(Some(joint))));
+    outbox.send(Command::Posture(PostureCommand::Mirror));
+    outbox.send(Command::Posture(PostureCommand::PinSelected));
+    outbox.send(Command::View(ViewCommand::Hover(None)));
+    assert_eq!(
+        editor.model.apply_outbox(&mut outbox),
+        stance_model::Change::Posture
+    );
+    assert!(outbox.is_empty());
+    assert_eq!(editor.model.selected_joint(), Some(joint));
+    let pinned = editor
+        .model
+        .session()
+        .tasks()
+        .iter()
+        .filter(|task| task.level == 1)
+        .count();
+    assert_eq!(
+        editor.model.apply_outbox(&mut outbox),
+        stance_model::Change::Nothing
+    );
+    // Undo takes back the pin, then the mirror: two edits, each carried out once.
+    editor.apply(Command::History(HistoryCommand::Undo));
+    let after_undo = editor
+        .model
+        .session()
+        .tasks()
+        .iter()
+        .filter(|task| task.level == 1)
+        .count();
+    assert_eq!(after_undo + 1, pinned);
+}
