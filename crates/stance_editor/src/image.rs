@@ -4,7 +4,7 @@
 //! request, whoever has the GPU (the viewport, or a test) calls [`ImageExport::advance`]
 //! every frame until it is done (the read-back is asynchronous: in the browser it completes
 //! on a later frame), and the finished PNG goes to the model as a command
-//! ([`Command::SaveImage`]), which hands it to the host.
+//! ([`FileCommand::SaveImage`]), which hands it to the host.
 
 use crate::model::Outbox;
 use crate::model::{FileCommand, NoticeCommand};
