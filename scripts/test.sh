@@ -35,6 +35,18 @@ for crate in "${PURE_CRATES[@]}"; do
   fi
 done
 
+# The editor's model is not a pure crate (it reads files through stance_asset and builds the
+# renderer's plain data, stance_render without its `gpu` feature) and its tests run natively
+# only; but it holds no UI, GPU or browser code: the views are stance_editor's (web-time's
+# wasm-bindgen, the browser's clock, is allowed).
+step "purity: stance_model depends on no UI, GPU or browser crate"
+forbidden=$(cargo tree -p stance_model -e normal --target all --prefix none --format '{lib}' \
+  | sed 's/ (\*)$//' | grep -Ex 'wgpu|egui|eframe|web_sys|winit|egui_wgpu|egui_kittest' | sort -u || true)
+if [ -n "$forbidden" ]; then
+  echo "stance_model depends on: $forbidden" >&2
+  exit 1
+fi
+
 step "fuzz targets: every file in crates/*/fuzz/fuzz_targets is a declared target (scripts/fuzz.sh runs them all)"
 for fuzz_dir in crates/*/fuzz; do
   for file in "$fuzz_dir"/fuzz_targets/*.rs; do

@@ -16,11 +16,15 @@ mod tasks_panel;
 mod timeline_panel;
 mod viewport_panel;
 
+use crate::model::{
+    AvatarCommand, FileCommand, GestureCommand, HistoryCommand, LibraryCommand, NoticeCommand,
+    PostureCommand, ViewCommand,
+};
 use std::sync::mpsc::Receiver;
 
 use egui::{Color32, Key, KeyboardShortcut, Modifiers, RichText};
-use stance_document::link;
 use stance_hanim::LevelOfArticulation;
+use stance_ik::Clock;
 use stance_render::{OrbitCamera, ViewPreset};
 
 use self::avatar_panel::MappingEditor;
@@ -31,14 +35,17 @@ use self::state::PageState;
 use self::tasks_panel::TasksPanel;
 use self::timeline_panel::TimelinePanel;
 use self::viewport_panel::ViewportPanel;
-use crate::host::{HostHooks, HostMessage};
-use crate::model::{Command, EditorModel, MotionCommand};
+use crate::model::{Command, EditorModel, MotionCommand, Outbox};
 use crate::posing::PosingError;
+use stance_model::{HostHooks, HostMessage};
 
 /// The Stance editor.
 pub struct StanceApp {
     /// Everything the editor knows and does, without egui.
     model: EditorModel,
+    /// What the views sent the model this frame: carried out between the views
+    /// ([`StanceApp::carry_out`]).
+    outbox: Outbox,
     viewport: ViewportPanel,
     windows: Windows,
     mapping_editor: MappingEditor,
@@ -95,6 +102,7 @@ impl StanceApp {
     pub fn without_gpu(hooks: Box<dyn HostHooks>) -> Result<Self, PosingError> {
         Ok(Self {
             model: EditorModel::new(hooks)?,
+            outbox: Outbox::default(),
             viewport: ViewportPanel::new(None),
             windows: Windows::default(),
             mapping_editor: MappingEditor::default(),
@@ -129,6 +137,11 @@ impl StanceApp {
         self.model.apply(command);
     }
 
+    /// Carries out what the views sent the model so far.
+    fn carry_out(&mut self) {
+        self.model.apply_outbox(&mut self.outbox);
+    }
+
     /// The viewport's orbit camera.
     pub fn camera(&self) -> &OrbitCamera {
         &self.viewport.camera
@@ -158,35 +171,37 @@ impl StanceApp {
         if ctx.input_mut(|input| input.consume_shortcut(&redo_shift))
             || ctx.input_mut(|input| input.consume_shortcut(&redo_y))
         {
-            self.model.apply(Command::Redo);
+            self.outbox.send(Command::History(HistoryCommand::Redo));
         } else if ctx.input_mut(|input| input.consume_shortcut(&undo)) {
-            self.model.apply(Command::Undo);
+            self.outbox.send(Command::History(HistoryCommand::Undo));
         }
         if ctx.egui_wants_keyboard_input() {
             return;
         }
         let plain = |key| KeyboardShortcut::new(Modifiers::NONE, key);
         if ctx.input_mut(|input| input.consume_shortcut(&plain(Key::P))) {
-            self.model.apply(Command::PinSelected);
+            self.outbox
+                .send(Command::Posture(PostureCommand::PinSelected));
         }
         if ctx.input_mut(|input| input.consume_shortcut(&plain(Key::M))) {
-            self.model.apply(Command::Mirror);
+            self.outbox.send(Command::Posture(PostureCommand::Mirror));
         }
         if ctx.input_mut(|input| input.consume_shortcut(&plain(Key::R))) {
-            self.model.apply(Command::ResetToRest);
+            self.outbox
+                .send(Command::Posture(PostureCommand::ResetToRest));
         }
         if ctx.input_mut(|input| input.consume_shortcut(&plain(Key::F))) {
             self.viewport.frame(&self.model, false);
         }
         self.view_keys(ctx);
         if ctx.input_mut(|input| input.consume_shortcut(&plain(Key::L))) {
-            copy_link(ctx, &mut self.model);
+            copy_link(ctx, &self.model, &mut self.outbox);
         }
         if ctx.input_mut(|input| input.consume_shortcut(&plain(Key::T))) {
             self.viewport.show_trace = !self.viewport.show_trace;
         }
         if ctx.input_mut(|input| input.consume_shortcut(&plain(Key::K))) {
-            self.model.apply(Command::Motion(MotionCommand::SetKey));
+            self.outbox.send(Command::Motion(MotionCommand::SetKey));
         }
         if ctx.input_mut(|input| input.consume_shortcut(&plain(Key::S))) {
             self.windows.sensors = !self.windows.sensors;
@@ -198,9 +213,10 @@ impl StanceApp {
         }
         if ctx.input_mut(|input| input.consume_shortcut(&plain(Key::Escape))) {
             if self.model.gesture().is_some() {
-                self.model.apply(Command::CancelGesture);
+                self.outbox
+                    .send(Command::Gesture(GestureCommand::CancelGesture));
             } else {
-                self.model.apply(Command::Select(None));
+                self.outbox.send(Command::View(ViewCommand::Select(None)));
             }
         }
     }
@@ -220,7 +236,7 @@ impl StanceApp {
             ui.menu_button("Motion", |ui| {
                 let before = self.timeline_shown();
                 let mut shown = before;
-                if timeline_panel::motion_menu(&mut self.model, ui, &mut shown) {
+                if timeline_panel::motion_menu(&self.model, &mut self.outbox, ui, &mut shown) {
                     self.windows.mapping = true;
                     self.windows.mapping_subject = SubjectKind::Clip;
                 }
@@ -245,19 +261,19 @@ impl StanceApp {
 
     fn file_menu(&mut self, ui: &mut egui::Ui) {
         if ui.button("Copy posture link (L)").clicked() {
-            copy_link(ui.ctx(), &mut self.model);
+            copy_link(ui.ctx(), &self.model, &mut self.outbox);
             ui.close();
         }
         ui.separator();
         let mut command = None;
         if ui.button("Export pose (JSON)…").clicked() {
-            command = Some(Command::ExportDocument);
+            command = Some(Command::File(FileCommand::ExportDocument));
         }
         if ui.button("Import pose or library (JSON)…").clicked() {
-            command = Some(Command::PickFile);
+            command = Some(Command::File(FileCommand::PickFile));
         }
         if ui.button("Export pose library (JSON)…").clicked() {
-            command = Some(Command::ExportLibrary);
+            command = Some(Command::Library(LibraryCommand::Export));
         }
         ui.separator();
         let posed = ui
@@ -268,7 +284,7 @@ impl StanceApp {
             .on_disabled_hover_text("load an avatar first (Avatar menu)");
         self.button_rects.push(("export_posed", posed.rect));
         if posed.clicked() {
-            command = Some(Command::ExportPosedAvatar);
+            command = Some(Command::Avatar(AvatarCommand::ExportPosedAvatar));
         }
         ui.separator();
         let save_image = ui.button("Save image (PNG)…");
@@ -278,7 +294,7 @@ impl StanceApp {
             ui.close();
         }
         if let Some(command) = command {
-            self.model.apply(command);
+            self.outbox.send(command);
             ui.close();
         }
     }
@@ -286,10 +302,12 @@ impl StanceApp {
     fn avatar_menu(&mut self, ui: &mut egui::Ui) {
         let mut command = None;
         if ui.button("Open avatar file (glTF, GLB, VRM)…").clicked() {
-            command = Some(Command::PickFile);
+            command = Some(Command::File(FileCommand::PickFile));
         }
         if ui.button("Bundled skinned humanoid").clicked() {
-            command = Some(Command::FetchAvatar("default-avatar.glb".to_owned()));
+            command = Some(Command::Avatar(AvatarCommand::FetchAvatar(
+                "default-avatar.glb".to_owned(),
+            )));
         }
         if ui
             .add_enabled(
@@ -298,11 +316,11 @@ impl StanceApp {
             )
             .clicked()
         {
-            command = Some(Command::UseMannequin);
+            command = Some(Command::Avatar(AvatarCommand::UseMannequin));
         }
         ui.checkbox(&mut self.viewport.show_skeleton, "Show the skeleton");
         if let Some(command) = command {
-            self.model.apply(command);
+            self.outbox.send(command);
             ui.close();
         }
     }
@@ -310,11 +328,36 @@ impl StanceApp {
     fn edit_menu(&mut self, ui: &mut egui::Ui) {
         let history = self.model.history();
         let entries = [
-            ("Undo", "Ctrl+Z", history.can_undo(), Command::Undo),
-            ("Redo", "Ctrl+Shift+Z", history.can_redo(), Command::Redo),
-            ("Pin selected part", "P", true, Command::PinSelected),
-            ("Mirror left/right", "M", true, Command::Mirror),
-            ("Reset to rest pose", "R", true, Command::ResetToRest),
+            (
+                "Undo",
+                "Ctrl+Z",
+                history.can_undo(),
+                Command::History(HistoryCommand::Undo),
+            ),
+            (
+                "Redo",
+                "Ctrl+Shift+Z",
+                history.can_redo(),
+                Command::History(HistoryCommand::Redo),
+            ),
+            (
+                "Pin selected part",
+                "P",
+                true,
+                Command::Posture(PostureCommand::PinSelected),
+            ),
+            (
+                "Mirror left/right",
+                "M",
+                true,
+                Command::Posture(PostureCommand::Mirror),
+            ),
+            (
+                "Reset to rest pose",
+                "R",
+                true,
+                Command::Posture(PostureCommand::ResetToRest),
+            ),
         ];
         let mut chosen = None;
         for (position, (label, shortcut, enabled, command)) in entries.into_iter().enumerate() {
@@ -329,7 +372,7 @@ impl StanceApp {
             }
         }
         if let Some(command) = chosen {
-            self.model.apply(command);
+            self.outbox.send(command);
             ui.close();
         }
     }
@@ -400,13 +443,14 @@ impl StanceApp {
         }
         ui.separator();
         if ui.button("Save this view with the document").clicked() {
-            self.viewport.save_camera(&mut self.model);
+            self.viewport.save_camera(&mut self.outbox);
             ui.close();
         }
         if self.model.session().camera().is_some()
             && ui.button("Forget the document's view").clicked()
         {
-            self.model.apply(Command::SaveCamera(None));
+            self.outbox
+                .send(Command::Posture(PostureCommand::SaveCamera(None)));
             ui.close();
         }
     }
@@ -429,7 +473,8 @@ impl StanceApp {
                 .radio(current == loa, format!("LOA {}", loa.number()))
                 .clicked()
             {
-                self.model.apply(Command::SetLevelOfArticulation(loa));
+                self.outbox
+                    .send(Command::Avatar(AvatarCommand::SetLevelOfArticulation(loa)));
             }
         }
     }
@@ -463,8 +508,8 @@ impl StanceApp {
                 ui.label(format!("frame {:.1} ms", cpu_seconds * 1000.0));
             }
             ui.separator();
-            ui.label(format!("solver {:.2} ms", self.model.solver_ms));
-            if let Some(report) = self.model.session.report() {
+            ui.label(format!("solver {:.2} ms", self.model.solver_ms()));
+            if let Some(report) = self.model.session().report() {
                 ui.separator();
                 let status = match report.status {
                     stance_ik::SolveStatus::Converged => "converged",
@@ -503,8 +548,8 @@ impl StanceApp {
                         .on_hover_text("stop opening the clip: the document stays as it is");
                     self.button_rects.push(("cancel_clip", cancel.rect));
                     if cancel.clicked() {
-                        self.model
-                            .apply(Command::Motion(crate::model::MotionCommand::CancelOpening));
+                        self.outbox
+                            .send(Command::Motion(crate::model::MotionCommand::CancelOpening));
                     }
                     let file = name.rsplit('/').next().unwrap_or(&name);
                     ui.add(egui::ProgressBar::new(progress as f32).text(format!(
@@ -539,7 +584,7 @@ impl StanceApp {
                 // widened the viewport under the tasks panel.)
                 ui.with_layout(egui::Layout::right_to_left(egui::Align::Min), |ui| {
                     if ui.small_button("x").on_hover_text("dismiss").clicked() {
-                        self.model.apply(Command::DismissNotice);
+                        self.outbox.send(Command::Notice(NoticeCommand::Dismiss));
                     }
                     ui.with_layout(egui::Layout::left_to_right(egui::Align::Min), |ui| {
                         ui.add(
@@ -591,7 +636,11 @@ impl StanceApp {
         let handed_to_host = opens_file
             && self.model.importing().is_some()
             && self.model.importing() != awaited.as_deref();
-        self.viewport.begin_avatar_upload(&mut self.model) || handed_to_host
+        let uploading = self
+            .viewport
+            .begin_avatar_upload(&self.model, &mut self.outbox);
+        self.carry_out();
+        uploading || handed_to_host
     }
 
     /// A share of the avatar's GPU upload, stepped by the host between frames (see
@@ -613,12 +662,14 @@ impl StanceApp {
         .to_json()
     }
 
-    /// Draws the whole editor into `ui` (shared by eframe and the UI tests).
+    /// Draws the whole editor into `ui` (shared by eframe and the UI tests): the views read
+    /// the model and send it commands, carried out after each view.
     pub fn show(&mut self, ui: &mut egui::Ui, frame: &eframe::Frame) {
         let ctx = ui.ctx().clone();
         self.button_rects.clear();
         self.drain_inbox();
         self.shortcuts(&ctx);
+        self.carry_out();
         // The frame's step runs before anything is drawn: the panels and the viewport show
         // this frame's posture and statuses. A gesture the viewport reads below is solved
         // there again before the body is drawn (EditorModel::follow_input).
@@ -632,23 +683,39 @@ impl StanceApp {
         }
         egui::Panel::top("menu_bar").show(ui, |ui| self.menu_bar(ui));
         egui::Panel::bottom("status_bar").show(ui, |ui| self.status_bar(ui, frame));
+        self.carry_out();
+        self.panels(ui);
+        egui::CentralPanel::default()
+            .frame(egui::Frame::NONE)
+            .show(ui, |ui| self.central(ui, frame, &clock));
+        self.show_windows(&ctx);
+        if let Some(cpu_seconds) = frame.info().cpu_usage {
+            self.frame_ms = f64::from(cpu_seconds) * 1000.0;
+        }
+    }
+
+    /// The timeline, side and tasks panels, each one's commands carried out before the next.
+    fn panels(&mut self, ui: &mut egui::Ui) {
         if self.timeline_shown() {
             egui::Panel::bottom("timeline_panel")
                 .exact_size(TimelinePanel::height(&self.model))
                 .show(ui, |ui| {
                     let mut panel = TimelinePanel {
-                        model: &mut self.model,
+                        model: &self.model,
+                        outbox: &mut self.outbox,
                         buttons: &mut self.button_rects,
                     };
                     egui::ScrollArea::vertical().show(ui, |ui| panel.show(ui));
                 });
+            self.carry_out();
         }
         egui::Panel::left("side_panel")
             .resizable(true)
             .default_size(230.0)
             .show(ui, |ui| {
                 let mut panel = SidePanel {
-                    model: &mut self.model,
+                    model: &self.model,
+                    outbox: &mut self.outbox,
                     pin_tool: &mut self.viewport.pin_tool,
                     windows: &mut self.windows,
                     library_name: &mut self.library_name,
@@ -656,55 +723,73 @@ impl StanceApp {
                 };
                 egui::ScrollArea::vertical().show(ui, |ui| panel.show(ui));
             });
+        self.carry_out();
         egui::Panel::right("tasks_panel")
             .resizable(true)
             .default_size(330.0)
             .show(ui, |ui| {
                 let mut panel = TasksPanel {
-                    model: &mut self.model,
+                    model: &self.model,
+                    outbox: &mut self.outbox,
                     buttons: &mut self.button_rects,
                 };
                 egui::ScrollArea::vertical().show(ui, |ui| panel.show(ui));
             });
-        egui::CentralPanel::default()
-            .frame(egui::Frame::NONE)
-            .show(ui, |ui| {
-                self.opening_strip(ui);
-                self.notice_strip(ui);
-                self.viewport.follow_document_camera(&self.model);
-                self.viewport.show(ui, frame, &mut self.model, &clock);
-            });
-        self.help_window(&ctx);
-        self.windows.image.show(
-            &ctx,
-            &mut self.model,
-            &self.viewport,
-            &mut self.button_rects,
-        );
+        self.carry_out();
+    }
+
+    /// The strips above the viewport and the viewport: its input is carried out and a gesture
+    /// it moved solved again (within `clock`'s frame budget) before the body is drawn, so that
+    /// the body drawn follows the pointer read in the same frame.
+    fn central(&mut self, ui: &mut egui::Ui, frame: &eframe::Frame, clock: &dyn Clock) {
+        self.opening_strip(ui);
+        self.notice_strip(ui);
+        self.carry_out();
+        self.viewport.follow_document_camera(&self.model);
+        let (response, input) = self.viewport.read_input(ui, &self.model, &mut self.outbox);
+        self.carry_out();
+        self.viewport
+            .follow_pointer(ui, &response, &input, &self.model, &mut self.outbox);
+        self.carry_out();
+        self.model.follow_input(Some(clock));
+        self.viewport
+            .show(ui, frame, &self.model, &mut self.outbox, &response);
+        self.model.readings_shown();
+        self.carry_out();
+    }
+
+    /// The windows: help, Save image, sensors, mapping.
+    fn show_windows(&mut self, ctx: &egui::Context) {
+        self.help_window(ctx);
+        self.windows
+            .image
+            .show(ctx, &mut self.viewport, &mut self.button_rects);
         let mut sensors = SensorsWindow {
-            model: &mut self.model,
+            model: &self.model,
+            outbox: &mut self.outbox,
             viewport_rect: self.viewport.rect,
             buttons: &mut self.button_rects,
         };
-        sensors.show(&ctx, &mut self.windows.sensors);
+        sensors.show(ctx, &mut self.windows.sensors);
         self.mapping_editor.show(
-            &ctx,
-            &mut self.model,
+            ctx,
+            &self.model,
+            &mut self.outbox,
             (&mut self.windows.mapping, self.windows.mapping_subject),
             &mut self.button_rects,
         );
-        if let Some(cpu_seconds) = frame.info().cpu_usage {
-            self.frame_ms = f64::from(cpu_seconds) * 1000.0;
-        }
+        self.carry_out();
     }
 }
 
 /// Encodes the document into the address bar and the clipboard.
-fn copy_link(ctx: &egui::Context, model: &mut EditorModel) {
-    let shared = link::encode_for_sharing(&model.document());
-    let url = model.hooks.share_link(&shared.fragment);
-    ctx.copy_text(url);
-    model.link_shared(shared.fragment.len(), shared.keys_left_out);
+fn copy_link(ctx: &egui::Context, model: &EditorModel, outbox: &mut Outbox) {
+    let shared = model.share_link();
+    ctx.copy_text(shared.url);
+    outbox.send(Command::File(FileCommand::LinkShared {
+        characters: shared.characters,
+        keys_left_out: shared.keys_left_out,
+    }));
 }
 
 /// The help window's rows: gesture or key, and what it does.

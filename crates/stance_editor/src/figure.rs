@@ -2,6 +2,8 @@
 //! and clothes, `stance_asset::make_default_avatar`) posed by the mannequin's posture, joint
 //! by joint by H-Anim name. The capsule view stays a display option (and the heat map's).
 
+use std::sync::Arc;
+
 use glam::Mat4;
 use stance_asset::make_default_avatar;
 use stance_hanim::{HumanoidSkeleton, LevelOfArticulation, SkeletonOptions};
@@ -40,8 +42,8 @@ impl MannequinFigure {
     }
 
     /// The mesh for the GPU (once).
-    pub fn take_model(&mut self) -> Option<SkinnedModel> {
-        self.avatar.model.take()
+    pub fn take_model(&mut self) -> Option<Arc<SkinnedModel>> {
+        self.avatar.take_mesh()
     }
 
     /// The skinning palettes that show `posture` of the mannequin `skeleton`: each DOF of

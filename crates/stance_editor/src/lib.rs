@@ -1,25 +1,21 @@
 //! The Stance application: the posture editor (tasks with priorities, grab-and-pull, undo,
 //! posture links, pose library) around the 3D viewport, and the eframe [`App`](eframe::App)
-//! that runs it natively and in the browser.
+//! that runs it natively and in the browser. The editor's state is `stance_model`'s (re-exported
+//! here): this crate holds the views, the viewport and what draws with the GPU.
 
 #![warn(missing_docs)]
+#![warn(clippy::too_many_lines)]
 
 mod app;
-pub mod avatar;
 pub mod figure;
 pub mod fonts;
-pub mod history;
-mod host;
-pub mod library;
-pub mod model;
-pub mod posing;
-pub mod sensors;
+pub mod image;
 mod viewport;
 
 pub use app::StanceApp;
-pub use host::{
-    AvatarImport, BackendSummary, ClipRetarget, HostHooks, HostMessage, ImportedAvatar, MemoryHost,
-    MemoryHostState, NoHostHooks,
+pub use stance_model::{
+    AvatarImport, BackendSummary, ClipRetarget, Command, EditorModel, Gesture, HostHooks,
+    HostMessage, ImportedAvatar, MemoryHost, MemoryHostState, NoHostHooks, Notice, SessionChange,
 };
-pub use model::{Command, EditorModel, Gesture, Notice, SessionChange};
+pub use stance_model::{avatar, history, library, model, posing, sensors};
 pub use viewport::{CameraGesture, ViewportInput};

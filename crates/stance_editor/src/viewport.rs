@@ -164,7 +164,10 @@ impl ViewportRenderer {
     }
 
     /// Starts uploading the avatar's GPU model over the next frames.
-    pub(crate) fn begin_avatar_upload(&mut self, model: stance_render::SkinnedModel) {
+    pub(crate) fn begin_avatar_upload(
+        &mut self,
+        model: std::sync::Arc<stance_render::SkinnedModel>,
+    ) {
         self.scene_renderer.begin_avatar_upload(model);
     }
 

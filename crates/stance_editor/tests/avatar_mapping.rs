@@ -11,6 +11,7 @@ use egui_kittest::kittest::{NodeT, Queryable};
 use glam::DVec3;
 use stance_asset::{LoadOptions, export_glb, load_avatar, make_default_avatar};
 use stance_document::TaskSpec;
+use stance_editor::model::{AvatarCommand, FileCommand};
 use stance_editor::{Command, MemoryHost, NoHostHooks, StanceApp};
 use stance_hanim::{LevelOfArticulation, SkeletonOptions};
 use stance_ik::Frames;
@@ -25,10 +26,10 @@ fn avatar_bytes() -> Vec<u8> {
 
 fn harness_with_avatar(host: &MemoryHost) -> Harness<'static, StanceApp> {
     let mut app = StanceApp::without_gpu(Box::new(host.clone())).unwrap();
-    app.apply(Command::LoadAvatar {
+    app.apply(Command::Avatar(AvatarCommand::LoadAvatar {
         name: "figure.glb".to_owned(),
         bytes: avatar_bytes(),
-    });
+    }));
     assert!(app.model().avatar().is_some(), "{:?}", app.model().notice());
     harness_sized(app, egui::vec2(1280.0, 800.0))
 }
@@ -159,10 +160,12 @@ fn swapping_the_elbows_in_the_mapping_window_rebuilds_the_skeleton() {
     document
         .tasks
         .push(TaskSpec::pin("l_sternoclavicular", collarbone.to_array()));
-    harness.state_mut().apply(Command::OpenFile {
-        name: "pose.json".to_owned(),
-        bytes: document.to_json(false).as_bytes().to_vec(),
-    });
+    harness
+        .state_mut()
+        .apply(Command::File(FileCommand::OpenFile {
+            name: "pose.json".to_owned(),
+            bytes: document.to_json(false).as_bytes().to_vec(),
+        }));
     settle(&mut harness);
     assert_eq!(
         harness.state().model().session().tasks().len(),
@@ -198,12 +201,16 @@ fn swapping_the_elbows_in_the_mapping_window_rebuilds_the_skeleton() {
 
     // The corrections stay with this avatar for the session: back to the mannequin, then
     // the same file again.
-    harness.state_mut().apply(Command::UseMannequin);
+    harness
+        .state_mut()
+        .apply(Command::Avatar(AvatarCommand::UseMannequin));
     harness.run_steps(2);
-    harness.state_mut().apply(Command::LoadAvatar {
-        name: "figure.glb".to_owned(),
-        bytes: avatar_bytes(),
-    });
+    harness
+        .state_mut()
+        .apply(Command::Avatar(AvatarCommand::LoadAvatar {
+            name: "figure.glb".to_owned(),
+            bytes: avatar_bytes(),
+        }));
     settle(&mut harness);
     assert!(
         notice(&harness).contains("made again"),
@@ -297,14 +304,14 @@ fn the_posed_avatar_is_exported_as_glb_that_reads_back_in_the_same_posture() {
 #[test]
 fn an_export_the_host_cannot_download_says_why() {
     let mut app = StanceApp::without_gpu(Box::new(NoHostHooks)).unwrap();
-    app.apply(Command::ExportPosedAvatar);
+    app.apply(Command::Avatar(AvatarCommand::ExportPosedAvatar));
     let notice = app.model().notice().unwrap();
     assert!(notice.is_error && notice.text.contains("Load an avatar first"));
-    app.apply(Command::LoadAvatar {
+    app.apply(Command::Avatar(AvatarCommand::LoadAvatar {
         name: "figure.glb".to_owned(),
         bytes: avatar_bytes(),
-    });
-    app.apply(Command::ExportPosedAvatar);
+    }));
+    app.apply(Command::Avatar(AvatarCommand::ExportPosedAvatar));
     let notice = app.model().notice().unwrap();
     assert!(notice.is_error, "{}", notice.text);
     assert!(notice.text.contains("cannot download"), "{}", notice.text);

@@ -60,8 +60,8 @@ fn the_shared_avatar_maps_renders_skinned_and_reaches_with_its_hand() {
 
     let (device, queue) = device();
     let mut renderer = SceneRenderer::new(&device);
-    let model = loaded.model.take().unwrap();
-    renderer.set_avatar(&device, &queue, Some(&model));
+    let model = loaded.take_mesh().unwrap();
+    renderer.set_avatar(&device, &queue, Some(&*model));
     // The same avatar uploaded over frames, as the editor does it.
     let mut staged = SceneRenderer::new(&device);
     staged.begin_avatar_upload(model.clone());

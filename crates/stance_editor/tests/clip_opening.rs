@@ -6,6 +6,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use stance_editor::model::MotionCommand;
+use stance_editor::model::{AvatarCommand, FileCommand, ViewCommand};
 use stance_editor::{ClipRetarget, Command, HostMessage, MemoryHost, StanceApp};
 use stance_hanim::LevelOfArticulation;
 
@@ -120,7 +121,9 @@ fn a_change_of_body_while_a_clip_opens_asks_again_on_the_new_body() {
     let mut model = editor_on(&host);
     open(&mut model, "walk.bvh", WALK);
     let first = last_request(&host);
-    model.apply(Command::SetLevelOfArticulation(LevelOfArticulation::Loa1));
+    model.apply(Command::Avatar(AvatarCommand::SetLevelOfArticulation(
+        LevelOfArticulation::Loa1,
+    )));
     let second = last_request(&host);
     assert_ne!(second.id, first.id);
     assert_eq!(host.inner.borrow().cancelled_clips, vec![first.id]);
@@ -186,10 +189,12 @@ fn the_progress_strip_shows_and_its_cancel_button_stops_the_opening() {
     let host = worker_host();
     let app = StanceApp::without_gpu(Box::new(host.clone())).unwrap();
     let mut harness = harness_for(app);
-    harness.state_mut().apply(Command::OpenFile {
-        name: "walk.bvh".into(),
-        bytes: WALK.to_vec(),
-    });
+    harness
+        .state_mut()
+        .apply(Command::File(FileCommand::OpenFile {
+            name: "walk.bvh".into(),
+            bytes: WALK.to_vec(),
+        }));
     let id = last_request(&host).id;
     harness
         .state_mut()
@@ -228,7 +233,7 @@ fn a_long_clips_trajectory_is_computed_a_thousand_frames_a_step() {
     open(&mut model, "long.bvh", &long_walk(2500));
     assert_eq!(model.frame_count(), 2500);
     let wrist = model.session().skeleton().joint_index("l_radiocarpal");
-    model.apply(Command::Select(wrist));
+    model.apply(Command::View(ViewCommand::Select(wrist)));
     let mut lengths = Vec::new();
     for step in 1..=4 {
         model.step(step as f64, None);
@@ -265,7 +270,9 @@ fn a_change_of_body_puts_the_open_clip_on_it_again_through_the_host() {
     let named = model.document().clip.unwrap();
     let requests = host.inner.borrow().clip_requests.len();
 
-    model.apply(Command::SetLevelOfArticulation(LevelOfArticulation::Loa1));
+    model.apply(Command::Avatar(AvatarCommand::SetLevelOfArticulation(
+        LevelOfArticulation::Loa1,
+    )));
     assert_eq!(host.inner.borrow().clip_requests.len(), requests + 1);
     let request = last_request(&host);
     assert_eq!(request.job.bytes, WALK);
@@ -297,7 +304,9 @@ fn a_change_of_body_puts_the_open_clip_on_it_again_through_the_host() {
         "{notice}"
     );
     let mut own = editor_on(&MemoryHost::default());
-    own.apply(Command::SetLevelOfArticulation(LevelOfArticulation::Loa1));
+    own.apply(Command::Avatar(AvatarCommand::SetLevelOfArticulation(
+        LevelOfArticulation::Loa1,
+    )));
     open(&mut own, "walk.bvh", WALK);
     assert_eq!(model.frame_count(), own.frame_count());
     assert_eq!(model.timeline().contacts(), own.timeline().contacts());
@@ -332,7 +341,9 @@ fn a_mapping_correction_goes_with_the_file_and_cancel_closes_the_clip_but_keeps_
     assert!(model.timeline().has_clip());
     assert_eq!(model.key_frames(), vec![40], "the keys stay");
 
-    model.apply(Command::SetLevelOfArticulation(LevelOfArticulation::Loa1));
+    model.apply(Command::Avatar(AvatarCommand::SetLevelOfArticulation(
+        LevelOfArticulation::Loa1,
+    )));
     let request = last_request(&host);
     model.apply(Command::Motion(MotionCommand::CancelOpening));
     model.receive(answer(request));
@@ -360,7 +371,9 @@ fn the_open_clip_asked_for_again_survives_another_clip_a_new_mapping_and_close()
     let named = model.document().clip.unwrap();
 
     // Another clip opened while the walk is asked for again on LOA 1, then cancelled.
-    model.apply(Command::SetLevelOfArticulation(LevelOfArticulation::Loa1));
+    model.apply(Command::Avatar(AvatarCommand::SetLevelOfArticulation(
+        LevelOfArticulation::Loa1,
+    )));
     let walk_again = last_request(&host);
     open(&mut model, "run.bvh", RUN);
     let run = last_request(&host);
@@ -394,7 +407,9 @@ fn the_open_clip_asked_for_again_survives_another_clip_a_new_mapping_and_close()
     assert_eq!(model.document().clip, Some(named));
 
     // Closed while it is asked for again: the request is cancelled, its reply not taken.
-    model.apply(Command::SetLevelOfArticulation(LevelOfArticulation::Loa2));
+    model.apply(Command::Avatar(AvatarCommand::SetLevelOfArticulation(
+        LevelOfArticulation::Loa2,
+    )));
     let last = last_request(&host);
     model.apply(Command::Motion(MotionCommand::CloseClip));
     assert!(host.inner.borrow().cancelled_clips.contains(&last.id));

@@ -7,6 +7,9 @@ use egui::{Key, Modifiers, PointerButton, Pos2};
 use egui_kittest::Harness;
 use egui_kittest::kittest::{NodeT, Queryable};
 use stance_document::{Document, TaskKindSpec};
+use stance_editor::model::{
+    AvatarCommand, FileCommand, HistoryCommand, PostureCommand, ViewCommand,
+};
 use stance_editor::{Command, MemoryHost, StanceApp};
 
 use crate::common;
@@ -321,23 +324,23 @@ fn work_survives_a_reload_and_the_library_keeps_named_poses() {
 fn a_bad_file_says_what_is_wrong_and_changes_nothing() {
     let mut app = StanceApp::without_gpu(Box::new(MemoryHost::default())).unwrap();
     let before = app.model().session().document();
-    app.apply(Command::OpenFile {
+    app.apply(Command::File(FileCommand::OpenFile {
         name: "pose.json".to_owned(),
         bytes: br#"{"tasks":[{"kind":"position","joint":"l_wirst","target":[0,1]}]}"#.to_vec(),
-    });
+    }));
     let notice = app.model().notice().unwrap();
     assert!(notice.is_error, "{}", notice.text);
     assert!(notice.text.contains("target"), "{}", notice.text);
     assert_eq!(app.model().session().document(), before);
-    app.apply(Command::OpenFile {
+    app.apply(Command::File(FileCommand::OpenFile {
         name: "avatar.glb".to_owned(),
         bytes: b"glTF".to_vec(),
-    });
+    }));
     assert!(app.model().notice().unwrap().is_error);
-    app.apply(Command::OpenFile {
+    app.apply(Command::File(FileCommand::OpenFile {
         name: "binary.json".to_owned(),
         bytes: vec![0xff, 0xfe, 0x00],
-    });
+    }));
     assert!(app.model().notice().unwrap().text.contains("not a text"));
     assert_eq!(app.model().session().document(), before);
 }
@@ -724,10 +727,12 @@ fn dragging_the_swivel_handle_turns_the_elbow_and_the_hand_stays() {
     // A pose with the right elbow bent, opened from a file.
     let mut pose = document(&harness);
     pose.posture.set("r_elbow", stance_ik::Dof::Rx, -1.2);
-    harness.state_mut().apply(Command::OpenFile {
-        name: "bent.json".to_owned(),
-        bytes: pose.to_json(false).as_bytes().to_vec(),
-    });
+    harness
+        .state_mut()
+        .apply(Command::File(FileCommand::OpenFile {
+            name: "bent.json".to_owned(),
+            bytes: pose.to_json(false).as_bytes().to_vec(),
+        }));
     settle(&mut harness);
     // Select the right upper arm by clicking it.
     let shoulder = screen_position(&harness, "r_shoulder");
@@ -880,10 +885,12 @@ fn a_key_shows_the_timeline_and_its_play_button_toggles_playing() {
 fn the_motion_menu_opens_the_clip_mapping_window_with_the_clip_joints() {
     let host = MemoryHost::default();
     let mut harness = harness(&host);
-    harness.state_mut().apply(Command::OpenFile {
-        name: "walk.bvh".into(),
-        bytes: include_bytes!("../../../tests/fixtures/motion/walk.bvh").to_vec(),
-    });
+    harness
+        .state_mut()
+        .apply(Command::File(FileCommand::OpenFile {
+            name: "walk.bvh".into(),
+            bytes: include_bytes!("../../../tests/fixtures/motion/walk.bvh").to_vec(),
+        }));
     harness.run_steps(2);
     assert!(harness.state().model().timeline().has_clip());
     harness.get_by_label("Motion").click();
@@ -928,7 +935,9 @@ fn numpad_views_orthographic_framing_and_a_view_saved_with_the_document() {
         .skeleton()
         .joint_index("l_radiocarpal")
         .unwrap();
-    harness.state_mut().apply(Command::Select(Some(hand)));
+    harness
+        .state_mut()
+        .apply(Command::View(ViewCommand::Select(Some(hand))));
     harness.key_press(Key::Period);
     harness.run_steps(1);
     let camera = *harness.state().camera();
@@ -955,12 +964,18 @@ fn numpad_views_orthographic_framing_and_a_view_saved_with_the_document() {
     harness.key_press(Key::Num5);
     harness.run_steps(1);
     assert!(!harness.state().camera().orthographic);
-    harness.state_mut().apply(Command::OpenFile {
-        name: "saved.json".into(),
-        bytes: document.to_json(true).into_bytes(),
-    });
-    harness.state_mut().apply(Command::SaveCamera(None));
-    harness.state_mut().apply(Command::Undo);
+    harness
+        .state_mut()
+        .apply(Command::File(FileCommand::OpenFile {
+            name: "saved.json".into(),
+            bytes: document.to_json(true).into_bytes(),
+        }));
+    harness
+        .state_mut()
+        .apply(Command::Posture(PostureCommand::SaveCamera(None)));
+    harness
+        .state_mut()
+        .apply(Command::History(HistoryCommand::Undo));
     harness.run_steps(2);
     let back = harness.state().camera();
     assert!(back.orthographic && (back.target_world - camera.target_world).length() < 1e-4);
@@ -977,9 +992,11 @@ fn the_hands_section_poses_both_hands_with_a_click_and_is_gone_without_fingers()
     let closed = model.hand_curl(stance_editor::model::Hands::Both, None);
     assert!(closed.unwrap() > 0.8, "{closed:?}");
     assert!(model.history().can_undo());
-    harness.state_mut().apply(Command::SetLevelOfArticulation(
-        stance_hanim::LevelOfArticulation::Loa1,
-    ));
+    harness
+        .state_mut()
+        .apply(Command::Avatar(AvatarCommand::SetLevelOfArticulation(
+            stance_hanim::LevelOfArticulation::Loa1,
+        )));
     settle(&mut harness);
     assert!(harness.query_by_label("fist").is_none());
     assert!(harness.query_by_label("Hands").is_none());

@@ -1,4 +1,4 @@
-//! *Save image* on the model alone (no egui): the command, the offscreen render on whatever
+//! *Save image* without egui: the export beside the views, the offscreen render on whatever
 //! adapter the machine has (lavapipe on CI), the asynchronous read-back polled frame by frame,
 //! and the PNG handed to the host.
 
@@ -7,8 +7,9 @@
 use crate::clocked;
 use clocked::Clocked;
 
-use stance_editor::model::{IMAGE_FILE_NAME, ImageRequest};
-use stance_editor::{Command, MemoryHost};
+use stance_editor::MemoryHost;
+use stance_editor::image::{IMAGE_FILE_NAME, ImageExport, ImageRequest};
+use stance_editor::model::Outbox;
 use stance_render::{ImageOptions, OrbitCamera, SceneRenderer, headless_gpu};
 
 /// A decoded PNG: width, height, RGBA.
@@ -27,19 +28,26 @@ fn save_image(editor: &mut Clocked, host: &MemoryHost, options: ImageOptions) ->
     let gpu = headless_gpu().expect("an adapter (lavapipe)");
     let mut renderer = SceneRenderer::new(&gpu.device);
     let before = host.inner.borrow().binary_downloads.len();
-    editor.apply(Command::SaveImage(ImageRequest {
+    let mut image = ImageExport::default();
+    image.request(ImageRequest {
         options,
         camera: OrbitCamera::default(),
-    }));
+    });
+    let mut outbox = Outbox::default();
     let mut frames = 0;
-    while editor
-        .model
-        .advance_image(&gpu.device, &gpu.queue, &mut renderer, None)
-    {
+    while image.advance(
+        &editor.model,
+        &mut outbox,
+        &gpu.device,
+        &gpu.queue,
+        &mut renderer,
+        None,
+    ) {
         frames += 1;
         assert!(frames < 2000, "the image never came back");
         std::thread::sleep(std::time::Duration::from_millis(2));
     }
+    editor.model.apply_outbox(&mut outbox);
     let downloads = &host.inner.borrow().binary_downloads;
     assert_eq!(downloads.len(), before + 1, "{:?}", editor.model.notice());
     let (name, bytes) = downloads.last().unwrap();
@@ -111,18 +119,24 @@ fn an_impossible_size_is_refused_with_a_notice_and_nothing_downloads() {
     let mut editor = Clocked::with_host(host.clone());
     let gpu = headless_gpu().unwrap();
     let mut renderer = SceneRenderer::new(&gpu.device);
-    editor.apply(Command::SaveImage(ImageRequest {
+    let mut image = ImageExport::default();
+    image.request(ImageRequest {
         options: ImageOptions {
             size_px: [0, 100],
             ..ImageOptions::default()
         },
         camera: OrbitCamera::default(),
-    }));
-    assert!(
-        !editor
-            .model
-            .advance_image(&gpu.device, &gpu.queue, &mut renderer, None)
-    );
+    });
+    let mut outbox = Outbox::default();
+    assert!(!image.advance(
+        &editor.model,
+        &mut outbox,
+        &gpu.device,
+        &gpu.queue,
+        &mut renderer,
+        None
+    ));
+    editor.model.apply_outbox(&mut outbox);
     assert!(host.inner.borrow().binary_downloads.is_empty());
     let notice = editor.model.notice().unwrap();
     assert!(

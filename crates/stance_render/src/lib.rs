@@ -1,19 +1,28 @@
 //! The wgpu renderer of Stance: the body as shaded capsules, the floor grid, and the orbit
 //! camera that looks at them. It knows nothing of egui or the browser: it renders a [`Scene`]
-//! into a [`RenderTarget`] texture that the editor shows (or a test reads back).
+//! into a `RenderTarget` texture that the editor shows (or a test reads back).
+//!
+//! Without its default feature `gpu` it is the renderer's plain data alone (capsules, the
+//! mannequin's bones, the orbit camera, avatars' skinned meshes and palettes, picking), with
+//! no wgpu: what the editor's model (`stance_model`) builds for the views to draw.
 
 #![warn(missing_docs)]
 
 mod avatar;
 mod body;
 mod camera;
+#[cfg(feature = "gpu")]
 mod capture;
-#[cfg(not(target_arch = "wasm32"))]
+#[cfg(all(feature = "gpu", not(target_arch = "wasm32")))]
 mod headless;
+#[cfg(feature = "gpu")]
 mod image;
 mod pick;
+#[cfg(feature = "gpu")]
 mod renderer;
 mod skinned;
+#[cfg(feature = "gpu")]
+mod skinned_gpu;
 
 pub use avatar::{AvatarPalettes, avatar_model};
 pub use body::{
@@ -21,20 +30,25 @@ pub use body::{
     posed_mannequin_bones, rest_pose_capsules,
 };
 pub use camera::{OrbitCamera, ViewPreset};
-#[cfg(not(target_arch = "wasm32"))]
+#[cfg(all(feature = "gpu", not(target_arch = "wasm32")))]
 pub use capture::read_pixels;
+#[cfg(feature = "gpu")]
 pub use capture::{CaptureError, Pixels, Readback};
-#[cfg(not(target_arch = "wasm32"))]
+#[cfg(all(feature = "gpu", not(target_arch = "wasm32")))]
 pub use headless::{HeadlessGpu, headless_gpu};
+#[cfg(feature = "gpu")]
 pub use image::{
     ImageError, ImageOptions, MAX_IMAGE_SIDE_PX, PendingImage, encode_png, render_image,
 };
 pub use pick::{CapsuleHit, pick_capsule};
-pub use renderer::{BACKGROUND_SRGB, COLOR_FORMAT, DEPTH_FORMAT, RenderTarget, SceneRenderer};
+#[cfg(feature = "gpu")]
+pub use renderer::{COLOR_FORMAT, DEPTH_FORMAT, RenderTarget, SceneRenderer};
 pub use skinned::{
-    AvatarGpu, AvatarUpload, MAX_PALETTE_MATRICES, SkinnedMaterial, SkinnedModel, SkinnedPrimitive,
-    SkinnedTexture, SkinnedVertex, UPLOAD_STEP_BYTES,
+    MAX_PALETTE_MATRICES, SkinnedMaterial, SkinnedModel, SkinnedPrimitive, SkinnedTexture,
+    SkinnedVertex,
 };
+#[cfg(feature = "gpu")]
+pub use skinned_gpu::{AvatarGpu, AvatarUpload, UPLOAD_STEP_BYTES};
 
 use glam::Vec3;
 
@@ -74,6 +88,9 @@ impl Capsule {
 pub const MARKER_RADIUS_M: f32 = 0.035;
 /// Colour of a goal marker whose task is met, or whose status is unknown (linear RGB).
 pub const GOAL_COLOR_LINEAR: [f32; 4] = [0.1, 0.65, 0.2, 1.0];
+
+/// The clear colour of the viewport and of images, sRGB-encoded.
+pub const BACKGROUND_SRGB: [f32; 4] = [0.13, 0.145, 0.17, 1.0];
 
 /// What one frame shows.
 #[derive(Debug, Clone, Default, PartialEq)]

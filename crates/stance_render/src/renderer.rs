@@ -4,7 +4,8 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec2;
 use wgpu::util::DeviceExt;
 
-use crate::skinned::{AvatarGpu, AvatarUpload, SkinnedModel, SkinnedPipeline};
+use crate::skinned::SkinnedModel;
+use crate::skinned_gpu::{AvatarGpu, AvatarUpload, SkinnedPipeline};
 use crate::{OrbitCamera, SHADERS, Scene};
 
 /// Colour format of the render target: what egui can show as a native texture. The shaders
@@ -12,8 +13,6 @@ use crate::{OrbitCamera, SHADERS, Scene};
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 /// Depth format of the render target.
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth24Plus;
-/// Background colour, sRGB-encoded.
-pub const BACKGROUND_SRGB: [f32; 4] = [0.13, 0.145, 0.17, 1.0];
 const SAMPLE_COUNT: u32 = 4;
 /// Direction the key light travels (from above, front-left).
 const LIGHT_DIRECTION_WORLD: [f32; 4] = [-0.4, -0.8, -0.45, 0.0];
@@ -351,7 +350,7 @@ impl SceneRenderer {
 
     /// Starts uploading `model` over the next frames ([`SceneRenderer::continue_avatar_upload`],
     /// a band of texture rows a step); the avatar uploaded before stays until it is complete.
-    pub fn begin_avatar_upload(&mut self, model: SkinnedModel) {
+    pub fn begin_avatar_upload(&mut self, model: std::sync::Arc<SkinnedModel>) {
         self.upload = Some(AvatarUpload::new(model));
     }
 

@@ -3,6 +3,8 @@
 //! corrected mapping), or each joint of the open motion clip (the model retargets the clip
 //! with the corrected mapping).
 
+use crate::model::Outbox;
+use crate::model::{AvatarCommand, NoticeCommand};
 use egui::{Color32, RichText};
 use stance_hanim::{
     LevelOfArticulation, Mapping, MatchMethod, all_joints, joint_by_name, mirror_name,
@@ -53,10 +55,7 @@ impl Subject {
                     joints: avatar.joint_nodes(),
                     names: avatar.avatar.nodes.iter().map(|n| n.name.clone()).collect(),
                     original: avatar.avatar.mapping.clone(),
-                    can_revert: model
-                        .mapping_corrections
-                        .before_last(&avatar.name)
-                        .is_some(),
+                    can_revert: model.can_revert_mapping(&avatar.name),
                 })
             }
             SubjectKind::Clip => {
@@ -126,7 +125,8 @@ impl MappingEditor {
     pub(super) fn show(
         &mut self,
         ctx: &egui::Context,
-        model: &mut EditorModel,
+        model: &EditorModel,
+        outbox: &mut Outbox,
         (open, kind): (&mut bool, SubjectKind),
         buttons: &mut ButtonRects,
     ) {
@@ -193,12 +193,12 @@ impl MappingEditor {
                 }
             });
         if let Some(action) = action {
-            self.act(action, model);
+            self.act(action, outbox);
         }
     }
 
     /// Carries out what the user asked for.
-    fn act(&mut self, action: MappingAction, model: &mut EditorModel) {
+    fn act(&mut self, action: MappingAction, outbox: &mut Outbox) {
         match action {
             MappingAction::Pick(source, hanim) => {
                 let Some(draft) = self.draft.as_mut() else {
@@ -207,20 +207,24 @@ impl MappingEditor {
                 let correction = Correction { source, hanim };
                 match correction.apply(draft) {
                     Ok(()) => self.staged.push(correction),
-                    Err(error) => model.apply(Command::Warn(format!(
-                        "That correction is not possible: {error}"
-                    ))),
+                    Err(error) => {
+                        outbox.send(Command::Notice(NoticeCommand::Warn(format!(
+                            "That correction is not possible: {error}"
+                        ))));
+                    }
                 }
             }
             MappingAction::Apply => {
                 let draft = self.draft.take();
                 let corrections = std::mem::take(&mut self.staged);
                 match (draft, self.kind) {
-                    (Some(mapping), SubjectKind::Avatar) => model.apply(Command::ApplyMapping {
-                        mapping: Box::new(mapping),
-                        corrections,
-                    }),
-                    (Some(mapping), SubjectKind::Clip) => model.apply(Command::Motion(
+                    (Some(mapping), SubjectKind::Avatar) => {
+                        outbox.send(Command::Avatar(AvatarCommand::ApplyMapping {
+                            mapping: Box::new(mapping),
+                            corrections,
+                        }));
+                    }
+                    (Some(mapping), SubjectKind::Clip) => outbox.send(Command::Motion(
                         MotionCommand::SetClipMapping(Box::new(mapping)),
                     )),
                     (None, _) => {}
@@ -228,13 +232,13 @@ impl MappingEditor {
             }
             MappingAction::Discard => {
                 self.restart();
-                model.apply(Command::Inform(
+                outbox.send(Command::Notice(NoticeCommand::Inform(
                     "The mapping changes were discarded.".to_owned(),
-                ));
+                )));
             }
             MappingAction::Revert => {
                 self.restart();
-                model.apply(Command::RevertMappingCorrection);
+                outbox.send(Command::Avatar(AvatarCommand::RevertMappingCorrection));
             }
         }
     }

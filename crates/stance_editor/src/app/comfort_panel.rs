@@ -1,11 +1,12 @@
 //! The side panel's comfort section: the RULA score with its parts, the five highest joint
 //! loads against gravity, the heat map switch and RULA's inputs that a posture does not show.
 
+use crate::model::Outbox;
 use egui::{Color32, RichText};
-use stance_hanim::comfort::rula::{RulaLoad, RulaVariant};
+use stance_hanim::comfort::rula::{RulaLoad, RulaReport, RulaVariant};
 use stance_hanim::readable_name;
 
-use crate::model::EditorModel;
+use crate::model::{ComfortCommand, Command, EditorModel};
 
 /// RULA's loads as the panel names them.
 const LOADS: [(RulaLoad, &str); 6] = [
@@ -18,52 +19,11 @@ const LOADS: [(RulaLoad, &str); 6] = [
 ];
 
 /// Draws the section.
-pub(super) fn show(ui: &mut egui::Ui, model: &mut EditorModel) {
+pub(super) fn show(ui: &mut egui::Ui, model: &EditorModel, outbox: &mut Outbox) {
     ui.heading("Comfort");
-    let report = model.comfort_report().clone();
+    let report = model.comfort_report();
     match &report.rula {
-        Some(rula) => {
-            let colour = match rula.action_level {
-                1 => Color32::from_rgb(60, 160, 70),
-                2 => Color32::from_rgb(200, 160, 30),
-                3 => Color32::from_rgb(220, 110, 30),
-                _ => Color32::from_rgb(210, 40, 30),
-            };
-            ui.label(
-                RichText::new(format!(
-                    "RULA {} (action level {})",
-                    rula.score, rula.action_level
-                ))
-                .strong()
-                .color(colour),
-            )
-            .on_hover_text(
-                "1-2 acceptable; 3-4 investigate; 5-6 investigate and change soon; 7 change now",
-            );
-            egui::Grid::new("rula_parts").num_columns(3).show(ui, |ui| {
-                ui.label("");
-                ui.label("left");
-                ui.label("right");
-                ui.end_row();
-                let rows = [
-                    ("upper arm", rula.left.upper_arm, rula.right.upper_arm),
-                    ("lower arm", rula.left.lower_arm, rula.right.lower_arm),
-                    ("wrist", rula.left.wrist, rula.right.wrist),
-                    ("wrist twist", rula.left.wrist_twist, rula.right.wrist_twist),
-                    ("score C", rula.left.score_c, rula.right.score_c),
-                ];
-                for (name, left, right) in rows {
-                    ui.label(name);
-                    ui.label(left.to_string());
-                    ui.label(right.to_string());
-                    ui.end_row();
-                }
-            });
-            ui.label(format!(
-                "neck {}, trunk {}, legs {}; score D {}",
-                rula.body.neck, rula.body.trunk, rula.body.legs, rula.body.score_d
-            ));
-        }
+        Some(rula) => rula_section(ui, rula),
         None => {
             ui.label("RULA: this body lacks a joint RULA measures");
         }
@@ -90,13 +50,19 @@ pub(super) fn show(ui: &mut egui::Ui, model: &mut EditorModel) {
             "below 15 % of the joint's strength"
         });
     }
-    ui.checkbox(&mut model.comfort.heat_map, "Heat map of joint loads");
-    settings(ui, model);
+    let mut heat_map = model.comfort().heat_map();
+    if ui
+        .checkbox(&mut heat_map, "Heat map of joint loads")
+        .changed()
+    {
+        outbox.send(Command::Comfort(ComfortCommand::ShowHeatMap(heat_map)));
+    }
+    settings(ui, model, outbox);
 }
 
 /// RULA's inputs that a posture does not show.
-fn settings(ui: &mut egui::Ui, model: &mut EditorModel) {
-    let mut settings = model.comfort.settings;
+fn settings(ui: &mut egui::Ui, model: &EditorModel, outbox: &mut Outbox) {
+    let mut settings = model.comfort().settings();
     let rula = &mut settings.rula_settings;
     egui::CollapsingHeader::new("RULA inputs").show(ui, |ui| {
         let current = LOADS
@@ -125,8 +91,51 @@ fn settings(ui: &mut egui::Ui, model: &mut EditorModel) {
             RulaVariant::Paper
         };
     });
-    if settings != model.comfort.settings {
-        model.comfort.settings = settings;
-        model.comfort.invalidate();
+    if settings != model.comfort().settings() {
+        outbox.send(Command::Comfort(ComfortCommand::SetSettings(settings)));
     }
+}
+
+/// The RULA score, its action level and its parts.
+fn rula_section(ui: &mut egui::Ui, rula: &RulaReport) {
+    let colour = match rula.action_level {
+        1 => Color32::from_rgb(60, 160, 70),
+        2 => Color32::from_rgb(200, 160, 30),
+        3 => Color32::from_rgb(220, 110, 30),
+        _ => Color32::from_rgb(210, 40, 30),
+    };
+    ui.label(
+        RichText::new(format!(
+            "RULA {} (action level {})",
+            rula.score, rula.action_level
+        ))
+        .strong()
+        .color(colour),
+    )
+    .on_hover_text(
+        "1-2 acceptable; 3-4 investigate; 5-6 investigate and change soon; 7 change now",
+    );
+    egui::Grid::new("rula_parts").num_columns(3).show(ui, |ui| {
+        ui.label("");
+        ui.label("left");
+        ui.label("right");
+        ui.end_row();
+        let rows = [
+            ("upper arm", rula.left.upper_arm, rula.right.upper_arm),
+            ("lower arm", rula.left.lower_arm, rula.right.lower_arm),
+            ("wrist", rula.left.wrist, rula.right.wrist),
+            ("wrist twist", rula.left.wrist_twist, rula.right.wrist_twist),
+            ("score C", rula.left.score_c, rula.right.score_c),
+        ];
+        for (name, left, right) in rows {
+            ui.label(name);
+            ui.label(left.to_string());
+            ui.label(right.to_string());
+            ui.end_row();
+        }
+    });
+    ui.label(format!(
+        "neck {}, trunk {}, legs {}; score D {}",
+        rula.body.neck, rula.body.trunk, rula.body.legs, rula.body.score_d
+    ));
 }

@@ -84,7 +84,7 @@ impl Handles<'_> {
     /// Tasks whose goal can be dragged, with the goal's world position.
     pub(super) fn goal_handles(&self) -> Vec<(usize, DVec3)> {
         self.model
-            .session
+            .session()
             .tasks()
             .iter()
             .enumerate()
@@ -102,11 +102,11 @@ impl Handles<'_> {
 
     /// The rings of the selected joint's rotational DOF.
     pub(super) fn rings(&self) -> Vec<Ring> {
-        let Some(joint_index) = self.model.selected_joint else {
+        let Some(joint_index) = self.model.selected_joint() else {
             return Vec::new();
         };
-        let skeleton = self.model.session.skeleton();
-        let frames = self.model.session.frames();
+        let skeleton = self.model.session().skeleton();
+        let frames = self.model.session().frames();
         let Some(joint) = skeleton.joints().get(joint_index) else {
             return Vec::new();
         };
@@ -135,14 +135,14 @@ impl Handles<'_> {
     pub(super) fn swivel_handle(&self) -> Option<SwivelHandle> {
         let joint = self
             .model
-            .session
+            .session()
             .skeleton()
             .joints()
-            .get(self.model.selected_joint?)?;
+            .get(self.model.selected_joint()?)?;
         let limb = LimbName::of_joint(&joint.name)?;
         let [upper, middle, end] = limb
             .joints()
-            .map(|name| self.model.session.joint_position(name));
+            .map(|name| self.model.session().joint_position(name));
         let (upper, middle_world, end) = (upper?, middle?, end?);
         let axis_world = (end - upper).normalize_or_zero();
         if axis_world == DVec3::ZERO {
@@ -154,7 +154,7 @@ impl Handles<'_> {
         if radius.is_nan() || radius < SWIVEL_MIN_RADIUS_M {
             return None;
         }
-        let (swivel, intervals) = self.model.session.limb_swivel(limb)?;
+        let (swivel, intervals) = self.model.session().limb_swivel(limb)?;
         Some(SwivelHandle {
             limb,
             middle_world,
@@ -269,7 +269,7 @@ impl Handles<'_> {
             let centre_px = self.lens.screen_point(ring.centre_world)?;
             let start_value = self
                 .model
-                .session
+                .session()
                 .posture()
                 .values()
                 .get(ring.dof)

@@ -1,12 +1,13 @@
 //! The side panel's hands section (bodies with fingers: LOA 2 and above, avatars with finger
 //! joints): which hands, the presets, and a curl slider for the whole hand and each finger.
 
+use crate::model::Outbox;
 use stance_hanim::hands::{Finger, HandPreset};
 
 use crate::model::{Command, EditorModel, HandCommand, Hands};
 
 /// Draws the section; nothing when the body has no fingers.
-pub(super) fn show(ui: &mut egui::Ui, model: &mut EditorModel) {
+pub(super) fn show(ui: &mut egui::Ui, model: &EditorModel, outbox: &mut Outbox) {
     if !model.has_fingers() {
         return;
     }
@@ -28,7 +29,7 @@ pub(super) fn show(ui: &mut egui::Ui, model: &mut EditorModel) {
     ui.horizontal_wrapped(|ui| {
         for preset in HandPreset::ALL {
             if ui.button(preset.name()).clicked() {
-                model.apply(Command::Hands(HandCommand::Preset { hands, preset }));
+                outbox.send(Command::Hands(HandCommand::Preset { hands, preset }));
             }
         }
     });
@@ -52,7 +53,7 @@ pub(super) fn show(ui: &mut egui::Ui, model: &mut EditorModel) {
                 .labelled_by(label.id)
                 .on_hover_text("curl: 0 % straight, 100 % closed as far as the joints allow");
             if response.changed() && percent != shown {
-                model.apply(Command::Hands(HandCommand::Curl {
+                outbox.send(Command::Hands(HandCommand::Curl {
                     hands,
                     finger,
                     curl: percent / 100.0,

@@ -6,7 +6,7 @@ use stance_render::{ImageOptions, MAX_IMAGE_SIDE_PX};
 
 use super::ButtonRects;
 use super::viewport_panel::ViewportPanel;
-use crate::model::{Command, EditorModel, IMAGE_FILE_NAME, ImageRequest};
+use crate::image::{IMAGE_FILE_NAME, ImageRequest};
 
 /// The *Save image* window and the options it keeps between uses.
 #[derive(Debug, Default)]
@@ -18,12 +18,11 @@ pub(crate) struct ImageWindow {
 }
 
 impl ImageWindow {
-    /// Shows the window when open; Save sends [`Command::SaveImage`] with `viewport`'s camera.
+    /// Shows the window when open; Save asks `viewport` for the image, seen through its camera.
     pub(super) fn show(
         &mut self,
         ctx: &egui::Context,
-        model: &mut EditorModel,
-        viewport: &ViewportPanel,
+        viewport: &mut ViewportPanel,
         buttons: &mut ButtonRects,
     ) {
         let mut open = self.open;
@@ -47,7 +46,7 @@ impl ImageWindow {
                 }
                 ui.checkbox(&mut options.transparent, "Transparent background");
                 ui.checkbox(&mut options.overlays, "Overlays (floor grid, task goals)");
-                let busy = model.image.is_busy();
+                let busy = viewport.image.is_busy();
                 let button = ui
                     .add_enabled(
                         viewport.has_gpu() && !busy,
@@ -62,10 +61,11 @@ impl ImageWindow {
                 save = button.clicked();
             });
         if save {
-            model.apply(Command::SaveImage(ImageRequest {
+            let camera = viewport.camera;
+            viewport.image.request(ImageRequest {
                 options: self.options,
-                camera: viewport.camera,
-            }));
+                camera,
+            });
             open = false;
         }
         self.open = open;

@@ -2,6 +2,7 @@
 //! pointer's ray back into the world (onto the plane facing the camera, the floor, or the
 //! plane across an axis).
 
+use crate::model::GestureCommand;
 use egui::Pos2;
 use glam::{DVec3, Vec2};
 use stance_render::OrbitCamera;
@@ -72,25 +73,27 @@ impl Lens<'_> {
                 plane_point_world, ..
             } => self
                 .pointer_on_view_plane(pointer, *plane_point_world)
-                .map(|target_world| Command::MoveGrab { target_world }),
+                .map(|target_world| Command::Gesture(GestureCommand::MoveGrab { target_world })),
             Gesture::Goal {
                 plane_point_world, ..
             } => self
                 .pointer_on_view_plane(pointer, *plane_point_world)
-                .map(|goal_world| Command::MoveGoal {
-                    goal_world,
-                    floor_world: self.pointer_on_floor(pointer),
+                .map(|goal_world| {
+                    Command::Gesture(GestureCommand::MoveGoal {
+                        goal_world,
+                        floor_world: self.pointer_on_floor(pointer),
+                    })
                 }),
-            Gesture::Ring { centre_px, .. } => Some(Command::TurnRing {
+            Gesture::Ring { centre_px, .. } => Some(Command::Gesture(GestureCommand::TurnRing {
                 screen_angle: screen_angle(egui::pos2(centre_px[0], centre_px[1]), pointer),
-            }),
+            })),
             Gesture::Swivel {
                 centre_world,
                 axis_world,
                 ..
             } => self
                 .pointer_around_axis(pointer, *centre_world, *axis_world)
-                .map(|point_world| Command::TurnSwivel { point_world }),
+                .map(|point_world| Command::Gesture(GestureCommand::TurnSwivel { point_world })),
         }
     }
 }

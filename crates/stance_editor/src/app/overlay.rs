@@ -41,10 +41,10 @@ impl Overlay<'_> {
 
     /// The trace of the pulled point (the paper's figure 9).
     fn draw_trace(&self, painter: &egui::Painter) {
-        if self.model.trace.len() > 1 {
+        if self.model.trace().len() > 1 {
             let points: Vec<Pos2> = self
                 .model
-                .trace
+                .trace()
                 .iter()
                 .filter_map(|point| self.lens.screen_point(*point))
                 .collect();
@@ -77,16 +77,16 @@ impl Overlay<'_> {
     /// Each task's goal, coloured by its status. Returns the balance's support polygon when a
     /// balance or centre-of-mass task is active (empty for a centre-of-mass task).
     fn draw_goals(&self, painter: &egui::Painter) -> Option<Vec<DVec3>> {
-        let skeleton = self.model.session.skeleton();
-        let frames = self.model.session.frames();
+        let skeleton = self.model.session().skeleton();
+        let frames = self.model.session().frames();
         let mut has_balance = false;
         let mut polygon = Vec::new();
         for (task, status) in self
             .model
-            .session
+            .session()
             .tasks()
             .iter()
-            .zip(self.model.session.statuses())
+            .zip(self.model.session().statuses())
         {
             let color = if !task.active {
                 GOAL_INACTIVE
@@ -112,7 +112,7 @@ impl Overlay<'_> {
                 TaskKindSpec::Limb { target, limb, .. } => {
                     let end = limb.map(|limb| limb.joints()[2]);
                     if let Some(effector) =
-                        end.and_then(|end| self.model.session.joint_position(end))
+                        end.and_then(|end| self.model.session().joint_position(end))
                     {
                         self.goal_marker(
                             painter,
@@ -132,7 +132,7 @@ impl Overlay<'_> {
                 TaskKindSpec::Com { .. } => has_balance |= task.active,
                 TaskKindSpec::Balance { .. } if task.active => {
                     has_balance = true;
-                    if let Ok(solver_task) = task.to_task(skeleton, self.model.session.tasks()) {
+                    if let Ok(solver_task) = task.to_task(skeleton, self.model.session().tasks()) {
                         polygon = solver_task.support_polygon(frames);
                     }
                 }
@@ -146,8 +146,8 @@ impl Overlay<'_> {
     /// The pulled point and where the cursor wants it.
     fn draw_pull(&self, painter: &egui::Painter) {
         if let (Some(grab), Some(point)) = (
-            self.model.session.grab(),
-            self.model.session.grabbed_point_world(),
+            self.model.session().grab(),
+            self.model.session().grabbed_point_world(),
         ) && let (Some(from), Some(to)) = (
             self.lens.screen_point(point),
             self.lens.screen_point(grab.target_world),
@@ -189,7 +189,7 @@ impl Overlay<'_> {
     /// The centre of mass, its projection on the floor, and the support polygon of the balance
     /// task (as the solver sees it), if there is one.
     fn draw_balance(&self, painter: &egui::Painter, polygon: &[DVec3]) {
-        let com = self.model.session.frames().center_of_mass();
+        let com = self.model.session().frames().center_of_mass();
         let floor_com = DVec3::new(com.x, 0.0, com.z);
         if polygon.len() >= 2 {
             let mut points: Vec<Pos2> = polygon
@@ -224,8 +224,8 @@ impl Overlay<'_> {
 
     /// The skeleton over the avatar: a line per bone, a dot per joint.
     pub(super) fn draw_skeleton(&self, painter: &egui::Painter) {
-        let skeleton = self.model.session.skeleton();
-        let frames = self.model.session.frames();
+        let skeleton = self.model.session().skeleton();
+        let frames = self.model.session().frames();
         let stroke = Stroke::new(1.5, Color32::from_rgba_unmultiplied(255, 255, 255, 170));
         for (index, joint) in skeleton.joints().iter().enumerate() {
             let Some(position) = frames.joint_position.get(index).copied() else {
@@ -240,7 +240,7 @@ impl Overlay<'_> {
             {
                 painter.line_segment([there, here], stroke);
             }
-            let color = if Some(index) == self.model.selected_joint {
+            let color = if Some(index) == self.model.selected_joint() {
                 Color32::from_rgb(80, 160, 255)
             } else {
                 Color32::WHITE

@@ -1,6 +1,8 @@
 //! The sensors window: device, connection, per-sensor figures, assignment to segments,
 //! calibration, heading reset, recording and replay, as commands to the model's sensors.
 
+use crate::model::FileCommand;
+use crate::model::Outbox;
 use egui::RichText;
 use stance_mocap::SensorId;
 use stance_mocap::ascii::ComponentOrder;
@@ -18,7 +20,8 @@ const BAUD_RATES: [u32; 6] = [9_600, 19_200, 38_400, 57_600, 115_200, 230_400];
 
 /// The sensors window over the model.
 pub(super) struct SensorsWindow<'a> {
-    pub model: &'a mut EditorModel,
+    pub model: &'a EditorModel,
+    pub outbox: &'a mut Outbox,
     /// Where the viewport is (the window opens over it).
     pub viewport_rect: egui::Rect,
     pub buttons: &'a mut ButtonRects,
@@ -44,15 +47,15 @@ impl SensorsWindow<'_> {
     }
 
     fn command(&mut self, command: SensorCommand) {
-        self.model.apply(Command::Sensors(command));
+        self.outbox.send(Command::Sensors(command));
     }
 
     fn contents(&mut self, ui: &mut egui::Ui) {
-        let mut settings = self.model.sensors.settings().clone();
-        let busy =
-            self.model.sensors.link().is_live() || self.model.sensors.replay_progress().is_some();
+        let mut settings = self.model.sensors().settings().clone();
+        let busy = self.model.sensors().link().is_live()
+            || self.model.sensors().replay_progress().is_some();
         ui.add_enabled_ui(!busy, |ui| device_settings(ui, &mut settings));
-        if settings != *self.model.sensors.settings() {
+        if settings != *self.model.sensors().settings() {
             self.command(SensorCommand::SetSettings(Box::new(settings)));
         }
 
@@ -77,7 +80,7 @@ impl SensorsWindow<'_> {
     /// Connect or disconnect, replay or stop, record or save.
     fn connection_row(&mut self, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
-            if self.model.sensors.link().is_live() {
+            if self.model.sensors().link().is_live() {
                 let button = ui.button("Disconnect");
                 self.buttons.push(("sensors_disconnect", button.rect));
                 if button.clicked() {
@@ -86,7 +89,7 @@ impl SensorsWindow<'_> {
             } else {
                 let button = ui
                     .add_enabled(
-                        self.model.sensors.replay_progress().is_none(),
+                        self.model.sensors().replay_progress().is_none(),
                         egui::Button::new("Connect…"),
                     )
                     .on_hover_text("The browser asks which serial port or HID device to use");
@@ -95,23 +98,23 @@ impl SensorsWindow<'_> {
                     self.command(SensorCommand::Connect);
                 }
             }
-            if self.model.sensors.replay_progress().is_some() {
+            if self.model.sensors().replay_progress().is_some() {
                 if ui.button("Stop replay").clicked() {
                     self.command(SensorCommand::StopReplay);
                 }
             } else {
                 let button = ui
                     .add_enabled(
-                        !self.model.sensors.link().is_live(),
+                        !self.model.sensors().link().is_live(),
                         egui::Button::new("Replay file…"),
                     )
                     .on_hover_text("Play a recording (or `stance simulate-sensors` output)");
                 self.buttons.push(("sensors_replay", button.rect));
                 if button.clicked() {
-                    self.model.apply(Command::PickRecording);
+                    self.outbox.send(Command::File(FileCommand::PickRecording));
                 }
             }
-            let recording = self.model.sensors.is_recording();
+            let recording = self.model.sensors().is_recording();
             let button = ui.button(if recording { "Stop and save" } else { "Record" });
             self.buttons.push(("sensors_record", button.rect));
             if button.clicked() {
@@ -133,7 +136,7 @@ impl SensorsWindow<'_> {
         );
         ui.horizontal(|ui| {
             let button = ui.add_enabled(
-                !self.model.sensors.assignments().is_empty(),
+                !self.model.sensors().assignments().is_empty(),
                 egui::Button::new("Calibrate"),
             );
             self.buttons.push(("sensors_calibrate", button.rect));
@@ -141,7 +144,7 @@ impl SensorsWindow<'_> {
             if button.clicked() {
                 self.command(SensorCommand::Calibrate);
             }
-            let calibrated = self.model.sensors.is_calibrated();
+            let calibrated = self.model.sensors().is_calibrated();
             let button = ui
                 .add_enabled(calibrated, egui::Button::new("Reset heading"))
                 .on_hover_text("Face the front, then press: turns every sensor about the vertical");
@@ -157,20 +160,20 @@ impl SensorsWindow<'_> {
                 self.command(SensorCommand::ReleaseJoints);
             }
         });
-        if self.model.sensors.is_calibrated() {
+        if self.model.sensors().is_calibrated() {
             ui.label(format!(
                 "Driving {} joints.",
                 self.model
-                    .sensors
-                    .driven_joints(self.model.session.skeleton())
+                    .sensors()
+                    .driven_joints(self.model.session().skeleton())
                     .len()
             ));
         }
     }
 
     fn link_line(&self, ui: &mut egui::Ui) {
-        let stats = self.model.sensors.stats();
-        let (text, colour) = match self.model.sensors.link() {
+        let stats = self.model.sensors().stats();
+        let (text, colour) = match self.model.sensors().link() {
             SensorLink::Idle => ("Not connected".to_owned(), ui.visuals().weak_text_color()),
             SensorLink::Connecting => (
                 "Waiting for the device…".to_owned(),
@@ -181,7 +184,7 @@ impl SensorsWindow<'_> {
                 egui::Color32::from_rgb(60, 160, 80),
             ),
             SensorLink::Replaying { name } => {
-                let (done, total) = self.model.sensors.replay_progress().unwrap_or_default();
+                let (done, total) = self.model.sensors().replay_progress().unwrap_or_default();
                 (
                     format!(
                         "Replaying {name}: {}%",
@@ -195,19 +198,19 @@ impl SensorsWindow<'_> {
         ui.colored_label(colour, text);
         ui.label(format!(
             "{} samples, {} bad frames, {} bytes skipped",
-            self.model.sensors.sample_count(),
+            self.model.sensors().sample_count(),
             stats.bad_frames,
             stats.skipped_bytes
         ));
         if let Some(bytes) = self
             .model
-            .sensors
+            .sensors()
             .is_recording()
-            .then(|| self.model.sensors.stats().bytes_received)
+            .then(|| self.model.sensors().stats().bytes_received)
         {
             ui.label(format!("Recording ({} KiB received)", bytes / 1024));
         }
-        if self.model.sensors.is_recording_full() {
+        if self.model.sensors().is_recording_full() {
             ui.colored_label(
                 ui.visuals().warn_fg_color,
                 format!(
@@ -216,7 +219,7 @@ impl SensorsWindow<'_> {
                 ),
             );
         }
-        if let Some((median, max)) = self.model.sensors.latency_ms() {
+        if let Some((median, max)) = self.model.sensors().latency_ms() {
             ui.label(format!(
                 "Bytes to posture: {median:.1} ms median, {max:.1} ms max"
             ));
@@ -226,7 +229,7 @@ impl SensorsWindow<'_> {
     fn sensor_table(&mut self, ui: &mut egui::Ui) {
         let tracks: Vec<(SensorId, f64, Option<[f64; 3]>)> = self
             .model
-            .sensors
+            .sensors()
             .tracks()
             .iter()
             .map(|(sensor, track)| {
@@ -244,7 +247,7 @@ impl SensorsWindow<'_> {
         let mut segments: Vec<SensorAssignment> = vec![SensorAssignment::Spine];
         segments.extend(
             self.model
-                .session
+                .session()
                 .skeleton()
                 .joints()
                 .iter()
@@ -270,7 +273,7 @@ impl SensorsWindow<'_> {
                         }
                         None => ui.label("no orientation"),
                     };
-                    let current = self.model.sensors.assignments().get(&sensor).cloned();
+                    let current = self.model.sensors().assignments().get(&sensor).cloned();
                     let text = current
                         .as_ref()
                         .map_or_else(|| "nothing".to_owned(), assignment_label);

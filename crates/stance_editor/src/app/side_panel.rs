@@ -2,9 +2,15 @@
 //! undo and the posing commands, the selection (joint angles, swivel), the hands and the pose
 //! library.
 
+use crate::model::Outbox;
+use crate::model::{
+    AvatarCommand, FileCommand, HistoryCommand, LibraryCommand, PostureCommand, TaskCommand,
+    ViewCommand,
+};
 use egui::RichText;
 use stance_document::LimbName;
 use stance_hanim::{MatchMethod, readable_name};
+use stance_ik::Joint;
 
 use super::avatar_panel::{GUESS_COLOR, LOW_CONFIDENCE};
 use super::{ButtonRects, Windows, copy_link};
@@ -12,7 +18,8 @@ use crate::model::{Command, EditorModel, NewTask};
 
 /// The side panel over the model.
 pub(super) struct SidePanel<'a> {
-    pub model: &'a mut EditorModel,
+    pub model: &'a EditorModel,
+    pub outbox: &'a mut Outbox,
     /// A click on the body pins it.
     pub pin_tool: &'a mut bool,
     pub windows: &'a mut Windows,
@@ -24,66 +31,12 @@ pub(super) struct SidePanel<'a> {
 impl SidePanel<'_> {
     /// The whole panel.
     pub(super) fn show(&mut self, ui: &mut egui::Ui) {
-        ui.heading("Humanoid");
-        match &self.model.avatar {
-            Some(avatar) => {
-                ui.label(RichText::new(&avatar.name).strong());
-                ui.label(format!(
-                    "{} vertices, {} joints mapped onto H-Anim",
-                    avatar.vertex_count,
-                    avatar.mapping_summary().0
-                ));
-                self.avatar_mapping_button(ui);
-            }
-            None => {
-                ui.label("H-Anim 2.0 mannequin (Avatar menu or drop a file to pose yours)");
-            }
-        }
-        let current = self.model.session.level_of_articulation();
-        let mut chosen = current;
-        egui::ComboBox::from_label("Articulation")
-            .selected_text(format!("LOA {}", current.number()))
-            .show_ui(ui, |ui| {
-                for loa in stance_hanim::LevelOfArticulation::ALL {
-                    ui.selectable_value(&mut chosen, loa, format!("LOA {}", loa.number()));
-                }
-            });
-        if chosen != current {
-            self.model.apply(Command::SetLevelOfArticulation(chosen));
-        }
-        ui.label(format!(
-            "{} joints, {} DOF",
-            self.model.session.skeleton().joint_count(),
-            self.model.session.skeleton().dof_count()
-        ));
-        ui.horizontal(|ui| {
-            if ui
-                .add_enabled(self.model.history.can_undo(), egui::Button::new("Undo"))
-                .on_hover_text("Ctrl+Z")
-                .clicked()
-            {
-                self.model.apply(Command::Undo);
-            }
-            if ui
-                .add_enabled(self.model.history.can_redo(), egui::Button::new("Redo"))
-                .on_hover_text("Ctrl+Shift+Z or Ctrl+Y")
-                .clicked()
-            {
-                self.model.apply(Command::Redo);
-            }
-        });
-        ui.horizontal(|ui| {
-            if ui.button("Mirror").on_hover_text("M").clicked() {
-                self.model.apply(Command::Mirror);
-            }
-            if ui.button("Rest pose").on_hover_text("R").clicked() {
-                self.model.apply(Command::ResetToRest);
-            }
-        });
+        self.humanoid_section(ui);
+        self.edit_buttons(ui);
         let copy = ui.button("Copy posture link").on_hover_text("L");
         self.buttons.push(("copy_link", copy.rect));
         if copy.clicked() {
-            copy_link(ui.ctx(), self.model);
+            copy_link(ui.ctx(), self.model, self.outbox);
         }
         let pin_tool = ui
             .toggle_value(self.pin_tool, "Pin tool")
@@ -101,87 +54,115 @@ impl SidePanel<'_> {
         ui.separator();
         self.library_section(ui);
         ui.separator();
-        super::comfort_panel::show(ui, self.model);
+        super::comfort_panel::show(ui, self.model, self.outbox);
+    }
+
+    /// The body: avatar or mannequin, its level of articulation, joints and DOF.
+    fn humanoid_section(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Humanoid");
+        match self.model.avatar() {
+            Some(avatar) => {
+                ui.label(RichText::new(&avatar.name).strong());
+                ui.label(format!(
+                    "{} vertices, {} joints mapped onto H-Anim",
+                    avatar.vertex_count,
+                    avatar.mapping_summary().0
+                ));
+                self.avatar_mapping_button(ui);
+            }
+            None => {
+                ui.label("H-Anim 2.0 mannequin (Avatar menu or drop a file to pose yours)");
+            }
+        }
+        let current = self.model.session().level_of_articulation();
+        let mut chosen = current;
+        egui::ComboBox::from_label("Articulation")
+            .selected_text(format!("LOA {}", current.number()))
+            .show_ui(ui, |ui| {
+                for loa in stance_hanim::LevelOfArticulation::ALL {
+                    ui.selectable_value(&mut chosen, loa, format!("LOA {}", loa.number()));
+                }
+            });
+        if chosen != current {
+            self.outbox
+                .send(Command::Avatar(AvatarCommand::SetLevelOfArticulation(
+                    chosen,
+                )));
+        }
+        ui.label(format!(
+            "{} joints, {} DOF",
+            self.model.session().skeleton().joint_count(),
+            self.model.session().skeleton().dof_count()
+        ));
+    }
+
+    /// Undo and redo, mirror and rest.
+    fn edit_buttons(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            if ui
+                .add_enabled(self.model.history().can_undo(), egui::Button::new("Undo"))
+                .on_hover_text("Ctrl+Z")
+                .clicked()
+            {
+                self.outbox.send(Command::History(HistoryCommand::Undo));
+            }
+            if ui
+                .add_enabled(self.model.history().can_redo(), egui::Button::new("Redo"))
+                .on_hover_text("Ctrl+Shift+Z or Ctrl+Y")
+                .clicked()
+            {
+                self.outbox.send(Command::History(HistoryCommand::Redo));
+            }
+        });
+        ui.horizontal(|ui| {
+            if ui.button("Mirror").on_hover_text("M").clicked() {
+                self.outbox.send(Command::Posture(PostureCommand::Mirror));
+            }
+            if ui.button("Rest pose").on_hover_text("R").clicked() {
+                self.outbox
+                    .send(Command::Posture(PostureCommand::ResetToRest));
+            }
+        });
     }
 
     /// The selection and, on a body with fingers, the hands.
     fn selection_and_hands(&mut self, ui: &mut egui::Ui) {
         self.selection_section(ui);
-        super::hands_panel::show(ui, self.model);
+        super::hands_panel::show(ui, self.model, self.outbox);
     }
 
     fn selection_section(&mut self, ui: &mut egui::Ui) {
         ui.heading("Selection");
-        let Some(joint_index) = self.model.selected_joint else {
+        let Some(joint_index) = self.model.selected_joint() else {
             ui.label("Click a body part to select it; drag it to pull it.");
             return;
         };
-        let skeleton = self.model.session.skeleton();
+        let skeleton = self.model.session().skeleton();
         let Some(joint) = skeleton.joints().get(joint_index).cloned() else {
-            self.model.apply(Command::Select(None));
+            self.outbox.send(Command::View(ViewCommand::Select(None)));
             return;
         };
-        let lower = skeleton.lower_limits().to_vec();
-        let upper = skeleton.upper_limits().to_vec();
         ui.label(RichText::new(readable_name(&joint.name)).strong());
         ui.label(RichText::new(&joint.name).small().weak());
         ui.horizontal(|ui| {
             if ui.button("Pin").on_hover_text("P").clicked() {
-                self.model.apply(Command::Pin(joint_index));
+                self.outbox
+                    .send(Command::Posture(PostureCommand::Pin(joint_index)));
             }
             if ui
                 .button("Hold orientation")
                 .on_hover_text("add an orientation task with the current orientation")
                 .clicked()
             {
-                self.model
-                    .apply(Command::AddTask(NewTask::Orientation(joint_index)));
+                self.outbox
+                    .send(Command::Task(TaskCommand::Add(NewTask::Orientation(
+                        joint_index,
+                    ))));
             }
         });
-        // Joint mode: each DOF within its anatomical limits.
-        let values = self.model.session.posture().values().to_vec();
-        let mut edit: Option<(usize, f64)> = None;
-        egui::Grid::new("joint_dofs").num_columns(2).show(ui, |ui| {
-            for (offset, dof) in joint.dofs.iter().enumerate() {
-                let index = joint.dof_start + offset;
-                let (Some(&value), Some(&low), Some(&high)) =
-                    (values.get(index), lower.get(index), upper.get(index))
-                else {
-                    continue;
-                };
-                ui.label(dof.name());
-                if dof.is_rotation() {
-                    let mut degrees = value.to_degrees();
-                    let range = low.to_degrees().max(-360.0)..=high.to_degrees().min(360.0);
-                    let response = ui.add(
-                        egui::DragValue::new(&mut degrees)
-                            .range(range)
-                            .speed(0.5)
-                            .suffix("°")
-                            .max_decimals(1),
-                    );
-                    if response.changed() {
-                        edit = Some((index, degrees.to_radians()));
-                    }
-                } else {
-                    let mut metres = value;
-                    if ui
-                        .add(
-                            egui::DragValue::new(&mut metres)
-                                .speed(0.005)
-                                .suffix(" m")
-                                .max_decimals(3),
-                        )
-                        .changed()
-                    {
-                        edit = Some((index, metres));
-                    }
-                }
-                ui.end_row();
-            }
-        });
-        if let Some((dof, value)) = edit {
-            self.model.apply(Command::SetDof { dof, value });
+        if let Some((dof, value)) = dof_editors(ui, self.model, &joint) {
+            self.outbox
+                .send(Command::Posture(PostureCommand::SetDof { dof, value }));
         }
         self.stiffness_section(ui, &joint);
         if let Some(limb) = LimbName::of_joint(&joint.name) {
@@ -192,7 +173,7 @@ impl SidePanel<'_> {
     /// Each rotation DOF's stiffness (H-Anim's `stiffness`): how much less it moves than a
     /// free DOF for the same task; its anatomical default until changed.
     fn stiffness_section(&mut self, ui: &mut egui::Ui, joint: &stance_ik::Joint) {
-        let session = &self.model.session;
+        let session = self.model.session();
         let stiffness = session.skeleton().stiffness().to_vec();
         let rotations: Vec<(usize, stance_ik::Dof)> = joint
             .dofs
@@ -241,12 +222,16 @@ impl SidePanel<'_> {
                 }
             });
         if let Some((dof, value)) = edit {
-            self.model.apply(Command::SetStiffness { dof, value });
+            self.outbox
+                .send(Command::Posture(PostureCommand::SetStiffness {
+                    dof,
+                    value,
+                }));
         }
     }
 
     fn swivel_section(&mut self, ui: &mut egui::Ui, limb: LimbName) {
-        let Some((swivel, intervals)) = self.model.session.limb_swivel(limb) else {
+        let Some((swivel, intervals)) = self.model.session().limb_swivel(limb) else {
             return;
         };
         ui.separator();
@@ -274,10 +259,11 @@ impl SidePanel<'_> {
             .small(),
         );
         if response.changed() {
-            self.model.apply(Command::SetSwivel {
-                limb,
-                swivel_angle: degrees.to_radians(),
-            });
+            self.outbox
+                .send(Command::Posture(PostureCommand::SetSwivel {
+                    limb,
+                    swivel_angle: degrees.to_radians(),
+                }));
         }
     }
 
@@ -293,12 +279,13 @@ impl SidePanel<'_> {
             .labelled_by(label.id);
             if ui.button("Save").clicked() {
                 let name = self.library_name.clone();
-                self.model.apply(Command::SaveToLibrary(name));
+                self.outbox
+                    .send(Command::Library(LibraryCommand::Save(name)));
             }
         });
         let mut load = None;
         let mut delete = None;
-        for (index, entry) in self.model.library.entries().iter().enumerate() {
+        for (index, entry) in self.model.library().entries().iter().enumerate() {
             ui.horizontal(|ui| {
                 if ui.button("Load").clicked() {
                     load = Some(index);
@@ -310,24 +297,26 @@ impl SidePanel<'_> {
             });
         }
         if let Some(index) = load {
-            self.model.apply(Command::LoadFromLibrary(index));
+            self.outbox
+                .send(Command::Library(LibraryCommand::Load(index)));
         }
         if let Some(index) = delete {
-            self.model.apply(Command::DeleteFromLibrary(index));
+            self.outbox
+                .send(Command::Library(LibraryCommand::Delete(index)));
         }
         ui.horizontal(|ui| {
             if ui.button("Import…").clicked() {
-                self.model.apply(Command::PickFile);
+                self.outbox.send(Command::File(FileCommand::PickFile));
             }
             if ui.button("Export…").clicked() {
-                self.model.apply(Command::ExportLibrary);
+                self.outbox.send(Command::Library(LibraryCommand::Export));
             }
         });
     }
 
     /// The side panel's line about guessed joints and the button that opens the window.
     fn avatar_mapping_button(&mut self, ui: &mut egui::Ui) {
-        let Some(avatar) = &self.model.avatar else {
+        let Some(avatar) = self.model.avatar() else {
             return;
         };
         let guesses = avatar
@@ -353,4 +342,53 @@ impl SidePanel<'_> {
             self.windows.mapping_subject = super::avatar_panel::SubjectKind::Avatar;
         }
     }
+}
+
+/// Joint mode: each DOF of `joint` within its anatomical limits; returns the DOF edited and
+/// its new value.
+fn dof_editors(ui: &mut egui::Ui, model: &EditorModel, joint: &Joint) -> Option<(usize, f64)> {
+    let skeleton = model.session().skeleton();
+    let (lower, upper) = (skeleton.lower_limits(), skeleton.upper_limits());
+    let values = model.session().posture().values();
+    let mut edit: Option<(usize, f64)> = None;
+    egui::Grid::new("joint_dofs").num_columns(2).show(ui, |ui| {
+        for (offset, dof) in joint.dofs.iter().enumerate() {
+            let index = joint.dof_start + offset;
+            let (Some(&value), Some(&low), Some(&high)) =
+                (values.get(index), lower.get(index), upper.get(index))
+            else {
+                continue;
+            };
+            ui.label(dof.name());
+            if dof.is_rotation() {
+                let mut degrees = value.to_degrees();
+                let range = low.to_degrees().max(-360.0)..=high.to_degrees().min(360.0);
+                let response = ui.add(
+                    egui::DragValue::new(&mut degrees)
+                        .range(range)
+                        .speed(0.5)
+                        .suffix("°")
+                        .max_decimals(1),
+                );
+                if response.changed() {
+                    edit = Some((index, degrees.to_radians()));
+                }
+            } else {
+                let mut metres = value;
+                if ui
+                    .add(
+                        egui::DragValue::new(&mut metres)
+                            .speed(0.005)
+                            .suffix(" m")
+                            .max_decimals(3),
+                    )
+                    .changed()
+                {
+                    edit = Some((index, metres));
+                }
+            }
+            ui.end_row();
+        }
+    });
+    edit
 }

@@ -63,7 +63,7 @@ impl PageState<'_> {
             "undo_steps": model.history().undo_steps(),
             "can_redo": model.history().can_redo(),
             "library": model.library().entries().iter().map(|entry| entry.name.clone()).collect::<Vec<_>>(),
-            "solver_ms": model.solver_ms,
+            "solver_ms": model.solver_ms(),
             "frame_ms": self.frame_ms,
             "scene_ms": self.viewport.scene_ms,
             "render_ms": self.viewport.render_ms,

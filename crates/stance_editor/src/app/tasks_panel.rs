@@ -2,6 +2,8 @@
 //! way; editing every field, adding (from where the body stands), removing, and reordering
 //! tasks and whole levels by dragging.
 
+use crate::model::Outbox;
+use crate::model::TaskCommand;
 use egui::{Color32, RichText};
 use glam::DQuat;
 use stance_document::{LimbName, TaskKindSpec, TaskSpec};
@@ -42,7 +44,8 @@ enum Action {
 
 /// The tasks panel over the model.
 pub(super) struct TasksPanel<'a> {
-    pub model: &'a mut EditorModel,
+    pub model: &'a EditorModel,
+    pub outbox: &'a mut Outbox,
     pub buttons: &'a mut ButtonRects,
 }
 
@@ -57,14 +60,14 @@ impl TasksPanel<'_> {
             let mut added = None;
             ui.menu_button("Add task", |ui| added = add_task_menu(ui, self.model));
             if let Some(what) = added {
-                self.model.apply(Command::AddTask(what));
+                self.outbox.send(Command::Task(TaskCommand::Add(what)));
             }
             let table1 = ui
                 .button("Table 1 example")
                 .on_hover_text("the paper's example: foot, gaze and hand at level 1, balance at 2, other hand at 3");
             self.buttons.push(("table1", table1.rect));
             if table1.clicked() {
-                self.model.apply(Command::LoadTable1Example);
+                self.outbox.send(Command::Task(TaskCommand::LoadTable1Example));
             }
         });
         ui.separator();
@@ -96,42 +99,21 @@ impl TasksPanel<'_> {
             action = Some(done);
         }
         if let Some(action) = action {
-            self.apply(action, tasks, &levels);
+            self.send(action, tasks);
         }
     }
 
-    /// Carries out the panel's action on the edited list `tasks`.
-    fn apply(&mut self, action: Action, mut tasks: Vec<TaskSpec>, levels: &[u32]) {
-        let kind = match action {
-            Action::Edit(kind) => kind,
-            Action::Remove(index) => {
-                if index < tasks.len() {
-                    tasks.remove(index);
-                }
-                EditKind::Command
-            }
-            Action::MoveTask(index, level) => {
-                if let Some(task) = tasks.get_mut(index) {
-                    task.level = level;
-                }
-                EditKind::Command
-            }
-            Action::MoveLevel(from, onto) => {
-                reorder_levels(&mut tasks, levels, from, onto);
-                EditKind::Command
-            }
-            Action::SwapLevels(a, b) => {
-                for task in &mut tasks {
-                    if task.level == a {
-                        task.level = b;
-                    } else if task.level == b {
-                        task.level = a;
-                    }
-                }
-                EditKind::Command
-            }
+    /// Sends the panel's action: a field edit as the edited list `tasks`, the rest as the
+    /// task-list edit it is (the model computes the list).
+    fn send(&mut self, action: Action, tasks: Vec<TaskSpec>) {
+        let command = match action {
+            Action::Edit(kind) => TaskCommand::Set { kind, tasks },
+            Action::Remove(index) => TaskCommand::Remove(index),
+            Action::MoveTask(task, level) => TaskCommand::MoveToLevel { task, level },
+            Action::MoveLevel(from, onto) => TaskCommand::MoveLevel { from, onto },
+            Action::SwapLevels(a, b) => TaskCommand::SwapLevels(a, b),
         };
-        self.model.apply(Command::SetTasks { kind, tasks });
+        self.outbox.send(Command::Task(command));
     }
 }
 
@@ -855,29 +837,6 @@ fn orientation_editor(ui: &mut egui::Ui, quaternion: &mut [f64; 4]) -> bool {
         }
     }
     false
-}
-
-/// Moves the group of tasks at level `from` to the place of level `onto` (the last place when
-/// `None`); the groups in between shift by one. The set of level numbers stays the same, so
-/// the default gaps (1, 2, 10...) are kept.
-fn reorder_levels(tasks: &mut [TaskSpec], levels: &[u32], from: u32, onto: Option<u32>) {
-    let mut order: Vec<u32> = levels.to_vec();
-    let Some(source) = order.iter().position(|&level| level == from) else {
-        return;
-    };
-    order.remove(source);
-    let target = onto
-        .and_then(|onto| levels.iter().position(|&level| level == onto))
-        .unwrap_or(order.len())
-        .min(order.len());
-    order.insert(target, from);
-    for task in tasks.iter_mut() {
-        if let Some(rank) = order.iter().position(|&level| level == task.level)
-            && let Some(&number) = levels.get(rank)
-        {
-            task.level = number;
-        }
-    }
 }
 
 /// The "axes" and "goal" rows of a position or centre-of-mass task.

@@ -3,6 +3,8 @@
 //! deletes or copies it), a row per task with an active interval (its ends drag) and the
 //! clip's foot contacts. Everything it does is a `MotionCommand`.
 
+use crate::model::FileCommand;
+use crate::model::Outbox;
 use egui::{Color32, Pos2, Rect, Sense, Stroke, pos2, vec2};
 use stance_document::TaskInterval;
 
@@ -24,7 +26,8 @@ const ROW_HEIGHT: f32 = 16.0;
 
 /// The timeline panel over the model.
 pub(super) struct TimelinePanel<'a> {
-    pub model: &'a mut EditorModel,
+    pub model: &'a EditorModel,
+    pub outbox: &'a mut Outbox,
     pub buttons: &'a mut ButtonRects,
 }
 
@@ -73,7 +76,7 @@ impl TimelinePanel<'_> {
     }
 
     fn command(&mut self, command: MotionCommand) {
-        self.model.apply(Command::Motion(command));
+        self.outbox.send(Command::Motion(command));
     }
 
     /// The panel's contents.
@@ -444,11 +447,16 @@ fn diamond(painter: &egui::Painter, centre: Pos2, radius: f32) {
 /// The Motion menu: clips in (a file, the avatar's own animations, a recording of the body),
 /// the clip's mapping, the timeline out (GLB on the avatar, BVH), the panel. Returns true
 /// when the clip's mapping window was asked for.
-pub(super) fn motion_menu(model: &mut EditorModel, ui: &mut egui::Ui, shown: &mut bool) -> bool {
+pub(super) fn motion_menu(
+    model: &EditorModel,
+    outbox: &mut Outbox,
+    ui: &mut egui::Ui,
+    shown: &mut bool,
+) -> bool {
     let mut command = None;
     let mut mapping = false;
     if ui.button("Open clip (BVH, glTF animation)…").clicked() {
-        command = Some(Command::PickClip);
+        command = Some(Command::File(FileCommand::PickClip));
     }
     let animations: Vec<String> = model
         .avatar()
@@ -494,18 +502,22 @@ pub(super) fn motion_menu(model: &mut EditorModel, ui: &mut egui::Ui, shown: &mu
         )
         .on_disabled_hover_text("open a clip or set keys, on a loaded avatar");
     if glb.clicked() {
-        command = Some(Command::ExportAnimation(AnimationFormat::Glb));
+        command = Some(Command::File(FileCommand::ExportAnimation(
+            AnimationFormat::Glb,
+        )));
     }
     let bvh = ui
         .add_enabled(has_timeline, egui::Button::new("Export animation (BVH)…"))
         .on_disabled_hover_text("open a clip or set keys first");
     if bvh.clicked() {
-        command = Some(Command::ExportAnimation(AnimationFormat::Bvh));
+        command = Some(Command::File(FileCommand::ExportAnimation(
+            AnimationFormat::Bvh,
+        )));
     }
     ui.separator();
     ui.checkbox(shown, "Show the timeline");
     if let Some(command) = command {
-        model.apply(command);
+        outbox.send(command);
         ui.close();
     }
     mapping

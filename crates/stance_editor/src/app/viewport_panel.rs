@@ -1,20 +1,22 @@
 //! The 3D viewport: the camera, the pointer's gestures as commands to the model (pull, handles,
 //! selection, the context menu), and the picture of the model's posture with its overlays.
 
+use crate::model::Outbox;
+use crate::model::{GestureCommand, PostureCommand, TaskCommand, ViewCommand};
 use egui::{Color32, RichText, Sense};
 use glam::DVec3;
 use stance_document::CameraSpec;
 use stance_hanim::{LevelOfArticulation, LimbName, readable_name};
-use stance_ik::Clock;
 use stance_render::{BODY_COLOR_LINEAR, OrbitCamera, Scene, ViewPreset, pick_capsule};
 
 use super::handles::Handles;
 use super::lens::Lens;
 use super::overlay::Overlay;
 use crate::figure::MannequinFigure;
-use crate::host::BackendSummary;
-use crate::model::{Command, EditorModel, NewTask, heat_color};
+use crate::image::ImageExport;
+use crate::model::{AvatarCommand, Command, EditorModel, NewTask, heat_color};
 use crate::viewport::{ViewportInput, ViewportRenderer, apply_gestures};
+use stance_model::BackendSummary;
 
 /// The most a frame (or a host task) spends uploading an avatar, in ms, and the most texture
 /// bytes it writes (see `upload_meshes`): more would wait for the GPU process to drain the
@@ -70,14 +72,15 @@ pub(super) struct ViewportPanel {
     pub render_ms: f64,
     /// The model's view request last followed (see `EditorModel::view_request`).
     view_request: u64,
+    /// *Save image*: asked, rendering on this viewport's GPU, handed to the model.
+    pub image: ImageExport,
 }
 
 impl ViewportPanel {
     /// A viewport with the floor and the trace shown, drawing with eframe's wgpu
     /// `render_state` (none: the viewport says why it is empty).
     pub(super) fn new(render_state: Option<&egui_wgpu::RenderState>) -> Self {
-        let backend =
-            render_state.map(|state| BackendSummary::from_adapter(&state.adapter.get_info()));
+        let backend = render_state.map(|state| backend_summary(&state.adapter.get_info()));
         let renderer = render_state.map(|state| ViewportRenderer::new(&state.device));
         Self {
             camera: OrbitCamera::default(),
@@ -101,6 +104,7 @@ impl ViewportPanel {
             scene_ms: 0.0,
             render_ms: 0.0,
             view_request: 0,
+            image: ImageExport::default(),
         }
     }
 
@@ -168,8 +172,10 @@ impl ViewportPanel {
     }
 
     /// The current view saved with the document (undoable).
-    pub(super) fn save_camera(&self, model: &mut EditorModel) {
-        model.apply(Command::SaveCamera(Some(self.camera_spec())));
+    pub(super) fn save_camera(&self, outbox: &mut Outbox) {
+        outbox.send(Command::Posture(PostureCommand::SaveCamera(Some(
+            self.camera_spec(),
+        ))));
     }
 
     /// The camera looking through this frame's rectangle.
@@ -188,17 +194,15 @@ impl ViewportPanel {
         }
     }
 
-    /// The viewport in `ui`'s remaining space: input as commands to `model` (a gesture the
-    /// pointer moved is solved at once, within `clock`'s frame budget), then the picture of
-    /// the model's posture with its overlays: the body drawn follows the pointer read in
-    /// the same frame.
-    pub(super) fn show(
+    /// The viewport's input in `ui`'s remaining space: a gesture that starts, as a command
+    /// to `model` (the app carries it out before [`Self::follow_pointer`] moves it). Returns
+    /// the viewport's response and input.
+    pub(super) fn read_input(
         &mut self,
         ui: &mut egui::Ui,
-        frame: &eframe::Frame,
-        model: &mut EditorModel,
-        clock: &dyn Clock,
-    ) {
+        model: &EditorModel,
+        outbox: &mut Outbox,
+    ) -> (egui::Response, ViewportInput) {
         let rect = ui.available_rect_before_wrap();
         self.rect = rect;
         // A stable id: the notice strip above comes and goes (with its own widgets), and an
@@ -210,15 +214,26 @@ impl ViewportPanel {
             Sense::click_and_drag(),
         );
         let input = ViewportInput::read(ui, &response);
-        self.gestures(ui, &response, &input, model);
-        model.follow_input(Some(clock));
-        context_menu(&response, model);
+        self.begin_gesture(ui, &response, &input, model, outbox);
+        (response, input)
+    }
+
+    /// The picture of the model's posture with its overlays, after [`Self::read_input`]
+    /// (`response`): the body drawn follows the pointer read in the same frame.
+    pub(super) fn show(
+        &mut self,
+        ui: &mut egui::Ui,
+        frame: &eframe::Frame,
+        model: &EditorModel,
+        outbox: &mut Outbox,
+        response: &egui::Response,
+    ) {
+        context_menu(response, model, outbox);
         if model.is_busy() {
             ui.ctx().request_repaint();
         }
-        self.draw(ui, frame, model);
-        self.advance_image(ui, frame, model);
-        model.readings_shown();
+        self.draw(ui, frame, model, outbox);
+        self.advance_image(ui, frame, model, outbox);
         self.draw_overlays(ui, model, response.hover_pos());
     }
 
@@ -266,36 +281,52 @@ impl ViewportPanel {
     /// The pointer on the viewport, as commands: a drag with the primary button (no Shift,
     /// one finger) that starts on a handle (a task's goal, a ring or the swivel of the
     /// selected joint) moves it; on the body it pulls that point; elsewhere it moves the
-    /// camera. A click selects (and with the pin tool or Alt pins).
-    fn gestures(
-        &mut self,
+    /// camera ([`Self::follow_pointer`]). A click selects (and with the pin tool or Alt pins).
+    fn begin_gesture(
+        &self,
         ui: &egui::Ui,
         response: &egui::Response,
         input: &ViewportInput,
-        model: &mut EditorModel,
+        model: &EditorModel,
+        outbox: &mut Outbox,
     ) {
-        let pointer = response.hover_pos();
         let press_origin = ui.input(|input| input.pointer.press_origin());
-        let interact_pos = response.interact_pointer_pos();
         if response.drag_started_by(egui::PointerButton::Primary)
             && !input.shift_held
             && input.touch_count < 2
             && let Some(origin) = press_origin
         {
             if let Some(handle) = self.handles(model).pick_handle(origin) {
-                model.apply(Command::BeginHandle(handle));
+                outbox.send(Command::Gesture(GestureCommand::BeginHandle(handle)));
             } else if let Some((joint, point_world)) = self.pick(model, origin) {
-                model.apply(Command::BeginPull { joint, point_world });
+                outbox.send(Command::Gesture(GestureCommand::BeginPull {
+                    joint,
+                    point_world,
+                }));
             }
         }
+    }
+
+    /// The pointer moves the gesture in progress (the app carries it out and solves it at
+    /// once, before [`Self::show`] draws), or the camera; hover, click, select and pin.
+    pub(super) fn follow_pointer(
+        &mut self,
+        ui: &egui::Ui,
+        response: &egui::Response,
+        input: &ViewportInput,
+        model: &EditorModel,
+        outbox: &mut Outbox,
+    ) {
+        let pointer = response.hover_pos();
+        let interact_pos = response.interact_pointer_pos();
         let dragging = response.dragged() && input.touch_count < 2;
         match (model.gesture().cloned(), interact_pos) {
             (Some(gesture), Some(pointer)) if dragging => {
                 if let Some(command) = self.lens().follow(&gesture, pointer) {
-                    model.apply(command);
+                    outbox.send(command);
                 }
             }
-            (Some(_), _) => model.apply(Command::EndGesture),
+            (Some(_), _) => outbox.send(Command::Gesture(GestureCommand::EndGesture)),
             (None, _) => {
                 if apply_gestures(&mut self.camera, &input.gestures(), self.rect.height()) {
                     ui.ctx().request_repaint();
@@ -307,23 +338,29 @@ impl ViewportPanel {
         } else {
             pointer.and_then(|pointer| self.pick(model, pointer).map(|(joint, _)| joint))
         };
-        model.apply(Command::Hover(hovered));
+        outbox.send(Command::View(ViewCommand::Hover(hovered)));
         if response.clicked_by(egui::PointerButton::Primary) {
             let clicked =
                 interact_pos.and_then(|pointer| self.pick(model, pointer).map(|(joint, _)| joint));
-            model.apply(Command::Select(clicked));
+            outbox.send(Command::View(ViewCommand::Select(clicked)));
             // The pin tool (or Alt + click): one click pins the part where it is.
             let alt = ui.input(|input| input.modifiers.alt);
             if let Some(joint) = clicked
                 && (self.pin_tool || alt)
             {
-                model.apply(Command::Pin(joint));
+                outbox.send(Command::Posture(PostureCommand::Pin(joint)));
             }
         }
     }
 
     /// The 3D picture of this frame's posture.
-    fn draw(&mut self, ui: &mut egui::Ui, frame: &eframe::Frame, model: &mut EditorModel) {
+    fn draw(
+        &mut self,
+        ui: &mut egui::Ui,
+        frame: &eframe::Frame,
+        model: &EditorModel,
+        outbox: &mut Outbox,
+    ) {
         let rect = self.rect;
         let pixels_per_point = ui.ctx().pixels_per_point();
         self.size_px = [
@@ -331,7 +368,7 @@ impl ViewportPanel {
             (rect.height() * pixels_per_point).round().max(1.0) as u32,
         ];
         let ctx = ui.ctx().clone();
-        self.upload_meshes(&ctx, frame, model);
+        self.upload_meshes(&ctx, frame, model, outbox);
         let scene_started = web_time::Instant::now();
         let scene = self.scene(model);
         self.scene_ms = scene_started.elapsed().as_secs_f64() * 1000.0;
@@ -345,7 +382,7 @@ impl ViewportPanel {
                 if !self.first_frame_reported {
                     self.first_frame_reported = true;
                     if let Some(backend) = &self.backend {
-                        model.hooks.first_frame_rendered(backend);
+                        model.hooks().first_frame_rendered(backend);
                     }
                 }
             }
@@ -370,12 +407,13 @@ impl ViewportPanel {
         &mut self,
         ctx: &egui::Context,
         frame: &eframe::Frame,
-        model: &mut EditorModel,
+        model: &EditorModel,
+        outbox: &mut Outbox,
     ) {
         if self.renderer.is_none() || frame.wgpu_render_state().is_none() {
             return;
         }
-        self.begin_avatar_upload(model);
+        self.begin_avatar_upload(model, outbox);
         if self
             .renderer
             .as_ref()
@@ -409,7 +447,7 @@ impl ViewportPanel {
         }
         match MannequinFigure::new(loa) {
             Ok(mut figure) => {
-                renderer.set_avatar(render_state, figure.take_model().as_ref());
+                renderer.set_avatar(render_state, figure.take_model().as_deref());
                 self.figure = Some((figure, loa));
             }
             Err(error) => {
@@ -423,18 +461,19 @@ impl ViewportPanel {
     /// Frames that repaint the canvas are slow to come while a large avatar arrives (a
     /// software-composited canvas is read back each time): the page steps the upload in tasks
     /// of its own where it can. Returns whether it does.
-    pub(super) fn begin_avatar_upload(&mut self, model: &mut EditorModel) -> bool {
+    pub(super) fn begin_avatar_upload(&mut self, model: &EditorModel, outbox: &mut Outbox) -> bool {
         let Some(renderer) = &mut self.renderer else {
             return false;
         };
-        let Some(mesh) = model.avatar.as_mut().and_then(|avatar| avatar.model.take()) else {
+        let Some(mesh) = model.avatar().and_then(|avatar| avatar.mesh()).cloned() else {
             return false;
         };
         renderer.begin_avatar_upload(mesh);
+        outbox.send(Command::Avatar(AvatarCommand::MeshTaken));
         self.avatar_uploaded = false;
         self.avatar_upload_ms = 0.0;
         self.avatar_upload_tasks = 0;
-        self.upload_in_tasks = model.hooks.upload_in_tasks();
+        self.upload_in_tasks = model.hooks().upload_in_tasks();
         self.upload_in_tasks
     }
 
@@ -490,8 +529,14 @@ impl ViewportPanel {
 
     /// *Save image* on this viewport's GPU (its renderer holds the avatar's mesh): the model
     /// renders an asked image and downloads it once the read-back completes, frames later.
-    fn advance_image(&mut self, ui: &egui::Ui, frame: &eframe::Frame, model: &mut EditorModel) {
-        if !model.image.is_busy() {
+    fn advance_image(
+        &mut self,
+        ui: &egui::Ui,
+        frame: &eframe::Frame,
+        model: &EditorModel,
+        outbox: &mut Outbox,
+    ) {
+        if !self.image.is_busy() {
             return;
         }
         // The image shows the figure when the viewport does (its mesh is the renderer's).
@@ -505,7 +550,11 @@ impl ViewportPanel {
         {
             let queue = &render_state.queue;
             let renderer = renderer.scene_renderer_mut();
-            if model.advance_image(&render_state.device, queue, renderer, figure) {
+            let device = &render_state.device;
+            if self
+                .image
+                .advance(model, outbox, device, queue, renderer, figure)
+            {
                 ui.ctx().request_repaint();
             }
         }
@@ -517,7 +566,7 @@ impl ViewportPanel {
         model.avatar().is_none()
             && self.show_figure
             && self.figure.is_some()
-            && !model.comfort.heat_map
+            && !model.comfort().heat_map()
     }
 
     /// What the renderer draws: the mannequin's figure, or its capsules (selection and hover
@@ -527,7 +576,7 @@ impl ViewportPanel {
         let show_figure = self.figure_shown(model);
         // With an avatar or the figure the capsules are hidden; the skeleton overlay shows the
         // bones of a selection.
-        let heat = model.comfort.heat_shares(model.session().skeleton());
+        let heat = model.comfort().heat_shares(model.session().skeleton());
         let capsules = if show_avatar || show_figure {
             Vec::new()
         } else {
@@ -569,7 +618,7 @@ impl ViewportPanel {
 }
 
 /// Right-click on the body: pin, select, add a task on that part.
-fn context_menu(response: &egui::Response, model: &mut EditorModel) {
+fn context_menu(response: &egui::Response, model: &EditorModel, outbox: &mut Outbox) {
     let context_joint = model.hovered_joint().or(model.selected_joint());
     response.context_menu(|ui| {
         let Some(joint) = context_joint else {
@@ -586,29 +635,51 @@ fn context_menu(response: &egui::Response, model: &mut EditorModel) {
         ui.label(RichText::new(readable_name(&name)).strong());
         let mut command = None;
         if ui.button("Pin here (level 1)").clicked() {
-            command = Some(Command::Pin(joint));
+            command = Some(Command::Posture(PostureCommand::Pin(joint)));
         }
         if ui.button("Select").clicked() {
-            command = Some(Command::Select(Some(joint)));
+            command = Some(Command::View(ViewCommand::Select(Some(joint))));
         }
         ui.separator();
         if ui.button("Add position task").clicked() {
-            command = Some(Command::AddTask(NewTask::Position(joint)));
+            command = Some(Command::Task(TaskCommand::Add(NewTask::Position(joint))));
         }
         if ui.button("Add orientation task").clicked() {
-            command = Some(Command::AddTask(NewTask::Orientation(joint)));
+            command = Some(Command::Task(TaskCommand::Add(NewTask::Orientation(joint))));
         }
         if let Some(limb) = LimbName::of_joint(&name)
             && ui.button("Add limb task (with swivel)").clicked()
         {
-            command = Some(Command::AddTask(NewTask::Limb(limb)));
+            command = Some(Command::Task(TaskCommand::Add(NewTask::Limb(limb))));
         }
         if let Some(command) = command {
-            if matches!(command, Command::AddTask(_)) {
-                model.apply(Command::Select(Some(joint)));
+            if matches!(command, Command::Task(TaskCommand::Add(_))) {
+                outbox.send(Command::View(ViewCommand::Select(Some(joint))));
             }
-            model.apply(command);
+            outbox.send(command);
             ui.close();
         }
     });
+}
+
+/// The backend and adapter `info` names, as the status bar says them.
+fn backend_summary(info: &wgpu::AdapterInfo) -> BackendSummary {
+    let backend = match info.backend {
+        wgpu::Backend::BrowserWebGpu => "WebGPU",
+        wgpu::Backend::Gl if cfg!(target_arch = "wasm32") => "WebGL2",
+        wgpu::Backend::Gl => "OpenGL",
+        wgpu::Backend::Vulkan => "Vulkan",
+        wgpu::Backend::Metal => "Metal",
+        wgpu::Backend::Dx12 => "DirectX 12",
+        wgpu::Backend::Noop => "no GPU",
+    };
+    let adapter = if info.name.is_empty() {
+        "unnamed adapter".to_owned()
+    } else {
+        info.name.clone()
+    };
+    BackendSummary {
+        backend: backend.to_owned(),
+        adapter,
+    }
 }

@@ -10,7 +10,9 @@
 use egui::{Modifiers, PointerButton, Pos2};
 use egui_kittest::Harness;
 use serde_json::Value;
-use stance_editor::{Command, EditorModel, MemoryHost, StanceApp};
+use stance_editor::StanceApp;
+
+pub use crate::clocked::{editor_on, open};
 
 /// The editor in a window of `size` points, run until it settles.
 pub fn harness_sized(app: StanceApp, size: egui::Vec2) -> Harness<'static, StanceApp> {
@@ -128,20 +130,5 @@ pub fn release_at(harness: &mut Harness<'static, StanceApp>, pos: Pos2) {
         button: PointerButton::Primary,
         pressed: false,
         modifiers: Modifiers::NONE,
-    });
-}
-
-/// The editor's model on `host`, after its first step.
-pub fn editor_on(host: &MemoryHost) -> EditorModel {
-    let mut model = EditorModel::new(Box::new(host.clone())).expect("the editor starts");
-    model.step(0.0, None);
-    model
-}
-
-/// Opens `bytes` as the file `name`, as a pick or a drop does.
-pub fn open(model: &mut EditorModel, name: &str, bytes: &[u8]) {
-    model.apply(Command::OpenFile {
-        name: name.into(),
-        bytes: bytes.to_vec(),
     });
 }

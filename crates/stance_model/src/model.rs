@@ -14,8 +14,8 @@ mod bones;
 mod clips;
 mod comfort;
 mod command;
+mod dispatch;
 mod hands;
-mod image;
 mod mapping;
 mod motion;
 mod opening;
@@ -24,21 +24,23 @@ mod tasks;
 
 use glam::DVec3;
 use serde_json::Value;
-use stance_document::{AvatarReference, Document, PostureRest, TaskSpec, link};
+use stance_document::{AvatarReference, Document, PostureRest, link};
 use stance_hanim::{LevelOfArticulation, Mapping, readable_name};
 use stance_ik::Clock;
 use stance_render::MannequinBone;
 
 pub use self::clips::{AUTOSAVE_CLIP_BYTES, AnimationFormat, CLIP_FPS, PickPurpose};
-pub use self::comfort::{ComfortView, heat_color};
-use self::command::goals_moved;
+pub use self::comfort::{ComfortCommand, ComfortView, heat_color};
 /// Said when a document made on the avatar before a posture meant the same pose on every body
 /// (its values relative to the avatar's own rest) was converted to the standard pose.
 pub(crate) const CONVERTED_NOTE: &str = " The document was made before a posture meant the same pose on every body: its values, relative to this avatar's own rest, were converted and show the pose it was saved with.";
 
-pub use self::command::{Command, Gesture, Notice, SessionChange};
+pub use self::command::{
+    AvatarCommand, Change, Command, FileCommand, Gesture, GestureCommand, HistoryCommand,
+    LibraryCommand, Notice, NoticeCommand, PostureCommand, SessionChange, TaskCommand, ViewCommand,
+};
+pub use self::dispatch::{Outbox, SharedLink};
 pub use self::hands::{HandCommand, Hands};
-pub use self::image::{IMAGE_FILE_NAME, ImageExport, ImageRequest};
 use self::mapping::MappingCorrections;
 pub use self::mapping::{Correction, carry_posture};
 pub use self::motion::{
@@ -50,8 +52,10 @@ use crate::history::{EditKind, History};
 use crate::host::{HostHooks, HostMessage};
 use crate::library::{Autosave, PoseLibrary};
 use crate::posing::{PosingError, PosingSession};
-use crate::sensors::{SensorCommand, SensorHub, SensorOutcome, SensorSettings};
+use crate::sensors::{SensorCommand, SensorHub, SensorSettings};
 
+/// The name a *Save image* PNG downloads as.
+pub const IMAGE_FILE_NAME: &str = "stance-posture.png";
 /// Seconds an information notice stays (errors stay until dismissed).
 pub const NOTICE_SECS: f64 = 8.0;
 /// Points of the effector trace kept.
@@ -61,14 +65,14 @@ const TRACE_STEP_M: f64 = 0.002;
 
 /// The editor's model.
 pub struct EditorModel {
-    pub(crate) session: PosingSession,
-    pub(crate) history: History,
-    pub(crate) selected_joint: Option<usize>,
-    pub(crate) hovered_joint: Option<usize>,
-    pub(crate) gesture: Option<Gesture>,
-    pub(crate) avatar: Option<LoadedAvatar>,
+    session: PosingSession,
+    history: History,
+    selected_joint: Option<usize>,
+    hovered_joint: Option<usize>,
+    gesture: Option<Gesture>,
+    avatar: Option<LoadedAvatar>,
     /// The URL the avatar came from (links and autosave name it); `None` for local files.
-    pub(crate) avatar_url: Option<String>,
+    avatar_url: Option<String>,
     /// Earlier bodies that undo or redo of a change of body brings back, by the id the
     /// history names them with (see `model/avatars.rs`).
     kept_bodies: Vec<(u64, avatars::KeptBody)>,
@@ -80,18 +84,18 @@ pub struct EditorModel {
     pending_document: Option<Document>,
     /// The avatar file the host is importing for the editor (its name).
     pending_import: Option<String>,
-    pub(crate) mapping_corrections: MappingCorrections,
-    pub(crate) trace: Vec<DVec3>,
-    pub(crate) notice: Option<Notice>,
-    pub(crate) library: PoseLibrary,
-    pub(crate) sensors: SensorHub,
+    mapping_corrections: MappingCorrections,
+    trace: Vec<DVec3>,
+    notice: Option<Notice>,
+    library: PoseLibrary,
+    sensors: SensorHub,
     /// The next picked file is a sensor recording to replay.
     /// What the next picked file is for, when the user asked for one.
     pending_pick: Option<PickPurpose>,
     /// Counts the times the document's saved view should be shown (a document with one was
     /// opened, or undo and redo changed it): the viewport follows each new count.
     view_requests: u64,
-    pub(crate) hooks: Box<dyn HostHooks>,
+    hooks: Box<dyn HostHooks>,
     autosave: Autosave,
     /// Seconds since the editor started, as of the last step.
     now_secs: f64,
@@ -102,15 +106,13 @@ pub struct EditorModel {
     /// The session revision the bones were built for.
     bones_revision: Option<u64>,
     /// CPU time of the last step's solve (ms).
-    pub(crate) solver_ms: f64,
+    solver_ms: f64,
     /// How many times the session was replaced (views keep per-session state by it).
     session_generation: u64,
     /// The clip, the playhead and the trajectory (the keys are in the document).
-    pub(crate) timeline: Timeline,
+    timeline: Timeline,
     /// The comfort panel: report and heat map.
-    pub(crate) comfort: ComfortView,
-    /// *Save image*: asked, rendering, downloaded.
-    pub(crate) image: ImageExport,
+    comfort: ComfortView,
 }
 
 impl std::fmt::Debug for EditorModel {
@@ -158,7 +160,6 @@ impl EditorModel {
             session_generation: 0,
             timeline: Timeline::default(),
             comfort: ComfortView::default(),
-            image: ImageExport::default(),
         };
         model.load_library();
         if let Some(settings) = SensorSettings::load(model.hooks.as_ref()) {
@@ -243,8 +244,28 @@ impl EditorModel {
     }
 
     /// The comfort of the current posture (measured once per posture).
-    pub fn comfort_report(&mut self) -> &stance_hanim::comfort::ComfortReport {
+    pub fn comfort_report(&self) -> stance_hanim::comfort::ComfortReport {
         self.comfort.report(&self.session, self.session_generation)
+    }
+
+    /// The comfort panel's view: heat map, settings, the last report measured.
+    pub fn comfort(&self) -> &ComfortView {
+        &self.comfort
+    }
+
+    /// CPU time of the last step's solve (ms).
+    pub fn solver_ms(&self) -> f64 {
+        self.solver_ms
+    }
+
+    /// What the editor needs from the page or the native shell.
+    pub fn hooks(&self) -> &dyn HostHooks {
+        self.hooks.as_ref()
+    }
+
+    /// Whether the avatar `name` has a mapping correction to revert.
+    pub fn can_revert_mapping(&self, name: &str) -> bool {
+        self.mapping_corrections.before_last(name).is_some()
     }
 
     /// Seconds since the editor started, as of the last step.
@@ -353,182 +374,6 @@ impl EditorModel {
     // -----------------------------------------------------------------------------------------
     // Commands
 
-    /// Carries out one command of the UI.
-    pub fn apply(&mut self, command: Command) {
-        let posture_edit = matches!(
-            command,
-            Command::SetDof { .. }
-                | Command::SetSwivel { .. }
-                | Command::ResetToRest
-                | Command::Mirror
-        );
-        self.apply_command(command);
-        if posture_edit {
-            self.motion_posture_edited();
-        }
-    }
-
-    fn apply_command(&mut self, command: Command) {
-        match command {
-            Command::Select(joint) => self.selected_joint = joint,
-            Command::Hover(joint) => self.hovered_joint = joint,
-            Command::BeginPull { joint, point_world } => self.begin_pull(joint, point_world),
-            Command::BeginHandle(gesture) => self.begin_handle(gesture),
-            Command::MoveGrab { target_world } => {
-                if self.is_pulling() {
-                    self.session.move_grab(target_world);
-                }
-            }
-            Command::MoveGoal {
-                goal_world,
-                floor_world,
-            } => {
-                if let Some(Gesture::Goal { tasks: moved, .. }) = &self.gesture {
-                    let tasks = goals_moved(self.session.tasks(), moved, goal_world, floor_world);
-                    self.session.set_tasks(tasks);
-                }
-            }
-            Command::TurnRing { screen_angle } => {
-                if let Some((dof, value)) = self
-                    .gesture
-                    .as_mut()
-                    .and_then(|gesture| gesture.turn_ring(screen_angle))
-                {
-                    self.session.set_dof(dof, value);
-                }
-            }
-            Command::TurnSwivel { point_world } => {
-                if let Some((limb, angle)) = self
-                    .gesture
-                    .as_ref()
-                    .and_then(|gesture| gesture.swivel_at(point_world))
-                {
-                    self.session.set_limb_swivel(limb, angle);
-                }
-            }
-            Command::EndGesture => self.end_gesture(),
-            Command::CancelGesture => self.cancel_gesture(),
-            other => self.apply_edit(other),
-        }
-    }
-
-    /// The commands that edit the document (each one undoable).
-    fn apply_edit(&mut self, command: Command) {
-        match command {
-            Command::Pin(joint) => self.pin(joint),
-            Command::PinSelected => match self.selected_joint {
-                Some(joint) => self.pin(joint),
-                None => self.inform("Select a body part first (click it), then pin it."),
-            },
-            Command::SetTasks { kind, tasks } => self.commit_tasks(kind, tasks),
-            Command::AddTask(what) => match make_task(&self.session, what) {
-                Ok(task) => {
-                    let mut tasks = self.session.tasks().to_vec();
-                    tasks.push(task);
-                    self.commit_tasks(EditKind::Command, tasks);
-                }
-                Err(error) => self.warn(format!("The task could not be added: {error}.")),
-            },
-            Command::LoadTable1Example => {
-                let tasks = table1_example(&self.session);
-                self.commit_tasks(EditKind::Command, tasks);
-                self.inform("Table 1 of the paper: level 1 holds the left foot, the gaze and the right hand; balance is level 2; the left hand on the bar level 3.");
-            }
-            Command::SetDof { dof, value } => {
-                self.record(EditKind::Joint(dof));
-                self.session.set_dof(dof, value);
-            }
-            Command::SetStiffness { dof, value } => self.set_stiffness(dof, value),
-            Command::SetSwivel { limb, swivel_angle } => {
-                self.record(EditKind::Swivel(limb as usize));
-                self.session.set_limb_swivel(limb, swivel_angle);
-            }
-            Command::Undo => self.undo(),
-            Command::Redo => self.redo(),
-            Command::ResetToRest => {
-                self.record(EditKind::Command);
-                self.session.reset_to_rest();
-                self.trace.clear();
-            }
-            Command::Mirror => {
-                self.record(EditKind::Command);
-                self.session.mirror();
-            }
-            Command::Hands(command) => self.apply_hands(command),
-            Command::SaveCamera(camera) => {
-                self.record(EditKind::Command);
-                self.session.set_camera(camera);
-                self.inform(match camera {
-                    Some(_) => "The view is saved with the document: opening it shows this view.",
-                    None => "The document no longer has a view of its own.",
-                });
-            }
-            other => self.apply_outside(other),
-        }
-    }
-
-    /// The commands about the body, files, the library, the sensors and notices.
-    fn apply_outside(&mut self, command: Command) {
-        match command {
-            Command::SetLevelOfArticulation(loa) => self.set_level_of_articulation(loa),
-            Command::LoadAvatar { name, bytes } => self.load_avatar(name, bytes, Vec::new()),
-            Command::FetchAvatar(url) => self.fetch_avatar(&url),
-            Command::UseMannequin => self.use_mannequin(),
-            Command::ApplyMapping {
-                mapping,
-                corrections,
-            } => self.apply_mapping(*mapping, corrections),
-            Command::RevertMappingCorrection => self.revert_mapping_correction(),
-            Command::OpenLink(text) => {
-                self.open_link(&text);
-            }
-            Command::OpenFile { name, bytes } => self.open_file(&name, bytes),
-            Command::OpenFiles(files) => self.open_files(files),
-            Command::DecodedImages { file, images } => self.decoded_images = Some((file, images)),
-            Command::AvatarImported { name, result } => self.avatar_imported(&name, result),
-            Command::SaveToLibrary(name) => self.save_to_library(&name),
-            Command::LoadFromLibrary(index) => self.load_from_library(index),
-            Command::DeleteFromLibrary(index) => self.delete_from_library(index),
-            Command::PickFile => self.host_result(self.hooks.pick_file(), "Could not open a file"),
-            Command::ExportDocument => self.export_document(),
-            Command::ExportLibrary => self.export_library(),
-            Command::SaveImage(request) => self.image.request(request),
-            Command::ExportPosedAvatar => self.export_posed_avatar(),
-            Command::PickRecording => match self.hooks.pick_file() {
-                Ok(()) => self.pending_pick = Some(PickPurpose::Recording),
-                Err(error) => self.warn(format!("Sensors: {error}")),
-            },
-            Command::PickClip => match self.hooks.pick_file() {
-                Ok(()) => self.pending_pick = Some(PickPurpose::Clip),
-                Err(error) => self.warn(format!("Motion: {error}")),
-            },
-            Command::ExportAnimation(format) => self.export_animation(format),
-            Command::Sensors(command) => {
-                let outcome = self.sensors.apply(
-                    command,
-                    &mut self.session,
-                    self.hooks.as_ref(),
-                    self.now_secs,
-                );
-                match outcome {
-                    SensorOutcome::Quiet => {}
-                    SensorOutcome::Inform(text) => self.inform(text),
-                    SensorOutcome::Warn(text) => self.warn(text),
-                }
-            }
-            Command::HostFailed(reason) => {
-                self.pending_pick = None;
-                self.warn(reason);
-            }
-            Command::Inform(text) => self.inform(text),
-            Command::Warn(text) => self.warn(text),
-            Command::DismissNotice => self.notice = None,
-            Command::Motion(command) => self.apply_motion(command),
-            // The gestures and edits are carried out above.
-            _ => {}
-        }
-    }
-
     /// Says what went wrong when the host refused.
     fn host_result(&mut self, result: Result<(), String>, what: &str) {
         if let Err(error) = result {
@@ -565,13 +410,6 @@ impl EditorModel {
     fn record(&mut self, kind: EditKind) {
         let before = self.session.document();
         self.history.record(&before, kind, self.now_secs);
-    }
-
-    fn commit_tasks(&mut self, kind: EditKind, tasks: Vec<TaskSpec>) {
-        if tasks.as_slice() != self.session.tasks() {
-            self.record(kind);
-            self.session.set_tasks(tasks);
-        }
     }
 
     fn undo(&mut self) {
@@ -818,6 +656,17 @@ impl EditorModel {
                 size.div_ceil(1024)
             )),
             Err(error) => self.warn(format!("{file_name} could not be exported: {error}")),
+        }
+    }
+
+    /// Hands a rendered image (PNG, `width` x `height` pixels) to the host as
+    /// [`IMAGE_FILE_NAME`].
+    fn save_image(&mut self, png: &[u8], width: u32, height: u32) {
+        match self.hooks.download_bytes(IMAGE_FILE_NAME, png) {
+            Ok(()) => self.inform(format!(
+                "Saved a {width}x{height} image as {IMAGE_FILE_NAME}."
+            )),
+            Err(error) => self.warn(format!("Could not save the image: {error}")),
         }
     }
 

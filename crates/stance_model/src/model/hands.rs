@@ -5,7 +5,7 @@
 use stance_hanim::Side;
 use stance_hanim::hands::{Finger, HandPreset};
 
-use super::EditorModel;
+use super::{Change, EditorModel};
 use crate::history::EditKind;
 
 /// Which hands an edit poses.
@@ -86,7 +86,8 @@ impl EditorModel {
 
     /// Carries out a hand edit: the DOF values of every hand asked for, as one undo step; a
     /// notice says why when the body has no fingers to pose.
-    pub(super) fn apply_hands(&mut self, command: HandCommand) {
+    /// Says whether the posture changed.
+    pub(super) fn apply_hands(&mut self, command: HandCommand) -> Change {
         let (hands, kind) = match command {
             HandCommand::Preset { hands, .. } => (hands, EditKind::Command),
             HandCommand::Curl { hands, finger, .. } => (hands, EditKind::HandCurl(hands, finger)),
@@ -106,20 +107,20 @@ impl EditorModel {
         if values.is_empty() {
             let why = problems.first().cloned().unwrap_or_default();
             self.inform(format!("No hand pose: {why}."));
-            return;
+            return Change::View;
         }
         let posture = self.session.posture().values();
         let unchanged = values
             .iter()
             .all(|&(dof, value)| posture.get(dof) == Some(&value));
         if unchanged {
-            return;
+            return Change::Nothing;
         }
         self.record(kind);
         self.session.set_dofs(&values);
-        self.motion_posture_edited();
         if let Some(problem) = problems.first() {
             self.inform(format!("Only one hand was posed: {problem}."));
         }
+        Change::Posture
     }
 }

@@ -1,46 +1,77 @@
 //! The comfort panel's model: the posture's comfort report (RULA with its parts, the joint
 //! loads against gravity), measured once per posture, and the heat map's colours.
 
+use std::cell::RefCell;
+
 use stance_hanim::comfort::{ComfortReport, ComfortSettings, comfort_report};
 use stance_hanim::strength::built_axes;
 
+use super::Change;
 use crate::posing::PosingSession;
 
-/// The comfort of the session's posture, cached by session revision.
+/// What the comfort panel asks of its model.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ComfortCommand {
+    /// Colour the body by joint load (the heat map), or not.
+    ShowHeatMap(bool),
+    /// RULA's inputs that a posture does not show, and the weights: the report is measured
+    /// again with them.
+    SetSettings(ComfortSettings),
+}
+
+/// The comfort of the session's posture, cached by session revision (a cache the views fill
+/// as they read it: measuring is not a change of the model).
 #[derive(Debug, Default)]
 pub struct ComfortView {
     /// Colour the body by joint load (the heat map).
-    pub heat_map: bool,
+    heat_map: bool,
     /// RULA's inputs that a posture does not show, and the weights.
-    pub settings: ComfortSettings,
-    report: Option<((u64, u64), ComfortReport)>,
+    settings: ComfortSettings,
+    report: RefCell<Option<((u64, u64), ComfortReport)>>,
 }
 
 impl ComfortView {
-    /// The report for the session's posture (`generation` tells sessions apart).
-    pub fn report(&mut self, session: &PosingSession, generation: u64) -> &ComfortReport {
-        let key = (generation, session.revision());
-        if self.report.as_ref().is_some_and(|(k, _)| *k != key) {
-            self.report = None;
+    /// Carries out a command of the comfort panel (the view changes, not the document).
+    pub fn apply(&mut self, command: ComfortCommand) -> Change {
+        match command {
+            ComfortCommand::ShowHeatMap(on) => self.heat_map = on,
+            ComfortCommand::SetSettings(settings) => {
+                if settings != self.settings {
+                    self.settings = settings;
+                    self.report = RefCell::new(None);
+                }
+            }
         }
-        let settings = &self.settings;
-        &self
-            .report
-            .get_or_insert_with(|| {
-                let report = comfort_report(
-                    session.skeleton(),
-                    &built_axes(session.humanoid()),
-                    session.posture(),
-                    settings,
-                );
-                (key, report)
-            })
-            .1
+        Change::View
     }
 
-    /// The last report measured, if any (the viewport's heat map reads it).
-    pub fn cached(&self) -> Option<&ComfortReport> {
-        self.report.as_ref().map(|(_, report)| report)
+    /// Whether the body is coloured by joint load.
+    pub fn heat_map(&self) -> bool {
+        self.heat_map
+    }
+
+    /// RULA's inputs that a posture does not show, and the weights.
+    pub fn settings(&self) -> ComfortSettings {
+        self.settings
+    }
+
+    /// The report for the session's posture (`generation` tells sessions apart).
+    pub fn report(&self, session: &PosingSession, generation: u64) -> ComfortReport {
+        let key = (generation, session.revision());
+        let mut cached = self.report.borrow_mut();
+        if let Some((k, report)) = cached.as_ref()
+            && *k == key
+        {
+            return report.clone();
+        }
+        let report = comfort_report(
+            session.skeleton(),
+            &built_axes(session.humanoid()),
+            session.posture(),
+            &self.settings,
+        );
+        *cached = Some((key, report.clone()));
+        report
     }
 
     /// Per joint of `skeleton`, its load share for the heat map (0 where unknown); `None`
@@ -49,7 +80,8 @@ impl ComfortView {
         if !self.heat_map {
             return None;
         }
-        let report = self.cached()?;
+        let cached = self.report.borrow();
+        let (_, report) = cached.as_ref()?;
         Some(
             skeleton
                 .joints()
@@ -64,11 +96,6 @@ impl ComfortView {
                 })
                 .collect(),
         )
-    }
-
-    /// Forgets the cached report (the settings changed).
-    pub fn invalidate(&mut self) {
-        self.report = None;
     }
 }
 

@@ -8,12 +8,13 @@
 use stance_document::{
     Document, MotionKey, MotionSection, PostureValues, TaskInterval, TaskSpec, link,
 };
-use stance_editor::model::MotionCommand;
-use stance_editor::{Command, EditorModel, MemoryHost};
 use stance_ik::Dof;
+use stance_model::model::MotionCommand;
+use stance_model::model::{FileCommand, PostureCommand};
+use stance_model::{Command, EditorModel, MemoryHost};
 use stance_motion::{BvhLimits, read_bvh};
 
-use crate::common::{editor_on, open};
+use crate::clocked::{editor_on, open};
 
 const WALK: &[u8] = include_bytes!("../../../tests/fixtures/motion/walk.bvh");
 const RUN: &[u8] = include_bytes!("../../../tests/fixtures/motion/run.bvh");
@@ -69,7 +70,7 @@ fn a_saved_document_reopens_in_a_fresh_editor_with_its_clip_and_keys() {
     let host = MemoryHost::default();
     let mut model = editor_on(&host);
     walk_with_keys(&mut model);
-    model.apply(Command::ExportDocument);
+    model.apply(Command::File(FileCommand::ExportDocument));
     let (file, text) = host.inner.borrow().downloads.last().cloned().unwrap();
     assert_eq!(file, "stance-pose.json");
     let json: serde_json::Value = serde_json::from_str(&text).unwrap();
@@ -119,7 +120,7 @@ fn a_damaged_embedded_clip_is_named_and_the_open_document_stays() {
     let host = MemoryHost::default();
     let mut model = editor_on(&host);
     walk_with_keys(&mut model);
-    model.apply(Command::ExportDocument);
+    model.apply(Command::File(FileCommand::ExportDocument));
     let text = host.inner.borrow().downloads.last().cloned().unwrap().1;
     let json: serde_json::Value = serde_json::from_str(&text).unwrap();
     let data = json["clip"]["deflate"].as_str().unwrap().to_owned();
@@ -164,7 +165,7 @@ fn a_link_names_its_clip_and_the_editor_asks_for_that_file_then_takes_it() {
     );
 
     let mut fresh = editor_on(&MemoryHost::default());
-    fresh.apply(Command::OpenLink(fragment.clone()));
+    fresh.apply(Command::File(FileCommand::OpenLink(fragment.clone())));
     let notice = fresh.notice().unwrap().clone();
     assert!(notice.is_error, "{}", notice.text);
     assert!(
@@ -200,7 +201,7 @@ fn a_link_names_its_clip_and_the_editor_asks_for_that_file_then_takes_it() {
     assert!(most < 1e-3, "the key over the clip is back: {most}");
 
     let mut wrong = editor_on(&MemoryHost::default());
-    wrong.apply(Command::OpenLink(fragment));
+    wrong.apply(Command::File(FileCommand::OpenLink(fragment)));
     open(&mut wrong, "run.bvh", RUN);
     let text = wrong.notice().unwrap().text.clone();
     assert!(text.contains("made over another clip, walk.bvh"), "{text}");
@@ -255,12 +256,15 @@ fn a_recorded_clip_is_kept_as_bvh_and_reopens_with_the_same_motion() {
     model.apply(Command::Motion(MotionCommand::Record(true)));
     for k in 1..=30 {
         let now = f64::from(k) / 30.0;
-        model.apply(Command::SetDof { dof, value: -now });
+        model.apply(Command::Posture(PostureCommand::SetDof {
+            dof,
+            value: -now,
+        }));
         model.step(now, None);
     }
     model.apply(Command::Motion(MotionCommand::Record(false)));
     assert_eq!(model.timeline().clip_name(), Some("recording"));
-    model.apply(Command::ExportDocument);
+    model.apply(Command::File(FileCommand::ExportDocument));
     let text = host.inner.borrow().downloads.last().cloned().unwrap().1;
     let json: serde_json::Value = serde_json::from_str(&text).unwrap();
     assert_eq!(json["clip"]["file"], "recording.bvh");
@@ -294,7 +298,7 @@ fn a_clip_too_large_for_the_autosave_is_named_and_asked_for() {
         long.push_str(rows[f % rows.len()]);
         long.push('\n');
     }
-    assert!(long.len() as u64 > stance_editor::model::AUTOSAVE_CLIP_BYTES);
+    assert!(long.len() as u64 > stance_model::model::AUTOSAVE_CLIP_BYTES);
     let host = MemoryHost::default();
     let mut model = editor_on(&host);
     // The plain copy: the contacts' solve would take seconds here and changes nothing kept.

@@ -6,12 +6,15 @@
 
 use crate::clocked;
 use clocked::Clocked;
+use stance_model::model::{
+    AvatarCommand, FileCommand, HistoryCommand, PostureCommand, TaskCommand,
+};
 
 use glam::{DQuat, DVec3};
 use serde_json::{Value, json};
 use stance_document::{TaskKindSpec, TaskSpec};
-use stance_editor::Command;
 use stance_ik::{Axes, Frames};
+use stance_model::Command;
 
 /// The finger joint the T-pose avatar below lacks.
 const FINGER: &str = "l_metacarpophalangeal_3";
@@ -69,7 +72,7 @@ fn swapping_the_avatar_keeps_the_posture_and_tasks_as_one_undoable_edit() {
     let set = |editor: &mut Clocked, joint: &str, k: usize, value: f64| {
         let j = editor.joint(joint);
         let dof = editor.model.session().skeleton().joints()[j].dof_start + k;
-        editor.apply(Command::SetDof { dof, value });
+        editor.apply(Command::Posture(PostureCommand::SetDof { dof, value }));
     };
     set(&mut editor, "r_shoulder", 0, -1.3);
     set(&mut editor, "r_elbow", 0, -0.9);
@@ -81,10 +84,10 @@ fn swapping_the_avatar_keeps_the_posture_and_tasks_as_one_undoable_edit() {
         axes: Axes::XYZ,
         target: editor.position(FINGER).to_array(),
     }));
-    editor.apply(Command::SetTasks {
-        kind: stance_editor::history::EditKind::Command,
+    editor.apply(Command::Task(TaskCommand::Set {
+        kind: stance_model::history::EditKind::Command,
         tasks: tasks.clone(),
-    });
+    }));
     editor.frames(1);
     let before = editor.model.document();
     let undo_steps = editor.model.history().undo_steps();
@@ -93,10 +96,10 @@ fn swapping_the_avatar_keeps_the_posture_and_tasks_as_one_undoable_edit() {
     let forearm = bone(&editor, "r_elbow", "r_radiocarpal");
     let lifted = bone(&editor, "l_shoulder", "l_elbow");
 
-    editor.apply(Command::LoadAvatar {
+    editor.apply(Command::Avatar(AvatarCommand::LoadAvatar {
         name: "t-pose.glb".to_owned(),
         bytes: t_pose_glb(),
-    });
+    }));
     let loaded = editor.model.avatar().expect("the avatar loads");
     assert_eq!(loaded.name, "t-pose.glb");
     let notice = editor.model.notice().unwrap().text.clone();
@@ -188,7 +191,7 @@ fn swapping_the_avatar_keeps_the_posture_and_tasks_as_one_undoable_edit() {
 
     // Undo brings the mannequin back with the document as it was (the finger's task too);
     // the earlier steps are kept.
-    editor.apply(Command::Undo);
+    editor.apply(Command::History(HistoryCommand::Undo));
     assert!(
         !editor.model.notice().is_some_and(|n| n.is_error),
         "{:?}",
@@ -201,17 +204,17 @@ fn swapping_the_avatar_keeps_the_posture_and_tasks_as_one_undoable_edit() {
     assert!(bone(&editor, "r_shoulder", "r_elbow").angle_between(reach_on_mannequin) < 1e-9);
     // Redo brings the avatar back (its GPU model made again for the renderer), with the
     // document carried over.
-    editor.apply(Command::Redo);
+    editor.apply(Command::History(HistoryCommand::Redo));
     let again = editor.model.avatar().expect("the avatar is back");
     assert_eq!(again.name, "t-pose.glb");
-    assert!(again.model.is_some());
+    assert!(again.mesh().is_some());
     assert_eq!(editor.model.document().tasks, tasks[..tasks.len() - 1]);
     assert_eq!(editor.model.history().undo_steps(), undo_steps + 1);
 
     // Back to the mannequin: the same document again, one more undoable edit, whose undo
     // brings the avatar back.
     let posture = editor.model.document().posture;
-    editor.apply(Command::UseMannequin);
+    editor.apply(Command::Avatar(AvatarCommand::UseMannequin));
     assert!(editor.model.avatar().is_none());
     assert_eq!(editor.model.history().undo_steps(), undo_steps + 2);
     let back = editor.model.document().posture;
@@ -224,7 +227,7 @@ fn swapping_the_avatar_keeps_the_posture_and_tasks_as_one_undoable_edit() {
             );
         }
     }
-    editor.apply(Command::Undo);
+    editor.apply(Command::History(HistoryCommand::Undo));
     assert_eq!(
         editor.model.avatar().map(|a| a.name.as_str()),
         Some("t-pose.glb")
@@ -238,10 +241,10 @@ fn swapping_the_avatar_keeps_the_posture_and_tasks_as_one_undoable_edit() {
 fn an_old_document_made_on_the_avatar_opens_as_it_was_saved() {
     let mut editor = Clocked::new();
     let url = "https://example.org/avatars/t-pose.glb";
-    editor.apply(Command::LoadAvatar {
+    editor.apply(Command::Avatar(AvatarCommand::LoadAvatar {
         name: url.to_owned(),
         bytes: t_pose_glb(),
-    });
+    }));
     assert!(editor.model.avatar().is_some());
     // Saved then: the left arm lowered from the T-pose by a quarter turn about the body's
     // front axis (straight down), the right arm as it was at rest (out to the side).
@@ -249,10 +252,10 @@ fn an_old_document_made_on_the_avatar_opens_as_it_was_saved() {
         r#"{{"avatar": {{"url": "{url}"}},
             "posture": {{"l_shoulder": {{"rz": -1.5707963267948966}}}}}}"#
     );
-    editor.apply(Command::OpenFile {
+    editor.apply(Command::File(FileCommand::OpenFile {
         name: "old.json".to_owned(),
         bytes: old.into_bytes(),
-    });
+    }));
     let notice = editor.model.notice().unwrap().text.clone();
     assert!(notice.contains("converted"), "{notice}");
     // By hand: the file's arms are the default centres' arms turned a quarter about z (out to

@@ -17,29 +17,6 @@ pub struct BackendSummary {
     pub adapter: String,
 }
 
-impl BackendSummary {
-    pub(crate) fn from_adapter(info: &wgpu::AdapterInfo) -> Self {
-        let backend = match info.backend {
-            wgpu::Backend::BrowserWebGpu => "WebGPU",
-            wgpu::Backend::Gl if cfg!(target_arch = "wasm32") => "WebGL2",
-            wgpu::Backend::Gl => "OpenGL",
-            wgpu::Backend::Vulkan => "Vulkan",
-            wgpu::Backend::Metal => "Metal",
-            wgpu::Backend::Dx12 => "DirectX 12",
-            wgpu::Backend::Noop => "no GPU",
-        };
-        let adapter = if info.name.is_empty() {
-            "unnamed adapter".to_owned()
-        } else {
-            info.name.clone()
-        };
-        Self {
-            backend: backend.to_owned(),
-            adapter,
-        }
-    }
-}
-
 /// An avatar file for the host to import off the editor's thread
 /// ([`HostHooks::import_avatar`]).
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -366,7 +366,9 @@ impl EditorModel {
             None => Err("no avatar is loaded".into()),
         };
         match clip {
-            Ok(clip) => self.apply_motion(MotionCommand::OpenClip(Box::new(clip))),
+            Ok(clip) => {
+                self.apply_motion(MotionCommand::OpenClip(Box::new(clip)));
+            }
             Err(error) => self.warn(format!("The animation could not be opened: {error}.")),
         }
     }
@@ -393,7 +395,9 @@ impl EditorModel {
             1.0 / CLIP_FPS,
         );
         match clip {
-            Ok(clip) => self.apply_motion(MotionCommand::OpenClip(Box::new(clip))),
+            Ok(clip) => {
+                self.apply_motion(MotionCommand::OpenClip(Box::new(clip)));
+            }
             Err(error) => self.warn(format!("The recording could not become a clip: {error}.")),
         }
     }

@@ -5,13 +5,17 @@
 
 use crate::clocked;
 use clocked::Clocked;
+use stance_model::model::{
+    AvatarCommand, FileCommand, GestureCommand, HistoryCommand, LibraryCommand, PostureCommand,
+    TaskCommand, ViewCommand,
+};
 
 use std::f64::consts::FRAC_PI_4;
 
 use glam::DVec3;
 use stance_document::{Document, TaskKindSpec, TaskSpec};
-use stance_editor::{Command, Gesture, MemoryHost};
 use stance_hanim::{LevelOfArticulation, LimbName};
+use stance_model::{Command, Gesture, MemoryHost};
 
 #[test]
 fn a_pull_moves_the_hand_while_the_pinned_feet_hold_and_undo_restores_the_document() {
@@ -21,18 +25,18 @@ fn a_pull_moves_the_hand_while_the_pinned_feet_hold_and_undo_restores_the_docume
     let foot = editor.position("l_talocrural");
     let wrist = editor.joint("r_radiocarpal");
     let start = editor.position("r_radiocarpal");
-    editor.apply(Command::BeginPull {
+    editor.apply(Command::Gesture(GestureCommand::BeginPull {
         joint: wrist,
         point_world: start,
-    });
+    }));
     assert!(editor.model.is_pulling());
     assert_eq!(editor.model.selected_joint(), Some(wrist));
     let target = start + DVec3::new(0.0, 0.2, 0.1);
     for step in 1..=20 {
         let along = start + (target - start) * (f64::from(step) / 20.0);
-        editor.apply(Command::MoveGrab {
+        editor.apply(Command::Gesture(GestureCommand::MoveGrab {
             target_world: along,
-        });
+        }));
         editor.frames(1);
     }
     editor.settle_within(300);
@@ -48,9 +52,9 @@ fn a_pull_moves_the_hand_while_the_pinned_feet_hold_and_undo_restores_the_docume
     );
     // The trace followed the pull.
     assert!(editor.model.trace().len() > 5);
-    editor.apply(Command::EndGesture);
+    editor.apply(Command::Gesture(GestureCommand::EndGesture));
     assert!(editor.model.gesture().is_none());
-    editor.apply(Command::Undo);
+    editor.apply(Command::History(HistoryCommand::Undo));
     assert_eq!(editor.model.document(), before);
 }
 
@@ -61,16 +65,16 @@ fn escape_during_a_pull_puts_the_body_back() {
     let before = editor.model.document();
     let wrist = editor.joint("l_radiocarpal");
     let start = editor.position("l_radiocarpal");
-    editor.apply(Command::BeginPull {
+    editor.apply(Command::Gesture(GestureCommand::BeginPull {
         joint: wrist,
         point_world: start,
-    });
-    editor.apply(Command::MoveGrab {
+    }));
+    editor.apply(Command::Gesture(GestureCommand::MoveGrab {
         target_world: start + DVec3::new(0.1, 0.3, 0.0),
-    });
+    }));
     editor.frames(10);
     assert_ne!(editor.model.document().posture, before.posture);
-    editor.apply(Command::CancelGesture);
+    editor.apply(Command::Gesture(GestureCommand::CancelGesture));
     assert!(editor.model.gesture().is_none());
     assert_eq!(editor.model.document(), before);
 }
@@ -84,28 +88,30 @@ fn a_goal_drag_moves_the_goals_it_took_and_is_one_undo_step() {
     reach.level = 3;
     tasks.push(reach);
     let index = tasks.len() - 1;
-    editor.apply(Command::SetTasks {
-        kind: stance_editor::history::EditKind::Command,
+    editor.apply(Command::Task(TaskCommand::Set {
+        kind: stance_model::history::EditKind::Command,
         tasks,
-    });
-    let with_task = editor.model.document();
-    editor.apply(Command::BeginHandle(Gesture::Goal {
-        tasks: vec![index],
-        plane_point_world: hand,
     }));
+    let with_task = editor.model.document();
+    editor.apply(Command::Gesture(GestureCommand::BeginHandle(
+        Gesture::Goal {
+            tasks: vec![index],
+            plane_point_world: hand,
+        },
+    )));
     for step in 1..=5 {
-        editor.apply(Command::MoveGoal {
+        editor.apply(Command::Gesture(GestureCommand::MoveGoal {
             goal_world: hand + DVec3::new(0.0, 0.02 * f64::from(step), 0.0),
             floor_world: None,
-        });
+        }));
         editor.frames(1);
     }
-    editor.apply(Command::EndGesture);
+    editor.apply(Command::Gesture(GestureCommand::EndGesture));
     let TaskKindSpec::Position { target, .. } = &editor.model.session().tasks()[index].kind else {
         panic!("the task is a position task");
     };
     assert!((target[1] - (hand.y + 0.1)).abs() < 1e-12);
-    editor.apply(Command::Undo);
+    editor.apply(Command::History(HistoryCommand::Undo));
     assert_eq!(editor.model.document().tasks, with_task.tasks);
 }
 
@@ -115,21 +121,23 @@ fn a_ring_turns_its_dof_by_the_pointer_angle() {
     let elbow = editor.joint("l_elbow");
     let dof = editor.model.session().skeleton().joints()[elbow].dof_start;
     let start_value = editor.model.session().posture().values()[dof];
-    editor.apply(Command::BeginHandle(Gesture::Ring {
-        dof,
-        centre_px: [100.0, 100.0],
-        last_angle: 0.0,
-        accumulated: 0.0,
-        start_value,
-        sign: 1.0,
-    }));
+    editor.apply(Command::Gesture(GestureCommand::BeginHandle(
+        Gesture::Ring {
+            dof,
+            centre_px: [100.0, 100.0],
+            last_angle: 0.0,
+            accumulated: 0.0,
+            start_value,
+            sign: 1.0,
+        },
+    )));
     // A quarter turn in two steps: the turn accumulates.
-    editor.apply(Command::TurnRing {
+    editor.apply(Command::Gesture(GestureCommand::TurnRing {
         screen_angle: std::f32::consts::FRAC_PI_8,
-    });
-    editor.apply(Command::TurnRing {
+    }));
+    editor.apply(Command::Gesture(GestureCommand::TurnRing {
         screen_angle: std::f32::consts::FRAC_PI_4,
-    });
+    }));
     let value = editor.model.session().posture().values()[dof];
     // Screen y points down: a positive screen angle is a clockwise turn, against the axis
     // that points toward the camera (sign +1).
@@ -138,7 +146,7 @@ fn a_ring_turns_its_dof_by_the_pointer_angle() {
         "{value} vs {}",
         start_value - FRAC_PI_4
     );
-    editor.apply(Command::EndGesture);
+    editor.apply(Command::Gesture(GestureCommand::EndGesture));
     assert!(editor.model.gesture().is_none());
 }
 
@@ -158,23 +166,28 @@ fn a_ring_drag_across_the_pi_seam_keeps_turning_the_same_way() {
     let elbow = editor.joint("l_elbow");
     let dof = editor.model.session().skeleton().joints()[elbow].dof_start;
     // The elbow flexes toward -rx: start a little bent so that the turn stays in its range.
-    editor.apply(Command::SetDof { dof, value: -0.5 });
+    editor.apply(Command::Posture(PostureCommand::SetDof {
+        dof,
+        value: -0.5,
+    }));
     let start_value = editor.model.session().posture().values()[dof];
     assert!((start_value + 0.5).abs() < 1e-12, "{start_value}");
-    editor.apply(Command::BeginHandle(Gesture::Ring {
-        dof,
-        centre_px: [100.0, 100.0],
-        last_angle: PI - 0.1,
-        accumulated: 0.0,
-        start_value,
-        sign: 1.0,
-    }));
+    editor.apply(Command::Gesture(GestureCommand::BeginHandle(
+        Gesture::Ring {
+            dof,
+            centre_px: [100.0, 100.0],
+            last_angle: PI - 0.1,
+            accumulated: 0.0,
+            start_value,
+            sign: 1.0,
+        },
+    )));
     let accumulated = |editor: &Clocked| match editor.model.gesture() {
         Some(Gesture::Ring { accumulated, .. }) => *accumulated,
         other => panic!("a ring drag: {other:?}"),
     };
     for screen_angle in [PI - 0.05, -PI + 0.05, -PI + 0.15] {
-        editor.apply(Command::TurnRing { screen_angle });
+        editor.apply(Command::Gesture(GestureCommand::TurnRing { screen_angle }));
     }
     let turned = accumulated(&editor);
     assert!(
@@ -187,9 +200,9 @@ fn a_ring_drag_across_the_pi_seam_keeps_turning_the_same_way() {
         "{value} vs {}",
         start_value - 0.25
     );
-    editor.apply(Command::TurnRing {
+    editor.apply(Command::Gesture(GestureCommand::TurnRing {
         screen_angle: PI - 0.1,
-    });
+    }));
     assert!(
         accumulated(&editor).abs() < 1e-5,
         "{}",
@@ -200,7 +213,7 @@ fn a_ring_drag_across_the_pi_seam_keeps_turning_the_same_way() {
         (value - start_value).abs() < 1e-5,
         "{value} vs {start_value}"
     );
-    editor.apply(Command::EndGesture);
+    editor.apply(Command::Gesture(GestureCommand::EndGesture));
 }
 
 #[test]
@@ -210,7 +223,10 @@ fn a_swivel_drag_turns_the_elbow_around_the_arm_and_holds_the_hand() {
     // Bend the elbow so that the arm has a swivel circle.
     let elbow = editor.joint("r_elbow");
     let dof = editor.model.session().skeleton().joints()[elbow].dof_start;
-    editor.apply(Command::SetDof { dof, value: -1.2 });
+    editor.apply(Command::Posture(PostureCommand::SetDof {
+        dof,
+        value: -1.2,
+    }));
     editor.settle_within(200);
     let limb = LimbName::RightArm;
     let Some((swivel, feasible)) = editor.model.session().limb_swivel(limb) else {
@@ -230,19 +246,21 @@ fn a_swivel_drag_turns_the_elbow_around_the_arm_and_holds_the_hand() {
     let axis = (wrist - shoulder).normalize();
     let centre = shoulder + axis * (middle - shoulder).dot(axis);
     let start_direction = (middle - centre).normalize();
-    editor.apply(Command::BeginHandle(Gesture::Swivel {
-        limb,
-        start_swivel: swivel,
-        start_direction,
-        centre_world: centre,
-        axis_world: axis,
-    }));
+    editor.apply(Command::Gesture(GestureCommand::BeginHandle(
+        Gesture::Swivel {
+            limb,
+            start_swivel: swivel,
+            start_direction,
+            centre_world: centre,
+            axis_world: axis,
+        },
+    )));
     // The pointer `wanted` around the axis (right-handed).
     let turned = centre
         + (start_direction * wanted.cos() + axis.cross(start_direction) * wanted.sin()) * 0.1;
-    editor.apply(Command::TurnSwivel {
+    editor.apply(Command::Gesture(GestureCommand::TurnSwivel {
         point_world: turned,
-    });
+    }));
     editor.frames(5);
     let Some((now, _)) = editor.model.session().limb_swivel(limb) else {
         panic!("the right arm has a swivel angle");
@@ -257,7 +275,7 @@ fn a_swivel_drag_turns_the_elbow_around_the_arm_and_holds_the_hand() {
         (editor.position("r_radiocarpal") - wrist).length() < 0.01,
         "the hand stayed"
     );
-    editor.apply(Command::EndGesture);
+    editor.apply(Command::Gesture(GestureCommand::EndGesture));
 }
 
 #[test]
@@ -265,24 +283,28 @@ fn there_is_one_gesture_at_a_time() {
     let mut editor = Clocked::new();
     let elbow = editor.joint("l_elbow");
     let dof = editor.model.session().skeleton().joints()[elbow].dof_start;
-    editor.apply(Command::BeginHandle(Gesture::Ring {
-        dof,
-        centre_px: [0.0, 0.0],
-        last_angle: 0.0,
-        accumulated: 0.0,
-        start_value: 0.0,
-        sign: 1.0,
-    }));
+    editor.apply(Command::Gesture(GestureCommand::BeginHandle(
+        Gesture::Ring {
+            dof,
+            centre_px: [0.0, 0.0],
+            last_angle: 0.0,
+            accumulated: 0.0,
+            start_value: 0.0,
+            sign: 1.0,
+        },
+    )));
     let wrist = editor.joint("r_radiocarpal");
     let point = editor.position("r_radiocarpal");
-    editor.apply(Command::BeginPull {
+    editor.apply(Command::Gesture(GestureCommand::BeginPull {
         joint: wrist,
         point_world: point,
-    });
+    }));
     assert!(editor.model.is_pulling());
     // A ring command now does nothing: the ring gesture is over.
     let before = editor.model.session().posture().values()[dof];
-    editor.apply(Command::TurnRing { screen_angle: 1.0 });
+    editor.apply(Command::Gesture(GestureCommand::TurnRing {
+        screen_angle: 1.0,
+    }));
     assert_eq!(editor.model.session().posture().values()[dof], before);
 }
 
@@ -292,15 +314,17 @@ fn switching_the_level_of_articulation_replaces_the_session_and_keeps_the_histor
     // A finger bent: a joint the LOA 1 body lacks.
     let finger = editor.joint("l_metacarpophalangeal_2");
     let dof = editor.model.session().skeleton().joints()[finger].dof_start;
-    editor.apply(Command::SetDof { dof, value: 0.4 });
+    editor.apply(Command::Posture(PostureCommand::SetDof { dof, value: 0.4 }));
     let wrist = editor.joint("r_radiocarpal");
-    editor.apply(Command::Select(Some(wrist)));
-    editor.apply(Command::BeginPull {
+    editor.apply(Command::View(ViewCommand::Select(Some(wrist))));
+    editor.apply(Command::Gesture(GestureCommand::BeginPull {
         joint: wrist,
         point_world: editor.position("r_radiocarpal"),
-    });
+    }));
     let generation = editor.model.session_generation();
-    editor.apply(Command::SetLevelOfArticulation(LevelOfArticulation::Loa1));
+    editor.apply(Command::Avatar(AvatarCommand::SetLevelOfArticulation(
+        LevelOfArticulation::Loa1,
+    )));
     assert_eq!(
         editor.model.notice().map(|notice| notice.text.clone()),
         None,
@@ -320,7 +344,7 @@ fn switching_the_level_of_articulation_replaces_the_session_and_keeps_the_histor
     let joints = editor.model.session().skeleton().joint_count();
     assert!(owners.iter().all(|&owner| owner < joints));
     // Undo restores the LOA 2 document on the LOA 1 body, its joints the body lacks left out.
-    editor.apply(Command::Undo);
+    editor.apply(Command::History(HistoryCommand::Undo));
     assert!(
         !editor.model.notice().is_some_and(|notice| notice.is_error),
         "{:?}",
@@ -331,12 +355,12 @@ fn switching_the_level_of_articulation_replaces_the_session_and_keeps_the_histor
 #[test]
 fn a_bad_avatar_or_document_leaves_the_work_as_it_was() {
     let mut editor = Clocked::new();
-    editor.apply(Command::Mirror);
+    editor.apply(Command::Posture(PostureCommand::Mirror));
     let before = editor.model.document();
-    editor.apply(Command::LoadAvatar {
+    editor.apply(Command::Avatar(AvatarCommand::LoadAvatar {
         name: "broken.glb".to_owned(),
         bytes: b"glTF\x02\x00\x00\x00garbage".to_vec(),
-    });
+    }));
     let Some(notice) = editor.model.notice() else {
         panic!("a notice says why");
     };
@@ -344,10 +368,10 @@ fn a_bad_avatar_or_document_leaves_the_work_as_it_was() {
     assert!(notice.text.contains("broken.glb"), "{}", notice.text);
     assert!(editor.model.avatar().is_none());
     assert_eq!(editor.model.document(), before);
-    editor.apply(Command::OpenFile {
+    editor.apply(Command::File(FileCommand::OpenFile {
         name: "pose.json".to_owned(),
         bytes: br#"{"posture": {"l_elbow": "bent"}}"#.to_vec(),
-    });
+    }));
     assert!(editor.model.notice().is_some_and(|notice| notice.is_error));
     assert_eq!(editor.model.document(), before);
 }
@@ -359,14 +383,17 @@ fn a_document_opens_as_one_undoable_edit_and_the_step_shows_it() {
     let mut bent = Clocked::new();
     let elbow = bent.joint("l_elbow");
     let dof = bent.model.session().skeleton().joints()[elbow].dof_start;
-    bent.apply(Command::SetDof { dof, value: -1.0 });
+    bent.apply(Command::Posture(PostureCommand::SetDof {
+        dof,
+        value: -1.0,
+    }));
     bent.frames(1);
     let document: Document = bent.model.document();
     let bones_before: Vec<_> = editor.model.bones().to_vec();
-    editor.apply(Command::OpenFile {
+    editor.apply(Command::File(FileCommand::OpenFile {
         name: "bent.json".to_owned(),
         bytes: document.to_json(false).into_bytes(),
-    });
+    }));
     assert_eq!(editor.model.document().posture, document.posture);
     editor.frames(1);
     let moved = editor
@@ -376,7 +403,7 @@ fn a_document_opens_as_one_undoable_edit_and_the_step_shows_it() {
         .zip(&bones_before)
         .any(|(now, before)| now.capsule.end_world != before.capsule.end_world);
     assert!(moved, "the cached bones follow the opened posture");
-    editor.apply(Command::Undo);
+    editor.apply(Command::History(HistoryCommand::Undo));
     assert_eq!(editor.model.document(), rest);
 }
 
@@ -385,17 +412,20 @@ fn the_step_autosaves_the_document_once_it_changed() {
     let host = MemoryHost::default();
     let storage = host.inner.clone();
     let mut editor = Clocked::with_host(host);
-    editor.apply(Command::Mirror);
-    editor.apply(Command::ResetToRest);
+    editor.apply(Command::Posture(PostureCommand::Mirror));
+    editor.apply(Command::Posture(PostureCommand::ResetToRest));
     let elbow = editor.joint("l_elbow");
     let dof = editor.model.session().skeleton().joints()[elbow].dof_start;
-    editor.apply(Command::SetDof { dof, value: -0.8 });
+    editor.apply(Command::Posture(PostureCommand::SetDof {
+        dof,
+        value: -0.8,
+    }));
     // More than the autosave interval later.
     editor.frames(90);
     let saved = storage
         .borrow()
         .storage
-        .get(stance_editor::library::AUTOSAVE_KEY)
+        .get(stance_model::library::AUTOSAVE_KEY)
         .cloned();
     let Some(saved) = saved else {
         panic!("the document was autosaved");
@@ -411,14 +441,17 @@ fn library_commands_save_load_and_delete() {
     let mut editor = Clocked::new();
     let elbow = editor.joint("l_elbow");
     let dof = editor.model.session().skeleton().joints()[elbow].dof_start;
-    editor.apply(Command::SetDof { dof, value: -0.9 });
+    editor.apply(Command::Posture(PostureCommand::SetDof {
+        dof,
+        value: -0.9,
+    }));
     let bent = editor.model.document();
-    editor.apply(Command::SaveToLibrary("bent".to_owned()));
-    editor.apply(Command::ResetToRest);
+    editor.apply(Command::Library(LibraryCommand::Save("bent".to_owned())));
+    editor.apply(Command::Posture(PostureCommand::ResetToRest));
     assert_ne!(editor.model.document().posture, bent.posture);
-    editor.apply(Command::LoadFromLibrary(0));
+    editor.apply(Command::Library(LibraryCommand::Load(0)));
     assert_eq!(editor.model.document().posture, bent.posture);
-    editor.apply(Command::DeleteFromLibrary(0));
+    editor.apply(Command::Library(LibraryCommand::Delete(0)));
     assert!(editor.model.library().entries().is_empty());
 }
 
@@ -433,10 +466,10 @@ fn a_limb_task_with_an_orientation_holds_the_hand_turned_as_in_the_cli() {
       {"kind":"balance","level":3}
     ]}"#;
     let mut editor = Clocked::new();
-    editor.apply(Command::OpenFile {
+    editor.apply(Command::File(FileCommand::OpenFile {
         name: "reach.json".to_owned(),
         bytes: document.as_bytes().to_vec(),
-    });
+    }));
     assert!(editor.model.notice().is_some_and(|notice| !notice.is_error));
     editor.settle_within(600);
     let wrist = editor.joint("r_radiocarpal");
@@ -467,24 +500,24 @@ fn a_stiffer_shoulder_turns_less_in_a_pull_and_the_change_is_one_undo_step() {
         let start = editor.model.session().skeleton().joints()[shoulder].dof_start;
         if let Some(value) = stiffness {
             for dof in start..start + 3 {
-                editor.apply(Command::SetStiffness {
+                editor.apply(Command::Posture(PostureCommand::SetStiffness {
                     dof,
                     value: Some(value),
-                });
+                }));
             }
         }
         let wrist = editor.joint("r_radiocarpal");
         let from = editor.position("r_radiocarpal");
-        editor.apply(Command::BeginPull {
+        editor.apply(Command::Gesture(GestureCommand::BeginPull {
             joint: wrist,
             point_world: from,
-        });
+        }));
         let target = from + DVec3::new(-0.1, 0.2, 0.1);
-        editor.apply(Command::MoveGrab {
+        editor.apply(Command::Gesture(GestureCommand::MoveGrab {
             target_world: target,
-        });
+        }));
         editor.settle_within(300);
-        editor.apply(Command::EndGesture);
+        editor.apply(Command::Gesture(GestureCommand::EndGesture));
         let reached = editor.position("r_radiocarpal").distance(target);
         let values = editor.model.session().posture().values()[start..start + 3].to_vec();
         let turned: f64 = values.iter().map(|v| v.abs()).sum();
@@ -510,7 +543,7 @@ fn a_stiffer_shoulder_turns_less_in_a_pull_and_the_change_is_one_undo_step() {
         Some(0.9)
     );
     for _ in 0..4 {
-        editor.apply(Command::Undo);
+        editor.apply(Command::History(HistoryCommand::Undo));
     }
     let session = editor.model.session();
     for dof in start..start + 3 {
@@ -539,10 +572,10 @@ fn gltf_and_bin() -> (Vec<u8>, Vec<u8>) {
 fn a_gltf_opens_with_its_bin_and_a_missing_bin_is_named() {
     let (gltf, bin) = gltf_and_bin();
     let mut editor = Clocked::new();
-    editor.apply(Command::OpenFiles(vec![(
+    editor.apply(Command::File(FileCommand::OpenFiles(vec![(
         "mannequin.gltf".to_owned(),
         gltf.clone(),
-    )]));
+    )])));
     let notice = editor.model.notice().unwrap();
     assert!(
         notice.is_error && notice.text.contains("mannequin.bin"),
@@ -554,13 +587,16 @@ fn a_gltf_opens_with_its_bin_and_a_missing_bin_is_named() {
     let mut bent = Clocked::new();
     let elbow = bent.joint("l_elbow");
     let dof = bent.model.session().skeleton().joints()[elbow].dof_start;
-    bent.apply(Command::SetDof { dof, value: -1.0 });
+    bent.apply(Command::Posture(PostureCommand::SetDof {
+        dof,
+        value: -1.0,
+    }));
     let document = bent.model.document().to_json(false).into_bytes();
-    editor.apply(Command::OpenFiles(vec![
+    editor.apply(Command::File(FileCommand::OpenFiles(vec![
         ("folder/mannequin.bin".to_owned(), bin),
         ("folder/mannequin.gltf".to_owned(), gltf),
         ("pose.json".to_owned(), document),
-    ]));
+    ])));
     let avatar = editor.model.avatar().expect("the avatar opened");
     assert_eq!(avatar.name, "folder/mannequin.gltf");
     let values = editor.model.session().posture().values();
@@ -575,17 +611,15 @@ fn a_gltf_opens_with_its_bin_and_a_missing_bin_is_named() {
 
 /// What the page's worker does with an import request: the editor's own importer, the
 /// avatar handed back as transfer bytes.
-fn import_as_the_worker_does(
-    request: &stance_editor::AvatarImport,
-) -> stance_editor::ImportedAvatar {
-    let imported = stance_editor::avatar::LoadedAvatar::import(
+fn import_as_the_worker_does(request: &stance_model::AvatarImport) -> stance_model::ImportedAvatar {
+    let imported = stance_model::avatar::LoadedAvatar::import(
         &request.bytes,
         &request.resources,
         Default::default(),
     )
     .unwrap();
     let transfer = stance_asset::AvatarTransfer::new(imported.avatar.clone()).unwrap();
-    stance_editor::ImportedAvatar {
+    stance_model::ImportedAvatar {
         avatar: transfer.into_avatar().unwrap(),
         in_worker: true,
         ..imported
@@ -599,10 +633,10 @@ fn an_avatar_imported_by_the_host_opens_when_it_arrives_and_only_the_last_asked_
     let asked = host.inner.clone();
     let mut editor = Clocked::with_host(host);
     let bytes = stance_asset::export_glb(&stance_asset::make_default_avatar().unwrap()).unwrap();
-    editor.apply(Command::LoadAvatar {
+    editor.apply(Command::Avatar(AvatarCommand::LoadAvatar {
         name: "first.glb".to_owned(),
         bytes: bytes.clone(),
-    });
+    }));
     // Asked of the host, not imported here: the body stays the mannequin meanwhile.
     assert_eq!(asked.borrow().avatar_imports.len(), 1);
     assert_eq!(asked.borrow().avatar_imports[0].bytes, bytes);
@@ -611,16 +645,16 @@ fn an_avatar_imported_by_the_host_opens_when_it_arrives_and_only_the_last_asked_
     editor.frames(2);
 
     // A second file asked for before the first arrives: the first's reply is dropped.
-    editor.apply(Command::LoadAvatar {
+    editor.apply(Command::Avatar(AvatarCommand::LoadAvatar {
         name: "second.glb".to_owned(),
         bytes: bytes.clone(),
-    });
+    }));
     let requests = asked.borrow().avatar_imports.clone();
     let first = import_as_the_worker_does(&requests[0]);
-    editor.apply(Command::AvatarImported {
+    editor.apply(Command::Avatar(AvatarCommand::AvatarImported {
         name: "first.glb".to_owned(),
         result: Ok(Box::new(first)),
-    });
+    }));
     assert!(editor.model.avatar().is_none(), "a reply no longer awaited");
     let second = import_as_the_worker_does(&requests[1]);
     let vertices: usize = second
@@ -630,10 +664,10 @@ fn an_avatar_imported_by_the_host_opens_when_it_arrives_and_only_the_last_asked_
         .flat_map(|m| &m.primitives)
         .map(|p| p.positions.len())
         .sum();
-    editor.apply(Command::AvatarImported {
+    editor.apply(Command::Avatar(AvatarCommand::AvatarImported {
         name: "second.glb".to_owned(),
         result: Ok(Box::new(second)),
-    });
+    }));
     let avatar = editor.model.avatar().expect("the awaited avatar opened");
     assert_eq!(editor.model.importing(), None);
     assert_eq!(avatar.name, "second.glb");
@@ -644,26 +678,26 @@ fn an_avatar_imported_by_the_host_opens_when_it_arrives_and_only_the_last_asked_
     editor.settle_within(300);
     let before = editor.position("r_radiocarpal");
     let wrist = editor.joint("r_radiocarpal");
-    editor.apply(Command::BeginPull {
+    editor.apply(Command::Gesture(GestureCommand::BeginPull {
         joint: wrist,
         point_world: before,
-    });
-    editor.apply(Command::MoveGrab {
+    }));
+    editor.apply(Command::Gesture(GestureCommand::MoveGrab {
         target_world: before + DVec3::new(0.0, 0.1, 0.05),
-    });
+    }));
     editor.settle_within(300);
-    editor.apply(Command::EndGesture);
+    editor.apply(Command::Gesture(GestureCommand::EndGesture));
     assert!((editor.position("r_radiocarpal") - before).length() > 0.05);
 
     // A file the host could not import: the notice names it and the avatar stays.
-    editor.apply(Command::LoadAvatar {
+    editor.apply(Command::Avatar(AvatarCommand::LoadAvatar {
         name: "broken.glb".to_owned(),
         bytes: b"glTF".to_vec(),
-    });
-    editor.apply(Command::AvatarImported {
+    }));
+    editor.apply(Command::Avatar(AvatarCommand::AvatarImported {
         name: "broken.glb".to_owned(),
         result: Err("bad GLB container: too short".to_owned()),
-    });
+    }));
     let notice = editor.model.notice().unwrap();
     assert!(notice.is_error);
     assert!(
@@ -672,4 +706,46 @@ fn an_avatar_imported_by_the_host_opens_when_it_arrives_and_only_the_last_asked_
         notice.text
     );
     assert_eq!(editor.model.avatar().unwrap().name, "second.glb");
+}
+
+#[test]
+fn the_outbox_carries_the_views_commands_out_in_order_and_says_the_most_they_changed() {
+    // Catches: commands dropped or reordered (a select then a pin of that part), the outbox
+    // not emptied (a command carried out twice), the change of the last command reported
+    // instead of the largest.
+    let mut editor = Clocked::new();
+    editor.settle();
+    let joint = editor.joint("l_elbow");
+    let mut outbox = stance_model::Outbox::default();
+    outbox.send(Command::View(ViewCommand::Select(Some(joint))));
+    outbox.send(Command::Posture(PostureCommand::Mirror));
+    outbox.send(Command::Posture(PostureCommand::PinSelected));
+    outbox.send(Command::View(ViewCommand::Hover(None)));
+    assert_eq!(
+        editor.model.apply_outbox(&mut outbox),
+        stance_model::Change::Posture
+    );
+    assert!(outbox.is_empty());
+    assert_eq!(editor.model.selected_joint(), Some(joint));
+    let pinned = editor
+        .model
+        .session()
+        .tasks()
+        .iter()
+        .filter(|task| task.level == 1)
+        .count();
+    assert_eq!(
+        editor.model.apply_outbox(&mut outbox),
+        stance_model::Change::Nothing
+    );
+    // Undo takes back the pin, then the mirror: two edits, each carried out once.
+    editor.apply(Command::History(HistoryCommand::Undo));
+    let after_undo = editor
+        .model
+        .session()
+        .tasks()
+        .iter()
+        .filter(|task| task.level == 1)
+        .count();
+    assert_eq!(after_undo + 1, pinned);
 }

@@ -5,6 +5,10 @@
 
 use crate::clocked;
 use clocked::Clocked;
+use stance_model::model::{
+    AvatarCommand, FileCommand, GestureCommand, HistoryCommand, PostureCommand, TaskCommand,
+    ViewCommand,
+};
 
 use std::f64::consts::FRAC_PI_2;
 
@@ -13,9 +17,9 @@ use stance_document::motion::smoothstep;
 use stance_document::{
     Document, MotionKey, MotionSection, PostureValues, TaskInterval, TaskKindSpec, TaskSpec,
 };
-use stance_editor::Command;
-use stance_editor::model::{IntervalEdge, MotionCommand};
 use stance_ik::{Dof, Frames, Posture};
+use stance_model::Command;
+use stance_model::model::{IntervalEdge, MotionCommand};
 use stance_motion::Clip;
 
 /// `count` postures of the session's body: the left arm raises and the right elbow bends
@@ -163,10 +167,10 @@ fn shoulder_degrees(editor: &mut Clocked, frame: usize) -> f64 {
 }
 
 fn open_document(editor: &mut Clocked, document: &Document) {
-    editor.apply(Command::OpenFile {
+    editor.apply(Command::File(FileCommand::OpenFile {
         name: "keys.json".to_owned(),
         bytes: document.to_json(true).into_bytes(),
-    });
+    }));
     editor.frames(1);
 }
 
@@ -204,27 +208,30 @@ fn keys_interpolate_with_ease_and_move_copy_delete_and_undo_change_that() {
     assert!(close(shoulder_degrees(&mut editor, 10), 45.0));
 
     for _ in 0..3 {
-        editor.apply(Command::Undo);
+        editor.apply(Command::History(HistoryCommand::Undo));
     }
     assert_eq!(editor.model.key_frames(), vec![0, 10]);
     assert!(close(shoulder_degrees(&mut editor, 5), 45.0));
-    editor.apply(Command::Redo);
+    editor.apply(Command::History(HistoryCommand::Redo));
     assert_eq!(editor.model.key_frames(), vec![0, 20]);
 }
 
 #[test]
 fn a_key_set_by_hand_is_the_posture_and_short_timelines_travel_in_links() {
     let mut editor = Clocked::new();
-    editor.apply(Command::SetTasks {
-        kind: stance_editor::history::EditKind::Command,
+    editor.apply(Command::Task(TaskCommand::Set {
+        kind: stance_model::history::EditKind::Command,
         tasks: Vec::new(),
-    });
+    }));
     editor.motion(MotionCommand::SetKey);
     assert_eq!(editor.model.key_frames(), vec![0]);
     editor.motion(MotionCommand::Seek(12));
     let skeleton = editor.model.session().skeleton();
     let dof = skeleton.joints()[editor.joint("l_elbow")].rotation_dof[0].unwrap();
-    editor.apply(Command::SetDof { dof, value: -1.0 });
+    editor.apply(Command::Posture(PostureCommand::SetDof {
+        dof,
+        value: -1.0,
+    }));
     editor.settle();
     assert_eq!(
         editor.model.key_frames(),
@@ -242,10 +249,18 @@ fn a_key_set_by_hand_is_the_posture_and_short_timelines_travel_in_links() {
     assert_eq!(shared.keys_left_out, None);
     let back = stance_document::link::decode(&shared.fragment).unwrap();
     assert_eq!(back.motion.unwrap().keys.len(), 2);
-    editor.model.link_shared(shared.fragment.len(), None);
+    let link = editor.model.share_link();
+    assert_eq!(link.characters, shared.fragment.len());
+    editor.apply(Command::File(FileCommand::LinkShared {
+        characters: link.characters,
+        keys_left_out: link.keys_left_out,
+    }));
     let notice = editor.model.notice().unwrap().text.clone();
     assert!(notice.contains("with the timeline's keys"), "{notice}");
-    editor.model.link_shared(900, Some(12_000));
+    editor.apply(Command::File(FileCommand::LinkShared {
+        characters: 900,
+        keys_left_out: Some(12_000),
+    }));
     let notice = editor.model.notice().unwrap().text.clone();
     assert!(
         notice.contains("The 2 keys are not in it") && notice.contains("12000 characters"),
@@ -262,18 +277,18 @@ fn a_pull_while_paused_on_a_clip_frame_becomes_a_key_there_and_undo_takes_it_bac
     assert!(editor.model.key_frames().is_empty());
     let wrist = editor.joint("r_radiocarpal");
     let start = editor.position("r_radiocarpal");
-    editor.apply(Command::BeginPull {
+    editor.apply(Command::Gesture(GestureCommand::BeginPull {
         joint: wrist,
         point_world: start,
-    });
+    }));
     for step in 1..=10 {
         let target = start + DVec3::new(0.0, 0.02, 0.02) * f64::from(step);
-        editor.apply(Command::MoveGrab {
+        editor.apply(Command::Gesture(GestureCommand::MoveGrab {
             target_world: target,
-        });
+        }));
         editor.frames(1);
     }
-    editor.apply(Command::EndGesture);
+    editor.apply(Command::Gesture(GestureCommand::EndGesture));
     editor.settle();
     assert_eq!(editor.model.key_frames(), vec![5]);
     let moved = editor.position("r_radiocarpal");
@@ -283,7 +298,7 @@ fn a_pull_while_paused_on_a_clip_frame_becomes_a_key_there_and_undo_takes_it_bac
     editor.motion(MotionCommand::Seek(5));
     editor.settle();
     assert!((editor.position("r_radiocarpal") - moved).length() < 1e-6);
-    editor.apply(Command::Undo);
+    editor.apply(Command::History(HistoryCommand::Undo));
     assert!(editor.model.key_frames().is_empty());
 }
 
@@ -306,10 +321,10 @@ fn own_wrist(editor: &Clocked, frame: usize) -> DVec3 {
 fn hand_goal_over_time(editor: &mut Clocked) -> DVec3 {
     open_clip(editor, 50, 0.05);
     let goal = own_wrist(editor, 15) + DVec3::new(0.1, 0.1, 0.1);
-    editor.apply(Command::SetTasks {
-        kind: stance_editor::history::EditKind::Command,
+    editor.apply(Command::Task(TaskCommand::Set {
+        kind: stance_model::history::EditKind::Command,
         tasks: vec![TaskSpec::pin("r_radiocarpal", goal.to_array())],
-    });
+    }));
     editor.motion(MotionCommand::SetInterval {
         task: 0,
         interval: Some(INTERVAL),
@@ -385,7 +400,7 @@ fn a_task_interval_eases_the_hand_in_without_a_pop_and_its_ends_drag() {
     });
     let dragged = editor.model.session().tasks()[0].interval.unwrap();
     assert_eq!((dragged.start, dragged.end), (2.3, 2.3));
-    editor.apply(Command::Undo);
+    editor.apply(Command::History(HistoryCommand::Undo));
     assert_eq!(editor.model.session().tasks()[0].interval, Some(INTERVAL));
 }
 
@@ -428,7 +443,7 @@ fn the_trajectory_follows_the_selected_joint_over_every_frame() {
     let postures = open_clip(&mut editor, 20, 1.0 / 30.0);
     assert!(editor.model.timeline().trajectory().is_empty());
     let wrist = editor.joint("l_radiocarpal");
-    editor.apply(Command::Select(Some(wrist)));
+    editor.apply(Command::View(ViewCommand::Select(Some(wrist))));
     editor.frames(1);
     let trajectory = editor.model.timeline().trajectory().to_vec();
     assert_eq!(trajectory.len(), 20);
@@ -451,9 +466,9 @@ fn a_new_level_of_articulation_retargets_the_clip_and_keeps_the_keys() {
     editor.motion(MotionCommand::Seek(6));
     editor.motion(MotionCommand::SetKey);
     let joints = editor.model.session().skeleton().joint_count();
-    editor.apply(Command::SetLevelOfArticulation(
+    editor.apply(Command::Avatar(AvatarCommand::SetLevelOfArticulation(
         stance_hanim::LevelOfArticulation::Loa1,
-    ));
+    )));
     editor.frames(1);
     assert!(editor.model.session().skeleton().joint_count() < joints);
     assert!(editor.model.timeline().has_clip());

@@ -7,12 +7,13 @@
 
 use glam::DQuat;
 use stance_asset::{LoadOptions, export_glb, load_avatar, make_default_avatar};
-use stance_editor::model::{AnimationFormat, MotionCommand};
-use stance_editor::{Command, EditorModel, MemoryHost};
 use stance_ik::Frames;
+use stance_model::model::{AnimationFormat, MotionCommand};
+use stance_model::model::{AvatarCommand, FileCommand, PostureCommand};
+use stance_model::{Command, EditorModel, MemoryHost};
 use stance_motion::{BvhLimits, ContactSettings, RestMatch, RetargetOptions, read_bvh};
 
-use crate::common::{editor_on, open};
+use crate::clocked::{editor_on, open};
 
 const WALK: &[u8] = include_bytes!("../../../tests/fixtures/motion/walk.bvh");
 
@@ -148,7 +149,10 @@ fn the_body_recorded_frame_by_frame_becomes_a_clip() {
             0.021
         };
         let now = t.min(1.0);
-        model.apply(Command::SetDof { dof, value: -now });
+        model.apply(Command::Posture(PostureCommand::SetDof {
+            dof,
+            value: -now,
+        }));
         model.step(now, None);
     }
     model.apply(Command::Motion(MotionCommand::Record(false)));
@@ -175,14 +179,16 @@ fn the_body_recorded_frame_by_frame_becomes_a_clip() {
 fn the_timeline_exports_as_bvh_and_as_a_glb_animation_on_the_avatar() {
     let (mut model, host, _) = editor();
     let glb = export_glb(&make_default_avatar().unwrap()).unwrap();
-    model.apply(Command::LoadAvatar {
+    model.apply(Command::Avatar(AvatarCommand::LoadAvatar {
         name: "default.glb".into(),
         bytes: glb,
-    });
+    }));
     open(&mut model, "walk.bvh", WALK);
     let baked = model.baked_postures();
     assert_eq!(baked.len(), 260);
-    model.apply(Command::ExportAnimation(AnimationFormat::Bvh));
+    model.apply(Command::File(FileCommand::ExportAnimation(
+        AnimationFormat::Bvh,
+    )));
     let (name, text) = host.inner.borrow().downloads.last().cloned().unwrap();
     assert_eq!(name, "walk.bvh");
     let clip = read_bvh(text.as_bytes(), "walk", &BvhLimits::default()).unwrap();
@@ -199,7 +205,9 @@ fn the_timeline_exports_as_bvh_and_as_a_glb_animation_on_the_avatar() {
             assert!((a - b).length() < 1e-5, "{name} frame {f}: {a} {b}");
         }
     }
-    model.apply(Command::ExportAnimation(AnimationFormat::Glb));
+    model.apply(Command::File(FileCommand::ExportAnimation(
+        AnimationFormat::Glb,
+    )));
     let (name, bytes) = host
         .inner
         .borrow()
@@ -216,10 +224,10 @@ fn the_timeline_exports_as_bvh_and_as_a_glb_animation_on_the_avatar() {
         "{duration}"
     );
     // Its own animation plays on the timeline again with the same frame count.
-    model.apply(Command::LoadAvatar {
+    model.apply(Command::Avatar(AvatarCommand::LoadAvatar {
         name: "walk.glb".into(),
         bytes,
-    });
+    }));
     model.apply(Command::Motion(MotionCommand::CloseClip));
     model.apply(Command::Motion(MotionCommand::OpenAvatarAnimation(0)));
     assert_eq!(model.timeline().clip_name(), Some("walk"));

@@ -7,8 +7,9 @@
 #![allow(clippy::expect_used, clippy::unwrap_used, clippy::panic)]
 
 use glam::DVec3;
-use stance_editor::model::MotionCommand;
-use stance_editor::{Command, EditorModel, Gesture, MemoryHost};
+use stance_model::model::FileCommand;
+use stance_model::model::MotionCommand;
+use stance_model::{Change, Command, EditorModel, Gesture, MemoryHost};
 
 /// Seconds between two frames.
 pub const FRAME: f64 = 1.0 / 60.0;
@@ -58,8 +59,8 @@ impl Clocked {
         self.settle_within(300);
     }
 
-    pub fn apply(&mut self, command: Command) {
-        self.model.apply(command);
+    pub fn apply(&mut self, command: Command) -> Change {
+        self.model.apply(command)
     }
 
     pub fn motion(&mut self, command: MotionCommand) {
@@ -121,4 +122,19 @@ pub fn unsettled(model: &EditorModel, frames: usize) -> String {
         "the model did not settle within {frames} frames: {solve}; gesture {gesture}, {} tasks",
         session.tasks().len()
     )
+}
+
+/// The editor's model on `host`, after its first step.
+pub fn editor_on(host: &MemoryHost) -> EditorModel {
+    let mut model = EditorModel::new(Box::new(host.clone())).expect("the editor starts");
+    model.step(0.0, None);
+    model
+}
+
+/// Opens `bytes` as the file `name`, as a pick or a drop does.
+pub fn open(model: &mut EditorModel, name: &str, bytes: &[u8]) {
+    model.apply(Command::File(FileCommand::OpenFile {
+        name: name.into(),
+        bytes: bytes.to_vec(),
+    }));
 }

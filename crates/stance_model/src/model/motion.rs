@@ -19,7 +19,7 @@ use stance_ik::{Frames, Posture};
 use stance_motion::{Clip, Contact, RetargetOptions, Retargeted, retarget};
 
 use self::layer::{KeyDelta, apply_delta, delta_at, key_delta, key_deltas};
-use super::EditorModel;
+use super::{Change, EditorModel};
 use crate::history::EditKind;
 
 /// Frames of the trajectory computed per step (see `refresh_trajectory`).
@@ -113,6 +113,40 @@ pub enum MotionCommand {
     },
     /// Stop opening the clip: the document and the timeline stay as they were.
     CancelOpening,
+}
+
+impl MotionCommand {
+    /// What carrying out the command changes: the playhead and playback are the view; the
+    /// clip, keys and intervals are the document.
+    pub fn change(&self) -> Change {
+        match self {
+            MotionCommand::Play
+            | MotionCommand::Pause
+            | MotionCommand::TogglePlay
+            | MotionCommand::Seek(_)
+            | MotionCommand::StepFrames(_)
+            | MotionCommand::SetLooping(_)
+            | MotionCommand::SetSpeed(_)
+            | MotionCommand::SetTrajectory(_)
+            | MotionCommand::ClipProgress { .. }
+            | MotionCommand::Record(true) => Change::View,
+            MotionCommand::OpenClip(_)
+            | MotionCommand::CloseClip
+            | MotionCommand::SetFrameCount(_)
+            | MotionCommand::SetKey
+            | MotionCommand::DeleteKey(_)
+            | MotionCommand::MoveKey { .. }
+            | MotionCommand::CopyKey { .. }
+            | MotionCommand::SetInterval { .. }
+            | MotionCommand::DragInterval { .. }
+            | MotionCommand::OpenAvatarAnimation(_)
+            | MotionCommand::Record(false)
+            | MotionCommand::SetRetargetOptions(_)
+            | MotionCommand::SetClipMapping(_)
+            | MotionCommand::ClipOpened { .. }
+            | MotionCommand::CancelOpening => Change::Document,
+        }
+    }
 }
 
 /// One end of an active interval.
@@ -371,8 +405,15 @@ impl EditorModel {
         }
     }
 
+    /// Carries out a timeline command; says what it changed ([`MotionCommand::change`]).
+    pub(crate) fn apply_motion(&mut self, command: MotionCommand) -> Change {
+        let change = command.change();
+        self.carry_out_motion(command);
+        change
+    }
+
     /// Carries out a timeline command.
-    pub(crate) fn apply_motion(&mut self, command: MotionCommand) {
+    fn carry_out_motion(&mut self, command: MotionCommand) {
         match command {
             MotionCommand::OpenClip(clip) => {
                 let source = super::clips::written_source(&clip);
@@ -865,7 +906,7 @@ impl EditorModel {
     /// The page shared a posture link of the document (`characters` long): says so, what of
     /// the timeline it carries (the keys and intervals fit in short links; `keys_left_out`:
     /// the length they would have made), and that a clip is only named in it.
-    pub fn link_shared(&mut self, characters: usize, keys_left_out: Option<usize>) {
+    pub(super) fn link_shared(&mut self, characters: usize, keys_left_out: Option<usize>) {
         let mut text = format!(
             "Link copied to the clipboard ({characters} characters): opening it shows exactly this posture and these tasks"
         );

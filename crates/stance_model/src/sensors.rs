@@ -294,49 +294,10 @@ impl SensorHub {
                     "Sensors disconnected; the posture stays as it is.".to_owned(),
                 )
             }
-            other => self.apply_rig(other, session, hooks, now_secs),
-        }
-    }
-
-    /// The commands about the rig (calibration, assignments), replay and recording.
-    fn apply_rig(
-        &mut self,
-        command: SensorCommand,
-        session: &mut PosingSession,
-        hooks: &dyn HostHooks,
-        now_secs: f64,
-    ) -> SensorOutcome {
-        match command {
-            SensorCommand::Calibrate => {
-                match self.calibrate(session.skeleton(), session.frames()) {
-                    Ok(()) => {
-                        let joints = self.driven_joints(session.skeleton());
-                        session.hold_joints(&joints);
-                        SensorOutcome::Inform(format!(
-                            "Sensors calibrated: they now drive {} joints; the other joints keep the tasks.",
-                            joints.len()
-                        ))
-                    }
-                    Err(error) => SensorOutcome::Warn(format!("Calibration failed: {error}.")),
-                }
-            }
+            SensorCommand::Calibrate => self.calibrate_session(session),
             SensorCommand::ReleaseJoints => self.release_joints(session),
-            SensorCommand::ResetHeading => {
-                if self.reset_heading() {
-                    SensorOutcome::Inform(
-                        "Heading reset: the body faces the front again.".to_owned(),
-                    )
-                } else {
-                    SensorOutcome::Quiet
-                }
-            }
-            SensorCommand::Replay { name, bytes } => {
-                if bytes.is_empty() {
-                    return SensorOutcome::Warn(format!("Sensors: {name} is empty."));
-                }
-                self.start_replay(&name, bytes, now_secs);
-                SensorOutcome::Inform(format!("Replaying {name}."))
-            }
+            SensorCommand::ResetHeading => self.reset_heading_said(),
+            SensorCommand::Replay { name, bytes } => self.replay(&name, bytes, now_secs),
             SensorCommand::StopReplay => {
                 self.stop_replay();
                 SensorOutcome::Quiet
@@ -354,13 +315,6 @@ impl SensorHub {
                 self.assign(sensor, assignment);
                 self.release_joints(session)
             }
-            other => self.apply_stream(other, now_secs),
-        }
-    }
-
-    /// The commands about the device's byte stream.
-    fn apply_stream(&mut self, command: SensorCommand, now_secs: f64) -> SensorOutcome {
-        match command {
             SensorCommand::Connected { device } => {
                 let text = format!("Sensors: {device} connected.");
                 self.connected(device);
@@ -384,9 +338,40 @@ impl SensorHub {
                 self.lost(reason);
                 SensorOutcome::Warn(text)
             }
-            // Device and rig commands are carried out above.
-            _ => SensorOutcome::Quiet,
         }
+    }
+
+    /// Calibrates the sensors on `session`'s posture: the driven joints are held.
+    fn calibrate_session(&mut self, session: &mut PosingSession) -> SensorOutcome {
+        match self.calibrate(session.skeleton(), session.frames()) {
+            Ok(()) => {
+                let joints = self.driven_joints(session.skeleton());
+                session.hold_joints(&joints);
+                SensorOutcome::Inform(format!(
+                    "Sensors calibrated: they now drive {} joints; the other joints keep the tasks.",
+                    joints.len()
+                ))
+            }
+            Err(error) => SensorOutcome::Warn(format!("Calibration failed: {error}.")),
+        }
+    }
+
+    /// Resets the heading; says so when there was one to reset.
+    fn reset_heading_said(&mut self) -> SensorOutcome {
+        if self.reset_heading() {
+            SensorOutcome::Inform("Heading reset: the body faces the front again.".to_owned())
+        } else {
+            SensorOutcome::Quiet
+        }
+    }
+
+    /// Replays the recording `name` (its `bytes`) from `now_secs`.
+    fn replay(&mut self, name: &str, bytes: Vec<u8>, now_secs: f64) -> SensorOutcome {
+        if bytes.is_empty() {
+            return SensorOutcome::Warn(format!("Sensors: {name} is empty."));
+        }
+        self.start_replay(name, bytes, now_secs);
+        SensorOutcome::Inform(format!("Replaying {name}."))
     }
 
     /// The sensors stop driving their joints; the solver takes them back.

@@ -1,6 +1,8 @@
 //! A user's avatar in the editor: the imported glTF/GLB/VRM file, its H-Anim skeleton, and the
 //! GPU model (vertices, materials, textures) with the palettes that pose it every frame.
 
+use std::sync::Arc;
+
 use glam::Mat4;
 use stance_asset::{
     Avatar, HostImages, LoadOptions, export_glb, find_resource, load_avatar_with_images,
@@ -19,8 +21,9 @@ pub struct LoadedAvatar {
     pub name: String,
     /// The imported file (H-Anim mapping included).
     pub avatar: Avatar,
-    /// The GPU model, taken by the renderer when it uploads it.
-    pub model: Option<SkinnedModel>,
+    /// The GPU model until the renderer took it for its upload
+    /// ([`AvatarCommand::MeshTaken`](crate::model::AvatarCommand::MeshTaken)).
+    model: Option<Arc<SkinnedModel>>,
     palettes: AvatarPalettes,
     /// What the user should know (unmapped joints, clamped skins...).
     pub warnings: Vec<String>,
@@ -139,7 +142,7 @@ impl LoadedAvatar {
         Ok(Self {
             name: name.to_owned(),
             avatar,
-            model: Some(model),
+            model: Some(Arc::new(model)),
             palettes,
             warnings,
             vertex_count,
@@ -154,7 +157,7 @@ impl LoadedAvatar {
     pub fn shown_again(mut self) -> Self {
         if self.model.is_none() {
             let (model, palettes, _) = avatar_model(&self.avatar);
-            self.model = Some(model);
+            self.model = Some(Arc::new(model));
             self.palettes = palettes;
         }
         self
@@ -168,6 +171,16 @@ impl LoadedAvatar {
                 ..SkeletonOptions::default()
             })
             .map_err(|error| error.to_string())
+    }
+
+    /// The GPU model (vertices, materials, textures) until the renderer took it.
+    pub fn mesh(&self) -> Option<&Arc<SkinnedModel>> {
+        self.model.as_ref()
+    }
+
+    /// Takes the GPU model for the renderer's upload: the avatar no longer holds it.
+    pub fn take_mesh(&mut self) -> Option<Arc<SkinnedModel>> {
+        self.model.take()
     }
 
     /// The palettes that show `posture` (mesh space -> H-Anim world), or `None` when the

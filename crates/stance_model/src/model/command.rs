@@ -6,8 +6,8 @@ use stance_document::{Document, LimbName, TaskKindSpec, TaskSpec};
 use stance_hanim::{LevelOfArticulation, Mapping};
 
 use super::clips::AnimationFormat;
+use super::comfort::ComfortCommand;
 use super::hands::HandCommand;
-use super::image::ImageRequest;
 use super::mapping::Correction;
 use super::motion::MotionCommand;
 use super::tasks::NewTask;
@@ -81,13 +81,66 @@ pub enum Gesture {
     },
 }
 
-/// What the UI asks the model to do.
+/// What the UI asks the model to do: one command per feature, each carried out by that
+/// feature's `apply` (see [`EditorModel::apply`](crate::EditorModel::apply)), which says what
+/// changed.
 #[derive(Debug, Clone)]
 pub enum Command {
+    /// Selection and hover.
+    View(ViewCommand),
+    /// The one gesture in progress: pull, goal, ring, swivel.
+    Gesture(GestureCommand),
+    /// An edit of the posture (a DOF, a limb's swivel, rest, mirror, a pin, the saved view).
+    Posture(PostureCommand),
+    /// An edit of the task list.
+    Task(TaskCommand),
+    /// Undo and redo.
+    History(HistoryCommand),
+    /// A hand preset or a finger curl (bodies with fingers).
+    Hands(HandCommand),
+    /// The body: avatar, mannequin, level of articulation, mapping.
+    Avatar(AvatarCommand),
+    /// Opening and offering files and links.
+    File(FileCommand),
+    /// The pose library.
+    Library(LibraryCommand),
+    /// A command for the sensors.
+    Sensors(SensorCommand),
+    /// A command for the timeline (clip, playhead, keys, intervals, trajectory).
+    Motion(MotionCommand),
+    /// A command for the comfort panel (heat map, RULA inputs).
+    Comfort(ComfortCommand),
+    /// The message above the viewport.
+    Notice(NoticeCommand),
+}
+
+/// What a command changed: the views redraw, the document is saved, the timeline keys a
+/// posture edit. Ordered: each one includes the ones before it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Default)]
+pub enum Change {
+    /// Nothing (the command did not apply, or changed nothing).
+    #[default]
+    Nothing,
+    /// What is shown (selection, playhead, notice, panels), not the document.
+    View,
+    /// The document (tasks, body, keys, files opened), undoable where the history keeps it.
+    Document,
+    /// The posture itself, by an edit of the user: paused on a timeline, it becomes a key.
+    Posture,
+}
+
+/// Selection and hover: what the views show, not the document.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ViewCommand {
     /// Select a joint (or nothing).
     Select(Option<usize>),
     /// The joint under the pointer (or nothing).
     Hover(Option<usize>),
+}
+
+/// The gesture in progress: begin, move, end.
+#[derive(Debug, Clone)]
+pub enum GestureCommand {
     /// Grab `joint` at `point_world` and start pulling it.
     BeginPull {
         /// The grabbed joint (skeleton index).
@@ -124,21 +177,15 @@ pub enum Command {
     EndGesture,
     /// The gesture ends and a pull's body goes back to where it was.
     CancelGesture,
+}
+
+/// An edit of the posture, each one undoable.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PostureCommand {
     /// Pin a joint where it is (level 1).
     Pin(usize),
     /// Pin the selected joint.
     PinSelected,
-    /// Replace the task list as one edit of `kind`.
-    SetTasks {
-        /// What kind of edit it is (edits of one kind in quick succession make one undo step).
-        kind: EditKind,
-        /// The whole new task list, in priority order.
-        tasks: Vec<TaskSpec>,
-    },
-    /// Add a task made from where the body stands.
-    AddTask(NewTask),
-    /// The paper's Table 1 in place of the tasks.
-    LoadTable1Example,
     /// Set one DOF (a slider or field), as one edit of `EditKind::Joint`.
     SetDof {
         /// The DOF (index in the posture's values).
@@ -161,17 +208,62 @@ pub enum Command {
         /// The elbow's or knee's angle around the limb's axis (rad).
         swivel_angle: f64,
     },
-    /// Take back the last edit.
-    Undo,
-    /// Do again the last edit taken back.
-    Redo,
     /// Put the body back in its rest posture; the tasks stay.
     ResetToRest,
     /// Swap left and right: the posture and the tasks with it, reflected in the body's
     /// sagittal plane.
     Mirror,
-    /// A hand preset or a finger curl (bodies with fingers).
-    Hands(HandCommand),
+    /// Save this camera with the document (`None`: forget it); undoable.
+    SaveCamera(Option<stance_document::CameraSpec>),
+}
+
+/// An edit of the task list, each one undoable.
+#[derive(Debug, Clone)]
+pub enum TaskCommand {
+    /// Replace the task list as one edit of `kind` (a field edited in the tasks panel).
+    Set {
+        /// What kind of edit it is (edits of one kind in quick succession make one undo step).
+        kind: EditKind,
+        /// The whole new task list, in priority order.
+        tasks: Vec<TaskSpec>,
+    },
+    /// Add a task made from where the body stands.
+    Add(NewTask),
+    /// The paper's Table 1 in place of the tasks.
+    LoadTable1Example,
+    /// Remove the task at this index of the list.
+    Remove(usize),
+    /// Move the task at index `task` to level `level` (dropped onto it).
+    MoveToLevel {
+        /// The task (index in the list).
+        task: usize,
+        /// Its new priority level.
+        level: u32,
+    },
+    /// Swap two levels: the tasks of each take the other's number.
+    SwapLevels(u32, u32),
+    /// Move the tasks of level `from` to the place of level `onto` (`None`: the lowest place);
+    /// the levels in between shift by one place, the level numbers in use stay the same.
+    MoveLevel {
+        /// The moved level.
+        from: u32,
+        /// The level whose place it takes, or `None` for the last place.
+        onto: Option<u32>,
+    },
+}
+
+/// Undo and redo.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HistoryCommand {
+    /// Take back the last edit.
+    Undo,
+    /// Do again the last edit taken back.
+    Redo,
+}
+
+/// The body: an avatar, the mannequin, the level of articulation, the mapping onto H-Anim.
+#[derive(Debug, Clone)]
+pub enum AvatarCommand {
     /// Rebuild the body at another level of articulation: the posture carries over by joint
     /// name, and the tasks whose joints remain stay.
     SetLevelOfArticulation(LevelOfArticulation),
@@ -195,18 +287,6 @@ pub enum Command {
     },
     /// Go back to the mapping before the last applied correction.
     RevertMappingCorrection,
-    /// Open a posture link (fragment or URL).
-    OpenLink(String),
-    /// Open a file: avatar, document, pose library, or a sensor recording when one was asked.
-    OpenFile {
-        /// The file's name (with the contents, it tells what kind of file it is).
-        name: String,
-        /// The file's contents.
-        bytes: Vec<u8>,
-    },
-    /// Open files picked or dropped together (name, contents): a `.gltf` among them opens as
-    /// an avatar with the others as its `.bin` buffers and images; the rest open in turn.
-    OpenFiles(Vec<(String, Vec<u8>)>),
     /// The texture images of the avatar file `file` decoded by the host: its next import
     /// takes them instead of decoding them.
     DecodedImages {
@@ -222,43 +302,86 @@ pub enum Command {
         /// The avatar, or what is wrong with the file.
         result: Result<Box<crate::host::ImportedAvatar>, String>,
     },
-    /// Save the posture in the library under a name.
-    SaveToLibrary(String),
-    /// Load the library's entry `index`.
-    LoadFromLibrary(usize),
-    /// Delete the library's entry `index`.
-    DeleteFromLibrary(usize),
-    /// Ask the page for a file to open.
-    PickFile,
-    /// Offer the document as a JSON download.
-    ExportDocument,
-    /// Offer the pose library as a JSON download.
-    ExportLibrary,
     /// Offer the avatar in the current posture as a GLB download.
     ExportPosedAvatar,
-    /// Render an image (PNG) of the posture and offer it as a download: the viewport's GPU
-    /// draws it on a following frame (see `EditorModel::advance_image`).
-    SaveImage(ImageRequest),
+    /// The renderer took the avatar's GPU model for its upload ([`LoadedAvatar::mesh`]): the
+    /// model lets go of its copy.
+    ///
+    /// [`LoadedAvatar::mesh`]: crate::avatar::LoadedAvatar::mesh
+    MeshTaken,
+}
+
+/// Files and links: opening what the user picked or dropped, offering downloads.
+#[derive(Debug, Clone)]
+pub enum FileCommand {
+    /// Open a posture link (fragment or URL).
+    OpenLink(String),
+    /// Open a file: avatar, document, pose library, or a sensor recording when one was asked.
+    OpenFile {
+        /// The file's name (with the contents, it tells what kind of file it is).
+        name: String,
+        /// The file's contents.
+        bytes: Vec<u8>,
+    },
+    /// Open files picked or dropped together (name, contents): a `.gltf` among them opens as
+    /// an avatar with the others as its `.bin` buffers and images; the rest open in turn.
+    OpenFiles(Vec<(String, Vec<u8>)>),
+    /// Ask the page for a file to open.
+    PickFile,
     /// Ask the page for a sensor recording to replay.
     PickRecording,
     /// Ask the page for a motion clip (BVH, or a glTF file's animation).
     PickClip,
-    /// Save this camera with the document (`None`: forget it); undoable.
-    SaveCamera(Option<stance_document::CameraSpec>),
+    /// Offer the document as a JSON download.
+    ExportDocument,
     /// Offer the timeline (clip, keys and timed tasks, baked) as a download.
     ExportAnimation(AnimationFormat),
-    /// A command for the sensors.
-    Sensors(SensorCommand),
+    /// Offer an image of the posture (a PNG the views rendered with the GPU, `width` x
+    /// `height` pixels) as a download.
+    SaveImage {
+        /// The PNG file's bytes.
+        png: Vec<u8>,
+        /// Width, pixels.
+        width: u32,
+        /// Height, pixels.
+        height: u32,
+    },
     /// The host failed to do what the editor asked (reading a file...).
     HostFailed(String),
+    /// The views shared the document's posture link ([`EditorModel::share_link`]): the
+    /// notice says what it carries.
+    ///
+    /// [`EditorModel::share_link`]: crate::EditorModel::share_link
+    LinkShared {
+        /// The link's fragment, in characters.
+        characters: usize,
+        /// The length the timeline's keys would have made it, when they were left out.
+        keys_left_out: Option<usize>,
+    },
+}
+
+/// The pose library: postures saved under names.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum LibraryCommand {
+    /// Save the posture in the library under a name.
+    Save(String),
+    /// Load the library's entry `index`.
+    Load(usize),
+    /// Delete the library's entry `index`.
+    Delete(usize),
+    /// Offer the pose library as a JSON download.
+    Export,
+}
+
+/// The message shown above the viewport.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum NoticeCommand {
     /// A message for the user.
     Inform(String),
     /// A problem for the user.
     Warn(String),
     /// Close the notice shown above the viewport.
-    DismissNotice,
-    /// A command for the timeline (clip, playhead, keys, intervals, trajectory).
-    Motion(MotionCommand),
+    Dismiss,
 }
 
 /// Why a session is replaced: what carries over.
@@ -348,7 +471,12 @@ pub(super) fn goals_moved(
                     target[2] = on_floor.z;
                 }
             }
-            _ => {}
+            // No goal to drag: the goal handles are drawn for the kinds above only.
+            TaskKindSpec::Orientation { .. }
+            | TaskKindSpec::Direction { .. }
+            | TaskKindSpec::Balance { .. }
+            | TaskKindSpec::Posture { .. }
+            | TaskKindSpec::Comfort { .. } => {}
         }
     }
     tasks
@@ -358,13 +486,17 @@ impl From<HostMessage> for Command {
     /// What the host sends, as the command it asks for.
     fn from(message: HostMessage) -> Self {
         match message {
-            HostMessage::OpenLink(fragment) => Command::OpenLink(fragment),
-            HostMessage::OpenFile { name, bytes } => Command::OpenFile { name, bytes },
-            HostMessage::OpenFiles(files) => Command::OpenFiles(files),
-            HostMessage::DecodedImages { file, images } => Command::DecodedImages { file, images },
-            HostMessage::Failed(reason) => Command::HostFailed(reason),
+            HostMessage::OpenLink(fragment) => Command::File(FileCommand::OpenLink(fragment)),
+            HostMessage::OpenFile { name, bytes } => {
+                Command::File(FileCommand::OpenFile { name, bytes })
+            }
+            HostMessage::OpenFiles(files) => Command::File(FileCommand::OpenFiles(files)),
+            HostMessage::DecodedImages { file, images } => {
+                Command::Avatar(AvatarCommand::DecodedImages { file, images })
+            }
+            HostMessage::Failed(reason) => Command::File(FileCommand::HostFailed(reason)),
             HostMessage::AvatarImported { name, result } => {
-                Command::AvatarImported { name, result }
+                Command::Avatar(AvatarCommand::AvatarImported { name, result })
             }
             HostMessage::ClipProgress { id, fraction } => {
                 Command::Motion(MotionCommand::ClipProgress { id, fraction })

@@ -5,12 +5,13 @@
 
 use crate::clocked;
 use clocked::Clocked;
+use stance_model::model::{AvatarCommand, FileCommand, HistoryCommand, PostureCommand};
 
 use stance_document::link;
-use stance_editor::Command;
-use stance_editor::model::{HandCommand, Hands};
 use stance_hanim::hands::{Finger, HandPreset};
 use stance_hanim::{LevelOfArticulation, Side};
+use stance_model::Command;
+use stance_model::model::{HandCommand, Hands};
 
 fn preset(hands: Hands, preset: HandPreset) -> Command {
     Command::Hands(HandCommand::Preset { hands, preset })
@@ -59,9 +60,9 @@ fn a_fist_on_both_hands_is_one_undo_step_the_solver_keeps_and_undo_restores_exac
     for ((dof, then), (_, now)) in posed.iter().zip(finger_values(&editor, Side::Right)) {
         assert!((then - now).abs() < 1e-3, "DOF {dof}: {then} became {now}");
     }
-    editor.apply(Command::Undo);
+    editor.apply(Command::History(HistoryCommand::Undo));
     assert_eq!(editor.model.document(), before);
-    editor.apply(Command::Redo);
+    editor.apply(Command::History(HistoryCommand::Redo));
     assert!(editor.model.hand_curl(Hands::Both, None).unwrap() > 0.8);
 }
 
@@ -97,8 +98,8 @@ fn a_curl_drag_is_one_undo_step_and_moves_only_that_finger_of_that_hand() {
     editor.frames(60);
     editor.apply(curl(Hands::Right, Some(Finger::Middle), 0.5));
     assert_eq!(editor.model.history().undo_steps(), steps + 2);
-    editor.apply(Command::Undo);
-    editor.apply(Command::Undo);
+    editor.apply(Command::History(HistoryCommand::Undo));
+    editor.apply(Command::History(HistoryCommand::Undo));
     assert_eq!(editor.model.document(), before);
 }
 
@@ -113,7 +114,7 @@ fn mirroring_the_posture_moves_a_fist_onto_the_other_hand() {
         .hand(Side::Left)
         .unwrap()
         .preset(session.skeleton(), HandPreset::Fist);
-    editor.apply(Command::Mirror);
+    editor.apply(Command::Posture(PostureCommand::Mirror));
     let values = editor.model.session().posture().values();
     for (dof, value) in expected {
         assert!(
@@ -129,7 +130,7 @@ fn mirroring_the_posture_moves_a_fist_onto_the_other_hand() {
     // default body's hands are not exact mirror images.)
     editor.apply(preset(Hands::Both, HandPreset::Grip));
     let left = finger_values(&editor, Side::Left);
-    editor.apply(Command::Mirror);
+    editor.apply(Command::Posture(PostureCommand::Mirror));
     for ((dof, before), (_, after)) in left.iter().zip(finger_values(&editor, Side::Left)) {
         assert!((before - after).abs() < 1e-9, "DOF {dof}");
     }
@@ -138,7 +139,9 @@ fn mirroring_the_posture_moves_a_fist_onto_the_other_hand() {
 #[test]
 fn a_body_without_fingers_poses_no_hand_and_says_why() {
     let mut editor = Clocked::new();
-    editor.apply(Command::SetLevelOfArticulation(LevelOfArticulation::Loa1));
+    editor.apply(Command::Avatar(AvatarCommand::SetLevelOfArticulation(
+        LevelOfArticulation::Loa1,
+    )));
     assert!(!editor.model.has_fingers());
     assert_eq!(editor.model.hand_curl(Hands::Both, None), None);
     let before = editor.model.document();
@@ -150,14 +153,18 @@ fn a_body_without_fingers_poses_no_hand_and_says_why() {
     let notice = editor.model.notice().unwrap();
     assert!(notice.text.contains("no finger joints"), "{}", notice.text);
     // Back at LOA 3 the hands are there again.
-    editor.apply(Command::SetLevelOfArticulation(LevelOfArticulation::Loa3));
+    editor.apply(Command::Avatar(AvatarCommand::SetLevelOfArticulation(
+        LevelOfArticulation::Loa3,
+    )));
     assert!(editor.model.has_fingers());
 }
 
 #[test]
 fn posed_fingers_travel_in_a_link() {
     let mut editor = Clocked::new();
-    editor.apply(Command::SetLevelOfArticulation(LevelOfArticulation::Loa3));
+    editor.apply(Command::Avatar(AvatarCommand::SetLevelOfArticulation(
+        LevelOfArticulation::Loa3,
+    )));
     editor.apply(preset(Hands::Left, HandPreset::Point));
     editor.apply(preset(Hands::Right, HandPreset::Grip));
     editor.apply(curl(Hands::Right, Some(Finger::Thumb), 0.3));
@@ -165,8 +172,10 @@ fn posed_fingers_travel_in_a_link() {
     let left = finger_values(&editor, Side::Left);
     let right = finger_values(&editor, Side::Right);
     let mut other = Clocked::new();
-    other.apply(Command::SetLevelOfArticulation(LevelOfArticulation::Loa3));
-    other.apply(Command::OpenLink(fragment));
+    other.apply(Command::Avatar(AvatarCommand::SetLevelOfArticulation(
+        LevelOfArticulation::Loa3,
+    )));
+    other.apply(Command::File(FileCommand::OpenLink(fragment)));
     assert!(!other.model.notice().unwrap().is_error);
     let half_step = link::ROTATION_STEP_RAD / 2.0 + 1e-12;
     for (side, sent) in [(Side::Left, left), (Side::Right, right)] {

@@ -1,0 +1,152 @@
+//! *File > Save image*: the posture rendered offscreen through the viewport's camera, at the
+//! chosen size, with or without background and overlays, as a PNG download. The image is
+//! drawn here, beside the views, with the GPU: the viewport's [`ImageExport`] takes the
+//! request, whoever has the GPU (the viewport, or a test) calls [`ImageExport::advance`]
+//! every frame until it is done (the read-back is asynchronous: in the browser it completes
+//! on a later frame), and the finished PNG goes to the model as a command
+//! ([`FileCommand::SaveImage`]), which hands it to the host.
+
+use crate::model::Outbox;
+use crate::model::{FileCommand, NoticeCommand};
+use glam::DVec3;
+use stance_render::{
+    BODY_COLOR_LINEAR, Capsule, GOAL_COLOR_LINEAR, ImageOptions, OrbitCamera, PendingImage, Scene,
+    SceneRenderer, encode_png, render_image,
+};
+
+use crate::figure::MannequinFigure;
+use crate::model::{Command, EditorModel};
+
+pub use crate::model::IMAGE_FILE_NAME;
+
+/// Goal marker of a task that gave way or has a problem (linear RGB).
+const GOAL_UNMET_LINEAR: [f32; 4] = [0.85, 0.3, 0.04, 1.0];
+/// Goal marker of an inactive task (linear RGB).
+const GOAL_INACTIVE_LINEAR: [f32; 4] = [0.25, 0.25, 0.25, 1.0];
+
+/// An image the user asked for: size, background and overlays, and the camera it is seen
+/// through (the viewport's when the user asked).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImageRequest {
+    /// Size, transparency, overlays.
+    pub options: ImageOptions,
+    /// The view.
+    pub camera: OrbitCamera,
+}
+
+/// The *Save image* work in progress: asked, then on its way back from the GPU.
+#[derive(Debug, Default)]
+pub struct ImageExport {
+    asked: Option<ImageRequest>,
+    pending: Option<PendingImage>,
+}
+
+impl ImageExport {
+    /// Asks for an image (replacing one asked and not yet started).
+    pub fn request(&mut self, request: ImageRequest) {
+        self.asked = Some(request);
+    }
+
+    /// Whether an image is asked for or on its way.
+    pub fn is_busy(&self) -> bool {
+        self.asked.is_some() || self.pending.is_some()
+    }
+
+    /// Moves *Save image* along with the viewport's GPU: renders an asked image of `model`,
+    /// and sends a finished one to the model, which hands it to the host as
+    /// `stance-posture.png`. Never blocks; returns whether an image is still on its way (call
+    /// again next frame). `renderer` draws the avatar it holds, or the mannequin's `figure`
+    /// when it holds its mesh (else the mannequin's capsules).
+    pub fn advance(
+        &mut self,
+        model: &EditorModel,
+        outbox: &mut Outbox,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        renderer: &mut SceneRenderer,
+        figure: Option<&MannequinFigure>,
+    ) -> bool {
+        if let Some(request) = self.asked.take() {
+            let mut scene = image_scene(model, renderer.avatar().is_some());
+            let session = model.session();
+            if let Some(figure) = figure.filter(|_| model.avatar().is_none())
+                && let Some(palettes) = figure.palettes(session.skeleton(), session.posture())
+            {
+                scene.capsules.clear();
+                scene.show_avatar = true;
+                scene.avatar_palettes = palettes;
+            }
+            let camera = &request.camera;
+            match render_image(device, queue, renderer, camera, &scene, &request.options) {
+                Ok(pending) => self.pending = Some(pending),
+                Err(error) => outbox.send(Command::Notice(NoticeCommand::Warn(format!(
+                    "The image could not be made: {error}."
+                )))),
+            }
+        }
+        let Some(result) = self.pending.as_mut().and_then(|p| p.poll(device)) else {
+            return self.pending.is_some();
+        };
+        self.pending = None;
+        match result.and_then(|pixels| encode_png(&pixels).map(|png| (pixels, png))) {
+            Ok((pixels, png)) => outbox.send(Command::File(FileCommand::SaveImage {
+                png,
+                width: pixels.width,
+                height: pixels.height,
+            })),
+            Err(error) => outbox.send(Command::Notice(NoticeCommand::Warn(format!(
+                "The image could not be made: {error}."
+            )))),
+        }
+        false
+    }
+}
+
+/// What an image of `model` shows: the body in its plain colour (the avatar when
+/// `avatar_uploaded`), the floor, and each task's goal as a marker coloured by its status
+/// (met, gave way, inactive); [`ImageOptions::scene`] drops the last two without overlays.
+fn image_scene(model: &EditorModel, avatar_uploaded: bool) -> Scene {
+    let session = model.session();
+    let show_avatar = avatar_uploaded && model.avatar().is_some();
+    let capsules = if show_avatar {
+        Vec::new()
+    } else {
+        model
+            .bones()
+            .iter()
+            .map(|bone| Capsule {
+                color_linear: BODY_COLOR_LINEAR,
+                ..bone.capsule
+            })
+            .collect()
+    };
+    let avatar_palettes = model
+        .avatar()
+        .filter(|_| show_avatar)
+        .and_then(|avatar| avatar.palettes(session.humanoid(), session.posture()))
+        .unwrap_or_default();
+    let markers = session
+        .tasks()
+        .iter()
+        .zip(session.statuses())
+        .filter_map(|(task, status)| {
+            let color = if !task.active {
+                GOAL_INACTIVE_LINEAR
+            } else if status.gave_way.is_some() || status.problem.is_some() {
+                GOAL_UNMET_LINEAR
+            } else {
+                GOAL_COLOR_LINEAR
+            };
+            let goal = task.kind.goal_point()?;
+            Some(Capsule::marker(DVec3::from_array(goal).as_vec3(), color))
+        })
+        .collect();
+    Scene {
+        capsules,
+        show_floor: true,
+        show_avatar,
+        avatar_palettes,
+        markers,
+        transparent_background: false,
+    }
+}
