@@ -220,7 +220,7 @@ describe("stance-ik", () => {
     // 2026-11: 328 KiB gzipped, 356 KiB once retargeting held heel, ball, hands, knees and
     // pelvis, 348 KiB with the package crates in one codegen unit. Retargeting moved to a
     // module of its own, loaded by the first `retarget` call: the solver's is what an import
-    // downloads (283 KiB when split), retargeting's (265 KiB: it has its own solver) only
+    // downloads (274 KiB in CI, Node's gzip -9), retargeting's (269 KiB: it has its own solver) only
     // what a page that retargets adds. stance_hanim at "z" would save 14 KiB, but Table 1
     // solves 1.5x slower.
     const customSections = (bytes) => {
