@@ -13,6 +13,7 @@
 
 pub mod anatomy;
 pub mod builder;
+pub mod capsules;
 pub mod chains;
 pub mod comfort;
 pub mod families;

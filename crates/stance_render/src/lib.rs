@@ -25,10 +25,7 @@ mod skinned;
 mod skinned_gpu;
 
 pub use avatar::{AvatarPalettes, avatar_model};
-pub use body::{
-    BODY_COLOR_LINEAR, MannequinBone, MannequinJoint, mannequin_bones, mannequin_capsules,
-    posed_mannequin_bones, rest_pose_capsules,
-};
+pub use body::{BODY_COLOR_LINEAR, MannequinBone, posed_mannequin_bones, rest_pose_capsules};
 pub use camera::{OrbitCamera, ViewPreset};
 #[cfg(all(feature = "gpu", not(target_arch = "wasm32")))]
 pub use capture::read_pixels;
