@@ -112,7 +112,8 @@ impl PostureValues {
 
 impl TaskSpec {
     /// The problem-file form of a solver task on `skeleton` (joints by name); `None` for the
-    /// kinds a problem file cannot hold (comfort, posture attraction) and joints out of range.
+    /// kinds a problem file cannot hold (comfort, posture attraction, collision: not yet) and
+    /// joints out of range.
     pub fn from_task(skeleton: &Skeleton, task: &Task) -> Option<Self> {
         let name = |j: usize| skeleton.joints().get(j).map(|joint| joint.name.clone());
         let kind = match &task.kind {
@@ -157,7 +158,9 @@ impl TaskSpec {
                 support: Some(support_names(skeleton, support)?),
                 margin: *margin,
             },
-            TaskKind::Comfort { .. } | TaskKind::PostureAttraction { .. } => return None,
+            TaskKind::Comfort { .. }
+            | TaskKind::PostureAttraction { .. }
+            | TaskKind::Collision { .. } => return None,
         };
         Some(Self {
             level: task.level,

@@ -1,38 +1,15 @@
-//! The body as capsules: one per bone (a segment from a joint to its child), a head above the
-//! skull base and two bars across the chest, each fixed in the frame of the joint that carries
-//! it, with radii from the segment it stands for (thigh, forearm...). The mannequin is drawn
-//! with them and collision tests use them, so that what is drawn is what collides.
+//! The body as capsules (`stance_ik::Capsule`): one per bone (a segment from a joint to its
+//! child), a head above the skull base and two bars across the chest, each fixed in the frame
+//! of the joint that carries it, with radii from the segment it stands for (thigh, forearm...).
+//! The mannequin is drawn with them and the collision task holds them apart, so that what is
+//! drawn is what collides.
 //!
 //! Radii (m) are for an adult of the default body's size, from segment girths of the
 //! anthropometric tables the body's proportions come from, rounded: a modelling choice, not
 //! a measurement of any one avatar.
 
 use glam::DVec3;
-use stance_ik::{Frames, Posture, Skeleton};
-
-/// A capsule of the body, in the frame of the joint that carries it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SegmentCapsule {
-    /// The joint whose frame carries it (a bone from a joint to its child moves with the
-    /// joint: the upper arm belongs to the shoulder).
-    pub joint: usize,
-    /// Centre of the start cap, joint frame (m).
-    pub start: DVec3,
-    /// Centre of the end cap, joint frame (m).
-    pub end: DVec3,
-    /// Radius of the swept sphere (m).
-    pub radius: f64,
-}
-
-impl SegmentCapsule {
-    /// Its two cap centres in the world, the body posed as `frames` say.
-    pub fn world(&self, frames: &Frames) -> (DVec3, DVec3) {
-        (
-            frames.point(self.joint, self.start),
-            frames.point(self.joint, self.end),
-        )
-    }
-}
+use stance_ik::{Capsule, Frames, Posture, Skeleton};
 
 /// The head's capsule above the skull base, along the joint's +Y: from, to (m) and radius.
 const HEAD: (f64, f64, f64) = (0.07, 0.15, 0.095);
@@ -76,7 +53,7 @@ pub fn segment_radius(parent: &str, child: &str) -> f64 {
 /// its rest posture: a bone per joint with a parent, in the parent's frame; the head above
 /// `skullbase`; bars between the collarbones and between the shoulders, carried by the
 /// vertebra the left collarbone hangs from.
-pub fn body_capsules(skeleton: &Skeleton) -> Vec<SegmentCapsule> {
+pub fn body_capsules(skeleton: &Skeleton) -> Vec<Capsule> {
     let rest = Frames::new(skeleton, &Posture::rest(skeleton));
     let joints = skeleton.joints();
     // A rest-pose world point in the frame of `joint`.
@@ -88,14 +65,14 @@ pub fn body_capsules(skeleton: &Skeleton) -> Vec<SegmentCapsule> {
         let Some(parent) = joint.parent else {
             continue;
         };
-        capsules.push(SegmentCapsule {
+        capsules.push(Capsule {
             joint: parent,
             start: DVec3::ZERO,
             end: local(parent, rest.joint_position[index]),
             radius: segment_radius(&joints[parent].name, &joint.name),
         });
         if joint.name == "skullbase" {
-            capsules.push(SegmentCapsule {
+            capsules.push(Capsule {
                 joint: index,
                 start: DVec3::Y * HEAD.0,
                 end: DVec3::Y * HEAD.1,
@@ -114,7 +91,7 @@ pub fn body_capsules(skeleton: &Skeleton) -> Vec<SegmentCapsule> {
         if let (Some(left), Some(right)) = (find(left), find(right)) {
             let (left, right) = (rest.joint_position[left], rest.joint_position[right]);
             let inset = (right - left) * CHEST.1;
-            capsules.push(SegmentCapsule {
+            capsules.push(Capsule {
                 joint: chest,
                 start: local(chest, left + inset),
                 end: local(chest, right - inset),

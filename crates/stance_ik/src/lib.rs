@@ -52,4 +52,7 @@ pub use solver::{
     AnalyticRestart, Backend, Clock, Iteration, LevelReport, SolveReport, SolveStatus, Solver,
     SolverSettings, TEXTBOOK_ANGULAR_STEP, TEXTBOOK_LINEAR_STEP,
 };
-pub use task::{Axes, BALANCE_BAND, Effector, Task, TaskFeature, TaskKind};
+pub use task::{
+    Axes, BALANCE_BAND, COLLISION_BAND, Capsule, Effector, Task, TaskFeature, TaskKind,
+    closest_points, collision_pairs, floor_capsules,
+};

@@ -4,12 +4,14 @@
 //! the submodules `gaze` and `balance`.
 
 mod balance;
+mod collision;
 mod gaze;
 
 use glam::{DQuat, DVec3};
 
 pub use balance::BALANCE_BAND;
 use balance::{BalanceGeometry, convex_hull, floor_points};
+pub use collision::{COLLISION_BAND, Capsule, closest_points, collision_pairs, floor_capsules};
 use gaze::{GazeGeometry, direction_error};
 
 use std::sync::Arc;
@@ -156,6 +158,24 @@ pub enum TaskKind {
         /// The cost.
         model: Arc<ComfortModel>,
     },
+    /// Collision avoidance as an inequality: the surfaces of the `pairs` of `capsules` (and
+    /// the `floor` capsules and the floor `y = 0`) keep at least `margin` apart. `rows`
+    /// rows, one per constraint along its line of closest approach, the nearest first: an
+    /// error where two surfaces are closer than the margin, a zero error within
+    /// [`COLLISION_BAND`] beyond it (they may slide along each other but not come closer),
+    /// empty rows for the rest. Pairs far apart cost the distance of two bounding spheres.
+    Collision {
+        /// The body's capsules.
+        capsules: Arc<[Capsule]>,
+        /// Indices into `capsules` of the pairs tested ([`collision_pairs`]).
+        pairs: Arc<[(usize, usize)]>,
+        /// Distance kept between surfaces (m), >= 0.
+        margin: f64,
+        /// Indices into `capsules` of those kept above the floor `y = 0` ([`floor_capsules`]).
+        floor: Arc<[usize]>,
+        /// Constraints held at once (>= 1).
+        rows: usize,
+    },
     /// Attraction of the chosen DOF toward a reference posture (Jacobian = identity rows).
     PostureAttraction {
         /// Reference value for every DOF of the skeleton.
@@ -283,6 +303,7 @@ impl Task {
             TaskKind::Orientation { .. } => 3,
             TaskKind::Gaze { .. } | TaskKind::Direction { .. } => 2,
             TaskKind::Balance { .. } | TaskKind::Comfort { .. } => 1,
+            TaskKind::Collision { rows, .. } => *rows,
             TaskKind::PostureAttraction { dofs, .. } => dofs.len(),
         }
     }
@@ -396,6 +417,37 @@ impl Task {
             TaskKind::Comfort { model } => {
                 model.validate(skeleton).map_err(bad)?;
             }
+            TaskKind::Collision {
+                capsules,
+                pairs,
+                margin,
+                floor,
+                rows,
+            } => {
+                for (i, c) in capsules.iter().enumerate() {
+                    joint_ok(c.joint)?;
+                    finite(c.start, "capsule start")?;
+                    finite(c.end, "capsule end")?;
+                    if !(c.radius.is_finite() && c.radius > 0.0) {
+                        return Err(bad(format!("capsule {i}: radius must be finite and > 0")));
+                    }
+                }
+                if let Some(&(a, b)) = pairs
+                    .iter()
+                    .find(|&&(a, b)| a == b || a >= capsules.len() || b >= capsules.len())
+                {
+                    return Err(bad(format!("pair ({a}, {b}) is not two of the capsules")));
+                }
+                if let Some(i) = floor.iter().find(|&&i| i >= capsules.len()) {
+                    return Err(bad(format!("floor capsule {i} is not one of the capsules")));
+                }
+                if !(margin.is_finite() && *margin >= 0.0) {
+                    return Err(bad("margin must be finite and >= 0".into()));
+                }
+                if *rows == 0 {
+                    return Err(bad("a collision task needs at least one row".into()));
+                }
+            }
             TaskKind::PostureAttraction { reference, dofs } => {
                 if reference.len() != skeleton.dof_count() {
                     return Err(bad(format!(
@@ -428,6 +480,15 @@ impl Task {
                 .collect(),
             TaskKind::CenterOfMass { .. } | TaskKind::Balance { .. } => {
                 (0..skeleton.dof_count()).collect()
+            }
+            TaskKind::Collision { capsules, .. } => {
+                let mut d: Vec<usize> = capsules
+                    .iter()
+                    .flat_map(|c| skeleton.chain_dofs(c.joint))
+                    .collect();
+                d.sort_unstable();
+                d.dedup();
+                d
             }
             TaskKind::Comfort { .. } => (0..skeleton.dof_count())
                 .filter(|&d| skeleton.dof_kinds()[d].is_rotation())
@@ -535,6 +596,21 @@ impl Task {
             }
             TaskKind::Comfort { model } => {
                 TaskFeature::Vector(vec![model.terms(skeleton, frames, values).total])
+            }
+            TaskKind::Collision {
+                capsules,
+                pairs,
+                margin,
+                floor,
+                rows,
+            } => {
+                // The distances of the rows held; constant where a row is empty.
+                let found = collision::constraints(frames, capsules, pairs, *margin, floor, *rows);
+                TaskFeature::Vector(
+                    (0..*rows)
+                        .map(|i| found.get(i).map_or(margin + COLLISION_BAND, |c| c.distance))
+                        .collect(),
+                )
             }
             TaskKind::PostureAttraction { dofs, .. } => TaskFeature::Vector(
                 dofs.iter()
@@ -654,6 +730,20 @@ impl Task {
                 err[0] = comfort_step(&gradient, limits);
                 cost
             }
+            TaskKind::Collision {
+                capsules,
+                pairs,
+                margin,
+                floor,
+                rows,
+            } => {
+                let found = collision::constraints(frames, capsules, pairs, *margin, floor, *rows);
+                err.iter_mut().for_each(|e| *e = 0.0);
+                for (e, c) in err.iter_mut().zip(&found) {
+                    *e = (margin - c.distance).max(0.0);
+                }
+                clamp_vec(err, limits.map(|l| l.linear))
+            }
             TaskKind::PostureAttraction { reference, dofs } => {
                 for (e, &d) in err.iter_mut().zip(dofs) {
                     let v = values.get(d).copied().unwrap_or(0.0);
@@ -723,6 +813,20 @@ impl Task {
                     let moved = point_column(skeleton, frames, d, a.joint, pa) * (1.0 - g.t)
                         + point_column(skeleton, frames, d, b.joint, pb) * g.t;
                     jac_t[d] = g.normal.dot(com_column(skeleton, frames, d, total) - moved);
+                }
+            }
+            TaskKind::Collision {
+                capsules,
+                pairs,
+                margin,
+                floor,
+                rows,
+            } => {
+                let found = collision::constraints(frames, capsules, pairs, *margin, floor, *rows);
+                for (row, c) in found.iter().enumerate() {
+                    for &d in support {
+                        jac_t[row * n + d] = c.column(skeleton, frames, d);
+                    }
                 }
             }
             TaskKind::Orientation { .. } => {
