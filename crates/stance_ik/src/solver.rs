@@ -544,24 +544,24 @@ impl Solver {
                 let jt = &mut sys.jacobian_t.as_mut_slice()[row * n..(row + rows) * n];
                 let support = &self.supports[ti];
                 // A comfort level waiting for the levels above it (see below) only weighs its
-                // cost: no gradient, an empty row the kernel skips.
+                // cost: no gradient, an empty row the kernel skips. Comfort and collision find
+                // their rows and errors at once.
                 let waiting = layout.comfort && !above_met;
-                let comfort = if waiting {
+                let at_once = if waiting {
                     err.fill(0.0);
                     task.comfort_cost(skeleton, &self.frames, values)
                 } else {
-                    task.comfort_system(
+                    task.system_at_once(
                         skeleton,
                         &self.frames,
                         values,
                         support,
-                        err,
-                        jt,
+                        (err, jt, n),
                         Some(limits),
                     )
                 };
-                let r = match comfort {
-                    Some(cost) => cost,
+                let r = match at_once {
+                    Some(r) => r,
                     None => {
                         let r = task.error(skeleton, &self.frames, values, err, Some(limits));
                         task.jacobian_t(skeleton, &self.frames, values, support, jt, n);

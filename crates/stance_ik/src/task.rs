@@ -738,10 +738,7 @@ impl Task {
                 rows,
             } => {
                 let found = collision::constraints(frames, capsules, pairs, *margin, floor, *rows);
-                err.iter_mut().for_each(|e| *e = 0.0);
-                for (e, c) in err.iter_mut().zip(&found) {
-                    *e = (margin - c.distance).max(0.0);
-                }
+                collision::errors(&found, *margin, err);
                 clamp_vec(err, limits.map(|l| l.linear))
             }
             TaskKind::PostureAttraction { reference, dofs } => {
@@ -823,11 +820,7 @@ impl Task {
                 rows,
             } => {
                 let found = collision::constraints(frames, capsules, pairs, *margin, floor, *rows);
-                for (row, c) in found.iter().enumerate() {
-                    for &d in support {
-                        jac_t[row * n + d] = c.column(skeleton, frames, d);
-                    }
-                }
+                collision::write_rows(skeleton, frames, &found, jac_t, n);
             }
             TaskKind::Orientation { .. } => {
                 for &d in support {
@@ -903,26 +896,46 @@ impl Task {
         Some(model.terms(skeleton, frames, values).total)
     }
 
-    /// A comfort task's row and error at once (one gradient): `err[0]` and `jac_t` as
-    /// [`Task::error`] and [`Task::jacobian_t`] write them; returns the cost. `None` for
-    /// other kinds.
-    pub(crate) fn comfort_system(
+    /// The rows and errors at once for the kinds that find both together, as
+    /// [`Task::error`] and [`Task::jacobian_t`] write them (`jac_t` zero on entry, `n` DOF):
+    /// comfort (one gradient; returns the cost) and collision (one search for its
+    /// constraints; returns the error's norm). `None` for other kinds.
+    pub(crate) fn system_at_once(
         &self,
         skeleton: &Skeleton,
         frames: &Frames,
         values: &[f64],
         support: &[usize],
-        err: &mut [f64],
-        jac_t: &mut [f64],
+        (err, jac_t, n): (&mut [f64], &mut [f64], usize),
         limits: Option<StepLimits>,
     ) -> Option<f64> {
-        let TaskKind::Comfort { model } = &self.kind else {
-            return None;
-        };
-        let (cost, gradient) = comfort_gradient(model, skeleton, frames, values);
-        err[0] = comfort_step(&gradient, limits);
-        unit_gradient_row(&gradient, support, jac_t);
-        Some(cost)
+        match &self.kind {
+            TaskKind::Comfort { model } => {
+                let (cost, gradient) = comfort_gradient(model, skeleton, frames, values);
+                err[0] = comfort_step(&gradient, limits);
+                unit_gradient_row(&gradient, support, jac_t);
+                Some(cost)
+            }
+            TaskKind::Collision {
+                capsules,
+                pairs,
+                margin,
+                floor,
+                rows,
+            } => {
+                let found = collision::constraints(frames, capsules, pairs, *margin, floor, *rows);
+                let norm = collision::errors(&found, *margin, err);
+                if let Some(l) = limits
+                    && norm > l.linear
+                {
+                    let s = l.linear / norm;
+                    err.iter_mut().for_each(|v| *v *= s);
+                }
+                collision::write_rows(skeleton, frames, &found, jac_t, n);
+                Some(norm)
+            }
+            _ => None,
+        }
     }
 }
 

@@ -169,14 +169,39 @@ pub(super) struct Constraint {
     normal: DVec3,
 }
 
-impl Constraint {
-    /// The distance's change for a unit velocity of DOF `d`.
-    pub fn column(&self, skeleton: &Skeleton, frames: &Frames, d: usize) -> f64 {
-        let moved = point_column(skeleton, frames, d, self.a.0, self.a.1)
-            - self.b.map_or(DVec3::ZERO, |(j, p)| {
-                point_column(skeleton, frames, d, j, p)
-            });
-        self.normal.dot(moved)
+/// The task's errors at `found` (`margin` less each distance where it is under it, 0 for the
+/// rows held in the band and the empty ones); returns their norm.
+pub(super) fn errors(found: &[Constraint], margin: f64, err: &mut [f64]) -> f64 {
+    err.fill(0.0);
+    for (e, c) in err.iter_mut().zip(found) {
+        *e = (margin - c.distance).max(0.0);
+    }
+    err.iter().map(|e| e * e).sum::<f64>().sqrt()
+}
+
+/// The task's rows at `found` into `jac_t` (`n x rows`, column-major, zero on entry): each
+/// the distance's change for unit velocities of the DOF of the two points' chains.
+pub(super) fn write_rows(
+    skeleton: &Skeleton,
+    frames: &Frames,
+    found: &[Constraint],
+    jac_t: &mut [f64],
+    n: usize,
+) {
+    for (row, c) in found.iter().enumerate() {
+        let Some(column) = jac_t.get_mut(row * n..(row + 1) * n) else {
+            return;
+        };
+        let ends = [(c.a.0, c.a.1, 1.0)]
+            .into_iter()
+            .chain(c.b.map(|(j, p)| (j, p, -1.0)));
+        for (joint, point, sign) in ends {
+            for d in skeleton.chain_dofs(joint) {
+                column[d] += sign
+                    * c.normal
+                        .dot(point_column(skeleton, frames, d, joint, point));
+            }
+        }
     }
 }
 
@@ -192,12 +217,12 @@ pub(super) fn constraints(
     rows: usize,
 ) -> Vec<Constraint> {
     let reach = margin + COLLISION_BAND;
+    // Each capsule's ends in the world and its bounding sphere, once.
+    let ends: Vec<(DVec3, DVec3)> = capsules.iter().map(|c| c.world(frames)).collect();
     let spheres: Vec<(DVec3, f64)> = capsules
         .iter()
-        .map(|c| {
-            let (a, b) = c.world(frames);
-            ((a + b) * 0.5, (b - a).length() * 0.5 + c.radius)
-        })
+        .zip(&ends)
+        .map(|(c, &(a, b))| ((a + b) * 0.5, (b - a).length() * 0.5 + c.radius))
         .collect();
     let mut found = Vec::new();
     for &(i, j) in pairs {
@@ -205,10 +230,13 @@ pub(super) fn constraints(
             continue;
         };
         let ((ca, ra), (cb, rb)) = (spheres[i], spheres[j]);
-        if (ca - cb).length() - ra - rb > reach {
+        let apart = ra + rb + reach;
+        if (ca - cb).length_squared() > apart * apart {
             continue;
         }
-        let (distance, pa, pb) = surface_distance(a, b, frames);
+        let ((a0, a1), (b0, b1)) = (ends[i], ends[j]);
+        let (pa, pb) = closest_points(a0, a1, b0, b1);
+        let distance = (pa - pb).length() - a.radius - b.radius;
         let gap = pa - pb;
         if distance < reach && gap.length() > 1e-9 {
             found.push(Constraint {
@@ -219,9 +247,11 @@ pub(super) fn constraints(
             });
         }
     }
-    for c in floor.iter().filter_map(|&i| capsules.get(i)) {
+    for (c, &(p0, p1)) in floor
+        .iter()
+        .filter_map(|&i| Some((capsules.get(i)?, ends.get(i)?)))
+    {
         {
-            let (p0, p1) = c.world(frames);
             let low = if p0.y <= p1.y { p0 } else { p1 };
             let distance = low.y - c.radius;
             if distance < reach {
