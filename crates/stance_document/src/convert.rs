@@ -160,7 +160,7 @@ impl TaskSpec {
             },
             TaskKind::Comfort { .. }
             | TaskKind::PostureAttraction { .. }
-            | TaskKind::Collision { .. } => return None,
+            | TaskKind::Collision(_) => return None,
         };
         Some(Self {
             level: task.level,

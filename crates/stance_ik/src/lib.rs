@@ -53,6 +53,6 @@ pub use solver::{
     SolverSettings, TEXTBOOK_ANGULAR_STEP, TEXTBOOK_LINEAR_STEP,
 };
 pub use task::{
-    Axes, BALANCE_BAND, COLLISION_BAND, Capsule, Effector, Task, TaskFeature, TaskKind,
+    Axes, BALANCE_BAND, COLLISION_BAND, Capsule, Collision, Effector, Task, TaskFeature, TaskKind,
     closest_points, collision_pairs, floor_capsules,
 };

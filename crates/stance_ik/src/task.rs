@@ -11,7 +11,9 @@ use glam::{DQuat, DVec3};
 
 pub use balance::BALANCE_BAND;
 use balance::{BalanceGeometry, convex_hull, floor_points};
-pub use collision::{COLLISION_BAND, Capsule, closest_points, collision_pairs, floor_capsules};
+pub use collision::{
+    COLLISION_BAND, Capsule, Collision, closest_points, collision_pairs, floor_capsules,
+};
 use gaze::{GazeGeometry, direction_error};
 
 use std::sync::Arc;
@@ -158,24 +160,13 @@ pub enum TaskKind {
         /// The cost.
         model: Arc<ComfortModel>,
     },
-    /// Collision avoidance as an inequality: the surfaces of the `pairs` of `capsules` (and
-    /// the `floor` capsules and the floor `y = 0`) keep at least `margin` apart. `rows`
+    /// Collision avoidance as an inequality ([`Collision`]): the surfaces of pairs of capsules
+    /// (and some capsules and the floor `y = 0`) keep at least a margin apart. `rows`
     /// rows, one per constraint along its line of closest approach, the nearest first: an
     /// error where two surfaces are closer than the margin, a zero error within
     /// [`COLLISION_BAND`] beyond it (they may slide along each other but not come closer),
     /// empty rows for the rest. Pairs far apart cost the distance of two bounding spheres.
-    Collision {
-        /// The body's capsules.
-        capsules: Arc<[Capsule]>,
-        /// Indices into `capsules` of the pairs tested ([`collision_pairs`]).
-        pairs: Arc<[(usize, usize)]>,
-        /// Distance kept between surfaces (m), >= 0.
-        margin: f64,
-        /// Indices into `capsules` of those kept above the floor `y = 0` ([`floor_capsules`]).
-        floor: Arc<[usize]>,
-        /// Constraints held at once (>= 1).
-        rows: usize,
-    },
+    Collision(Collision),
     /// Attraction of the chosen DOF toward a reference posture (Jacobian = identity rows).
     PostureAttraction {
         /// Reference value for every DOF of the skeleton.
@@ -303,7 +294,7 @@ impl Task {
             TaskKind::Orientation { .. } => 3,
             TaskKind::Gaze { .. } | TaskKind::Direction { .. } => 2,
             TaskKind::Balance { .. } | TaskKind::Comfort { .. } => 1,
-            TaskKind::Collision { rows, .. } => *rows,
+            TaskKind::Collision(c) => c.rows,
             TaskKind::PostureAttraction { dofs, .. } => dofs.len(),
         }
     }
@@ -417,37 +408,7 @@ impl Task {
             TaskKind::Comfort { model } => {
                 model.validate(skeleton).map_err(bad)?;
             }
-            TaskKind::Collision {
-                capsules,
-                pairs,
-                margin,
-                floor,
-                rows,
-            } => {
-                for (i, c) in capsules.iter().enumerate() {
-                    joint_ok(c.joint)?;
-                    finite(c.start, "capsule start")?;
-                    finite(c.end, "capsule end")?;
-                    if !(c.radius.is_finite() && c.radius > 0.0) {
-                        return Err(bad(format!("capsule {i}: radius must be finite and > 0")));
-                    }
-                }
-                if let Some(&(a, b)) = pairs
-                    .iter()
-                    .find(|&&(a, b)| a == b || a >= capsules.len() || b >= capsules.len())
-                {
-                    return Err(bad(format!("pair ({a}, {b}) is not two of the capsules")));
-                }
-                if let Some(i) = floor.iter().find(|&&i| i >= capsules.len()) {
-                    return Err(bad(format!("floor capsule {i} is not one of the capsules")));
-                }
-                if !(margin.is_finite() && *margin >= 0.0) {
-                    return Err(bad("margin must be finite and >= 0".into()));
-                }
-                if *rows == 0 {
-                    return Err(bad("a collision task needs at least one row".into()));
-                }
-            }
+            TaskKind::Collision(c) => c.validate(skeleton).map_err(bad)?,
             TaskKind::PostureAttraction { reference, dofs } => {
                 if reference.len() != skeleton.dof_count() {
                     return Err(bad(format!(
@@ -481,10 +442,11 @@ impl Task {
             TaskKind::CenterOfMass { .. } | TaskKind::Balance { .. } => {
                 (0..skeleton.dof_count()).collect()
             }
-            TaskKind::Collision { capsules, .. } => {
-                let mut d: Vec<usize> = capsules
+            TaskKind::Collision(c) => {
+                let mut d: Vec<usize> = c
+                    .capsules
                     .iter()
-                    .flat_map(|c| skeleton.chain_dofs(c.joint))
+                    .flat_map(|capsule| skeleton.chain_dofs(capsule.joint))
                     .collect();
                 d.sort_unstable();
                 d.dedup();
@@ -597,18 +559,16 @@ impl Task {
             TaskKind::Comfort { model } => {
                 TaskFeature::Vector(vec![model.terms(skeleton, frames, values).total])
             }
-            TaskKind::Collision {
-                capsules,
-                pairs,
-                margin,
-                floor,
-                rows,
-            } => {
+            TaskKind::Collision(c) => {
                 // The distances of the rows held; constant where a row is empty.
-                let found = collision::constraints(frames, capsules, pairs, *margin, floor, *rows);
+                let found = c.constraints(frames);
                 TaskFeature::Vector(
-                    (0..*rows)
-                        .map(|i| found.get(i).map_or(margin + COLLISION_BAND, |c| c.distance))
+                    (0..c.rows)
+                        .map(|i| {
+                            found
+                                .get(i)
+                                .map_or(c.margin + COLLISION_BAND, |f| f.distance)
+                        })
                         .collect(),
                 )
             }
@@ -730,15 +690,9 @@ impl Task {
                 err[0] = comfort_step(&gradient, limits);
                 cost
             }
-            TaskKind::Collision {
-                capsules,
-                pairs,
-                margin,
-                floor,
-                rows,
-            } => {
-                let found = collision::constraints(frames, capsules, pairs, *margin, floor, *rows);
-                collision::errors(&found, *margin, err);
+            TaskKind::Collision(c) => {
+                let found = c.constraints(frames);
+                collision::errors(&found, c.margin, err);
                 clamp_vec(err, limits.map(|l| l.linear))
             }
             TaskKind::PostureAttraction { reference, dofs } => {
@@ -812,14 +766,8 @@ impl Task {
                     jac_t[d] = g.normal.dot(com_column(skeleton, frames, d, total) - moved);
                 }
             }
-            TaskKind::Collision {
-                capsules,
-                pairs,
-                margin,
-                floor,
-                rows,
-            } => {
-                let found = collision::constraints(frames, capsules, pairs, *margin, floor, *rows);
+            TaskKind::Collision(c) => {
+                let found = c.constraints(frames);
                 collision::write_rows(skeleton, frames, &found, jac_t, n);
             }
             TaskKind::Orientation { .. } => {
@@ -916,15 +864,9 @@ impl Task {
                 unit_gradient_row(&gradient, support, jac_t);
                 Some(cost)
             }
-            TaskKind::Collision {
-                capsules,
-                pairs,
-                margin,
-                floor,
-                rows,
-            } => {
-                let found = collision::constraints(frames, capsules, pairs, *margin, floor, *rows);
-                let norm = collision::errors(&found, *margin, err);
+            TaskKind::Collision(c) => {
+                let found = c.constraints(frames);
+                let norm = collision::errors(&found, c.margin, err);
                 if let Some(l) = limits
                     && norm > l.linear
                 {

@@ -11,8 +11,8 @@ use glam::DVec3;
 use stance_hanim::capsules::body_capsules;
 use stance_hanim::{LevelOfArticulation, SkeletonOptions, default_skeleton};
 use stance_ik::{
-    Capsule, Frames, Posture, Skeleton, Solver, SolverSettings, Task, TaskKind, closest_points,
-    collision_pairs, floor_capsules,
+    Capsule, Collision, Frames, Posture, Skeleton, Solver, SolverSettings, Task, TaskKind,
+    closest_points, collision_pairs, floor_capsules,
 };
 
 use crate::common::{finite_difference_jacobian, random_posture, rng};
@@ -35,13 +35,13 @@ fn collision(skeleton: &Skeleton, margin: f64) -> (Task, Vec<Capsule>, Vec<(usiz
         &rest,
         margin + stance_ik::COLLISION_BAND,
     );
-    let task = Task::new(TaskKind::Collision {
+    let task = Task::new(TaskKind::Collision(Collision {
         capsules: Arc::from(capsules.clone()),
         pairs: Arc::from(pairs.clone()),
         margin,
         floor: Arc::from(floor_capsules(&capsules, &rest)),
         rows: 8,
-    });
+    }));
     (task, capsules, pairs)
 }
 

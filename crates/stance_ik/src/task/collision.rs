@@ -6,6 +6,8 @@
 //! fixed number of rows: the nearest constraints fill them, nearest first; the rest are empty
 //! (zero rows).
 
+use std::sync::Arc;
+
 use glam::DVec3;
 
 use super::point_column;
@@ -14,6 +16,74 @@ use crate::{Frames, Skeleton};
 /// How far past the margin a constraint still holds (with a zero error): the lower levels may
 /// not pull the surfaces back together (m).
 pub const COLLISION_BAND: f64 = 0.002;
+
+/// A collision task's data: the surfaces of the `pairs` of `capsules` (and of the `floor`
+/// capsules and the floor `y = 0`) keep at least `margin` apart, `rows` constraints at once.
+/// One row per constraint along its line of closest approach, the nearest first: an error
+/// where two surfaces are closer than the margin, a zero error within [`COLLISION_BAND`]
+/// beyond it (they may slide along each other but not come closer), empty rows for the rest.
+/// Pairs far apart cost the distance of two bounding spheres.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Collision {
+    /// The body's capsules.
+    pub capsules: Arc<[Capsule]>,
+    /// Indices into `capsules` of the pairs tested ([`collision_pairs`]).
+    pub pairs: Arc<[(usize, usize)]>,
+    /// Indices into `capsules` of those kept above the floor ([`floor_capsules`]).
+    pub floor: Arc<[usize]>,
+    /// Distance kept between surfaces (m), >= 0.
+    pub margin: f64,
+    /// Constraints held at once (>= 1).
+    pub rows: usize,
+}
+
+impl Collision {
+    /// Checks the data against a skeleton; the reason names the offending part.
+    pub fn validate(&self, skeleton: &Skeleton) -> Result<(), String> {
+        for (i, c) in self.capsules.iter().enumerate() {
+            if c.joint >= skeleton.joint_count() {
+                return Err(format!("capsule {i}: joint index {} out of range", c.joint));
+            }
+            if !(c.start.is_finite() && c.end.is_finite()) {
+                return Err(format!("capsule {i}: its ends are not finite"));
+            }
+            if !(c.radius.is_finite() && c.radius > 0.0) {
+                return Err(format!("capsule {i}: radius must be finite and > 0"));
+            }
+        }
+        let n = self.capsules.len();
+        if let Some(&(a, b)) = self
+            .pairs
+            .iter()
+            .find(|&&(a, b)| a == b || a >= n || b >= n)
+        {
+            return Err(format!("pair ({a}, {b}) is not two of the capsules"));
+        }
+        if let Some(i) = self.floor.iter().find(|&&i| i >= n) {
+            return Err(format!("floor capsule {i} is not one of the capsules"));
+        }
+        if !(self.margin.is_finite() && self.margin >= 0.0) {
+            return Err("margin must be finite and >= 0".into());
+        }
+        if self.rows == 0 {
+            return Err("a collision task needs at least one row".into());
+        }
+        Ok(())
+    }
+
+    /// The constraints at `frames`: every pair and every floor capsule within the margin plus
+    /// the band, nearest first, at most `rows`.
+    pub(super) fn constraints(&self, frames: &Frames) -> Vec<Constraint> {
+        constraints(
+            frames,
+            &self.capsules,
+            &self.pairs,
+            self.margin,
+            &self.floor,
+            self.rows,
+        )
+    }
+}
 
 /// A capsule of the body: a segment fixed in a joint's frame, swept by a sphere.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -208,7 +278,7 @@ pub(super) fn write_rows(
 /// The task's constraints at `frames`: every pair and every capsule of `floor` within
 /// `margin` plus the band, nearest first, at most `rows`. Pairs whose capsules' bounding
 /// spheres are further apart cost a distance of centres only.
-pub(super) fn constraints(
+fn constraints(
     frames: &Frames,
     capsules: &[Capsule],
     pairs: &[(usize, usize)],
