@@ -12,7 +12,7 @@
 # package's version is the workspace's. Quick when nothing changed: wasm-bindgen and
 # wasm-opt run only when cargo's wasm is newer than the package's. `npm pack` in
 # packages/stance-ik runs this first (its prepack).
-set -euo pipefail
+set -Eeuo pipefail
 cd "$(dirname "$0")/.."
 # What ships is compiled by plain rustc (see scripts/clippy-env.sh).
 unset RUSTC_WORKSPACE_WRAPPER CLIPPY_ARGS

@@ -48,7 +48,7 @@ pub fn solve_json(problem: &str) -> JsResult<String> {
 }
 
 /// A level of articulation in a recipe (0 to 255; the body builder checks its range).
-fn small_number(what: &str, value: &Value) -> JsResult<u8> {
+fn recipe_loa(what: &str, value: &Value) -> JsResult<u8> {
     value
         .as_u64()
         .and_then(|n| u8::try_from(n).ok())
@@ -182,7 +182,7 @@ impl Body {
         let recipe = json(recipe)?;
         let field = |key: &str| recipe.get(key).cloned();
         if let Some(loa) = field("hanim") {
-            return Self::hanim(small_number("recipe.hanim", &loa)?);
+            return Self::hanim(recipe_loa("recipe.hanim", &loa)?);
         }
         if let Some(joints) = field("joints") {
             return Self::from_joints_value(joints);
@@ -211,7 +211,7 @@ impl Body {
             .map(Value::as_f64)
             .collect::<Option<Vec<_>>>()
             .ok_or("recipe.skin.rest: not all numbers")?;
-        let loa = small_number("recipe.skin.loa", skin.get("loa").unwrap_or(&Value::Null))?;
+        let loa = recipe_loa("recipe.skin.loa", skin.get("loa").unwrap_or(&Value::Null))?;
         Self::from_skin(&names, &parents, &rest, loa)
     }
 
