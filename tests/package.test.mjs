@@ -220,7 +220,7 @@ describe("stance-ik", () => {
     // 2026-11: 328 KiB gzipped, 356 KiB once retargeting held heel, ball, hands, knees and
     // pelvis, 348 KiB with the package crates in one codegen unit. Retargeting moved to a
     // module of its own, loaded by the first `retarget` call: the solver's is what an import
-    // downloads (274 KiB in CI, Node's gzip -9), retargeting's (269 KiB: it has its own solver) only
+    // downloads (274 KiB in CI, 280 with the collision task), retargeting's (269 KiB, 274: it has its own solver) only
     // what a page that retargets adds. stance_hanim at "z" would save 14 KiB, but Table 1
     // solves 1.5x slower.
     const customSections = (bytes) => {
@@ -243,7 +243,7 @@ describe("stance-ik", () => {
       }
       return names;
     };
-    for (const [name, limit] of [["stance_ik", 300], ["stance_ik_motion", 280]]) {
+    for (const [name, limit] of [["stance_ik", 300], ["stance_ik_motion", 290]]) {
       const wasm = readFileSync(join(packageDir, "pkg", `${name}_bg.wasm`));
       const gzipped = gzipSync(wasm, { level: 9 }).length;
       console.log(`[package] ${name} wasm ${(wasm.length / 1024).toFixed(0)} KiB, ${(gzipped / 1024).toFixed(0)} KiB gzipped`);
