@@ -326,3 +326,166 @@ fn bad_documents_sizes_and_outputs_fail_with_a_reason_and_write_nothing() {
         assert!(!std::path::Path::new(&missing_dir).exists());
     }
 }
+
+/// Runs `stance render DOC --map openpose` with `args`: the decoded skeleton image and the
+/// keypoints' JSON.
+fn openpose(document: &str, name: &str, args: &[&str]) -> (Image, serde_json::Value) {
+    let keypoints = temp(&format!("{name}.json"));
+    let keypoints_text = keypoints.to_string_lossy().into_owned();
+    let mut all = vec!["--map", "openpose", "--keypoints-out", &keypoints_text];
+    all.extend_from_slice(args);
+    let image = render(document, &format!("{name}.png"), &all);
+    let json = serde_json::from_str(&std::fs::read_to_string(&keypoints).unwrap()).unwrap();
+    (image, json)
+}
+
+fn numbers(value: &serde_json::Value) -> Vec<f64> {
+    value
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| n.as_f64().unwrap())
+        .collect()
+}
+
+#[test]
+fn the_openpose_keypoints_land_where_the_camera_projects_the_joints() {
+    // By hand: the saved camera at (0, 1, 4.5) looks down -Z at (0, 1, 0) with a 40 degree
+    // vertical field of view; H-Anim's default l_shoulder is at (0.2029, 1.4376, -0.0387),
+    // l_elbow at (0.2014, 1.1357, -0.0682). A point at depth d = 4.5 - z lands at
+    // x = W/2 (1 + X / (d tan 20 deg aspect)), y = H/2 (1 - (Y - 1) / (d tan 20 deg)).
+    // Catches: a flipped axis or side (the body's left is on the image's right seen from the
+    // front), keypoints from the wrong joints, the size or aspect ignored.
+    let doc = write(
+        "openpose-doc.json",
+        r#"{"version": 1, "camera": {"target": [0, 1.0, 0], "yaw": 0, "pitch": 0, "distance": 4.5}}"#,
+    );
+    let (width, height) = (600.0, 400.0);
+    let (image, json) = openpose(&doc, "openpose", &["--size", "600x400"]);
+    assert_eq!((image.width, image.height), (600, 400));
+    assert_eq!(
+        (
+            json["canvas_width"].as_u64(),
+            json["canvas_height"].as_u64()
+        ),
+        (Some(600), Some(400))
+    );
+    let people = json["people"].as_array().unwrap();
+    assert_eq!(people.len(), 1);
+    let body = numbers(&people[0]["pose_keypoints_2d"]);
+    assert_eq!(body.len(), 18 * 3);
+    assert_eq!(numbers(&people[0]["hand_left_keypoints_2d"]).len(), 21 * 3);
+    assert_eq!(numbers(&people[0]["hand_right_keypoints_2d"]).len(), 21 * 3);
+    assert!(
+        people[0]["face_keypoints_2d"]
+            .as_array()
+            .unwrap()
+            .is_empty()
+    );
+    let tan = 20f64.to_radians().tan();
+    let project = |[x, y, z]: [f64; 3]| {
+        let depth = 4.5 - z;
+        (
+            width / 2.0 * (1.0 + x / (depth * tan * width / height)),
+            height / 2.0 * (1.0 - (y - 1.0) / (depth * tan)),
+        )
+    };
+    // COCO-18: 5 is the left shoulder, 6 the left elbow, 2 the right shoulder.
+    for (index, joint) in [
+        (5, [0.2029, 1.4376, -0.0387]),
+        (6, [0.2014, 1.1357, -0.0682]),
+    ] {
+        let expected = project(joint);
+        let (x, y, c) = (body[index * 3], body[index * 3 + 1], body[index * 3 + 2]);
+        assert_eq!(c, 1.0);
+        assert!(
+            (x - expected.0).abs() < 0.5 && (y - expected.1).abs() < 0.5,
+            "keypoint {index} at ({x}, {y}), projected at {expected:?}"
+        );
+    }
+    assert!(body[2 * 3] < width / 2.0 && body[5 * 3] > width / 2.0);
+    // The skeleton is drawn where the keypoints are: the left shoulder's point in its colour.
+    let at = |x: f64, y: f64| {
+        let offset = ((y as u32 * image.width + x as u32) * 4) as usize;
+        image.rgba[offset..offset + 3].to_vec()
+    };
+    assert_eq!(at(body[15], body[16]), vec![85, 255, 0]);
+    // Normalised: the same points as fractions of the size.
+    let (_, normalized) = openpose(&doc, "openpose-n", &["--size", "600x400", "--normalized"]);
+    let fractions = numbers(&normalized["people"][0]["pose_keypoints_2d"]);
+    assert!((fractions[15] * width - body[15]).abs() < 0.01);
+    assert!((fractions[16] * height - body[16]).abs() < 0.01);
+}
+
+#[test]
+fn hidden_keypoints_go_missing_on_request_and_a_body_without_fingers_has_no_hands() {
+    // Catches: --hidden ignored; hand points made up for a body without finger joints.
+    let doc = write("openpose-side.json", DEFAULT_DOCUMENT);
+    let side = ["--view", "left", "--size", "400x400"];
+    let (_, kept) = openpose(&doc, "side-kept", &side);
+    let missing_args = [&side[..], &["--hidden", "missing"]].concat();
+    let (_, missing) = openpose(&doc, "side-missing", &missing_args);
+    let body = |json: &serde_json::Value| numbers(&json["people"][0]["pose_keypoints_2d"]);
+    let seen = |values: &[f64]| values.chunks(3).filter(|p| p[2] > 0.0).count();
+    assert_eq!(seen(&body(&kept)), 18);
+    // Seen from the left: the right shoulder, hip, eye and ear are behind the body, and left
+    // out as 0, 0, 0; the neck and the left side stay.
+    let hidden = body(&missing);
+    for index in [2, 8, 14, 16] {
+        assert_eq!(
+            &hidden[index * 3..index * 3 + 3],
+            &[0.0, 0.0, 0.0],
+            "keypoint {index}"
+        );
+    }
+    for index in [1, 5, 11, 15, 17] {
+        assert_eq!(hidden[index * 3 + 2], 1.0, "keypoint {index}");
+    }
+    let (_, loa1) = openpose(&doc, "loa1", &["--size", "300x300", "--loa", "1"]);
+    for hand in ["hand_left_keypoints_2d", "hand_right_keypoints_2d"] {
+        assert!(
+            numbers(&loa1["people"][0][hand]).iter().all(|v| *v == 0.0),
+            "{hand}"
+        );
+    }
+}
+
+#[test]
+fn control_map_options_out_of_place_fail_with_a_reason_and_write_nothing() {
+    let good = write("map-good.json", DEFAULT_DOCUMENT);
+    let keypoints = temp("map-k.json").to_string_lossy().into_owned();
+    let cases: [(&[&str], &str); 5] = [
+        (
+            &["--keypoints-out", &keypoints],
+            "--keypoints-out goes with --map openpose",
+        ),
+        (
+            &["--hidden", "missing"],
+            "--hidden goes with --map openpose",
+        ),
+        (
+            &["--map", "openpose", "--transparent"],
+            "--transparent does not go with --map",
+        ),
+        (&["--map", "lines"], "invalid value 'lines'"),
+        (
+            &["--map", "openpose", "--keypoints-out", &good],
+            "the document itself",
+        ),
+    ];
+    for (index, (extra, expected)) in cases.iter().enumerate() {
+        let out = temp(&format!("map-fail-{index}.png"));
+        let out_text = out.to_string_lossy().into_owned();
+        let mut args = vec!["render", &good, "--out", &out_text];
+        args.extend_from_slice(extra);
+        let (ok, err) = stance(&args);
+        assert!(!ok, "case {index} succeeded");
+        assert!(err.contains(expected), "case {index}: {err}");
+        assert!(
+            !out.exists() && !std::path::Path::new(&keypoints).exists(),
+            "case {index} wrote"
+        );
+    }
+    // The document is still there, unchanged (not overwritten by --keypoints-out).
+    assert_eq!(std::fs::read_to_string(&good).unwrap(), DEFAULT_DOCUMENT);
+}

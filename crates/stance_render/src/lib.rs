@@ -4,7 +4,9 @@
 //!
 //! Without its default feature `gpu` it is the renderer's plain data alone (capsules, the
 //! mannequin's bones, the orbit camera, avatars' skinned meshes and palettes, picking), with
-//! no wgpu: what the editor's model (`stance_model`) builds for the views to draw.
+//! no wgpu: what the editor's model (`stance_model`) builds for the views to draw. The
+//! OpenPose control map needs no GPU either: keypoints seen by the camera, their JSON and the
+//! skeleton image drawn on the CPU ([`OpenPose`]).
 
 #![warn(missing_docs)]
 
@@ -17,7 +19,10 @@ mod capture;
 mod headless;
 #[cfg(feature = "gpu")]
 mod image;
+mod openpose;
+mod openpose_draw;
 mod pick;
+mod raster;
 #[cfg(feature = "gpu")]
 mod renderer;
 mod skinned;
@@ -39,6 +44,11 @@ pub use headless::{HeadlessGpu, headless_gpu};
 #[cfg(feature = "gpu")]
 pub use image::{
     ImageError, ImageOptions, MAX_IMAGE_SIDE_PX, PendingImage, encode_png, render_image,
+};
+pub use openpose::{HiddenKeypoints, KeypointUnits, OpenPose, OpenPosePerson};
+pub use openpose_draw::{
+    BODY_COLORS, HAND_BONES, HAND_POINT_COLOR, LIMBS, POINT_RADIUS_PX, STICK_WIDTH_PX,
+    hand_bone_color,
 };
 pub use pick::{CapsuleHit, pick_capsule};
 #[cfg(feature = "gpu")]
