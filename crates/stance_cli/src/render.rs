@@ -2,9 +2,10 @@
 //! (the mannequin) or on an avatar (its skinned mesh), drawn natively with wgpu on any adapter
 //! (lavapipe will do) through the same image path as the editor's *File > Save image*.
 //!
-//! `--map openpose` writes a control map for image generation instead: the OpenPose skeleton
-//! seen by the same camera (drawn on the CPU), and with `--keypoints-out` its keypoints as
-//! OpenPose JSON (docs/control-maps.md).
+//! `--map openpose|depth|normal|mask` writes a control map for image generation instead, seen
+//! by the same camera: the OpenPose skeleton (drawn on the CPU; with `--keypoints-out` its
+//! keypoints as OpenPose JSON), or the figure's depth, normals or mask (rendered like the
+//! picture, unlit, on black). See docs/control-maps.md.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -18,7 +19,7 @@ use stance_hanim::{HumanoidSkeleton, LevelOfArticulation, SkeletonOptions, defau
 use stance_ik::{Frames, Posture};
 use stance_render::{
     Capsule, GOAL_COLOR_LINEAR, HiddenKeypoints, ImageOptions, KeypointUnits, OpenPose,
-    OpenPosePerson, OrbitCamera, Pixels, Scene, SceneRenderer, ViewPreset, avatar_model,
+    OpenPosePerson, OrbitCamera, Pixels, Scene, SceneRenderer, Shading, ViewPreset, avatar_model,
     encode_png, headless_gpu, posed_mannequin_bones, render_image,
 };
 
@@ -57,7 +58,9 @@ pub struct RenderArgs {
     #[arg(long)]
     pub capsules: bool,
     /// Write a control map for image generation instead of the picture: `openpose`, the
-    /// OpenPose skeleton (COCO-18 body and hands) as the ControlNet preprocessors draw it.
+    /// OpenPose skeleton (COCO-18 body and hands) as the ControlNet preprocessors draw it;
+    /// `depth` (near bright), `normal` (ControlNet's normal colours) or `mask` (white on
+    /// black), rendered like the picture.
     #[arg(long, value_enum)]
     pub map: Option<ControlMap>,
     /// With --map openpose: also write the keypoints as OpenPose JSON (pixels unless
@@ -78,12 +81,49 @@ pub struct RenderArgs {
 pub enum ControlMap {
     /// The OpenPose skeleton: body, hands (no face).
     Openpose,
+    /// Depth, near bright, over the figure's depth range.
+    Depth,
+    /// View-space normals, ControlNet's normal (BAE) colours.
+    Normal,
+    /// The figure white on black.
+    Mask,
 }
 
 impl ControlMap {
     fn name(self) -> &'static str {
         match self {
             ControlMap::Openpose => "openpose",
+            ControlMap::Depth => "depth",
+            ControlMap::Normal => "normal",
+            ControlMap::Mask => "mask",
+        }
+    }
+}
+
+/// How far beyond the figure's farthest point its depth map reaches black, as a fraction of
+/// its depth range: the farthest point stays a dark grey, apart from the black background.
+const DEPTH_MARGIN: f32 = 0.2;
+
+/// The shading of `map`: a depth map spans the figure's depth seen by `camera` (its capsules
+/// widened by their radii), white at its nearest point.
+fn shading(map: Option<ControlMap>, camera: &OrbitCamera, capsules: &[Capsule]) -> Shading {
+    match map {
+        None | Some(ControlMap::Openpose) => Shading::Shaded,
+        Some(ControlMap::Normal) => Shading::Normal,
+        Some(ControlMap::Mask) => Shading::Mask,
+        Some(ControlMap::Depth) => {
+            let view_from_world = camera.view_from_world();
+            let (near_m, far_m) = extent_points(capsules)
+                .iter()
+                .map(|point| -view_from_world.transform_point3(*point).z)
+                .fold((f32::INFINITY, f32::NEG_INFINITY), |(near, far), depth| {
+                    (near.min(depth), far.max(depth))
+                });
+            let range = (far_m - near_m).max(0.01);
+            Shading::Depth {
+                near_m,
+                far_m: near_m + range * (1.0 + DEPTH_MARGIN),
+            }
         }
     }
 }
@@ -329,7 +369,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let posed = Posed::new(&args, size_px)?;
     match args.map {
         Some(ControlMap::Openpose) => write_openpose(&args, &posed, size_px, started),
-        None => render_picture(&args, posed, size_px, started),
+        None | Some(ControlMap::Depth | ControlMap::Normal | ControlMap::Mask) => {
+            render_picture(&args, posed, size_px, started)
+        }
     }
 }
 
@@ -351,7 +393,7 @@ fn check_map_options(args: &RenderArgs) -> Result<()> {
         for (given, option) in [
             (args.transparent, "--transparent"),
             (args.overlays, "--overlays"),
-            (args.capsules, "--capsules"),
+            (openpose && args.capsules, "--capsules"),
         ] {
             if given {
                 bail!(
@@ -443,7 +485,7 @@ fn write_openpose(
     Ok(())
 }
 
-/// The picture itself, rendered with wgpu.
+/// The picture itself, or a depth, normal or mask map, rendered with wgpu.
 fn render_picture(
     args: &RenderArgs,
     posed: Posed,
@@ -459,6 +501,7 @@ fn render_picture(
         ..
     } = posed;
     let skeleton = &figure.humanoid.skeleton;
+    let capsules_for_depth = capsules.clone();
     let avatar_palettes = match &figure.mesh {
         Some(mesh) => {
             let carried = Posture::carried_over(&mesh.skeleton.skeleton, skeleton, &posture);
@@ -485,6 +528,7 @@ fn render_picture(
         avatar_palettes,
         markers,
         transparent_background: false,
+        shading: shading(args.map, &camera, &capsules_for_depth),
     };
     let options = ImageOptions {
         size_px,

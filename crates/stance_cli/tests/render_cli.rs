@@ -489,3 +489,90 @@ fn control_map_options_out_of_place_fail_with_a_reason_and_write_nothing() {
     // The document is still there, unchanged (not overwritten by --keypoints-out).
     assert_eq!(std::fs::read_to_string(&good).unwrap(), DEFAULT_DOCUMENT);
 }
+
+/// The pixel of `image` at `point_world` seen by `camera`.
+fn pixel_at(image: &Image, camera: &stance_render::OrbitCamera, point_world: [f32; 3]) -> [u8; 4] {
+    let size = glam::Vec2::new(image.width as f32, image.height as f32);
+    let at = camera
+        .project(glam::Vec3::from_array(point_world), size)
+        .unwrap();
+    let offset = ((at.y as u32 * image.width + at.x as u32) * 4) as usize;
+    image.rgba[offset..offset + 4].try_into().unwrap()
+}
+
+#[test]
+fn the_depth_map_is_bright_near_and_the_normal_map_uses_controlnets_colours() {
+    // Catches: depth drawn far-bright (the convention reversed), normals in world rather than
+    // view space, a flipped red (left) or green (up) axis, a map drawn on the grey background.
+    let turned_camera =
+        r#""camera": {"target": [0, 1.0, 0], "yaw": 0.6, "pitch": 0, "distance": 3.0}"#;
+    let turned = write(
+        "turned.json",
+        &format!(r#"{{"version": 1, {turned_camera}}}"#),
+    );
+    let front = write(
+        "front-maps.json",
+        r#"{"version": 1, "camera": {"target": [0, 1.45, 0], "yaw": 0, "pitch": 0, "distance": 1.2}}"#,
+    );
+    let saved = |target: [f64; 3], yaw, distance| {
+        stance_render::OrbitCamera::saved(target, yaw, 0.0, distance, false)
+    };
+    let depth = render(
+        &turned,
+        "depth.png",
+        &["--map", "depth", "--size", "300x300"],
+    );
+    let camera = saved([0.0, 1.0, 0.0], 0.6, 3.0);
+    // Turned toward the body's left: the left shoulder (H-Anim default centre) is nearer.
+    let near = pixel_at(&depth, &camera, [0.2029, 1.4376, -0.0387]);
+    let far = pixel_at(&depth, &camera, [-0.1907, 1.4407, -0.0325]);
+    assert!(
+        near[0] > far[0] + 10 && far[0] > 0,
+        "near {near:?}, far {far:?}"
+    );
+    assert_eq!(near[0], near[1]);
+    assert_eq!(&depth.rgba[..4], &[0, 0, 0, 255], "the background is black");
+    // The head seen from the front: its middle faces the camera, its side on the image's
+    // left (the body's right) faces left (red), its top faces up (green).
+    let normal = render(
+        &front,
+        "normal.png",
+        &["--map", "normal", "--size", "300x300"],
+    );
+    let camera = saved([0.0, 1.45, 0.0], 0.0, 1.2);
+    let head = [0.0044, 1.6209 + 0.085, 0.0236 + 0.1];
+    let facing = pixel_at(&normal, &camera, head);
+    assert!(
+        facing[0].abs_diff(128) < 25 && facing[1].abs_diff(128) < 25 && facing[2] > 225,
+        "{facing:?}"
+    );
+    let left = pixel_at(&normal, &camera, [head[0] - 0.065, head[1], head[2] - 0.05]);
+    assert!(left[0] > 170 && left[2] > 128, "{left:?}");
+    let top = pixel_at(&normal, &camera, [head[0], head[1] + 0.1, head[2] - 0.06]);
+    assert!(top[1] > 170, "{top:?}");
+}
+
+#[test]
+fn the_mask_covers_exactly_the_figure_of_the_picture() {
+    // Catches: a mask of the capsules rather than of the figure drawn, or with the floor.
+    let doc = write("mask.json", DEFAULT_DOCUMENT);
+    let mask = render(&doc, "mask.png", &["--map", "mask", "--size", "200x200"]);
+    let picture = render(
+        &doc,
+        "mask-picture.png",
+        &["--size", "200x200", "--transparent"],
+    );
+    let mut differing = 0;
+    for (m, p) in mask.rgba.chunks(4).zip(picture.rgba.chunks(4)) {
+        assert_eq!((m[0], m[3]), (m[2], 255));
+        if (m[0] > 0) != (p[3] > 0) {
+            differing += 1;
+        }
+    }
+    let covered = picture.covered_count();
+    assert!(covered > 2000, "{covered}");
+    assert!(
+        differing * 200 <= covered,
+        "{differing} of {covered} pixels differ"
+    );
+}

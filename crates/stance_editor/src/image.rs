@@ -147,6 +147,6 @@ fn image_scene(model: &EditorModel, avatar_uploaded: bool) -> Scene {
         show_avatar,
         avatar_palettes,
         markers,
-        transparent_background: false,
+        ..Scene::default()
     }
 }

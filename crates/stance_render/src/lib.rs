@@ -119,6 +119,44 @@ pub struct Scene {
     /// Clear to transparent black (alpha 0) instead of [`BACKGROUND_SRGB`]: the colours
     /// drawn then come out premultiplied by their coverage.
     pub transparent_background: bool,
+    /// The shaded picture, or a control map for image generation.
+    pub shading: Shading,
+}
+
+/// How the figure is coloured: shaded, or as one of the control maps image generation reads
+/// (on black, unlit; the floor and markers are overlays and have no place in them).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub enum Shading {
+    /// Lit and coloured: the viewport's picture.
+    #[default]
+    Shaded,
+    /// Distance along the view, near bright: white at `near_m`, black at `far_m` (m from the
+    /// eye), as the common depth models (MiDaS, ZoeDepth) draw theirs.
+    Depth {
+        /// The depth drawn white (m).
+        near_m: f32,
+        /// The depth drawn black (m).
+        far_m: f32,
+    },
+    /// The view-space normal as ControlNet's normal model (normalbae: ScanNet's protocol,
+    /// Bae et al.'s estimator) reads it: `(n + 1) / 2` with red toward the image's left,
+    /// green up, blue toward the viewer; a surface facing the camera is (128, 128, 255).
+    Normal,
+    /// White where the figure is.
+    Mask,
+}
+
+impl Shading {
+    /// The shaders' `control_map` uniform.
+    #[cfg(feature = "gpu")]
+    fn uniform(self) -> [f32; 4] {
+        match self {
+            Shading::Shaded => [0.0; 4],
+            Shading::Depth { near_m, far_m } => [1.0, near_m, far_m, 0.0],
+            Shading::Normal => [2.0, 0.0, 0.0, 0.0],
+            Shading::Mask => [3.0, 0.0, 0.0, 0.0],
+        }
+    }
 }
 
 impl Scene {
@@ -126,6 +164,8 @@ impl Scene {
     pub fn background_srgb(&self) -> [f32; 4] {
         if self.transparent_background {
             [0.0; 4]
+        } else if self.shading != Shading::Shaded {
+            [0.0, 0.0, 0.0, 1.0]
         } else {
             BACKGROUND_SRGB
         }
