@@ -144,3 +144,35 @@ fn an_impossible_size_is_refused_with_a_notice_and_nothing_downloads() {
         "{notice:?}"
     );
 }
+
+#[test]
+fn file_export_control_maps_downloads_the_openpose_image_and_its_keypoints() {
+    // Catches: the menu entry or the window's button not wired, the size asked ignored, the
+    // JSON or the PNG not handed to the host. No GPU: the OpenPose map is drawn on the CPU.
+    use egui_kittest::kittest::Queryable;
+    let host = MemoryHost::default();
+    let app = stance_editor::StanceApp::without_gpu(Box::new(host.clone())).unwrap();
+    let mut harness = crate::common::harness_for(app);
+    crate::common::settle(&mut harness);
+    harness.get_by_label("File").click();
+    harness.run_steps(2);
+    harness.get_by_label("Export control maps…").click();
+    harness.run_steps(2);
+    harness
+        .get_by_label("Export stance-openpose.png and JSON")
+        .click();
+    harness.run_steps(2);
+    let downloads = host.inner.borrow().binary_downloads.clone();
+    let names: Vec<&str> = downloads.iter().map(|(name, _)| name.as_str()).collect();
+    assert_eq!(names, ["stance-openpose.png", "stance-openpose.json"]);
+    let (width, height, rgba) = decode(&downloads[0].1);
+    assert_eq!((width, height), (1024, 1024));
+    assert!(
+        rgba.chunks(4).any(|pixel| pixel[..3] != [0, 0, 0]),
+        "a skeleton is drawn"
+    );
+    let json: serde_json::Value = serde_json::from_slice(&downloads[1].1).unwrap();
+    assert_eq!(json["canvas_width"], 1024);
+    let body = json["people"][0]["pose_keypoints_2d"].as_array().unwrap();
+    assert_eq!(body.len(), 54);
+}
