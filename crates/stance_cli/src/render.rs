@@ -100,31 +100,13 @@ impl ControlMap {
     }
 }
 
-/// How far beyond the figure's farthest point its depth map reaches black, as a fraction of
-/// its depth range: the farthest point stays a dark grey, apart from the black background.
-const DEPTH_MARGIN: f32 = 0.2;
-
-/// The shading of `map`: a depth map spans the figure's depth seen by `camera` (its capsules
-/// widened by their radii), white at its nearest point.
+/// The shading of `map`: a depth map spans the figure's depth seen by `camera`.
 fn shading(map: Option<ControlMap>, camera: &OrbitCamera, capsules: &[Capsule]) -> Shading {
     match map {
         None | Some(ControlMap::Openpose) => Shading::Shaded,
         Some(ControlMap::Normal) => Shading::Normal,
         Some(ControlMap::Mask) => Shading::Mask,
-        Some(ControlMap::Depth) => {
-            let view_from_world = camera.view_from_world();
-            let (near_m, far_m) = extent_points(capsules)
-                .iter()
-                .map(|point| -view_from_world.transform_point3(*point).z)
-                .fold((f32::INFINITY, f32::NEG_INFINITY), |(near, far), depth| {
-                    (near.min(depth), far.max(depth))
-                });
-            let range = (far_m - near_m).max(0.01);
-            Shading::Depth {
-                near_m,
-                far_m: near_m + range * (1.0 + DEPTH_MARGIN),
-            }
-        }
+        Some(ControlMap::Depth) => Shading::depth_seen_by(camera, capsules),
     }
 }
 

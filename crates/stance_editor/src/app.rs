@@ -777,7 +777,7 @@ impl StanceApp {
         self.windows.control_maps.show(
             ctx,
             (&self.model, &mut self.outbox),
-            &self.viewport,
+            &mut self.viewport,
             &mut self.button_rects,
         );
         let mut sensors = SensorsWindow {

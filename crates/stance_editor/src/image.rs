@@ -4,18 +4,20 @@
 //! request, whoever has the GPU (the viewport, or a test) calls [`ImageExport::advance`]
 //! every frame until it is done (the read-back is asynchronous: in the browser it completes
 //! on a later frame), and the finished PNG goes to the model as a command
-//! ([`FileCommand::SaveImage`]), which hands it to the host.
+//! ([`FileCommand::SaveImage`]), which hands it to the host. *Export control maps* asks for
+//! its depth, normal and mask maps the same way, one after another
+//! ([`FileCommand::SaveControlMap`]).
 
 use crate::model::Outbox;
 use crate::model::{FileCommand, NoticeCommand};
 use glam::DVec3;
 use stance_render::{
     BODY_COLOR_LINEAR, Capsule, GOAL_COLOR_LINEAR, ImageOptions, OrbitCamera, PendingImage, Scene,
-    SceneRenderer, encode_png, render_image,
+    SceneRenderer, Shading, encode_png, render_image,
 };
 
 use crate::figure::MannequinFigure;
-use crate::model::{Command, EditorModel};
+use crate::model::{Command, EditorModel, RenderedMap};
 
 pub use crate::model::IMAGE_FILE_NAME;
 
@@ -32,24 +34,32 @@ pub struct ImageRequest {
     pub options: ImageOptions,
     /// The view.
     pub camera: OrbitCamera,
+    /// A control map instead of the picture (then without background or overlays).
+    pub map: Option<RenderedMap>,
 }
 
 /// The *Save image* work in progress: asked, then on its way back from the GPU.
 #[derive(Debug, Default)]
 pub struct ImageExport {
-    asked: Option<ImageRequest>,
-    pending: Option<PendingImage>,
+    /// The images asked for and not yet started, the next first.
+    asked: std::collections::VecDeque<ImageRequest>,
+    pending: Option<(PendingImage, Option<RenderedMap>)>,
 }
 
 impl ImageExport {
-    /// Asks for an image (replacing one asked and not yet started).
+    /// Asks for an image (replacing those asked and not yet started).
     pub fn request(&mut self, request: ImageRequest) {
-        self.asked = Some(request);
+        self.request_all(vec![request]);
+    }
+
+    /// Asks for images, made one after another (replacing those asked and not yet started).
+    pub fn request_all(&mut self, requests: Vec<ImageRequest>) {
+        self.asked = requests.into();
     }
 
     /// Whether an image is asked for or on its way.
     pub fn is_busy(&self) -> bool {
-        self.asked.is_some() || self.pending.is_some()
+        !self.asked.is_empty() || self.pending.is_some()
     }
 
     /// Moves *Save image* along with the viewport's GPU: renders an asked image of `model`,
@@ -66,7 +76,9 @@ impl ImageExport {
         renderer: &mut SceneRenderer,
         figure: Option<&MannequinFigure>,
     ) -> bool {
-        if let Some(request) = self.asked.take() {
+        if self.pending.is_none()
+            && let Some(request) = self.asked.pop_front()
+        {
             let mut scene = image_scene(model, renderer.avatar().is_some());
             let session = model.session();
             if let Some(figure) = figure.filter(|_| model.avatar().is_none())
@@ -77,28 +89,58 @@ impl ImageExport {
                 scene.avatar_palettes = palettes;
             }
             let camera = &request.camera;
-            match render_image(device, queue, renderer, camera, &scene, &request.options) {
-                Ok(pending) => self.pending = Some(pending),
+            let mut options = request.options;
+            if let Some(map) = request.map {
+                scene.shading = shading(map, camera, model);
+                options.transparent = false;
+                options.overlays = false;
+            }
+            match render_image(device, queue, renderer, camera, &scene, &options) {
+                Ok(pending) => self.pending = Some((pending, request.map)),
                 Err(error) => outbox.send(Command::Notice(NoticeCommand::Warn(format!(
                     "The image could not be made: {error}."
                 )))),
             }
         }
-        let Some(result) = self.pending.as_mut().and_then(|p| p.poll(device)) else {
-            return self.pending.is_some();
+        let Some((result, map)) = self
+            .pending
+            .as_mut()
+            .and_then(|(pending, map)| Some((pending.poll(device)?, *map)))
+        else {
+            return self.is_busy();
         };
         self.pending = None;
         match result.and_then(|pixels| encode_png(&pixels).map(|png| (pixels, png))) {
-            Ok((pixels, png)) => outbox.send(Command::File(FileCommand::SaveImage {
-                png,
-                width: pixels.width,
-                height: pixels.height,
+            Ok((pixels, png)) => outbox.send(Command::File(match map {
+                None => FileCommand::SaveImage {
+                    png,
+                    width: pixels.width,
+                    height: pixels.height,
+                },
+                Some(map) => FileCommand::SaveControlMap {
+                    map,
+                    png,
+                    width: pixels.width,
+                    height: pixels.height,
+                },
             })),
             Err(error) => outbox.send(Command::Notice(NoticeCommand::Warn(format!(
                 "The image could not be made: {error}."
             )))),
         }
-        false
+        self.is_busy()
+    }
+}
+
+/// How `map` colours the body: the depth map spans the mannequin's depth seen by `camera`.
+fn shading(map: RenderedMap, camera: &OrbitCamera, model: &EditorModel) -> Shading {
+    match map {
+        RenderedMap::Depth => {
+            let capsules: Vec<Capsule> = model.bones().iter().map(|bone| bone.capsule).collect();
+            Shading::depth_seen_by(camera, &capsules)
+        }
+        RenderedMap::Normal => Shading::Normal,
+        RenderedMap::Mask => Shading::Mask,
     }
 }
 

@@ -146,7 +146,39 @@ pub enum Shading {
     Mask,
 }
 
+/// How far beyond the body's farthest point a depth map reaches black, as a fraction of its
+/// depth range: the farthest point stays a dark grey, apart from the black background.
+pub const DEPTH_MARGIN: f32 = 0.2;
+
 impl Shading {
+    /// The depth map of a body made of `capsules` seen by `camera`: white at its nearest
+    /// point (the capsules widened by their radii), black [`DEPTH_MARGIN`] of its depth range
+    /// beyond its farthest.
+    pub fn depth_seen_by(camera: &OrbitCamera, capsules: &[Capsule]) -> Shading {
+        let view_from_world = camera.view_from_world();
+        let (near_m, far_m) = capsules
+            .iter()
+            .flat_map(|capsule| {
+                [capsule.start_world, capsule.end_world].map(|end| (end, capsule.radius_m))
+            })
+            .map(|(end, radius)| (-view_from_world.transform_point3(end).z, radius))
+            .fold(
+                (f32::INFINITY, f32::NEG_INFINITY),
+                |(near, far), (depth, radius)| (near.min(depth - radius), far.max(depth + radius)),
+            );
+        if !(near_m.is_finite() && far_m.is_finite()) {
+            return Shading::Depth {
+                near_m: 0.0,
+                far_m: 1.0,
+            };
+        }
+        let range = (far_m - near_m).max(0.01);
+        Shading::Depth {
+            near_m,
+            far_m: near_m + range * (1.0 + DEPTH_MARGIN),
+        }
+    }
+
     /// The shaders' `control_map` uniform.
     #[cfg(feature = "gpu")]
     fn uniform(self) -> [f32; 4] {

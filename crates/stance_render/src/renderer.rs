@@ -258,8 +258,10 @@ impl SceneRenderer {
                 buffers: &[Some(template_layout), Some(instance_layout)],
             },
             primitive: wgpu::PrimitiveState {
+                // The template's triangles turn counter-clockwise seen from outside (its
+                // outward normals by the right-hand rule): their backs, inside, are culled.
                 cull_mode: Some(wgpu::Face::Back),
-                front_face: wgpu::FrontFace::Cw,
+                front_face: wgpu::FrontFace::Ccw,
                 ..Default::default()
             },
             depth_stencil: depth_stencil.clone(),

@@ -361,6 +361,18 @@ pub enum FileCommand {
         /// Height, pixels.
         height: u32,
     },
+    /// Offer a control map the views rendered with the GPU (a PNG, `width` x `height`
+    /// pixels) as a download named after it.
+    SaveControlMap {
+        /// Which map.
+        map: super::RenderedMap,
+        /// The PNG file's bytes.
+        png: Vec<u8>,
+        /// Width, pixels.
+        width: u32,
+        /// Height, pixels.
+        height: u32,
+    },
     /// The host failed to do what the editor asked (reading a file...).
     HostFailed(String),
     /// The views shared the document's posture link ([`EditorModel::share_link`]): the

@@ -316,6 +316,12 @@ impl EditorModel {
                 width,
                 height,
             } => self.save_openpose(&png, &json, width, height),
+            FileCommand::SaveControlMap {
+                map,
+                png,
+                width,
+                height,
+            } => self.save_control_map(map, &png, width, height),
             FileCommand::HostFailed(reason) => {
                 self.pending_pick = None;
                 self.warn(reason);
