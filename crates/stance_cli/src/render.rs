@@ -4,8 +4,8 @@
 //!
 //! `--map openpose|depth|normal|mask` writes a control map for image generation instead, seen
 //! by the same camera: the OpenPose skeleton (drawn on the CPU; with `--keypoints-out` its
-//! keypoints as OpenPose JSON), or the figure's depth, normals or mask (rendered like the
-//! picture, unlit, on black). See docs/control-maps.md.
+//! keypoints as OpenPose JSON), or the figure's depth, normals, mask or line art (rendered
+//! like the picture, unlit, on black). See docs/control-maps.md.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -20,13 +20,14 @@ use stance_ik::{Frames, Posture};
 use stance_render::{
     Capsule, GOAL_COLOR_LINEAR, HiddenKeypoints, ImageOptions, KeypointUnits, OpenPose,
     OpenPosePerson, OrbitCamera, Pixels, Scene, SceneRenderer, Shading, ViewPreset, avatar_model,
-    encode_png, headless_gpu, posed_mannequin_bones, render_image,
+    encode_png, headless_gpu, line_art, posed_mannequin_bones, render_image,
 };
 
 use crate::avatar;
 
 /// `stance render DOC.json --out IMAGE.png [--avatar FILE] [--view VIEW] [--size WxH]
-/// [--map openpose [--keypoints-out K.json] [--normalized] [--hidden keep|missing]]`.
+/// [--map openpose [--keypoints-out K.json] [--normalized] [--hidden keep|missing]]
+/// [--map depth|normal|mask|lines]`.
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
     /// The document (JSON, as the editor exports it).
@@ -59,8 +60,8 @@ pub struct RenderArgs {
     pub capsules: bool,
     /// Write a control map for image generation instead of the picture: `openpose`, the
     /// OpenPose skeleton (COCO-18 body and hands) as the ControlNet preprocessors draw it;
-    /// `depth` (near bright), `normal` (ControlNet's normal colours) or `mask` (white on
-    /// black), rendered like the picture.
+    /// `depth` (near bright), `normal` (ControlNet's normal colours), `mask` (white on
+    /// black) or `lines` (line art: silhouettes, contours, creases), rendered like the picture.
     #[arg(long, value_enum)]
     pub map: Option<ControlMap>,
     /// With --map openpose: also write the keypoints as OpenPose JSON (pixels unless
@@ -87,6 +88,8 @@ pub enum ControlMap {
     Normal,
     /// The figure white on black.
     Mask,
+    /// Line art: silhouettes, contours and creases, white on black.
+    Lines,
 }
 
 impl ControlMap {
@@ -96,6 +99,7 @@ impl ControlMap {
             ControlMap::Depth => "depth",
             ControlMap::Normal => "normal",
             ControlMap::Mask => "mask",
+            ControlMap::Lines => "lines",
         }
     }
 }
@@ -107,6 +111,8 @@ fn shading(map: Option<ControlMap>, camera: &OrbitCamera, capsules: &[Capsule]) 
         Some(ControlMap::Normal) => Shading::Normal,
         Some(ControlMap::Mask) => Shading::Mask,
         Some(ControlMap::Depth) => Shading::depth_seen_by(camera, capsules),
+        // Drawn from a depth and a normal map (`render_picture`).
+        Some(ControlMap::Lines) => Shading::Normal,
     }
 }
 
@@ -351,7 +357,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let posed = Posed::new(&args, size_px)?;
     match args.map {
         Some(ControlMap::Openpose) => write_openpose(&args, &posed, size_px, started),
-        None | Some(ControlMap::Depth | ControlMap::Normal | ControlMap::Mask) => {
+        None
+        | Some(ControlMap::Depth | ControlMap::Normal | ControlMap::Mask | ControlMap::Lines) => {
             render_picture(&args, posed, size_px, started)
         }
     }
@@ -524,15 +531,33 @@ fn render_picture(
         &gpu.queue,
         figure.mesh.as_ref().map(|mesh| &mesh.model),
     );
-    let pixels = render_image(
-        &gpu.device,
-        &gpu.queue,
-        &mut renderer,
-        &camera,
-        &scene,
-        &options,
-    )?
-    .wait(&gpu.device)?;
+    let mut render = |scene: &Scene| {
+        render_image(
+            &gpu.device,
+            &gpu.queue,
+            &mut renderer,
+            &camera,
+            scene,
+            &options,
+        )?
+        .wait(&gpu.device)
+    };
+    let pixels = if args.map == Some(ControlMap::Lines) {
+        // Line art: from the depth and normal maps of the same view.
+        let depth = render(&Scene {
+            shading: Shading::depth_seen_by(&camera, &capsules_for_depth),
+            ..scene.clone()
+        })?;
+        let normal = render(&Scene {
+            shading: Shading::Normal,
+            ..scene
+        })?;
+        let rgba = line_art(&depth.rgba, &normal.rgba, depth.width, depth.height)
+            .ok_or_else(|| anyhow!("the depth and normal maps differ in size"))?;
+        Pixels { rgba, ..depth }
+    } else {
+        render(&scene)?
+    };
     let png = encode_png(&pixels)?;
     std::fs::write(&args.out, png)
         .with_context(|| format!("cannot write {}", args.out.display()))?;

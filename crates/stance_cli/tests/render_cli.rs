@@ -467,7 +467,7 @@ fn control_map_options_out_of_place_fail_with_a_reason_and_write_nothing() {
             &["--map", "openpose", "--transparent"],
             "--transparent does not go with --map",
         ),
-        (&["--map", "lines"], "invalid value 'lines'"),
+        (&["--map", "sketch"], "invalid value 'sketch'"),
         (
             &["--map", "openpose", "--keypoints-out", &good],
             "the document itself",
@@ -575,4 +575,47 @@ fn the_mask_covers_exactly_the_figure_of_the_picture() {
         differing * 200 <= covered,
         "{differing} of {covered} pixels differ"
     );
+}
+
+#[test]
+fn line_art_outlines_the_figure_inside_its_mask() {
+    // Catches: lines drawn on the background side of the silhouette, a filled figure instead
+    // of lines, no inner lines (contours, creases) at all.
+    let doc = write("lines.json", DEFAULT_DOCUMENT);
+    let size = ["--size", "256x256"];
+    let lines = render(
+        &doc,
+        "lines.png",
+        &[&["--map", "lines"][..], &size].concat(),
+    );
+    let mask = render(
+        &doc,
+        "lines-mask.png",
+        &[&["--map", "mask"][..], &size].concat(),
+    );
+    let white = |image: &Image, at: usize| image.rgba[at * 4] > 127;
+    let count = (lines.width * lines.height) as usize;
+    let on_lines: Vec<usize> = (0..count).filter(|&at| white(&lines, at)).collect();
+    let figure = (0..count).filter(|&at| white(&mask, at)).count();
+    assert!(
+        on_lines.iter().all(|&at| mask.rgba[at * 4] > 0),
+        "a line off the figure"
+    );
+    assert!(
+        on_lines.len() * 20 > figure && on_lines.len() * 2 < figure,
+        "{} line pixels for a figure of {figure}",
+        on_lines.len()
+    );
+    // Inner lines: some line pixels have figure all round them (not on the silhouette).
+    let inner = on_lines.iter().filter(|&&at| {
+        let (x, y) = (at % 256, at / 256);
+        x > 0
+            && y > 0
+            && x < 255
+            && y < 255
+            && [at - 1, at + 1, at - 256, at + 256]
+                .iter()
+                .all(|&n| white(&mask, n))
+    });
+    assert!(inner.count() > 20);
 }

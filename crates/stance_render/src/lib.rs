@@ -19,6 +19,7 @@ mod capture;
 mod headless;
 #[cfg(feature = "gpu")]
 mod image;
+mod line_art;
 mod openpose;
 mod openpose_draw;
 mod pick;
@@ -45,6 +46,7 @@ pub use headless::{HeadlessGpu, headless_gpu};
 pub use image::{
     ImageError, ImageOptions, MAX_IMAGE_SIDE_PX, PendingImage, encode_png, render_image,
 };
+pub use line_art::{CREASE_DEGREES, DEPTH_JUMP, line_art};
 pub use openpose::{HiddenKeypoints, KeypointUnits, OpenPose, OpenPosePerson};
 pub use openpose_draw::{
     BODY_COLORS, HAND_BONES, HAND_POINT_COLOR, LIMBS, POINT_RADIUS_PX, STICK_WIDTH_PX,
