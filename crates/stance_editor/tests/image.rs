@@ -180,7 +180,8 @@ fn file_export_control_maps_downloads_the_openpose_image_and_its_keypoints() {
 #[test]
 fn the_rendered_control_maps_come_one_after_another_as_their_own_downloads() {
     // Catches: a queued map lost after the first, a map drawn shaded or on the grey
-    // background, the files misnamed. Timed: the three maps at 1024x1024 (software GL here).
+    // background, the files misnamed, line art's second pass lost. Timed: the four maps at
+    // 1024x1024 (software GL here).
     use stance_editor::model::RenderedMap;
     let host = MemoryHost::default();
     let mut editor = Clocked::with_host(host.clone());
@@ -218,7 +219,7 @@ fn the_rendered_control_maps_come_one_after_another_as_their_own_downloads() {
         std::thread::sleep(std::time::Duration::from_millis(1));
     }
     eprintln!(
-        "depth, normal and mask maps at 1024x1024 in {:.2} s on {}",
+        "depth, normal, mask and line-art maps at 1024x1024 in {:.2} s on {}",
         started.elapsed().as_secs_f64(),
         gpu.adapter.name
     );
@@ -227,7 +228,12 @@ fn the_rendered_control_maps_come_one_after_another_as_their_own_downloads() {
     let names: Vec<&str> = downloads.iter().map(|(name, _)| name.as_str()).collect();
     assert_eq!(
         names,
-        ["stance-depth.png", "stance-normal.png", "stance-mask.png"]
+        [
+            "stance-depth.png",
+            "stance-normal.png",
+            "stance-mask.png",
+            "stance-lines.png"
+        ]
     );
     for (name, bytes) in &downloads {
         let (width, height, rgba) = decode(bytes);
@@ -235,7 +241,7 @@ fn the_rendered_control_maps_come_one_after_another_as_their_own_downloads() {
         assert_eq!(&rgba[..4], &[0, 0, 0, 255], "{name}: black background");
         let covered = rgba.chunks(4).filter(|p| p[..3] != [0, 0, 0]).count();
         assert!(covered > 5000, "{name}: {covered} pixels of figure");
-        if name.contains("mask") {
+        if name.contains("mask") || name.contains("lines") {
             assert!(
                 rgba.chunks(4).all(|p| p[0] == p[1] && p[1] == p[2]),
                 "grey levels"

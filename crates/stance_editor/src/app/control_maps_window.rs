@@ -2,8 +2,8 @@
 //! keypoints' options; Export draws the OpenPose map of the posture seen through the
 //! viewport's camera (on the CPU: [`stance_render::OpenPose::draw`]) and sends its PNG and
 //! JSON to the model, which downloads them as `stance-openpose.png` and
-//! `stance-openpose.json`, and asks the viewport's GPU for the depth, normal and mask maps
-//! (`stance-depth.png`...), rendered one after another as *Save image* renders.
+//! `stance-openpose.json`, and asks the viewport's GPU for the depth, normal, mask and line-art
+//! maps (`stance-depth.png`...), rendered one after another as *Save image* renders.
 
 use stance_render::{
     HiddenKeypoints, ImageOptions, KeypointUnits, MAX_IMAGE_SIDE_PX, Pixels, encode_png,
@@ -29,8 +29,9 @@ pub(crate) struct ControlMapsWindow {
     pub normalized: bool,
     /// Export the OpenPose map.
     pub openpose: bool,
-    /// Export each rendered map (depth, normal, mask, in [`RenderedMap::ALL`]'s order).
-    pub rendered: [bool; 3],
+    /// Export each rendered map (depth, normal, mask, line art: [`RenderedMap::ALL`]'s
+    /// order).
+    pub rendered: [bool; 4],
 }
 
 impl Default for ControlMapsWindow {
@@ -41,7 +42,7 @@ impl Default for ControlMapsWindow {
             hidden_missing: false,
             normalized: false,
             openpose: true,
-            rendered: [true; 3],
+            rendered: [true; 4],
         }
     }
 }
@@ -122,7 +123,7 @@ impl ControlMapsWindow {
         let button = ui
             .add_enabled(!busy, egui::Button::new("Export"))
             .on_hover_text(format!(
-                "{OPENPOSE_IMAGE_FILE_NAME}, stance-openpose.json, stance-depth.png, stance-normal.png, stance-mask.png"
+                "{OPENPOSE_IMAGE_FILE_NAME}, stance-openpose.json, stance-depth.png, stance-normal.png, stance-mask.png, stance-lines.png"
             ))
             .on_disabled_hover_text("an image is on its way");
         buttons.push(("export_control_maps", button.rect));

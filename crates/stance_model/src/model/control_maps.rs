@@ -27,11 +27,18 @@ pub enum RenderedMap {
     Normal,
     /// The figure white on black.
     Mask,
+    /// Line art (from a depth and a normal map), white on black.
+    Lines,
 }
 
 impl RenderedMap {
     /// Every one, in menu order.
-    pub const ALL: [RenderedMap; 3] = [RenderedMap::Depth, RenderedMap::Normal, RenderedMap::Mask];
+    pub const ALL: [RenderedMap; 4] = [
+        RenderedMap::Depth,
+        RenderedMap::Normal,
+        RenderedMap::Mask,
+        RenderedMap::Lines,
+    ];
 
     /// The file it downloads as.
     pub fn file_name(self) -> &'static str {
@@ -39,6 +46,7 @@ impl RenderedMap {
             RenderedMap::Depth => "stance-depth.png",
             RenderedMap::Normal => "stance-normal.png",
             RenderedMap::Mask => "stance-mask.png",
+            RenderedMap::Lines => "stance-lines.png",
         }
     }
 
@@ -48,6 +56,7 @@ impl RenderedMap {
             RenderedMap::Depth => "Depth (near bright)",
             RenderedMap::Normal => "Normals (ControlNet colours)",
             RenderedMap::Mask => "Mask (white on black)",
+            RenderedMap::Lines => "Line art (white on black)",
         }
     }
 }
