@@ -100,6 +100,17 @@ impl ImageExport {
                 self.lines_depth = Some(depth);
                 return true;
             }
+            // Its depth pass failed: not its normal pass either.
+            (Some(RenderedMap::Lines), Err(error)) if self.lines_depth.is_none() => {
+                if self
+                    .asked
+                    .front()
+                    .is_some_and(|next| next.map == Some(RenderedMap::Lines))
+                {
+                    self.asked.pop_front();
+                }
+                Err(error)
+            }
             (Some(RenderedMap::Lines), Ok(normal)) => self
                 .lines_depth
                 .take()
