@@ -379,16 +379,25 @@ fn check_map_options(args: &RenderArgs) -> Result<()> {
         }
     }
     if let Some(map) = args.map {
-        for (given, option) in [
-            (args.transparent, "--transparent"),
-            (args.overlays, "--overlays"),
-            (openpose && args.capsules, "--capsules"),
+        for (given, option, why) in [
+            (
+                args.transparent,
+                "--transparent",
+                "a control map is drawn on black",
+            ),
+            (
+                args.overlays,
+                "--overlays",
+                "a control map shows the body alone",
+            ),
+            (
+                openpose && args.capsules,
+                "--capsules",
+                "the OpenPose map draws the skeleton, not the body",
+            ),
         ] {
             if given {
-                bail!(
-                    "{option} does not go with --map {}: a control map is drawn on black, without overlays",
-                    map.name()
-                );
+                bail!("{option} does not go with --map {}: {why}", map.name());
             }
         }
     }
