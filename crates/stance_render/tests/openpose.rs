@@ -126,7 +126,7 @@ fn the_skeleton_image_matches_controlnet_aux_pixel_for_pixel() {
         .filter(|path| path.extension().is_some_and(|e| e == "json"))
         .collect();
     names.sort();
-    assert!(names.len() >= 6, "fixtures: {names:?}");
+    assert!(names.len() >= 7, "fixtures: {names:?}");
     for json in names {
         let pose = read_keypoints(&json);
         let ([width, height], reference) = read_rgb(&json.with_extension("png"));
