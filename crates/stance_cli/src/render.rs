@@ -1,6 +1,11 @@
 //! `stance render DOC.json --out IMAGE.png`: the document's posture on the default H-Anim body
 //! (the mannequin) or on an avatar (its skinned mesh), drawn natively with wgpu on any adapter
 //! (lavapipe will do) through the same image path as the editor's *File > Save image*.
+//!
+//! `--map openpose|depth|normal|mask` writes a control map for image generation instead, seen
+//! by the same camera: the OpenPose skeleton (drawn on the CPU; with `--keypoints-out` its
+//! keypoints as OpenPose JSON), or the figure's depth, normals, mask or line art (rendered
+//! like the picture, unlit, on black). See docs/control-maps.md.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -9,16 +14,20 @@ use anyhow::{Context, Result, anyhow, bail};
 use glam::{DVec3, Vec3};
 use stance_asset::{LoadOptions, make_default_avatar};
 use stance_document::{Document, PostureRest};
+use stance_hanim::keypoints::KeypointFinder;
 use stance_hanim::{HumanoidSkeleton, LevelOfArticulation, SkeletonOptions, default_skeleton};
 use stance_ik::{Frames, Posture};
 use stance_render::{
-    Capsule, GOAL_COLOR_LINEAR, ImageOptions, OrbitCamera, Scene, SceneRenderer, ViewPreset,
-    avatar_model, encode_png, headless_gpu, posed_mannequin_bones, render_image,
+    Capsule, GOAL_COLOR_LINEAR, HiddenKeypoints, ImageOptions, KeypointUnits, OpenPose,
+    OpenPosePerson, OrbitCamera, Pixels, Scene, SceneRenderer, Shading, ViewPreset, avatar_model,
+    encode_png, headless_gpu, line_art, posed_mannequin_bones, render_image,
 };
 
 use crate::avatar;
 
-/// `stance render DOC.json --out IMAGE.png [--avatar FILE] [--view VIEW] [--size WxH]`.
+/// `stance render DOC.json --out IMAGE.png [--avatar FILE] [--view VIEW] [--size WxH]
+/// [--map openpose [--keypoints-out K.json] [--normalized] [--hidden keep|missing]]
+/// [--map depth|normal|mask|lines]`.
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
     /// The document (JSON, as the editor exports it).
@@ -49,6 +58,80 @@ pub struct RenderArgs {
     /// figure; no effect with --avatar.
     #[arg(long)]
     pub capsules: bool,
+    /// Write a control map for image generation instead of the picture: `openpose`, the
+    /// OpenPose skeleton (COCO-18 body and hands) as the ControlNet preprocessors draw it;
+    /// `depth` (near bright), `normal` (ControlNet's normal colours), `mask` (white on
+    /// black) or `lines` (line art: silhouettes, contours, creases), rendered like the picture.
+    #[arg(long, value_enum)]
+    pub map: Option<ControlMap>,
+    /// With --map openpose: also write the keypoints as OpenPose JSON (pixels unless
+    /// --normalized).
+    #[arg(long)]
+    pub keypoints_out: Option<PathBuf>,
+    /// With --keypoints-out: positions as fractions of the image's width and height.
+    #[arg(long)]
+    pub normalized: bool,
+    /// With --map openpose: what becomes of a keypoint the body hides from the camera
+    /// (default: keep).
+    #[arg(long, value_enum)]
+    pub hidden: Option<Hidden>,
+}
+
+/// The control maps.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ControlMap {
+    /// The OpenPose skeleton: body, hands (no face).
+    Openpose,
+    /// Depth, near bright, over the figure's depth range.
+    Depth,
+    /// View-space normals, ControlNet's normal (BAE) colours.
+    Normal,
+    /// The figure white on black.
+    Mask,
+    /// Line art: silhouettes, contours and creases, white on black.
+    Lines,
+}
+
+impl ControlMap {
+    fn name(self) -> &'static str {
+        match self {
+            ControlMap::Openpose => "openpose",
+            ControlMap::Depth => "depth",
+            ControlMap::Normal => "normal",
+            ControlMap::Mask => "mask",
+            ControlMap::Lines => "lines",
+        }
+    }
+}
+
+/// The shading of `map`: a depth map spans the figure's depth seen by `camera`.
+fn shading(map: Option<ControlMap>, camera: &OrbitCamera, capsules: &[Capsule]) -> Shading {
+    match map {
+        None | Some(ControlMap::Openpose) => Shading::Shaded,
+        Some(ControlMap::Normal) => Shading::Normal,
+        Some(ControlMap::Mask) => Shading::Mask,
+        Some(ControlMap::Depth) => Shading::depth_seen_by(camera, capsules),
+        // Drawn from a depth and a normal map (`render_picture`).
+        Some(ControlMap::Lines) => Shading::Normal,
+    }
+}
+
+/// A keypoint hidden behind the body.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Hidden {
+    /// Kept, drawn and listed.
+    Keep,
+    /// Left out as missing (0, 0, 0 in the JSON).
+    Missing,
+}
+
+impl Hidden {
+    fn keypoints(self) -> HiddenKeypoints {
+        match self {
+            Hidden::Keep => HiddenKeypoints::Keep,
+            Hidden::Missing => HiddenKeypoints::Missing,
+        }
+    }
 }
 
 /// The standard views.
@@ -186,39 +269,70 @@ fn extent_points(capsules: &[Capsule]) -> Vec<Vec3> {
         .collect()
 }
 
-pub fn run(args: RenderArgs) -> Result<()> {
-    let started = Instant::now();
-    let size_px = parse_size(&args.size)?;
-    let text = std::fs::read_to_string(&args.document)
-        .with_context(|| format!("cannot read {}", args.document.display()))?;
-    let document = Document::from_json(&text)
-        .map_err(|e| anyhow!("invalid document {}: {e}", args.document.display()))?;
-    let figure = figure(&args)?;
-    // Made on an avatar before a posture meant the same pose on every body: relative to that
-    // avatar's own rest, taken to be the one drawn (as `export-posed` takes it).
-    let document = if args.avatar.is_some() && document.rest == PostureRest::Avatar {
-        eprintln!(
-            "note: the document's values are relative to the avatar's own rest (made before a posture meant the same pose on every body); converted to the H-Anim standard pose"
-        );
-        document.in_standard_rest(&figure.humanoid)
-    } else {
-        document
-    };
-    let skeleton = &figure.humanoid.skeleton;
-    let posture = document
-        .to_posture(skeleton)
-        .map_err(|e| anyhow!("{}: {e}", args.document.display()))?;
-    let frames = Frames::new(skeleton, &posture);
-    let capsules: Vec<Capsule> = posed_mannequin_bones(skeleton, &frames)
-        .into_iter()
-        .map(|bone| bone.capsule)
-        .collect();
+/// The document's posture on its body, and the camera that sees it.
+struct Posed {
+    figure: Figure,
+    document: Document,
+    posture: Posture,
+    frames: Frames,
+    /// The mannequin's capsules of the posed body (drawn without an avatar; the body that
+    /// hides keypoints in a control map).
+    capsules: Vec<Capsule>,
+    camera: OrbitCamera,
+}
+
+impl Posed {
+    fn new(args: &RenderArgs, size_px: [u32; 2]) -> Result<Posed> {
+        let text = std::fs::read_to_string(&args.document)
+            .with_context(|| format!("cannot read {}", args.document.display()))?;
+        let document = Document::from_json(&text)
+            .map_err(|e| anyhow!("invalid document {}: {e}", args.document.display()))?;
+        let figure = figure(args)?;
+        // Made on an avatar before a posture meant the same pose on every body: relative to
+        // that avatar's own rest, taken to be the one drawn (as `export-posed` takes it).
+        let document = if args.avatar.is_some() && document.rest == PostureRest::Avatar {
+            eprintln!(
+                "note: the document's values are relative to the avatar's own rest (made before a posture meant the same pose on every body); converted to the H-Anim standard pose"
+            );
+            document.in_standard_rest(&figure.humanoid)
+        } else {
+            document
+        };
+        let skeleton = &figure.humanoid.skeleton;
+        let posture = document
+            .to_posture(skeleton)
+            .map_err(|e| anyhow!("{}: {e}", args.document.display()))?;
+        let frames = Frames::new(skeleton, &posture);
+        let capsules: Vec<Capsule> = posed_mannequin_bones(skeleton, &frames)
+            .into_iter()
+            .map(|bone| bone.capsule)
+            .collect();
+        let camera = camera(args.view, &document, &capsules, size_px);
+        Ok(Posed {
+            figure,
+            document,
+            posture,
+            frames,
+            capsules,
+            camera,
+        })
+    }
+}
+
+/// `--view` framed on the body, else the document's saved camera, else the editor's default
+/// view framed on the body.
+fn camera(
+    view: Option<View>,
+    document: &Document,
+    capsules: &[Capsule],
+    size_px: [u32; 2],
+) -> OrbitCamera {
     let aspect = size_px[0] as f32 / size_px[1] as f32;
-    let camera = match (args.view, &document.camera) {
+    match (view, &document.camera) {
         (Some(view), _) => {
             let mut camera = OrbitCamera::default();
             camera.set_view(view.preset());
-            camera.frame_points(&extent_points(&capsules), aspect);
+            camera.frame_points(&extent_points(capsules), aspect);
             camera
         }
         (None, Some(spec)) => OrbitCamera::saved(
@@ -230,10 +344,162 @@ pub fn run(args: RenderArgs) -> Result<()> {
         ),
         (None, None) => {
             let mut camera = OrbitCamera::default();
-            camera.frame_points(&extent_points(&capsules), aspect);
+            camera.frame_points(&extent_points(capsules), aspect);
             camera
         }
+    }
+}
+
+pub fn run(args: RenderArgs) -> Result<()> {
+    let started = Instant::now();
+    let size_px = parse_size(&args.size)?;
+    check_map_options(&args)?;
+    let posed = Posed::new(&args, size_px)?;
+    match args.map {
+        Some(ControlMap::Openpose) => write_openpose(&args, &posed, size_px, started),
+        None
+        | Some(ControlMap::Depth | ControlMap::Normal | ControlMap::Mask | ControlMap::Lines) => {
+            render_picture(&args, posed, size_px, started)
+        }
+    }
+}
+
+/// The options that only a control map takes, or that a control map does not take.
+fn check_map_options(args: &RenderArgs) -> Result<()> {
+    let openpose = args.map == Some(ControlMap::Openpose);
+    if !openpose {
+        for (given, option) in [
+            (args.keypoints_out.is_some(), "--keypoints-out"),
+            (args.normalized, "--normalized"),
+            (args.hidden.is_some(), "--hidden"),
+        ] {
+            if given {
+                bail!("{option} goes with --map openpose (the keypoints of an OpenPose map)");
+            }
+        }
+    }
+    if let Some(map) = args.map {
+        for (given, option, why) in [
+            (
+                args.transparent,
+                "--transparent",
+                "a control map is drawn on black",
+            ),
+            (
+                args.overlays,
+                "--overlays",
+                "a control map shows the body alone",
+            ),
+            (
+                openpose && args.capsules,
+                "--capsules",
+                "the OpenPose map draws the skeleton, not the body",
+            ),
+        ] {
+            if given {
+                bail!("{option} does not go with --map {}: {why}", map.name());
+            }
+        }
+    }
+    let same = |a: &PathBuf, b: &PathBuf| {
+        a == b || matches!((a.canonicalize(), b.canonicalize()), (Ok(a), Ok(b)) if a == b)
     };
+    for (path, option) in [
+        (Some(&args.out), "--out"),
+        (args.keypoints_out.as_ref(), "--keypoints-out"),
+    ] {
+        if let Some(path) = path
+            && same(path, &args.document)
+        {
+            bail!(
+                "{option} {}: the document itself (it would be overwritten)",
+                path.display()
+            );
+        }
+    }
+    if args
+        .keypoints_out
+        .as_ref()
+        .is_some_and(|path| same(path, &args.out))
+    {
+        bail!(
+            "--keypoints-out {}: the same file as --out",
+            args.out.display()
+        );
+    }
+    Ok(())
+}
+
+/// `--map openpose`: the skeleton image (and the keypoints' JSON) drawn on the CPU.
+fn write_openpose(
+    args: &RenderArgs,
+    posed: &Posed,
+    size_px: [u32; 2],
+    started: Instant,
+) -> Result<()> {
+    let skeleton = &posed.figure.humanoid.skeleton;
+    let keypoints = KeypointFinder::new(skeleton).find(skeleton, &posed.frames);
+    let person = OpenPosePerson::seen(
+        &keypoints,
+        &posed.camera,
+        size_px,
+        &posed.capsules,
+        args.hidden.unwrap_or(Hidden::Keep).keypoints(),
+    );
+    let pose = OpenPose {
+        size_px,
+        people: vec![person],
+    };
+    let png = encode_png(&Pixels {
+        width: size_px[0],
+        height: size_px[1],
+        rgba: pose.draw(),
+    })?;
+    let units = if args.normalized {
+        KeypointUnits::Normalized
+    } else {
+        KeypointUnits::Pixels
+    };
+    if let Some(path) = &args.keypoints_out {
+        std::fs::write(path, pose.to_json(units))
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    std::fs::write(&args.out, png)
+        .with_context(|| format!("cannot write {}", args.out.display()))?;
+    let seen = person.body.iter().flatten().count();
+    let hands = person
+        .left_hand
+        .iter()
+        .chain(&person.right_hand)
+        .flatten()
+        .count();
+    eprintln!(
+        "{}: OpenPose {}x{}, {seen} of 18 body and {hands} of 42 hand keypoints in view, in {:.2} s",
+        args.out.display(),
+        size_px[0],
+        size_px[1],
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// The picture itself, or a depth, normal or mask map, rendered with wgpu.
+fn render_picture(
+    args: &RenderArgs,
+    posed: Posed,
+    size_px: [u32; 2],
+    started: Instant,
+) -> Result<()> {
+    let Posed {
+        figure,
+        document,
+        posture,
+        capsules,
+        camera,
+        ..
+    } = posed;
+    let skeleton = &figure.humanoid.skeleton;
+    let capsules_for_depth = capsules.clone();
     let avatar_palettes = match &figure.mesh {
         Some(mesh) => {
             let carried = Posture::carried_over(&mesh.skeleton.skeleton, skeleton, &posture);
@@ -260,6 +526,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         avatar_palettes,
         markers,
         transparent_background: false,
+        shading: shading(args.map, &camera, &capsules_for_depth),
     };
     let options = ImageOptions {
         size_px,
@@ -273,15 +540,33 @@ pub fn run(args: RenderArgs) -> Result<()> {
         &gpu.queue,
         figure.mesh.as_ref().map(|mesh| &mesh.model),
     );
-    let pixels = render_image(
-        &gpu.device,
-        &gpu.queue,
-        &mut renderer,
-        &camera,
-        &scene,
-        &options,
-    )?
-    .wait(&gpu.device)?;
+    let mut render = |scene: &Scene| {
+        render_image(
+            &gpu.device,
+            &gpu.queue,
+            &mut renderer,
+            &camera,
+            scene,
+            &options,
+        )?
+        .wait(&gpu.device)
+    };
+    let pixels = if args.map == Some(ControlMap::Lines) {
+        // Line art: from the depth and normal maps of the same view.
+        let depth = render(&Scene {
+            shading: Shading::depth_seen_by(&camera, &capsules_for_depth),
+            ..scene.clone()
+        })?;
+        let normal = render(&Scene {
+            shading: Shading::Normal,
+            ..scene
+        })?;
+        let rgba = line_art(&depth.rgba, &normal.rgba, depth.width, depth.height)
+            .ok_or_else(|| anyhow!("the depth and normal maps differ in size"))?;
+        Pixels { rgba, ..depth }
+    } else {
+        render(&scene)?
+    };
     let png = encode_png(&pixels)?;
     std::fs::write(&args.out, png)
         .with_context(|| format!("cannot write {}", args.out.display()))?;

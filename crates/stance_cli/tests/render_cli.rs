@@ -326,3 +326,296 @@ fn bad_documents_sizes_and_outputs_fail_with_a_reason_and_write_nothing() {
         assert!(!std::path::Path::new(&missing_dir).exists());
     }
 }
+
+/// Runs `stance render DOC --map openpose` with `args`: the decoded skeleton image and the
+/// keypoints' JSON.
+fn openpose(document: &str, name: &str, args: &[&str]) -> (Image, serde_json::Value) {
+    let keypoints = temp(&format!("{name}.json"));
+    let keypoints_text = keypoints.to_string_lossy().into_owned();
+    let mut all = vec!["--map", "openpose", "--keypoints-out", &keypoints_text];
+    all.extend_from_slice(args);
+    let image = render(document, &format!("{name}.png"), &all);
+    let json = serde_json::from_str(&std::fs::read_to_string(&keypoints).unwrap()).unwrap();
+    (image, json)
+}
+
+fn numbers(value: &serde_json::Value) -> Vec<f64> {
+    value
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| n.as_f64().unwrap())
+        .collect()
+}
+
+#[test]
+fn the_openpose_keypoints_land_where_the_camera_projects_the_joints() {
+    // By hand: the saved camera at (0, 1, 4.5) looks down -Z at (0, 1, 0) with a 40 degree
+    // vertical field of view; H-Anim's default l_shoulder is at (0.2029, 1.4376, -0.0387),
+    // l_elbow at (0.2014, 1.1357, -0.0682). A point at depth d = 4.5 - z lands at
+    // x = W/2 (1 + X / (d tan 20 deg aspect)), y = H/2 (1 - (Y - 1) / (d tan 20 deg)).
+    // Catches: a flipped axis or side (the body's left is on the image's right seen from the
+    // front), keypoints from the wrong joints, the size or aspect ignored.
+    let doc = write(
+        "openpose-doc.json",
+        r#"{"version": 1, "camera": {"target": [0, 1.0, 0], "yaw": 0, "pitch": 0, "distance": 4.5}}"#,
+    );
+    let (width, height) = (600.0, 400.0);
+    let (image, json) = openpose(&doc, "openpose", &["--size", "600x400"]);
+    assert_eq!((image.width, image.height), (600, 400));
+    assert_eq!(
+        (
+            json["canvas_width"].as_u64(),
+            json["canvas_height"].as_u64()
+        ),
+        (Some(600), Some(400))
+    );
+    let people = json["people"].as_array().unwrap();
+    assert_eq!(people.len(), 1);
+    let body = numbers(&people[0]["pose_keypoints_2d"]);
+    assert_eq!(body.len(), 18 * 3);
+    assert_eq!(numbers(&people[0]["hand_left_keypoints_2d"]).len(), 21 * 3);
+    assert_eq!(numbers(&people[0]["hand_right_keypoints_2d"]).len(), 21 * 3);
+    assert!(
+        people[0]["face_keypoints_2d"]
+            .as_array()
+            .unwrap()
+            .is_empty()
+    );
+    let tan = 20f64.to_radians().tan();
+    let project = |[x, y, z]: [f64; 3]| {
+        let depth = 4.5 - z;
+        (
+            width / 2.0 * (1.0 + x / (depth * tan * width / height)),
+            height / 2.0 * (1.0 - (y - 1.0) / (depth * tan)),
+        )
+    };
+    // COCO-18: 5 is the left shoulder, 6 the left elbow, 2 the right shoulder.
+    for (index, joint) in [
+        (5, [0.2029, 1.4376, -0.0387]),
+        (6, [0.2014, 1.1357, -0.0682]),
+    ] {
+        let expected = project(joint);
+        let (x, y, c) = (body[index * 3], body[index * 3 + 1], body[index * 3 + 2]);
+        assert_eq!(c, 1.0);
+        assert!(
+            (x - expected.0).abs() < 0.5 && (y - expected.1).abs() < 0.5,
+            "keypoint {index} at ({x}, {y}), projected at {expected:?}"
+        );
+    }
+    assert!(body[2 * 3] < width / 2.0 && body[5 * 3] > width / 2.0);
+    // The skeleton is drawn where the keypoints are: the left shoulder's point in its colour.
+    let at = |x: f64, y: f64| {
+        let offset = ((y as u32 * image.width + x as u32) * 4) as usize;
+        image.rgba[offset..offset + 3].to_vec()
+    };
+    assert_eq!(at(body[15], body[16]), vec![85, 255, 0]);
+    // Normalised: the same points as fractions of the size.
+    let (_, normalized) = openpose(&doc, "openpose-n", &["--size", "600x400", "--normalized"]);
+    let fractions = numbers(&normalized["people"][0]["pose_keypoints_2d"]);
+    assert!((fractions[15] * width - body[15]).abs() < 0.01);
+    assert!((fractions[16] * height - body[16]).abs() < 0.01);
+}
+
+#[test]
+fn hidden_keypoints_go_missing_on_request_and_a_body_without_fingers_has_no_hands() {
+    // Catches: --hidden ignored; hand points made up for a body without finger joints.
+    let doc = write("openpose-side.json", DEFAULT_DOCUMENT);
+    let side = ["--view", "left", "--size", "400x400"];
+    let (_, kept) = openpose(&doc, "side-kept", &side);
+    let missing_args = [&side[..], &["--hidden", "missing"]].concat();
+    let (_, missing) = openpose(&doc, "side-missing", &missing_args);
+    let body = |json: &serde_json::Value| numbers(&json["people"][0]["pose_keypoints_2d"]);
+    let seen = |values: &[f64]| values.chunks(3).filter(|p| p[2] > 0.0).count();
+    assert_eq!(seen(&body(&kept)), 18);
+    // Seen from the left: the right shoulder, hip, eye and ear are behind the body, and left
+    // out as 0, 0, 0; the neck and the left side stay.
+    let hidden = body(&missing);
+    for index in [2, 8, 14, 16] {
+        assert_eq!(
+            &hidden[index * 3..index * 3 + 3],
+            &[0.0, 0.0, 0.0],
+            "keypoint {index}"
+        );
+    }
+    for index in [1, 5, 11, 15, 17] {
+        assert_eq!(hidden[index * 3 + 2], 1.0, "keypoint {index}");
+    }
+    let (_, loa1) = openpose(&doc, "loa1", &["--size", "300x300", "--loa", "1"]);
+    for hand in ["hand_left_keypoints_2d", "hand_right_keypoints_2d"] {
+        assert!(
+            numbers(&loa1["people"][0][hand]).iter().all(|v| *v == 0.0),
+            "{hand}"
+        );
+    }
+}
+
+#[test]
+fn control_map_options_out_of_place_fail_with_a_reason_and_write_nothing() {
+    let good = write("map-good.json", DEFAULT_DOCUMENT);
+    let keypoints = temp("map-k.json").to_string_lossy().into_owned();
+    let cases: [(&[&str], &str); 5] = [
+        (
+            &["--keypoints-out", &keypoints],
+            "--keypoints-out goes with --map openpose",
+        ),
+        (
+            &["--hidden", "missing"],
+            "--hidden goes with --map openpose",
+        ),
+        (
+            &["--map", "openpose", "--transparent"],
+            "--transparent does not go with --map",
+        ),
+        (&["--map", "sketch"], "invalid value 'sketch'"),
+        (
+            &["--map", "openpose", "--keypoints-out", &good],
+            "the document itself",
+        ),
+    ];
+    for (index, (extra, expected)) in cases.iter().enumerate() {
+        let out = temp(&format!("map-fail-{index}.png"));
+        let out_text = out.to_string_lossy().into_owned();
+        let mut args = vec!["render", &good, "--out", &out_text];
+        args.extend_from_slice(extra);
+        let (ok, err) = stance(&args);
+        assert!(!ok, "case {index} succeeded");
+        assert!(err.contains(expected), "case {index}: {err}");
+        assert!(
+            !out.exists() && !std::path::Path::new(&keypoints).exists(),
+            "case {index} wrote"
+        );
+    }
+    // The document is still there, unchanged (not overwritten by --keypoints-out).
+    assert_eq!(std::fs::read_to_string(&good).unwrap(), DEFAULT_DOCUMENT);
+}
+
+/// The pixel of `image` at `point_world` seen by `camera`.
+fn pixel_at(image: &Image, camera: &stance_render::OrbitCamera, point_world: [f32; 3]) -> [u8; 4] {
+    let size = glam::Vec2::new(image.width as f32, image.height as f32);
+    let at = camera
+        .project(glam::Vec3::from_array(point_world), size)
+        .unwrap();
+    let offset = ((at.y as u32 * image.width + at.x as u32) * 4) as usize;
+    image.rgba[offset..offset + 4].try_into().unwrap()
+}
+
+#[test]
+fn the_depth_map_is_bright_near_and_the_normal_map_uses_controlnets_colours() {
+    // Catches: depth drawn far-bright (the convention reversed), normals in world rather than
+    // view space, a flipped red (left) or green (up) axis, a map drawn on the grey background.
+    let turned_camera =
+        r#""camera": {"target": [0, 1.0, 0], "yaw": 0.6, "pitch": 0, "distance": 3.0}"#;
+    let turned = write(
+        "turned.json",
+        &format!(r#"{{"version": 1, {turned_camera}}}"#),
+    );
+    let front = write(
+        "front-maps.json",
+        r#"{"version": 1, "camera": {"target": [0, 1.45, 0], "yaw": 0, "pitch": 0, "distance": 1.2}}"#,
+    );
+    let saved = |target: [f64; 3], yaw, distance| {
+        stance_render::OrbitCamera::saved(target, yaw, 0.0, distance, false)
+    };
+    let depth = render(
+        &turned,
+        "depth.png",
+        &["--map", "depth", "--size", "300x300"],
+    );
+    let camera = saved([0.0, 1.0, 0.0], 0.6, 3.0);
+    // Turned toward the body's left: the left shoulder (H-Anim default centre) is nearer.
+    let near = pixel_at(&depth, &camera, [0.2029, 1.4376, -0.0387]);
+    let far = pixel_at(&depth, &camera, [-0.1907, 1.4407, -0.0325]);
+    assert!(
+        near[0] > far[0] + 10 && far[0] > 0,
+        "near {near:?}, far {far:?}"
+    );
+    assert_eq!(near[0], near[1]);
+    assert_eq!(&depth.rgba[..4], &[0, 0, 0, 255], "the background is black");
+    // The head seen from the front: its middle faces the camera, its side on the image's
+    // left (the body's right) faces left (red), its top faces up (green).
+    let normal = render(
+        &front,
+        "normal.png",
+        &["--map", "normal", "--size", "300x300"],
+    );
+    let camera = saved([0.0, 1.45, 0.0], 0.0, 1.2);
+    let head = [0.0044, 1.6209 + 0.085, 0.0236 + 0.1];
+    let facing = pixel_at(&normal, &camera, head);
+    assert!(
+        facing[0].abs_diff(128) < 25 && facing[1].abs_diff(128) < 25 && facing[2] > 225,
+        "{facing:?}"
+    );
+    let left = pixel_at(&normal, &camera, [head[0] - 0.065, head[1], head[2] - 0.05]);
+    assert!(left[0] > 170 && left[2] > 128, "{left:?}");
+    let top = pixel_at(&normal, &camera, [head[0], head[1] + 0.1, head[2] - 0.06]);
+    assert!(top[1] > 170, "{top:?}");
+}
+
+#[test]
+fn the_mask_covers_exactly_the_figure_of_the_picture() {
+    // Catches: a mask of the capsules rather than of the figure drawn, or with the floor.
+    let doc = write("mask.json", DEFAULT_DOCUMENT);
+    let mask = render(&doc, "mask.png", &["--map", "mask", "--size", "200x200"]);
+    let picture = render(
+        &doc,
+        "mask-picture.png",
+        &["--size", "200x200", "--transparent"],
+    );
+    let mut differing = 0;
+    for (m, p) in mask.rgba.chunks(4).zip(picture.rgba.chunks(4)) {
+        assert_eq!((m[0], m[3]), (m[2], 255));
+        if (m[0] > 0) != (p[3] > 0) {
+            differing += 1;
+        }
+    }
+    let covered = picture.covered_count();
+    assert!(covered > 2000, "{covered}");
+    assert!(
+        differing * 200 <= covered,
+        "{differing} of {covered} pixels differ"
+    );
+}
+
+#[test]
+fn line_art_outlines_the_figure_inside_its_mask() {
+    // Catches: lines drawn on the background side of the silhouette, a filled figure instead
+    // of lines, no inner lines (contours, creases) at all.
+    let doc = write("lines.json", DEFAULT_DOCUMENT);
+    let size = ["--size", "256x256"];
+    let lines = render(
+        &doc,
+        "lines.png",
+        &[&["--map", "lines"][..], &size].concat(),
+    );
+    let mask = render(
+        &doc,
+        "lines-mask.png",
+        &[&["--map", "mask"][..], &size].concat(),
+    );
+    let white = |image: &Image, at: usize| image.rgba[at * 4] > 127;
+    let count = (lines.width * lines.height) as usize;
+    let on_lines: Vec<usize> = (0..count).filter(|&at| white(&lines, at)).collect();
+    let figure = (0..count).filter(|&at| white(&mask, at)).count();
+    assert!(
+        on_lines.iter().all(|&at| mask.rgba[at * 4] > 0),
+        "a line off the figure"
+    );
+    assert!(
+        on_lines.len() * 20 > figure && on_lines.len() * 2 < figure,
+        "{} line pixels for a figure of {figure}",
+        on_lines.len()
+    );
+    // Inner lines: some line pixels have figure all round them (not on the silhouette).
+    let inner = on_lines.iter().filter(|&&at| {
+        let (x, y) = (at % 256, at / 256);
+        x > 0
+            && y > 0
+            && x < 255
+            && y < 255
+            && [at - 1, at + 1, at - 256, at + 256]
+                .iter()
+                .all(|&n| white(&mask, n))
+    });
+    assert!(inner.count() > 20);
+}

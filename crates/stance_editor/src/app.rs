@@ -4,6 +4,7 @@
 
 mod avatar_panel;
 mod comfort_panel;
+mod control_maps_window;
 mod handles;
 mod hands_panel;
 mod image_window;
@@ -76,6 +77,8 @@ pub(crate) struct Windows {
     pub timeline: Option<bool>,
     /// *Save image*.
     pub image: image_window::ImageWindow,
+    /// *Export control maps*.
+    pub control_maps: control_maps_window::ControlMapsWindow,
 }
 
 impl std::fmt::Debug for StanceApp {
@@ -291,6 +294,13 @@ impl StanceApp {
         self.button_rects.push(("save_image_menu", save_image.rect));
         if save_image.clicked() {
             self.windows.image.open = true;
+            ui.close();
+        }
+        let control_maps = ui.button("Export control maps…");
+        self.button_rects
+            .push(("control_maps_menu", control_maps.rect));
+        if control_maps.clicked() {
+            self.windows.control_maps.open = true;
             ui.close();
         }
         if let Some(command) = command {
@@ -758,12 +768,18 @@ impl StanceApp {
         self.carry_out();
     }
 
-    /// The windows: help, Save image, sensors, mapping.
+    /// The windows: help, Save image, Export control maps, sensors, mapping.
     fn show_windows(&mut self, ctx: &egui::Context) {
         self.help_window(ctx);
         self.windows
             .image
             .show(ctx, &mut self.viewport, &mut self.button_rects);
+        self.windows.control_maps.show(
+            ctx,
+            (&self.model, &mut self.outbox),
+            &mut self.viewport,
+            &mut self.button_rects,
+        );
         let mut sensors = SensorsWindow {
             model: &self.model,
             outbox: &mut self.outbox,

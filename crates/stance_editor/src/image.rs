@@ -4,18 +4,20 @@
 //! request, whoever has the GPU (the viewport, or a test) calls [`ImageExport::advance`]
 //! every frame until it is done (the read-back is asynchronous: in the browser it completes
 //! on a later frame), and the finished PNG goes to the model as a command
-//! ([`FileCommand::SaveImage`]), which hands it to the host.
+//! ([`FileCommand::SaveImage`]), which hands it to the host. *Export control maps* asks for
+//! its depth, normal and mask maps the same way, one after another
+//! ([`FileCommand::SaveControlMap`]).
 
 use crate::model::Outbox;
 use crate::model::{FileCommand, NoticeCommand};
 use glam::DVec3;
 use stance_render::{
-    BODY_COLOR_LINEAR, Capsule, GOAL_COLOR_LINEAR, ImageOptions, OrbitCamera, PendingImage, Scene,
-    SceneRenderer, encode_png, render_image,
+    BODY_COLOR_LINEAR, Capsule, GOAL_COLOR_LINEAR, ImageError, ImageOptions, OrbitCamera,
+    PendingImage, Pixels, Scene, SceneRenderer, Shading, encode_png, line_art, render_image,
 };
 
 use crate::figure::MannequinFigure;
-use crate::model::{Command, EditorModel};
+use crate::model::{Command, EditorModel, RenderedMap};
 
 pub use crate::model::IMAGE_FILE_NAME;
 
@@ -32,31 +34,44 @@ pub struct ImageRequest {
     pub options: ImageOptions,
     /// The view.
     pub camera: OrbitCamera,
+    /// A control map instead of the picture (then without background or overlays).
+    pub map: Option<RenderedMap>,
 }
 
 /// The *Save image* work in progress: asked, then on its way back from the GPU.
 #[derive(Debug, Default)]
 pub struct ImageExport {
-    asked: Option<ImageRequest>,
-    pending: Option<PendingImage>,
+    /// The images asked for and not yet started, the next first.
+    asked: std::collections::VecDeque<ImageRequest>,
+    /// The image on its way back, and the map it is (none: the picture).
+    pending: Option<(PendingImage, Option<RenderedMap>)>,
+    /// Line art's depth map, back and waiting for its normal map.
+    lines_depth: Option<Pixels>,
 }
 
 impl ImageExport {
-    /// Asks for an image (replacing one asked and not yet started).
+    /// Asks for an image (replacing those asked and not yet started).
     pub fn request(&mut self, request: ImageRequest) {
-        self.asked = Some(request);
+        self.request_all(vec![request]);
+    }
+
+    /// Asks for images, made one after another (replacing those asked and not yet started).
+    pub fn request_all(&mut self, requests: Vec<ImageRequest>) {
+        self.asked = requests.into();
+        self.lines_depth = None;
     }
 
     /// Whether an image is asked for or on its way.
     pub fn is_busy(&self) -> bool {
-        self.asked.is_some() || self.pending.is_some()
+        !self.asked.is_empty() || self.pending.is_some()
     }
 
     /// Moves *Save image* along with the viewport's GPU: renders an asked image of `model`,
     /// and sends a finished one to the model, which hands it to the host as
-    /// `stance-posture.png`. Never blocks; returns whether an image is still on its way (call
-    /// again next frame). `renderer` draws the avatar it holds, or the mannequin's `figure`
-    /// when it holds its mesh (else the mannequin's capsules).
+    /// `stance-posture.png` (a control map under its own name). Never blocks; returns whether
+    /// an image is still on its way (call again next frame). `renderer` draws the avatar it
+    /// holds, or the mannequin's `figure` when it holds its mesh (else the mannequin's
+    /// capsules).
     pub fn advance(
         &mut self,
         model: &EditorModel,
@@ -66,39 +81,129 @@ impl ImageExport {
         renderer: &mut SceneRenderer,
         figure: Option<&MannequinFigure>,
     ) -> bool {
-        if let Some(request) = self.asked.take() {
-            let mut scene = image_scene(model, renderer.avatar().is_some());
-            let session = model.session();
-            if let Some(figure) = figure.filter(|_| model.avatar().is_none())
-                && let Some(palettes) = figure.palettes(session.skeleton(), session.posture())
-            {
-                scene.capsules.clear();
-                scene.show_avatar = true;
-                scene.avatar_palettes = palettes;
-            }
-            let camera = &request.camera;
-            match render_image(device, queue, renderer, camera, &scene, &request.options) {
-                Ok(pending) => self.pending = Some(pending),
-                Err(error) => outbox.send(Command::Notice(NoticeCommand::Warn(format!(
-                    "The image could not be made: {error}."
-                )))),
-            }
+        if self.pending.is_none()
+            && let Some(request) = self.asked.pop_front()
+        {
+            self.start(request, model, outbox, (device, queue, renderer), figure);
         }
-        let Some(result) = self.pending.as_mut().and_then(|p| p.poll(device)) else {
-            return self.pending.is_some();
+        let Some((result, map)) = self
+            .pending
+            .as_mut()
+            .and_then(|(pending, map)| Some((pending.poll(device)?, *map)))
+        else {
+            return self.is_busy();
         };
         self.pending = None;
+        let result = match (map, result) {
+            // Line art's first pass: keep the depth, render the normals next.
+            (Some(RenderedMap::Lines), Ok(depth)) if self.lines_depth.is_none() => {
+                self.lines_depth = Some(depth);
+                return true;
+            }
+            // Its depth pass failed: not its normal pass either.
+            (Some(RenderedMap::Lines), Err(error)) if self.lines_depth.is_none() => {
+                if self
+                    .asked
+                    .front()
+                    .is_some_and(|next| next.map == Some(RenderedMap::Lines))
+                {
+                    self.asked.pop_front();
+                }
+                Err(error)
+            }
+            (Some(RenderedMap::Lines), Ok(normal)) => self
+                .lines_depth
+                .take()
+                .and_then(|depth| {
+                    let rgba = line_art(&depth.rgba, &normal.rgba, depth.width, depth.height)?;
+                    Some(Pixels { rgba, ..depth })
+                })
+                .ok_or(ImageError::Encode("the line art's maps differ".to_owned())),
+            (_, result) => result,
+        };
         match result.and_then(|pixels| encode_png(&pixels).map(|png| (pixels, png))) {
-            Ok((pixels, png)) => outbox.send(Command::File(FileCommand::SaveImage {
-                png,
-                width: pixels.width,
-                height: pixels.height,
+            Ok((pixels, png)) => outbox.send(Command::File(match map {
+                None => FileCommand::SaveImage {
+                    png,
+                    width: pixels.width,
+                    height: pixels.height,
+                },
+                Some(map) => FileCommand::SaveControlMap {
+                    map,
+                    png,
+                    width: pixels.width,
+                    height: pixels.height,
+                },
             })),
             Err(error) => outbox.send(Command::Notice(NoticeCommand::Warn(format!(
                 "The image could not be made: {error}."
             )))),
         }
-        false
+        self.is_busy()
+    }
+
+    /// Renders `request` and starts reading it back (line art: its depth pass first, asking
+    /// again for its normal pass).
+    fn start(
+        &mut self,
+        request: ImageRequest,
+        model: &EditorModel,
+        outbox: &mut Outbox,
+        (device, queue, renderer): (&wgpu::Device, &wgpu::Queue, &mut SceneRenderer),
+        figure: Option<&MannequinFigure>,
+    ) {
+        let mut scene = image_scene(model, renderer.avatar().is_some());
+        let session = model.session();
+        if let Some(figure) = figure.filter(|_| model.avatar().is_none())
+            && let Some(palettes) = figure.palettes(session.skeleton(), session.posture())
+        {
+            scene.capsules.clear();
+            scene.show_avatar = true;
+            scene.avatar_palettes = palettes;
+        }
+        let camera = &request.camera;
+        let mut options = request.options;
+        let first_pass = self.lines_depth.is_none();
+        if let Some(map) = request.map {
+            scene.shading = shading(map, camera, model, first_pass);
+            options.transparent = false;
+            options.overlays = false;
+        }
+        match render_image(device, queue, renderer, camera, &scene, &options) {
+            Ok(pending) => {
+                self.pending = Some((pending, request.map));
+                if request.map == Some(RenderedMap::Lines) && first_pass {
+                    // The normal pass next.
+                    self.asked.push_front(request);
+                }
+            }
+            Err(error) => {
+                self.lines_depth = None;
+                outbox.send(Command::Notice(NoticeCommand::Warn(format!(
+                    "The image could not be made: {error}."
+                ))));
+            }
+        }
+    }
+}
+
+/// How `map` colours the body: the depth map spans the mannequin's depth seen by `camera`;
+/// line art is drawn from a depth map (its `first_pass`), then a normal map.
+fn shading(
+    map: RenderedMap,
+    camera: &OrbitCamera,
+    model: &EditorModel,
+    first_pass: bool,
+) -> Shading {
+    let depth = || {
+        let capsules: Vec<Capsule> = model.bones().iter().map(|bone| bone.capsule).collect();
+        Shading::depth_seen_by(camera, &capsules)
+    };
+    match map {
+        RenderedMap::Depth => depth(),
+        RenderedMap::Lines if first_pass => depth(),
+        RenderedMap::Normal | RenderedMap::Lines => Shading::Normal,
+        RenderedMap::Mask => Shading::Mask,
     }
 }
 
@@ -147,6 +252,6 @@ fn image_scene(model: &EditorModel, avatar_uploaded: bool) -> Scene {
         show_avatar,
         avatar_palettes,
         markers,
-        transparent_background: false,
+        ..Scene::default()
     }
 }

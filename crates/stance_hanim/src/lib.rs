@@ -20,10 +20,12 @@ pub mod families;
 pub mod frame;
 pub mod hands;
 mod joint_table;
+pub mod keypoints;
 pub mod mapping;
 pub mod names;
 pub mod rest_match;
 pub mod scenarios;
+pub mod sites;
 pub mod strength;
 
 pub use builder::{

@@ -14,6 +14,7 @@ mod bones;
 mod clips;
 mod comfort;
 mod command;
+mod control_maps;
 mod dispatch;
 mod hands;
 mod mapping;
@@ -31,6 +32,7 @@ use stance_render::MannequinBone;
 
 pub use self::clips::{AUTOSAVE_CLIP_BYTES, AnimationFormat, CLIP_FPS, PickPurpose};
 pub use self::comfort::{ComfortCommand, ComfortView, heat_color};
+pub use self::control_maps::{OPENPOSE_IMAGE_FILE_NAME, OPENPOSE_KEYPOINTS_FILE_NAME, RenderedMap};
 /// Said when a document made on the avatar before a posture meant the same pose on every body
 /// (its values relative to the avatar's own rest) was converted to the standard pose.
 pub(crate) const CONVERTED_NOTE: &str = " The document was made before a posture meant the same pose on every body: its values, relative to this avatar's own rest, were converted and show the pose it was saved with.";

@@ -749,3 +749,78 @@ fn the_outbox_carries_the_views_commands_out_in_order_and_says_the_most_they_cha
         .count();
     assert_eq!(after_undo + 1, pinned);
 }
+
+#[test]
+fn the_openpose_map_sees_the_posed_body_through_the_camera_and_downloads_as_two_files() {
+    // Catches: keypoints taken from another posture or skeleton than the session's, the
+    // camera or size ignored, hidden keypoints kept when asked to leave them out, one of the
+    // two files not handed to the host.
+    use stance_render::{HiddenKeypoints, OrbitCamera};
+    let host = MemoryHost::default();
+    let downloads = host.inner.clone();
+    let mut editor = Clocked::with_host(host);
+    editor.settle_within(200);
+    let elbow = editor.joint("l_elbow");
+    let dof = editor.model.session().skeleton().joints()[elbow].dof_start;
+    editor.apply(Command::Posture(PostureCommand::SetDof {
+        dof,
+        value: -1.2,
+    }));
+    editor.settle_within(200);
+    let front = OrbitCamera {
+        target_world: glam::Vec3::new(0.0, 1.0, 0.0),
+        yaw: 0.0,
+        pitch: 0.0,
+        distance_m: 4.0,
+        ..OrbitCamera::default()
+    };
+    let size = [640, 480];
+    let pose = editor.model.openpose(&front, size, HiddenKeypoints::Keep);
+    let person = pose.people[0];
+    assert!(person.body.iter().all(Option::is_some));
+    assert!(
+        person
+            .left_hand
+            .iter()
+            .chain(&person.right_hand)
+            .all(Option::is_some)
+    );
+    let expected = |name| {
+        front
+            .project(
+                editor.position(name).as_vec3(),
+                glam::Vec2::new(640.0, 480.0),
+            )
+            .unwrap()
+            .as_dvec2()
+    };
+    // COCO-18: 6 is the left elbow, 7 the left wrist (moved by the posture).
+    assert!((person.body[6].unwrap() - expected("l_elbow")).length() < 1e-3);
+    assert!((person.body[7].unwrap() - expected("l_radiocarpal")).length() < 1e-3);
+    let mut side = front;
+    side.set_view(stance_render::ViewPreset::Left);
+    let hidden = editor.model.openpose(&side, size, HiddenKeypoints::Missing);
+    assert_eq!(
+        hidden.people[0].body[2], None,
+        "the right shoulder behind the body"
+    );
+    assert!(
+        hidden.people[0].body[5].is_some(),
+        "the left shoulder in view"
+    );
+
+    editor.apply(Command::File(FileCommand::SaveOpenPose {
+        png: vec![137, 80, 78, 71],
+        json: pose.to_json(stance_render::KeypointUnits::Pixels),
+        width: 640,
+        height: 480,
+    }));
+    let names: Vec<String> = downloads
+        .borrow()
+        .binary_downloads
+        .iter()
+        .map(|(name, _)| name.clone())
+        .collect();
+    assert_eq!(names, ["stance-openpose.png", "stance-openpose.json"]);
+    assert!(editor.model.notice().is_some_and(|notice| !notice.is_error));
+}

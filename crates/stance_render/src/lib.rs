@@ -4,7 +4,9 @@
 //!
 //! Without its default feature `gpu` it is the renderer's plain data alone (capsules, the
 //! mannequin's bones, the orbit camera, avatars' skinned meshes and palettes, picking), with
-//! no wgpu: what the editor's model (`stance_model`) builds for the views to draw.
+//! no wgpu: what the editor's model (`stance_model`) builds for the views to draw. The
+//! OpenPose control map needs no GPU either: keypoints seen by the camera, their JSON and the
+//! skeleton image drawn on the CPU ([`OpenPose`]).
 
 #![warn(missing_docs)]
 
@@ -17,7 +19,11 @@ mod capture;
 mod headless;
 #[cfg(feature = "gpu")]
 mod image;
+mod line_art;
+mod openpose;
+mod openpose_draw;
 mod pick;
+mod raster;
 #[cfg(feature = "gpu")]
 mod renderer;
 mod skinned;
@@ -36,6 +42,12 @@ pub use headless::{HeadlessGpu, headless_gpu};
 #[cfg(feature = "gpu")]
 pub use image::{
     ImageError, ImageOptions, MAX_IMAGE_SIDE_PX, PendingImage, encode_png, render_image,
+};
+pub use line_art::{CREASE_DEGREES, DEPTH_JUMP, line_art};
+pub use openpose::{HiddenKeypoints, KeypointUnits, OpenPose, OpenPosePerson};
+pub use openpose_draw::{
+    BODY_COLORS, HAND_BONES, HAND_POINT_COLOR, LIMBS, POINT_RADIUS_PX, STICK_WIDTH_PX,
+    hand_bone_color,
 };
 pub use pick::{CapsuleHit, pick_capsule};
 #[cfg(feature = "gpu")]
@@ -106,6 +118,76 @@ pub struct Scene {
     /// Clear to transparent black (alpha 0) instead of [`BACKGROUND_SRGB`]: the colours
     /// drawn then come out premultiplied by their coverage.
     pub transparent_background: bool,
+    /// The shaded picture, or a control map for image generation.
+    pub shading: Shading,
+}
+
+/// How the figure is coloured: shaded, or as one of the control maps image generation reads
+/// (on black, unlit; the floor and markers are overlays and have no place in them).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub enum Shading {
+    /// Lit and coloured: the viewport's picture.
+    #[default]
+    Shaded,
+    /// Distance along the view, near bright: white at `near_m`, black at `far_m` (m from the
+    /// eye), as the common depth models (MiDaS, ZoeDepth) draw theirs.
+    Depth {
+        /// The depth drawn white (m).
+        near_m: f32,
+        /// The depth drawn black (m).
+        far_m: f32,
+    },
+    /// The view-space normal as ControlNet's normal model (normalbae: ScanNet's protocol,
+    /// Bae et al.'s estimator) reads it: `(n + 1) / 2` with red toward the image's left,
+    /// green up, blue toward the viewer; a surface facing the camera is (128, 128, 255).
+    Normal,
+    /// White where the figure is.
+    Mask,
+}
+
+/// How far beyond the body's farthest point a depth map reaches black, as a fraction of its
+/// depth range: the farthest point stays a dark grey, apart from the black background.
+pub const DEPTH_MARGIN: f32 = 0.2;
+
+impl Shading {
+    /// The depth map of a body made of `capsules` seen by `camera`: white at its nearest
+    /// point (the capsules widened by their radii), black [`DEPTH_MARGIN`] of its depth range
+    /// beyond its farthest.
+    pub fn depth_seen_by(camera: &OrbitCamera, capsules: &[Capsule]) -> Shading {
+        let view_from_world = camera.view_from_world();
+        let (near_m, far_m) = capsules
+            .iter()
+            .flat_map(|capsule| {
+                [capsule.start_world, capsule.end_world].map(|end| (end, capsule.radius_m))
+            })
+            .map(|(end, radius)| (-view_from_world.transform_point3(end).z, radius))
+            .fold(
+                (f32::INFINITY, f32::NEG_INFINITY),
+                |(near, far), (depth, radius)| (near.min(depth - radius), far.max(depth + radius)),
+            );
+        if !(near_m.is_finite() && far_m.is_finite()) {
+            return Shading::Depth {
+                near_m: 0.0,
+                far_m: 1.0,
+            };
+        }
+        let range = (far_m - near_m).max(0.01);
+        Shading::Depth {
+            near_m,
+            far_m: near_m + range * (1.0 + DEPTH_MARGIN),
+        }
+    }
+
+    /// The shaders' `control_map` uniform.
+    #[cfg(feature = "gpu")]
+    fn uniform(self) -> [f32; 4] {
+        match self {
+            Shading::Shaded => [0.0; 4],
+            Shading::Depth { near_m, far_m } => [1.0, near_m, far_m, 0.0],
+            Shading::Normal => [2.0, 0.0, 0.0, 0.0],
+            Shading::Mask => [3.0, 0.0, 0.0, 0.0],
+        }
+    }
 }
 
 impl Scene {
@@ -113,6 +195,8 @@ impl Scene {
     pub fn background_srgb(&self) -> [f32; 4] {
         if self.transparent_background {
             [0.0; 4]
+        } else if self.shading != Shading::Shaded {
+            [0.0, 0.0, 0.0, 1.0]
         } else {
             BACKGROUND_SRGB
         }

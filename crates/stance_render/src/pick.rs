@@ -43,7 +43,11 @@ pub fn pick_capsule(
 }
 
 /// Distance along a unit ray to the surface of a capsule (its segment swept by a sphere).
-fn ray_capsule_distance(origin: Vec3, direction: Vec3, capsule: &Capsule) -> Option<f32> {
+pub(crate) fn ray_capsule_distance(
+    origin: Vec3,
+    direction: Vec3,
+    capsule: &Capsule,
+) -> Option<f32> {
     let radius = capsule.radius_m;
     if radius.is_nan() || radius <= 0.0 {
         return None;

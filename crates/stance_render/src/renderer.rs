@@ -24,6 +24,9 @@ struct FrameUniforms {
     camera_position_world: [f32; 4],
     light_direction_world: [f32; 4],
     background: [f32; 4],
+    view_from_world: [[f32; 4]; 4],
+    /// x: 0 shaded, 1 depth, 2 normals, 3 mask; y, z: the depth range (m).
+    control_map: [f32; 4],
 }
 
 #[repr(C)]
@@ -255,8 +258,10 @@ impl SceneRenderer {
                 buffers: &[Some(template_layout), Some(instance_layout)],
             },
             primitive: wgpu::PrimitiveState {
+                // The template's triangles turn counter-clockwise seen from outside (its
+                // outward normals by the right-hand rule): their backs, inside, are culled.
                 cull_mode: Some(wgpu::Face::Back),
-                front_face: wgpu::FrontFace::Cw,
+                front_face: wgpu::FrontFace::Ccw,
                 ..Default::default()
             },
             depth_stencil: depth_stencil.clone(),
@@ -403,6 +408,8 @@ impl SceneRenderer {
             camera_position_world: camera.eye_world().extend(1.0).to_array(),
             light_direction_world: LIGHT_DIRECTION_WORLD,
             background: scene.background_srgb(),
+            view_from_world: camera.view_from_world().to_cols_array_2d(),
+            control_map: scene.shading.uniform(),
         };
         queue.write_buffer(&self.frame_uniforms, 0, bytemuck::bytes_of(&uniforms));
         let draw_avatar = scene.show_avatar && self.avatar.is_some();

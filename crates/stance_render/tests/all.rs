@@ -3,4 +3,5 @@
 //! tests with `cargo test -p stance_render --test all FILE::`.
 
 mod offscreen;
+mod openpose;
 mod shaders;

@@ -65,6 +65,7 @@ impl ImageWindow {
             viewport.image.request(ImageRequest {
                 options: self.options,
                 camera,
+                map: None,
             });
             open = false;
         }

@@ -346,6 +346,33 @@ pub enum FileCommand {
         /// Height, pixels.
         height: u32,
     },
+    /// Offer the OpenPose control map (its skeleton image, a PNG the views drew from
+    /// [`EditorModel::openpose`], `width` x `height` pixels, and its keypoints as OpenPose
+    /// JSON) as two downloads.
+    ///
+    /// [`EditorModel::openpose`]: crate::EditorModel::openpose
+    SaveOpenPose {
+        /// The PNG file's bytes.
+        png: Vec<u8>,
+        /// The keypoints' JSON.
+        json: String,
+        /// Width, pixels.
+        width: u32,
+        /// Height, pixels.
+        height: u32,
+    },
+    /// Offer a control map the views rendered with the GPU (a PNG, `width` x `height`
+    /// pixels) as a download named after it.
+    SaveControlMap {
+        /// Which map.
+        map: super::RenderedMap,
+        /// The PNG file's bytes.
+        png: Vec<u8>,
+        /// Width, pixels.
+        width: u32,
+        /// Height, pixels.
+        height: u32,
+    },
     /// The host failed to do what the editor asked (reading a file...).
     HostFailed(String),
     /// The views shared the document's posture link ([`EditorModel::share_link`]): the

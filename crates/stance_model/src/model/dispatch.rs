@@ -310,6 +310,18 @@ impl EditorModel {
             FileCommand::ExportDocument => self.export_document(),
             FileCommand::ExportAnimation(format) => self.export_animation(format),
             FileCommand::SaveImage { png, width, height } => self.save_image(&png, width, height),
+            FileCommand::SaveOpenPose {
+                png,
+                json,
+                width,
+                height,
+            } => self.save_openpose(&png, &json, width, height),
+            FileCommand::SaveControlMap {
+                map,
+                png,
+                width,
+                height,
+            } => self.save_control_map(map, &png, width, height),
             FileCommand::HostFailed(reason) => {
                 self.pending_pick = None;
                 self.warn(reason);

@@ -6,6 +6,10 @@ struct Frame {
     camera_position_world: vec4<f32>,
     light_direction_world: vec4<f32>,
     background: vec4<f32>,
+    view_from_world: mat4x4<f32>,
+    // A control map instead of the shaded picture: x 0 shaded, 1 depth, 2 normals, 3 mask;
+    // y, z: the depth (m along the view) drawn white and black.
+    control_map: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -63,9 +67,30 @@ fn linear_to_srgb(linear: vec3<f32>) -> vec3<f32> {
     return select(high, low, c <= vec3<f32>(0.0031308));
 }
 
+// The control map's colour of a surface point: depth near-bright over [y, z] of the map's
+// range; the view-space normal in the ControlNet normal (BAE, ScanNet) convention: red toward
+// the image's left, green up, blue toward the viewer; white for the mask.
+fn control_map_color(position_world: vec3<f32>, normal_world: vec3<f32>) -> vec4<f32> {
+    let mode = frame.control_map.x;
+    if (mode < 1.5) {
+        let depth = -(frame.view_from_world * vec4<f32>(position_world, 1.0)).z;
+        let range = max(frame.control_map.z - frame.control_map.y, 1e-4);
+        let v = clamp((frame.control_map.z - depth) / range, 0.0, 1.0);
+        return vec4<f32>(v, v, v, 1.0);
+    }
+    if (mode < 2.5) {
+        let n = normalize((frame.view_from_world * vec4<f32>(normal_world, 0.0)).xyz);
+        return vec4<f32>(vec3<f32>(-n.x, n.y, n.z) * 0.5 + vec3<f32>(0.5), 1.0);
+    }
+    return vec4<f32>(1.0);
+}
+
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     let n = normalize(in.normal_world);
+    if (frame.control_map.x > 0.5) {
+        return control_map_color(in.position_world, n);
+    }
     let l = normalize(-frame.light_direction_world.xyz);
     let v = normalize(frame.camera_position_world.xyz - in.position_world);
     let h = normalize(l + v);

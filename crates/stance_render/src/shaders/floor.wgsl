@@ -6,6 +6,10 @@ struct Frame {
     camera_position_world: vec4<f32>,
     light_direction_world: vec4<f32>,
     background: vec4<f32>,
+    view_from_world: mat4x4<f32>,
+    // A control map instead of the shaded picture: x 0 shaded, 1 depth, 2 normals, 3 mask;
+    // y, z: the depth (m along the view) drawn white and black.
+    control_map: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> frame: Frame;
