@@ -22,6 +22,31 @@ fn decode(bytes: &[u8]) -> (u32, u32, Vec<u8>) {
     (info.width, info.height, rgba)
 }
 
+/// Moves the export's requests along, frame by frame (a millisecond apart), until none is
+/// left; the outbox with what it sent. Fails after 4,000 frames.
+fn run(
+    image: &mut ImageExport,
+    editor: &Clocked,
+    gpu: &stance_render::HeadlessGpu,
+    renderer: &mut SceneRenderer,
+) -> Outbox {
+    let mut outbox = Outbox::default();
+    let mut frames = 0;
+    while image.advance(
+        &editor.model,
+        &mut outbox,
+        &gpu.device,
+        &gpu.queue,
+        renderer,
+        None,
+    ) {
+        frames += 1;
+        assert!(frames < 4000, "the export never came back");
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+    outbox
+}
+
 /// Asks for an image with `options` and moves it along, frame by frame, until the host has
 /// it; returns the PNG's bytes.
 fn save_image(editor: &mut Clocked, host: &MemoryHost, options: ImageOptions) -> Vec<u8> {
@@ -34,20 +59,7 @@ fn save_image(editor: &mut Clocked, host: &MemoryHost, options: ImageOptions) ->
         camera: OrbitCamera::default(),
         map: None,
     });
-    let mut outbox = Outbox::default();
-    let mut frames = 0;
-    while image.advance(
-        &editor.model,
-        &mut outbox,
-        &gpu.device,
-        &gpu.queue,
-        &mut renderer,
-        None,
-    ) {
-        frames += 1;
-        assert!(frames < 2000, "the image never came back");
-        std::thread::sleep(std::time::Duration::from_millis(2));
-    }
+    let mut outbox = run(&mut image, editor, &gpu, &mut renderer);
     editor.model.apply_outbox(&mut outbox);
     let downloads = &host.inner.borrow().binary_downloads;
     assert_eq!(downloads.len(), before + 1, "{:?}", editor.model.notice());
@@ -204,20 +216,7 @@ fn the_rendered_control_maps_come_one_after_another_as_their_own_downloads() {
             })
             .collect(),
     );
-    let mut outbox = Outbox::default();
-    let mut frames = 0;
-    while image.advance(
-        &editor.model,
-        &mut outbox,
-        &gpu.device,
-        &gpu.queue,
-        &mut renderer,
-        None,
-    ) {
-        frames += 1;
-        assert!(frames < 4000, "the maps never came back");
-        std::thread::sleep(std::time::Duration::from_millis(1));
-    }
+    let mut outbox = run(&mut image, &editor, &gpu, &mut renderer);
     eprintln!(
         "depth, normal, mask and line-art maps at 1024x1024 in {:.2} s on {}",
         started.elapsed().as_secs_f64(),

@@ -95,17 +95,7 @@ impl ControlMapsWindow {
         viewport: &ViewportPanel,
         buttons: &mut ButtonRects,
     ) -> bool {
-        let sides = 1..=MAX_IMAGE_SIDE_PX;
-        ui.horizontal(|ui| {
-            ui.label("Size");
-            ui.add(egui::DragValue::new(&mut self.size_px[0]).range(sides.clone()));
-            ui.label("×");
-            ui.add(egui::DragValue::new(&mut self.size_px[1]).range(sides));
-            ui.label("px");
-        });
-        if ui.button("Viewport size").clicked() {
-            self.size_px = viewport.size_px.map(|side| side.max(1));
-        }
+        super::image_window::size_row(ui, &mut self.size_px, viewport);
         ui.checkbox(&mut self.openpose, "OpenPose skeleton and keypoints (JSON)");
         ui.indent("openpose_options", |ui| {
             ui.checkbox(

@@ -33,17 +33,7 @@ impl ImageWindow {
             .collapsible(false)
             .show(ctx, |ui| {
                 let options = &mut self.options;
-                let sides = 1..=MAX_IMAGE_SIDE_PX;
-                ui.horizontal(|ui| {
-                    ui.label("Size");
-                    ui.add(egui::DragValue::new(&mut options.size_px[0]).range(sides.clone()));
-                    ui.label("×");
-                    ui.add(egui::DragValue::new(&mut options.size_px[1]).range(sides));
-                    ui.label("px");
-                });
-                if ui.button("Viewport size").clicked() {
-                    options.size_px = viewport.size_px.map(|side| side.max(1));
-                }
+                size_row(ui, &mut options.size_px, viewport);
                 ui.checkbox(&mut options.transparent, "Transparent background");
                 ui.checkbox(&mut options.overlays, "Overlays (floor grid, task goals)");
                 let busy = viewport.image.is_busy();
@@ -70,5 +60,21 @@ impl ImageWindow {
             open = false;
         }
         self.open = open;
+    }
+}
+
+/// An exported image's size in pixels (each side 1 to [`MAX_IMAGE_SIDE_PX`]), and a button
+/// that takes the viewport's.
+pub(super) fn size_row(ui: &mut egui::Ui, size_px: &mut [u32; 2], viewport: &ViewportPanel) {
+    let sides = 1..=MAX_IMAGE_SIDE_PX;
+    ui.horizontal(|ui| {
+        ui.label("Size");
+        ui.add(egui::DragValue::new(&mut size_px[0]).range(sides.clone()));
+        ui.label("×");
+        ui.add(egui::DragValue::new(&mut size_px[1]).range(sides));
+        ui.label("px");
+    });
+    if ui.button("Viewport size").clicked() {
+        *size_px = viewport.size_px.map(|side| side.max(1));
     }
 }
