@@ -340,7 +340,7 @@ const BALL_SHARE: f64 = 0.55;
 /// (where joint frames are parallel to the body frame: +Z ahead). Only their floor-plane
 /// positions matter to a support polygon. The length comes from the foot's own joints when
 /// the skeleton has them (the mean of its metatarsophalangeal joints is the ball of the foot,
-/// [`BALL_SHARE`] of the length ahead), else from the leg's length in the anthropometric
+/// `BALL_SHARE` of the length ahead), else from the leg's length in the anthropometric
 /// proportions above.
 pub fn sole(skeleton: &Skeleton, ankle: usize) -> [DVec3; 4] {
     let frames = Frames::new(skeleton, &Posture::rest(skeleton));
@@ -391,10 +391,10 @@ const ANKLE_HEIGHT: f64 = 0.039;
 
 /// The two points of a foot that touch the ground in a stance, on the sole, as offsets from
 /// the ankle in its rest frame (the body frame: +Y up, +Z ahead): the heel (below the ankle,
-/// [`HEEL_SHARE`] of the foot's length behind it) and the ball of the foot (the mean of the
-/// foot's toe joints `toes` when it has them, else [`BALL_SHARE`] of the length ahead). The
+/// `HEEL_SHARE` of the foot's length behind it) and the ball of the foot (the mean of the
+/// foot's toe joints `toes` when it has them, else `BALL_SHARE` of the length ahead). The
 /// sole is as far below the ankle as the lowest of `foot` (every joint and end point below the
-/// ankle), or [`ANKLE_HEIGHT`] of the stature without one 2 cm lower. Metres; `hip_to_ankle`
+/// ankle), or `ANKLE_HEIGHT` of the stature without one 2 cm lower. Metres; `hip_to_ankle`
 /// (the leg's length) sizes a foot without toes.
 pub fn heel_and_ball(toes: &[DVec3], foot: &[DVec3], hip_to_ankle: f64) -> [DVec3; 2] {
     let stature = stature_of(Some(hip_to_ankle));

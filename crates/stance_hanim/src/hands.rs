@@ -668,7 +668,7 @@ impl HandRig {
     }
 
     /// The world position of the tip of `finger` in the posture of `frames`: beyond its last
-    /// joint, along the direction the digit points at rest, by [`TIP_RATIO`] of the segment
+    /// joint, along the direction the digit points at rest, by `TIP_RATIO` of the segment
     /// before it.
     pub fn fingertip(&self, skeleton: &Skeleton, frames: &Frames, finger: Finger) -> Option<DVec3> {
         let rigged = self.finger(finger)?;

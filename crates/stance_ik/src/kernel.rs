@@ -236,7 +236,7 @@ fn reflect4(v: &[f64], beta: f64, x: [&mut [f64]; 4]) {
 /// every level's `dx`. When `projectors` is given, `P_k` after each level is pushed into it
 /// (for tests). `ws.partial_steps()` then holds `dtheta_k` after each level.
 ///
-/// The projector is kept as Householder reflectors on the free DOF (see [`Kernel`]): the
+/// The projector is kept as Householder reflectors on the free DOF (see `Kernel`): the
 /// recursive update `P_k = P_{k-1} - Jh_k^+ Jh_k` appends the reflectors of a pivoted,
 /// rank-revealing Householder QR of `Jh_k^T` written in the rotated coordinates
 /// (`Q^T P_{k-1} J_k^T = [0; Z]`), which keeps `W` orthonormal to machine precision without

@@ -218,7 +218,7 @@ pub struct Contact {
     pub floor: f64,
 }
 
-/// The ground near each frame: the 10th percentile, within [`GROUND_WINDOW`] seconds and
+/// The ground near each frame: the 10th percentile, within `GROUND_WINDOW` seconds and
 /// from `start` on, of the lowest of the tracks' points less their clearances (m).
 pub fn ground(tracks: &[PointTrack], frame_time: f64, scale: &ClipScale) -> Vec<f64> {
     let n = tracks.iter().map(|t| t.positions.len()).min().unwrap_or(0);

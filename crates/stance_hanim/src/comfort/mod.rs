@@ -1,5 +1,5 @@
 //! Comfort of an H-Anim body's posture: RULA ([`rula`]) and the comfort cost and report
-//! ([`model`]): joint loads against gravity as shares of strength, joint ranges, RULA.
+//! (`model`): joint loads against gravity as shares of strength, joint ranges, RULA.
 
 mod model;
 pub mod rula;

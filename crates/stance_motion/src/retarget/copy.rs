@@ -47,7 +47,7 @@ pub struct Placement {
     /// Root motion scale (target hip height over the clip's).
     pub root_scale: f64,
     /// Horizontal root motion scale: the root scale, or the one under which the feet in
-    /// contact slide least (see [`crate::retarget`]).
+    /// contact slide least (see [`crate::retarget()`]).
     pub stride_scale: f64,
     /// The clip's ankle floor: the 5th percentile of its ankles' heights over the motion
     /// (clip metres).
