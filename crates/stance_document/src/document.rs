@@ -476,6 +476,19 @@ impl TaskSpec {
     }
 }
 
+/// The top-level fields of a document (`docs/document-format.md`), as written and read.
+const DOCUMENT_FIELDS: [&str; 9] = [
+    "version",
+    "avatar",
+    "rest",
+    "posture",
+    "tasks",
+    "motion",
+    "camera",
+    "stiffness",
+    "clip",
+];
+
 impl Document {
     /// Checks every field: finite numbers (a document never holds NaN or infinity), levels,
     /// weights, quaternions, axes. Errors name the field (`tasks[2].target[0]`).
@@ -509,9 +522,24 @@ impl Document {
         Self::from_json_value(&v)
     }
 
-    /// Parses and validates a document from a JSON value.
+    /// Parses and validates a document from a JSON value. An object with fields but none of
+    /// a document's is refused, naming what it has (an OpenPose keypoints file, a glTF's JSON:
+    /// read as an empty document, opening one would replace the user's work with nothing);
+    /// `{}` is the empty document, and unknown fields beside a document's are ignored.
     pub fn from_json_value(v: &Value) -> Result<Self, DocumentError> {
         let o = obj(v, "the document")?;
+        if !o.is_empty() && !o.keys().any(|k| DOCUMENT_FIELDS.contains(&k.as_str())) {
+            let found: Vec<&str> = o.keys().take(4).map(String::as_str).collect();
+            return Err(DocumentError::field(
+                "the document",
+                format!(
+                    "none of a document's fields ({}); it has {}{}",
+                    DOCUMENT_FIELDS.join(", "),
+                    found.join(", "),
+                    if o.len() > found.len() { ", ..." } else { "" }
+                ),
+            ));
+        }
         if let Some(ver) = o.get("version").filter(|v| !v.is_null()) {
             let n = number(ver, "version")?;
             if n.fract() != 0.0 || n < 1.0 {

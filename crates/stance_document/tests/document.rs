@@ -50,6 +50,27 @@ fn a_problem_files_tasks_are_document_tasks() {
     assert_eq!(p.values()[s.joints()[knee].dof_start], 0.3);
 }
 
+/// Catches a reader that takes any JSON object for a document: an OpenPose keypoints file
+/// (what `stance render --keypoints-out` writes) opened by mistake read as an empty document,
+/// and opening it replaced the user's posture and tasks with nothing. The empty document `{}`
+/// and unknown fields beside a document's still read.
+#[test]
+fn a_json_file_that_is_no_document_is_refused_by_name() {
+    let openpose = r#"{"people": [{"pose_keypoints_2d": [1, 2, 1]}], "canvas_width": 512, "canvas_height": 512}"#;
+    let e = err(openpose);
+    assert!(
+        e.contains("none of a document's fields") && e.contains("people"),
+        "{e}"
+    );
+    assert!(e.contains("posture"), "{e}");
+    assert_eq!(
+        Document::from_json("{}").unwrap(),
+        Document::from_json("{}").unwrap()
+    );
+    let d = Document::from_json(r#"{"posture": {"l_knee": {"rx": 0.3}}, "note": "mine"}"#).unwrap();
+    assert_eq!(d.posture.get("l_knee", Dof::Rx), Some(0.3));
+}
+
 #[test]
 fn json_round_trips_exactly() {
     let mut r = rng(5);
