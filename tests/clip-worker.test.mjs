@@ -11,7 +11,8 @@
 // measured first and printed). So the test asserts what the retargeting's move off the main
 // thread is about: no call of the page into the editor for the clip takes 50 ms, every long
 // task with such calls in it is an editor frame with under 50 ms of them, and the long tasks
-// that are neither (the baseline has them too) are at most two, each under 100 ms.
+// that are neither (the baseline has them too) are at most two, none longer than the
+// baseline's longest frame.
 import { after, before, describe, test } from "node:test";
 import assert from "node:assert/strict";
 import { mkdtempSync, readFileSync, writeFileSync } from "node:fs";
@@ -200,16 +201,21 @@ describe("a long clip opens in the loading worker", () => {
     assert.deepEqual(withCalls.map((t) => describeTask(t, started)), [],
       "every main-thread task over 50 ms with the clip's calls in it is an editor frame with under 50 ms of them");
     // Tasks that are neither a frame nor hold a call of the clip's happen without a clip too
-    // (the baseline has them: a fresh-clone run saw one of 51 ms in each): at most two, none
-    // near a frame's cost. Catches clip work done on the main thread outside the measured calls
-    // (a parse or a copy of the result in the page's message handler).
+    // (the baseline has them: a fresh-clone run saw one of 51 ms in each, another one of 355
+    // ms while the other end-to-end file loaded the machine): at most two, none longer than
+    // the baseline's longest editor frame (the page's own cost of a task on this machine,
+    // now; at least 100 ms). Catches clip work done on the main thread outside the measured
+    // calls (a parse or a copy of the result in the page's message handler: one per part,
+    // ten for this clip, or one for the whole file, longer than a frame).
     const others = tasks.filter((t) => !t.frame && t.calls.length === 0);
     const baselineOthers = baseline.tasks.filter((t) => !t.frame);
+    const frameCost = Math.max(100, ...frameTasks(baseline.tasks).map((t) => t.duration));
     console.log(`# tasks over 50 ms that are neither an editor frame nor a call of the clip's: `
       + `${others.map((t) => `${t.duration.toFixed(0)} ms`).join(", ") || "none"} (baseline: `
       + `${baselineOthers.map((t) => `${t.duration.toFixed(0)} ms`).join(", ") || "none"})`);
-    assert.ok(others.length <= 2 && others.every((t) => t.duration < 100),
-      `other long tasks while opening: ${others.map((t) => describeTask(t, started)).join("; ")}`);
+    assert.ok(others.length <= 2 && others.every((t) => t.duration < frameCost),
+      `other long tasks while opening (a baseline frame up to ${frameCost.toFixed(0)} ms): `
+        + others.map((t) => describeTask(t, started)).join("; "));
     assert.deepEqual(errors, []);
     await page.close();
   });
