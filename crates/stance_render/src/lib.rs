@@ -61,11 +61,25 @@ pub use skinned_gpu::{AvatarGpu, AvatarUpload, UPLOAD_STEP_BYTES};
 
 use glam::Vec3;
 
-/// Every WGSL shader of the renderer, by file name (validated by naga in the tests).
+/// Every WGSL shader of the renderer, by file name (validated by naga in the tests); the two
+/// that draw bodies end with the control maps' colour (`shaders/control_map.wgsl.part`, a
+/// piece of both, not a shader of its own).
 pub const SHADERS: &[(&str, &str)] = &[
-    ("capsule.wgsl", include_str!("shaders/capsule.wgsl")),
+    (
+        "capsule.wgsl",
+        concat!(
+            include_str!("shaders/capsule.wgsl"),
+            include_str!("shaders/control_map.wgsl.part")
+        ),
+    ),
     ("floor.wgsl", include_str!("shaders/floor.wgsl")),
-    ("skinned.wgsl", include_str!("shaders/skinned.wgsl")),
+    (
+        "skinned.wgsl",
+        concat!(
+            include_str!("shaders/skinned.wgsl"),
+            include_str!("shaders/control_map.wgsl.part")
+        ),
+    ),
 ];
 
 /// A capsule: the segment from `start_world` to `end_world` swept by a sphere of `radius_m`.

@@ -72,23 +72,6 @@ fn linear_to_srgb(linear: vec3<f32>) -> vec3<f32> {
     return select(high, low, c <= vec3<f32>(0.0031308));
 }
 
-// The control map's colour of a surface point: depth near-bright over [y, z] of the map's
-// range; the view-space normal in the ControlNet normal (BAE, ScanNet) convention: red toward
-// the image's left, green up, blue toward the viewer; white for the mask.
-fn control_map_color(position_world: vec3<f32>, normal_world: vec3<f32>) -> vec4<f32> {
-    let mode = frame.control_map.x;
-    if (mode < 1.5) {
-        let depth = -(frame.view_from_world * vec4<f32>(position_world, 1.0)).z;
-        let range = max(frame.control_map.z - frame.control_map.y, 1e-4);
-        let v = clamp((frame.control_map.z - depth) / range, 0.0, 1.0);
-        return vec4<f32>(v, v, v, 1.0);
-    }
-    if (mode < 2.5) {
-        let n = normalize((frame.view_from_world * vec4<f32>(normal_world, 0.0)).xyz);
-        return vec4<f32>(vec3<f32>(-n.x, n.y, n.z) * 0.5 + vec3<f32>(0.5), 1.0);
-    }
-    return vec4<f32>(1.0);
-}
 
 @fragment
 fn fs_main(in: VertexOut, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
