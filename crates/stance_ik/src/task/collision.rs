@@ -193,7 +193,7 @@ pub fn collision_pairs(
             if a.joint >= parents.len() || b.joint >= parents.len() || steps(a.joint, b.joint) < 3 {
                 continue;
             }
-            if surface_distance(a, b, rest).0 > clearance {
+            if surface_distance(a, a.world(rest), b, b.world(rest)).0 > clearance {
                 pairs.push((i, j));
             }
         }
@@ -216,11 +216,14 @@ pub fn floor_capsules(capsules: &[Capsule], rest: &Frames) -> Vec<usize> {
         .collect()
 }
 
-/// The distance between the surfaces of `a` and `b` (negative where they overlap) and the
-/// closest points of their axes, on `a` and on `b`.
-fn surface_distance(a: &Capsule, b: &Capsule, frames: &Frames) -> (f64, DVec3, DVec3) {
-    let (a0, a1) = a.world(frames);
-    let (b0, b1) = b.world(frames);
+/// The distance between the surfaces of `a` and `b` whose axes' ends are given (in the
+/// world; negative where they overlap) and the closest points of their axes, on each.
+fn surface_distance(
+    a: &Capsule,
+    (a0, a1): (DVec3, DVec3),
+    b: &Capsule,
+    (b0, b1): (DVec3, DVec3),
+) -> (f64, DVec3, DVec3) {
     let (pa, pb) = closest_points(a0, a1, b0, b1);
     ((pa - pb).length() - a.radius - b.radius, pa, pb)
 }
@@ -304,9 +307,7 @@ fn constraints(
         if (ca - cb).length_squared() > apart * apart {
             continue;
         }
-        let ((a0, a1), (b0, b1)) = (ends[i], ends[j]);
-        let (pa, pb) = closest_points(a0, a1, b0, b1);
-        let distance = (pa - pb).length() - a.radius - b.radius;
+        let (distance, pa, pb) = surface_distance(a, ends[i], b, ends[j]);
         let gap = pa - pb;
         if distance < reach && gap.length() > 1e-9 {
             found.push(Constraint {
