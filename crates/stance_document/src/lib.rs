@@ -8,6 +8,7 @@
 //!   to and from the solver's types; errors name the field (`tasks[2].joint: unknown joint ...`).
 //! - [`ClipReference`]: the motion clip the keys were made over, named by content hash and,
 //!   in a saved document, embedded (compressed).
+//! - [`Scene`]: several characters, each a document with a name and a placement.
 //! - [`link`]: the compact, versioned, checksummed URL-fragment form of a document.
 //! - [`Problem`]: the one way from tasks to a solver problem (tasks by level, closed-form limb
 //!   starts, settings), from a problem file (`stance solve`) or a document on a skeleton;
@@ -28,6 +29,7 @@ pub mod link;
 pub mod motion;
 mod problem;
 mod range_coder;
+pub mod scene;
 mod status;
 pub mod stiffness;
 mod task_json;
@@ -49,5 +51,6 @@ pub use motion::{MotionKey, MotionSection, TaskInterval};
 pub use problem::{
     LimbStart, Problem, ProblemSettings, parse_skeleton, problem_json, skeleton_json,
 };
+pub use scene::{Placement, Scene, SceneCharacter, clean_name, default_character_name};
 pub use status::{MET_TOLERANCE, TaskStatus, statuses_json, task_statuses};
 pub use stiffness::{StiffnessValues, apply_stiffness};

@@ -152,6 +152,23 @@ impl LoadedAvatar {
         })
     }
 
+    /// A copy for another character: the same file and mapping, its GPU model made again
+    /// for that character's upload.
+    pub fn duplicate(&self) -> Self {
+        let (model, palettes, _) = avatar_model(&self.avatar);
+        Self {
+            name: self.name.clone(),
+            avatar: self.avatar.clone(),
+            model: Some(Arc::new(model)),
+            palettes,
+            warnings: self.warnings.clone(),
+            vertex_count: self.vertex_count,
+            triangle_count: self.triangle_count,
+            images_from_host: self.images_from_host,
+            load: self.load,
+        }
+    }
+
     /// The avatar to be shown again (undo or redo brings it back): its GPU model made again
     /// when the renderer took it.
     pub fn shown_again(mut self) -> Self {

@@ -1,9 +1,10 @@
-//! Undo and redo of every edit: snapshots of the document taken before each edit.
+//! Undo and redo of every edit: snapshots of a character's document taken before each edit
+//! of it, and of the cast (the scene's characters) before each change of it.
 //!
 //! An edit that goes on over many frames (dragging a value, pulling a body part) is one step:
 //! edits with the same [`EditKind`] that follow each other within [`COALESCE_SECS`] merge.
 
-use stance_document::Document;
+use stance_document::{Document, Placement};
 use stance_hanim::hands::Finger;
 
 use crate::model::Hands;
@@ -30,15 +31,76 @@ pub enum EditKind {
     Swivel(usize),
     /// The curl of a finger (the whole hand for `None`) of some hands.
     HandCurl(Hands, Option<Finger>),
+    /// A character's name or place, edited over frames.
+    Cast,
 }
 
-/// One step back or forward: the document, and for a change of body (an avatar swap, back to
-/// the mannequin) the body to bring back, as the editor stored it (see
-/// [`crate::model::EditorModel`]'s kept bodies).
+/// A character's place in the cast as the history keeps it.
 #[derive(Debug, Clone, PartialEq)]
-struct Step {
-    document: Document,
-    body: Option<u64>,
+pub struct CastEntry {
+    /// The character's id.
+    pub id: u64,
+    /// Its name.
+    pub name: String,
+    /// Where it stood.
+    pub placement: Placement,
+}
+
+/// The scene's characters as they were: their order, names and placements, and the selected
+/// one.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CastSnapshot {
+    /// The characters in the scene's order.
+    pub order: Vec<CastEntry>,
+    /// The selected character's id.
+    pub selected: u64,
+}
+
+/// One step back or forward.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Step {
+    /// An edit of one character: its document before, and for a change of body (an avatar
+    /// swap, back to the mannequin) the body to bring back, as the editor stored it (see
+    /// [`crate::model::EditorModel`]'s kept bodies).
+    Edit {
+        /// The character's id.
+        character: u64,
+        /// Its document.
+        document: Box<Document>,
+        /// The body to bring back.
+        body: Option<u64>,
+    },
+    /// A change of the cast (a character added, duplicated, removed, renamed, moved).
+    Cast(CastSnapshot),
+}
+
+/// What the next undo or redo changes: the caller selects that character and passes its
+/// state as it is now ([`History::undo`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Pending {
+    /// An edit of the character `character`; `changes_body`: its body changes back.
+    Edit {
+        /// The character's id.
+        character: u64,
+        /// Whether the step changes the body.
+        changes_body: bool,
+    },
+    /// The cast.
+    Cast,
+}
+
+impl Step {
+    fn pending(&self) -> Pending {
+        match self {
+            Step::Edit {
+                character, body, ..
+            } => Pending::Edit {
+                character: *character,
+                changes_body: body.is_some(),
+            },
+            Step::Cast(_) => Pending::Cast,
+        }
+    }
 }
 
 /// The undo and redo stacks.
@@ -46,49 +108,86 @@ struct Step {
 pub struct History {
     undo: Vec<Step>,
     redo: Vec<Step>,
-    last_edit: Option<(EditKind, f64)>,
+    /// The last edit: of which character (`None`: the cast), what, when.
+    last_edit: Option<(Option<u64>, EditKind, f64)>,
 }
 
 impl History {
-    /// Records `before`, the document as it was before an edit of `kind` at `now_secs`.
-    /// Returns whether a new undo step was made (false when it merged with the previous one).
-    pub fn record(&mut self, before: &Document, kind: EditKind, now_secs: f64) -> bool {
-        let merges = kind != EditKind::Command
-            && self
-                .last_edit
-                .as_ref()
-                .is_some_and(|(last_kind, last_secs)| {
-                    *last_kind == kind && (now_secs - last_secs).abs() < COALESCE_SECS
-                })
-            && !self.undo.is_empty();
-        self.last_edit = Some((kind, now_secs));
-        self.redo.clear();
-        if merges {
+    /// Records `before`, the document of the character `character` as it was before an edit
+    /// of `kind` at `now_secs`. Returns whether a new undo step was made (false when it merged
+    /// with the previous one).
+    pub fn record(
+        &mut self,
+        character: u64,
+        before: &Document,
+        kind: EditKind,
+        now_secs: f64,
+    ) -> bool {
+        if self.merges(Some(character), kind, now_secs) {
             return false;
         }
-        if self
-            .undo
-            .last()
-            .is_some_and(|step| step.body.is_none() && step.document == *before)
-        {
+        let unchanged = matches!(self.undo.last(), Some(Step::Edit { character: last, document, body: None })
+            if *last == character && **document == *before);
+        if unchanged {
             return false;
         }
-        self.push_undo(Step {
-            document: before.clone(),
+        self.push_undo(Step::Edit {
+            character,
+            document: Box::new(before.clone()),
             body: None,
         });
         true
     }
 
-    /// Records a change of body: `before`, the document before it, and `body`, the stored
-    /// body that undo brings back. Always a step of its own.
-    pub fn record_body_change(&mut self, before: &Document, body: u64, now_secs: f64) {
-        self.last_edit = Some((EditKind::Command, now_secs));
+    /// Whether an edit of `kind` on `character` at `now_secs` merges with the last one (and
+    /// notes it as the last edit; the redo stack empties either way).
+    fn merges(&mut self, character: Option<u64>, kind: EditKind, now_secs: f64) -> bool {
+        let merges = kind != EditKind::Command
+            && self
+                .last_edit
+                .as_ref()
+                .is_some_and(|(last_character, last_kind, last_secs)| {
+                    *last_character == character
+                        && *last_kind == kind
+                        && (now_secs - last_secs).abs() < COALESCE_SECS
+                })
+            && !self.undo.is_empty();
+        self.last_edit = Some((character, kind, now_secs));
         self.redo.clear();
-        self.push_undo(Step {
-            document: before.clone(),
+        merges
+    }
+
+    /// Records a change of body of the character `character`: `before`, its document before
+    /// it, and `body`, the stored body that undo brings back. Always a step of its own.
+    pub fn record_body_change(
+        &mut self,
+        character: u64,
+        before: &Document,
+        body: u64,
+        now_secs: f64,
+    ) {
+        self.last_edit = Some((Some(character), EditKind::Command, now_secs));
+        self.redo.clear();
+        self.push_undo(Step::Edit {
+            character,
+            document: Box::new(before.clone()),
             body: Some(body),
         });
+    }
+
+    /// Records `before`, the cast as it was before a change at `now_secs`; `coalesce`: the
+    /// change goes on over frames (a drag, typing a name) and merges with the last one of its
+    /// kind.
+    pub fn record_cast(&mut self, before: CastSnapshot, coalesce: bool, now_secs: f64) {
+        let kind = if coalesce {
+            EditKind::Cast
+        } else {
+            EditKind::Command
+        };
+        if self.merges(None, kind, now_secs) {
+            return;
+        }
+        self.push_undo(Step::Cast(before));
     }
 
     fn push_undo(&mut self, step: Step) {
@@ -103,48 +202,40 @@ impl History {
         self.last_edit = None;
     }
 
-    /// Whether the next undo changes the body back (the caller stores the current body and
-    /// passes it to [`History::undo`]).
-    pub fn undo_changes_body(&self) -> bool {
-        self.undo.last().is_some_and(|step| step.body.is_some())
+    /// What the next undo changes.
+    pub fn next_undo(&self) -> Option<Pending> {
+        self.undo.last().map(Step::pending)
     }
 
-    /// Whether the next redo changes the body again.
-    pub fn redo_changes_body(&self) -> bool {
-        self.redo.last().is_some_and(|step| step.body.is_some())
+    /// What the next redo changes.
+    pub fn next_redo(&self) -> Option<Pending> {
+        self.redo.last().map(Step::pending)
     }
 
-    /// The document to go back to, and the body to bring back when the step changed the body;
-    /// `current` (on `current_body`, stored by the caller when the step changes the body)
+    /// The step to go back to; `current` (the state [`Self::next_undo`] names, as it is now)
     /// becomes redoable.
-    pub fn undo(
-        &mut self,
-        current: &Document,
-        current_body: Option<u64>,
-    ) -> Option<(Document, Option<u64>)> {
+    pub fn undo(&mut self, current: Step) -> Option<Step> {
         let previous = self.undo.pop()?;
-        self.redo.push(Step {
-            document: current.clone(),
-            body: current_body,
-        });
+        self.redo.push(current);
         self.last_edit = None;
-        Some((previous.document, previous.body))
+        Some(previous)
     }
 
-    /// The document to go forward to, and the body to bring back; `current` (on
-    /// `current_body`) becomes undoable.
-    pub fn redo(
-        &mut self,
-        current: &Document,
-        current_body: Option<u64>,
-    ) -> Option<(Document, Option<u64>)> {
+    /// The step to go forward to; `current` becomes undoable.
+    pub fn redo(&mut self, current: Step) -> Option<Step> {
         let next = self.redo.pop()?;
-        self.undo.push(Step {
-            document: current.clone(),
-            body: current_body,
-        });
+        self.undo.push(current);
         self.last_edit = None;
-        Some((next.document, next.body))
+        Some(next)
+    }
+
+    /// Drops the next undo (`back`) or redo step without taking it.
+    pub fn discard(&mut self, back: bool) {
+        if back {
+            self.undo.pop();
+        } else {
+            self.redo.pop();
+        }
     }
 
     /// The stored bodies the steps refer to.
@@ -152,7 +243,22 @@ impl History {
         self.undo
             .iter()
             .chain(&self.redo)
-            .filter_map(|step| step.body)
+            .filter_map(|step| match step {
+                Step::Edit { body, .. } => *body,
+                Step::Cast(_) => None,
+            })
+    }
+
+    /// The characters the steps of the cast name.
+    pub fn characters(&self) -> impl Iterator<Item = u64> + '_ {
+        self.undo
+            .iter()
+            .chain(&self.redo)
+            .filter_map(|step| match step {
+                Step::Cast(snapshot) => Some(snapshot.order.iter().map(|entry| entry.id)),
+                Step::Edit { .. } => None,
+            })
+            .flatten()
     }
 
     /// Whether there is an edit to take back.
@@ -190,17 +296,48 @@ mod tests {
         }
     }
 
+    const A: u64 = 0;
+    const B: u64 = 1;
+
+    fn edit(character: u64, document: &Document, body: Option<u64>) -> Step {
+        Step::Edit {
+            character,
+            document: Box::new(document.clone()),
+            body,
+        }
+    }
+
+    fn cast(ids: &[u64], selected: u64) -> CastSnapshot {
+        CastSnapshot {
+            order: ids
+                .iter()
+                .map(|&id| CastEntry {
+                    id,
+                    name: format!("Character {id}"),
+                    placement: Placement::default(),
+                })
+                .collect(),
+            selected,
+        }
+    }
+
     #[test]
     fn undo_then_redo_walks_back_and_forth_exactly() {
         let mut history = History::default();
         let (zero, one, two) = (document_with(0), document_with(1), document_with(2));
-        history.record(&zero, EditKind::Command, 0.0);
-        history.record(&one, EditKind::Command, 0.1);
-        assert_eq!(history.undo(&two, None), Some((one.clone(), None)));
-        assert_eq!(history.undo(&one, None), Some((zero.clone(), None)));
-        assert_eq!(history.undo(&zero, None), None);
-        assert_eq!(history.redo(&zero, None), Some((one.clone(), None)));
-        assert_eq!(history.redo(&one, None), Some((two, None)));
+        history.record(A, &zero, EditKind::Command, 0.0);
+        history.record(A, &one, EditKind::Command, 0.1);
+        assert_eq!(history.undo(edit(A, &two, None)), Some(edit(A, &one, None)));
+        assert_eq!(
+            history.undo(edit(A, &one, None)),
+            Some(edit(A, &zero, None))
+        );
+        assert_eq!(history.undo(edit(A, &zero, None)), None);
+        assert_eq!(
+            history.redo(edit(A, &zero, None)),
+            Some(edit(A, &one, None))
+        );
+        assert_eq!(history.redo(edit(A, &one, None)), Some(edit(A, &two, None)));
         assert!(!history.can_redo());
     }
 
@@ -208,9 +345,10 @@ mod tests {
     fn a_drag_is_one_step_and_a_new_edit_clears_redo() {
         let mut history = History::default();
         let zero = document_with(0);
-        assert!(history.record(&zero, EditKind::TaskField(0, "weight"), 0.0));
+        assert!(history.record(A, &zero, EditKind::TaskField(0, "weight"), 0.0));
         for frame in 1..30 {
             let merged = !history.record(
+                A,
                 &document_with(frame),
                 EditKind::TaskField(0, "weight"),
                 f64::from(frame as u32) * 0.016,
@@ -218,10 +356,37 @@ mod tests {
             assert!(merged);
         }
         assert_eq!(history.undo_steps(), 1);
-        let undone = history.undo(&document_with(30), None);
-        assert_eq!(undone, Some((zero.clone(), None)));
-        history.record(&zero, EditKind::Command, 5.0);
+        let undone = history.undo(edit(A, &document_with(30), None));
+        assert_eq!(undone, Some(edit(A, &zero, None)));
+        history.record(A, &zero, EditKind::Command, 5.0);
         assert!(!history.can_redo());
+    }
+
+    /// The same field of the same task on two characters: two steps, each naming its own.
+    #[test]
+    fn edits_of_two_characters_never_merge() {
+        let mut history = History::default();
+        let (zero, one) = (document_with(0), document_with(1));
+        assert!(history.record(A, &zero, EditKind::TaskField(0, "weight"), 0.0));
+        assert!(history.record(B, &one, EditKind::TaskField(0, "weight"), 0.1));
+        assert_eq!(
+            history.next_undo(),
+            Some(Pending::Edit {
+                character: B,
+                changes_body: false
+            })
+        );
+        assert_eq!(
+            history.undo(edit(B, &zero, None)),
+            Some(edit(B, &one, None))
+        );
+        assert_eq!(
+            history.next_undo(),
+            Some(Pending::Edit {
+                character: A,
+                changes_body: false
+            })
+        );
     }
 
     /// A change of body is a step of its own that names the body to bring back, and the
@@ -230,24 +395,53 @@ mod tests {
     fn a_change_of_body_carries_its_bodies_back_and_forth() {
         let mut history = History::default();
         let (zero, one) = (document_with(0), document_with(1));
-        history.record(&zero, EditKind::Joint(3), 0.0);
-        history.record_body_change(&one, 7, 0.1);
-        history.record_body_change(&one, 8, 0.2);
+        history.record(A, &zero, EditKind::Joint(3), 0.0);
+        history.record_body_change(A, &one, 7, 0.1);
+        history.record_body_change(A, &one, 8, 0.2);
         assert_eq!(history.undo_steps(), 3);
-        assert!(history.undo_changes_body());
-        assert_eq!(history.undo(&one, Some(9)), Some((one.clone(), Some(8))));
-        assert!(history.redo_changes_body());
+        assert_eq!(
+            history.next_undo(),
+            Some(Pending::Edit {
+                character: A,
+                changes_body: true
+            })
+        );
+        assert_eq!(
+            history.undo(edit(A, &one, Some(9))),
+            Some(edit(A, &one, Some(8)))
+        );
         assert_eq!(history.bodies().collect::<Vec<_>>(), [7, 9]);
-        assert_eq!(history.redo(&one, Some(10)), Some((one.clone(), Some(9))));
-        history.record(&one, EditKind::Command, 1.0);
+        assert_eq!(
+            history.redo(edit(A, &one, Some(10))),
+            Some(edit(A, &one, Some(9)))
+        );
+        history.record(A, &one, EditKind::Command, 1.0);
         assert_eq!(history.bodies().collect::<Vec<_>>(), [7, 10]);
+    }
+
+    /// Renaming over frames is one step; the characters a step of the cast names are the
+    /// ones kept for it.
+    #[test]
+    fn changes_of_the_cast_are_steps_that_name_their_characters() {
+        let mut history = History::default();
+        history.record_cast(cast(&[A], A), false, 0.0);
+        history.record_cast(cast(&[A, B], B), true, 1.0);
+        history.record_cast(cast(&[A, B], B), true, 1.1);
+        assert_eq!(history.undo_steps(), 2);
+        assert_eq!(history.next_undo(), Some(Pending::Cast));
+        let mut named: Vec<u64> = history.characters().collect();
+        named.sort_unstable();
+        named.dedup();
+        assert_eq!(named, [A, B]);
+        let back = history.undo(Step::Cast(cast(&[A], A)));
+        assert_eq!(back, Some(Step::Cast(cast(&[A, B], B))));
     }
 
     #[test]
     fn the_stack_is_bounded() {
         let mut history = History::default();
         for step in 0..(MAX_UNDO_STEPS + 50) {
-            history.record(&document_with(step), EditKind::Command, step as f64);
+            history.record(A, &document_with(step), EditKind::Command, step as f64);
         }
         assert_eq!(history.undo_steps(), MAX_UNDO_STEPS);
     }

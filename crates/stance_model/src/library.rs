@@ -2,7 +2,7 @@
 //! and the autosave of the work in progress.
 
 use serde_json::{Value, json};
-use stance_document::Document;
+use stance_document::{Document, Scene};
 
 use crate::host::HostHooks;
 
@@ -133,7 +133,7 @@ impl PoseLibrary {
 /// when the document changed.
 #[derive(Debug)]
 pub struct Autosave {
-    saved: Option<Document>,
+    saved: Option<Scene>,
     last_secs: f64,
     /// The last save failed (the failure was said once).
     failing: bool,
@@ -150,16 +150,16 @@ impl Default for Autosave {
 }
 
 impl Autosave {
-    /// The autosaved document the host kept, if any.
-    pub fn load(hooks: &dyn HostHooks) -> Option<Result<Document, String>> {
+    /// The autosaved scene the host kept (a document: a scene of one character), if any.
+    pub fn load(hooks: &dyn HostHooks) -> Option<Result<Scene, String>> {
         hooks
             .load_text(AUTOSAVE_KEY)
-            .map(|text| Document::from_json(&text).map_err(|error| error.to_string()))
+            .map(|text| Scene::from_json(&text).map_err(|error| error.to_string()))
     }
 
-    /// `document` is what the host already keeps.
-    pub fn saved(&mut self, document: Document) {
-        self.saved = Some(document);
+    /// `scene` is what the host already keeps.
+    pub fn saved(&mut self, scene: Scene) {
+        self.saved = Some(scene);
     }
 
     /// Saves the document at `now_secs` when the interval has passed and it changed (it is
@@ -168,7 +168,7 @@ impl Autosave {
     pub fn tick(
         &mut self,
         now_secs: f64,
-        document: impl FnOnce() -> Document,
+        document: impl FnOnce() -> Scene,
         hooks: &dyn HostHooks,
     ) -> Option<String> {
         if now_secs - self.last_secs < AUTOSAVE_INTERVAL_SECS {

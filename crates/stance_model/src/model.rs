@@ -11,6 +11,7 @@
 
 mod avatars;
 mod bones;
+mod cast;
 mod clips;
 mod comfort;
 mod command;
@@ -30,6 +31,7 @@ use stance_hanim::{LevelOfArticulation, Mapping, readable_name};
 use stance_ik::Clock;
 use stance_render::MannequinBone;
 
+pub use self::cast::{CHARACTER_SPACING_M, Cast, Character, SceneCommand};
 pub use self::clips::{AUTOSAVE_CLIP_BYTES, AnimationFormat, CLIP_FPS, PickPurpose};
 pub use self::comfort::{ComfortCommand, ComfortView, heat_color};
 pub use self::control_maps::{OPENPOSE_IMAGE_FILE_NAME, OPENPOSE_KEYPOINTS_FILE_NAME, RenderedMap};
@@ -43,14 +45,13 @@ pub use self::command::{
 };
 pub use self::dispatch::{Outbox, SharedLink};
 pub use self::hands::{HandCommand, Hands};
-use self::mapping::MappingCorrections;
 pub use self::mapping::{Correction, carry_posture};
 pub use self::motion::{
     IntervalEdge, MotionCommand, SPEED_RANGE, TRAJECTORY_FRAMES_PER_STEP, Timeline,
 };
 pub use self::tasks::{NewTask, make_task, table1_example};
 use crate::avatar::LoadedAvatar;
-use crate::history::{EditKind, History};
+use crate::history::{EditKind, History, Pending, Step};
 use crate::host::{HostHooks, HostMessage};
 use crate::library::{Autosave, PoseLibrary};
 use crate::posing::{PosingError, PosingSession};
@@ -67,14 +68,14 @@ const TRACE_STEP_M: f64 = 0.002;
 
 /// The editor's model.
 pub struct EditorModel {
-    session: PosingSession,
+    /// The selected character: the one every tool works on.
+    character: Character,
+    /// The scene's other characters.
+    cast: Cast,
     history: History,
     selected_joint: Option<usize>,
     hovered_joint: Option<usize>,
     gesture: Option<Gesture>,
-    avatar: Option<LoadedAvatar>,
-    /// The URL the avatar came from (links and autosave name it); `None` for local files.
-    avatar_url: Option<String>,
     /// Earlier bodies that undo or redo of a change of body brings back, by the id the
     /// history names them with (see `model/avatars.rs`).
     kept_bodies: Vec<(u64, avatars::KeptBody)>,
@@ -86,7 +87,6 @@ pub struct EditorModel {
     pending_document: Option<Document>,
     /// The avatar file the host is importing for the editor (its name).
     pending_import: Option<String>,
-    mapping_corrections: MappingCorrections,
     trace: Vec<DVec3>,
     notice: Option<Notice>,
     library: PoseLibrary,
@@ -101,18 +101,12 @@ pub struct EditorModel {
     autosave: Autosave,
     /// Seconds since the editor started, as of the last step.
     now_secs: f64,
-    /// The posed mannequin's bones after the last step.
-    bones: Vec<MannequinBone>,
     /// Whether the last step put sensor readings in the posture.
     sensors_drove: bool,
-    /// The session revision the bones were built for.
-    bones_revision: Option<u64>,
     /// CPU time of the last step's solve (ms).
     solver_ms: f64,
     /// How many times the session was replaced (views keep per-session state by it).
     session_generation: u64,
-    /// The clip, the playhead and the trajectory (the keys are in the document).
-    timeline: Timeline,
     /// The comfort panel: report and heat map.
     comfort: ComfortView,
 }
@@ -120,7 +114,7 @@ pub struct EditorModel {
 impl std::fmt::Debug for EditorModel {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("EditorModel")
-            .field("session", &self.session)
+            .field("character", &self.character)
             .field("selected_joint", &self.selected_joint)
             .field("gesture", &self.gesture)
             .finish_non_exhaustive()
@@ -133,19 +127,17 @@ impl EditorModel {
     pub fn new(hooks: Box<dyn HostHooks>) -> Result<Self, PosingError> {
         let session = PosingSession::new(LevelOfArticulation::Loa2)?;
         let mut model = Self {
-            session,
+            character: Character::new(0, stance_document::default_character_name(1), session),
+            cast: Cast::default(),
             history: History::default(),
             selected_joint: None,
             hovered_joint: None,
             gesture: None,
-            avatar: None,
-            avatar_url: None,
             kept_bodies: Vec::new(),
             next_body: 0,
             decoded_images: None,
             pending_document: None,
             pending_import: None,
-            mapping_corrections: MappingCorrections::default(),
             trace: Vec::new(),
             notice: None,
             library: PoseLibrary::default(),
@@ -155,12 +147,9 @@ impl EditorModel {
             hooks,
             autosave: Autosave::default(),
             now_secs: 0.0,
-            bones: Vec::new(),
-            bones_revision: None,
             sensors_drove: false,
             solver_ms: 0.0,
             session_generation: 0,
-            timeline: Timeline::default(),
             comfort: ComfortView::default(),
         };
         model.load_library();
@@ -176,7 +165,7 @@ impl EditorModel {
 
     /// The posing session: the body, its posture, the tasks and the solver.
     pub fn session(&self) -> &PosingSession {
-        &self.session
+        &self.character.session
     }
 
     /// The undo and redo history.
@@ -186,7 +175,7 @@ impl EditorModel {
 
     /// The body's H-Anim level of articulation (how many joints it has).
     pub fn level_of_articulation(&self) -> LevelOfArticulation {
-        self.session.level_of_articulation()
+        self.character.session.level_of_articulation()
     }
 
     /// The selected joint (skeleton index), if any.
@@ -211,7 +200,7 @@ impl EditorModel {
 
     /// The loaded avatar; `None` while the built-in mannequin is shown.
     pub fn avatar(&self) -> Option<&LoadedAvatar> {
-        self.avatar.as_ref()
+        self.character.avatar.as_ref()
     }
 
     /// The message shown above the viewport, if any.
@@ -237,7 +226,7 @@ impl EditorModel {
     /// The posed mannequin's bones (capsules with the joint that carries each) as of the last
     /// step: what is drawn and picked.
     pub fn bones(&self) -> &[MannequinBone] {
-        &self.bones
+        &self.character.bones
     }
 
     /// How many times the session was replaced (a new body, LOA or mapping).
@@ -247,7 +236,8 @@ impl EditorModel {
 
     /// The comfort of the current posture (measured once per posture).
     pub fn comfort_report(&self) -> stance_hanim::comfort::ComfortReport {
-        self.comfort.report(&self.session, self.session_generation)
+        self.comfort
+            .report(&self.character.session, self.session_generation)
     }
 
     /// The comfort panel's view: heat map, settings, the last report measured.
@@ -267,7 +257,10 @@ impl EditorModel {
 
     /// Whether the avatar `name` has a mapping correction to revert.
     pub fn can_revert_mapping(&self, name: &str) -> bool {
-        self.mapping_corrections.before_last(name).is_some()
+        self.character
+            .mapping_corrections
+            .before_last(name)
+            .is_some()
     }
 
     /// Seconds since the editor started, as of the last step.
@@ -278,18 +271,21 @@ impl EditorModel {
     /// The document: the session's posture and tasks, the avatar they are for, and the clip
     /// the keys are over (embedded; named only when its file is not loaded).
     pub fn document(&self) -> Document {
-        let mut document = document_of(&self.session, self.avatar_url.as_deref());
-        document.clip = self.timeline.document_clip().cloned();
+        let mut document = document_of(
+            &self.character.session,
+            self.character.avatar_url.as_deref(),
+        );
+        document.clip = self.character.timeline.document_clip().cloned();
         document
     }
 
     /// Whether anything still moves: the solver has not settled, a gesture or a replay goes
     /// on, the trajectory is being computed (the UI keeps drawing frames).
     pub fn is_busy(&self) -> bool {
-        !self.session.is_settled()
+        !self.character.session.is_settled()
             || self.gesture.is_some()
             || self.sensors.replay_progress().is_some()
-            || self.timeline.is_playing()
+            || self.character.timeline.is_playing()
             || self.trajectory_pending()
     }
 
@@ -307,9 +303,9 @@ impl EditorModel {
             self.inform(message);
         }
         self.motion_before_solve(now_secs);
-        self.sensors_drove = self.sensors.drive(&mut self.session);
+        self.sensors_drove = self.sensors.drive(&mut self.character.session);
         let started = web_time::Instant::now();
-        self.session.solve_frame(clock);
+        self.character.session.solve_frame(clock);
         self.solver_ms = started.elapsed().as_secs_f64() * 1000.0;
         self.motion_after_solve();
         self.capture_frame(now_secs);
@@ -324,11 +320,11 @@ impl EditorModel {
     /// one frame later. Nothing to do without a gesture or when the step's posture still
     /// holds.
     pub fn follow_input(&mut self, clock: Option<&dyn Clock>) {
-        if self.gesture.is_none() || self.session.is_settled() {
+        if self.gesture.is_none() || self.character.session.is_settled() {
             return;
         }
         let started = web_time::Instant::now();
-        self.session.solve_frame(clock);
+        self.character.session.solve_frame(clock);
         self.solver_ms += started.elapsed().as_secs_f64() * 1000.0;
         self.extend_trace();
         self.refresh_bones();
@@ -336,7 +332,7 @@ impl EditorModel {
 
     /// The pulled point's path: a point where it moved far enough from the last one.
     fn extend_trace(&mut self) {
-        if let Some(point) = self.session.grabbed_point_world() {
+        if let Some(point) = self.character.session.grabbed_point_world() {
             let moved = self
                 .trace
                 .last()
@@ -357,11 +353,7 @@ impl EditorModel {
     /// The bones follow the posture: rebuilt when the session's revision moved (or the
     /// session was replaced), not every frame.
     fn refresh_bones(&mut self) {
-        let revision = Some(self.session.revision());
-        if revision != self.bones_revision {
-            self.bones = bones::posed_bones(&self.session);
-            self.bones_revision = revision;
-        }
+        self.character.refresh_bones();
     }
 
     fn expire_notice(&mut self) {
@@ -410,41 +402,79 @@ impl EditorModel {
     // Edits: each one records the document before it, so that undo restores it exactly.
 
     fn record(&mut self, kind: EditKind) {
-        let before = self.session.document();
-        self.history.record(&before, kind, self.now_secs);
+        let before = self.character.session.document();
+        self.history
+            .record(self.character.id, &before, kind, self.now_secs);
     }
 
     fn undo(&mut self) {
-        self.end_gesture();
-        let current = self.session.document();
-        // A change of body goes back: the current body is kept for redo.
-        let body = self.history.undo_changes_body().then(|| self.keep_body());
-        match self.history.undo(&current, body) {
-            Some((previous, back)) => {
-                if let Some(back) = back {
-                    self.bring_back_body(back, body);
-                }
-                self.restore(&previous, "undo");
-            }
-            None => self.inform("Nothing to undo."),
-        }
-        self.forget_unreferenced_bodies();
+        self.travel(true);
     }
 
     fn redo(&mut self) {
+        self.travel(false);
+    }
+
+    /// Undo (`back`) or redo: the step's character is selected first (undo shows what it
+    /// changes); its state as it is now becomes the step the other way.
+    fn travel(&mut self, back: bool) {
         self.end_gesture();
-        let current = self.session.document();
-        let body = self.history.redo_changes_body().then(|| self.keep_body());
-        match self.history.redo(&current, body) {
-            Some((next, back)) => {
-                if let Some(back) = back {
-                    self.bring_back_body(back, body);
+        let what = if back { "undo" } else { "redo" };
+        let pending = if back {
+            self.history.next_undo()
+        } else {
+            self.history.next_redo()
+        };
+        let Some(pending) = pending else {
+            self.inform(format!("Nothing to {what}."));
+            return;
+        };
+        let current = match pending {
+            Pending::Edit {
+                character,
+                changes_body,
+            } => {
+                if !self.switch_to_character(character) {
+                    // Its character is gone for good (never the case while a step of the
+                    // cast names it): the step is dropped.
+                    self.history.discard(back);
+                    self.warn(format!(
+                        "Could not {what}: its character is no longer in the scene."
+                    ));
+                    return;
                 }
-                self.restore(&next, "redo");
+                let document = self.character.session.document();
+                // A change of body goes back: the current body is kept for the other way.
+                let body = changes_body.then(|| self.keep_body());
+                Step::Edit {
+                    character: self.character.id,
+                    document: Box::new(document),
+                    body,
+                }
             }
-            None => self.inform("Nothing to redo."),
+            Pending::Cast => Step::Cast(self.cast_snapshot()),
+        };
+        let current_body = match &current {
+            Step::Edit { body, .. } => *body,
+            Step::Cast(_) => None,
+        };
+        let step = if back {
+            self.history.undo(current)
+        } else {
+            self.history.redo(current)
+        };
+        match step {
+            Some(Step::Edit { document, body, .. }) => {
+                if let Some(body) = body {
+                    self.bring_back_body(body, current_body);
+                }
+                self.restore(&document, what);
+            }
+            Some(Step::Cast(snapshot)) => self.restore_cast(&snapshot),
+            None => {}
         }
         self.forget_unreferenced_bodies();
+        self.forget_unreferenced_characters();
     }
 
     /// Undo or redo: `document` on the current body, which may lack some of its joints (the
@@ -452,8 +482,8 @@ impl EditorModel {
     /// left out.
     fn restore(&mut self, document: &Document, what: &str) {
         self.motion_restored();
-        let camera = self.session.camera();
-        let skeleton = self.session.skeleton();
+        let camera = self.character.session.camera();
+        let skeleton = self.character.session.skeleton();
         let mut document = document.clone();
         document.posture = document.posture.fitted(skeleton);
         if let Some(motion) = &mut document.motion {
@@ -461,10 +491,10 @@ impl EditorModel {
                 key.posture = key.posture.fitted(skeleton);
             }
         }
-        if let Err(error) = self.session.restore_document(&document) {
+        if let Err(error) = self.character.session.restore_document(&document) {
             self.warn(format!("Could not {what}: {error}"));
         }
-        if self.session.camera() != camera {
+        if self.character.session.camera() != camera {
             self.view_requests += 1;
         }
     }
@@ -483,21 +513,25 @@ impl EditorModel {
     /// from that avatar's own rest; returns whether it was (say so: [`CONVERTED_NOTE`]).
     fn open_document(&mut self, document: &Document) -> Result<bool, PosingError> {
         let on_this_avatar = matches!(&document.avatar, AvatarReference::Url(url)
-            if self.avatar.is_some() && self.avatar_url.as_ref() == Some(url));
+            if self.character.avatar.is_some() && self.character.avatar_url.as_ref() == Some(url));
         let converted = document.rest == PostureRest::Avatar && on_this_avatar;
         let document = &if converted {
-            document.in_standard_rest(self.session.humanoid())
+            document.in_standard_rest(self.character.session.humanoid())
         } else {
             document.clone()
         };
-        let current = self.session.document();
+        let current = self.character.session.document();
         if document.posture.joints.is_empty() {
-            self.session.load_document(document)?;
+            self.character.session.load_document(document)?;
         } else {
-            self.session.restore_document(document)?;
+            self.character.session.restore_document(document)?;
         }
-        self.history
-            .record(&current, EditKind::Command, self.now_secs);
+        self.history.record(
+            self.character.id,
+            &current,
+            EditKind::Command,
+            self.now_secs,
+        );
         if document.camera.is_some() {
             self.view_requests += 1;
         }
@@ -506,9 +540,10 @@ impl EditorModel {
 
     fn pin(&mut self, joint: usize) {
         self.record(EditKind::Command);
-        self.session.pin(joint);
+        self.character.session.pin(joint);
         self.selected_joint = Some(joint);
         let name = self
+            .character
             .session
             .skeleton()
             .joints()
@@ -523,10 +558,10 @@ impl EditorModel {
 
     fn begin_pull(&mut self, joint: usize, point_world: DVec3) {
         self.end_gesture();
-        let document_before = Box::new(self.session.document());
+        let document_before = Box::new(self.character.session.document());
         self.record(EditKind::Command);
         self.history.break_coalescing();
-        self.session.begin_grab(joint, point_world);
+        self.character.session.begin_grab(joint, point_world);
         self.trace.clear();
         self.trace.push(point_world);
         self.selected_joint = Some(joint);
@@ -546,7 +581,7 @@ impl EditorModel {
         self.record(EditKind::Command);
         self.history.break_coalescing();
         if let Gesture::Swivel { limb, .. } = &gesture {
-            self.session.hold_limb_end(*limb);
+            self.character.session.hold_limb_end(*limb);
         }
         self.gesture = Some(gesture);
     }
@@ -556,9 +591,9 @@ impl EditorModel {
             self.motion_posture_edited();
         }
         match self.gesture.take() {
-            Some(Gesture::Pull { .. }) => self.session.end_grab(),
+            Some(Gesture::Pull { .. }) => self.character.session.end_grab(),
             Some(Gesture::Swivel { .. }) => {
-                self.session.release_hold();
+                self.character.session.release_hold();
                 self.history.break_coalescing();
             }
             Some(_) => self.history.break_coalescing(),
@@ -572,8 +607,8 @@ impl EditorModel {
             Some(Gesture::Pull {
                 document_before, ..
             }) => {
-                self.session.end_grab();
-                if let Err(error) = self.session.restore_document(&document_before) {
+                self.character.session.end_grab();
+                if let Err(error) = self.character.session.restore_document(&document_before) {
                     self.warn(format!("Could not cancel the pull: {error}"));
                 }
             }
@@ -592,8 +627,8 @@ impl EditorModel {
     /// starts again.
     pub(crate) fn replace_session(&mut self, session: PosingSession, change: SessionChange) {
         self.gesture = None;
-        let motion = self.session.motion().cloned();
-        self.session = session;
+        let motion = self.character.session.motion().cloned();
+        self.character.session = session;
         self.sensors.release();
         self.selected_joint = None;
         self.hovered_joint = None;
@@ -604,17 +639,17 @@ impl EditorModel {
         }
         self.session_generation += 1;
         self.motion_session_replaced(motion);
-        self.bones_revision = None;
+        self.character.bones_revision = None;
         self.refresh_bones();
     }
 
     /// The body at another level of articulation: the posture carries over by joint name
     /// (world rotations), the tasks whose joints remain stay; one undoable edit.
     fn set_level_of_articulation(&mut self, loa: LevelOfArticulation) {
-        if loa == self.session.level_of_articulation() {
+        if loa == self.character.session.level_of_articulation() {
             return;
         }
-        let humanoid = match &self.avatar {
+        let humanoid = match &self.character.avatar {
             Some(avatar) => avatar.skeleton(loa),
             None => stance_hanim::default_skeleton(&stance_hanim::SkeletonOptions {
                 loa,
@@ -622,7 +657,9 @@ impl EditorModel {
             })
             .map_err(|error| error.to_string()),
         };
-        match humanoid.and_then(|humanoid| mapping::rebuilt_session(&self.session, humanoid)) {
+        match humanoid
+            .and_then(|humanoid| mapping::rebuilt_session(&self.character.session, humanoid))
+        {
             Ok((session, dropped)) => {
                 self.record(EditKind::Command);
                 self.replace_session(session, SessionChange::Rebuilt);
@@ -641,12 +678,15 @@ impl EditorModel {
     /// Offers the avatar in the current posture as a GLB download (what `stance
     /// export-posed` writes); says why when it cannot.
     fn export_posed_avatar(&mut self) {
-        let Some(avatar) = self.avatar.as_mut() else {
+        let Some(avatar) = self.character.avatar.as_mut() else {
             self.warn("Load an avatar first (Avatar menu): the mannequin cannot be exported.");
             return;
         };
         let file_name = crate::avatar::posed_file_name(&avatar.name);
-        let posed = avatar.posed_glb(self.session.humanoid(), self.session.posture());
+        let posed = avatar.posed_glb(
+            self.character.session.humanoid(),
+            self.character.session.posture(),
+        );
         let result = posed.and_then(|bytes| {
             self.hooks
                 .download_bytes(&file_name, &bytes)
@@ -675,7 +715,7 @@ impl EditorModel {
     /// Rebuilds the avatar's skeleton and the session from `mapping`, remembered as one
     /// correction to revert.
     fn apply_mapping(&mut self, mapping: Mapping, corrections: Vec<Correction>) {
-        let Some(avatar) = &self.avatar else {
+        let Some(avatar) = &self.character.avatar else {
             return;
         };
         if corrections.is_empty() {
@@ -687,11 +727,13 @@ impl EditorModel {
         let changes = mapping::describe_changes(avatar, &before, &mapping);
         match self.remap_avatar(mapping) {
             Ok(dropped) => {
-                self.mapping_corrections.remember(name, before, corrections);
+                self.character
+                    .mapping_corrections
+                    .remember(name, before, corrections);
                 self.inform(format!(
                     "Mapping corrected ({}): {} Ctrl+Z does not undo this; Revert last correction in the mapping window does.",
                     mapping::summarize(&changes),
-                    mapping::rebuilt_summary(&self.session, &dropped)
+                    mapping::rebuilt_summary(&self.character.session, &dropped)
                 ));
             }
             Err(error) => self.warn(format!(
@@ -701,11 +743,11 @@ impl EditorModel {
     }
 
     fn revert_mapping_correction(&mut self) {
-        let Some(avatar) = &self.avatar else {
+        let Some(avatar) = &self.character.avatar else {
             return;
         };
         let name = avatar.name.clone();
-        let Some(previous) = self.mapping_corrections.before_last(&name) else {
+        let Some(previous) = self.character.mapping_corrections.before_last(&name) else {
             self.inform("There is no mapping correction to revert.");
             return;
         };
@@ -714,10 +756,10 @@ impl EditorModel {
             .and_then(|mapping| self.remap_avatar(mapping))
         {
             Ok(dropped) => {
-                self.mapping_corrections.forget_last(&name);
+                self.character.mapping_corrections.forget_last(&name);
                 self.inform(format!(
                     "Reverted the last mapping correction: {}",
-                    mapping::rebuilt_summary(&self.session, &dropped)
+                    mapping::rebuilt_summary(&self.character.session, &dropped)
                 ));
             }
             Err(error) => self.warn(format!("The correction could not be reverted: {error}")),
@@ -728,13 +770,13 @@ impl EditorModel {
     /// LOA: the posture carries over by joint name, the tasks that still fit stay. On error
     /// nothing changes. Returns the dropped tasks, described.
     fn remap_avatar(&mut self, mapping: Mapping) -> Result<Vec<String>, String> {
-        let loa = self.session.level_of_articulation();
-        let Some(avatar) = self.avatar.as_ref() else {
+        let loa = self.character.session.level_of_articulation();
+        let Some(avatar) = self.character.avatar.as_ref() else {
             return Err("no avatar is loaded".to_owned());
         };
         let humanoid = avatar.skeleton_with_mapping(&mapping, loa)?;
-        let (session, dropped) = mapping::rebuilt_session(&self.session, humanoid)?;
-        if let Some(avatar) = self.avatar.as_mut() {
+        let (session, dropped) = mapping::rebuilt_session(&self.character.session, humanoid)?;
+        if let Some(avatar) = self.character.avatar.as_mut() {
             avatar.avatar.mapping = mapping;
         }
         self.replace_session(session, SessionChange::Rebuilt);

@@ -91,18 +91,20 @@ impl EditorModel {
     /// others are named.
     fn open_imported_avatar(&mut self, name: &str, result: Result<Box<ImportedAvatar>, String>) {
         let started = web_time::Instant::now();
-        let loa = self.session.level_of_articulation();
+        let loa = self.character.session.level_of_articulation();
         let mut mapping_note = None;
         let swap = self.pending_document.is_none();
         let mut dropped = Vec::new();
         let loaded = result
             .and_then(|imported| LoadedAvatar::from_imported(name, *imported, loa))
             .and_then(|(mut avatar, mut humanoid)| {
-                mapping_note = self
-                    .mapping_corrections
-                    .reapply(&mut avatar, loa, &mut humanoid);
+                mapping_note =
+                    self.character
+                        .mapping_corrections
+                        .reapply(&mut avatar, loa, &mut humanoid);
                 let session = if swap {
-                    let (session, gone) = super::mapping::rebuilt_session(&self.session, humanoid)?;
+                    let (session, gone) =
+                        super::mapping::rebuilt_session(&self.character.session, humanoid)?;
                     dropped = gone;
                     session
                 } else {
@@ -147,14 +149,14 @@ impl EditorModel {
         } else {
             self.replace_session(session, SessionChange::NewBody);
         }
-        self.avatar = Some(avatar);
-        self.avatar_url = crate::avatar::is_url(name).then(|| name.to_owned());
+        self.character.avatar = Some(avatar);
+        self.character.avatar_url = crate::avatar::is_url(name).then(|| name.to_owned());
         if let Some(document) = self.pending_document.take() {
             // Written before postures meant the same pose on every body: its values are
             // relative to this avatar's own rest.
             let own_rest = document.rest == stance_document::PostureRest::Avatar;
-            let document = document.in_standard_rest(self.session.humanoid());
-            if let Err(error) = self.session.restore_document(&document) {
+            let document = document.in_standard_rest(self.character.session.humanoid());
+            if let Err(error) = self.character.session.restore_document(&document) {
                 self.warn(format!("The posture does not fit this avatar: {error}"));
                 return;
             }
@@ -163,7 +165,7 @@ impl EditorModel {
             }
         }
         self.inform(text);
-        if let Some(avatar) = &mut self.avatar {
+        if let Some(avatar) = &mut self.character.avatar {
             avatar.load.session_ms = started.elapsed().as_secs_f64() * 1e3 - avatar.load.build_ms;
         }
     }
@@ -179,13 +181,13 @@ impl EditorModel {
     pub(super) fn use_mannequin(&mut self) {
         // An import still under way no longer replaces the body.
         self.pending_import = None;
-        if self.avatar.is_none() {
+        if self.character.avatar.is_none() {
             return;
         }
-        let built = PosingSession::new(self.session.level_of_articulation())
+        let built = PosingSession::new(self.character.session.level_of_articulation())
             .map_err(|error| error.to_string())
             .and_then(|session| {
-                super::mapping::rebuilt_session(&self.session, session.humanoid().clone())
+                super::mapping::rebuilt_session(&self.character.session, session.humanoid().clone())
             });
         match built {
             Ok((session, dropped)) => {
@@ -224,10 +226,10 @@ impl EditorModel {
     /// Puts `session`'s body on in place of the current one as one step of the history: the
     /// body taken off is kept for its undo.
     fn change_body(&mut self, session: PosingSession) {
-        let before = self.session.document();
+        let before = self.character.session.document();
         let kept = self.keep_body();
         self.history
-            .record_body_change(&before, kept, self.now_secs);
+            .record_body_change(self.character.id, &before, kept, self.now_secs);
         self.replace_session(session, SessionChange::Rebuilt);
         self.forget_unreferenced_bodies();
     }
@@ -238,8 +240,8 @@ impl EditorModel {
         let id = self.next_body;
         self.next_body += 1;
         let body = KeptBody {
-            avatar: self.avatar.take(),
-            url: self.avatar_url.take(),
+            avatar: self.character.avatar.take(),
+            url: self.character.avatar_url.take(),
         };
         self.kept_bodies.push((id, body));
         if self.kept_bodies.len() > MAX_KEPT_BODIES {
@@ -281,7 +283,7 @@ impl EditorModel {
     /// When it is no longer kept, the body just taken off (`instead`) comes back and the
     /// notice says so.
     pub(super) fn bring_back_body(&mut self, id: u64, instead: Option<u64>) {
-        let loa = self.session.level_of_articulation();
+        let loa = self.character.session.level_of_articulation();
         let (body, session, found) = match self.take_kept_body(id, loa) {
             Some((body, session)) => (body, session, true),
             None => match instead.and_then(|instead| self.take_kept_body(instead, loa)) {
@@ -292,8 +294,8 @@ impl EditorModel {
         self.replace_session(session, SessionChange::Rebuilt);
         // An import still under way no longer replaces the body.
         self.pending_import = None;
-        self.avatar = body.avatar.map(LoadedAvatar::shown_again);
-        self.avatar_url = body.url;
+        self.character.avatar = body.avatar.map(LoadedAvatar::shown_again);
+        self.character.avatar_url = body.url;
         if !found {
             self.warn(
                 "The earlier body is no longer kept (only the last three are): the document went back on this one.",

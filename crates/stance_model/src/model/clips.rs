@@ -99,16 +99,16 @@ impl EditorModel {
         from_document: bool,
         again: Option<Mapping>,
     ) -> Option<Result<String, String>> {
-        if let Some(previous) = self.timeline.opening.take() {
+        if let Some(previous) = self.character.timeline.opening.take() {
             self.hooks.cancel_retarget(previous.id);
         }
-        let id = self.timeline.next_request;
-        self.timeline.next_request += 1;
+        let id = self.character.timeline.next_request;
+        self.character.timeline.next_request += 1;
         let job = Box::new(ClipJob {
             name: name.to_owned(),
             bytes: bytes.clone(),
-            body: self.session.humanoid().clone(),
-            options: self.timeline.options.clone(),
+            body: self.character.session.humanoid().clone(),
+            options: self.character.timeline.options.clone(),
             mapping: again.clone(),
         });
         let opening = Opening {
@@ -122,7 +122,7 @@ impl EditorModel {
         };
         match self.hooks.retarget_clip(ClipRetarget { id, job }) {
             Ok(()) => {
-                self.timeline.opening = Some(opening);
+                self.character.timeline.opening = Some(opening);
                 None
             }
             Err(request) => {
@@ -143,7 +143,7 @@ impl EditorModel {
         let OpenedClip { clip, retargeted } = result?;
         // Made for this body (a change of body meanwhile asks again): a result that does
         // not fit it is refused rather than shown.
-        let dofs = self.session.skeleton().dof_count();
+        let dofs = self.character.session.skeleton().dof_count();
         if retargeted.postures.len() != clip.frames.len()
             || retargeted.postures.iter().any(|p| p.values().len() != dofs)
         {
@@ -158,11 +158,11 @@ impl EditorModel {
             let name = clip.name.clone();
             self.set_clip(Box::new(clip), retargeted, source, file);
             self.show_playhead();
-            let words = self.timeline.contact_words().unwrap_or_default();
+            let words = self.character.timeline.contact_words().unwrap_or_default();
             return Ok(format!("The clip {name} is on the body again: {words}."));
         }
         if opening.from_document {
-            self.timeline.wanted = None;
+            self.character.timeline.wanted = None;
         }
         let set_aside = !opening.from_document;
         Ok(self.put_clip(Box::new(clip), retargeted, source, file, set_aside))
@@ -180,7 +180,7 @@ impl EditorModel {
 
     /// The host's progress with the clip request `id`.
     pub(super) fn clip_progress(&mut self, id: u64, fraction: f64) {
-        if let Some(opening) = self.timeline.opening.as_mut()
+        if let Some(opening) = self.character.timeline.opening.as_mut()
             && opening.id == id
             && fraction.is_finite()
         {
@@ -191,10 +191,16 @@ impl EditorModel {
     /// The host's result for the clip request `id`: put on the timeline if it is the one
     /// awaited (dropped if it was cancelled or another clip opened since).
     pub(super) fn clip_opened(&mut self, id: u64, result: Result<Box<OpenedClip>, String>) {
-        if self.timeline.opening.as_ref().is_none_or(|o| o.id != id) {
+        if self
+            .character
+            .timeline
+            .opening
+            .as_ref()
+            .is_none_or(|o| o.id != id)
+        {
             return;
         }
-        let Some(opening) = self.timeline.opening.take() else {
+        let Some(opening) = self.character.timeline.opening.take() else {
             return;
         };
         let (again, from_document) = (opening.again.is_some(), opening.from_document);
@@ -228,7 +234,7 @@ impl EditorModel {
     /// *Cancel*: the clip being opened is dropped; the document and the timeline stay as
     /// they were (a document's clip stays named, to be opened again).
     pub(super) fn cancel_opening(&mut self) {
-        let Some(opening) = self.timeline.opening.take() else {
+        let Some(opening) = self.character.timeline.opening.take() else {
             return;
         };
         self.hooks.cancel_retarget(opening.id);
@@ -260,13 +266,14 @@ impl EditorModel {
     /// replace it, asked for again if that one fails or is cancelled), else the open clip
     /// ([`Self::retarget_clip`]).
     pub(super) fn put_clips_on_body_again(&mut self) {
-        let Some(opening) = self.timeline.opening.take() else {
+        let Some(opening) = self.character.timeline.opening.take() else {
             self.retarget_clip();
             return;
         };
         self.hooks.cancel_retarget(opening.id);
         let again = opening.again.map(|old| {
-            self.timeline
+            self.character
+                .timeline
                 .clip
                 .as_ref()
                 .map_or(old, |clip| clip.mapping.clone())
@@ -291,7 +298,7 @@ impl EditorModel {
     /// The open clip was hidden while another was on its way, which failed or was cancelled:
     /// it is asked for again on the body as it is.
     fn bring_back_hidden_clip(&mut self) {
-        if self.timeline.opening.is_none() && self.clip_hidden() {
+        if self.character.timeline.opening.is_none() && self.clip_hidden() {
             self.retarget_clip();
         }
     }
@@ -299,11 +306,12 @@ impl EditorModel {
     /// The open clip's own request (put on the body again) is cancelled, if one is on its way.
     pub(super) fn cancel_reopening(&mut self) {
         if self
+            .character
             .timeline
             .opening
             .as_ref()
             .is_some_and(|opening| opening.again.is_some())
-            && let Some(opening) = self.timeline.opening.take()
+            && let Some(opening) = self.character.timeline.opening.take()
         {
             self.hooks.cancel_retarget(opening.id);
         }
@@ -311,7 +319,8 @@ impl EditorModel {
 
     /// Whether `reference` is the open clip's file.
     fn is_open_clip(&self, reference: &ClipReference) -> bool {
-        self.timeline
+        self.character
+            .timeline
             .source
             .as_ref()
             .is_some_and(|open| open.hash == reference.hash && open.size == reference.size)
@@ -325,7 +334,7 @@ impl EditorModel {
             return (String::new(), false);
         };
         if self.is_open_clip(reference) {
-            self.timeline.wanted = None;
+            self.character.timeline.wanted = None;
             return (
                 format!(" Its clip {} is the one open.", reference.name),
                 false,
@@ -333,7 +342,7 @@ impl EditorModel {
         }
         // Saved again before the clip is open (or when it cannot be), the document still
         // names its clip.
-        self.timeline.wanted = Some(reference.without_file());
+        self.character.timeline.wanted = Some(reference.without_file());
         if let Some(embedded) = &reference.embedded {
             let name = reference.name.clone();
             let bytes = embedded.bytes().to_vec();
@@ -357,7 +366,7 @@ impl EditorModel {
 
     /// Puts the loaded avatar's animation `index` on the timeline.
     pub(super) fn open_avatar_animation(&mut self, index: usize) {
-        let clip = match self.avatar.as_ref() {
+        let clip = match self.character.avatar.as_ref() {
             Some(loaded) if index < loaded.avatar.animations.len() => {
                 clip_from_animation(&loaded.avatar, index, ANIMATION_SAMPLE_FPS)
                     .map_err(|e| e.to_string())
@@ -377,11 +386,11 @@ impl EditorModel {
     /// timeline as a clip (resampled at [`CLIP_FPS`]).
     pub(super) fn record_motion(&mut self, on: bool) {
         if on {
-            self.timeline.recording = Some(Vec::new());
+            self.character.timeline.recording = Some(Vec::new());
             self.inform("Recording: the body is captured every frame until you stop.");
             return;
         }
-        let Some(samples) = self.timeline.recording.take() else {
+        let Some(samples) = self.character.timeline.recording.take() else {
             return;
         };
         if samples.len() < 2 {
@@ -390,7 +399,7 @@ impl EditorModel {
         }
         let clip = Clip::from_samples(
             "recording",
-            self.session.humanoid(),
+            self.character.session.humanoid(),
             &samples,
             1.0 / CLIP_FPS,
         );
@@ -404,27 +413,27 @@ impl EditorModel {
 
     /// While recording, the posture of this frame (after the solve).
     pub(super) fn capture_frame(&mut self, now: f64) {
-        if let Some(samples) = self.timeline.recording.as_mut() {
+        if let Some(samples) = self.character.timeline.recording.as_mut() {
             let newer = samples.last().is_none_or(|(t, _)| now > *t);
             if newer {
-                samples.push((now, self.session.posture().clone()));
+                samples.push((now, self.character.session.posture().clone()));
             }
         }
     }
 
     /// New retargeting settings: the clip is put on the body again with them.
     pub(super) fn set_retarget_options(&mut self, options: RetargetOptions) {
-        self.timeline.options = options;
+        self.character.timeline.options = options;
         self.put_clips_on_body_again();
         self.show_playhead();
-        if let Some(words) = self.timeline.contact_words() {
+        if let Some(words) = self.character.timeline.contact_words() {
             self.inform(format!("The clip is put on the body again: {words}."));
         }
     }
 
     /// The clip's mapping corrected: the clip is put on the body again with it.
     pub(super) fn set_clip_mapping(&mut self, mapping: stance_hanim::Mapping) {
-        let Some(clip) = self.timeline.clip.as_mut() else {
+        let Some(clip) = self.character.timeline.clip.as_mut() else {
             self.warn("No clip is open: nothing to map.");
             return;
         };
@@ -436,7 +445,7 @@ impl EditorModel {
         let name = clip.name.clone();
         self.put_clips_on_body_again();
         self.show_playhead();
-        if self.timeline.has_clip() {
+        if self.character.timeline.has_clip() {
             self.inform(format!(
                 "The clip {name} is retargeted with the corrected mapping."
             ));
@@ -446,14 +455,14 @@ impl EditorModel {
     /// Every frame of the timeline as shown: the clip and keys, then the tasks with their
     /// interval weights at that frame's time.
     pub fn baked_postures(&self) -> Vec<Posture> {
-        let humanoid = self.session.humanoid();
+        let humanoid = self.character.session.humanoid();
         let mut solver = Solver::new(SolverSettings::default()).unwrap_or_default();
         (0..self.frame_count())
             .map(|frame| {
                 let mut posture = self.frame_posture(frame);
                 let time = frame as f64 * self.frame_time();
                 let specs = crate::posing::timed_tasks_at(
-                    self.session.tasks(),
+                    self.character.session.tasks(),
                     &humanoid.skeleton,
                     &posture,
                     time,
@@ -479,17 +488,18 @@ impl EditorModel {
             return;
         }
         let name = self
+            .character
             .timeline
             .clip_name()
             .unwrap_or("stance-motion")
             .to_owned();
         let postures = self.baked_postures();
         let frame_time = self.frame_time();
-        let humanoid = self.session.humanoid();
+        let humanoid = self.character.session.humanoid();
         let (file_name, result) = match format {
             AnimationFormat::Glb => {
                 let file_name = format!("{name}.glb");
-                let Some(loaded) = self.avatar.as_ref() else {
+                let Some(loaded) = self.character.avatar.as_ref() else {
                     self.warn("Load an avatar first (Avatar menu) to export a GLB, or export BVH.");
                     return;
                 };

@@ -121,10 +121,11 @@ impl super::EditorModel {
     /// Sets a DOF's stiffness (`None`: its anatomical default) as one undoable edit; a value
     /// the body refuses is named and changes nothing.
     pub(super) fn set_stiffness(&mut self, dof: usize, value: Option<f64>) {
-        let before = self.session.document();
-        match self.session.set_stiffness(dof, value) {
+        let before = self.character.session.document();
+        match self.character.session.set_stiffness(dof, value) {
             Ok(()) => {
                 self.history.record(
+                    self.character.id,
                     &before,
                     crate::history::EditKind::Stiffness(dof),
                     self.now_secs,

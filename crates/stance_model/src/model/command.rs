@@ -5,6 +5,7 @@ use glam::DVec3;
 use stance_document::{Document, LimbName, TaskKindSpec, TaskSpec};
 use stance_hanim::{LevelOfArticulation, Mapping};
 
+use super::cast::SceneCommand;
 use super::clips::AnimationFormat;
 use super::comfort::ComfortCommand;
 use super::hands::HandCommand;
@@ -112,6 +113,8 @@ pub enum Command {
     Comfort(ComfortCommand),
     /// The message above the viewport.
     Notice(NoticeCommand),
+    /// The scene's characters: add, duplicate, remove, rename, select, place.
+    Scene(SceneCommand),
 }
 
 /// What a command changed: the views redraw, the document is saved, the timeline keys a

@@ -84,6 +84,7 @@ impl EditorModel {
             Command::Motion(command) => self.apply_motion(command),
             Command::Comfort(command) => self.comfort.apply(command),
             Command::Notice(command) => self.apply_notice(command),
+            Command::Scene(command) => self.apply_scene(command),
         };
         if change == Change::Posture {
             self.motion_posture_edited();
@@ -108,7 +109,7 @@ impl EditorModel {
             GestureCommand::BeginHandle(gesture) => self.begin_handle(gesture),
             GestureCommand::MoveGrab { target_world } => {
                 if self.is_pulling() {
-                    self.session.move_grab(target_world);
+                    self.character.session.move_grab(target_world);
                 }
             }
             GestureCommand::MoveGoal {
@@ -116,8 +117,13 @@ impl EditorModel {
                 floor_world,
             } => {
                 if let Some(Gesture::Goal { tasks: moved, .. }) = &self.gesture {
-                    let tasks = goals_moved(self.session.tasks(), moved, goal_world, floor_world);
-                    self.session.set_tasks(tasks);
+                    let tasks = goals_moved(
+                        self.character.session.tasks(),
+                        moved,
+                        goal_world,
+                        floor_world,
+                    );
+                    self.character.session.set_tasks(tasks);
                 }
             }
             GestureCommand::TurnRing { screen_angle } => {
@@ -126,7 +132,7 @@ impl EditorModel {
                     .as_mut()
                     .and_then(|gesture| gesture.turn_ring(screen_angle))
                 {
-                    self.session.set_dof(dof, value);
+                    self.character.session.set_dof(dof, value);
                 }
             }
             GestureCommand::TurnSwivel { point_world } => {
@@ -135,7 +141,7 @@ impl EditorModel {
                     .as_ref()
                     .and_then(|gesture| gesture.swivel_at(point_world))
                 {
-                    self.session.set_limb_swivel(limb, angle);
+                    self.character.session.set_limb_swivel(limb, angle);
                 }
             }
             GestureCommand::EndGesture => self.end_gesture(),
@@ -157,29 +163,29 @@ impl EditorModel {
             },
             PostureCommand::SetDof { dof, value } => {
                 self.record(EditKind::Joint(dof));
-                self.session.set_dof(dof, value);
+                self.character.session.set_dof(dof, value);
                 return Change::Posture;
             }
             PostureCommand::SetStiffness { dof, value } => self.set_stiffness(dof, value),
             PostureCommand::SetSwivel { limb, swivel_angle } => {
                 self.record(EditKind::Swivel(limb as usize));
-                self.session.set_limb_swivel(limb, swivel_angle);
+                self.character.session.set_limb_swivel(limb, swivel_angle);
                 return Change::Posture;
             }
             PostureCommand::ResetToRest => {
                 self.record(EditKind::Command);
-                self.session.reset_to_rest();
+                self.character.session.reset_to_rest();
                 self.trace.clear();
                 return Change::Posture;
             }
             PostureCommand::Mirror => {
                 self.record(EditKind::Command);
-                self.session.mirror();
+                self.character.session.mirror();
                 return Change::Posture;
             }
             PostureCommand::SaveCamera(camera) => {
                 self.record(EditKind::Command);
-                self.session.set_camera(camera);
+                self.character.session.set_camera(camera);
                 self.inform(match camera {
                     Some(_) => "The view is saved with the document: opening it shows this view.",
                     None => "The document no longer has a view of its own.",
@@ -191,13 +197,13 @@ impl EditorModel {
 
     /// The edits of the task list, each one undoable.
     fn apply_task(&mut self, command: TaskCommand) -> Change {
-        let mut tasks = self.session.tasks().to_vec();
+        let mut tasks = self.character.session.tasks().to_vec();
         let kind = match command {
             TaskCommand::Set { kind, tasks: new } => {
                 tasks = new;
                 kind
             }
-            TaskCommand::Add(what) => match make_task(&self.session, what) {
+            TaskCommand::Add(what) => match make_task(&self.character.session, what) {
                 Ok(task) => {
                     tasks.push(task);
                     EditKind::Command
@@ -208,7 +214,7 @@ impl EditorModel {
                 }
             },
             TaskCommand::LoadTable1Example => {
-                tasks = table1_example(&self.session);
+                tasks = table1_example(&self.character.session);
                 self.inform("Table 1 of the paper: level 1 holds the left foot, the gaze and the right hand; balance is level 2; the left hand on the bar level 3.");
                 EditKind::Command
             }
@@ -238,11 +244,11 @@ impl EditorModel {
 
     /// Replaces the task list as one edit of `kind`, when it changed.
     pub(super) fn commit_tasks(&mut self, kind: EditKind, tasks: Vec<TaskSpec>) -> Change {
-        if tasks.as_slice() == self.session.tasks() {
+        if tasks.as_slice() == self.character.session.tasks() {
             return Change::Nothing;
         }
         self.record(kind);
-        self.session.set_tasks(tasks);
+        self.character.session.set_tasks(tasks);
         Change::Document
     }
 
@@ -277,7 +283,7 @@ impl EditorModel {
                 return Change::View;
             }
             AvatarCommand::MeshTaken => {
-                if let Some(avatar) = self.avatar.as_mut() {
+                if let Some(avatar) = self.character.avatar.as_mut() {
                     avatar.take_mesh();
                 }
                 return Change::Nothing;
@@ -361,7 +367,7 @@ impl EditorModel {
     fn apply_sensors(&mut self, command: SensorCommand) -> Change {
         let outcome = self.sensors.apply(
             command,
-            &mut self.session,
+            &mut self.character.session,
             self.hooks.as_ref(),
             self.now_secs,
         );

@@ -69,17 +69,23 @@ impl EditorModel {
     pub fn has_fingers(&self) -> bool {
         [Side::Left, Side::Right]
             .into_iter()
-            .any(|side| self.session.hand(side).is_ok())
+            .any(|side| self.character.session.hand(side).is_ok())
     }
 
     /// How curled `finger` (the whole hand for `None`) of `hands` is, 0 to 1 (the mean over
     /// both hands for [`Hands::Both`]); `None` without fingers.
     pub fn hand_curl(&self, hands: Hands, finger: Option<Finger>) -> Option<f64> {
-        let posture = self.session.posture();
+        let posture = self.character.session.posture();
         let curls: Vec<f64> = hands
             .sides()
             .iter()
-            .filter_map(|&side| self.session.hand(side).ok()?.curl_of(posture, finger))
+            .filter_map(|&side| {
+                self.character
+                    .session
+                    .hand(side)
+                    .ok()?
+                    .curl_of(posture, finger)
+            })
             .collect();
         (!curls.is_empty()).then(|| curls.iter().sum::<f64>() / curls.len() as f64)
     }
@@ -92,11 +98,11 @@ impl EditorModel {
             HandCommand::Preset { hands, .. } => (hands, EditKind::Command),
             HandCommand::Curl { hands, finger, .. } => (hands, EditKind::HandCurl(hands, finger)),
         };
-        let skeleton = self.session.skeleton();
+        let skeleton = self.character.session.skeleton();
         let mut values = Vec::new();
         let mut problems = Vec::new();
         for &side in hands.sides() {
-            match self.session.hand(side) {
+            match self.character.session.hand(side) {
                 Ok(rig) => values.extend(match command {
                     HandCommand::Preset { preset, .. } => rig.preset(skeleton, preset),
                     HandCommand::Curl { finger, curl, .. } => rig.curl(skeleton, finger, curl),
@@ -109,7 +115,7 @@ impl EditorModel {
             self.inform(format!("No hand pose: {why}."));
             return Change::View;
         }
-        let posture = self.session.posture().values();
+        let posture = self.character.session.posture().values();
         let unchanged = values
             .iter()
             .all(|&(dof, value)| posture.get(dof) == Some(&value));
@@ -117,7 +123,7 @@ impl EditorModel {
             return Change::Nothing;
         }
         self.record(kind);
-        self.session.set_dofs(&values);
+        self.character.session.set_dofs(&values);
         if let Some(problem) = problems.first() {
             self.inform(format!("Only one hand was posed: {problem}."));
         }

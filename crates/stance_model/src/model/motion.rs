@@ -327,21 +327,21 @@ impl Timeline {
 impl EditorModel {
     /// The timeline: clip, playhead, contacts, trajectory.
     pub fn timeline(&self) -> &Timeline {
-        &self.timeline
+        &self.character.timeline
     }
 
     /// Whether there is a timeline to show: a clip or keys.
     pub fn has_timeline(&self) -> bool {
-        self.timeline.has_clip() || !self.key_frames().is_empty()
+        self.character.timeline.has_clip() || !self.key_frames().is_empty()
     }
 
     /// Frames of the timeline: the clip's (also while it is hidden, being put on the body
     /// again: the same count), else the document's (60 by default).
     pub fn frame_count(&self) -> usize {
         match (
-            self.timeline.base_postures(),
-            &self.timeline.clip,
-            self.session.motion(),
+            self.character.timeline.base_postures(),
+            &self.character.timeline.clip,
+            self.character.session.motion(),
         ) {
             (Some(postures), _, _) => postures.len().max(1),
             (None, Some(hidden), _) => hidden.frames.len().max(1),
@@ -353,9 +353,9 @@ impl EditorModel {
     /// Seconds per frame: the clip's, else the document's (30 fps by default).
     pub fn frame_time(&self) -> f64 {
         match (
-            &self.timeline.retargeted,
-            &self.timeline.clip,
-            self.session.motion(),
+            &self.character.timeline.retargeted,
+            &self.character.timeline.clip,
+            self.character.session.motion(),
         ) {
             (Some(retargeted), _, _) => retargeted.frame_time,
             (None, Some(hidden), _) => hidden.frame_time,
@@ -366,7 +366,8 @@ impl EditorModel {
 
     /// The frames that have a key, in order.
     pub fn key_frames(&self) -> Vec<usize> {
-        self.session
+        self.character
+            .session
             .motion()
             .map(|motion| motion.keys.iter().map(|key| key.frame).collect())
             .unwrap_or_default()
@@ -379,8 +380,8 @@ impl EditorModel {
     }
 
     fn base_posture(&self, frame: usize) -> Posture {
-        let skeleton = self.session.skeleton();
-        match self.timeline.base_postures() {
+        let skeleton = self.character.session.skeleton();
+        match self.character.timeline.base_postures() {
             Some(postures) if !postures.is_empty() => {
                 postures[frame.min(postures.len() - 1)].clone()
             }
@@ -389,8 +390,12 @@ impl EditorModel {
     }
 
     fn key_layer(&self) -> Vec<KeyDelta> {
-        let keys = self.session.motion().map_or(&[][..], |m| m.keys.as_slice());
-        key_deltas(self.session.skeleton(), keys, |frame| {
+        let keys = self
+            .character
+            .session
+            .motion()
+            .map_or(&[][..], |m| m.keys.as_slice());
+        key_deltas(self.character.session.skeleton(), keys, |frame| {
             self.base_posture(frame)
         })
     }
@@ -398,9 +403,12 @@ impl EditorModel {
     fn layered_posture(&self, deltas: &[KeyDelta], frame: usize) -> Posture {
         let base = self.base_posture(frame);
         match delta_at(deltas, frame) {
-            Some((rotations, translation)) => {
-                apply_delta(self.session.skeleton(), &base, &rotations, translation)
-            }
+            Some((rotations, translation)) => apply_delta(
+                self.character.session.skeleton(),
+                &base,
+                &rotations,
+                translation,
+            ),
             None => base,
         }
     }
@@ -425,17 +433,17 @@ impl EditorModel {
             MotionCommand::CloseClip => self.close_clip(false),
             MotionCommand::Play => self.play(true),
             MotionCommand::Pause => self.play(false),
-            MotionCommand::TogglePlay => self.play(!self.timeline.playing),
+            MotionCommand::TogglePlay => self.play(!self.character.timeline.playing),
             MotionCommand::Seek(frame) => self.seek(frame),
             MotionCommand::StepFrames(by) => {
-                self.timeline.playing = false;
-                let frame = self.timeline.frame as i64 + by;
+                self.character.timeline.playing = false;
+                let frame = self.character.timeline.frame as i64 + by;
                 self.seek(frame.max(0) as usize);
             }
-            MotionCommand::SetLooping(looping) => self.timeline.looping = looping,
+            MotionCommand::SetLooping(looping) => self.character.timeline.looping = looping,
             MotionCommand::SetSpeed(speed) => {
                 if speed.is_finite() {
-                    self.timeline.speed = speed.clamp(SPEED_RANGE.0, SPEED_RANGE.1);
+                    self.character.timeline.speed = speed.clamp(SPEED_RANGE.0, SPEED_RANGE.1);
                 }
             }
             MotionCommand::SetFrameCount(count) => self.set_frame_count(count),
@@ -460,7 +468,7 @@ impl EditorModel {
                 self.drag_interval(task, edge, secs);
             }
             MotionCommand::SetTrajectory(joint) => {
-                self.timeline.trajectory_joint = joint;
+                self.character.timeline.trajectory_joint = joint;
                 self.refresh_trajectory();
             }
             MotionCommand::OpenAvatarAnimation(index) => self.open_avatar_animation(index),
@@ -484,13 +492,17 @@ impl EditorModel {
         source: ClipReference,
         set_aside: bool,
     ) -> Result<String, String> {
-        let retargeted =
-            retarget(&clip, self.session.humanoid(), &self.timeline.options).map_err(|error| {
-                format!(
-                    "The clip {} could not be put on this body: {error}.",
-                    clip.name
-                )
-            })?;
+        let retargeted = retarget(
+            &clip,
+            self.character.session.humanoid(),
+            &self.character.timeline.options,
+        )
+        .map_err(|error| {
+            format!(
+                "The clip {} could not be put on this body: {error}.",
+                clip.name
+            )
+        })?;
         Ok(self.put_clip(clip, retargeted, source, None, set_aside))
     }
 
@@ -507,7 +519,7 @@ impl EditorModel {
         let contacts = contact_words(&retargeted);
         let name = clip.name.clone();
         let mut text = format!("the clip {name}: {frames} frames at {fps:.3} fps, {contacts}.");
-        if let Some(wanted) = self.timeline.wanted.take() {
+        if let Some(wanted) = self.character.timeline.wanted.take() {
             if wanted.hash == source.hash && wanted.size == source.size {
                 text.push_str(&format!(
                     " It is the clip the document was made over ({}): its keys are over it again.",
@@ -523,7 +535,7 @@ impl EditorModel {
             }
         }
         self.set_clip(clip, retargeted, source, file);
-        self.timeline.playing = false;
+        self.character.timeline.playing = false;
         let set_aside = if set_aside {
             self.set_aside_standing_tasks()
         } else {
@@ -542,32 +554,36 @@ impl EditorModel {
     /// undoable edit. Returns how many.
     fn set_aside_standing_tasks(&mut self) -> usize {
         let tasks: Vec<_> = self
+            .character
             .session
             .tasks()
             .iter()
             .filter(|task| task.interval.is_some())
             .cloned()
             .collect();
-        let removed = self.session.tasks().len() - tasks.len();
+        let removed = self.character.session.tasks().len() - tasks.len();
         self.commit_tasks(EditKind::Command, tasks);
         removed
     }
 
     fn play(&mut self, playing: bool) {
         self.flush_pending_key();
-        if playing && self.timeline.frame + 1 >= self.frame_count() && !self.timeline.looping {
-            self.timeline.frame = 0;
-            self.timeline.position = 0.0;
+        if playing
+            && self.character.timeline.frame + 1 >= self.frame_count()
+            && !self.character.timeline.looping
+        {
+            self.character.timeline.frame = 0;
+            self.character.timeline.position = 0.0;
         }
-        self.timeline.playing = playing;
-        self.timeline.last_now = self.now_secs;
+        self.character.timeline.playing = playing;
+        self.character.timeline.last_now = self.now_secs;
     }
 
     fn seek(&mut self, frame: usize) {
         self.flush_pending_key();
         let frame = frame.min(self.frame_count() - 1);
-        self.timeline.frame = frame;
-        self.timeline.position = frame as f64 * self.frame_time();
+        self.character.timeline.frame = frame;
+        self.character.timeline.position = frame as f64 * self.frame_time();
         self.show_frame(frame);
     }
 
@@ -575,41 +591,45 @@ impl EditorModel {
     fn show_frame(&mut self, frame: usize) {
         let posture = self.frame_posture(frame);
         let time = frame as f64 * self.frame_time();
-        self.session.show_timed(Some((posture, time)));
-        self.timeline.shown = Some(frame);
+        self.character.session.show_timed(Some((posture, time)));
+        self.character.timeline.shown = Some(frame);
     }
 
     /// The playhead advances while playing (real time × speed), and a new frame is shown.
     pub(super) fn motion_before_solve(&mut self, now: f64) {
-        let elapsed = (now - self.timeline.last_now).max(0.0);
-        self.timeline.last_now = now;
-        if !self.timeline.playing {
+        let elapsed = (now - self.character.timeline.last_now).max(0.0);
+        self.character.timeline.last_now = now;
+        if !self.character.timeline.playing {
             return;
         }
         let (count, frame_time) = (self.frame_count(), self.frame_time());
         let duration = count as f64 * frame_time;
-        let mut position = self.timeline.position + elapsed * self.timeline.speed;
+        let mut position =
+            self.character.timeline.position + elapsed * self.character.timeline.speed;
         let mut frame = (position / frame_time + 1e-9).floor() as usize;
         if frame >= count {
-            if self.timeline.looping && duration > 0.0 {
+            if self.character.timeline.looping && duration > 0.0 {
                 position %= duration;
                 frame = ((position / frame_time + 1e-9).floor() as usize).min(count - 1);
             } else {
                 frame = count - 1;
                 position = frame as f64 * frame_time;
-                self.timeline.playing = false;
+                self.character.timeline.playing = false;
             }
         }
-        self.timeline.position = position;
-        self.timeline.frame = frame;
-        if self.timeline.shown != Some(frame) {
+        self.character.timeline.position = position;
+        self.character.timeline.frame = frame;
+        if self.character.timeline.shown != Some(frame) {
             self.show_frame(frame);
         }
     }
 
     /// A pending key is set once the body settles; the trajectory follows the keys.
     pub(super) fn motion_after_solve(&mut self) {
-        if self.timeline.pending_key && self.gesture.is_none() && self.session.is_settled() {
+        if self.character.timeline.pending_key
+            && self.gesture.is_none()
+            && self.character.session.is_settled()
+        {
             self.flush_pending_key();
         }
         self.refresh_trajectory();
@@ -617,26 +637,26 @@ impl EditorModel {
 
     /// A gesture ended or a posture edit landed: paused on a timeline, it becomes a key.
     pub(super) fn motion_posture_edited(&mut self) {
-        if self.has_timeline() && !self.timeline.playing {
-            self.timeline.pending_key = true;
+        if self.has_timeline() && !self.character.timeline.playing {
+            self.character.timeline.pending_key = true;
         }
     }
 
     /// Undo or redo put a document back: no key is pending any more.
     pub(super) fn motion_restored(&mut self) {
-        self.timeline.pending_key = false;
+        self.character.timeline.pending_key = false;
     }
 
     /// The session was replaced (another body, LOA or mapping): the keys carry over by
     /// joint name, the clip is retargeted onto the new body and the frame shown again.
     pub(super) fn motion_session_replaced(&mut self, motion: Option<MotionSection>) {
-        self.timeline.pending_key = false;
-        self.timeline.shown = None;
-        if self.session.motion().is_none() && motion.is_some() {
-            self.session.set_motion(motion);
+        self.character.timeline.pending_key = false;
+        self.character.timeline.shown = None;
+        if self.character.session.motion().is_none() && motion.is_some() {
+            self.character.session.set_motion(motion);
         }
         self.put_clips_on_body_again();
-        self.timeline.playing = false;
+        self.character.timeline.playing = false;
         self.show_playhead();
     }
 
@@ -646,41 +666,45 @@ impl EditorModel {
     /// document still names it); a recording or an avatar's animation is put on the body here.
     /// A clip that does not fit is closed with a notice.
     pub(super) fn retarget_clip(&mut self) {
-        let Some(clip) = &self.timeline.clip else {
+        let Some(clip) = &self.character.timeline.clip else {
             return;
         };
-        if let Some((name, bytes)) = self.timeline.file.clone() {
+        if let Some((name, bytes)) = self.character.timeline.file.clone() {
             let mapping = clip.mapping.clone();
-            let source = self.timeline.source.clone();
+            let source = self.character.timeline.source.clone();
             self.hide_clip();
             if let Some(result) = self.start_opening(&name, bytes, source, false, Some(mapping)) {
                 self.report_opening(true, false, result);
             }
             return;
         }
-        match retarget(clip, self.session.humanoid(), &self.timeline.options) {
-            Ok(retargeted) => self.timeline.retargeted = Some(retargeted),
+        match retarget(
+            clip,
+            self.character.session.humanoid(),
+            &self.character.timeline.options,
+        ) {
+            Ok(retargeted) => self.character.timeline.retargeted = Some(retargeted),
             Err(error) => {
                 self.close_clip(false);
                 self.warn(format!("The clip does not fit the body: {error}."));
             }
         }
-        self.timeline.base_revision += 1;
-        self.timeline.shown = None;
+        self.character.timeline.base_revision += 1;
+        self.character.timeline.shown = None;
     }
 
     /// The open clip hidden from the timeline (made for another body) while it is asked for
     /// again or another clip on its way replaces it; the document still names it.
     pub(super) fn hide_clip(&mut self) {
-        if self.timeline.retargeted.take().is_some() {
-            self.timeline.base_revision += 1;
-            self.timeline.shown = None;
+        if self.character.timeline.retargeted.take().is_some() {
+            self.character.timeline.base_revision += 1;
+            self.character.timeline.shown = None;
         }
     }
 
     /// Whether the open clip is hidden (see [`Self::hide_clip`]).
     pub(super) fn clip_hidden(&self) -> bool {
-        self.timeline.clip.is_some() && self.timeline.retargeted.is_none()
+        self.character.timeline.clip.is_some() && self.character.timeline.retargeted.is_none()
     }
 
     /// `clip`, retargeted onto the body, on the timeline, kept in the document as `source`
@@ -692,12 +716,12 @@ impl EditorModel {
         source: ClipReference,
         file: Option<(String, Vec<u8>)>,
     ) {
-        self.timeline.clip = Some(clip);
-        self.timeline.retargeted = Some(retargeted);
-        self.timeline.source = Some(source);
-        self.timeline.file = file;
-        self.timeline.base_revision += 1;
-        self.timeline.shown = None;
+        self.character.timeline.clip = Some(clip);
+        self.character.timeline.retargeted = Some(retargeted);
+        self.character.timeline.source = Some(source);
+        self.character.timeline.file = file;
+        self.character.timeline.base_revision += 1;
+        self.character.timeline.shown = None;
     }
 
     /// Closes the clip (a request putting it on the body again is cancelled); `keep_named`:
@@ -705,40 +729,40 @@ impl EditorModel {
     /// clip).
     pub(super) fn close_clip(&mut self, keep_named: bool) {
         self.cancel_reopening();
-        let source = self.timeline.source.take();
-        self.timeline.wanted = if keep_named {
-            source.or(self.timeline.wanted.take())
+        let source = self.character.timeline.source.take();
+        self.character.timeline.wanted = if keep_named {
+            source.or(self.character.timeline.wanted.take())
         } else {
             None
         };
-        self.timeline.clip = None;
-        self.timeline.retargeted = None;
-        self.timeline.file = None;
-        self.timeline.playing = false;
-        self.timeline.base_revision += 1;
-        self.timeline.shown = None;
-        self.session.show_timed(None);
+        self.character.timeline.clip = None;
+        self.character.timeline.retargeted = None;
+        self.character.timeline.file = None;
+        self.character.timeline.playing = false;
+        self.character.timeline.base_revision += 1;
+        self.character.timeline.shown = None;
+        self.character.session.show_timed(None);
     }
 
     /// Shows the playhead's frame again (after the clip or the body changed).
     pub(super) fn show_playhead(&mut self) {
         if self.has_timeline() {
-            let frame = self.timeline.frame.min(self.frame_count() - 1);
+            let frame = self.character.timeline.frame.min(self.frame_count() - 1);
             self.seek(frame);
         }
     }
 
     fn flush_pending_key(&mut self) {
         // A key over a clip that is being put on the body would be taken over the rest posture.
-        if std::mem::take(&mut self.timeline.pending_key) && !self.clip_hidden() {
+        if std::mem::take(&mut self.character.timeline.pending_key) && !self.clip_hidden() {
             self.set_key_here(false);
         }
     }
 
     /// The document's motion section, made for this timeline when missing.
     fn motion_section(&self) -> MotionSection {
-        let mut motion = self.session.motion().cloned().unwrap_or_default();
-        if let Some(retargeted) = &self.timeline.retargeted {
+        let mut motion = self.character.session.motion().cloned().unwrap_or_default();
+        if let Some(retargeted) = &self.character.timeline.retargeted {
             motion.frame_time = retargeted.frame_time;
             motion.frame_count = retargeted.postures.len().max(1);
         }
@@ -748,8 +772,11 @@ impl EditorModel {
     /// A key at the playhead from the current posture; `record`: as its own undo step
     /// (otherwise the gesture's or edit's record covers it).
     fn set_key_here(&mut self, record: bool) {
-        let frame = self.timeline.frame;
-        let posture = PostureValues::from_posture(self.session.skeleton(), self.session.posture());
+        let frame = self.character.timeline.frame;
+        let posture = PostureValues::from_posture(
+            self.character.session.skeleton(),
+            self.character.session.posture(),
+        );
         let mut motion = self.motion_section();
         motion.keys.retain(|key| key.frame != frame);
         let at = motion.keys.partition_point(|key| key.frame < frame);
@@ -757,21 +784,21 @@ impl EditorModel {
         if record {
             self.record(EditKind::Command);
         }
-        self.session.set_motion(Some(motion));
-        self.timeline.shown = Some(frame);
+        self.character.session.set_motion(Some(motion));
+        self.character.timeline.shown = Some(frame);
     }
 
     /// One undoable change of the keys; the playhead's frame is shown again.
     fn edit_keys(&mut self, change: impl FnOnce(&mut Vec<MotionKey>, &Self)) {
         let mut motion = self.motion_section();
         change(&mut motion.keys, self);
-        if Some(&motion) == self.session.motion() {
+        if Some(&motion) == self.character.session.motion() {
             return;
         }
         self.record(EditKind::Command);
-        self.session.set_motion(Some(motion));
+        self.character.session.set_motion(Some(motion));
         if self.has_timeline() {
-            self.show_frame(self.timeline.frame);
+            self.show_frame(self.character.timeline.frame);
         }
     }
 
@@ -785,7 +812,7 @@ impl EditorModel {
             let Some(index) = keys.iter().position(|key| key.frame == from) else {
                 return;
             };
-            let skeleton = model.session.skeleton();
+            let skeleton = model.character.session.skeleton();
             let key = layer::lenient_posture(skeleton, &keys[index].posture);
             let delta = key_delta(skeleton, from, &key, &model.base_posture(from));
             let moved = apply_delta(
@@ -805,7 +832,7 @@ impl EditorModel {
     }
 
     fn set_frame_count(&mut self, count: usize) {
-        if self.timeline.has_clip() || count == 0 {
+        if self.character.timeline.has_clip() || count == 0 {
             return;
         }
         let mut motion = self.motion_section();
@@ -814,8 +841,8 @@ impl EditorModel {
         }
         motion.frame_count = count;
         self.record(EditKind::Command);
-        self.session.set_motion(Some(motion));
-        if self.timeline.frame >= count {
+        self.character.session.set_motion(Some(motion));
+        if self.character.timeline.frame >= count {
             self.seek(count - 1);
         }
     }
@@ -825,7 +852,7 @@ impl EditorModel {
             self.warn("An interval needs finite times, its end after its start and eases >= 0.");
             return;
         }
-        let mut tasks = self.session.tasks().to_vec();
+        let mut tasks = self.character.session.tasks().to_vec();
         let Some(spec) = tasks.get_mut(task) else {
             return;
         };
@@ -835,6 +862,7 @@ impl EditorModel {
 
     fn drag_interval(&mut self, task: usize, edge: IntervalEdge, secs: f64) {
         let Some(mut interval) = self
+            .character
             .session
             .tasks()
             .get(task)
@@ -856,27 +884,27 @@ impl EditorModel {
     /// the body or the joint changed: [`TRAJECTORY_FRAMES_PER_STEP`] frames a step (a
     /// 10,000-frame clip's would hold up one frame of the page for about 100 ms).
     fn refresh_trajectory(&mut self) {
-        let skeleton = self.session.skeleton();
-        let joint = match &self.timeline.trajectory_joint {
+        let skeleton = self.character.session.skeleton();
+        let joint = match &self.character.timeline.trajectory_joint {
             Some(name) => resolve_joint(skeleton, name),
             None => self.selected_joint,
         };
         let Some(joint) = joint.filter(|_| self.has_timeline()) else {
-            self.timeline.trajectory.clear();
-            self.timeline.trajectory_for = None;
+            self.character.timeline.trajectory.clear();
+            self.character.timeline.trajectory_for = None;
             return;
         };
         let wanted = (
             joint,
-            self.timeline.base_revision,
+            self.character.timeline.base_revision,
             self.session_generation,
-            self.session.motion_revision(),
+            self.character.session.motion_revision(),
         );
-        if self.timeline.trajectory_for != Some(wanted) {
-            self.timeline.trajectory.clear();
-            self.timeline.trajectory_for = Some(wanted);
+        if self.character.timeline.trajectory_for != Some(wanted) {
+            self.character.timeline.trajectory.clear();
+            self.character.timeline.trajectory_for = Some(wanted);
         }
-        let from = self.timeline.trajectory.len();
+        let from = self.character.timeline.trajectory.len();
         let to = self
             .frame_count()
             .min(from.saturating_add(TRAJECTORY_FRAMES_PER_STEP));
@@ -894,13 +922,13 @@ impl EditorModel {
                     .unwrap_or_default()
             })
             .collect();
-        self.timeline.trajectory.extend(more);
+        self.character.timeline.trajectory.extend(more);
     }
 
     /// Whether the trajectory has frames still to compute (the next steps add them).
     pub(super) fn trajectory_pending(&self) -> bool {
-        self.timeline.trajectory_for.is_some()
-            && self.timeline.trajectory.len() < self.frame_count()
+        self.character.timeline.trajectory_for.is_some()
+            && self.character.timeline.trajectory.len() < self.frame_count()
     }
 
     /// The page shared a posture link of the document (`characters` long): says so, what of
@@ -911,6 +939,7 @@ impl EditorModel {
             "Link copied to the clipboard ({characters} characters): opening it shows exactly this posture and these tasks"
         );
         let intervals = self
+            .character
             .session
             .tasks()
             .iter()
@@ -925,7 +954,7 @@ impl EditorModel {
             }
             None => text.push('.'),
         }
-        if let Some(clip) = self.timeline.document_clip() {
+        if let Some(clip) = self.character.timeline.document_clip() {
             text.push_str(&format!(
                 " The clip file {} is not in the link, only named by its content: whoever opens the link is asked to open that file (a saved document carries it).",
                 clip.name

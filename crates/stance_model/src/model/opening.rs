@@ -2,6 +2,7 @@
 //! pasted or followed, and a file dropped or picked (documents, libraries, avatars, clips).
 
 use super::*;
+use stance_document::Scene;
 
 impl EditorModel {
     /// Opens what the page was opened with: a posture link when the address has one (a bad
@@ -18,14 +19,39 @@ impl EditorModel {
         let Some(autosaved) = Autosave::load(self.hooks.as_ref()) else {
             return;
         };
-        match autosaved {
+        let document = match autosaved {
+            Ok(scene) if !scene.is_plain_document() => {
+                match self.open_scene(&scene) {
+                    Ok(words) => {
+                        self.inform(format!("Restored the autosaved scene.{words}"));
+                        self.history = crate::history::History::default();
+                        self.forget_unreferenced_characters();
+                        self.autosave.saved(self.autosaved_scene());
+                    }
+                    Err(error) => {
+                        self.warn(format!(
+                            "The autosaved scene could not be restored: {error}"
+                        ));
+                    }
+                }
+                return;
+            }
+            Ok(scene) => scene
+                .characters
+                .into_iter()
+                .next()
+                .map(|c| c.document)
+                .ok_or_else(String::new),
+            Err(error) => Err(error),
+        };
+        match document {
             Ok(document) => {
                 if let AvatarReference::Url(url) = &document.avatar {
                     self.pending_document = Some(document.clone());
                     let url = url.clone();
                     self.fetch_avatar(&url);
                 }
-                match self.session.restore_document(&document) {
+                match self.character.session.restore_document(&document) {
                     Err(error) => {
                         self.warn(format!("The autosaved work could not be restored: {error}"));
                     }
@@ -38,7 +64,7 @@ impl EditorModel {
                         } else if !clip_words.is_empty() {
                             self.inform(text);
                         }
-                        self.autosave.saved(self.autosaved_document());
+                        self.autosave.saved(self.autosaved_scene());
                     }
                 }
             }
@@ -73,7 +99,7 @@ impl EditorModel {
         // A link names its clip, never carries it.
         let (clip_words, warning) = self.follow_document_clip(&document);
         let text = match &document.avatar {
-            AvatarReference::Url(url) if self.avatar_url.as_ref() != Some(url) => {
+            AvatarReference::Url(url) if self.character.avatar_url.as_ref() != Some(url) => {
                 let text =
                     format!("Opened the posture link; loading its avatar {url}…{clip_words}");
                 let url = url.clone();
@@ -129,12 +155,25 @@ impl EditorModel {
             self.import_library(name, text);
             return;
         }
-        let document = match Document::from_json(text) {
-            Ok(document) => document,
+        let scene = match Scene::from_json(text) {
+            Ok(scene) => scene,
             Err(error) => {
                 self.warn(format!("{name} is not a Stance document: {error}"));
                 return;
             }
+        };
+        if !scene.is_plain_document() {
+            match self.open_scene(&scene) {
+                Ok(words) => self.inform(format!(
+                    "Opened {name}: {} characters.{words}",
+                    scene.characters.len()
+                )),
+                Err(error) => self.warn(format!("{name} was not opened: {error}")),
+            }
+            return;
+        }
+        let Some(document) = scene.characters.into_iter().next().map(|c| c.document) else {
+            return;
         };
         match self.open_document(&document) {
             Ok(converted) => {

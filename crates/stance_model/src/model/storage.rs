@@ -1,13 +1,13 @@
 //! The pose library and the autosave of the model.
 
-use stance_document::Document;
+use stance_document::Scene;
 
-use super::{EditorModel, document_of};
+use super::EditorModel;
 use crate::library::PoseLibrary;
 
 impl EditorModel {
     pub(super) fn export_document(&mut self) {
-        let text = self.document().to_json(true);
+        let text = self.scene().to_json(true);
         let result = self.hooks.download("stance-pose.json", &text);
         self.host_result(result, "Could not export the pose");
     }
@@ -58,7 +58,7 @@ impl EditorModel {
     }
 
     pub(super) fn save_to_library(&mut self, name: &str) {
-        match self.library.save(name, self.session.document()) {
+        match self.library.save(name, self.character.session.document()) {
             Ok(()) => {
                 self.store_library();
                 self.inform(format!("Saved the pose \"{}\".", name.trim()));
@@ -90,27 +90,29 @@ impl EditorModel {
         }
     }
 
-    /// The document as the autosave keeps it (see [`Self::autosaved_clip`]).
-    pub(super) fn autosaved_document(&self) -> Document {
-        Document {
-            clip: self.timeline.autosaved_clip(),
-            ..document_of(&self.session, self.avatar_url.as_deref())
+    /// The scene as the autosave keeps it: the selected character's clip embedded when it
+    /// is small enough (see [`Self::autosaved_clip`]).
+    pub(super) fn autosaved_scene(&self) -> Scene {
+        let mut scene = self.scene();
+        if let Some(entry) = scene.characters.get_mut(scene.selected) {
+            entry.document.clip = self.character.timeline.autosaved_clip();
         }
+        scene
     }
 
     pub(super) fn autosave(&mut self) {
         if self.is_pulling() {
             return;
         }
-        let (session, avatar_url, timeline) = (&self.session, &self.avatar_url, &self.timeline);
-        let document = || Document {
-            clip: timeline.autosaved_clip(),
-            ..document_of(session, avatar_url.as_deref())
-        };
-        if let Some(error) = self
-            .autosave
-            .tick(self.now_secs, document, self.hooks.as_ref())
-        {
+        // The autosave is taken out while it reads the scene (made only when it is due).
+        let mut autosave = std::mem::take(&mut self.autosave);
+        let failed = autosave.tick(
+            self.now_secs,
+            || self.autosaved_scene(),
+            self.hooks.as_ref(),
+        );
+        self.autosave = autosave;
+        if let Some(error) = failed {
             self.warn(format!("Autosave failed: {error}"));
         }
     }

@@ -1,0 +1,577 @@
+//! The scene's characters. Each [`Character`] has its own body (avatar or mannequin, level of
+//! articulation), posing session (posture, tasks, stiffness, hands), timeline and placement
+//! on the floor. The selected one is the one every tool works on: the model holds it apart
+//! from the others (so that a tool borrows it beside the history, the notice and the sensors);
+//! the others wait as they were left, drawn and picked. Adding, duplicating, removing,
+//! renaming, moving and selecting characters are [`SceneCommand`]s, undone like any edit
+//! (the history keeps the cast as it was; a removed character is kept while a step names it).
+
+use stance_document::{Placement, Scene, SceneCharacter, clean_name, default_character_name};
+use stance_render::MannequinBone;
+
+use super::mapping::MappingCorrections;
+use super::motion::Timeline;
+use super::{EditorModel, bones, document_of};
+use crate::avatar::LoadedAvatar;
+use crate::history::{CastEntry, CastSnapshot};
+use crate::posing::PosingSession;
+
+/// Where a new character stands: this far (m) along +X from the rightmost one.
+pub const CHARACTER_SPACING_M: f64 = 0.8;
+/// The most characters a scene holds.
+pub use stance_document::scene::MAX_CHARACTERS;
+
+/// One character of the scene.
+pub struct Character {
+    /// Stable while the editor runs (the history names characters by it).
+    pub(super) id: u64,
+    pub(super) name: String,
+    pub(super) placement: Placement,
+    pub(super) session: PosingSession,
+    pub(super) avatar: Option<LoadedAvatar>,
+    /// The URL the avatar came from (links and autosave name it); `None` for local files.
+    pub(super) avatar_url: Option<String>,
+    pub(super) mapping_corrections: MappingCorrections,
+    /// The clip, the playhead and the trajectory (the keys are in the document).
+    pub(super) timeline: Timeline,
+    /// The posed mannequin's bones after the last step (in the character's frame).
+    pub(super) bones: Vec<MannequinBone>,
+    /// The session revision the bones were built for.
+    pub(super) bones_revision: Option<u64>,
+}
+
+impl std::fmt::Debug for Character {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Character")
+            .field("id", &self.id)
+            .field("name", &self.name)
+            .field("placement", &self.placement)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Character {
+    pub(super) fn new(id: u64, name: String, session: PosingSession) -> Self {
+        let mut timeline = Timeline::default();
+        // Clip requests are answered by id: each character's run apart.
+        timeline.next_request = id << 32;
+        let mut character = Self {
+            id,
+            name,
+            placement: Placement::default(),
+            session,
+            avatar: None,
+            avatar_url: None,
+            mapping_corrections: MappingCorrections::default(),
+            timeline,
+            bones: Vec::new(),
+            bones_revision: None,
+        };
+        character.refresh_bones();
+        character
+    }
+
+    /// Its id (stable while the editor runs).
+    pub fn id(&self) -> u64 {
+        self.id
+    }
+
+    /// Its name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Where it stands in the scene.
+    pub fn placement(&self) -> Placement {
+        self.placement
+    }
+
+    /// Its posing session: body, posture, tasks, solver.
+    pub fn session(&self) -> &PosingSession {
+        &self.session
+    }
+
+    /// Its avatar, if it is not the mannequin.
+    pub fn avatar(&self) -> Option<&LoadedAvatar> {
+        self.avatar.as_ref()
+    }
+
+    /// Its posed bones (in its own frame; [`Placement::scene_from_character`] puts them in
+    /// the scene).
+    pub fn bones(&self) -> &[MannequinBone] {
+        &self.bones
+    }
+
+    /// The bones follow the posture: rebuilt when the session's revision moved (or the
+    /// session was replaced), not every frame.
+    pub(super) fn refresh_bones(&mut self) {
+        let revision = Some(self.session.revision());
+        if revision != self.bones_revision {
+            self.bones = bones::posed_bones(&self.session);
+            self.bones_revision = revision;
+        }
+    }
+
+    /// Its entry in the scene document.
+    fn scene_character(&self) -> SceneCharacter {
+        let mut document = document_of(&self.session, self.avatar_url.as_deref());
+        document.clip = self.timeline.document_clip().cloned();
+        SceneCharacter {
+            name: self.name.clone(),
+            placement: self.placement,
+            document,
+        }
+    }
+
+    fn cast_entry(&self) -> CastEntry {
+        CastEntry {
+            id: self.id,
+            name: self.name.clone(),
+            placement: self.placement,
+        }
+    }
+}
+
+/// The characters that are not selected, and the removed ones undo may bring back.
+#[derive(Debug, Default)]
+pub struct Cast {
+    /// In the scene's order, the selected character left out.
+    others: Vec<Character>,
+    /// The selected character's place in the scene's order.
+    selected_at: usize,
+    /// The id of the next character.
+    next_id: u64,
+    /// Removed characters that a step of the history names.
+    removed: Vec<Character>,
+}
+
+/// A command for the scene's characters.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SceneCommand {
+    /// A new character on the mannequin, at the selected one's level of articulation, at
+    /// rest, standing beside the others; it becomes the selected one.
+    Add,
+    /// A copy of the selected character (body, posture, tasks, timeline keys) beside the
+    /// others; it becomes the selected one.
+    Duplicate,
+    /// Removes the character (not the last one).
+    Remove(u64),
+    /// Renames the character (trimmed; an empty name is refused).
+    Rename(u64, String),
+    /// Selects the character: the tools work on it.
+    Select(u64),
+    /// Moves or turns the character on the floor.
+    Place(u64, Placement),
+}
+
+impl EditorModel {
+    /// The selected character (the one the tools work on).
+    pub fn character(&self) -> &Character {
+        &self.character
+    }
+
+    /// Every character in the scene's order, with whether it is the selected one.
+    pub fn characters(&self) -> impl Iterator<Item = (&Character, bool)> + '_ {
+        let (before, after) = self
+            .cast
+            .others
+            .split_at(self.cast.selected_at.min(self.cast.others.len()));
+        before
+            .iter()
+            .map(|c| (c, false))
+            .chain(std::iter::once((&self.character, true)))
+            .chain(after.iter().map(|c| (c, false)))
+    }
+
+    /// The characters that are not selected, in the scene's order.
+    pub fn other_characters(&self) -> &[Character] {
+        &self.cast.others
+    }
+
+    /// How many characters the scene holds.
+    pub fn character_count(&self) -> usize {
+        self.cast.others.len() + 1
+    }
+
+    /// The whole scene as a document: every character's document, name and placement.
+    pub fn scene(&self) -> Scene {
+        let characters = self
+            .characters()
+            .map(|(c, _)| c.scene_character())
+            .collect();
+        Scene {
+            characters,
+            selected: self.cast.selected_at,
+        }
+    }
+
+    pub(super) fn apply_scene(&mut self, command: SceneCommand) -> super::Change {
+        match command {
+            SceneCommand::Add => self.add_character(false),
+            SceneCommand::Duplicate => self.add_character(true),
+            SceneCommand::Remove(id) => self.remove_character(id),
+            SceneCommand::Rename(id, name) => self.rename_character(id, &name),
+            SceneCommand::Select(id) => self.select_character(id),
+            SceneCommand::Place(id, placement) => self.place_character(id, placement),
+        }
+    }
+
+    fn select_character(&mut self, id: u64) -> super::Change {
+        if id == self.character.id || !self.switch_to_character(id) {
+            return super::Change::Nothing;
+        }
+        let name = self.character.name.clone();
+        self.inform(format!("Selected {name}: the tools work on it."));
+        super::Change::View
+    }
+
+    fn place_character(&mut self, id: u64, placement: Placement) -> super::Change {
+        if placement.validate_at("placement").is_err() {
+            return super::Change::Nothing;
+        }
+        let before = self.cast_snapshot();
+        let Some(character) = self.character_mut(id) else {
+            return super::Change::Nothing;
+        };
+        if character.placement == placement {
+            return super::Change::Nothing;
+        }
+        character.placement = placement;
+        self.history.record_cast(before, true, self.now_secs);
+        super::Change::Document
+    }
+
+    fn character_mut(&mut self, id: u64) -> Option<&mut Character> {
+        if self.character.id == id {
+            return Some(&mut self.character);
+        }
+        self.cast.others.iter_mut().find(|c| c.id == id)
+    }
+
+    /// The first "Character N" no character is named.
+    fn free_name(&self) -> String {
+        (1..)
+            .map(default_character_name)
+            .find(|name| self.characters().all(|(c, _)| c.name != *name))
+            .unwrap_or_default()
+    }
+
+    /// A name for a copy of `name`: "name 2", "name 3"... the first free one.
+    fn copy_name(&self, name: &str) -> String {
+        (2..)
+            .map(|n| format!("{name} {n}"))
+            .find(|candidate| self.characters().all(|(c, _)| c.name != *candidate))
+            .unwrap_or_default()
+    }
+
+    /// Where a new character stands: beside the rightmost one, on the floor.
+    fn free_placement(&self) -> Placement {
+        let right = self
+            .characters()
+            .map(|(c, _)| c.placement.position[0])
+            .fold(f64::NEG_INFINITY, f64::max);
+        Placement::at([right + CHARACTER_SPACING_M, 0.0, 0.0])
+    }
+
+    fn next_character_id(&mut self) -> u64 {
+        self.cast.next_id += 1;
+        self.cast.next_id
+    }
+
+    fn add_character(&mut self, duplicate: bool) -> super::Change {
+        if self.character_count() >= MAX_CHARACTERS {
+            self.warn(format!(
+                "A scene holds at most {MAX_CHARACTERS} characters."
+            ));
+            return super::Change::Nothing;
+        }
+        let made = if duplicate {
+            self.duplicate_selected()
+        } else {
+            PosingSession::new(self.character.session.level_of_articulation())
+                .map(|session| (session, None, None, self.free_name()))
+                .map_err(|error| error.to_string())
+        };
+        let (session, avatar, avatar_url, name) = match made {
+            Ok(made) => made,
+            Err(error) => {
+                self.warn(format!("Could not add a character: {error}"));
+                return super::Change::Nothing;
+            }
+        };
+        let before = self.cast_snapshot();
+        let id = self.next_character_id();
+        let mut character = Character::new(id, name.clone(), session);
+        character.avatar = avatar;
+        character.avatar_url = avatar_url;
+        character.placement = self.free_placement();
+        character.refresh_bones();
+        self.history.record_cast(before, false, self.now_secs);
+        self.cast.others.push(character);
+        self.switch_to_character(id);
+        self.inform(format!(
+            "{} {name}: the tools work on it (Scene panel to select another).",
+            if duplicate { "Duplicated as" } else { "Added" }
+        ));
+        super::Change::Document
+    }
+
+    /// The selected character's body and document in a new session, and a name for the copy.
+    #[allow(clippy::type_complexity)]
+    fn duplicate_selected(
+        &self,
+    ) -> Result<(PosingSession, Option<LoadedAvatar>, Option<String>, String), String> {
+        let source = &self.character;
+        let humanoid = source.session.humanoid().clone();
+        let mut session = PosingSession::with_humanoid(humanoid).map_err(|e| e.to_string())?;
+        let mut document = source.session.document();
+        document.camera = None;
+        session
+            .restore_document(&document)
+            .map_err(|e| e.to_string())?;
+        let avatar = source.avatar.as_ref().map(LoadedAvatar::duplicate);
+        Ok((
+            session,
+            avatar,
+            source.avatar_url.clone(),
+            self.copy_name(&source.name),
+        ))
+    }
+
+    fn remove_character(&mut self, id: u64) -> super::Change {
+        if self.character_count() == 1 {
+            self.warn("The scene's last character cannot be removed.");
+            return super::Change::Nothing;
+        }
+        let before = self.cast_snapshot();
+        if self.character.id == id {
+            // Select the next one in the scene's order (else the one before).
+            let next = self
+                .cast
+                .others
+                .get(self.cast.selected_at)
+                .or_else(|| self.cast.others.last())
+                .map(|c| c.id);
+            let Some(next) = next else {
+                return super::Change::Nothing;
+            };
+            self.switch_to_character(next);
+        }
+        let Some(at) = self.cast.others.iter().position(|c| c.id == id) else {
+            return super::Change::Nothing;
+        };
+        let removed = self.cast.others.remove(at);
+        if at < self.cast.selected_at {
+            self.cast.selected_at -= 1;
+        }
+        let name = removed.name.clone();
+        self.cast.removed.push(removed);
+        self.history.record_cast(before, false, self.now_secs);
+        self.inform(format!("Removed {name} (undo brings it back)."));
+        super::Change::Document
+    }
+
+    fn rename_character(&mut self, id: u64, name: &str) -> super::Change {
+        let Some(name) = clean_name(name) else {
+            self.warn("A character's name cannot be empty.");
+            return super::Change::Nothing;
+        };
+        let before = self.cast_snapshot();
+        let Some(character) = self.character_mut(id) else {
+            return super::Change::Nothing;
+        };
+        if character.name == name {
+            return super::Change::Nothing;
+        }
+        character.name = name;
+        self.history.record_cast(before, true, self.now_secs);
+        super::Change::Document
+    }
+
+    /// Makes the character `id` the selected one; the gesture, the joint selection, the
+    /// trace and the sensors' hold end (they belonged to the other body), and a clip on its
+    /// way to the character left is cancelled. Returns whether `id` is in the scene.
+    pub(super) fn switch_to_character(&mut self, id: u64) -> bool {
+        if self.character.id == id {
+            return true;
+        }
+        let Some(index) = self.cast.others.iter().position(|c| c.id == id) else {
+            return false;
+        };
+        self.end_gesture();
+        self.cancel_opening();
+        self.sensors.release();
+        self.selected_joint = None;
+        self.hovered_joint = None;
+        self.trace.clear();
+        let selected_at = self.cast.selected_at;
+        // The incoming character's place in the scene's order.
+        let incoming_at = if index < selected_at {
+            index
+        } else {
+            index + 1
+        };
+        let incoming = self.cast.others.remove(index);
+        let outgoing = std::mem::replace(&mut self.character, incoming);
+        self.cast.others.insert(
+            selected_at - usize::from(incoming_at < selected_at),
+            outgoing,
+        );
+        self.cast.selected_at = incoming_at;
+        self.session_generation += 1;
+        self.character.bones_revision = None;
+        self.refresh_bones();
+        true
+    }
+
+    /// The cast as the history keeps it.
+    pub(super) fn cast_snapshot(&self) -> CastSnapshot {
+        CastSnapshot {
+            order: self.characters().map(|(c, _)| c.cast_entry()).collect(),
+            selected: self.character.id,
+        }
+    }
+
+    /// Undo or redo of a change of the cast: the characters, their order, names and
+    /// placements, and the selection as `snapshot` has them; characters it leaves out are
+    /// kept as removed (a later step may bring them back).
+    pub(super) fn restore_cast(&mut self, snapshot: &CastSnapshot) {
+        if snapshot.selected != self.character.id && !self.switch_to_character(snapshot.selected) {
+            // The selection comes back from the removed characters.
+            if let Some(at) = self
+                .cast
+                .removed
+                .iter()
+                .position(|c| c.id == snapshot.selected)
+            {
+                let incoming = self.cast.removed.remove(at);
+                self.end_gesture();
+                self.cancel_opening();
+                self.sensors.release();
+                self.selected_joint = None;
+                self.hovered_joint = None;
+                self.trace.clear();
+                let outgoing = std::mem::replace(&mut self.character, incoming);
+                self.cast.others.push(outgoing);
+                self.session_generation += 1;
+                self.character.bones_revision = None;
+                self.refresh_bones();
+            }
+        }
+        let mut pool: Vec<Character> = self.cast.others.drain(..).collect();
+        pool.append(&mut self.cast.removed);
+        let mut others = Vec::with_capacity(snapshot.order.len());
+        let mut selected_at = 0;
+        for entry in &snapshot.order {
+            if entry.id == self.character.id {
+                selected_at = others.len();
+                self.character.name.clone_from(&entry.name);
+                self.character.placement = entry.placement;
+            } else if let Some(at) = pool.iter().position(|c| c.id == entry.id) {
+                let mut character = pool.remove(at);
+                character.name.clone_from(&entry.name);
+                character.placement = entry.placement;
+                others.push(character);
+            }
+        }
+        self.cast.others = others;
+        self.cast.selected_at = selected_at;
+        self.cast.removed = pool;
+    }
+
+    /// Opens `scene` in place of the scene's characters, as one undoable change of the cast
+    /// (undo brings the characters back as they were). Every character is built before
+    /// anything changes: one that does not fit leaves the scene as it was and names it.
+    /// Characters are posed on the mannequin at the current level of articulation, or on the
+    /// selected character's avatar when their document names it; the selected one's avatar
+    /// named by URL is fetched (its document waits for it). Returns what to tell the user
+    /// after "Opened NAME" (avatars left on the mannequin).
+    pub(super) fn open_scene(&mut self, scene: &Scene) -> Result<String, String> {
+        let loa = self.character.session.level_of_articulation();
+        let current_url = self.character.avatar_url.clone();
+        let mut built = Vec::with_capacity(scene.characters.len());
+        let mut on_mannequin = Vec::new();
+        for (i, entry) in scene.characters.iter().enumerate() {
+            let document = &entry.document;
+            let named_url = match &document.avatar {
+                stance_document::AvatarReference::Url(url) => Some(url.clone()),
+                stance_document::AvatarReference::Default => None,
+            };
+            let on_avatar = named_url.is_some() && named_url == current_url;
+            let avatar = if on_avatar {
+                self.character.avatar.as_ref().map(LoadedAvatar::duplicate)
+            } else {
+                None
+            };
+            let session = match &avatar {
+                Some(avatar) => avatar
+                    .skeleton(loa)
+                    .and_then(|h| PosingSession::with_humanoid(h).map_err(|e| e.to_string())),
+                None => PosingSession::new(loa).map_err(|e| e.to_string()),
+            };
+            let mut session = session.map_err(|e| format!("{}: {e}", entry.name))?;
+            let mut fitted = document.clone();
+            fitted.posture = fitted.posture.fitted(session.skeleton());
+            let restored = if fitted.posture.joints.is_empty() {
+                session.load_document(&fitted)
+            } else {
+                session.restore_document(&fitted)
+            };
+            restored.map_err(|e| format!("{} does not fit its body: {e}", entry.name))?;
+            if let (Some(url), None) = (&named_url, &avatar)
+                && i != scene.selected
+            {
+                on_mannequin.push(format!("{} ({url})", entry.name));
+            }
+            let mut character = Character::new(0, entry.name.clone(), session);
+            character.placement = entry.placement;
+            character.avatar = avatar;
+            character.avatar_url = if on_avatar { named_url.clone() } else { None };
+            built.push((character, named_url.filter(|_| !on_avatar)));
+        }
+        let before = self.cast_snapshot();
+        let old: Vec<u64> = self.characters().map(|(c, _)| c.id).collect();
+        let mut selected_id = None;
+        let mut fetch = None;
+        for (i, (mut character, wanted_url)) in built.into_iter().enumerate() {
+            character.id = self.next_character_id();
+            character.timeline.next_request = character.id << 32;
+            if i == scene.selected {
+                selected_id = Some(character.id);
+                fetch = wanted_url.map(|url| (url, scene.characters[i].document.clone()));
+            }
+            self.cast.others.push(character);
+        }
+        if let Some(id) = selected_id {
+            self.switch_to_character(id);
+        }
+        let (kept, gone): (Vec<Character>, Vec<Character>) = self
+            .cast
+            .others
+            .drain(..)
+            .partition(|c| !old.contains(&c.id));
+        self.cast.others = kept;
+        self.cast.removed.extend(gone);
+        self.cast.selected_at = scene.selected.min(self.cast.others.len());
+        self.history.record_cast(before, false, self.now_secs);
+        if let Some((url, document)) = fetch {
+            self.pending_document = Some(document);
+            self.fetch_avatar(&url);
+        }
+        self.view_requests += u64::from(self.character.session.camera().is_some());
+        Ok(if on_mannequin.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " Posed on the mannequin until their avatar is loaded: {}.",
+                on_mannequin.join(", ")
+            )
+        })
+    }
+
+    /// Forgets the removed characters no step of the history names.
+    pub(super) fn forget_unreferenced_characters(&mut self) {
+        let named: Vec<u64> = self.history.characters().collect();
+        self.cast.removed.retain(|c| named.contains(&c.id));
+    }
+}
