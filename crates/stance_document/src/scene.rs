@@ -5,8 +5,8 @@
 //! body: its pins, goals and keys); the placement puts that frame in the scene
 //! (`scene_from_character`: a turn about the vertical, then a translation). A document
 //! without `"characters"` is a scene of one character at the origin, so every document
-//! written before scenes opens as one; a scene of one character at the origin is written as
-//! that plain document, so older versions of Stance still read it.
+//! written before scenes opens as one; a scene of one unnamed character at the origin is
+//! written as that plain document, so older versions of Stance still read it.
 
 use glam::{DAffine3, DQuat, DVec3};
 use serde::Serialize;
@@ -175,9 +175,11 @@ impl Scene {
         Ok(())
     }
 
-    /// Whether it is one character at the origin: written as a plain document.
+    /// Whether it is one character at the origin with the first character's default name:
+    /// written as a plain document (nothing is lost).
     pub fn is_plain_document(&self) -> bool {
-        matches!(self.characters.as_slice(), [only] if only.placement.is_identity())
+        matches!(self.characters.as_slice(), [only]
+            if only.placement.is_identity() && only.name == default_character_name(1))
     }
 
     /// Parses and validates a scene, or a plain document as a scene of one, from JSON text.

@@ -12,4 +12,5 @@ mod document;
 mod fuzz_seeds;
 mod link;
 mod problem;
+mod scene;
 mod stiffness;

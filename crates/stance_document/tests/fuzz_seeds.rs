@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use base64::Engine as _;
 use base64::engine::general_purpose::URL_SAFE_NO_PAD;
-use stance_document::{ClipReference, Document, Problem, TaskKindSpec, link};
+use stance_document::{ClipReference, Document, Problem, Scene, TaskKindSpec, link};
 use stance_hanim::{LevelOfArticulation, SkeletonOptions, default_skeleton};
 use stance_ik::Skeleton;
 
@@ -19,6 +19,12 @@ fn seed_dir(target: &str) -> PathBuf {
         .join("fuzz/seeds")
         .join(target)
 }
+
+/// A scene of two characters, one named and moved.
+const SCENE: &str = r#"{"characters": [
+  {"name": "Ann", "posture": {"l_elbow": {"rx": -0.5}}, "tasks": [{"level": 1, "kind": "position", "joint": "l_talocrural", "target": [0.1, 0.07, 0.0]}]},
+  {"name": "Bo", "placement": {"position": [0.8, 0, -0.2], "yaw": 90}}
+], "selected": 1}"#;
 
 /// A document with every kind of task, a timeline, a camera and joint stiffness.
 const EVERYTHING: &str = r#"{
@@ -205,6 +211,7 @@ fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
         "clip.json".into(),
         document(link::LINK_FORMAT).to_json(false).into_bytes(),
     ));
+    out.push(("document", "scene.json".into(), SCENE.into()));
     out.push(("problem", "arm.json".into(), ARM.into()));
     out.push(("problem", "loa1.json".into(), loa1_problem().into_bytes()));
     out
@@ -275,7 +282,8 @@ fn the_fuzz_seeds_are_valid() {
                     };
                     link::decode(&text).map(|_| ()).map_err(|e| e.to_string())
                 }
-                "document" => Document::from_json(std::str::from_utf8(&bytes).unwrap())
+                // The document target reads scenes too (a document is a scene of one).
+                "document" => Scene::from_json(std::str::from_utf8(&bytes).unwrap())
                     .map(|_| ())
                     .map_err(|e| e.to_string()),
                 _ => Problem::from_json(std::str::from_utf8(&bytes).unwrap())

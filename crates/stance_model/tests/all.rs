@@ -10,4 +10,5 @@ mod hands;
 mod kept_clips;
 mod model;
 mod motion;
+mod scene;
 mod tasks;

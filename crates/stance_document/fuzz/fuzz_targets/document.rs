@@ -1,4 +1,4 @@
-//! The document reader (`Document::from_json`) on arbitrary text. Must never panic; every
+//! The document and scene readers (`Document::from_json`, `Scene::from_json`) on arbitrary text. Must never panic; every
 //! error must say something. A document that loads survives its JSON and its link, and is
 //! set on the default H-Anim body (LOA2) as the editor does: its posture, its tasks as a
 //! problem, their mirror images, and a few solver iterations with the solution's report.
@@ -13,7 +13,7 @@ use std::sync::OnceLock;
 mod solve_briefly;
 
 use libfuzzer_sys::fuzz_target;
-use stance_document::{Document, Problem, link};
+use stance_document::{Document, Problem, Scene, link};
 use stance_hanim::{HumanoidSkeleton, SkeletonOptions, default_skeleton};
 
 fn body() -> Option<&'static HumanoidSkeleton> {
@@ -24,6 +24,13 @@ fn body() -> Option<&'static HumanoidSkeleton> {
 
 fuzz_target!(|data: &[u8]| {
     let text = String::from_utf8_lossy(data);
+    match Scene::from_json(&text) {
+        Ok(scene) => {
+            let again = Scene::from_json(&scene.to_json(true));
+            assert_eq!(again.as_ref(), Ok(&scene), "the scene's JSON round trip");
+        }
+        Err(e) => assert!(!e.to_string().trim().is_empty(), "empty error: {e:?}"),
+    }
     let document = match Document::from_json(&text) {
         Ok(document) => document,
         Err(e) => {

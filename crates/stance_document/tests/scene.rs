@@ -1,0 +1,106 @@
+//! Scene documents: several characters, each a document with a name and a placement; a plain
+//! document reads as a scene of one and a scene of one at the origin is written as a plain
+//! document (older versions read it); errors name the field.
+
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use glam::DVec3;
+use stance_document::{Document, Placement, Scene, SceneCharacter};
+#[cfg(target_arch = "wasm32")]
+use wasm_bindgen_test::wasm_bindgen_test as test;
+
+fn two_characters() -> Scene {
+    let mut first = Document::default();
+    first.posture.set("l_elbow", stance_ik::Dof::Rx, -0.5);
+    Scene {
+        characters: vec![
+            SceneCharacter {
+                name: "Ann".into(),
+                placement: Placement::default(),
+                document: first,
+            },
+            SceneCharacter {
+                name: "Bo".into(),
+                placement: Placement {
+                    position: [0.8, 0.0, -0.2],
+                    yaw_degrees: 90.0,
+                },
+                document: Document::default(),
+            },
+        ],
+        selected: 1,
+    }
+}
+
+#[test]
+fn a_scene_round_trips_through_its_json() {
+    let scene = two_characters();
+    let text = scene.to_json(true);
+    assert!(text.contains("\"characters\""), "{text}");
+    assert_eq!(Scene::from_json(&text).expect("reads back"), scene);
+}
+
+#[test]
+fn a_plain_document_is_a_scene_of_one_and_is_written_back_plain() {
+    let text = r#"{"version": 1, "posture": {"l_elbow": {"rx": -0.5}}}"#;
+    let scene = Scene::from_json(text).expect("an old document opens");
+    assert_eq!(scene.characters.len(), 1);
+    assert!(scene.is_plain_document());
+    let written = scene.to_json(false);
+    assert!(!written.contains("characters"), "{written}");
+    assert_eq!(
+        Document::from_json(&written).expect("older readers read it"),
+        scene.characters[0].document
+    );
+    // Named, or moved off the origin, one character is a scene (nothing lost).
+    let mut named = scene.clone();
+    named.characters[0].name = "Ann".into();
+    assert_eq!(Scene::from_json(&named.to_json(false)).expect("reads"), named);
+    let mut moved = scene;
+    moved.characters[0].placement = Placement::at([1.0, 0.0, 0.0]);
+    assert!(moved.to_json(false).contains("characters"));
+}
+
+#[test]
+fn the_placement_turns_then_translates() {
+    let placement = Placement {
+        position: [1.0, 0.0, 2.0],
+        yaw_degrees: 90.0,
+    };
+    // The character's +Z (its front) faces the scene's +X after a quarter turn about +Y.
+    let front = placement.scene_from_character().transform_point3(DVec3::Z);
+    assert!((front - DVec3::new(2.0, 0.0, 2.0)).length() < 1e-12, "{front}");
+}
+
+#[test]
+fn errors_name_the_field_and_nothing_is_half_read() {
+    let cases = [
+        (r#"{"characters": []}"#, "characters"),
+        (r#"{"characters": {}}"#, "characters"),
+        (r#"{"characters": [{}], "selected": 3}"#, "selected"),
+        (r#"{"characters": [{}], "selected": -1}"#, "selected"),
+        (
+            r#"{"characters": [{"placement": {"position": [0, 0]}}]}"#,
+            "characters[0].placement.position",
+        ),
+        (
+            r#"{"characters": [{}, {"posture": {"l_elbow": {"rx": "bent"}}}]}"#,
+            "characters[1]",
+        ),
+        (r#"{"characters": [{"name": 3}]}"#, "characters[0].name"),
+    ];
+    for (text, field) in cases {
+        let error = Scene::from_json(text).expect_err(text).to_string();
+        assert!(error.contains(field), "{text}: {error}");
+    }
+    let many = format!(r#"{{"characters": [{}]}}"#, vec!["{}"; 40].join(","));
+    assert!(Scene::from_json(&many).is_err());
+}
+
+#[test]
+fn names_are_cleaned_and_defaulted() {
+    let scene = Scene::from_json(r#"{"characters": [{"name": "  \u0007 "}, {"name": " Bo\n"}]}"#)
+        .expect("reads");
+    assert_eq!(scene.characters[0].name, "Character 1");
+    assert_eq!(scene.characters[1].name, "Bo");
+}
