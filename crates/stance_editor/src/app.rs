@@ -11,6 +11,7 @@ mod image_window;
 mod lens;
 mod overlay;
 mod sensors_panel;
+mod scene_panel;
 mod side_panel;
 mod state;
 mod tasks_panel;

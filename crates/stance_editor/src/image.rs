@@ -9,6 +9,7 @@
 //! ([`FileCommand::SaveControlMap`]).
 
 use crate::model::Outbox;
+use crate::cast_view::{other_capsules, placed_capsule, placed_palettes, scene_from_character};
 use crate::model::{FileCommand, NoticeCommand};
 use glam::DVec3;
 use stance_render::{
@@ -157,9 +158,10 @@ impl ImageExport {
         if let Some(figure) = figure.filter(|_| model.avatar().is_none())
             && let Some(palettes) = figure.palettes(session.skeleton(), session.posture())
         {
-            scene.capsules.clear();
+            // The selected character is the figure; the others stay capsules.
+            scene.capsules = other_capsules(model);
             scene.show_avatar = true;
-            scene.avatar_palettes = palettes;
+            scene.avatar_palettes = placed_palettes(palettes, scene_from_character(model.character()));
         }
         let camera = &request.camera;
         let mut options = request.options;
@@ -196,7 +198,13 @@ fn shading(
     first_pass: bool,
 ) -> Shading {
     let depth = || {
-        let capsules: Vec<Capsule> = model.bones().iter().map(|bone| bone.capsule).collect();
+        let place = scene_from_character(model.character());
+        let mut capsules: Vec<Capsule> = model
+            .bones()
+            .iter()
+            .map(|bone| placed_capsule(bone.capsule, place))
+            .collect();
+        capsules.extend(other_capsules(model));
         Shading::depth_seen_by(camera, &capsules)
     };
     match map {
@@ -225,10 +233,17 @@ fn image_scene(model: &EditorModel, avatar_uploaded: bool) -> Scene {
             })
             .collect()
     };
+    let place = scene_from_character(model.character());
+    let mut capsules: Vec<Capsule> = capsules
+        .into_iter()
+        .map(|capsule| placed_capsule(capsule, place))
+        .collect();
+    capsules.extend(other_capsules(model));
     let avatar_palettes = model
         .avatar()
         .filter(|_| show_avatar)
         .and_then(|avatar| avatar.palettes(session.humanoid(), session.posture()))
+        .map(|palettes| placed_palettes(palettes, place))
         .unwrap_or_default();
     let markers = session
         .tasks()
@@ -243,7 +258,10 @@ fn image_scene(model: &EditorModel, avatar_uploaded: bool) -> Scene {
                 GOAL_COLOR_LINEAR
             };
             let goal = task.kind.goal_point()?;
-            Some(Capsule::marker(DVec3::from_array(goal).as_vec3(), color))
+            Some(placed_capsule(
+                Capsule::marker(DVec3::from_array(goal).as_vec3(), color),
+                place,
+            ))
         })
         .collect();
     Scene {

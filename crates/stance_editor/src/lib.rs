@@ -7,6 +7,7 @@
 #![warn(clippy::too_many_lines)]
 
 mod app;
+mod cast_view;
 pub mod figure;
 pub mod fonts;
 pub mod image;

@@ -258,7 +258,7 @@ impl Handles<'_> {
                 axis_world: handle.axis_world,
             });
         }
-        let eye = self.lens.camera.eye_world().as_dvec3();
+        let eye = self.lens.eye();
         for ring in self.rings() {
             let near = self.ring_points(&ring).windows(2).any(|pair| {
                 distance_to_segment(pointer, pair[0], pair[1]) <= HANDLE_REACH_PT * 0.7

@@ -1,10 +1,12 @@
-//! The viewport's camera and rectangle as one lens: world points to screen points, and the
-//! pointer's ray back into the world (onto the plane facing the camera, the floor, or the
-//! plane across an axis).
+//! The viewport's camera and rectangle as one lens: the selected character's world points to
+//! screen points, and the pointer's ray back into that world (onto the plane facing the
+//! camera, the floor, or the plane across an axis). The character's world is its own frame
+//! (its session's: pins, goals, the pulled point), placed in the scene the camera looks at by
+//! `scene_from_character`.
 
 use crate::model::GestureCommand;
 use egui::Pos2;
-use glam::{DVec3, Vec2};
+use glam::{DAffine3, DVec3, Vec2};
 use stance_render::OrbitCamera;
 
 use crate::model::{Command, Gesture};
@@ -14,22 +16,30 @@ use crate::model::{Command, Gesture};
 pub(super) struct Lens<'a> {
     pub camera: &'a OrbitCamera,
     pub rect: egui::Rect,
+    /// The selected character's placement in the scene.
+    pub scene_from_character: DAffine3,
 }
 
 impl Lens<'_> {
-    /// Where a world point shows on screen; `None` behind the camera.
+    /// Where a world point of the selected character shows on screen; `None` behind the
+    /// camera.
     pub fn screen_point(self, point_world: DVec3) -> Option<Pos2> {
+        self.scene_screen_point(self.scene_from_character.transform_point3(point_world))
+    }
+
+    /// Where a point of the scene shows on screen; `None` behind the camera.
+    pub fn scene_screen_point(self, point_scene: DVec3) -> Option<Pos2> {
         let rect = self.rect;
         let pixel = self.camera.project(
-            point_world.as_vec3(),
+            point_scene.as_vec3(),
             Vec2::new(rect.width(), rect.height()),
         )?;
         let position = rect.min + egui::vec2(pixel.x, pixel.y);
         position.x.is_finite().then_some(position)
     }
 
-    /// The camera ray under the pointer: origin and direction in the world.
-    pub fn pointer_ray(&self, pointer: Pos2) -> (DVec3, DVec3) {
+    /// The camera ray under the pointer: origin and direction in the scene.
+    pub fn pointer_scene_ray(&self, pointer: Pos2) -> (DVec3, DVec3) {
         let rect = self.rect;
         let local = pointer - rect.min;
         let (origin, direction) = self.camera.ray_through(
@@ -39,18 +49,44 @@ impl Lens<'_> {
         (origin.as_dvec3(), direction.as_dvec3())
     }
 
+    /// The camera ray under the pointer: origin and direction in the selected character's
+    /// world.
+    pub fn pointer_ray(&self, pointer: Pos2) -> (DVec3, DVec3) {
+        let (origin, direction) = self.pointer_scene_ray(pointer);
+        let character_from_scene = self.scene_from_character.inverse();
+        (
+            character_from_scene.transform_point3(origin),
+            character_from_scene.transform_vector3(direction),
+        )
+    }
+
     /// Where the pointer meets the plane facing the camera through `plane_point_world`.
     pub fn pointer_on_view_plane(&self, pointer: Pos2, plane_point_world: DVec3) -> Option<DVec3> {
         let (origin, direction) = self.pointer_ray(pointer);
-        let normal = (self.camera.target_world.as_dvec3() - self.camera.eye_world().as_dvec3())
+        let forward_scene = self.camera.target_world.as_dvec3() - self.camera.eye_world().as_dvec3();
+        let normal = self
+            .scene_from_character
+            .inverse()
+            .transform_vector3(forward_scene)
             .normalize_or_zero();
         ray_meets_plane(origin, direction, plane_point_world, normal, 1e-6)
     }
 
-    /// Where the pointer's ray meets the floor (y = 0).
+    /// Where the pointer's ray meets the floor (the scene's y = 0).
     pub fn pointer_on_floor(&self, pointer: Pos2) -> Option<DVec3> {
         let (origin, direction) = self.pointer_ray(pointer);
-        ray_meets_plane(origin, direction, DVec3::ZERO, DVec3::Y, 1e-6)
+        let floor = self
+            .scene_from_character
+            .inverse()
+            .transform_point3(DVec3::ZERO);
+        ray_meets_plane(origin, direction, floor, DVec3::Y, 1e-6)
+    }
+
+    /// The camera's eye in the selected character's world.
+    pub fn eye(&self) -> DVec3 {
+        self.scene_from_character
+            .inverse()
+            .transform_point3(self.camera.eye_world().as_dvec3())
     }
 
     /// Where the pointer's ray meets the plane through `centre` across `axis` (the swivel

@@ -1,4 +1,4 @@
-//! The side panel: the body (avatar or mannequin, its mapping, the level of articulation),
+//! The side panel: the scene's characters (`scene_panel`), the selected one's body (avatar or mannequin, its mapping, the level of articulation),
 //! undo and the posing commands, the selection (joint angles, swivel), the hands and the pose
 //! library.
 
@@ -31,6 +31,8 @@ pub(super) struct SidePanel<'a> {
 impl SidePanel<'_> {
     /// The whole panel.
     pub(super) fn show(&mut self, ui: &mut egui::Ui) {
+        super::scene_panel::show(ui, self.model, self.outbox, self.buttons);
+        ui.separator();
         self.humanoid_section(ui);
         self.edit_buttons(ui);
         let copy = ui.button("Copy posture link").on_hover_text("L");

@@ -2,9 +2,9 @@
 //! selection, the context menu), and the picture of the model's posture with its overlays.
 
 use crate::model::Outbox;
-use crate::model::{GestureCommand, PostureCommand, TaskCommand, ViewCommand};
+use crate::model::{GestureCommand, PostureCommand, SceneCommand, TaskCommand, ViewCommand};
 use egui::{Color32, RichText, Sense};
-use glam::DVec3;
+use glam::{DAffine3, DVec3};
 use stance_document::CameraSpec;
 use stance_hanim::{LevelOfArticulation, LimbName, readable_name};
 use stance_render::{BODY_COLOR_LINEAR, OrbitCamera, Scene, ViewPreset, pick_capsule};
@@ -12,6 +12,7 @@ use stance_render::{BODY_COLOR_LINEAR, OrbitCamera, Scene, ViewPreset, pick_caps
 use super::handles::Handles;
 use super::lens::Lens;
 use super::overlay::Overlay;
+use crate::cast_view::{other_capsules, pick_other, placed_capsule, placed_palettes, scene_from_character};
 use crate::figure::MannequinFigure;
 use crate::image::ImageExport;
 use crate::model::{AvatarCommand, Command, EditorModel, NewTask, heat_color};
@@ -37,6 +38,8 @@ const HOVERED_COLOR_LINEAR: [f32; 4] = [0.85, 0.45, 0.22, 1.0];
 /// The viewport: camera, display options, the GPU renderer and this frame's figures.
 pub(super) struct ViewportPanel {
     pub camera: OrbitCamera,
+    /// The selected character's placement in the scene, as of this frame's input.
+    scene_from_character: DAffine3,
     /// The viewport's rectangle this frame (points).
     pub rect: egui::Rect,
     /// Its size in physical pixels.
@@ -84,6 +87,7 @@ impl ViewportPanel {
         let renderer = render_state.map(|state| ViewportRenderer::new(&state.device));
         Self {
             camera: OrbitCamera::default(),
+            scene_from_character: DAffine3::IDENTITY,
             rect: egui::Rect::NOTHING,
             size_px: [0, 0],
             show_floor: true,
@@ -183,6 +187,7 @@ impl ViewportPanel {
         Lens {
             camera: &self.camera,
             rect: self.rect,
+            scene_from_character: self.scene_from_character,
         }
     }
 
@@ -205,6 +210,7 @@ impl ViewportPanel {
     ) -> (egui::Response, ViewportInput) {
         let rect = ui.available_rect_before_wrap();
         self.rect = rect;
+        self.scene_from_character = model.character().placement().scene_from_character();
         // A stable id: the notice strip above comes and goes (with its own widgets), and an
         // automatic id would change with it and end a drag in progress.
         ui.allocate_rect(rect, Sense::hover());
@@ -278,6 +284,22 @@ impl ViewportPanel {
         Some((bone.owner, hit.point_world.as_dvec3()))
     }
 
+    /// The character other than the selected one under `pointer`, nearer than the selected
+    /// one's body there.
+    pub(super) fn pick_other(&self, model: &EditorModel, pointer: egui::Pos2) -> Option<u64> {
+        if !self.rect.contains(pointer) {
+            return None;
+        }
+        let (origin, direction) = self.lens().pointer_scene_ray(pointer);
+        let (origin, direction) = (origin.as_vec3(), direction.as_vec3());
+        let (id, distance) = pick_other(model, origin, direction)?;
+        let selected = self.pick(model, pointer).map(|(_, point_world)| {
+            let point_scene = self.scene_from_character.transform_point3(point_world);
+            (point_scene.as_vec3() - origin).length()
+        });
+        selected.is_none_or(|near| distance < near).then_some(id)
+    }
+
     /// The pointer on the viewport, as commands: a drag with the primary button (no Shift,
     /// one finger) that starts on a handle (a task's goal, a ring or the swivel of the
     /// selected joint) moves it; on the body it pulls that point; elsewhere it moves the
@@ -342,6 +364,13 @@ impl ViewportPanel {
         if response.clicked_by(egui::PointerButton::Primary) {
             let clicked =
                 interact_pos.and_then(|pointer| self.pick(model, pointer).map(|(joint, _)| joint));
+            // A click on another character selects it.
+            if clicked.is_none()
+                && let Some(id) = interact_pos.and_then(|pointer| self.pick_other(model, pointer))
+            {
+                outbox.send(Command::Scene(SceneCommand::Select(id)));
+                return;
+            }
             outbox.send(Command::View(ViewCommand::Select(clicked)));
             // The pin tool (or Alt + click): one click pins the part where it is.
             let alt = ui.input(|input| input.modifiers.alt);
@@ -599,6 +628,7 @@ impl ViewportPanel {
                 .collect()
         };
         let session = model.session();
+        let place = scene_from_character(model.character());
         let avatar_palettes = match (model.avatar(), &self.figure) {
             (Some(avatar), _) => avatar.palettes(session.humanoid(), session.posture()),
             (None, Some((figure, _))) if show_figure => {
@@ -606,7 +636,13 @@ impl ViewportPanel {
             }
             _ => None,
         }
+        .map(|palettes| placed_palettes(palettes, place))
         .unwrap_or_default();
+        let mut capsules: Vec<_> = capsules
+            .into_iter()
+            .map(|capsule| placed_capsule(capsule, place))
+            .collect();
+        capsules.extend(other_capsules(model));
         Scene {
             capsules,
             show_floor: self.show_floor,

@@ -418,10 +418,20 @@ impl EditorModel {
             outgoing,
         );
         self.cast.selected_at = incoming_at;
+        self.character_switched_in();
+        true
+    }
+
+    /// The incoming character's bones are rebuilt, its avatar's GPU model made again if the
+    /// renderer took it when it was selected before (the viewport uploads it again), and the
+    /// views' per-session state starts again.
+    fn character_switched_in(&mut self) {
+        if let Some(avatar) = self.character.avatar.take() {
+            self.character.avatar = Some(avatar.shown_again());
+        }
         self.session_generation += 1;
         self.character.bones_revision = None;
         self.refresh_bones();
-        true
     }
 
     /// The cast as the history keeps it.
@@ -453,9 +463,7 @@ impl EditorModel {
                 self.trace.clear();
                 let outgoing = std::mem::replace(&mut self.character, incoming);
                 self.cast.others.push(outgoing);
-                self.session_generation += 1;
-                self.character.bones_revision = None;
-                self.refresh_bones();
+                self.character_switched_in();
             }
         }
         let mut pool: Vec<Character> = self.cast.others.drain(..).collect();

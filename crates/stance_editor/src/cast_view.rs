@@ -1,0 +1,79 @@
+//! The scene's characters as the renderer draws them: each character's capsules and skinning
+//! palettes are in its own frame, put in the scene by its placement
+//! ([`stance_document::Placement::scene_from_character`]). The characters that are not
+//! selected are drawn as their mannequin capsules in a quieter colour.
+
+use glam::{Mat4, Vec3};
+use stance_render::Capsule;
+
+use crate::model::{Character, EditorModel};
+
+/// The colour of the characters that are not selected (linear RGB): the body's, greyer.
+pub(crate) const OTHER_COLOR_LINEAR: [f32; 4] = [0.42, 0.42, 0.45, 1.0];
+
+/// The character's frame in the scene, for the GPU.
+pub(crate) fn scene_from_character(character: &Character) -> Mat4 {
+    character
+        .placement()
+        .scene_from_character()
+        .as_affine3a()
+        .into()
+}
+
+/// `capsule`, in a character's frame, put in the scene.
+pub(crate) fn placed_capsule(capsule: Capsule, scene_from_character: Mat4) -> Capsule {
+    let place = |point: Vec3| scene_from_character.transform_point3(point);
+    Capsule {
+        start_world: place(capsule.start_world),
+        end_world: place(capsule.end_world),
+        ..capsule
+    }
+}
+
+/// Skinning palettes (mesh space to the character's frame) put in the scene.
+pub(crate) fn placed_palettes(
+    mut palettes: Vec<Vec<Mat4>>,
+    scene_from_character: Mat4,
+) -> Vec<Vec<Mat4>> {
+    if scene_from_character != Mat4::IDENTITY {
+        for matrix in palettes.iter_mut().flatten() {
+            *matrix = scene_from_character * *matrix;
+        }
+    }
+    palettes
+}
+
+/// The capsules of every character but the selected one, in the scene, in
+/// [`OTHER_COLOR_LINEAR`].
+pub(crate) fn other_capsules(model: &EditorModel) -> Vec<Capsule> {
+    model
+        .other_characters()
+        .iter()
+        .flat_map(|character| {
+            let place = scene_from_character(character);
+            character.bones().iter().map(move |bone| Capsule {
+                color_linear: OTHER_COLOR_LINEAR,
+                ..placed_capsule(bone.capsule, place)
+            })
+        })
+        .collect()
+}
+
+/// The character whose body the scene ray `origin + t direction` meets first among those not
+/// selected, and the distance along the ray.
+pub(crate) fn pick_other(model: &EditorModel, origin: Vec3, direction: Vec3) -> Option<(u64, f32)> {
+    model
+        .other_characters()
+        .iter()
+        .filter_map(|character| {
+            let place = scene_from_character(character);
+            let capsules: Vec<Capsule> = character
+                .bones()
+                .iter()
+                .map(|bone| placed_capsule(bone.capsule, place))
+                .collect();
+            let hit = stance_render::pick_capsule(&capsules, origin, direction)?;
+            Some((character.id(), (hit.point_world - origin).length()))
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+}
