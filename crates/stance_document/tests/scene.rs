@@ -55,7 +55,10 @@ fn a_plain_document_is_a_scene_of_one_and_is_written_back_plain() {
     // Named, or moved off the origin, one character is a scene (nothing lost).
     let mut named = scene.clone();
     named.characters[0].name = "Ann".into();
-    assert_eq!(Scene::from_json(&named.to_json(false)).expect("reads"), named);
+    assert_eq!(
+        Scene::from_json(&named.to_json(false)).expect("reads"),
+        named
+    );
     let mut moved = scene;
     moved.characters[0].placement = Placement::at([1.0, 0.0, 0.0]);
     assert!(moved.to_json(false).contains("characters"));
@@ -69,7 +72,10 @@ fn the_placement_turns_then_translates() {
     };
     // The character's +Z (its front) faces the scene's +X after a quarter turn about +Y.
     let front = placement.scene_from_character().transform_point3(DVec3::Z);
-    assert!((front - DVec3::new(2.0, 0.0, 2.0)).length() < 1e-12, "{front}");
+    assert!(
+        (front - DVec3::new(2.0, 0.0, 2.0)).length() < 1e-12,
+        "{front}"
+    );
 }
 
 #[test]

@@ -8,8 +8,8 @@
 //! its depth, normal and mask maps the same way, one after another
 //! ([`FileCommand::SaveControlMap`]).
 
-use crate::model::Outbox;
 use crate::cast_view::{other_capsules, placed_capsule, placed_palettes, scene_from_character};
+use crate::model::Outbox;
 use crate::model::{FileCommand, NoticeCommand};
 use glam::DVec3;
 use stance_render::{
@@ -161,7 +161,8 @@ impl ImageExport {
             // The selected character is the figure; the others stay capsules.
             scene.capsules = other_capsules(model);
             scene.show_avatar = true;
-            scene.avatar_palettes = placed_palettes(palettes, scene_from_character(model.character()));
+            scene.avatar_palettes =
+                placed_palettes(palettes, scene_from_character(model.character()));
         }
         let camera = &request.camera;
         let mut options = request.options;

@@ -14,4 +14,5 @@ mod editor_ui;
 mod fonts;
 mod frame_cost;
 mod image;
+mod scene_ui;
 mod sensors;

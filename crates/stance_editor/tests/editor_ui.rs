@@ -291,7 +291,7 @@ fn work_survives_a_reload_and_the_library_keeps_named_poses() {
     harness.get_by_label("Table 1 example").click();
     settle(&mut harness);
     // Save it in the library under a name typed in the panel.
-    let name_field = harness.get_by_role(egui::accesskit::Role::TextInput);
+    let name_field = harness.get_by_role_and_label(egui::accesskit::Role::TextInput, "Name");
     name_field.focus();
     name_field.type_text("reach for the ball");
     harness.run_steps(2);

@@ -56,11 +56,17 @@ fn an_added_character_stands_beside_the_first_is_selected_and_undo_takes_it_away
     // Catches: a character added on top of the other, not selected, or not undoable.
     let mut editor = Clocked::new();
     assert_eq!(editor.model.character_count(), 1);
-    assert_eq!(editor.apply(Command::Scene(SceneCommand::Add)), Change::Document);
+    assert_eq!(
+        editor.apply(Command::Scene(SceneCommand::Add)),
+        Change::Document
+    );
     editor.settle();
     assert_eq!(
         names(&editor),
-        (vec!["Character 1".into(), "Character 2".into()], "Character 2".into())
+        (
+            vec!["Character 1".into(), "Character 2".into()],
+            "Character 2".into()
+        )
     );
     let placement = editor.model.character().placement();
     assert!(
@@ -71,9 +77,16 @@ fn an_added_character_stands_beside_the_first_is_selected_and_undo_takes_it_away
     assert!(!editor.model.character().bones().is_empty());
     let added = editor.model.character().id();
     assert_eq!(undo(&mut editor), Change::Document);
-    assert_eq!(names(&editor), (vec!["Character 1".into()], "Character 1".into()));
+    assert_eq!(
+        names(&editor),
+        (vec!["Character 1".into()], "Character 1".into())
+    );
     assert_eq!(redo(&mut editor), Change::Document);
-    assert_eq!(editor.model.character().id(), added, "redo brings the same character back");
+    assert_eq!(
+        editor.model.character().id(),
+        added,
+        "redo brings the same character back"
+    );
     assert_eq!(editor.model.character_count(), 2);
 }
 
@@ -86,11 +99,17 @@ fn the_tools_work_on_the_selected_character_and_undo_selects_the_one_it_changes(
     let first = editor.model.character().id();
     editor.apply(Command::Scene(SceneCommand::Add));
     let second = editor.model.character().id();
-    assert!(elbow(&editor).abs() < 1e-12, "the new character stands at rest");
+    assert!(
+        elbow(&editor).abs() < 1e-12,
+        "the new character stands at rest"
+    );
     bend_elbow(&mut editor, -1.1);
     editor.apply(Command::Scene(SceneCommand::Select(first)));
     assert_eq!(editor.model.character().id(), first);
-    assert!((elbow(&editor) + 0.5).abs() < 1e-12, "the first kept its elbow");
+    assert!(
+        (elbow(&editor) + 0.5).abs() < 1e-12,
+        "the first kept its elbow"
+    );
     // The last edit was the second's elbow: undo selects it and takes the bend back.
     assert_eq!(undo(&mut editor), Change::Document);
     assert_eq!(editor.model.character().id(), second);
@@ -140,19 +159,34 @@ fn removing_selects_the_next_keeps_the_last_and_undo_brings_it_back_as_it_was() 
     );
     assert_eq!(
         names(&editor),
-        (vec!["Character 1".into(), "Character 3".into()], "Character 3".into())
+        (
+            vec!["Character 1".into(), "Character 3".into()],
+            "Character 3".into()
+        )
     );
     assert_eq!(undo(&mut editor), Change::Document);
     assert_eq!(
         names(&editor),
         (
-            vec!["Character 1".into(), "Character 2".into(), "Character 3".into()],
+            vec![
+                "Character 1".into(),
+                "Character 2".into(),
+                "Character 3".into()
+            ],
             "Character 2".into()
         )
     );
-    assert!((elbow(&editor) + 0.9).abs() < 1e-12, "it comes back with its posture");
+    assert!(
+        (elbow(&editor) + 0.9).abs() < 1e-12,
+        "it comes back with its posture"
+    );
     // The last character stays.
-    for (id, _) in editor.model.characters().map(|(c, s)| (c.id(), s)).collect::<Vec<_>>() {
+    for (id, _) in editor
+        .model
+        .characters()
+        .map(|(c, s)| (c.id(), s))
+        .collect::<Vec<_>>()
+    {
         editor.apply(Command::Scene(SceneCommand::Remove(id)));
     }
     assert_eq!(editor.model.character_count(), 1);
@@ -164,7 +198,10 @@ fn renaming_trims_refuses_an_empty_name_and_is_undone() {
     let mut editor = Clocked::new();
     let id = editor.model.character().id();
     assert_eq!(
-        editor.apply(Command::Scene(SceneCommand::Rename(id, "  Dancer \n".into()))),
+        editor.apply(Command::Scene(SceneCommand::Rename(
+            id,
+            "  Dancer \n".into()
+        ))),
         Change::Document
     );
     assert_eq!(editor.model.character().name(), "Dancer");
@@ -194,7 +231,12 @@ fn a_scene_saved_opens_as_it_was_and_opening_it_is_one_undo_step() {
     editor.apply(Command::Scene(SceneCommand::Place(id, placement)));
     bend_elbow(&mut editor, -1.2);
     editor.apply(Command::File(FileCommand::ExportDocument));
-    let (_, text) = storage.borrow().downloads.last().cloned().expect("a download");
+    let (_, text) = storage
+        .borrow()
+        .downloads
+        .last()
+        .cloned()
+        .expect("a download");
     let saved = Scene::from_json(&text).expect("the export is a scene");
     assert_eq!(saved.characters.len(), 2);
     assert_eq!(saved.selected, 1);
@@ -207,7 +249,10 @@ fn a_scene_saved_opens_as_it_was_and_opening_it_is_one_undo_step() {
     other.settle();
     assert_eq!(
         names(&other),
-        (vec!["Character 1".into(), "Character 1 2".into()], "Character 1 2".into())
+        (
+            vec!["Character 1".into(), "Character 1 2".into()],
+            "Character 1 2".into()
+        )
     );
     assert_eq!(other.model.character().placement(), placement);
     assert!((elbow(&other) + 1.2).abs() < 1e-6);

@@ -63,7 +63,8 @@ impl Lens<'_> {
     /// Where the pointer meets the plane facing the camera through `plane_point_world`.
     pub fn pointer_on_view_plane(&self, pointer: Pos2, plane_point_world: DVec3) -> Option<DVec3> {
         let (origin, direction) = self.pointer_ray(pointer);
-        let forward_scene = self.camera.target_world.as_dvec3() - self.camera.eye_world().as_dvec3();
+        let forward_scene =
+            self.camera.target_world.as_dvec3() - self.camera.eye_world().as_dvec3();
         let normal = self
             .scene_from_character
             .inverse()

@@ -46,14 +46,14 @@ pub(super) fn show(
     }
     ui.horizontal(|ui| {
         let add = ui
-            .button("Add")
+            .button("Add character")
             .on_hover_text("A new character on the mannequin, beside the others");
         buttons.push(("scene_add", add.rect));
         if add.clicked() {
             outbox.send(Command::Scene(SceneCommand::Add));
         }
         let duplicate = ui
-            .button("Duplicate")
+            .button("Duplicate character")
             .on_hover_text("A copy of the selected character: body, posture, tasks");
         buttons.push(("scene_duplicate", duplicate.rect));
         if duplicate.clicked() {
@@ -61,7 +61,7 @@ pub(super) fn show(
         }
         let remove = ui.add_enabled(
             model.character_count() > 1,
-            egui::Button::new("Remove"),
+            egui::Button::new("Remove character"),
         );
         buttons.push(("scene_remove", remove.rect));
         if remove
@@ -85,8 +85,8 @@ fn selected_character(ui: &mut egui::Ui, model: &EditorModel, outbox: &mut Outbo
         .unwrap_or_else(|| character.name().to_owned());
     let response = ui
         .horizontal(|ui| {
-            ui.label("Name");
-            ui.text_edit_singleline(&mut name)
+            let label = ui.label("Character name");
+            ui.text_edit_singleline(&mut name).labelled_by(label.id)
         })
         .inner;
     if response.changed() {
@@ -105,13 +105,13 @@ fn selected_character(ui: &mut egui::Ui, model: &EditorModel, outbox: &mut Outbo
         ui.add(
             egui::DragValue::new(&mut moved.position[0])
                 .speed(0.01)
-                .prefix("x ")
+                .prefix("at x ")
                 .suffix(" m"),
         );
         ui.add(
             egui::DragValue::new(&mut moved.position[2])
                 .speed(0.01)
-                .prefix("z ")
+                .prefix("at z ")
                 .suffix(" m"),
         );
         ui.add(

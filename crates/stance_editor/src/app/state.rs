@@ -75,8 +75,37 @@ impl PageState<'_> {
             "sensors": self.sensors(),
             "swivel": self.viewport.handles(model).swivel_state(),
             "motion": self.motion(),
+            "characters": self.characters(),
         })
         .to_string()
+    }
+
+    /// The scene's characters in order: name, id, whether selected, placement, and where the
+    /// middle of the pelvis shows on screen (to click one).
+    fn characters(&self) -> Vec<Value> {
+        let lens = self.viewport.lens();
+        self.model
+            .characters()
+            .map(|(character, selected)| {
+                let placement = character.placement();
+                let pelvis = character
+                    .session()
+                    .joint_position("sacroiliac")
+                    .and_then(|p| {
+                        lens.scene_screen_point(
+                            placement.scene_from_character().transform_point3(p),
+                        )
+                    });
+                json!({
+                    "name": character.name(),
+                    "id": character.id(),
+                    "selected": selected,
+                    "position": placement.position,
+                    "yaw": placement.yaw_degrees,
+                    "pelvis_screen": pelvis.map(|p| [p.x, p.y]),
+                })
+            })
+            .collect()
     }
 
     /// Joint positions in the world (m) and on screen (points), by joint name.

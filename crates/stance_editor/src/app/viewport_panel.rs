@@ -12,7 +12,9 @@ use stance_render::{BODY_COLOR_LINEAR, OrbitCamera, Scene, ViewPreset, pick_caps
 use super::handles::Handles;
 use super::lens::Lens;
 use super::overlay::Overlay;
-use crate::cast_view::{other_capsules, pick_other, placed_capsule, placed_palettes, scene_from_character};
+use crate::cast_view::{
+    other_capsules, pick_other, placed_capsule, placed_palettes, scene_from_character,
+};
 use crate::figure::MannequinFigure;
 use crate::image::ImageExport;
 use crate::model::{AvatarCommand, Command, EditorModel, NewTask, heat_color};
