@@ -31,14 +31,22 @@ use read::decode_payload;
 use write::encode_payload;
 
 use crate::document::{Document, TaskKindSpec};
+use crate::scene::Scene;
 
-/// The newest link format this version writes and reads: 2 adds the tasks' active intervals
+/// The newest link format this version writes and reads: 7 a scene of several characters
+/// ([`encode_scene`]); 2 adds the tasks' active intervals
 /// and the timeline (frame rate, length, keys), 3 the comfort task (a 16-symbol model of the
 /// task kinds), 4 the joint stiffness, 5 what the posture values are relative to (a document
 /// made on an avatar, whose values are relative to the H-Anim standard pose), 6 the clip the
 /// keys were made over (its file name, size and content hash; never the file). A document is
 /// written in the oldest format that holds it.
-pub const LINK_FORMAT: u8 = 6;
+pub const LINK_FORMAT: u8 = 7;
+/// The format of a scene's link ([`encode_scene`]): several characters (or one with a name or
+/// a placement), each its name, placement and document payload in the oldest format that
+/// holds it.
+pub const SCENE_FORMAT: u8 = 7;
+/// Quantisation step of a character's turn on the floor: 0.005 degrees in radians.
+const YAW_STEP_RAD: f64 = ROTATION_STEP_RAD;
 /// Longest link [`encode_for_sharing`] makes with the timeline in it, in characters: beyond,
 /// the keys are left out (a link is pasted into chats and mails).
 pub const MAX_SHARE_CHARS: usize = 8 * 1024;
@@ -124,6 +132,12 @@ fn engine() -> GeneralPurpose {
 /// else 2 when the document has a timeline or a task interval, else 1 (the oldest format that
 /// holds it, for older readers).
 pub fn encode(document: &Document) -> String {
+    let (format, payload) = document_payload(document);
+    frame(format, &payload)
+}
+
+/// The oldest format that holds `document`, and its payload in that format.
+fn document_payload(document: &Document) -> (u8, Vec<u8>) {
     let timed = document.motion.is_some() || document.tasks.iter().any(|t| t.interval.is_some());
     let comfort = document
         .tasks
@@ -146,14 +160,161 @@ pub fn encode(document: &Document) -> String {
     } else {
         1
     };
-    let payload = encode_payload(document, format);
+    (format, encode_payload(document, format))
+}
+
+/// The fragment of `payload` in `format`: the format, the length, the payload, the CRC-32.
+fn frame(format: u8, payload: &[u8]) -> String {
     let mut frame = Vec::with_capacity(payload.len() + 8);
     frame.push(format);
     write_leb128(&mut frame, payload.len() as u64);
-    frame.extend_from_slice(&payload);
+    frame.extend_from_slice(payload);
     let crc = crc32fast::hash(&frame);
     frame.extend_from_slice(&crc.to_le_bytes());
     engine().encode(frame)
+}
+
+/// The URL fragment (without `#`) that carries `scene`: a plain document's link
+/// ([`encode`]) for a scene of one unnamed character at the origin, else format
+/// [`SCENE_FORMAT`]: the count, the selected index, and per character its name (UTF-8), its
+/// placement (position quantised to [`POSITION_STEP_M`], turn to 0.005 degrees) and its
+/// document as [`encode`] writes its payload (format byte, length, payload).
+pub fn encode_scene(scene: &Scene) -> String {
+    if scene.is_plain_document()
+        && let Some(only) = scene.characters.first()
+    {
+        return encode(&only.document);
+    }
+    let mut payload = Vec::new();
+    write_leb128(&mut payload, scene.characters.len() as u64);
+    write_leb128(&mut payload, scene.selected as u64);
+    for character in &scene.characters {
+        let name = character.name.as_bytes();
+        write_leb128(&mut payload, name.len() as u64);
+        payload.extend_from_slice(name);
+        for value in character.placement.position {
+            write_zigzag(&mut payload, models::quantise(value, POSITION_STEP_M));
+        }
+        let yaw = character.placement.yaw_degrees.to_radians();
+        write_zigzag(&mut payload, models::quantise(yaw, YAW_STEP_RAD));
+        let (format, document) = document_payload(&character.document);
+        payload.push(format);
+        write_leb128(&mut payload, document.len() as u64);
+        payload.extend_from_slice(&document);
+    }
+    frame(SCENE_FORMAT, &payload)
+}
+
+/// [`encode_scene`]'s link to share: with every character's timeline when the link stays
+/// within [`MAX_SHARE_CHARS`], else without their keys.
+pub fn encode_scene_for_sharing(scene: &Scene) -> SharedLink {
+    let fragment = encode_scene(scene);
+    let timed = scene.characters.iter().any(|c| c.document.motion.is_some());
+    if fragment.len() <= MAX_SHARE_CHARS || !timed {
+        return SharedLink {
+            fragment,
+            keys_left_out: None,
+        };
+    }
+    let mut without = scene.clone();
+    for character in &mut without.characters {
+        character.document.motion = None;
+        character.document.camera = None;
+    }
+    SharedLink {
+        fragment: encode_scene(&without),
+        keys_left_out: Some(fragment.len()),
+    }
+}
+
+/// The scene in a link of any format (a document's link is a scene of one character).
+pub fn decode_scene(link: &str) -> Result<Scene, LinkError> {
+    let (format, payload) = unframe(link)?;
+    if format != SCENE_FORMAT {
+        return document_from_payload(&payload, format).map(Scene::of_one);
+    }
+    let scene = decode_scene_payload(&payload).map_err(LinkError::Malformed)?;
+    scene
+        .validate()
+        .map_err(|e| LinkError::Malformed(e.to_string()))?;
+    Ok(scene)
+}
+
+fn decode_scene_payload(bytes: &[u8]) -> Result<Scene, String> {
+    let mut at = 0usize;
+    let leb = |at: &mut usize, what: &str| -> Result<u64, String> {
+        let (value, used) = bytes
+            .get(*at..)
+            .and_then(read_leb128)
+            .ok_or_else(|| format!("the scene's {what} is cut"))?;
+        *at += used;
+        Ok(value)
+    };
+    let count = leb(&mut at, "character count")?;
+    if count == 0 || count > crate::scene::MAX_CHARACTERS as u64 {
+        return Err(format!("a scene of {count} characters"));
+    }
+    let selected = leb(&mut at, "selection")?;
+    let mut characters = Vec::new();
+    for i in 0..count {
+        let length = usize::try_from(leb(&mut at, "name")?).unwrap_or(usize::MAX);
+        let name = bytes
+            .get(at..at.saturating_add(length))
+            .ok_or_else(|| format!("character {i}'s name is cut"))?;
+        at += length;
+        let name = std::str::from_utf8(name)
+            .map_err(|_| format!("character {i}'s name is not UTF-8"))?
+            .to_owned();
+        let mut position = [0.0; 3];
+        for value in &mut position {
+            *value = models::dequantise(read_zigzag(leb(&mut at, "placement")?)?, POSITION_STEP_M);
+        }
+        let yaw = models::dequantise(read_zigzag(leb(&mut at, "placement")?)?, YAW_STEP_RAD);
+        let format = *bytes
+            .get(at)
+            .ok_or_else(|| format!("character {i}'s document is cut"))?;
+        at += 1;
+        if format == 0 || format >= SCENE_FORMAT {
+            return Err(format!("character {i}'s document is in format {format}"));
+        }
+        let length = usize::try_from(leb(&mut at, "document")?).unwrap_or(usize::MAX);
+        let payload = bytes
+            .get(at..at.saturating_add(length))
+            .ok_or_else(|| format!("character {i}'s document is cut"))?;
+        at += length;
+        let document =
+            decode_payload(payload, format).map_err(|e| format!("character {i}: {e}"))?;
+        characters.push(crate::scene::SceneCharacter {
+            name,
+            placement: crate::scene::Placement {
+                position,
+                yaw_degrees: yaw.to_degrees(),
+            },
+            document,
+        });
+    }
+    if at != bytes.len() {
+        return Err(format!(
+            "{} bytes after the last character",
+            bytes.len() - at
+        ));
+    }
+    Ok(Scene {
+        characters,
+        selected: usize::try_from(selected).unwrap_or(usize::MAX),
+    })
+}
+
+fn write_zigzag(out: &mut Vec<u8>, value: i64) {
+    write_leb128(out, ((value << 1) ^ (value >> 63)) as u64);
+}
+
+fn read_zigzag(value: u64) -> Result<i64, String> {
+    let decoded = ((value >> 1) as i64) ^ -((value & 1) as i64);
+    if decoded.unsigned_abs() > models::MAX_QUANTISED as u64 {
+        return Err("a placement out of range".to_owned());
+    }
+    Ok(decoded)
 }
 
 /// A link to share: the fragment, and whether the timeline's keys had to be left out.
@@ -189,6 +350,27 @@ pub fn encode_for_sharing(document: &Document) -> SharedLink {
 
 /// The document in a link: a bare fragment, `#fragment`, or a whole URL containing `#`.
 pub fn decode(link: &str) -> Result<Document, LinkError> {
+    let (format, payload) = unframe(link)?;
+    if format == SCENE_FORMAT {
+        let count = payload.first().copied().unwrap_or(0);
+        return Err(LinkError::Malformed(format!(
+            "it holds a scene of {count} characters, not one posture (open it in the editor)"
+        )));
+    }
+    document_from_payload(&payload, format)
+}
+
+fn document_from_payload(payload: &[u8], format: u8) -> Result<Document, LinkError> {
+    let document = decode_payload(payload, format).map_err(LinkError::Malformed)?;
+    document
+        .validate()
+        .map_err(|e| LinkError::Malformed(e.to_string()))?;
+    Ok(document)
+}
+
+/// The format and the payload of a link, its framing checked (characters, length, checksum,
+/// format).
+fn unframe(link: &str) -> Result<(u8, Vec<u8>), LinkError> {
     let fragment = match link.find('#') {
         Some(i) => &link[i + 1..],
         None => link,
@@ -261,11 +443,7 @@ pub fn decode(link: &str) -> Result<Document, LinkError> {
             payload.len()
         )));
     }
-    let document = decode_payload(payload, format).map_err(LinkError::Malformed)?;
-    document
-        .validate()
-        .map_err(|e| LinkError::Malformed(e.to_string()))?;
-    Ok(document)
+    Ok((format, payload.to_vec()))
 }
 
 /// The whole frame length a link declares, when its header can be read.

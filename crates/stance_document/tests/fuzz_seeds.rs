@@ -183,7 +183,11 @@ fn loa1_problem() -> String {
 fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
     let mut out = Vec::new();
     for format in 1..=link::LINK_FORMAT {
-        let text = link::encode(&document(format));
+        let text = if format == link::SCENE_FORMAT {
+            link::encode_scene(&Scene::from_json(SCENE).unwrap())
+        } else {
+            link::encode(&document(format))
+        };
         let frame = URL_SAFE_NO_PAD.decode(&text).unwrap();
         assert_eq!(frame[0], format);
         // The frame without its format byte, length and CRC: the fuzz target frames it again.
@@ -209,7 +213,7 @@ fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
     out.push((
         "document",
         "clip.json".into(),
-        document(link::LINK_FORMAT).to_json(false).into_bytes(),
+        document(link::SCENE_FORMAT - 1).to_json(false).into_bytes(),
     ));
     out.push(("document", "scene.json".into(), SCENE.into()));
     out.push(("problem", "arm.json".into(), ARM.into()));
@@ -280,7 +284,9 @@ fn the_fuzz_seeds_are_valid() {
                         frame.extend_from_slice(&crc.to_le_bytes());
                         URL_SAFE_NO_PAD.encode(frame)
                     };
-                    link::decode(&text).map(|_| ()).map_err(|e| e.to_string())
+                    link::decode_scene(&text)
+                        .map(|_| ())
+                        .map_err(|e| e.to_string())
                 }
                 // The document target reads scenes too (a document is a scene of one).
                 "document" => Scene::from_json(std::str::from_utf8(&bytes).unwrap())

@@ -110,3 +110,64 @@ fn names_are_cleaned_and_defaulted() {
     assert_eq!(scene.characters[0].name, "Character 1");
     assert_eq!(scene.characters[1].name, "Bo");
 }
+
+#[test]
+fn a_scene_link_carries_every_character_within_the_link_steps() {
+    use stance_document::link;
+    let scene = two_characters();
+    let fragment = link::encode_scene(&scene);
+    let back = link::decode_scene(&fragment).expect("opens");
+    assert_eq!(back.selected, 1);
+    assert_eq!(back.characters.len(), 2);
+    for (a, b) in back.characters.iter().zip(&scene.characters) {
+        assert_eq!(a.name, b.name);
+        for (x, y) in a.placement.position.iter().zip(b.placement.position) {
+            assert!((x - y).abs() <= link::POSITION_STEP_M / 2.0, "{x} {y}");
+        }
+        assert!((a.placement.yaw_degrees - b.placement.yaw_degrees).abs() < 0.003);
+        // Each document as its own link carries it.
+        assert_eq!(
+            a.document,
+            link::decode(&link::encode(&b.document)).expect("the document's link")
+        );
+    }
+    // Written again, the same link.
+    assert_eq!(link::encode_scene(&back), fragment);
+    // A reader of documents says what it holds.
+    let error = link::decode(&fragment)
+        .expect_err("not one posture")
+        .to_string();
+    assert!(error.contains("scene of 2 characters"), "{error}");
+}
+
+#[test]
+fn a_plain_scene_is_a_document_link_and_document_links_open_as_scenes() {
+    use stance_document::link;
+    let document = two_characters().characters[0].document.clone();
+    let fragment = link::encode(&document);
+    assert_eq!(
+        link::encode_scene(&Scene::of_one(document.clone())),
+        fragment
+    );
+    let scene = link::decode_scene(&fragment).expect("a document link opens as a scene");
+    let read = link::decode(&fragment).expect("the document's link");
+    assert_eq!(scene, Scene::of_one(read));
+}
+
+#[test]
+fn a_cut_or_damaged_scene_link_is_refused_with_a_reason() {
+    use base64::Engine as _;
+    use base64::engine::general_purpose::URL_SAFE_NO_PAD;
+    use stance_document::link;
+    let fragment = link::encode_scene(&two_characters());
+    let cut = &fragment[..fragment.len() / 2];
+    assert!(link::decode_scene(cut).is_err());
+    // A valid frame whose payload says 40 characters.
+    let mut frame = vec![link::SCENE_FORMAT, 2, 40, 0];
+    let crc = crc32fast::hash(&frame);
+    frame.extend_from_slice(&crc.to_le_bytes());
+    let error = link::decode_scene(&URL_SAFE_NO_PAD.encode(frame))
+        .expect_err("too many")
+        .to_string();
+    assert!(error.contains("40 characters"), "{error}");
+}

@@ -277,3 +277,27 @@ fn the_autosave_keeps_the_whole_scene() {
     assert_eq!(reloaded.model.character_count(), 2);
     assert_eq!(reloaded.model.scene(), editor.model.scene());
 }
+
+#[test]
+fn a_scene_link_opens_every_character_where_it_stood() {
+    // Catches: a share link that carries the selected character alone.
+    let mut editor = Clocked::new();
+    bend_elbow(&mut editor, -0.4);
+    editor.apply(Command::Scene(SceneCommand::Duplicate));
+    bend_elbow(&mut editor, -1.0);
+    let link = editor.model.share_link();
+    assert!(link.keys_left_out.is_none());
+    let mut other = Clocked::new();
+    other.model.open_startup(Some(&link.url));
+    other.settle();
+    assert_eq!(names(&other), names(&editor));
+    let placement = other.model.character().placement();
+    assert_eq!(placement, editor.model.character().placement());
+    assert!((elbow(&other) + 1.0).abs() < 1e-4);
+    let first = id_of(&other, "Character 1");
+    other.apply(Command::Scene(SceneCommand::Select(first)));
+    assert!((elbow(&other) + 0.4).abs() < 1e-4);
+    // One character at the origin still shares the link older versions read.
+    let single = Clocked::new().model.share_link();
+    assert!(stance_document::link::decode(&single.url).is_ok());
+}

@@ -3,7 +3,8 @@
 //! set, the rest is a payload framed as a link of format `(byte >> 1) % 8` with its length and
 //! a valid CRC-32, so that mutations reach the payload decoder instead of the checksum. A
 //! link that opens is a valid document, opens again once written again with the same
-//! posture, and survives the document's JSON.
+//! posture, and survives the document's JSON; the same input read as a scene (format 7) opens
+//! again once written again.
 //!
 //! Seeds: `fuzz/seeds/link/` (written by `cargo test -p stance_document --test all fuzz_seeds:: --
 //! --ignored`).
@@ -41,6 +42,22 @@ fuzz_target!(|data: &[u8]| {
     } else {
         framed((selector >> 1) % 8, rest)
     };
+    // Every link reads as a scene (a document's as a scene of one); a scene that opens is
+    // valid and opens again once written again, with the same characters and postures.
+    match link::decode_scene(&text) {
+        Ok(scene) => {
+            assert!(scene.validate().is_ok(), "{scene:?}");
+            let again = match link::decode_scene(&link::encode_scene(&scene)) {
+                Ok(again) => again,
+                Err(e) => panic!("a decoded scene does not open again: {e}\n{scene:?}"),
+            };
+            assert_eq!(again.characters.len(), scene.characters.len());
+            for (a, b) in again.characters.iter().zip(&scene.characters) {
+                assert_eq!(a.document.posture, b.document.posture);
+            }
+        }
+        Err(e) => assert!(!e.to_string().trim().is_empty(), "empty error: {e:?}"),
+    }
     let document = match link::decode(&text) {
         Ok(document) => document,
         Err(e) => {

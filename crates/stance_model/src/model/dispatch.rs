@@ -59,7 +59,12 @@ impl EditorModel {
     /// The document's posture link, as the host shares it; send
     /// [`FileCommand::LinkShared`] once it is copied.
     pub fn share_link(&self) -> SharedLink {
-        let shared = stance_document::link::encode_for_sharing(&self.document());
+        let scene = self.scene();
+        let shared = if scene.is_plain_document() {
+            stance_document::link::encode_for_sharing(&self.document())
+        } else {
+            stance_document::link::encode_scene_for_sharing(&scene)
+        };
         SharedLink {
             url: self.hooks.share_link(&shared.fragment),
             characters: shared.fragment.len(),

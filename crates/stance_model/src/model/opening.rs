@@ -76,7 +76,37 @@ impl EditorModel {
     /// Opens a posture link (fragment or URL); on failure says why and changes nothing.
     /// Returns whether it opened.
     pub(super) fn open_link(&mut self, link_text: &str) -> bool {
-        let document = match link::decode(link_text) {
+        let scene = match link::decode_scene(link_text) {
+            Ok(scene) if !scene.is_plain_document() => {
+                return match self.open_scene(&scene) {
+                    Ok(words) => {
+                        self.inform(format!(
+                            "Opened the scene link: {} characters.{words}",
+                            scene.characters.len()
+                        ));
+                        true
+                    }
+                    Err(error) => {
+                        self.warn(format!(
+                            "This scene link could not be opened: {error}. The editor opened normally."
+                        ));
+                        false
+                    }
+                };
+            }
+            Ok(scene) => scene,
+            Err(error) => {
+                self.warn(format!(
+                    "This posture link could not be opened: {error}. The editor opened normally."
+                ));
+                return false;
+            }
+        };
+        let document = match scene.characters.into_iter().next().map(|c| c.document) {
+            Some(document) => Ok(document),
+            None => Err(link::LinkError::Empty),
+        };
+        let document = match document {
             Ok(document) => document,
             Err(error) => {
                 self.warn(format!(
