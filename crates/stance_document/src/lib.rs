@@ -51,6 +51,9 @@ pub use motion::{MotionKey, MotionSection, TaskInterval};
 pub use problem::{
     LimbStart, Problem, ProblemSettings, parse_skeleton, problem_json, skeleton_json,
 };
-pub use scene::{Placement, Scene, SceneCharacter, clean_name, default_character_name};
+pub use scene::{
+    Placement, Prop, PropShape, Scene, SceneCharacter, clean_name, default_character_name,
+    default_prop_name,
+};
 pub use status::{MET_TOLERANCE, TaskStatus, statuses_json, task_statuses};
 pub use stiffness::{StiffnessValues, apply_stiffness};

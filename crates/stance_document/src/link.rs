@@ -31,7 +31,7 @@ use read::decode_payload;
 use write::encode_payload;
 
 use crate::document::{Document, TaskKindSpec};
-use crate::scene::Scene;
+use crate::scene::{Prop, PropShape, Scene};
 
 /// The newest link format this version writes and reads: 7 a scene of several characters
 /// ([`encode_scene`]); 2 adds the tasks' active intervals
@@ -202,6 +202,23 @@ pub fn encode_scene(scene: &Scene) -> String {
         write_leb128(&mut payload, document.len() as u64);
         payload.extend_from_slice(&document);
     }
+    write_leb128(&mut payload, scene.props.len() as u64);
+    for prop in &scene.props {
+        let name = prop.name.as_bytes();
+        write_leb128(&mut payload, name.len() as u64);
+        payload.extend_from_slice(name);
+        let shape = PropShape::WORDS
+            .iter()
+            .position(|word| *word == prop.shape.name())
+            .unwrap_or(0);
+        payload.push(shape as u8);
+        for value in prop.shape.dimensions().into_iter().chain(prop.position) {
+            write_zigzag(&mut payload, models::quantise(value, POSITION_STEP_M));
+        }
+        for value in prop.rotation {
+            write_zigzag(&mut payload, models::quantise(value, DIRECTION_STEP));
+        }
+    }
     frame(SCENE_FORMAT, &payload)
 }
 
@@ -293,13 +310,63 @@ fn decode_scene_payload(bytes: &[u8]) -> Result<Scene, String> {
             document,
         });
     }
+    let count = leb(&mut at, "prop count")?;
+    if count > crate::scene::MAX_PROPS as u64 {
+        return Err(format!("a scene of {count} props"));
+    }
+    let mut props = Vec::new();
+    for i in 0..count {
+        let length = usize::try_from(leb(&mut at, "prop name")?).unwrap_or(usize::MAX);
+        let name = bytes
+            .get(at..at.saturating_add(length))
+            .ok_or_else(|| format!("prop {i}'s name is cut"))?;
+        at += length;
+        let name = std::str::from_utf8(name)
+            .map_err(|_| format!("prop {i}'s name is not UTF-8"))?
+            .to_owned();
+        let word = bytes
+            .get(at)
+            .and_then(|&b| PropShape::WORDS.get(usize::from(b)))
+            .ok_or_else(|| format!("prop {i}'s shape is unknown"))?;
+        at += 1;
+        let dimensions = match *word {
+            "box" => 3,
+            "sphere" => 1,
+            _ => 2,
+        };
+        let mut values = Vec::with_capacity(dimensions + 3);
+        for _ in 0..dimensions + 3 {
+            values.push(models::dequantise(
+                read_zigzag(leb(&mut at, "prop")?)?,
+                POSITION_STEP_M,
+            ));
+        }
+        let shape = PropShape::from_dimensions(word, &values[..dimensions])
+            .ok_or_else(|| format!("prop {i}'s shape is unknown"))?;
+        let mut rotation = [0.0; 4];
+        for value in &mut rotation {
+            *value = models::dequantise(read_zigzag(leb(&mut at, "prop")?)?, DIRECTION_STEP);
+        }
+        let norm = rotation.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if norm > 0.0 {
+            rotation = rotation.map(|v| v / norm);
+        }
+        props.push(Prop {
+            name,
+            shape,
+            position: [
+                values[dimensions],
+                values[dimensions + 1],
+                values[dimensions + 2],
+            ],
+            rotation,
+        });
+    }
     if at != bytes.len() {
-        return Err(format!(
-            "{} bytes after the last character",
-            bytes.len() - at
-        ));
+        return Err(format!("{} bytes after the last prop", bytes.len() - at));
     }
     Ok(Scene {
+        props,
         characters,
         selected: usize::try_from(selected).unwrap_or(usize::MAX),
     })

@@ -109,11 +109,272 @@ pub struct SceneCharacter {
     pub document: Document,
 }
 
-/// Several characters; one of them selected (the one the editor's tools work on).
+/// The most props a scene holds.
+pub const MAX_PROPS: usize = 64;
+/// The largest size of a prop along any axis (m).
+pub const MAX_PROP_SIZE_M: f64 = 100.0;
+
+/// A prop's shape, centred on its origin, in metres. A cylinder stands along its own +Y (a
+/// vertical bar); a plane is a rectangle in its own XZ plane facing +Y (a floor patch, a
+/// table top), drawn as a thin slab.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PropShape {
+    /// `size`: width (X), height (Y), depth (Z).
+    Box {
+        /// Full extents (m).
+        size: [f64; 3],
+    },
+    /// A ball.
+    Sphere {
+        /// Radius (m).
+        radius: f64,
+    },
+    /// A bar or a column.
+    Cylinder {
+        /// Radius (m).
+        radius: f64,
+        /// Length along +Y (m).
+        height: f64,
+    },
+    /// A rectangle facing +Y: `size` along X and Z.
+    Plane {
+        /// Extents along X and Z (m).
+        size: [f64; 2],
+    },
+}
+
+impl PropShape {
+    /// Its word in documents.
+    pub fn name(&self) -> &'static str {
+        match self {
+            PropShape::Box { .. } => "box",
+            PropShape::Sphere { .. } => "sphere",
+            PropShape::Cylinder { .. } => "cylinder",
+            PropShape::Plane { .. } => "plane",
+        }
+    }
+
+    /// Its extents along its own X, Y and Z (a plane has none along Y).
+    pub fn extents(&self) -> [f64; 3] {
+        match *self {
+            PropShape::Box { size } => size,
+            PropShape::Sphere { radius } => [2.0 * radius; 3],
+            PropShape::Cylinder { radius, height } => [2.0 * radius, height, 2.0 * radius],
+            PropShape::Plane { size } => [size[0], 0.0, size[1]],
+        }
+    }
+
+    /// Its dimensions as numbers, in the order the link writes them.
+    pub fn dimensions(&self) -> Vec<f64> {
+        match *self {
+            PropShape::Box { size } => size.to_vec(),
+            PropShape::Sphere { radius } => vec![radius],
+            PropShape::Cylinder { radius, height } => vec![radius, height],
+            PropShape::Plane { size } => size.to_vec(),
+        }
+    }
+
+    /// The shape named `word` with `dimensions` in [`Self::dimensions`]' order.
+    pub fn from_dimensions(word: &str, dimensions: &[f64]) -> Option<Self> {
+        match (word, dimensions) {
+            ("box", [x, y, z]) => Some(PropShape::Box { size: [*x, *y, *z] }),
+            ("sphere", [radius]) => Some(PropShape::Sphere { radius: *radius }),
+            ("cylinder", [radius, height]) => Some(PropShape::Cylinder {
+                radius: *radius,
+                height: *height,
+            }),
+            ("plane", [x, z]) => Some(PropShape::Plane { size: [*x, *z] }),
+            _ => None,
+        }
+    }
+
+    /// The shape words, in the link's order.
+    pub const WORDS: [&'static str; 4] = ["box", "sphere", "cylinder", "plane"];
+
+    fn validate_at(&self, at: &str) -> Result<(), DocumentError> {
+        for value in self.dimensions() {
+            if !value.is_finite() || value <= 0.0 || value > MAX_PROP_SIZE_M {
+                return Err(DocumentError::field(
+                    at,
+                    format!("{value} m: a size is above 0 and at most {MAX_PROP_SIZE_M} m"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A static object of the scene: a primitive placed and turned.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Prop {
+    /// Its name in the *Scene* panel.
+    pub name: String,
+    /// Its shape and size.
+    pub shape: PropShape,
+    /// Scene position of its centre (m).
+    pub position: [f64; 3],
+    /// Its turn in the scene (unit quaternion `[x, y, z, w]`).
+    pub rotation: [f64; 4],
+}
+
+impl Prop {
+    /// A prop of `shape` at `position`, unturned.
+    pub fn new(name: String, shape: PropShape, position: [f64; 3]) -> Self {
+        Self {
+            name,
+            shape,
+            position,
+            rotation: [0.0, 0.0, 0.0, 1.0],
+        }
+    }
+
+    /// The transform from the prop's frame (centred on it) to the scene's.
+    pub fn scene_from_prop(&self) -> DAffine3 {
+        DAffine3::from_rotation_translation(
+            DQuat::from_array(self.rotation).normalize(),
+            DVec3::from_array(self.position),
+        )
+    }
+
+    /// Checks its numbers: sizes above 0 and at most [`MAX_PROP_SIZE_M`], a finite position,
+    /// a rotation of unit length (within 1e-3).
+    pub fn validate_at(&self, at: &str) -> Result<(), DocumentError> {
+        self.shape
+            .validate_at(&format!("{at}.{}", self.shape.name()))?;
+        if self.position.iter().any(|v| !v.is_finite()) {
+            return Err(DocumentError::field(
+                format!("{at}.position"),
+                "not a finite number",
+            ));
+        }
+        let norm = self.rotation.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if !norm.is_finite() || (norm - 1.0).abs() > 1e-3 {
+            return Err(DocumentError::field(
+                format!("{at}.rotation"),
+                "expected a unit quaternion [x, y, z, w]",
+            ));
+        }
+        Ok(())
+    }
+
+    fn from_json_value(v: &Value, at: &str, index: usize) -> Result<Self, DocumentError> {
+        let o = obj(v, at)?;
+        let word = string(
+            o.get("shape").unwrap_or(&Value::Null),
+            &format!("{at}.shape"),
+        )?;
+        let dimension = |key: &str| -> Result<f64, DocumentError> {
+            number(o.get(key).unwrap_or(&Value::Null), &format!("{at}.{key}"))
+        };
+        let pair_or_triple = |key: &str, len: usize| -> Result<Vec<f64>, DocumentError> {
+            numbers(
+                o.get(key).unwrap_or(&Value::Null),
+                &format!("{at}.{key}"),
+                len,
+            )
+        };
+        let shape = match word {
+            "box" => {
+                let s = pair_or_triple("size", 3)?;
+                PropShape::Box {
+                    size: [s[0], s[1], s[2]],
+                }
+            }
+            "sphere" => PropShape::Sphere {
+                radius: dimension("radius")?,
+            },
+            "cylinder" => PropShape::Cylinder {
+                radius: dimension("radius")?,
+                height: dimension("height")?,
+            },
+            "plane" => {
+                let s = pair_or_triple("size", 2)?;
+                PropShape::Plane { size: [s[0], s[1]] }
+            }
+            other => {
+                return Err(DocumentError::field(
+                    format!("{at}.shape"),
+                    format!(
+                        "unknown shape `{other}`: one of {}",
+                        PropShape::WORDS.join(", ")
+                    ),
+                ));
+            }
+        };
+        let name = match o.get("name") {
+            None | Some(Value::Null) => default_prop_name(shape, index + 1),
+            Some(n) => clean_name(string(n, &format!("{at}.name"))?)
+                .unwrap_or_else(|| default_prop_name(shape, index + 1)),
+        };
+        let position = match o.get("position") {
+            None | Some(Value::Null) => [0.0; 3],
+            Some(_) => {
+                let p = pair_or_triple("position", 3)?;
+                [p[0], p[1], p[2]]
+            }
+        };
+        let rotation = match o.get("rotation") {
+            None | Some(Value::Null) => [0.0, 0.0, 0.0, 1.0],
+            Some(_) => {
+                let q = pair_or_triple("rotation", 4)?;
+                [q[0], q[1], q[2], q[3]]
+            }
+        };
+        let prop = Self {
+            name,
+            shape,
+            position,
+            rotation,
+        };
+        prop.validate_at(at)?;
+        Ok(prop)
+    }
+
+    fn to_json_value(&self) -> Value {
+        let mut fields = Map::new();
+        fields.insert("name".into(), Value::String(self.name.clone()));
+        fields.insert("shape".into(), Value::String(self.shape.name().into()));
+        match self.shape {
+            PropShape::Box { size } => {
+                fields.insert("size".into(), serde_json::json!(size));
+            }
+            PropShape::Sphere { radius } => {
+                fields.insert("radius".into(), serde_json::json!(radius));
+            }
+            PropShape::Cylinder { radius, height } => {
+                fields.insert("radius".into(), serde_json::json!(radius));
+                fields.insert("height".into(), serde_json::json!(height));
+            }
+            PropShape::Plane { size } => {
+                fields.insert("size".into(), serde_json::json!(size));
+            }
+        }
+        fields.insert("position".into(), serde_json::json!(self.position));
+        fields.insert("rotation".into(), serde_json::json!(self.rotation));
+        Value::Object(fields)
+    }
+}
+
+/// The name of the `n`th prop (from 1) of `shape` when it is not named: "Box 2".
+pub fn default_prop_name(shape: PropShape, n: usize) -> String {
+    let word = shape.name();
+    let mut chars = word.chars();
+    let capital: String = chars
+        .next()
+        .map(|c| c.to_ascii_uppercase())
+        .into_iter()
+        .chain(chars)
+        .collect();
+    format!("{capital} {n}")
+}
+
+/// Several characters and props; one character selected (the one the editor's tools work on).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Scene {
     /// The characters, in the outliner's order (at least one).
     pub characters: Vec<SceneCharacter>,
+    /// The props, in the outliner's order.
+    pub props: Vec<Prop>,
     /// The selected character's index.
     pub selected: usize,
 }
@@ -138,6 +399,7 @@ impl Scene {
                 placement: Placement::default(),
                 document,
             }],
+            props: Vec::new(),
             selected: 0,
         }
     }
@@ -165,6 +427,18 @@ impl Scene {
                 format!("character {} of {}", self.selected, self.characters.len()),
             ));
         }
+        if self.props.len() > MAX_PROPS {
+            return Err(DocumentError::field(
+                "props",
+                format!(
+                    "{} props; a scene holds at most {MAX_PROPS}",
+                    self.props.len()
+                ),
+            ));
+        }
+        for (i, prop) in self.props.iter().enumerate() {
+            prop.validate_at(&format!("props[{i}]"))?;
+        }
         for (i, character) in self.characters.iter().enumerate() {
             let at = format!("characters[{i}]");
             character
@@ -178,7 +452,8 @@ impl Scene {
     /// Whether it is one character at the origin with the first character's default name:
     /// written as a plain document (nothing is lost).
     pub fn is_plain_document(&self) -> bool {
-        matches!(self.characters.as_slice(), [only]
+        self.props.is_empty()
+            && matches!(self.characters.as_slice(), [only]
             if only.placement.is_identity() && only.name == default_character_name(1))
     }
 
@@ -189,9 +464,9 @@ impl Scene {
         Self::from_json_value(&v)
     }
 
-    /// Parses and validates a scene from a JSON value: `{"characters": [...], "selected": i}`,
-    /// each character a document with `"name"` and `"placement"`; any other object is read as
-    /// a document, a scene of one character.
+    /// Parses and validates a scene from a JSON value: `{"characters": [...], "props": [...],
+    /// "selected": i}`, each character a document with `"name"` and `"placement"`; any other
+    /// object is read as a document, a scene of one character.
     pub fn from_json_value(v: &Value) -> Result<Self, DocumentError> {
         let o = obj(v, "the document")?;
         let Some(list) = o.get("characters") else {
@@ -235,6 +510,22 @@ impl Scene {
                 document,
             });
         }
+        let props = match o.get("props") {
+            None | Some(Value::Null) => Vec::new(),
+            Some(Value::Array(list)) => {
+                if list.len() > MAX_PROPS {
+                    return Err(DocumentError::field(
+                        "props",
+                        format!("more than {MAX_PROPS} props"),
+                    ));
+                }
+                list.iter()
+                    .enumerate()
+                    .map(|(i, v)| Prop::from_json_value(v, &format!("props[{i}]"), i))
+                    .collect::<Result<Vec<_>, _>>()?
+            }
+            Some(_) => return Err(DocumentError::field("props", "expected an array of props")),
+        };
         let selected = match o.get("selected") {
             None | Some(Value::Null) => 0,
             Some(s) => {
@@ -247,6 +538,7 @@ impl Scene {
         };
         let scene = Self {
             characters,
+            props,
             selected,
         };
         scene.validate()?;
@@ -274,7 +566,12 @@ impl Scene {
                 Value::Object(fields)
             })
             .collect();
-        serde_json::json!({ "characters": characters, "selected": self.selected })
+        let props: Vec<Value> = self.props.iter().map(Prop::to_json_value).collect();
+        if props.is_empty() {
+            serde_json::json!({ "characters": characters, "selected": self.selected })
+        } else {
+            serde_json::json!({ "characters": characters, "props": props, "selected": self.selected })
+        }
     }
 
     /// The JSON text (pretty or compact).

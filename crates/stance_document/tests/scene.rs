@@ -5,7 +5,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use glam::DVec3;
-use stance_document::{Document, Placement, Scene, SceneCharacter};
+use stance_document::{Document, Placement, Prop, PropShape, Scene, SceneCharacter};
 #[cfg(target_arch = "wasm32")]
 use wasm_bindgen_test::wasm_bindgen_test as test;
 
@@ -27,6 +27,36 @@ fn two_characters() -> Scene {
                 },
                 document: Document::default(),
             },
+        ],
+        props: vec![
+            Prop::new(
+                "Ball".into(),
+                PropShape::Sphere { radius: 0.11 },
+                [0.3, 0.9, 0.4],
+            ),
+            Prop {
+                rotation: [0.0, (0.25f64).sin(), 0.0, (0.25f64).cos()],
+                ..Prop::new(
+                    "Bar".into(),
+                    PropShape::Cylinder {
+                        radius: 0.02,
+                        height: 2.0,
+                    },
+                    [-0.5, 1.0, 0.3],
+                )
+            },
+            Prop::new(
+                "Step".into(),
+                PropShape::Box {
+                    size: [0.6, 0.2, 0.4],
+                },
+                [0.0, 0.1, 0.6],
+            ),
+            Prop::new(
+                "Table".into(),
+                PropShape::Plane { size: [1.2, 0.8] },
+                [1.0, 0.75, 0.6],
+            ),
         ],
         selected: 1,
     }
@@ -94,6 +124,22 @@ fn errors_name_the_field_and_nothing_is_half_read() {
             "characters[1]",
         ),
         (r#"{"characters": [{"name": 3}]}"#, "characters[0].name"),
+        (
+            r#"{"characters": [{}], "props": [{"shape": "cone"}]}"#,
+            "props[0].shape",
+        ),
+        (
+            r#"{"characters": [{}], "props": [{"shape": "sphere", "radius": -1}]}"#,
+            "props[0].sphere",
+        ),
+        (
+            r#"{"characters": [{}], "props": [{"shape": "box", "size": [1, 1]}]}"#,
+            "props[0].size",
+        ),
+        (
+            r#"{"characters": [{}], "props": [{"shape": "plane", "size": [1, 1], "rotation": [0, 0, 0, 2]}]}"#,
+            "props[0].rotation",
+        ),
     ];
     for (text, field) in cases {
         let error = Scene::from_json(text).expect_err(text).to_string();
@@ -125,6 +171,18 @@ fn a_scene_link_carries_every_character_within_the_link_steps() {
             assert!((x - y).abs() <= link::POSITION_STEP_M / 2.0, "{x} {y}");
         }
         assert!((a.placement.yaw_degrees - b.placement.yaw_degrees).abs() < 0.003);
+    }
+    assert_eq!(back.props.len(), scene.props.len());
+    for (a, b) in back.props.iter().zip(&scene.props) {
+        assert_eq!((&a.name, a.shape.name()), (&b.name, b.shape.name()));
+        for (x, y) in a.shape.dimensions().iter().zip(b.shape.dimensions()) {
+            assert!((x - y).abs() <= link::POSITION_STEP_M / 2.0);
+        }
+        for (x, y) in a.rotation.iter().zip(b.rotation) {
+            assert!((x - y).abs() < 1e-4, "{:?} {:?}", a.rotation, b.rotation);
+        }
+    }
+    for (a, b) in back.characters.iter().zip(&scene.characters) {
         // Each document as its own link carries it.
         assert_eq!(
             a.document,

@@ -4,7 +4,7 @@
 //! An edit that goes on over many frames (dragging a value, pulling a body part) is one step:
 //! edits with the same [`EditKind`] that follow each other within [`COALESCE_SECS`] merge.
 
-use stance_document::{Document, Placement};
+use stance_document::{Document, Placement, Prop};
 use stance_hanim::hands::Finger;
 
 use crate::model::Hands;
@@ -46,14 +46,16 @@ pub struct CastEntry {
     pub placement: Placement,
 }
 
-/// The scene's characters as they were: their order, names and placements, and the selected
-/// one.
+/// The scene as it was apart from the characters' documents: the characters' order, names and
+/// placements, the selected one, and the props.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CastSnapshot {
     /// The characters in the scene's order.
     pub order: Vec<CastEntry>,
     /// The selected character's id.
     pub selected: u64,
+    /// The props.
+    pub props: Vec<Prop>,
 }
 
 /// One step back or forward.
@@ -318,6 +320,7 @@ mod tests {
                 })
                 .collect(),
             selected,
+            props: Vec::new(),
         }
     }
 

@@ -301,3 +301,55 @@ fn a_scene_link_opens_every_character_where_it_stood() {
     let single = Clocked::new().model.share_link();
     assert!(stance_document::link::decode(&single.url).is_ok());
 }
+
+#[test]
+fn props_are_added_in_front_edited_removed_and_undone_with_the_scene() {
+    use stance_document::PropShape;
+    let mut editor = Clocked::new();
+    editor.apply(Command::Scene(SceneCommand::Add));
+    editor.apply(Command::Scene(SceneCommand::AddProp(PropShape::Sphere {
+        radius: 0.11,
+    })));
+    let ball = editor.model.props()[0].clone();
+    assert_eq!(ball.name, "Sphere 1");
+    // In front of the selected character (+Z of its frame), at chest height.
+    let at = editor.model.character().placement().position;
+    assert!((ball.position[0] - at[0]).abs() < 1e-9, "{ball:?}");
+    assert!(
+        ball.position[2] > at[2] + 0.3 && ball.position[1] > 0.8,
+        "{ball:?}"
+    );
+    // A drag of its height over frames is one step.
+    for step in 1..=10 {
+        let mut moved = ball.clone();
+        moved.position[1] += 0.01 * f64::from(step);
+        editor.apply(Command::Scene(SceneCommand::EditProp(0, moved)));
+    }
+    assert!((editor.model.props()[0].position[1] - ball.position[1] - 0.1).abs() < 1e-12);
+    undo(&mut editor);
+    assert_eq!(editor.model.props()[0], ball);
+    // A size of zero is refused, nothing changes.
+    let flat = stance_document::Prop {
+        shape: PropShape::Sphere { radius: 0.0 },
+        ..ball.clone()
+    };
+    assert_eq!(
+        editor.apply(Command::Scene(SceneCommand::EditProp(0, flat))),
+        Change::Nothing
+    );
+    editor.apply(Command::Scene(SceneCommand::AddProp(PropShape::Cylinder {
+        radius: 0.02,
+        height: 2.0,
+    })));
+    assert_eq!(editor.model.props().len(), 2);
+    // Saved and shared with the scene.
+    let scene = editor.model.scene();
+    assert_eq!(scene.props.len(), 2);
+    let link = stance_document::link::decode_scene(&editor.model.share_link().url).expect("opens");
+    assert_eq!(link.props.len(), 2);
+    editor.apply(Command::Scene(SceneCommand::RemoveProp(0)));
+    assert_eq!(editor.model.props()[0].name, "Cylinder 1");
+    undo(&mut editor);
+    assert_eq!(editor.model.props().len(), 2);
+    assert_eq!(editor.model.props()[0], ball);
+}

@@ -6,7 +6,11 @@
 //! renaming, moving and selecting characters are [`SceneCommand`]s, undone like any edit
 //! (the history keeps the cast as it was; a removed character is kept while a step names it).
 
-use stance_document::{Placement, Scene, SceneCharacter, clean_name, default_character_name};
+use stance_document::scene::MAX_PROPS;
+use stance_document::{
+    Placement, Prop, PropShape, Scene, SceneCharacter, clean_name, default_character_name,
+    default_prop_name,
+};
 use stance_render::MannequinBone;
 
 use super::mapping::MappingCorrections;
@@ -143,6 +147,8 @@ pub struct Cast {
     next_id: u64,
     /// Removed characters that a step of the history names.
     removed: Vec<Character>,
+    /// The scene's props, in the outliner's order.
+    props: Vec<Prop>,
 }
 
 /// A command for the scene's characters.
@@ -162,6 +168,12 @@ pub enum SceneCommand {
     Select(u64),
     /// Moves or turns the character on the floor.
     Place(u64, Placement),
+    /// A new prop of this shape in front of the selected character.
+    AddProp(PropShape),
+    /// Removes the prop at this index.
+    RemoveProp(usize),
+    /// Sets the prop at this index (its name, size, place, turn), as one edit over frames.
+    EditProp(usize, Prop),
 }
 
 impl EditorModel {
@@ -201,6 +213,7 @@ impl EditorModel {
             .collect();
         Scene {
             characters,
+            props: self.cast.props.clone(),
             selected: self.cast.selected_at,
         }
     }
@@ -213,7 +226,77 @@ impl EditorModel {
             SceneCommand::Rename(id, name) => self.rename_character(id, &name),
             SceneCommand::Select(id) => self.select_character(id),
             SceneCommand::Place(id, placement) => self.place_character(id, placement),
+            SceneCommand::AddProp(shape) => self.add_prop(shape),
+            SceneCommand::RemoveProp(index) => self.remove_prop(index),
+            SceneCommand::EditProp(index, prop) => self.edit_prop(index, prop),
         }
+    }
+
+    /// The scene's props.
+    pub fn props(&self) -> &[Prop] {
+        &self.cast.props
+    }
+
+    fn add_prop(&mut self, shape: PropShape) -> super::Change {
+        if self.cast.props.len() >= MAX_PROPS {
+            self.warn(format!("A scene holds at most {MAX_PROPS} props."));
+            return super::Change::Nothing;
+        }
+        let n = 1 + self
+            .cast
+            .props
+            .iter()
+            .filter(|p| p.shape.name() == shape.name())
+            .count();
+        let name = default_prop_name(shape, n);
+        // In front of the selected character, resting on the floor (a plane at table height, a
+        // ball at chest height, a bar standing beside it).
+        let scene_from_character = self.character.placement.scene_from_character();
+        let (ahead, height) = match shape {
+            PropShape::Box { size } => (0.5, size[1] / 2.0),
+            PropShape::Sphere { .. } => (0.4, 1.0),
+            PropShape::Cylinder { height, .. } => (0.45, height / 2.0),
+            PropShape::Plane { .. } => (0.6, 0.75),
+        };
+        let centre = scene_from_character.transform_point3(glam::DVec3::new(0.0, height, ahead));
+        let mut prop = Prop::new(name.clone(), shape, centre.to_array());
+        prop.rotation =
+            glam::DQuat::from_rotation_y(self.character.placement.yaw_degrees.to_radians())
+                .to_array();
+        let before = self.cast_snapshot();
+        self.cast.props.push(prop);
+        self.history.record_cast(before, false, self.now_secs);
+        self.inform(format!("Added {name} (Scene panel: its size and place)."));
+        super::Change::Document
+    }
+
+    fn remove_prop(&mut self, index: usize) -> super::Change {
+        if index >= self.cast.props.len() {
+            return super::Change::Nothing;
+        }
+        let before = self.cast_snapshot();
+        let prop = self.cast.props.remove(index);
+        self.history.record_cast(before, false, self.now_secs);
+        self.inform(format!("Removed {} (undo brings it back).", prop.name));
+        super::Change::Document
+    }
+
+    fn edit_prop(&mut self, index: usize, mut prop: Prop) -> super::Change {
+        let Some(current) = self.cast.props.get(index) else {
+            return super::Change::Nothing;
+        };
+        prop.name = clean_name(&prop.name).unwrap_or_else(|| current.name.clone());
+        if let Err(error) = prop.validate_at("prop") {
+            self.warn(format!("The prop was not changed: {error}"));
+            return super::Change::Nothing;
+        }
+        if *current == prop {
+            return super::Change::Nothing;
+        }
+        let before = self.cast_snapshot();
+        self.cast.props[index] = prop;
+        self.history.record_cast(before, true, self.now_secs);
+        super::Change::Document
     }
 
     fn select_character(&mut self, id: u64) -> super::Change {
@@ -439,6 +522,7 @@ impl EditorModel {
         CastSnapshot {
             order: self.characters().map(|(c, _)| c.cast_entry()).collect(),
             selected: self.character.id,
+            props: self.cast.props.clone(),
         }
     }
 
@@ -485,6 +569,7 @@ impl EditorModel {
         self.cast.others = others;
         self.cast.selected_at = selected_at;
         self.cast.removed = pool;
+        self.cast.props.clone_from(&snapshot.props);
     }
 
     /// Opens `scene` in place of the scene's characters, as one undoable change of the cast
@@ -500,42 +585,13 @@ impl EditorModel {
         let mut built = Vec::with_capacity(scene.characters.len());
         let mut on_mannequin = Vec::new();
         for (i, entry) in scene.characters.iter().enumerate() {
-            let document = &entry.document;
-            let named_url = match &document.avatar {
-                stance_document::AvatarReference::Url(url) => Some(url.clone()),
-                stance_document::AvatarReference::Default => None,
-            };
-            let on_avatar = named_url.is_some() && named_url == current_url;
-            let avatar = if on_avatar {
-                self.character.avatar.as_ref().map(LoadedAvatar::duplicate)
-            } else {
-                None
-            };
-            let session = match &avatar {
-                Some(avatar) => avatar
-                    .skeleton(loa)
-                    .and_then(|h| PosingSession::with_humanoid(h).map_err(|e| e.to_string())),
-                None => PosingSession::new(loa).map_err(|e| e.to_string()),
-            };
-            let mut session = session.map_err(|e| format!("{}: {e}", entry.name))?;
-            let mut fitted = document.clone();
-            fitted.posture = fitted.posture.fitted(session.skeleton());
-            let restored = if fitted.posture.joints.is_empty() {
-                session.load_document(&fitted)
-            } else {
-                session.restore_document(&fitted)
-            };
-            restored.map_err(|e| format!("{} does not fit its body: {e}", entry.name))?;
-            if let (Some(url), None) = (&named_url, &avatar)
+            let (character, wanted_url) = self.built_character(entry, loa, current_url.as_ref())?;
+            if let Some(url) = &wanted_url
                 && i != scene.selected
             {
                 on_mannequin.push(format!("{} ({url})", entry.name));
             }
-            let mut character = Character::new(0, entry.name.clone(), session);
-            character.placement = entry.placement;
-            character.avatar = avatar;
-            character.avatar_url = if on_avatar { named_url.clone() } else { None };
-            built.push((character, named_url.filter(|_| !on_avatar)));
+            built.push((character, wanted_url));
         }
         let before = self.cast_snapshot();
         let old: Vec<u64> = self.characters().map(|(c, _)| c.id).collect();
@@ -561,6 +617,7 @@ impl EditorModel {
         self.cast.others = kept;
         self.cast.removed.extend(gone);
         self.cast.selected_at = scene.selected.min(self.cast.others.len());
+        self.cast.props.clone_from(&scene.props);
         self.history.record_cast(before, false, self.now_secs);
         if let Some((url, document)) = fetch {
             self.pending_document = Some(document);
@@ -575,6 +632,49 @@ impl EditorModel {
                 on_mannequin.join(", ")
             )
         })
+    }
+
+    /// A character made from a scene's `entry` at `loa` (its id not given yet): on the
+    /// selected character's avatar when its document names that avatar's URL (`current_url`),
+    /// else on the mannequin; with the URL of an avatar it names that is not loaded.
+    fn built_character(
+        &self,
+        entry: &SceneCharacter,
+        loa: stance_hanim::LevelOfArticulation,
+        current_url: Option<&String>,
+    ) -> Result<(Character, Option<String>), String> {
+        let document = &entry.document;
+        let named_url = match &document.avatar {
+            stance_document::AvatarReference::Url(url) => Some(url.clone()),
+            stance_document::AvatarReference::Default => None,
+        };
+        let on_avatar = named_url.is_some() && named_url.as_ref() == current_url;
+        let avatar = if on_avatar {
+            self.character.avatar.as_ref().map(LoadedAvatar::duplicate)
+        } else {
+            None
+        };
+        let session = match &avatar {
+            Some(avatar) => avatar
+                .skeleton(loa)
+                .and_then(|h| PosingSession::with_humanoid(h).map_err(|e| e.to_string())),
+            None => PosingSession::new(loa).map_err(|e| e.to_string()),
+        };
+        let mut session = session.map_err(|e| format!("{}: {e}", entry.name))?;
+        let mut fitted = document.clone();
+        fitted.posture = fitted.posture.fitted(session.skeleton());
+        let restored = if fitted.posture.joints.is_empty() {
+            session.load_document(&fitted)
+        } else {
+            session.restore_document(&fitted)
+        };
+        restored.map_err(|e| format!("{} does not fit its body: {e}", entry.name))?;
+        let on_avatar = avatar.is_some();
+        let mut character = Character::new(0, entry.name.clone(), session);
+        character.placement = entry.placement;
+        character.avatar = avatar;
+        character.avatar_url = if on_avatar { named_url.clone() } else { None };
+        Ok((character, named_url.filter(|_| !on_avatar)))
     }
 
     /// Forgets the removed characters no step of the history names.
