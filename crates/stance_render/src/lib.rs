@@ -23,6 +23,7 @@ mod line_art;
 mod openpose;
 mod openpose_draw;
 mod pick;
+mod props;
 mod raster;
 #[cfg(feature = "gpu")]
 mod renderer;
@@ -50,6 +51,7 @@ pub use openpose_draw::{
     hand_bone_color,
 };
 pub use pick::{CapsuleHit, pick_capsule};
+pub use props::{PropInstance, PropMesh, PropTemplate, normal_matrix, prop_mesh};
 #[cfg(feature = "gpu")]
 pub use renderer::{COLOR_FORMAT, DEPTH_FORMAT, RenderTarget, SceneRenderer};
 pub use skinned::{
@@ -73,6 +75,13 @@ pub const SHADERS: &[(&str, &str)] = &[
         ),
     ),
     ("floor.wgsl", include_str!("shaders/floor.wgsl")),
+    (
+        "prop.wgsl",
+        concat!(
+            include_str!("shaders/prop.wgsl"),
+            include_str!("shaders/control_map.wgsl.part")
+        ),
+    ),
     (
         "skinned.wgsl",
         concat!(
@@ -126,6 +135,8 @@ pub struct Scene {
     pub show_avatar: bool,
     /// This frame's matrix palettes of the avatar (mesh space -> H-Anim world), one per palette.
     pub avatar_palettes: Vec<Vec<glam::Mat4>>,
+    /// The scene's props (boxes, spheres, cylinders), shaded like the bodies.
+    pub props: Vec<PropInstance>,
     /// Overlay markers drawn like capsules (an image's task goals); the viewport draws its
     /// overlays with egui instead and leaves this empty.
     pub markers: Vec<Capsule>,

@@ -6,6 +6,7 @@ use wgpu::util::DeviceExt;
 
 use crate::skinned::SkinnedModel;
 use crate::skinned_gpu::{AvatarGpu, AvatarUpload, SkinnedPipeline};
+use crate::props::{PropInstance, PropTemplate, normal_matrix, prop_mesh};
 use crate::{OrbitCamera, SHADERS, Scene};
 
 /// Colour format of the render target: what egui can show as a native texture. The shaders
@@ -35,6 +36,178 @@ struct CapsuleInstance {
     start_and_radius: [f32; 4],
     end_world: [f32; 4],
     color: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct PropVertex {
+    position: [f32; 4],
+    normal: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct PropGpuInstance {
+    world_from_unit: [[f32; 4]; 4],
+    normals: [[f32; 4]; 3],
+    color: [f32; 4],
+}
+
+/// The props' pipeline, the unit shapes' combined mesh and the instances' buffer.
+#[derive(Debug)]
+struct PropPipeline {
+    pipeline: wgpu::RenderPipeline,
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    /// Per template (in [`PropTemplate::ALL`]'s order): its index range and first vertex.
+    ranges: Vec<(std::ops::Range<u32>, i32)>,
+    instances: wgpu::Buffer,
+    capacity: usize,
+}
+
+impl PropPipeline {
+    fn new(
+        device: &wgpu::Device,
+        layout: &wgpu::PipelineLayout,
+        shader: &wgpu::ShaderModule,
+        depth_stencil: Option<wgpu::DepthStencilState>,
+        multisample: wgpu::MultisampleState,
+        color_targets: &[Option<wgpu::ColorTargetState>],
+    ) -> Self {
+        let vertex_layout = wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<PropVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4],
+        };
+        let instance_layout = wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<PropGpuInstance>() as u64,
+            step_mode: wgpu::VertexStepMode::Instance,
+            attributes: &wgpu::vertex_attr_array![
+                2 => Float32x4, 3 => Float32x4, 4 => Float32x4, 5 => Float32x4,
+                6 => Float32x4, 7 => Float32x4, 8 => Float32x4, 9 => Float32x4
+            ],
+        };
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("stance props"),
+            layout: Some(layout),
+            vertex: wgpu::VertexState {
+                module: shader,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(vertex_layout), Some(instance_layout)],
+            },
+            primitive: wgpu::PrimitiveState {
+                cull_mode: Some(wgpu::Face::Back),
+                front_face: wgpu::FrontFace::Ccw,
+                ..Default::default()
+            },
+            depth_stencil,
+            multisample,
+            fragment: Some(wgpu::FragmentState {
+                module: shader,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: color_targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let mut vertices = Vec::new();
+        let mut indices: Vec<u16> = Vec::new();
+        let mut ranges = Vec::new();
+        for template in PropTemplate::ALL {
+            let mesh = prop_mesh(template);
+            let first_vertex = i32::try_from(vertices.len()).unwrap_or(0);
+            let first_index = u32::try_from(indices.len()).unwrap_or(0);
+            vertices.extend(mesh.positions.iter().zip(&mesh.normals).map(|(p, n)| PropVertex {
+                position: p.extend(1.0).to_array(),
+                normal: n.extend(0.0).to_array(),
+            }));
+            indices.extend_from_slice(&mesh.indices);
+            let end = u32::try_from(indices.len()).unwrap_or(0);
+            ranges.push((first_index..end, first_vertex));
+        }
+        let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("stance prop vertices"),
+            contents: bytemuck::cast_slice(&vertices),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("stance prop indices"),
+            contents: bytemuck::cast_slice(&indices),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        let capacity = 16;
+        Self {
+            pipeline,
+            vertices,
+            indices,
+            ranges,
+            instances: Self::instance_buffer(device, capacity),
+            capacity,
+        }
+    }
+
+    fn instance_buffer(device: &wgpu::Device, capacity: usize) -> wgpu::Buffer {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("stance prop instances"),
+            size: (capacity * std::mem::size_of::<PropGpuInstance>()) as u64,
+            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    }
+
+    /// Writes `props`' instances, grouped by template; returns each template's instance range.
+    fn write(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        props: &[PropInstance],
+    ) -> Vec<std::ops::Range<u32>> {
+        let mut instances = Vec::with_capacity(props.len());
+        let mut groups = Vec::with_capacity(PropTemplate::ALL.len());
+        for template in PropTemplate::ALL {
+            let start = u32::try_from(instances.len()).unwrap_or(u32::MAX);
+            instances.extend(
+                props
+                    .iter()
+                    .filter(|prop| prop.template == template && prop.world_from_unit.is_finite())
+                    .map(|prop| {
+                        let normals = normal_matrix(prop.world_from_unit);
+                        PropGpuInstance {
+                            world_from_unit: prop.world_from_unit.to_cols_array_2d(),
+                            normals: [normals.x_axis, normals.y_axis, normals.z_axis]
+                                .map(|c| c.extend(0.0).to_array()),
+                            color: prop.color_linear,
+                        }
+                    }),
+            );
+            groups.push(start..u32::try_from(instances.len()).unwrap_or(u32::MAX));
+        }
+        if instances.len() > self.capacity {
+            self.capacity = instances.len().next_power_of_two();
+            self.instances = Self::instance_buffer(device, self.capacity);
+        }
+        if !instances.is_empty() {
+            queue.write_buffer(&self.instances, 0, bytemuck::cast_slice(&instances));
+        }
+        groups
+    }
+
+    fn draw(&self, pass: &mut wgpu::RenderPass<'_>, groups: &[std::ops::Range<u32>]) {
+        if groups.iter().all(std::ops::Range::is_empty) {
+            return;
+        }
+        pass.set_pipeline(&self.pipeline);
+        pass.set_vertex_buffer(0, self.vertices.slice(..));
+        pass.set_vertex_buffer(1, self.instances.slice(..));
+        pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint16);
+        for ((indices, first_vertex), instances) in self.ranges.iter().zip(groups) {
+            if !instances.is_empty() {
+                pass.draw_indexed(indices.clone(), *first_vertex, instances.clone());
+            }
+        }
+    }
 }
 
 /// The colour texture a frame is rendered into, with its multisampled and depth companions.
@@ -130,6 +303,7 @@ pub struct SceneRenderer {
     template_index_count: u32,
     instances: wgpu::Buffer,
     instance_capacity: usize,
+    props: PropPipeline,
 }
 
 /// A unit sphere split at the equator: vertices carry (direction, half) with half 1 for the
@@ -221,6 +395,7 @@ impl SceneRenderer {
         let capsule_shader = shader("capsule.wgsl");
         let floor_shader = shader("floor.wgsl");
         let skinned_shader = shader("skinned.wgsl");
+        let prop_shader = shader("prop.wgsl");
         let depth_stencil = Some(wgpu::DepthStencilState {
             format: DEPTH_FORMAT,
             depth_write_enabled: Some(true),
@@ -229,6 +404,7 @@ impl SceneRenderer {
             bias: wgpu::DepthBiasState::default(),
         });
         let depth_stencil_for_skinned = depth_stencil.clone();
+        let depth_stencil_for_props = depth_stencil.clone();
         let multisample = wgpu::MultisampleState {
             count: SAMPLE_COUNT,
             ..Default::default()
@@ -304,6 +480,14 @@ impl SceneRenderer {
             multisample,
             &color_targets,
         );
+        let props = PropPipeline::new(
+            device,
+            &layout,
+            &prop_shader,
+            depth_stencil_for_props,
+            multisample,
+            &color_targets,
+        );
         let (template, indices) = capsule_template();
         let template_vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("stance capsule template vertices"),
@@ -329,6 +513,7 @@ impl SceneRenderer {
             template_index_count: u32::try_from(indices.len()).unwrap_or(0),
             instances: Self::instance_buffer(device, instance_capacity),
             instance_capacity,
+            props,
         }
     }
 
@@ -440,6 +625,8 @@ impl SceneRenderer {
             queue.write_buffer(&self.instances, 0, bytemuck::cast_slice(&instances));
         }
 
+        let prop_groups = self.props.write(device, queue, &scene.props);
+
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("stance frame"),
         });
@@ -481,6 +668,7 @@ impl SceneRenderer {
                 let instance_count = u32::try_from(instances.len()).unwrap_or(u32::MAX);
                 pass.draw_indexed(0..self.template_index_count, 0, 0..instance_count);
             }
+            self.props.draw(&mut pass, &prop_groups);
             if scene.show_floor {
                 pass.set_pipeline(&self.floor_pipeline);
                 pass.draw(0..6, 0..1);
