@@ -3,13 +3,45 @@
 //! ([`stance_document::Placement::scene_from_character`]). The characters that are not
 //! selected are drawn as their mannequin capsules in a quieter colour.
 
-use glam::{Mat4, Vec3};
-use stance_render::Capsule;
+use glam::{DMat4, DVec3, Mat4, Vec3};
+use stance_document::{Prop, PropShape};
+use stance_render::{Capsule, PropInstance, PropTemplate};
 
 use crate::model::{Character, EditorModel};
 
 /// The colour of the characters that are not selected (linear RGB): the body's, greyer.
 pub(crate) const OTHER_COLOR_LINEAR: [f32; 4] = [0.42, 0.42, 0.45, 1.0];
+
+/// The colour of the props (linear RGB): a light wood.
+pub(crate) const PROP_COLOR_LINEAR: [f32; 4] = [0.52, 0.40, 0.28, 1.0];
+/// How thick a plane prop is drawn (m).
+pub(crate) const PLANE_THICKNESS_M: f64 = 0.01;
+
+/// How the renderer draws `prop`: its unit shape, sized, turned and placed.
+pub(crate) fn prop_instance(prop: &Prop) -> PropInstance {
+    let (template, size) = match prop.shape {
+        PropShape::Box { size } => (PropTemplate::Box, DVec3::from_array(size)),
+        PropShape::Sphere { radius } => (PropTemplate::Sphere, DVec3::splat(radius)),
+        PropShape::Cylinder { radius, height } => {
+            (PropTemplate::Cylinder, DVec3::new(radius, height, radius))
+        }
+        PropShape::Plane { size } => (
+            PropTemplate::Box,
+            DVec3::new(size[0], PLANE_THICKNESS_M, size[1]),
+        ),
+    };
+    let world_from_unit = DMat4::from(prop.scene_from_prop()) * DMat4::from_scale(size);
+    PropInstance {
+        template,
+        world_from_unit: world_from_unit.as_mat4(),
+        color_linear: PROP_COLOR_LINEAR,
+    }
+}
+
+/// Every prop of the scene as the renderer draws it.
+pub(crate) fn prop_instances(model: &EditorModel) -> Vec<PropInstance> {
+    model.props().iter().map(prop_instance).collect()
+}
 
 /// The character's frame in the scene, for the GPU.
 pub(crate) fn scene_from_character(character: &Character) -> Mat4 {

@@ -267,6 +267,7 @@ fn image_scene(model: &EditorModel, avatar_uploaded: bool) -> Scene {
         .collect();
     Scene {
         capsules,
+        props: crate::cast_view::prop_instances(model),
         show_floor: true,
         show_avatar,
         avatar_palettes,

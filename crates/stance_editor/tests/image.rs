@@ -256,3 +256,65 @@ fn the_rendered_control_maps_come_one_after_another_as_their_own_downloads() {
         }
     }
 }
+
+#[test]
+fn the_image_shows_every_character_and_prop_where_they_stand() {
+    // Catches: other characters or props left out of the picture, a placement ignored.
+    use stance_document::{Placement, PropShape};
+    use stance_editor::Command;
+    use stance_editor::model::SceneCommand;
+    let host = MemoryHost::default();
+    let mut editor = Clocked::with_host(host.clone());
+    editor.apply(Command::Scene(SceneCommand::Add));
+    let second = editor.model.character().id();
+    let placement = Placement::at([-0.7, 0.0, 0.0]);
+    editor.apply(Command::Scene(SceneCommand::Place(second, placement)));
+    editor.apply(Command::Scene(SceneCommand::AddProp(PropShape::Box {
+        size: [0.3, 0.3, 0.3],
+    })));
+    let mut prop = editor.model.props()[0].clone();
+    prop.position = [0.7, 0.15, 0.0];
+    editor.apply(Command::Scene(SceneCommand::EditProp(0, prop)));
+    editor.settle();
+    let size = [320u32, 240];
+    let png = save_image(
+        &mut editor,
+        &host,
+        ImageOptions {
+            size_px: size,
+            transparent: true,
+            overlays: false,
+        },
+    );
+    // STANCE_SCENE_PNG=FILE keeps the picture, to look at.
+    if let Ok(path) = std::env::var("STANCE_SCENE_PNG") {
+        std::fs::write(path, &png).unwrap();
+    }
+    let (width, _, rgba) = decode(&png);
+    let camera = OrbitCamera::default();
+    let pixel = |point: [f32; 3]| {
+        let at = camera
+            .project(glam::Vec3::from_array(point), glam::Vec2::new(320.0, 240.0))
+            .expect("in front of the camera");
+        let (x, y) = (at.x.round() as u32, at.y.round() as u32);
+        let i = ((y * width + x) * 4) as usize;
+        [rgba[i], rgba[i + 1], rgba[i + 2], rgba[i + 3]]
+    };
+    // The box: opaque, wood-coloured (more red than blue).
+    let box_pixel = pixel([0.7, 0.15, 0.15]);
+    assert_eq!(box_pixel[3], 255, "{box_pixel:?}");
+    assert!(box_pixel[0] > box_pixel[2] + 20, "{box_pixel:?}");
+    // The second character stands where it was placed: its pelvis is drawn there, and the
+    // first one's (at the origin) too.
+    let pelvis = editor
+        .model
+        .character()
+        .session()
+        .joint_position("sacroiliac")
+        .unwrap();
+    let placed = placement.scene_from_character().transform_point3(pelvis);
+    assert_eq!(pixel(placed.as_vec3().to_array())[3], 255);
+    assert_eq!(pixel(pelvis.as_vec3().to_array())[3], 255);
+    // Between them, at pelvis height, nothing.
+    assert_eq!(pixel([-0.35, pelvis.y as f32 + 0.3, 0.0])[3], 0);
+}

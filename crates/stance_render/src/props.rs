@@ -113,7 +113,8 @@ fn sphere_mesh(rings: u16, segments: u16) -> PropMesh {
         for segment in 0..segments {
             let a = ring * stride + segment;
             let b = a + stride;
-            mesh.indices.extend_from_slice(&[a, b, a + 1, a + 1, b, b + 1]);
+            mesh.indices
+                .extend_from_slice(&[a, b, a + 1, a + 1, b, b + 1]);
         }
     }
     mesh
@@ -193,7 +194,10 @@ mod tests {
                 .positions
                 .iter()
                 .fold(Vec3::ZERO, |most, p| most.max(p.abs()));
-            assert!((most - extent).abs().max_element() < 1e-5, "{template:?} {most}");
+            assert!(
+                (most - extent).abs().max_element() < 1e-5,
+                "{template:?} {most}"
+            );
         }
     }
 }

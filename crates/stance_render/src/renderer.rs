@@ -4,9 +4,9 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec2;
 use wgpu::util::DeviceExt;
 
+use crate::props::{PropInstance, PropTemplate, normal_matrix, prop_mesh};
 use crate::skinned::SkinnedModel;
 use crate::skinned_gpu::{AvatarGpu, AvatarUpload, SkinnedPipeline};
-use crate::props::{PropInstance, PropTemplate, normal_matrix, prop_mesh};
 use crate::{OrbitCamera, SHADERS, Scene};
 
 /// Colour format of the render target: what egui can show as a native texture. The shaders
@@ -119,10 +119,15 @@ impl PropPipeline {
             let mesh = prop_mesh(template);
             let first_vertex = i32::try_from(vertices.len()).unwrap_or(0);
             let first_index = u32::try_from(indices.len()).unwrap_or(0);
-            vertices.extend(mesh.positions.iter().zip(&mesh.normals).map(|(p, n)| PropVertex {
-                position: p.extend(1.0).to_array(),
-                normal: n.extend(0.0).to_array(),
-            }));
+            vertices.extend(
+                mesh.positions
+                    .iter()
+                    .zip(&mesh.normals)
+                    .map(|(p, n)| PropVertex {
+                        position: p.extend(1.0).to_array(),
+                        normal: n.extend(0.0).to_array(),
+                    }),
+            );
             indices.extend_from_slice(&mesh.indices);
             let end = u32::try_from(indices.len()).unwrap_or(0);
             ranges.push((first_index..end, first_vertex));

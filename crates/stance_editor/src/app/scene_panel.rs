@@ -1,9 +1,10 @@
 //! The scene panel (the outliner): the characters in the scene's order, the selected one
 //! highlighted; add, duplicate, remove, rename, and move or turn the selected one on the
-//! floor. Every change goes to the model as a [`SceneCommand`].
+//! floor; the props: add a box, a ball, a bar or a plane, set each one's size, place and turn,
+//! remove it. Every change goes to the model as a [`SceneCommand`].
 
 use egui::RichText;
-use stance_document::Placement;
+use stance_document::{Placement, Prop, PropShape};
 
 use super::ButtonRects;
 use crate::model::{Command, EditorModel, Outbox, SceneCommand};
@@ -72,6 +73,125 @@ pub(super) fn show(
         }
     });
     selected_character(ui, model, outbox);
+    ui.separator();
+    props_section(ui, model, outbox, buttons);
+}
+
+/// The shapes the *Add prop* row offers, with their first size: a box (a step), a ball, a
+/// vertical bar, a table top.
+const NEW_PROPS: [(&str, &str, PropShape); 4] = [
+    (
+        "add_box",
+        "Box",
+        PropShape::Box {
+            size: [0.6, 0.2, 0.4],
+        },
+    ),
+    ("add_sphere", "Ball", PropShape::Sphere { radius: 0.11 }),
+    (
+        "add_bar",
+        "Bar",
+        PropShape::Cylinder {
+            radius: 0.02,
+            height: 2.0,
+        },
+    ),
+    ("add_plane", "Plane", PropShape::Plane { size: [1.2, 0.8] }),
+];
+
+/// The props: add one of each shape, and per prop its size, place and turn, and *Remove*.
+fn props_section(
+    ui: &mut egui::Ui,
+    model: &EditorModel,
+    outbox: &mut Outbox,
+    buttons: &mut ButtonRects,
+) {
+    ui.horizontal_wrapped(|ui| {
+        ui.label("Add prop");
+        for (name, label, shape) in NEW_PROPS {
+            let button = ui.button(label);
+            buttons.push((name, button.rect));
+            if button.clicked() {
+                outbox.send(Command::Scene(SceneCommand::AddProp(shape)));
+            }
+        }
+    });
+    for (index, prop) in model.props().iter().enumerate() {
+        egui::CollapsingHeader::new(&prop.name)
+            .id_salt(("prop", index))
+            .show(ui, |ui| {
+                let mut edited = prop.clone();
+                size_row(ui, &mut edited.shape);
+                position_row(ui, &mut edited);
+                if ui.button(format!("Remove {}", prop.name)).clicked() {
+                    outbox.send(Command::Scene(SceneCommand::RemoveProp(index)));
+                } else if edited != *prop {
+                    outbox.send(Command::Scene(SceneCommand::EditProp(index, edited)));
+                }
+            });
+    }
+}
+
+/// A prop's size fields (m).
+fn size_row(ui: &mut egui::Ui, shape: &mut PropShape) {
+    let field = |ui: &mut egui::Ui, value: &mut f64, label: &str| {
+        ui.add(
+            egui::DragValue::new(value)
+                .speed(0.005)
+                .range(0.005..=stance_document::scene::MAX_PROP_SIZE_M)
+                .prefix(format!("{label} "))
+                .suffix(" m"),
+        );
+    };
+    ui.horizontal_wrapped(|ui| match shape {
+        PropShape::Box { size } => {
+            field(ui, &mut size[0], "width");
+            field(ui, &mut size[1], "height");
+            field(ui, &mut size[2], "depth");
+        }
+        PropShape::Sphere { radius } => field(ui, radius, "radius"),
+        PropShape::Cylinder { radius, height } => {
+            field(ui, radius, "radius");
+            field(ui, height, "length");
+        }
+        PropShape::Plane { size } => {
+            field(ui, &mut size[0], "width");
+            field(ui, &mut size[1], "depth");
+        }
+    });
+}
+
+/// A prop's centre (m) and its turn about the vertical (degrees; a prop turned about other
+/// axes keeps that part of its turn).
+fn position_row(ui: &mut egui::Ui, prop: &mut Prop) {
+    let rotation = glam::DQuat::from_array(prop.rotation);
+    let (yaw, pitch, roll) = rotation.to_euler(glam::EulerRot::YXZ);
+    let mut yaw_degrees = yaw.to_degrees();
+    ui.horizontal_wrapped(|ui| {
+        for (axis, value) in ["centre x", "centre y", "centre z"]
+            .into_iter()
+            .zip(&mut prop.position)
+        {
+            ui.add(
+                egui::DragValue::new(value)
+                    .speed(0.01)
+                    .prefix(format!("{axis} "))
+                    .suffix(" m"),
+            );
+        }
+        ui.add(
+            egui::DragValue::new(&mut yaw_degrees)
+                .speed(1.0)
+                .range(-180.0..=180.0)
+                .prefix("prop turn ")
+                .suffix("°"),
+        );
+    });
+    if (yaw_degrees - yaw.to_degrees()).abs() > 1e-9 {
+        prop.rotation =
+            glam::DQuat::from_euler(glam::EulerRot::YXZ, yaw_degrees.to_radians(), pitch, roll)
+                .to_array();
+    }
 }
 
 /// The selected character's name (sent when the field loses focus or Enter is pressed) and its

@@ -13,7 +13,8 @@ use super::handles::Handles;
 use super::lens::Lens;
 use super::overlay::Overlay;
 use crate::cast_view::{
-    other_capsules, pick_other, placed_capsule, placed_palettes, scene_from_character,
+    other_capsules, pick_other, placed_capsule, placed_palettes, prop_instances,
+    scene_from_character,
 };
 use crate::figure::MannequinFigure;
 use crate::image::ImageExport;
@@ -646,6 +647,7 @@ impl ViewportPanel {
             .collect();
         capsules.extend(other_capsules(model));
         Scene {
+            props: prop_instances(model),
             capsules,
             show_floor: self.show_floor,
             show_avatar: show_avatar || show_figure,
