@@ -5,7 +5,7 @@
 
 use glam::{DMat4, DVec3, Mat4, Vec3};
 use stance_document::{Prop, PropShape};
-use stance_render::{Capsule, PropInstance, PropTemplate};
+use stance_render::{Capsule, ContactShadow, PropInstance, PropTemplate};
 
 use crate::model::{Character, EditorModel};
 
@@ -41,6 +41,36 @@ pub(crate) fn prop_instance(prop: &Prop) -> PropInstance {
 /// Every prop of the scene as the renderer draws it.
 pub(crate) fn prop_instances(model: &EditorModel) -> Vec<PropInstance> {
     model.props().iter().map(prop_instance).collect()
+}
+
+/// The contact shadows of the scene: one under each character (its bones, placed) and one
+/// under each prop (its box's corners).
+pub(crate) fn contact_shadows(model: &EditorModel) -> Vec<ContactShadow> {
+    let characters = model.characters().filter_map(|(character, _)| {
+        let place = scene_from_character(character);
+        let ends = character.bones().iter().flat_map(|bone| {
+            let capsule = placed_capsule(bone.capsule, place);
+            [capsule.start_world, capsule.end_world]
+        });
+        ContactShadow::under(ends, 0.15, 0.6)
+    });
+    let props = model.props().iter().filter_map(|prop| {
+        let instance = prop_instance(prop);
+        let half = match instance.template {
+            PropTemplate::Box | PropTemplate::Cylinder => 0.5,
+            PropTemplate::Sphere => 1.0,
+        };
+        let corners = (0..8).map(move |i| {
+            let corner = Vec3::new(
+                if i & 1 == 0 { -half } else { half },
+                if i & 2 == 0 { -half } else { half },
+                if i & 4 == 0 { -half } else { half },
+            );
+            instance.world_from_unit.transform_point3(corner)
+        });
+        ContactShadow::under(corners, 0.05, 0.6)
+    });
+    characters.chain(props).collect()
 }
 
 /// The character's frame in the scene, for the GPU.

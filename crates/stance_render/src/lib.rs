@@ -124,6 +124,51 @@ pub const GOAL_COLOR_LINEAR: [f32; 4] = [0.1, 0.65, 0.2, 1.0];
 /// The clear colour of the viewport and of images, sRGB-encoded.
 pub const BACKGROUND_SRGB: [f32; 4] = [0.13, 0.145, 0.17, 1.0];
 
+/// The most contact shadows a frame draws.
+pub const MAX_CONTACT_SHADOWS: usize = 16;
+
+/// A soft dark disc on the floor under something: darkest at its centre, fading out at
+/// `radius_m`; `strength` in [0, 1] (1 for a thing resting on the floor, less the higher it
+/// floats).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactShadow {
+    /// Centre on the floor: world x and z (m).
+    pub centre_xz: [f32; 2],
+    /// Radius (m).
+    pub radius_m: f32,
+    /// Darkness at the centre, 0 to 1.
+    pub strength: f32,
+}
+
+impl ContactShadow {
+    /// The shadow under points (world) of a thing: under their horizontal middle, as wide as
+    /// they spread (at least `min_radius_m`), fading as their lowest point rises to `fade_m`
+    /// above the floor. `None` for no points.
+    pub fn under(
+        points: impl IntoIterator<Item = Vec3>,
+        min_radius_m: f32,
+        fade_m: f32,
+    ) -> Option<Self> {
+        let points: Vec<Vec3> = points.into_iter().filter(|p| p.is_finite()).collect();
+        let lowest = points.iter().map(|p| p.y).fold(f32::INFINITY, f32::min);
+        if !lowest.is_finite() {
+            return None;
+        }
+        let (min, max) = points.iter().fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(min, max), p| (min.min(*p), max.max(*p)),
+        );
+        let centre = (min + max) / 2.0;
+        let spread = ((max.x - min.x).max(max.z - min.z) / 2.0).max(min_radius_m);
+        let strength = (1.0 - lowest.max(0.0) / fade_m.max(1e-3)).clamp(0.0, 1.0);
+        Some(Self {
+            centre_xz: [centre.x, centre.z],
+            radius_m: spread * 1.3,
+            strength,
+        })
+    }
+}
+
 /// What one frame shows.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Scene {
@@ -137,6 +182,9 @@ pub struct Scene {
     pub avatar_palettes: Vec<Vec<glam::Mat4>>,
     /// The scene's props (boxes, spheres, cylinders), shaded like the bodies.
     pub props: Vec<PropInstance>,
+    /// Soft shadows on the floor under the characters and props (at most
+    /// [`MAX_CONTACT_SHADOWS`] are drawn), so that heights read at a glance.
+    pub shadows: Vec<ContactShadow>,
     /// Overlay markers drawn like capsules (an image's task goals); the viewport draws its
     /// overlays with egui instead and leaves this empty.
     pub markers: Vec<Capsule>,

@@ -201,3 +201,34 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+mod shadow_tests {
+    use crate::ContactShadow;
+    use glam::Vec3;
+
+    /// A thing on the floor casts its darkest shadow under its middle, as wide as it spreads;
+    /// the same thing lifted casts a fainter one, none once it is `fade_m` up.
+    #[test]
+    fn a_shadow_fades_as_its_thing_rises() {
+        let block = |lift: f32| {
+            [(-0.2, 0.0), (0.2, 0.0), (0.0, 0.4)]
+                .map(|(x, z)| Vec3::new(x + 1.0, lift, z))
+                .into_iter()
+                .chain([Vec3::new(1.0, lift + 1.0, 0.2)])
+        };
+        let resting = ContactShadow::under(block(0.0), 0.05, 0.6).unwrap();
+        assert_eq!(resting.centre_xz, [1.0, 0.2]);
+        assert!((resting.radius_m - 0.2 * 1.3).abs() < 1e-6);
+        assert!((resting.strength - 1.0).abs() < 1e-6);
+        let lifted = ContactShadow::under(block(0.3), 0.05, 0.6).unwrap();
+        assert!((lifted.strength - 0.5).abs() < 1e-6);
+        assert_eq!(
+            ContactShadow::under(block(0.7), 0.05, 0.6)
+                .unwrap()
+                .strength,
+            0.0
+        );
+        assert!(ContactShadow::under(std::iter::empty(), 0.05, 0.6).is_none());
+    }
+}

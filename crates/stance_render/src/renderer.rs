@@ -7,7 +7,7 @@ use wgpu::util::DeviceExt;
 use crate::props::{PropInstance, PropTemplate, normal_matrix, prop_mesh};
 use crate::skinned::SkinnedModel;
 use crate::skinned_gpu::{AvatarGpu, AvatarUpload, SkinnedPipeline};
-use crate::{OrbitCamera, SHADERS, Scene};
+use crate::{MAX_CONTACT_SHADOWS, OrbitCamera, SHADERS, Scene};
 
 /// Colour format of the render target: what egui can show as a native texture. The shaders
 /// write sRGB-encoded values into it.
@@ -309,6 +309,7 @@ pub struct SceneRenderer {
     instances: wgpu::Buffer,
     instance_capacity: usize,
     props: PropPipeline,
+    shadow_uniforms: wgpu::Buffer,
 }
 
 /// A unit sphere split at the equator: vertices carry (direction, half) with half 1 for the
@@ -361,26 +362,43 @@ impl SceneRenderer {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        // The floor's contact shadows: MAX_CONTACT_SHADOWS discs (x, z, radius, strength).
+        let shadow_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("stance contact shadows"),
+            size: (MAX_CONTACT_SHADOWS * std::mem::size_of::<[f32; 4]>()) as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let uniform_entry = |binding, visibility| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
         let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("stance frame layout"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
+            entries: &[
+                uniform_entry(0, wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT),
+                uniform_entry(1, wgpu::ShaderStages::FRAGMENT),
+            ],
         });
         let frame_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("stance frame bind group"),
             layout: &frame_layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: frame_uniforms.as_entire_binding(),
-            }],
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: frame_uniforms.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: shadow_uniforms.as_entire_binding(),
+                },
+            ],
         });
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("stance pipeline layout"),
@@ -519,6 +537,7 @@ impl SceneRenderer {
             instances: Self::instance_buffer(device, instance_capacity),
             instance_capacity,
             props,
+            shadow_uniforms,
         }
     }
 
@@ -602,6 +621,21 @@ impl SceneRenderer {
             control_map: scene.shading.uniform(),
         };
         queue.write_buffer(&self.frame_uniforms, 0, bytemuck::bytes_of(&uniforms));
+        let mut shadows = [[0.0f32; 4]; MAX_CONTACT_SHADOWS];
+        for (slot, shadow) in shadows.iter_mut().zip(
+            scene
+                .shadows
+                .iter()
+                .filter(|s| s.centre_xz.iter().all(|v| v.is_finite()) && s.radius_m > 0.0),
+        ) {
+            *slot = [
+                shadow.centre_xz[0],
+                shadow.centre_xz[1],
+                shadow.radius_m,
+                shadow.strength.clamp(0.0, 1.0),
+            ];
+        }
+        queue.write_buffer(&self.shadow_uniforms, 0, bytemuck::cast_slice(&shadows));
         let draw_avatar = scene.show_avatar && self.avatar.is_some();
         if draw_avatar && let Some(avatar) = &self.avatar {
             avatar.write_palettes(queue, &scene.avatar_palettes);

@@ -648,6 +648,7 @@ impl ViewportPanel {
         capsules.extend(other_capsules(model));
         Scene {
             props: prop_instances(model),
+            shadows: crate::cast_view::contact_shadows(model),
             capsules,
             show_floor: self.show_floor,
             show_avatar: show_avatar || show_figure,

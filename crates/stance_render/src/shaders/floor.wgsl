@@ -1,5 +1,6 @@
 // The floor: a large square at y = 0 with a metre grid, decimetre lines near the camera,
-// the X axis in red and the Z axis in blue, fading into the background with distance.
+// the X axis in red and the Z axis in blue, soft contact shadows under what stands on it,
+// fading into the background with distance.
 
 struct Frame {
     clip_from_world: mat4x4<f32>,
@@ -13,6 +14,8 @@ struct Frame {
 };
 
 @group(0) @binding(0) var<uniform> frame: Frame;
+// Contact shadows: x, z of the centre, radius (m), strength (0: none).
+@group(0) @binding(1) var<uniform> shadows: array<vec4<f32>, 16>;
 
 const HALF_EXTENT_M: f32 = 50.0;
 
@@ -65,6 +68,16 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     if (abs(xz.x) < axis_width.x) {
         color = vec3<f32>(0.12, 0.2, 0.6);
     }
+    // Soft dark discs under the characters and props: darker the nearer they rest.
+    var light = 1.0;
+    for (var i = 0; i < 16; i = i + 1) {
+        let shadow = shadows[i];
+        if (shadow.w > 0.0 && shadow.z > 0.0) {
+            let d = length(xz - shadow.xy) / shadow.z;
+            light = light * (1.0 - 0.85 * shadow.w * (1.0 - smoothstep(0.0, 1.0, d)));
+        }
+    }
+    color = color * light;
     let distance_m = length(in.position_world - frame.camera_position_world.xyz);
     let fade = smoothstep(8.0, 30.0, distance_m);
     // Into the background, alpha too: a transparent background (0, 0, 0, 0) leaves the
