@@ -7,6 +7,7 @@ use glam::{DMat4, DVec3, Mat4, Vec3};
 use stance_document::{Prop, PropShape};
 use stance_render::{Capsule, ContactShadow, PropInstance, PropTemplate};
 
+use crate::figure::MannequinFigure;
 use crate::model::{Character, EditorModel};
 
 /// The colour of the characters that are not selected (linear RGB): the body's, greyer.
@@ -105,20 +106,55 @@ pub(crate) fn placed_palettes(
     palettes
 }
 
-/// The capsules of every character but the selected one, in the scene, in
+/// The model on the GPU this frame, which characters other than the selected one are drawn
+/// with when it is theirs too.
+#[derive(Clone, Copy)]
+pub(crate) enum Uploaded<'a> {
+    /// The mannequin's figure: every character on the mannequin.
+    Figure(&'a MannequinFigure),
+    /// The selected character's avatar: the characters on the same avatar file.
+    Avatar,
+    /// Nothing (or the capsules are shown): the others are capsules.
+    None,
+}
+
+/// How the characters other than the selected one are drawn: skinned with the uploaded model
+/// where it is theirs (their poses, placed: `more_avatar_poses`), else as their capsules in
 /// [`OTHER_COLOR_LINEAR`].
-pub(crate) fn other_capsules(model: &EditorModel) -> Vec<Capsule> {
-    model
-        .other_characters()
-        .iter()
-        .flat_map(|character| {
-            let place = scene_from_character(character);
-            character.bones().iter().map(move |bone| Capsule {
+pub(crate) fn other_figures(
+    model: &EditorModel,
+    uploaded: Uploaded<'_>,
+) -> (Vec<Capsule>, Vec<Vec<Vec<Mat4>>>) {
+    let selected_avatar = model.avatar().map(|avatar| avatar.name.as_str());
+    let mut capsules = Vec::new();
+    let mut poses = Vec::new();
+    for character in model.other_characters() {
+        let place = scene_from_character(character);
+        let session = character.session();
+        let palettes = match (uploaded, character.avatar()) {
+            (Uploaded::Figure(figure), None) => {
+                figure.palettes(session.skeleton(), session.posture())
+            }
+            (Uploaded::Avatar, Some(avatar)) if Some(avatar.name.as_str()) == selected_avatar => {
+                avatar.palettes(session.humanoid(), session.posture())
+            }
+            _ => None,
+        };
+        match palettes {
+            Some(palettes) => poses.push(placed_palettes(palettes, place)),
+            None => capsules.extend(character.bones().iter().map(|bone| Capsule {
                 color_linear: OTHER_COLOR_LINEAR,
                 ..placed_capsule(bone.capsule, place)
-            })
-        })
-        .collect()
+            })),
+        }
+    }
+    (capsules, poses)
+}
+
+/// The capsules of every character but the selected one, in the scene (their bodies as
+/// shapes: the depth range of a control map).
+pub(crate) fn other_capsules(model: &EditorModel) -> Vec<Capsule> {
+    other_figures(model, Uploaded::None).0
 }
 
 /// The character whose body the scene ray `origin + t direction` meets first among those not

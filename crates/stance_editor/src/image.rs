@@ -8,7 +8,9 @@
 //! its depth, normal and mask maps the same way, one after another
 //! ([`FileCommand::SaveControlMap`]).
 
-use crate::cast_view::{other_capsules, placed_capsule, placed_palettes, scene_from_character};
+use crate::cast_view::{
+    Uploaded, other_capsules, other_figures, placed_capsule, placed_palettes, scene_from_character,
+};
 use crate::model::Outbox;
 use crate::model::{FileCommand, NoticeCommand};
 use glam::DVec3;
@@ -158,8 +160,10 @@ impl ImageExport {
         if let Some(figure) = figure.filter(|_| model.avatar().is_none())
             && let Some(palettes) = figure.palettes(session.skeleton(), session.posture())
         {
-            // The selected character is the figure; the others stay capsules.
-            scene.capsules = other_capsules(model);
+            // The selected character is the figure, and so are the others on the mannequin.
+            let (others, more_poses) = other_figures(model, Uploaded::Figure(figure));
+            scene.capsules = others;
+            scene.more_avatar_poses = more_poses;
             scene.show_avatar = true;
             scene.avatar_palettes =
                 placed_palettes(palettes, scene_from_character(model.character()));
@@ -239,7 +243,13 @@ fn image_scene(model: &EditorModel, avatar_uploaded: bool) -> Scene {
         .into_iter()
         .map(|capsule| placed_capsule(capsule, place))
         .collect();
-    capsules.extend(other_capsules(model));
+    let uploaded = if show_avatar {
+        Uploaded::Avatar
+    } else {
+        Uploaded::None
+    };
+    let (others, more_avatar_poses) = other_figures(model, uploaded);
+    capsules.extend(others);
     let avatar_palettes = model
         .avatar()
         .filter(|_| show_avatar)
@@ -272,6 +282,7 @@ fn image_scene(model: &EditorModel, avatar_uploaded: bool) -> Scene {
         show_floor: true,
         show_avatar,
         avatar_palettes,
+        more_avatar_poses,
         markers,
         ..Scene::default()
     }

@@ -8,6 +8,7 @@ use crate::clocked;
 use clocked::Clocked;
 
 use stance_editor::MemoryHost;
+use stance_editor::figure::MannequinFigure;
 use stance_editor::image::{IMAGE_FILE_NAME, ImageExport, ImageRequest};
 use stance_editor::model::Outbox;
 use stance_render::{ImageOptions, OrbitCamera, SceneRenderer, headless_gpu};
@@ -29,6 +30,7 @@ fn run(
     editor: &Clocked,
     gpu: &stance_render::HeadlessGpu,
     renderer: &mut SceneRenderer,
+    figure: Option<&MannequinFigure>,
 ) -> Outbox {
     let mut outbox = Outbox::default();
     let mut frames = 0;
@@ -38,7 +40,7 @@ fn run(
         &gpu.device,
         &gpu.queue,
         renderer,
-        None,
+        figure,
     ) {
         frames += 1;
         assert!(frames < 4000, "the export never came back");
@@ -50,8 +52,24 @@ fn run(
 /// Asks for an image with `options` and moves it along, frame by frame, until the host has
 /// it; returns the PNG's bytes.
 fn save_image(editor: &mut Clocked, host: &MemoryHost, options: ImageOptions) -> Vec<u8> {
+    save_image_with(editor, host, options, false)
+}
+
+/// [`save_image`], with the mannequin drawn as its figure (uploaded as the viewport does) when
+/// `figure`.
+fn save_image_with(
+    editor: &mut Clocked,
+    host: &MemoryHost,
+    options: ImageOptions,
+    figure: bool,
+) -> Vec<u8> {
     let gpu = headless_gpu().expect("an adapter (lavapipe)");
     let mut renderer = SceneRenderer::new(&gpu.device);
+    let loa = editor.model.session().level_of_articulation();
+    let mut figure = figure.then(|| MannequinFigure::new(loa).expect("the figure"));
+    if let Some(figure) = &mut figure {
+        renderer.set_avatar(&gpu.device, &gpu.queue, figure.take_model().as_deref());
+    }
     let before = host.inner.borrow().binary_downloads.len();
     let mut image = ImageExport::default();
     image.request(ImageRequest {
@@ -59,7 +77,7 @@ fn save_image(editor: &mut Clocked, host: &MemoryHost, options: ImageOptions) ->
         camera: OrbitCamera::default(),
         map: None,
     });
-    let mut outbox = run(&mut image, editor, &gpu, &mut renderer);
+    let mut outbox = run(&mut image, editor, &gpu, &mut renderer, figure.as_ref());
     editor.model.apply_outbox(&mut outbox);
     let downloads = &host.inner.borrow().binary_downloads;
     assert_eq!(downloads.len(), before + 1, "{:?}", editor.model.notice());
@@ -216,7 +234,7 @@ fn the_rendered_control_maps_come_one_after_another_as_their_own_downloads() {
             })
             .collect(),
     );
-    let mut outbox = run(&mut image, &editor, &gpu, &mut renderer);
+    let mut outbox = run(&mut image, &editor, &gpu, &mut renderer, None);
     eprintln!(
         "depth, normal, mask and line-art maps at 1024x1024 in {:.2} s on {}",
         started.elapsed().as_secs_f64(),
@@ -317,4 +335,53 @@ fn the_image_shows_every_character_and_prop_where_they_stand() {
     assert_eq!(pixel(pelvis.as_vec3().to_array())[3], 255);
     // Between them, at pelvis height, nothing.
     assert_eq!(pixel([-0.35, pelvis.y as f32 + 0.3, 0.0])[3], 0);
+}
+
+#[test]
+fn characters_on_the_mannequin_are_all_drawn_as_its_figure() {
+    // Catches: a second pose of the uploaded model not drawn (the other character would be
+    // missing, or grey capsules in the figure's place).
+    use stance_document::Placement;
+    use stance_editor::Command;
+    use stance_editor::model::SceneCommand;
+    let host = MemoryHost::default();
+    let mut editor = Clocked::with_host(host.clone());
+    editor.apply(Command::Scene(SceneCommand::Add));
+    let second = editor.model.character().id();
+    editor.apply(Command::Scene(SceneCommand::Place(
+        second,
+        Placement::at([-0.7, 0.0, 0.0]),
+    )));
+    editor.settle();
+    let options = ImageOptions {
+        size_px: [320, 240],
+        transparent: true,
+        overlays: false,
+    };
+    let png = save_image_with(&mut editor, &host, options, true);
+    // STANCE_FIGURES_PNG=FILE keeps the picture, to look at.
+    if let Ok(path) = std::env::var("STANCE_FIGURES_PNG") {
+        std::fs::write(path, &png).unwrap();
+    }
+    let (width, _, rgba) = decode(&png);
+    let camera = OrbitCamera::default();
+    let pelvis = editor
+        .model
+        .character()
+        .session()
+        .joint_position("sacroiliac")
+        .unwrap();
+    let colour = |point: glam::Vec3| {
+        let at = camera
+            .project(point, glam::Vec2::new(320.0, 240.0))
+            .unwrap();
+        let i = ((at.y.round() as u32 * width + at.x.round() as u32) * 4) as usize;
+        [rgba[i], rgba[i + 1], rgba[i + 2], rgba[i + 3]]
+    };
+    let first = colour(pelvis.as_vec3());
+    let placed = colour((pelvis + glam::DVec3::new(-0.7, 0.0, 0.0)).as_vec3());
+    assert_eq!((first[3], placed[3]), (255, 255), "{first:?} {placed:?}");
+    // Both drawn by the figure's materials: not the grey of the other characters' capsules.
+    let grey = |p: [u8; 4]| p[0].abs_diff(p[2]) < 12 && p[0].abs_diff(p[1]) < 12;
+    assert!(!grey(first) && !grey(placed), "{first:?} {placed:?}");
 }

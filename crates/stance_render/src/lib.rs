@@ -180,6 +180,9 @@ pub struct Scene {
     pub show_avatar: bool,
     /// This frame's matrix palettes of the avatar (mesh space -> H-Anim world), one per palette.
     pub avatar_palettes: Vec<Vec<glam::Mat4>>,
+    /// More poses of the same uploaded avatar, drawn beside the first (other characters on the
+    /// same model), each its palettes as `avatar_palettes`.
+    pub more_avatar_poses: Vec<Vec<Vec<glam::Mat4>>>,
     /// The scene's props (boxes, spheres, cylinders), shaded like the bodies.
     pub props: Vec<PropInstance>,
     /// Soft shadows on the floor under the characters and props (at most

@@ -637,8 +637,13 @@ impl SceneRenderer {
         }
         queue.write_buffer(&self.shadow_uniforms, 0, bytemuck::cast_slice(&shadows));
         let draw_avatar = scene.show_avatar && self.avatar.is_some();
-        if draw_avatar && let Some(avatar) = &self.avatar {
-            avatar.write_palettes(queue, &scene.avatar_palettes);
+        let poses = 1 + scene.more_avatar_poses.len();
+        if draw_avatar && let Some(avatar) = &mut self.avatar {
+            avatar.ensure_poses(device, &self.skinned_pipeline, poses);
+            avatar.write_palettes(queue, 0, &scene.avatar_palettes);
+            for (pose, palettes) in scene.more_avatar_poses.iter().enumerate() {
+                avatar.write_palettes(queue, pose + 1, palettes);
+            }
         }
 
         let instances: Vec<CapsuleInstance> = scene
@@ -696,7 +701,9 @@ impl SceneRenderer {
             });
             pass.set_bind_group(0, &self.frame_bind_group, &[]);
             if draw_avatar && let Some(avatar) = &self.avatar {
-                avatar.draw(&mut pass, &self.skinned_pipeline);
+                for pose in 0..poses {
+                    avatar.draw(&mut pass, &self.skinned_pipeline, pose);
+                }
                 pass.set_bind_group(0, &self.frame_bind_group, &[]);
             }
             if !instances.is_empty() {

@@ -128,7 +128,11 @@ impl SkinnedPipeline {
 /// An avatar uploaded to the GPU.
 pub struct AvatarGpu {
     primitives: Vec<PrimitiveGpu>,
-    palettes: Vec<(wgpu::Buffer, wgpu::BindGroup)>,
+    /// Per pose drawn in a frame (the first for the selected character, more for others drawn
+    /// with the same model), its palettes' buffers and bind groups.
+    poses: Vec<Vec<(wgpu::Buffer, wgpu::BindGroup)>>,
+    /// How many palettes a pose has.
+    palette_count: usize,
     materials: Vec<wgpu::BindGroup>,
     fallback_material: wgpu::BindGroup,
     triangle_count: usize,
@@ -138,7 +142,8 @@ impl std::fmt::Debug for AvatarGpu {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("AvatarGpu")
             .field("primitives", &self.primitives.len())
-            .field("palettes", &self.palettes.len())
+            .field("palettes", &self.palette_count)
+            .field("poses", &self.poses.len())
             .field("triangles", &self.triangle_count)
             .finish()
     }
@@ -447,27 +452,8 @@ impl AvatarGpu {
         };
         let materials: Vec<wgpu::BindGroup> = model.materials.iter().map(&material_group).collect();
         let fallback_material = material_group(&grey);
-        let palettes = model
-            .palette_sizes
-            .iter()
-            .map(|_| {
-                let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("stance palette"),
-                    size: (MAX_PALETTE_MATRICES * std::mem::size_of::<[f32; 16]>()) as u64,
-                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                });
-                let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("stance palette bind group"),
-                    layout: &pipeline.palette_layout,
-                    entries: &[wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: buffer.as_entire_binding(),
-                    }],
-                });
-                (buffer, group)
-            })
-            .collect();
+        let palette_count = model.palette_sizes.len();
+        let palettes = pose_buffers(device, pipeline, palette_count);
         let mut triangle_count = 0;
         let primitives = model
             .primitives
@@ -494,7 +480,8 @@ impl AvatarGpu {
             .collect();
         Self {
             primitives,
-            palettes,
+            poses: vec![palettes],
+            palette_count,
             materials,
             fallback_material,
             triangle_count,
@@ -506,9 +493,26 @@ impl AvatarGpu {
         self.triangle_count
     }
 
-    /// Writes this frame's palettes (extra matrices are ignored, missing ones keep their value).
-    pub(crate) fn write_palettes(&self, queue: &wgpu::Queue, palettes: &[Vec<Mat4>]) {
-        for ((buffer, _), matrices) in self.palettes.iter().zip(palettes) {
+    /// Makes room for `count` poses in a frame (buffers are made once, kept after).
+    pub(crate) fn ensure_poses(
+        &mut self,
+        device: &wgpu::Device,
+        pipeline: &SkinnedPipeline,
+        count: usize,
+    ) {
+        while self.poses.len() < count {
+            self.poses
+                .push(pose_buffers(device, pipeline, self.palette_count));
+        }
+    }
+
+    /// Writes this frame's palettes of pose `pose` (extra matrices are ignored, missing ones
+    /// keep their value).
+    pub(crate) fn write_palettes(&self, queue: &wgpu::Queue, pose: usize, palettes: &[Vec<Mat4>]) {
+        let Some(buffers) = self.poses.get(pose) else {
+            return;
+        };
+        for ((buffer, _), matrices) in buffers.iter().zip(palettes) {
             let count = matrices.len().min(MAX_PALETTE_MATRICES);
             let Some(matrices) = matrices.get(..count) else {
                 continue;
@@ -523,11 +527,19 @@ impl AvatarGpu {
         }
     }
 
-    /// Draws every primitive (the frame bind group is already set at group 0).
-    pub(crate) fn draw(&self, pass: &mut wgpu::RenderPass<'_>, pipeline: &SkinnedPipeline) {
+    /// Draws every primitive in pose `pose` (the frame bind group is already set at group 0).
+    pub(crate) fn draw(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        pipeline: &SkinnedPipeline,
+        pose: usize,
+    ) {
+        let Some(buffers) = self.poses.get(pose) else {
+            return;
+        };
         pass.set_pipeline(&pipeline.pipeline);
         for primitive in &self.primitives {
-            let Some((_, palette)) = self.palettes.get(primitive.palette) else {
+            let Some((_, palette)) = buffers.get(primitive.palette) else {
                 continue;
             };
             let material = self
@@ -541,4 +553,31 @@ impl AvatarGpu {
             pass.draw_indexed(0..primitive.index_count, 0, 0..1);
         }
     }
+}
+
+/// One pose's palette buffers (each holds [`MAX_PALETTE_MATRICES`] matrices) and bind groups.
+fn pose_buffers(
+    device: &wgpu::Device,
+    pipeline: &SkinnedPipeline,
+    palette_count: usize,
+) -> Vec<(wgpu::Buffer, wgpu::BindGroup)> {
+    (0..palette_count)
+        .map(|_| {
+            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("stance palette"),
+                size: (MAX_PALETTE_MATRICES * std::mem::size_of::<[f32; 16]>()) as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("stance palette bind group"),
+                layout: &pipeline.palette_layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: buffer.as_entire_binding(),
+                }],
+            });
+            (buffer, group)
+        })
+        .collect()
 }

@@ -13,7 +13,7 @@ use super::handles::Handles;
 use super::lens::Lens;
 use super::overlay::Overlay;
 use crate::cast_view::{
-    other_capsules, pick_other, placed_capsule, placed_palettes, prop_instances,
+    Uploaded, other_figures, pick_other, placed_capsule, placed_palettes, prop_instances,
     scene_from_character,
 };
 use crate::figure::MannequinFigure;
@@ -645,7 +645,13 @@ impl ViewportPanel {
             .into_iter()
             .map(|capsule| placed_capsule(capsule, place))
             .collect();
-        capsules.extend(other_capsules(model));
+        let uploaded = match &self.figure {
+            _ if show_avatar => Uploaded::Avatar,
+            Some((figure, _)) if show_figure => Uploaded::Figure(figure),
+            _ => Uploaded::None,
+        };
+        let (others, more_avatar_poses) = other_figures(model, uploaded);
+        capsules.extend(others);
         Scene {
             props: prop_instances(model),
             shadows: crate::cast_view::contact_shadows(model),
@@ -653,6 +659,7 @@ impl ViewportPanel {
             show_floor: self.show_floor,
             show_avatar: show_avatar || show_figure,
             avatar_palettes,
+            more_avatar_poses,
             ..Scene::default()
         }
     }
