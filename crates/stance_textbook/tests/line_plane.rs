@@ -48,7 +48,12 @@ fn problem(skeleton: &Skeleton, case: u64) -> String {
     let drawn = Posture::from_values(skeleton, values).unwrap();
     let frames = Frames::new(skeleton, &drawn);
     let at = |name: &str| skeleton.joint_index(name).unwrap();
-    let (wrist, left, right, head) = (at("l_radiocarpal"), at("l_talocrural"), at("r_talocrural"), at("skullbase"));
+    let (wrist, left, right, head) = (
+        at("l_radiocarpal"),
+        at("l_talocrural"),
+        at("r_talocrural"),
+        at("skullbase"),
+    );
     let place = |j: usize| frames.joint_position[j];
     let direction = r.vec3(1.0) + DVec3::X * 0.2;
     let normal = DVec3::Y + r.vec3(0.4);
