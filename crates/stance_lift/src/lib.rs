@@ -52,3 +52,9 @@ pub enum LiftError {
     #[error("the lift's problem cannot be solved: {0}")]
     Problem(String),
 }
+
+// Known limits (measured, docs/control-maps.md): a lift takes seconds, not the 50 ms aimed
+// at (each solve runs its 200 iterations: the comfort level is never met; a solve leaving a
+// keypoint over 0.5 px off tries eight flips, each a whole solve); a hand-made flip of an elbow
+// can leave the hand below it a few pixels off its rays (a local minimum of the solve from
+// the flipped start).

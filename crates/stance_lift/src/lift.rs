@@ -123,7 +123,7 @@ pub fn lift(
             break;
         }
         let Some((joint, flipped, flipped_report, flipped_worst)) =
-            best_flip(skeleton, &document, &posture, &camera, worst, &off)?
+            best_flip(skeleton, &document, &posture, &camera, &report, worst, &off)?
         else {
             break;
         };
@@ -160,6 +160,15 @@ const FLIP_CANDIDATES: [&str; 8] = [
     "r_talocrural",
     "l_talocrural",
 ];
+
+/// The floor level's residual in a solve (m).
+fn floor_residual(report: &SolveReport) -> f64 {
+    report
+        .levels
+        .iter()
+        .find(|l| l.level == FLOOR_LEVEL)
+        .map_or(0.0, |l| l.residual_after)
+}
 
 /// A keypoint this close to its pixel counts as on it: no flip is tried (px).
 const ON_PIXEL_PX: f64 = 0.5;
@@ -198,6 +207,7 @@ fn best_flip(
     document: &Document,
     posture: &Posture,
     camera: &OrbitCamera,
+    report: &SolveReport,
     worst: f64,
     off: &dyn Fn(&Posture) -> f64,
 ) -> Result<Option<(String, Posture, SolveReport, f64)>, LiftError> {
@@ -209,7 +219,10 @@ fn best_flip(
         let flipped = crate::flip_depth(skeleton, posture, camera, joint)?;
         let (solved, solved_report) = solve(skeleton, document, &flipped)?;
         let solved_worst = off(&solved);
-        if solved_worst < best.as_ref().map_or(worst, |b| b.3) {
+        // Kept when it halves the worst keypoint's distance and leaves the feet where they
+        // stood (the floor's level within 5 mm of what it was).
+        let floor_kept = floor_residual(&solved_report) <= floor_residual(report) + 0.005;
+        if floor_kept && solved_worst < 0.5 * best.as_ref().map_or(worst, |b| b.3) {
             let done = solved_worst <= ON_PIXEL_PX;
             best = Some((joint.to_owned(), solved, solved_report, solved_worst));
             if done {
@@ -231,9 +244,8 @@ pub fn solve(
         posture: PostureValues::from_posture(skeleton, start),
         ..document.clone()
     };
-    let mut problem = Problem::from_document(&with_start, skeleton.clone())
+    let problem = Problem::from_document(&with_start, skeleton.clone())
         .map_err(|e| LiftError::Problem(e.to_string()))?;
-    problem.settings.max_iterations = std::env::var("LIFT_ITER").ok().and_then(|v| v.parse().ok()).unwrap_or(200);
     problem
         .solve()
         .map_err(|e| LiftError::Problem(e.to_string()))
