@@ -9,6 +9,7 @@ mod bench_suite;
 mod comfort;
 mod decode;
 mod families;
+mod lift;
 mod link;
 mod render;
 mod retarget;
@@ -52,6 +53,8 @@ enum Command {
     Link(link::LinkArgs),
     /// Render a document's posture (on the default body or an avatar) as a PNG image.
     Render(render::RenderArgs),
+    /// Lift a posture from OpenPose keypoints (JSON) into a document.
+    Lift(lift::LiftArgs),
     /// Retargets clips (BVH, glTF animations) onto an avatar, holding foot contacts.
     Retarget(retarget::RetargetArgs),
 }
@@ -71,5 +74,6 @@ fn main() -> anyhow::Result<()> {
         Command::Link(args) => link::run(args),
         Command::Retarget(args) => retarget::run(args),
         Command::Render(args) => render::run(args),
+        Command::Lift(args) => lift::run(args),
     }
 }

@@ -461,7 +461,7 @@ fn write_openpose(
         KeypointUnits::Pixels
     };
     if let Some(path) = &args.keypoints_out {
-        std::fs::write(path, pose.to_json(units))
+        std::fs::write(path, pose.to_json_seen_by(units, &posed.camera))
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
     std::fs::write(&args.out, png)
@@ -527,6 +527,7 @@ fn render_picture(
         markers,
         transparent_background: false,
         shading: shading(args.map, &camera, &capsules_for_depth),
+        ..Scene::default()
     };
     let options = ImageOptions {
         size_px,

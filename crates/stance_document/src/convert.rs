@@ -158,6 +158,28 @@ impl TaskSpec {
                 support: Some(support_names(skeleton, support)?),
                 margin: *margin,
             },
+            TaskKind::PointOnLine {
+                effector,
+                origin,
+                direction,
+            } => TaskKindSpec::Line {
+                joint: name(effector.joint)?,
+                point: effector.point.to_array(),
+                origin: origin.to_array(),
+                direction: direction.to_array(),
+            },
+            TaskKind::PointOnPlane {
+                effector,
+                origin,
+                normal,
+                above,
+            } => TaskKindSpec::Plane {
+                joint: name(effector.joint)?,
+                point: effector.point.to_array(),
+                origin: origin.to_array(),
+                normal: normal.to_array(),
+                above: *above,
+            },
             TaskKind::Comfort { .. }
             | TaskKind::PostureAttraction { .. }
             | TaskKind::Collision(_) => return None,
@@ -456,6 +478,34 @@ impl TaskSpec {
                     target: v3(*target),
                 }
             }
+            TaskKindSpec::Line {
+                joint,
+                point,
+                origin,
+                direction,
+            } => TaskKind::PointOnLine {
+                effector: Effector {
+                    joint: joint_at(skeleton, joint, "joint")?,
+                    point: v3(*point),
+                },
+                origin: v3(*origin),
+                direction: v3(*direction).normalize(),
+            },
+            TaskKindSpec::Plane {
+                joint,
+                point,
+                origin,
+                normal,
+                above,
+            } => TaskKind::PointOnPlane {
+                effector: Effector {
+                    joint: joint_at(skeleton, joint, "joint")?,
+                    point: v3(*point),
+                },
+                origin: v3(*origin),
+                normal: v3(*normal).normalize(),
+                above: *above,
+            },
         };
         let task = Task {
             kind,

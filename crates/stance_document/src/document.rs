@@ -299,6 +299,32 @@ pub enum TaskKindSpec {
         /// Optional `world_from_end` quaternion `[qx, qy, qz, qw]` of the end joint.
         orientation: Option<[f64; 4]>,
     },
+    /// `"line"`: a point of a segment kept on a world line (a hand on a bar, a keypoint on
+    /// the camera ray through its pixel).
+    Line {
+        /// Joint name.
+        joint: String,
+        /// Point in the joint frame (m).
+        point: [f64; 3],
+        /// A point of the line (world, m).
+        origin: [f64; 3],
+        /// The line's direction (world, non-zero).
+        direction: [f64; 3],
+    },
+    /// `"plane"`: a point of a segment kept on a world plane, or with `above` on or above it
+    /// (an inequality: a hand or foot on a surface).
+    Plane {
+        /// Joint name.
+        joint: String,
+        /// Point in the joint frame (m).
+        point: [f64; 3],
+        /// A point of the plane (world, m).
+        origin: [f64; 3],
+        /// The plane's normal (world, non-zero); `above` means on its side.
+        normal: [f64; 3],
+        /// On or above the plane instead of on it.
+        above: bool,
+    },
 }
 
 impl TaskKindSpec {
@@ -314,6 +340,8 @@ impl TaskKindSpec {
             TaskKindSpec::Posture { .. } => "posture",
             TaskKindSpec::Comfort { .. } => "comfort",
             TaskKindSpec::Limb { .. } => "limb",
+            TaskKindSpec::Line { .. } => "line",
+            TaskKindSpec::Plane { .. } => "plane",
         }
     }
 
@@ -470,6 +498,27 @@ impl TaskSpec {
                     }
                     _ => {}
                 }
+            }
+            TaskKindSpec::Line {
+                point,
+                origin,
+                direction: vector,
+                ..
+            }
+            | TaskKindSpec::Plane {
+                point,
+                origin,
+                normal: vector,
+                ..
+            } => {
+                let (name, what) = match self.kind {
+                    TaskKindSpec::Line { .. } => ("direction", "direction"),
+                    _ => ("normal", "normal"),
+                };
+                finite_all(point, "point")?;
+                finite_all(origin, "origin")?;
+                finite_all(vector, name)?;
+                nonzero(vector, name, what)?;
             }
         }
         Ok(())

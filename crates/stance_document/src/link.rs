@@ -33,18 +33,18 @@ use write::encode_payload;
 use crate::document::{Document, TaskKindSpec};
 use crate::scene::{Prop, PropShape, Scene};
 
-/// The newest link format this version writes and reads: 7 a scene of several characters
-/// ([`encode_scene`]); 2 adds the tasks' active intervals
+/// The newest link format this version writes and reads: 2 adds the tasks' active intervals
 /// and the timeline (frame rate, length, keys), 3 the comfort task (a 16-symbol model of the
 /// task kinds), 4 the joint stiffness, 5 what the posture values are relative to (a document
 /// made on an avatar, whose values are relative to the H-Anim standard pose), 6 the clip the
-/// keys were made over (its file name, size and content hash; never the file). A document is
-/// written in the oldest format that holds it.
-pub const LINK_FORMAT: u8 = 7;
+/// keys were made over (its file name, size and content hash; never the file), 7 the
+/// point-on-a-line and point-on-a-plane tasks, 8 a scene of several characters and props
+/// ([`encode_scene`]). A document is written in the oldest format that holds it.
+pub const LINK_FORMAT: u8 = 8;
 /// The format of a scene's link ([`encode_scene`]): several characters (or one with a name or
-/// a placement), each its name, placement and document payload in the oldest format that
-/// holds it.
-pub const SCENE_FORMAT: u8 = 7;
+/// a placement) and the props, each character its name, placement and document payload in the
+/// oldest format that holds it.
+pub const SCENE_FORMAT: u8 = 8;
 /// Quantisation step of a character's turn on the floor: 0.005 degrees in radians.
 const YAW_STEP_RAD: f64 = ROTATION_STEP_RAD;
 /// Longest link [`encode_for_sharing`] makes with the timeline in it, in characters: beyond,
@@ -127,7 +127,8 @@ fn engine() -> GeneralPurpose {
 
 /// The URL fragment (without `#`) that carries `document`. Values are quantised (see the module
 /// documentation); non-finite numbers, which a validated document never holds, are written as 0.
-/// Format 6 when the document names a clip, else 5 when the document names an avatar and its values are relative to the standard pose
+/// Format 7 when a task is a point-on-a-line or point-on-a-plane task, else 6 when the document
+/// names a clip, else 5 when the document names an avatar and its values are relative to the standard pose
 /// (what the editor writes), else 4 when the document sets a joint stiffness, else 3 when a task is a comfort task,
 /// else 2 when the document has a timeline or a task interval, else 1 (the oldest format that
 /// holds it, for older readers).
@@ -147,7 +148,15 @@ fn document_payload(document: &Document) -> (u8, Vec<u8>) {
     // the mannequin that rest is the standard pose.
     let standard_on_avatar = document.avatar != crate::document::AvatarReference::Default
         && document.rest == crate::document::PostureRest::Standard;
-    let format = if document.clip.is_some() {
+    let on_line_or_plane = document.tasks.iter().any(|t| {
+        matches!(
+            t.kind,
+            TaskKindSpec::Line { .. } | TaskKindSpec::Plane { .. }
+        )
+    });
+    let format = if on_line_or_plane {
+        7
+    } else if document.clip.is_some() {
         6
     } else if standard_on_avatar {
         5

@@ -247,11 +247,36 @@ impl TaskSpec {
                     orientation,
                 }
             }
+            "line" => TaskKindSpec::Line {
+                joint: joint("joint")?,
+                point,
+                origin: vec3(f("origin")?, &here("origin"))?,
+                direction: nonzero_vec3(f("direction")?, &here("direction"))?,
+            },
+            "plane" => TaskKindSpec::Plane {
+                joint: joint("joint")?,
+                point,
+                origin: vec3(f("origin")?, &here("origin"))?,
+                normal: match opt("normal") {
+                    None => [0.0, 1.0, 0.0],
+                    Some(n) => nonzero_vec3(n, &here("normal"))?,
+                },
+                above: match opt("above") {
+                    None => false,
+                    Some(Value::Bool(b)) => *b,
+                    Some(_) => {
+                        return Err(DocumentError::field(
+                            here("above"),
+                            "expected true or false",
+                        ));
+                    }
+                },
+            },
             other => {
                 return Err(DocumentError::field(
                     here("kind"),
                     format!(
-                        "unknown kind `{other}` (expected position, orientation, direction, gaze, com, balance, posture, comfort or limb)"
+                        "unknown kind `{other}` (expected position, orientation, direction, gaze, com, balance, posture, comfort, limb, line or plane)"
                     ),
                 ));
             }
@@ -301,6 +326,15 @@ impl TaskSpec {
             interval,
         })
     }
+}
+
+/// A non-zero 3-vector (a line's direction, a plane's normal).
+fn nonzero_vec3(v: &Value, at: &str) -> Result<[f64; 3], DocumentError> {
+    let v3 = vec3(v, at)?;
+    if v3.iter().map(|x| x * x).sum::<f64>().sqrt() < 1e-9 {
+        return Err(DocumentError::field(at, "zero-length vector"));
+    }
+    Ok(v3)
 }
 
 impl Serialize for TaskSpec {
@@ -391,6 +425,30 @@ impl Serialize for TaskSpec {
                 if let Some(q) = orientation {
                     m.serialize_entry("orientation", q)?;
                 }
+            }
+            TaskKindSpec::Line {
+                joint,
+                point,
+                origin,
+                direction,
+            } => {
+                m.serialize_entry("joint", joint)?;
+                m.serialize_entry("point", point)?;
+                m.serialize_entry("origin", origin)?;
+                m.serialize_entry("direction", direction)?;
+            }
+            TaskKindSpec::Plane {
+                joint,
+                point,
+                origin,
+                normal,
+                above,
+            } => {
+                m.serialize_entry("joint", joint)?;
+                m.serialize_entry("point", point)?;
+                m.serialize_entry("origin", origin)?;
+                m.serialize_entry("normal", normal)?;
+                m.serialize_entry("above", above)?;
             }
         }
         m.serialize_entry("weight", &self.weight)?;

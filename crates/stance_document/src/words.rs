@@ -156,6 +156,30 @@ impl TaskSpec {
                 swivel: swivel.map(|angle| -angle),
                 orientation: orientation.map(reflect_rotation),
             },
+            TaskKindSpec::Line {
+                joint,
+                point,
+                origin,
+                direction,
+            } => TaskKindSpec::Line {
+                joint: mirror_name(joint),
+                point: reflect(*point),
+                origin: reflect(*origin),
+                direction: reflect(*direction),
+            },
+            TaskKindSpec::Plane {
+                joint,
+                point,
+                origin,
+                normal,
+                above,
+            } => TaskKindSpec::Plane {
+                joint: mirror_name(joint),
+                point: reflect(*point),
+                origin: reflect(*origin),
+                normal: reflect(*normal),
+                above: *above,
+            },
         };
         mirrored
     }
@@ -204,6 +228,11 @@ impl TaskSpec {
                 (None, Some(joints)) => format!("{} limb", readable_name(&joints[2])),
                 (None, None) => "limb".to_owned(),
             },
+            TaskKindSpec::Line { joint, .. } => format!("{} on a line", readable_name(joint)),
+            TaskKindSpec::Plane {
+                joint, above: true, ..
+            } => format!("{} on or above a plane", readable_name(joint)),
+            TaskKindSpec::Plane { joint, .. } => format!("{} on a plane", readable_name(joint)),
         }
     }
 }

@@ -437,3 +437,91 @@ fn a_saved_camera_round_trips_and_a_bad_one_is_named() {
         assert!(e.contains(field), "{camera}: {e}");
     }
 }
+
+/// Catches a line or plane task that loses a field on the way through JSON, converts onto the
+/// wrong joint or with its vector unnormalised, keeps `above` wrong, mirrors wrongly, or
+/// accepts a zero direction or normal, a missing origin or a non-boolean `above` silently.
+#[test]
+fn line_and_plane_tasks_read_write_convert_and_mirror() {
+    let s = loa2_body40().unwrap();
+    let text = doc_with_tasks(
+        r#"[{"kind":"line","joint":"l_wrist","point":[0,0.01,0],"origin":[0.3,1.2,0.35],"direction":[2,0,0]},
+            {"kind":"plane","joint":"r_ankle","origin":[0,0.08,0],"level":2},
+            {"kind":"plane","joint":"r_ankle","origin":[0,1,0],"normal":[0,0,-3],"above":true}]"#,
+    );
+    let d = Document::from_json(&text).unwrap();
+    // Defaults filled in: no point is the joint centre, no normal is up, no `above` is on.
+    assert_eq!(
+        d.tasks[1].kind,
+        TaskKindSpec::Plane {
+            joint: "r_ankle".into(),
+            point: [0.0; 3],
+            origin: [0.0, 0.08, 0.0],
+            normal: [0.0, 1.0, 0.0],
+            above: false,
+        }
+    );
+    assert_eq!(Document::from_json(&d.to_json(false)).unwrap(), d);
+    let tasks = d.to_tasks(&s).unwrap();
+    let wrist = s.joint_index("l_radiocarpal").or(s.joint_index("l_wrist"));
+    match &tasks[0].kind {
+        TaskKind::PointOnLine {
+            effector,
+            origin,
+            direction,
+        } => {
+            assert_eq!(Some(effector.joint), wrist);
+            assert_eq!(effector.point.to_array(), [0.0, 0.01, 0.0]);
+            assert_eq!(origin.to_array(), [0.3, 1.2, 0.35]);
+            assert_eq!(direction.to_array(), [1.0, 0.0, 0.0]);
+        }
+        k => panic!("{k:?}"),
+    }
+    match &tasks[2].kind {
+        TaskKind::PointOnPlane { normal, above, .. } => {
+            assert_eq!(normal.to_array(), [0.0, 0.0, -1.0]);
+            assert!(*above);
+        }
+        k => panic!("{k:?}"),
+    }
+    assert_eq!(tasks[1].level, 2);
+    // Back to the problem-file form: the same task.
+    let back = TaskSpec::from_task(&s, &tasks[2]).unwrap();
+    assert_eq!(back.kind.name(), "plane");
+    // Mirrored: the other side's joint, x reflected.
+    match d.tasks[0].mirrored().kind {
+        TaskKindSpec::Line {
+            joint,
+            origin,
+            direction,
+            ..
+        } => {
+            assert_eq!(joint, "r_wrist");
+            assert_eq!(origin, [-0.3, 1.2, 0.35]);
+            assert_eq!(direction, [-2.0, 0.0, 0.0]);
+        }
+        k => panic!("{k:?}"),
+    }
+    assert_eq!(d.tasks[2].description(), "right ankle on or above a plane");
+    for (tasks, want) in [
+        (
+            r#"[{"kind":"line","joint":"l_wrist","origin":[0,1,0],"direction":[0,0,0]}]"#,
+            "tasks[0].direction: zero-length vector",
+        ),
+        (
+            r#"[{"kind":"line","joint":"l_wrist","direction":[0,0,1]}]"#,
+            "tasks[0].origin: missing",
+        ),
+        (
+            r#"[{"kind":"plane","joint":"l_wrist","origin":[0,1,0],"normal":[0,0,0]}]"#,
+            "tasks[0].normal: zero-length vector",
+        ),
+        (
+            r#"[{"kind":"plane","joint":"l_wrist","origin":[0,1,0],"above":1}]"#,
+            "tasks[0].above: expected true or false",
+        ),
+    ] {
+        let e = err(&doc_with_tasks(tasks));
+        assert!(e.starts_with(want), "{e}");
+    }
+}

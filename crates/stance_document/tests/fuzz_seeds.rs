@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use base64::Engine as _;
 use base64::engine::general_purpose::URL_SAFE_NO_PAD;
-use stance_document::{ClipReference, Document, Problem, Scene, TaskKindSpec, link};
+use stance_document::{ClipReference, Document, Problem, Scene, TaskKindSpec, TaskSpec, link};
 use stance_hanim::{LevelOfArticulation, SkeletonOptions, default_skeleton};
 use stance_ik::Skeleton;
 
@@ -79,6 +79,10 @@ fn document(format: u8) -> Document {
     if format >= 6 {
         d.clip = Some(ClipReference::embed("tiny.bvh", TINY_BVH.as_bytes()));
     }
+    // From format 7 a point-on-a-line and a point-on-a-plane task.
+    if format >= 7 {
+        d.tasks.extend(on_line_and_plane());
+    }
     if format < 4 {
         d.stiffness = Default::default();
     }
@@ -93,6 +97,25 @@ fn document(format: u8) -> Document {
         }
     }
     d
+}
+
+/// A wrist on a bar and a foot on or above a tilted plane.
+fn on_line_and_plane() -> Vec<TaskSpec> {
+    vec![
+        TaskSpec::new(TaskKindSpec::Line {
+            joint: "l_radiocarpal".into(),
+            point: [0.0; 3],
+            origin: [0.3, 1.2, 0.35],
+            direction: [1.0, 0.0, 0.0],
+        }),
+        TaskSpec::new(TaskKindSpec::Plane {
+            joint: "r_talocrural".into(),
+            point: [0.0, -0.07, 0.02],
+            origin: [0.0, 0.1, 0.0],
+            normal: [0.0, 1.0, 0.3],
+            above: true,
+        }),
+    ]
 }
 
 /// The skeleton of `s` in a problem file's form.
@@ -168,6 +191,8 @@ fn loa1_problem() -> String {
             {"level": 1, "kind": "position", "joint": "r_talocrural", "target": [-0.1, 0.08, 0.0]},
             {"level": 2, "kind": "balance"},
             {"level": 3, "kind": "limb", "joints": ["r_shoulder", "r_elbow", "r_wrist"], "target": [-0.3, 1.2, 0.3]},
+            {"level": 3, "kind": "line", "joint": "l_wrist", "origin": [0.3, 1.2, 0.35], "direction": [1, 0, 0]},
+            {"level": 3, "kind": "plane", "joint": "l_knee", "origin": [0, 0.3, 0], "normal": [0, 0, -1], "above": true},
             {"level": 4, "kind": "comfort", "effort": 1, "range": 0.2, "rula": 0.5}
         ],
         "settings": {"max_iterations": 20, "iteration": "textbook", "lambda": 0.01},

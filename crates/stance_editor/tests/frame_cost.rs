@@ -1,5 +1,6 @@
 //! The editor's CPU per frame with the shared avatar and the paper's Table 1 while the body is
-//! pulled (measured, not asserted): what a frame costs natively, without the GPU draw.
+//! pulled, and with three characters beside one (measured, not asserted): what a frame costs
+//! natively, without the GPU draw.
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
@@ -10,7 +11,7 @@ use std::sync::mpsc::channel;
 use egui_kittest::kittest::Queryable;
 use stance_editor::{HostMessage, MemoryHost, StanceApp};
 
-use common::{harness_sized, press_at, screen_position, settle, state};
+use common::{click_button, harness_sized, press_at, release_at, screen_position, settle, state};
 
 const AVATAR: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
@@ -70,5 +71,49 @@ fn frame_cost_with_the_avatar_and_table1_while_pulling() {
         frame_ms.len(),
         percentile(&solver_ms, 0.5),
         percentile(&scene_ms, 0.5),
+    );
+}
+
+/// Pulls the selected character's left shin for `frames` frames; the editor's CPU per frame
+/// (ms).
+fn pull_frames(harness: &mut egui_kittest::Harness<'static, StanceApp>, frames: usize) -> Vec<f64> {
+    let knee = screen_position(harness, "l_knee");
+    let ankle = screen_position(harness, "l_talocrural");
+    let grab = knee + (ankle - knee) * 0.3;
+    press_at(harness, grab);
+    let mut frame_ms = Vec::with_capacity(frames);
+    let mut pos = grab;
+    for step in 1..=frames {
+        pos = grab + egui::vec2(30.0 * (step as f32 / 10.0).sin(), -(step as f32) * 0.5);
+        harness.event(egui::Event::PointerMoved(pos));
+        let started = std::time::Instant::now();
+        harness.step();
+        frame_ms.push(started.elapsed().as_secs_f64() * 1000.0);
+    }
+    assert_eq!(state(harness)["pulling"], true, "the drag grabbed the body");
+    release_at(harness, pos);
+    settle(harness);
+    frame_ms
+}
+
+/// Issue 31's target: three LOA 2 characters, Table 1 on one and a pull on another, against
+/// the pull on one character with Table 1 (the same run, the mannequin).
+#[test]
+fn frame_cost_of_three_characters_against_one() {
+    let app = StanceApp::without_gpu(Box::new(MemoryHost::default())).unwrap();
+    let mut harness = harness_sized(app, egui::vec2(1280.0, 720.0));
+    settle(&mut harness);
+    harness.get_by_label("Table 1 example").click();
+    settle(&mut harness);
+    let one = pull_frames(&mut harness, 90);
+    click_button(&mut harness, "scene_add");
+    click_button(&mut harness, "scene_add");
+    settle(&mut harness);
+    assert_eq!(state(&harness)["characters"].as_array().map(Vec::len), Some(3));
+    let three = pull_frames(&mut harness, 90);
+    let (one, three) = (percentile(&one, 0.5), percentile(&three, 0.5));
+    println!(
+        "[frame] native, LOA 2 mannequins, 1280x720, no GPU draw: editor CPU per frame while pulling, median over 90 frames: one character with Table 1 {one:.2} ms; three characters (Table 1 on the first, the pull on the third) {three:.2} ms: {:.2}x",
+        three / one
     );
 }

@@ -20,7 +20,7 @@
 //! fraction of the joint's range in that direction, so every value is within the joint's limits.
 
 use glam::DVec3;
-use stance_ik::{Frames, Posture, Skeleton};
+use stance_ik::{Effector, Frames, Posture, Skeleton};
 
 use crate::names::{Side, resolve_joint};
 
@@ -671,11 +671,20 @@ impl HandRig {
     /// joint, along the direction the digit points at rest, by `TIP_RATIO` of the segment
     /// before it.
     pub fn fingertip(&self, skeleton: &Skeleton, frames: &Frames, finger: Finger) -> Option<DVec3> {
+        let tip = self.fingertip_effector(skeleton, finger)?;
+        (tip.joint < frames.joint_position.len()).then(|| frames.point(tip.joint, tip.point))
+    }
+
+    /// The fingertip as a point of the digit's last segment (what [`HandRig::fingertip`]
+    /// places in a posture; a solver task can hold it).
+    pub fn fingertip_effector(&self, skeleton: &Skeleton, finger: Finger) -> Option<Effector> {
         let rigged = self.finger(finger)?;
         let last = rigged.joints.last()?.joint;
         let length = skeleton.joints().get(last)?.offset.length();
-        (last < frames.joint_position.len())
-            .then(|| frames.point(last, rigged.pointing * length * TIP_RATIO))
+        Some(Effector {
+            joint: last,
+            point: rigged.pointing * length * TIP_RATIO,
+        })
     }
 }
 

@@ -29,7 +29,7 @@
 //! finger joints (LOA 1) has no hand points.
 
 use glam::DVec3;
-use stance_ik::{Frames, Skeleton};
+use stance_ik::{Effector, Frames, Skeleton};
 
 use crate::hands::{Finger, FingerJoint, HandRig};
 use crate::names::{Side, resolve_joint};
@@ -115,6 +115,40 @@ pub struct PoseKeypoints {
     pub right_hand: [Option<DVec3>; HAND_KEYPOINTS],
 }
 
+/// Where one keypoint lies on the body, as points of its segments (what a solver task can
+/// hold): one point of a segment, or the midpoint of two (the neck, between the shoulders).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum KeypointSource {
+    /// A point of one segment.
+    On(Effector),
+    /// The midpoint of two points.
+    Between(Effector, Effector),
+}
+
+impl KeypointSource {
+    /// Its world position in the posture of `frames`.
+    pub fn position(&self, frames: &Frames) -> Option<DVec3> {
+        let at = |e: &Effector| {
+            (e.joint < frames.joint_position.len()).then(|| frames.point(e.joint, e.point))
+        };
+        match self {
+            KeypointSource::On(e) => at(e),
+            KeypointSource::Between(a, b) => Some((at(a)? + at(b)?) * 0.5),
+        }
+    }
+}
+
+/// Every keypoint of one skeleton as [`KeypointSource`]s, `None` where the body has none.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct KeypointSources {
+    /// COCO-18, in OpenPose's order.
+    pub body: [Option<KeypointSource>; BODY_KEYPOINTS],
+    /// The left hand's 21.
+    pub left_hand: [Option<Effector>; HAND_KEYPOINTS],
+    /// The right hand's 21.
+    pub right_hand: [Option<Effector>; HAND_KEYPOINTS],
+}
+
 /// Finds the keypoints on one skeleton; built once, used for every posture.
 #[derive(Debug, Clone)]
 pub struct KeypointFinder {
@@ -154,23 +188,42 @@ impl KeypointFinder {
         KeypointFinder { body, head, hands }
     }
 
+    /// Where each keypoint lies on `skeleton` (the one the finder was made for), as points of
+    /// its segments: what [`KeypointFinder::find`] places in a posture, and what a solver task
+    /// holds (`stance_lift` keeps each on its camera ray).
+    pub fn sources(&self, skeleton: &Skeleton) -> KeypointSources {
+        let joint = |joint: usize| Effector {
+            joint,
+            point: DVec3::ZERO,
+        };
+        let body = self.body.map(|located| match located? {
+            Located::Joint(index) => Some(KeypointSource::On(joint(index))),
+            Located::Site(site) => Some(KeypointSource::On(self.head?.effector(site))),
+            Located::Midpoint(a, b) => Some(KeypointSource::Between(joint(a), joint(b))),
+        });
+        let [left_hand, right_hand] = self.hands.each_ref().map(|hand| {
+            hand.as_ref()
+                .map_or([None; HAND_KEYPOINTS], |hand| hand.sources(skeleton))
+        });
+        KeypointSources {
+            body,
+            left_hand,
+            right_hand,
+        }
+    }
+
     /// The keypoints in the posture of `frames` (forward kinematics of the skeleton the
     /// finder was made for).
     pub fn find(&self, skeleton: &Skeleton, frames: &Frames) -> PoseKeypoints {
-        let joint = |index: usize| frames.joint_position.get(index).copied();
-        let body = self.body.map(|located| match located? {
-            Located::Joint(index) => joint(index),
-            Located::Site(site) => self.head?.position(frames, site),
-            Located::Midpoint(a, b) => Some((joint(a)? + joint(b)?) * 0.5),
-        });
+        let sources = self.sources(skeleton);
+        let body = sources.body.map(|source| source?.position(frames));
         let body_facing = self.body.map(|located| match located? {
             Located::Site(site) => self.head?.facing(frames, site),
             Located::Joint(_) | Located::Midpoint(..) => None,
         });
-        let [left_hand, right_hand] = self.hands.each_ref().map(|hand| {
-            hand.as_ref()
-                .map_or([None; HAND_KEYPOINTS], |hand| hand.find(skeleton, frames))
-        });
+        let at = |e: Option<Effector>| KeypointSource::On(e?).position(frames);
+        let left_hand = sources.left_hand.map(at);
+        let right_hand = sources.right_hand.map(at);
         PoseKeypoints {
             body,
             body_facing,
@@ -224,12 +277,15 @@ fn hand_points(skeleton: &Skeleton, side: Side) -> Option<HandPoints> {
 }
 
 impl HandPoints {
-    fn find(&self, skeleton: &Skeleton, frames: &Frames) -> [Option<DVec3>; HAND_KEYPOINTS] {
-        let mut points = self
-            .joints
-            .map(|joint| frames.joint_position.get(joint?).copied());
+    fn sources(&self, skeleton: &Skeleton) -> [Option<Effector>; HAND_KEYPOINTS] {
+        let mut points = self.joints.map(|joint| {
+            Some(Effector {
+                joint: joint?,
+                point: DVec3::ZERO,
+            })
+        });
         for (digit, finger) in Finger::ALL.into_iter().enumerate() {
-            points[4 + digit * 4] = self.rig.fingertip(skeleton, frames, finger);
+            points[4 + digit * 4] = self.rig.fingertip_effector(skeleton, finger);
         }
         points
     }

@@ -41,7 +41,7 @@
 //! an offset in `skullbase`'s frame.
 
 use glam::DVec3;
-use stance_ik::{Frames, Skeleton};
+use stance_ik::{Effector, Frames, Skeleton};
 
 use crate::names::resolve_joint;
 
@@ -161,9 +161,19 @@ impl HeadSites {
     /// The world position of `site` in the posture of `frames` (forward kinematics of the
     /// same skeleton).
     pub fn position(&self, frames: &Frames, site: HeadSite) -> Option<DVec3> {
-        (self.skullbase < frames.joint_position.len()
-            && self.skullbase < frames.world_from_joint_rotation.len())
-        .then(|| frames.point(self.skullbase, site.default_offset() * self.scale))
+        let at = self.effector(site);
+        (at.joint < frames.joint_position.len()
+            && at.joint < frames.world_from_joint_rotation.len())
+        .then(|| frames.point(at.joint, at.point))
+    }
+
+    /// `site` as a point of the head's segment (`skullbase`'s frame): what
+    /// [`HeadSites::position`] places in a posture; a solver task can hold it.
+    pub fn effector(&self, site: HeadSite) -> Effector {
+        Effector {
+            joint: self.skullbase,
+            point: site.default_offset() * self.scale,
+        }
     }
 
     /// The world direction the head's surface faces at `site` in the posture of `frames`.

@@ -8,6 +8,7 @@
 //! - [`Posture`] / [`Frames`]: DOF values (rotation vectors, no Euler singularity) and
 //!   forward kinematics.
 //! - [`Task`]: position, orientation, direction (partial orientation), gaze, centre of mass,
+//!   a point on a line or on a plane (or above it),
 //!   balance (the centre of mass inside the support polygon, an inequality), posture
 //!   attraction; each with a level, a weight and an active flag.
 //! - [`Solver`]: iterates prioritized steps with joint-limit clamping and per-level damping:
@@ -53,6 +54,6 @@ pub use solver::{
     SolverSettings, TEXTBOOK_ANGULAR_STEP, TEXTBOOK_LINEAR_STEP,
 };
 pub use task::{
-    Axes, BALANCE_BAND, COLLISION_BAND, Capsule, Collision, Effector, Task, TaskFeature, TaskKind,
-    closest_points, collision_pairs, floor_capsules,
+    Axes, BALANCE_BAND, COLLISION_BAND, Capsule, Collision, Effector, PLANE_BAND, Task,
+    TaskFeature, TaskKind, closest_points, collision_pairs, floor_capsules,
 };

@@ -6,6 +6,7 @@
 mod balance;
 mod collision;
 mod gaze;
+mod locus;
 
 use glam::{DQuat, DVec3};
 
@@ -15,6 +16,8 @@ pub use collision::{
     COLLISION_BAND, Capsule, Collision, closest_points, collision_pairs, floor_capsules,
 };
 use gaze::{GazeGeometry, direction_error};
+pub use locus::PLANE_BAND;
+use locus::{line_basis, line_offset, plane_active, plane_distance, plane_error};
 
 use std::sync::Arc;
 
@@ -167,6 +170,32 @@ pub enum TaskKind {
     /// [`COLLISION_BAND`] beyond it (they may slide along each other but not come closer),
     /// empty rows for the rest. Pairs far apart cost the distance of two bounding spheres.
     Collision(Collision),
+    /// Point on a line: the effector point kept on the world line through `origin` along
+    /// `direction` (a hand on a bar, a keypoint on the camera ray through its pixel). 2 rows:
+    /// the point's offset from the line along two unit vectors orthogonal to the direction.
+    PointOnLine {
+        /// The controlled point.
+        effector: Effector,
+        /// A point of the line (world, m).
+        origin: DVec3,
+        /// The line's direction (world, non-zero; normalised when used).
+        direction: DVec3,
+    },
+    /// Point on a plane: the effector point kept on the world plane through `origin` with
+    /// normal `normal` (a hand or foot on a surface). 1 row, the signed distance. With
+    /// `above`, an inequality: on or above the plane (the side the normal points to), the row
+    /// active with an error below it, active with a zero error within [`PLANE_BAND`] over it,
+    /// empty further above.
+    PointOnPlane {
+        /// The controlled point.
+        effector: Effector,
+        /// A point of the plane (world, m).
+        origin: DVec3,
+        /// The plane's normal (world, non-zero; normalised when used).
+        normal: DVec3,
+        /// On or above the plane (an inequality) instead of on it.
+        above: bool,
+    },
     /// Attraction of the chosen DOF toward a reference posture (Jacobian = identity rows).
     PostureAttraction {
         /// Reference value for every DOF of the skeleton.
@@ -240,6 +269,32 @@ impl Task {
         Self::new(TaskKind::Balance { support, margin })
     }
 
+    /// `point` (joint frame) of `joint` on the world line through `origin` along `direction`.
+    pub fn point_on_line(joint: usize, point: DVec3, origin: DVec3, direction: DVec3) -> Self {
+        Self::new(TaskKind::PointOnLine {
+            effector: Effector { joint, point },
+            origin,
+            direction,
+        })
+    }
+
+    /// `point` (joint frame) of `joint` on the world plane through `origin` with `normal`;
+    /// with `above`, on or above it.
+    pub fn point_on_plane(
+        joint: usize,
+        point: DVec3,
+        origin: DVec3,
+        normal: DVec3,
+        above: bool,
+    ) -> Self {
+        Self::new(TaskKind::PointOnPlane {
+            effector: Effector { joint, point },
+            origin,
+            normal,
+            above,
+        })
+    }
+
     /// Centre of mass on `axes`.
     pub fn center_of_mass(axes: Axes, target: DVec3) -> Self {
         Self::new(TaskKind::CenterOfMass { axes, target })
@@ -292,8 +347,10 @@ impl Task {
         match &self.kind {
             TaskKind::Position { axes, .. } | TaskKind::CenterOfMass { axes, .. } => axes.count(),
             TaskKind::Orientation { .. } => 3,
-            TaskKind::Gaze { .. } | TaskKind::Direction { .. } => 2,
-            TaskKind::Balance { .. } | TaskKind::Comfort { .. } => 1,
+            TaskKind::Gaze { .. } | TaskKind::Direction { .. } | TaskKind::PointOnLine { .. } => 2,
+            TaskKind::Balance { .. } | TaskKind::Comfort { .. } | TaskKind::PointOnPlane { .. } => {
+                1
+            }
             TaskKind::Collision(c) => c.rows,
             TaskKind::PostureAttraction { dofs, .. } => dofs.len(),
         }
@@ -409,6 +466,30 @@ impl Task {
                 model.validate(skeleton).map_err(bad)?;
             }
             TaskKind::Collision(c) => c.validate(skeleton).map_err(bad)?,
+            TaskKind::PointOnLine {
+                effector,
+                origin,
+                direction: vector,
+            }
+            | TaskKind::PointOnPlane {
+                effector,
+                origin,
+                normal: vector,
+                ..
+            } => {
+                joint_ok(effector.joint)?;
+                finite(effector.point, "point")?;
+                finite(*origin, "origin")?;
+                let what = if matches!(self.kind, TaskKind::PointOnLine { .. }) {
+                    "line direction"
+                } else {
+                    "plane normal"
+                };
+                finite(*vector, what)?;
+                if vector.length() < 1e-9 {
+                    return Err(bad(format!("{what} has zero length")));
+                }
+            }
             TaskKind::PostureAttraction { reference, dofs } => {
                 if reference.len() != skeleton.dof_count() {
                     return Err(bad(format!(
@@ -431,9 +512,10 @@ impl Task {
     /// Posture indices of the possibly non-zero Jacobian columns.
     pub fn support(&self, skeleton: &Skeleton) -> Vec<usize> {
         match &self.kind {
-            TaskKind::Position { effector, .. } | TaskKind::Gaze { effector, .. } => {
-                skeleton.chain_dofs(effector.joint)
-            }
+            TaskKind::Position { effector, .. }
+            | TaskKind::Gaze { effector, .. }
+            | TaskKind::PointOnLine { effector, .. }
+            | TaskKind::PointOnPlane { effector, .. } => skeleton.chain_dofs(effector.joint),
             TaskKind::Orientation { joint, .. } | TaskKind::Direction { joint, .. } => skeleton
                 .chain_dofs(*joint)
                 .into_iter()
@@ -558,6 +640,32 @@ impl Task {
             }
             TaskKind::Comfort { model } => {
                 TaskFeature::Vector(vec![model.terms(skeleton, frames, values).total])
+            }
+            TaskKind::PointOnLine {
+                effector,
+                origin,
+                direction,
+            } => {
+                let p = frames.point(effector.joint, effector.point);
+                TaskFeature::Vector(line_offset(p, *origin, *direction).to_vec())
+            }
+            TaskKind::PointOnPlane {
+                effector,
+                origin,
+                normal,
+                above,
+            } => {
+                // The signed distance; constant where an inequality's row is empty.
+                let s = plane_distance(
+                    frames.point(effector.joint, effector.point),
+                    *origin,
+                    *normal,
+                );
+                TaskFeature::Vector(vec![if plane_active(s, *above) {
+                    s
+                } else {
+                    PLANE_BAND
+                }])
             }
             TaskKind::Collision(c) => {
                 // The distances of the rows held; constant where a row is empty.
@@ -695,6 +803,31 @@ impl Task {
                 collision::errors(&found, c.margin, err);
                 clamp_vec(err, limits.map(|l| l.linear))
             }
+            TaskKind::PointOnLine {
+                effector,
+                origin,
+                direction,
+            } => {
+                let p = frames.point(effector.joint, effector.point);
+                let [a, b] = line_offset(p, *origin, *direction);
+                err[0] = -a;
+                err[1] = -b;
+                clamp_vec(err, limits.map(|l| l.linear))
+            }
+            TaskKind::PointOnPlane {
+                effector,
+                origin,
+                normal,
+                above,
+            } => {
+                let s = plane_distance(
+                    frames.point(effector.joint, effector.point),
+                    *origin,
+                    *normal,
+                );
+                err[0] = plane_error(s, *above);
+                clamp_vec(err, limits.map(|l| l.linear))
+            }
             TaskKind::PostureAttraction { reference, dofs } => {
                 for (e, &d) in err.iter_mut().zip(dofs) {
                     let v = values.get(d).copied().unwrap_or(0.0);
@@ -769,6 +902,34 @@ impl Task {
             TaskKind::Collision(c) => {
                 let found = c.constraints(frames);
                 collision::write_rows(skeleton, frames, &found, jac_t, n);
+            }
+            TaskKind::PointOnLine {
+                effector,
+                direction,
+                ..
+            } => {
+                let p = frames.point(effector.joint, effector.point);
+                let [e1, e2] = line_basis(*direction);
+                for &d in support {
+                    let v = point_column(skeleton, frames, d, effector.joint, p);
+                    jac_t[d] = e1.dot(v);
+                    jac_t[n + d] = e2.dot(v);
+                }
+            }
+            TaskKind::PointOnPlane {
+                effector,
+                origin,
+                normal,
+                above,
+            } => {
+                let p = frames.point(effector.joint, effector.point);
+                if !plane_active(plane_distance(p, *origin, *normal), *above) {
+                    return;
+                }
+                let unit = normal.normalize_or(DVec3::Y);
+                for &d in support {
+                    jac_t[d] = unit.dot(point_column(skeleton, frames, d, effector.joint, p));
+                }
             }
             TaskKind::Orientation { .. } => {
                 for &d in support {

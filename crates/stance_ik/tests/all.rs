@@ -14,6 +14,7 @@ mod damping;
 mod joint_rotation;
 mod kinematics;
 mod limb;
+mod line_plane;
 mod priority;
 mod table1;
 mod timing;

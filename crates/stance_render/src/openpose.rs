@@ -197,6 +197,18 @@ impl OpenPose {
     /// the ControlNet editors' `canvas_width` and `canvas_height`): confidence 1 for a point
     /// seen, `0, 0, 0` for a missing one; no face points (an empty list).
     pub fn to_json(&self, units: KeypointUnits) -> String {
+        self.json(units, None)
+    }
+
+    /// [`OpenPose::to_json`] with the camera that saw the keypoints as one more field,
+    /// `"stance_camera"`: `{"target": [x, y, z], "yaw", "pitch", "distance", "orthographic",
+    /// "vertical_fov"}` (the orbit camera's, m and rad), which other readers ignore and
+    /// `stance lift` takes instead of fitting one.
+    pub fn to_json_seen_by(&self, units: KeypointUnits, camera: &OrbitCamera) -> String {
+        self.json(units, Some(camera))
+    }
+
+    fn json(&self, units: KeypointUnits, camera: Option<&OrbitCamera>) -> String {
         let [width, height] = self.size_px;
         let scale = match units {
             KeypointUnits::Pixels => DVec2::ONE,
@@ -233,8 +245,15 @@ impl OpenPose {
                 )
             })
             .collect();
+        let camera = camera.map_or(String::new(), |c| {
+            let t = c.target_world;
+            format!(
+                ",\"stance_camera\":{{\"target\":[{},{},{}],\"yaw\":{},\"pitch\":{},\"distance\":{},\"orthographic\":{},\"vertical_fov\":{}}}",
+                t.x, t.y, t.z, c.yaw, c.pitch, c.distance_m, c.orthographic, c.vertical_fov
+            )
+        });
         format!(
-            "{{\"people\":[{}],\"canvas_width\":{width},\"canvas_height\":{height}}}\n",
+            "{{\"people\":[{}],\"canvas_width\":{width},\"canvas_height\":{height}{camera}}}\n",
             people.join(",")
         )
     }

@@ -87,6 +87,27 @@ enum Goal {
         support: Vec<(usize, Vector3<f64>)>,
         margin: f64,
     },
+    /// A point of a segment on a world line (unit `direction`).
+    Line {
+        joint: usize,
+        point: Vector3<f64>,
+        origin: Vector3<f64>,
+        direction: Vector3<f64>,
+    },
+    /// A point of a segment on a world plane (unit `normal`); with `above`, on or above it
+    /// (an inequality).
+    Plane {
+        joint: usize,
+        point: Vector3<f64>,
+        origin: Vector3<f64>,
+        normal: Vector3<f64>,
+        above: bool,
+    },
+}
+
+/// The component of `v` across the unit `direction`: `(I - u u^T) v`.
+fn across(direction: &Vector3<f64>, v: &Vector3<f64>) -> Vector3<f64> {
+    v - direction * direction.dot(v)
 }
 
 #[derive(Debug, Clone)]
@@ -340,6 +361,26 @@ impl Problem {
             Goal::Balance { support, margin } => self
                 .standing(f, support, *margin)
                 .map_or(0.0, |s| s.violation.max(0.0)),
+            Goal::Line {
+                joint,
+                point,
+                origin,
+                direction,
+            } => {
+                let p = f.position[*joint] + f.rotation[*joint] * point;
+                across(direction, &(p - origin)).norm()
+            }
+            Goal::Plane {
+                joint,
+                point,
+                origin,
+                normal,
+                above,
+            } => {
+                let p = f.position[*joint] + f.rotation[*joint] * point;
+                let s = normal.dot(&(p - origin));
+                if *above { (-s).max(0.0) } else { s.abs() }
+            }
         }
     }
 
@@ -509,6 +550,52 @@ impl Problem {
                     -at.violation.max(0.0).min(settings.max_linear)
                 } else {
                     -at.violation
+                };
+                (vec![e], vec![row])
+            }
+            Goal::Line {
+                joint,
+                point,
+                origin,
+                direction,
+            } => {
+                // Three rows of rank two: the offset across the line and its derivative, the
+                // point's velocity with its component along the line taken out.
+                let p = f.position[*joint] + f.rotation[*joint] * point;
+                let off = across(direction, &(p - origin));
+                let cols: Vec<Vector3<f64>> = point_columns(*joint, &p)
+                    .iter()
+                    .map(|c| across(direction, c))
+                    .collect();
+                let (mut e, rows) = select(&all, -off, cols);
+                clamp_to(&mut e, off.norm(), settings.max_linear);
+                (e, rows)
+            }
+            Goal::Plane {
+                joint,
+                point,
+                origin,
+                normal,
+                above,
+            } => {
+                // The signed distance; "on or above" in a solve (`clamp`) holds its row from
+                // `BAND` over the plane and pulls back only what is under it; unclamped (for
+                // the tests) it is the signed distance everywhere.
+                let p = f.position[*joint] + f.rotation[*joint] * point;
+                let s = normal.dot(&(p - origin));
+                if clamp && *above && s > balance::BAND {
+                    return (vec![0.0], vec![vec![0.0; n]]);
+                }
+                let row = point_columns(*joint, &p)
+                    .iter()
+                    .map(|c| normal.dot(c))
+                    .collect();
+                let e = if clamp && *above {
+                    (-s).max(0.0).min(settings.max_linear)
+                } else if clamp {
+                    (-s).clamp(-settings.max_linear, settings.max_linear)
+                } else {
+                    -s
                 };
                 (vec![e], vec![row])
             }

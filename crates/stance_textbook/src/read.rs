@@ -261,6 +261,32 @@ impl Problem {
                             margin: t.get("margin").and_then(Value::as_f64).unwrap_or(0.02),
                         }
                     }
+                    Some("line") => Goal::Line {
+                        joint: joint(t, &at)?,
+                        point: point()?,
+                        origin: vector(
+                            t.get("origin").unwrap_or(&Value::Null),
+                            &format!("{at}.origin"),
+                        )?,
+                        direction: vector(
+                            t.get("direction").unwrap_or(&Value::Null),
+                            &format!("{at}.direction"),
+                        )?
+                        .normalize(),
+                    },
+                    Some("plane") => Goal::Plane {
+                        joint: joint(t, &at)?,
+                        point: point()?,
+                        origin: vector(
+                            t.get("origin").unwrap_or(&Value::Null),
+                            &format!("{at}.origin"),
+                        )?,
+                        normal: match t.get("normal") {
+                            Some(v) => vector(v, &format!("{at}.normal"))?.normalize(),
+                            None => Vector3::y(),
+                        },
+                        above: t.get("above").and_then(Value::as_bool).unwrap_or(false),
+                    },
                     other => return Err(bad(format!("{at}.kind: {other:?} is not read here"))),
                 };
             let weight = t.get("weight").and_then(Value::as_f64).unwrap_or(1.0);

@@ -23,7 +23,7 @@ pub(super) const ANGLE_PRIOR: [u32; 8] = [15, 16, 14, 15, 16, 13, 15, 14];
 /// Adaptive contexts, one per kind of value; the encoder and the decoder evolve them alike.
 #[derive(Debug)]
 pub(super) struct Models {
-    pub(super) flags: [Bit; 20],
+    pub(super) flags: [Bit; 21],
     pub(super) rotation: UintModel,
     pub(super) translation: UintModel,
     pub(super) position: UintModel,
@@ -92,6 +92,8 @@ pub(super) const HAS_MOTION: usize = 17;
 pub(super) const STANDARD_REST: usize = 18;
 // Format 6.
 pub(super) const HAS_CLIP: usize = 19;
+// Format 7.
+pub(super) const ABOVE: usize = 20;
 
 /// `m / 10^k`, correctly rounded (both are exact in f64 for the ranges used).
 pub(super) fn from_decimal(m: u64, k: i32) -> f64 {
@@ -111,9 +113,9 @@ pub(super) fn short_decimal(w: f64) -> Option<(u64, u8)> {
     })
 }
 
-/// Task kinds by symbol: formats 1 and 2 code the first eight (an 8-symbol model), format 3
-/// all (a 16-symbol model).
-pub(super) const KINDS: [&str; 9] = [
+/// Task kinds by symbol: formats 1 and 2 code the first eight (an 8-symbol model), formats 3
+/// to 6 the first nine (a 16-symbol model), format 7 all.
+pub(super) const KINDS: [&str; 11] = [
     "position",
     "orientation",
     "gaze",
@@ -123,6 +125,8 @@ pub(super) const KINDS: [&str; 9] = [
     "direction",
     "balance",
     "comfort",
+    "line",
+    "plane",
 ];
 
 /// Largest quantised value a link holds (2^48: 2.4e10 rad, 2.8e10 m); larger ones are written

@@ -5,10 +5,10 @@ use glam::{DQuat, DVec3};
 use stance_ik::{Axes, Dof};
 
 use super::models::{
-    ACTIVE, AVATAR_URL, AXES_XYZ, AXIS_Y, AXIS_Z, HANIM_JOINT, HAS_CLIP, HAS_INTERVAL, HAS_JOINTS,
-    HAS_LIMB, HAS_MOTION, HAS_ORIENTATION, HAS_REFERENCE, HAS_SWIVEL, JOINT_MASK_DEFAULT, KINDS,
-    MASKS_DEFAULT, MAX_QUANTISED, Models, POINT_ZERO, STANDARD_REST, WEIGHT_DECIMAL, WEIGHT_ONE,
-    default_mask, dequantise, from_decimal, in_loa_base,
+    ABOVE, ACTIVE, AVATAR_URL, AXES_XYZ, AXIS_Y, AXIS_Z, HANIM_JOINT, HAS_CLIP, HAS_INTERVAL,
+    HAS_JOINTS, HAS_LIMB, HAS_MOTION, HAS_ORIENTATION, HAS_REFERENCE, HAS_SWIVEL,
+    JOINT_MASK_DEFAULT, KINDS, MASKS_DEFAULT, MAX_QUANTISED, Models, POINT_ZERO, STANDARD_REST,
+    WEIGHT_DECIMAL, WEIGHT_ONE, default_mask, dequantise, from_decimal, in_loa_base,
 };
 use super::{
     DIRECTION_STEP, MAX_COUNT, MAX_OVERRUN, MAX_STRING_BYTES, POSITION_STEP_M, ROTATION_STEP_RAD,
@@ -241,7 +241,9 @@ impl Reader<'_> {
             .ok_or("level out of range")?;
         let active = self.flag(ACTIVE);
         let weight = self.weight()?;
-        let kind = match KINDS.get(kind).copied() {
+        // The point-on-a-line and point-on-a-plane kinds came with format 7.
+        let known = if self.format >= 7 { KINDS.len() } else { 9 };
+        let kind = match KINDS[..known].get(kind).copied() {
             Some("position") => TaskKindSpec::Position {
                 joint: self.joint()?,
                 point: self.point()?,
@@ -330,6 +332,29 @@ impl Reader<'_> {
                     target,
                     swivel,
                     orientation,
+                }
+            }
+            Some("line") => TaskKindSpec::Line {
+                joint: self.joint()?,
+                point: self.point()?,
+                origin: self.position()?,
+                direction: self.direction()?,
+            },
+            Some("plane") => {
+                let joint = self.joint()?;
+                let point = self.point()?;
+                let origin = self.position()?;
+                let normal = if self.flag(AXIS_Y) {
+                    [0.0, 1.0, 0.0]
+                } else {
+                    self.direction()?
+                };
+                TaskKindSpec::Plane {
+                    joint,
+                    point,
+                    origin,
+                    normal,
+                    above: self.flag(ABOVE),
                 }
             }
             _ => return Err(format!("unknown task kind {kind}")),

@@ -4,10 +4,10 @@ use glam::{DQuat, DVec3};
 use stance_ik::Axes;
 
 use super::models::{
-    ACTIVE, AVATAR_URL, AXES_XYZ, AXIS_Y, AXIS_Z, HANIM_JOINT, HAS_CLIP, HAS_INTERVAL, HAS_JOINTS,
-    HAS_LIMB, HAS_MOTION, HAS_ORIENTATION, HAS_REFERENCE, HAS_SWIVEL, JOINT_MASK_DEFAULT, KINDS,
-    MASKS_DEFAULT, Models, POINT_ZERO, STANDARD_REST, WEIGHT_DECIMAL, WEIGHT_ONE, default_mask,
-    hanim_index, in_loa_base, mask_of, quantise, short_decimal, unit,
+    ABOVE, ACTIVE, AVATAR_URL, AXES_XYZ, AXIS_Y, AXIS_Z, HANIM_JOINT, HAS_CLIP, HAS_INTERVAL,
+    HAS_JOINTS, HAS_LIMB, HAS_MOTION, HAS_ORIENTATION, HAS_REFERENCE, HAS_SWIVEL,
+    JOINT_MASK_DEFAULT, KINDS, MASKS_DEFAULT, Models, POINT_ZERO, STANDARD_REST, WEIGHT_DECIMAL,
+    WEIGHT_ONE, default_mask, hanim_index, in_loa_base, mask_of, quantise, short_decimal, unit,
 };
 use super::{DIRECTION_STEP, POSITION_STEP_M, ROTATION_STEP_RAD};
 use crate::document::{
@@ -277,6 +277,35 @@ impl Writer {
                     self.quaternion(*q);
                 }
             }
+            TaskKindSpec::Line {
+                joint,
+                point,
+                origin,
+                direction,
+            } => {
+                self.joint(joint);
+                self.point(*point);
+                self.position(*origin);
+                self.direction(unit(*direction));
+            }
+            TaskKindSpec::Plane {
+                joint,
+                point,
+                origin,
+                normal,
+                above,
+            } => {
+                self.joint(joint);
+                self.point(*point);
+                self.position(*origin);
+                let normal = unit(*normal);
+                let y = normal == [0.0, 1.0, 0.0];
+                self.flag(AXIS_Y, y);
+                if !y {
+                    self.direction(normal);
+                }
+                self.flag(ABOVE, *above);
+            }
         }
     }
 
@@ -347,7 +376,7 @@ fn motion(w: &mut Writer, d: &Document) {
 /// The payload of `format` (1: posture and tasks; 2: also the intervals and the timeline; 3:
 /// the task kinds in a 16-symbol model, comfort among them; 4: also the joint stiffness, in
 /// the shape and quantisation of a posture; 5: the rest flag; 6: the clip's reference: file
-/// name, size and content hash, never the file).
+/// name, size and content hash, never the file; 7: the line and plane task kinds, no new field).
 pub(super) fn encode_payload(d: &Document, format: u8) -> Vec<u8> {
     let mut w = Writer {
         e: Encoder::new(),

@@ -541,6 +541,47 @@ pub fn document_close(a: &Document, b: &Document) -> Result<(), String> {
                         _ => false,
                     }
             }
+            (
+                TaskKindSpec::Line {
+                    joint: j1,
+                    point: p1,
+                    origin: o1,
+                    direction: d1,
+                },
+                TaskKindSpec::Line {
+                    joint: j2,
+                    point: p2,
+                    origin: o2,
+                    direction: d2,
+                },
+            ) => {
+                j1 == j2
+                    && close3(*p1, *p2, POSITION_STEP_M)
+                    && close3(*o1, *o2, POSITION_STEP_M)
+                    && close3(unit(*d1), *d2, DIRECTION_STEP)
+            }
+            (
+                TaskKindSpec::Plane {
+                    joint: j1,
+                    point: p1,
+                    origin: o1,
+                    normal: n1,
+                    above: a1,
+                },
+                TaskKindSpec::Plane {
+                    joint: j2,
+                    point: p2,
+                    origin: o2,
+                    normal: n2,
+                    above: a2,
+                },
+            ) => {
+                j1 == j2
+                    && a1 == a2
+                    && close3(*p1, *p2, POSITION_STEP_M)
+                    && close3(*o1, *o2, POSITION_STEP_M)
+                    && close3(unit(*n1), *n2, DIRECTION_STEP)
+            }
             _ => false,
         };
         if !ok {

@@ -650,7 +650,8 @@ fn kind_fields(
             target,
         } => rows.direction(joint, axis, target),
         TaskKindSpec::Balance { support, margin } => rows.balance(support.as_deref(), margin),
-        TaskKindSpec::Posture { .. } => {}
+        // No fields of their own in the panel yet (made by `stance lift`).
+        TaskKindSpec::Posture { .. } | TaskKindSpec::Line { .. } | TaskKindSpec::Plane { .. } => {}
         TaskKindSpec::Comfort {
             effort,
             range,

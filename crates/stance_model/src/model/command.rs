@@ -506,7 +506,9 @@ pub(super) fn goals_moved(
             | TaskKindSpec::Direction { .. }
             | TaskKindSpec::Balance { .. }
             | TaskKindSpec::Posture { .. }
-            | TaskKindSpec::Comfort { .. } => {}
+            | TaskKindSpec::Comfort { .. }
+            | TaskKindSpec::Line { .. }
+            | TaskKindSpec::Plane { .. } => {}
         }
     }
     tasks

@@ -137,7 +137,9 @@ pub fn blended(spec: &TaskSpec, weight: f64, skeleton: &Skeleton, frames: &Frame
         TaskKindSpec::Com { target, .. } => lerp(frames.center_of_mass(), target),
         TaskKindSpec::Balance { .. }
         | TaskKindSpec::Posture { .. }
-        | TaskKindSpec::Comfort { .. } => out.weight *= weight,
+        | TaskKindSpec::Comfort { .. }
+        | TaskKindSpec::Line { .. }
+        | TaskKindSpec::Plane { .. } => out.weight *= weight,
     }
     out
 }

@@ -1,0 +1,586 @@
+//! One person's keypoints lifted onto the body: the camera (given, or fitted to the
+//! keypoints), the tasks (each keypoint on its camera ray, the feet on the floor, balance,
+//! comfort), the start posture (the rest body turned and placed to match the keypoints) and
+//! the solve.
+
+use glam::{DQuat, DVec2, DVec3, Vec2};
+use stance_document::{CameraSpec, Document, PostureValues, Problem, TaskKindSpec, TaskSpec};
+use stance_hanim::keypoints::{
+    HAND_KEYPOINTS, KeypointFinder, KeypointSource, NECK, PoseKeypoints,
+};
+use stance_ik::{Dof, Effector, Frames, Posture, Skeleton, SolveReport};
+use stance_render::{OpenPosePerson, OrbitCamera};
+
+use crate::LiftError;
+
+/// COCO-18 indices.
+const NOSE: usize = 0;
+const R_SHOULDER: usize = 2;
+const L_SHOULDER: usize = 5;
+const R_HIP: usize = 8;
+const R_ANKLE: usize = 10;
+const L_HIP: usize = 11;
+const L_ANKLE: usize = 13;
+const R_EAR: usize = 16;
+const L_EAR: usize = 17;
+
+/// The bones between body keypoints whose rest length gives the body's scale in the image
+/// (arms, legs, shoulders, hips, the torso's sides).
+const SCALE_BONES: [(usize, usize); 12] = [
+    (2, 3),
+    (3, 4),
+    (5, 6),
+    (6, 7),
+    (8, 9),
+    (9, 10),
+    (11, 12),
+    (12, 13),
+    (2, 5),
+    (8, 11),
+    (2, 8),
+    (5, 11),
+];
+
+/// An ankle whose keypoint lies within this many metres (at the body's scale in the image)
+/// of the lowest ankle's is taken to stand on the floor; a higher one only stays above it.
+const STANDING_SLACK_M: f64 = 0.25;
+
+/// The levels of the lifted document's tasks.
+const IMAGE_LEVEL: u32 = 1;
+const FLOOR_LEVEL: u32 = 2;
+const BALANCE_LEVEL: u32 = 3;
+
+/// What a lift made.
+#[derive(Debug, Clone)]
+pub struct Lifted {
+    /// The document: the solved posture, its tasks (each keypoint on its ray at level 1, the
+    /// feet at 2, balance at 3, comfort at 10) and the camera as its saved view.
+    pub document: Document,
+    /// The solved posture on the body's skeleton.
+    pub posture: Posture,
+    /// The camera the keypoints were seen with (given, or fitted).
+    pub camera: OrbitCamera,
+    /// Whether the camera was fitted to the keypoints.
+    pub camera_fitted: bool,
+    /// How many keypoints became tasks.
+    pub keypoints_used: usize,
+    /// The feet taken to stand on the floor (ankle joint names).
+    pub standing: Vec<String>,
+    /// The joints whose depth the lift flipped to meet the image level (see
+    /// [`crate::flip_depth`]), in order.
+    pub flips: Vec<String>,
+    /// The solve's report.
+    pub report: SolveReport,
+}
+
+/// Lifts `person`'s keypoints, seen in an image of `size_px` through `camera` (or, without
+/// one, a camera fitted to them: see `fit_camera`), onto `skeleton`.
+pub fn lift(
+    skeleton: &Skeleton,
+    person: &OpenPosePerson,
+    size_px: [u32; 2],
+    camera: Option<OrbitCamera>,
+) -> Result<Lifted, LiftError> {
+    let seen = person
+        .body
+        .iter()
+        .chain(&person.left_hand)
+        .chain(&person.right_hand)
+        .flatten()
+        .count();
+    if seen == 0 {
+        return Err(LiftError::NoKeypoints);
+    }
+    let finder = KeypointFinder::new(skeleton);
+    let rest = Frames::new(skeleton, &Posture::rest(skeleton));
+    let rest_points = finder.find(skeleton, &rest);
+    let scale = Scale::new(person, &rest_points)?;
+    let (camera, camera_fitted) = match camera {
+        Some(camera) => {
+            crate::read::check_camera(&camera)?;
+            (camera, false)
+        }
+        None => (fit_camera(person, size_px, &rest_points, &scale), true),
+    };
+    let view = View { camera, size_px };
+    let (mut tasks, keypoints_used) = image_plane_tasks(skeleton, &finder, person, &view);
+    let standing = standing_feet(person, &scale);
+    tasks.extend(floor_tasks(skeleton, &rest, &standing));
+    tasks.push(TaskSpec::comfort());
+    let start = start_posture(skeleton, person, &view, &rest_points, &scale);
+    let mut document = Document {
+        posture: PostureValues::from_posture(skeleton, &start),
+        tasks,
+        camera: Some(camera_spec(&camera)),
+        ..Document::default()
+    };
+    let (mut posture, mut report) = solve(skeleton, &document, &start)?;
+    let mut flips = Vec::new();
+    let off = |p: &Posture| worst_pixel(skeleton, &finder, p, &view, person);
+    let mut worst = off(&posture);
+    for _ in 0..MAX_FLIPS {
+        if worst <= ON_PIXEL_PX {
+            break;
+        }
+        let Some((joint, flipped, flipped_report, flipped_worst)) =
+            best_flip(skeleton, &document, &posture, &camera, &report, worst, &off)?
+        else {
+            break;
+        };
+        flips.push(joint);
+        posture = flipped;
+        report = flipped_report;
+        worst = flipped_worst;
+    }
+    document.posture = PostureValues::from_posture(skeleton, &posture);
+    Ok(Lifted {
+        document,
+        posture,
+        camera,
+        camera_fitted,
+        keypoints_used,
+        standing,
+        flips,
+        report,
+    })
+}
+
+/// At most this many limbs are flipped in depth to meet the image level.
+const MAX_FLIPS: usize = 3;
+
+/// The joints whose depth a lift tries flipping when the image level is not met: where a
+/// limb's local minimum lies (the elbow or knee on the wrong side of its parent in depth).
+const FLIP_CANDIDATES: [&str; 8] = [
+    "r_elbow",
+    "l_elbow",
+    "r_knee",
+    "l_knee",
+    "r_radiocarpal",
+    "l_radiocarpal",
+    "r_talocrural",
+    "l_talocrural",
+];
+
+/// The floor level's residual in a solve (m).
+fn floor_residual(report: &SolveReport) -> f64 {
+    report
+        .levels
+        .iter()
+        .find(|l| l.level == FLOOR_LEVEL)
+        .map_or(0.0, |l| l.residual_after)
+}
+
+/// A keypoint this close to its pixel counts as on it: no flip is tried (px).
+const ON_PIXEL_PX: f64 = 0.5;
+
+/// The largest distance in the image between a seen keypoint and where `posture` puts it
+/// (pixels; the renderer's projection of the body's keypoints, as `stance render` draws them).
+fn worst_pixel(
+    skeleton: &Skeleton,
+    finder: &KeypointFinder,
+    posture: &Posture,
+    view: &View,
+    person: &OpenPosePerson,
+) -> f64 {
+    let points = finder.find(skeleton, &Frames::new(skeleton, posture));
+    let project = |p: Option<DVec3>| {
+        let p = p?;
+        view.camera
+            .project(p.as_vec3(), view.size())
+            .map(|px| px.as_dvec2())
+    };
+    let pairs = person
+        .body
+        .iter()
+        .zip(points.body.map(project))
+        .chain(person.left_hand.iter().zip(points.left_hand.map(project)))
+        .chain(person.right_hand.iter().zip(points.right_hand.map(project)));
+    pairs
+        .filter_map(|(seen, got)| Some((*seen)?.distance(got.unwrap_or(DVec2::splat(1e9)))))
+        .fold(0.0, f64::max)
+}
+
+/// Each candidate joint's depth flipped and the tasks solved again: the one that brings the
+/// keypoints nearest their pixels, if any does better than `worst` (px).
+fn best_flip(
+    skeleton: &Skeleton,
+    document: &Document,
+    posture: &Posture,
+    camera: &OrbitCamera,
+    report: &SolveReport,
+    worst: f64,
+    off: &dyn Fn(&Posture) -> f64,
+) -> Result<Option<(String, Posture, SolveReport, f64)>, LiftError> {
+    let mut best: Option<(String, Posture, SolveReport, f64)> = None;
+    for joint in FLIP_CANDIDATES {
+        if skeleton.joint_index(joint).is_none() {
+            continue;
+        }
+        let flipped = crate::flip_depth(skeleton, posture, camera, joint)?;
+        let (solved, solved_report) = solve(skeleton, document, &flipped)?;
+        let solved_worst = off(&solved);
+        // Kept when it halves the worst keypoint's distance and leaves the feet where they
+        // stood (the floor's level within 5 mm of what it was).
+        let floor_kept = floor_residual(&solved_report) <= floor_residual(report) + 0.005;
+        if floor_kept && solved_worst < 0.5 * best.as_ref().map_or(worst, |b| b.3) {
+            let done = solved_worst <= ON_PIXEL_PX;
+            best = Some((joint.to_owned(), solved, solved_report, solved_worst));
+            if done {
+                break;
+            }
+        }
+    }
+    Ok(best)
+}
+
+/// Solves `document`'s tasks on `skeleton` from `start` (a lift's, or one flipped by
+/// [`crate::flip_depth`]).
+pub fn solve(
+    skeleton: &Skeleton,
+    document: &Document,
+    start: &Posture,
+) -> Result<(Posture, SolveReport), LiftError> {
+    let with_start = Document {
+        posture: PostureValues::from_posture(skeleton, start),
+        ..document.clone()
+    };
+    let problem = Problem::from_document(&with_start, skeleton.clone())
+        .map_err(|e| LiftError::Problem(e.to_string()))?;
+    problem
+        .solve()
+        .map_err(|e| LiftError::Problem(e.to_string()))
+}
+
+/// The document's saved view of `camera` (its field of view is the default one's).
+pub fn camera_spec(camera: &OrbitCamera) -> CameraSpec {
+    let t = camera.target_world;
+    CameraSpec {
+        target: [f64::from(t.x), f64::from(t.y), f64::from(t.z)],
+        yaw: f64::from(camera.yaw),
+        pitch: f64::from(camera.pitch),
+        distance: f64::from(camera.distance_m),
+        orthographic: camera.orthographic,
+    }
+}
+
+/// A camera and the image it sees.
+#[derive(Debug, Clone, Copy)]
+struct View {
+    camera: OrbitCamera,
+    size_px: [u32; 2],
+}
+
+impl View {
+    fn size(&self) -> Vec2 {
+        Vec2::new(self.size_px[0] as f32, self.size_px[1] as f32)
+    }
+
+    /// The ray through `pixel`: origin and unit direction.
+    fn ray(&self, pixel: DVec2) -> (DVec3, DVec3) {
+        let (origin, direction) = self.camera.ray_through(pixel.as_vec2(), self.size());
+        (origin.as_dvec3(), direction.as_dvec3())
+    }
+
+    /// The point seen at `pixel` at `depth` metres from the eye along the view axis.
+    fn at_depth(&self, pixel: DVec2, depth: f64) -> DVec3 {
+        let eye = self.camera.eye_world().as_dvec3();
+        let forward = (self.camera.target_world.as_dvec3() - eye).normalize_or(DVec3::NEG_Z);
+        let (origin, direction) = self.ray(pixel);
+        let along = direction.dot(forward).max(1e-6);
+        origin + direction * ((depth - (origin - eye).dot(forward)) / along)
+    }
+
+    /// Pixels per metre at `depth` from the eye (for orthographic projection, at any depth).
+    fn focal_px(&self) -> f64 {
+        f64::from(self.size_px[1]) * 0.5 / f64::from(self.camera.vertical_fov * 0.5).tan()
+    }
+}
+
+/// The body's scale in the image: pixels per metre at its depth, the largest ratio of a
+/// visible bone's length in the image to its rest length (a bone seen side-on is not
+/// shortened; any other is), and the keypoints' centroid in the image.
+struct Scale {
+    px_per_m: f64,
+    centroid_px: DVec2,
+}
+
+impl Scale {
+    fn new(person: &OpenPosePerson, rest: &PoseKeypoints) -> Result<Scale, LiftError> {
+        let visible: Vec<DVec2> = person.body.iter().flatten().copied().collect();
+        let px_per_m = SCALE_BONES
+            .iter()
+            .filter_map(|&(a, b)| {
+                let image = (person.body[a]? - person.body[b]?).length();
+                let length = (rest.body[a]? - rest.body[b]?).length();
+                (length > 1e-3).then_some(image / length)
+            })
+            .fold(0.0, f64::max);
+        if visible.len() < 2 || px_per_m <= 0.0 {
+            return Err(LiftError::TooFewKeypoints(visible.len()));
+        }
+        let centroid_px = visible.iter().sum::<DVec2>() / visible.len() as f64;
+        Ok(Scale {
+            px_per_m,
+            centroid_px,
+        })
+    }
+}
+
+/// A perspective camera of the default field of view, level with the editor's default pitch
+/// and looking at the body's front (yaw 0: the body turns instead), placed so that the rest
+/// body's bones match the keypoints in scale ([`Scale`]: the distance at which a metre spans
+/// that many pixels) and position: the keypoints' centroid seen over the world origin, and
+/// the lowest ankle's keypoint at the rest ankle's height (without an ankle, the centroid at
+/// the rest keypoints' centroid height).
+fn fit_camera(
+    person: &OpenPosePerson,
+    size_px: [u32; 2],
+    rest: &PoseKeypoints,
+    scale: &Scale,
+) -> OrbitCamera {
+    let provisional = OrbitCamera {
+        target_world: glam::Vec3::ZERO,
+        yaw: 0.0,
+        ..OrbitCamera::default()
+    };
+    let view = View {
+        camera: provisional,
+        size_px,
+    };
+    let depth = view.focal_px() / scale.px_per_m;
+    let distance = depth as f32;
+    let view = View {
+        camera: OrbitCamera {
+            distance_m: distance,
+            ..provisional
+        },
+        size_px,
+    };
+    let centre = view.at_depth(scale.centroid_px, depth);
+    let lowest_ankle = [R_ANKLE, L_ANKLE]
+        .into_iter()
+        .filter_map(|k| Some((k, person.body[k]?)))
+        .max_by(|a, b| a.1.y.total_cmp(&b.1.y));
+    let lift_y = match lowest_ankle {
+        Some((k, pixel)) => {
+            let height = rest.body[k].map_or(0.08, |p| p.y);
+            height - view.at_depth(pixel, depth).y
+        }
+        None => {
+            let visible: Vec<DVec3> = person
+                .body
+                .iter()
+                .zip(rest.body)
+                .filter_map(|(seen, at)| seen.and(at))
+                .collect();
+            let height = visible.iter().map(|p| p.y).sum::<f64>() / visible.len().max(1) as f64;
+            height - centre.y
+        }
+    };
+    let shift = DVec3::new(-centre.x, lift_y, -centre.z);
+    OrbitCamera {
+        target_world: shift.as_vec3(),
+        distance_m: distance,
+        ..provisional
+    }
+}
+
+/// The joint name of an effector.
+fn joint_name(skeleton: &Skeleton, effector: &Effector) -> Option<String> {
+    Some(skeleton.joints().get(effector.joint)?.name.clone())
+}
+
+/// The level-1 tasks: every visible keypoint's body point on the camera ray through its
+/// pixel. The neck is the shoulders' midpoint, not a point of one segment: with both shoulders
+/// seen it adds no task (their rays place it); with one shoulder missing, that shoulder is
+/// taken at the neck's mirror of the other's pixel (exact in orthographic projection, within
+/// about a pixel at the usual distances). Returns the tasks and how many keypoints they hold.
+fn image_plane_tasks(
+    skeleton: &Skeleton,
+    finder: &KeypointFinder,
+    person: &OpenPosePerson,
+    view: &View,
+) -> (Vec<TaskSpec>, usize) {
+    let sources = finder.sources(skeleton);
+    let mut body = person.body;
+    if let Some(neck) = body[NECK] {
+        match (body[R_SHOULDER], body[L_SHOULDER]) {
+            (Some(r), None) => body[L_SHOULDER] = Some(neck * 2.0 - r),
+            (None, Some(l)) => body[R_SHOULDER] = Some(neck * 2.0 - l),
+            _ => {}
+        }
+    }
+    let mut tasks = Vec::new();
+    let mut used = 0;
+    let mut on_ray = |effector: &Effector, pixel: DVec2| {
+        let Some(joint) = joint_name(skeleton, effector) else {
+            return false;
+        };
+        let (origin, direction) = view.ray(pixel);
+        let mut task = TaskSpec::new(TaskKindSpec::Line {
+            joint,
+            point: effector.point.to_array(),
+            origin: origin.to_array(),
+            direction: direction.to_array(),
+        });
+        task.level = IMAGE_LEVEL;
+        tasks.push(task);
+        true
+    };
+    for (k, (pixel, source)) in body.iter().zip(sources.body).enumerate() {
+        if let (Some(pixel), Some(KeypointSource::On(effector))) = (pixel, source)
+            && on_ray(&effector, *pixel)
+            && person.body[k].is_some()
+        {
+            used += 1;
+        }
+    }
+    used += usize::from(person.body[NECK].is_some());
+    for (hand, effectors) in [
+        (&person.left_hand, sources.left_hand),
+        (&person.right_hand, sources.right_hand),
+    ] {
+        for (pixel, effector) in hand.iter().zip(effectors).take(HAND_KEYPOINTS) {
+            if let (Some(pixel), Some(effector)) = (pixel, effector)
+                && on_ray(&effector, *pixel)
+            {
+                used += 1;
+            }
+        }
+    }
+    (tasks, used)
+}
+
+/// The ankles (COCO indices) taken to stand on the floor: those seen within
+/// [`STANDING_SLACK_M`] of the lowest ankle in the image.
+fn standing_ankles(person: &OpenPosePerson, scale: &Scale) -> Vec<usize> {
+    let ankles: Vec<(usize, f64)> = [R_ANKLE, L_ANKLE]
+        .into_iter()
+        .filter_map(|k| Some((k, person.body[k]?.y)))
+        .collect();
+    let lowest = ankles.iter().map(|a| a.1).fold(f64::NEG_INFINITY, f64::max);
+    ankles
+        .into_iter()
+        .filter(|&(_, y)| y >= lowest - STANDING_SLACK_M * scale.px_per_m)
+        .map(|(k, _)| k)
+        .collect()
+}
+
+const ANKLE_JOINTS: [(usize, &str); 2] = [(R_ANKLE, "r_talocrural"), (L_ANKLE, "l_talocrural")];
+
+fn standing_feet(person: &OpenPosePerson, scale: &Scale) -> Vec<String> {
+    let standing = standing_ankles(person, scale);
+    ANKLE_JOINTS
+        .iter()
+        .filter(|(k, _)| standing.contains(k))
+        .map(|(_, name)| (*name).to_owned())
+        .collect()
+}
+
+/// Level 2: each ankle at its rest height over the floor when it stands, else on or above
+/// that height; level 3: balance over the standing feet.
+fn floor_tasks(skeleton: &Skeleton, rest: &Frames, standing: &[String]) -> Vec<TaskSpec> {
+    let mut tasks = Vec::new();
+    for (_, name) in ANKLE_JOINTS {
+        let Some(j) = skeleton.joint_index(name) else {
+            continue;
+        };
+        let height = rest.joint_position.get(j).map_or(0.0, |p| p.y);
+        let mut task = TaskSpec::new(TaskKindSpec::Plane {
+            joint: name.to_owned(),
+            point: [0.0; 3],
+            origin: [0.0, height, 0.0],
+            normal: [0.0, 1.0, 0.0],
+            above: !standing.iter().any(|s| s == name),
+        });
+        task.level = FLOOR_LEVEL;
+        tasks.push(task);
+    }
+    if !standing.is_empty() {
+        let mut balance = TaskSpec::balance();
+        balance.kind = TaskKindSpec::Balance {
+            support: Some(standing.to_vec()),
+            margin: stance_document::DEFAULT_BALANCE_MARGIN,
+        };
+        balance.level = BALANCE_LEVEL;
+        tasks.push(balance);
+    }
+    tasks
+}
+
+/// The rest body turned about the vertical to face as the keypoints say (its left and right
+/// shoulders or hips apart in the image: how much it faces the camera; the nose before the
+/// ears or neck: to which side it turns) and moved so that its keypoints' centroid lies on the
+/// centroid's ray at the depth of the body's scale.
+fn start_posture(
+    skeleton: &Skeleton,
+    person: &OpenPosePerson,
+    view: &View,
+    rest: &PoseKeypoints,
+    scale: &Scale,
+) -> Posture {
+    let body = &person.body;
+    let across = |r: usize, l: usize| {
+        let image = body[l]?.x - body[r]?.x;
+        let width = (rest.body[l]? - rest.body[r]?).length();
+        Some(image / (width * scale.px_per_m).max(1e-9))
+    };
+    let facing = across(R_SHOULDER, L_SHOULDER)
+        .or_else(|| across(R_HIP, L_HIP))
+        .unwrap_or(1.0)
+        .clamp(-1.0, 1.0);
+    let head = match (body[R_EAR], body[L_EAR]) {
+        (Some(r), Some(l)) => Some((r + l) * 0.5),
+        (Some(e), None) | (None, Some(e)) => Some(e),
+        (None, None) => body[NECK],
+    };
+    let side = match (body[NOSE], head) {
+        (Some(nose), Some(head)) => ((nose.x - head.x) / (0.09 * scale.px_per_m)).clamp(-1.0, 1.0),
+        _ => 0.0,
+    };
+    // The image's x axis is the camera's right; turned by `camera.yaw` from the world's +X.
+    let turn = f64::from(view.camera.yaw) + side.atan2(facing);
+    let rotation = DQuat::from_rotation_y(turn);
+    let root = rest_root(skeleton);
+    let visible: Vec<DVec3> = body
+        .iter()
+        .zip(rest.body)
+        .filter_map(|(seen, at)| seen.and(at))
+        .collect();
+    let rest_centroid = visible.iter().sum::<DVec3>() / visible.len().max(1) as f64;
+    let depth = if view.camera.orthographic {
+        f64::from(view.camera.distance_m)
+    } else {
+        view.focal_px() / scale.px_per_m
+    };
+    let centre = view.at_depth(scale.centroid_px, depth);
+    let shift = centre - root - rotation * (rest_centroid - root);
+    let mut values = PostureValues::new();
+    let name = skeleton
+        .joints()
+        .first()
+        .map_or("humanoid_root", |j| j.name.as_str());
+    let r = rotation.to_scaled_axis();
+    for (dof, v) in [
+        (Dof::Tx, shift.x),
+        (Dof::Ty, shift.y),
+        (Dof::Tz, shift.z),
+        (Dof::Rx, r.x),
+        (Dof::Ry, r.y),
+        (Dof::Rz, r.z),
+    ] {
+        values.set(name, dof, v);
+    }
+    values
+        .to_posture_at(skeleton, "posture")
+        .unwrap_or_else(|_| Posture::rest(skeleton))
+}
+
+/// The root joint's rest position.
+fn rest_root(skeleton: &Skeleton) -> DVec3 {
+    Frames::new(skeleton, &Posture::rest(skeleton))
+        .joint_position
+        .first()
+        .copied()
+        .unwrap_or_default()
+}

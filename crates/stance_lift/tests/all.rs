@@ -1,0 +1,5 @@
+//! stance_lift's integration tests as one binary.
+
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+mod round_trip;

@@ -1,0 +1,324 @@
+//! Postures of the default body seen as keypoints through a known camera (the renderer's own
+//! projection and keypoint code: `stance_render::OpenPosePerson::seen`, the JSON
+//! `OpenPose::to_json_seen_by` writes), lifted, and seen again: the oracle is the keypoints of
+//! the drawn posture, compared pixel by pixel with those of the lifted one, and the drawn
+//! posture's ankles.
+
+use glam::{DVec2, DVec3, Vec3};
+use stance_document::Document;
+use stance_hanim::keypoints::{KeypointFinder, PoseKeypoints};
+use stance_hanim::{SkeletonOptions, default_skeleton};
+use stance_ik::{Frames, Posture, Skeleton, Solver, SolverSettings, Task};
+use stance_lift::{LiftError, ObservedPose, flip_depth, lift, solve};
+use stance_render::{HiddenKeypoints, KeypointUnits, OpenPose, OpenPosePerson, OrbitCamera};
+
+const SIZE: [u32; 2] = [768, 768];
+
+fn body() -> Skeleton {
+    default_skeleton(&SkeletonOptions::default())
+        .unwrap()
+        .skeleton
+}
+
+/// A camera framing the standing body from `yaw`, a little above.
+fn camera(yaw: f32, pitch: f32, distance: f32) -> OrbitCamera {
+    OrbitCamera {
+        target_world: Vec3::new(0.0, 0.9, 0.0),
+        yaw,
+        pitch,
+        distance_m: distance,
+        ..OrbitCamera::default()
+    }
+}
+
+/// A posture drawn from the default body: the feet pinned where `feet` put them (y at the
+/// rest ankle height: on the floor), the wrists pulled to `hands` (world), the rest below.
+fn drawn(s: &Skeleton, feet: [DVec3; 2], hands: [DVec3; 2]) -> Posture {
+    let at = |name: &str| s.joint_index(name).unwrap();
+    let mut tasks = vec![
+        Task::position(at("l_talocrural"), DVec3::ZERO, feet[0]),
+        Task::position(at("r_talocrural"), DVec3::ZERO, feet[1]),
+        Task::position(at("l_radiocarpal"), DVec3::ZERO, hands[0]).at_level(2),
+        Task::position(at("r_radiocarpal"), DVec3::ZERO, hands[1]).at_level(2),
+    ];
+    tasks.push(Task::rest_posture(s).at_level(3).with_weight(0.05));
+    let mut posture = Posture::rest(s);
+    let mut solver = Solver::new(SolverSettings {
+        max_iterations: 300,
+        ..SolverSettings::default()
+    })
+    .unwrap();
+    solver.solve(s, &tasks, &mut posture).unwrap();
+    posture
+}
+
+fn keypoints(s: &Skeleton, posture: &Posture) -> PoseKeypoints {
+    KeypointFinder::new(s).find(s, &Frames::new(s, posture))
+}
+
+fn seen(s: &Skeleton, posture: &Posture, camera: &OrbitCamera) -> OpenPosePerson {
+    OpenPosePerson::seen(
+        &keypoints(s, posture),
+        camera,
+        SIZE,
+        &[],
+        HiddenKeypoints::Keep,
+    )
+}
+
+/// The largest pixel distance between the keypoints seen in both, and how many were compared.
+fn worst_px(a: &OpenPosePerson, b: &OpenPosePerson) -> (f64, usize) {
+    let pairs = a
+        .body
+        .iter()
+        .zip(&b.body)
+        .chain(a.left_hand.iter().zip(&b.left_hand))
+        .chain(a.right_hand.iter().zip(&b.right_hand));
+    let mut worst = 0.0f64;
+    let mut count = 0;
+    for (p, q) in pairs {
+        match (p, q) {
+            (Some(p), Some(q)) => {
+                worst = worst.max((*p - *q).length());
+                count += 1;
+            }
+            (Some(_), None) => worst = f64::INFINITY,
+            _ => {}
+        }
+    }
+    (worst, count)
+}
+
+/// The postures of the round trip: standing, reaching toward the camera with both hands, one
+/// arm up and one across the body, a step with a hand forward.
+fn postures(s: &Skeleton) -> Vec<(&'static str, Posture)> {
+    let rest = Frames::new(s, &Posture::rest(s));
+    let at = |name: &str| rest.joint_position[s.joint_index(name).unwrap()];
+    let (lf, rf) = (at("l_talocrural"), at("r_talocrural"));
+    vec![
+        ("standing", Posture::rest(s)),
+        (
+            "hands toward the camera",
+            drawn(
+                s,
+                [lf, rf],
+                [DVec3::new(0.15, 1.25, 0.5), DVec3::new(-0.2, 1.1, 0.45)],
+            ),
+        ),
+        (
+            "arm up, arm across",
+            drawn(
+                s,
+                [lf, rf],
+                [DVec3::new(0.3, 1.85, 0.1), DVec3::new(0.1, 1.1, 0.3)],
+            ),
+        ),
+        (
+            "a step, a hand forward",
+            drawn(
+                s,
+                [
+                    lf + DVec3::new(0.0, 0.0, 0.3),
+                    rf - DVec3::new(0.0, 0.0, 0.15),
+                ],
+                [DVec3::new(0.25, 1.0, 0.55), DVec3::new(-0.3, 0.85, -0.1)],
+            ),
+        ),
+    ]
+}
+
+/// Catches a lift whose keypoints do not land back on their pixels (a task on the wrong
+/// point, a ray through the wrong pixel, a wrong keypoint order), that leaves the floor, or
+/// whose document does not carry the camera that reproduces them.
+#[test]
+fn lifted_postures_give_their_keypoints_back_within_two_pixels() {
+    let s = body();
+    let rest = Frames::new(&s, &Posture::rest(&s));
+    for (yaw, pitch) in [(0.35f32, 0.12f32), (-0.6, 0.05), (1.2, 0.2)] {
+        let camera = camera(yaw, pitch, 3.4);
+        for (name, posture) in postures(&s) {
+            let observed = seen(&s, &posture, &camera);
+            // Through the JSON the renderer writes, with its camera.
+            let json = OpenPose {
+                size_px: SIZE,
+                people: vec![observed],
+            }
+            .to_json_seen_by(KeypointUnits::Pixels, &camera);
+            let read = ObservedPose::from_json(&json, None).unwrap();
+            assert_eq!(read.camera, Some(camera));
+            let started = std::time::Instant::now();
+            let lifted = lift(&s, read.first_person().unwrap(), SIZE, read.camera).unwrap();
+            let took = started.elapsed();
+            let again = seen(&s, &lifted.posture, &camera);
+            let (worst, count) = worst_px(&observed, &again);
+            println!(
+                "yaw {yaw:5.2} {name:<24}: {count} keypoints back within {worst:.3} px ({} iterations, {:.0} ms, debug build)",
+                lifted.report.iterations,
+                took.as_secs_f64() * 1e3
+            );
+            assert!(count >= 50, "{count} keypoints compared");
+            assert!(worst <= 2.0, "{name}, yaw {yaw}: a keypoint {worst} px off");
+            // The document's saved view is the camera: its keypoints are the same.
+            let document = Document::from_json(&lifted.document.to_json(false)).unwrap();
+            let spec = document.camera.unwrap();
+            let saved = OrbitCamera::saved(spec.target, spec.yaw, spec.pitch, spec.distance, false);
+            let from_document = document.to_posture(&s).unwrap();
+            let (worst, _) = worst_px(&observed, &seen(&s, &from_document, &saved));
+            assert!(worst <= 2.0, "{name}: the document's view {worst} px off");
+            // Bone lengths (the oracle: joint centres' distances in the drawn posture) and the
+            // feet on the floor where they were.
+            let (a, b) = (Frames::new(&s, &posture), Frames::new(&s, &lifted.posture));
+            for j in 1..s.joint_count() {
+                let parent = s.joints()[j].parent.unwrap();
+                let bone = |f: &Frames| (f.joint_position[j] - f.joint_position[parent]).length();
+                assert!((bone(&a) - bone(&b)).abs() < 1e-9);
+            }
+            for ankle in ["l_talocrural", "r_talocrural"] {
+                let j = s.joint_index(ankle).unwrap();
+                let (drawn, got) = (a.joint_position[j].y, b.joint_position[j].y);
+                assert!(
+                    (drawn - rest.joint_position[j].y).abs() < 1e-3,
+                    "the drawn foot stands"
+                );
+                assert!(
+                    (got - drawn).abs() < 0.01,
+                    "{name}: {ankle} at {got} m, drawn at {drawn} m"
+                );
+            }
+        }
+    }
+}
+
+/// Catches a fitted camera that does not match the keypoints' scale and place (the lift then
+/// leaves keypoints far off their pixels, or the feet off the floor). The bound is looser than
+/// with the true camera: the fitted one has the default pitch and another distance, through
+/// which the rigid body cannot project exactly as it did; stated here as at most 15 px (2 %
+/// of the image) for any keypoint and at most 4 px on average.
+#[test]
+fn with_a_fitted_camera_the_keypoints_come_back_near_their_pixels() {
+    let s = body();
+    let camera = camera(0.35, 0.12, 3.4);
+    for (name, posture) in postures(&s) {
+        let observed = seen(&s, &posture, &camera);
+        let lifted = lift(&s, &observed, SIZE, None).unwrap();
+        assert!(lifted.camera_fitted);
+        let again = seen(&s, &lifted.posture, &lifted.camera);
+        let (worst, count) = worst_px(&observed, &again);
+        let mean = mean_px(&observed, &again);
+        println!(
+            "fitted camera, {name:<24}: {count} keypoints, worst {worst:.2} px, mean {mean:.2} px; camera {:.2} m away (true 3.4)",
+            lifted.camera.distance_m
+        );
+        assert!(
+            worst <= 15.0 && mean <= 4.0,
+            "{name}: worst {worst}, mean {mean}"
+        );
+        assert_eq!(lifted.standing.len(), 2, "{name}: {:?}", lifted.standing);
+    }
+}
+
+fn mean_px(a: &OpenPosePerson, b: &OpenPosePerson) -> f64 {
+    let d: Vec<f64> = a
+        .body
+        .iter()
+        .zip(&b.body)
+        .chain(a.left_hand.iter().zip(&b.left_hand))
+        .chain(a.right_hand.iter().zip(&b.right_hand))
+        .filter_map(|(p, q)| Some((p.as_ref()? - q.as_ref()?).length()))
+        .collect();
+    d.iter().sum::<f64>() / d.len().max(1) as f64
+}
+
+/// Catches a flip that does not change the limb's depth or moves its keypoint on the image:
+/// the right elbow of the "hands toward the camera" posture flipped goes to the other side of
+/// the shoulder in depth, its keypoint and the shoulder's staying within 3 px.
+#[test]
+fn a_flipped_elbow_goes_to_the_other_side_in_depth_and_projects_the_same() {
+    let s = body();
+    let camera = camera(0.0, 0.0, 3.4);
+    let (_, posture) = postures(&s).swap_remove(1);
+    let observed = seen(&s, &posture, &camera);
+    let lifted = lift(&s, &observed, SIZE, Some(camera)).unwrap();
+    let depth = |p: &Posture, joint: &str| {
+        let f = Frames::new(&s, p);
+        let eye = camera.eye_world().as_dvec3();
+        (f.joint_position[s.joint_index(joint).unwrap()] - eye).length()
+    };
+    let before = depth(&lifted.posture, "r_elbow") - depth(&lifted.posture, "r_shoulder");
+    let flipped = flip_depth(&s, &lifted.posture, &camera, "r_elbow").unwrap();
+    let (resolved, _) = solve(&s, &lifted.document, &flipped).unwrap();
+    let after = depth(&resolved, "r_elbow") - depth(&resolved, "r_shoulder");
+    println!("flip: the elbow {before:.3} m from the shoulder in depth, then {after:.3} m");
+    assert!(
+        before * after < 0.0 && after.abs() > 0.05,
+        "{before} -> {after}"
+    );
+    // The shoulder and elbow stay near their pixels (measured 2.3 px at most, bounded at 3);
+    // the hand below the flipped elbow may stop short of its rays (a local minimum of the
+    // solve from the flipped start): measured 4.7 px, bounded here at 8 px. A known limit
+    // (the crate's docs), not the 2 px of a lift.
+    let again = seen(&s, &resolved, &camera);
+    for k in [2, 3] {
+        let d = (observed.body[k].unwrap() - again.body[k].unwrap()).length();
+        assert!(d <= 3.0, "keypoint {k} {d} px off after the flip");
+    }
+    let (worst, _) = worst_px(&observed, &again);
+    println!("flip: worst keypoint {worst:.2} px off after the solve");
+    assert!(worst <= 8.0, "after the flip a keypoint is {worst} px off");
+    assert_eq!(
+        flip_depth(&s, &lifted.posture, &camera, "l_wirst"),
+        Err(LiftError::UnknownJoint("l_wirst".into()))
+    );
+}
+
+/// Catches a reader that takes a document, a problem file or an empty person for keypoints,
+/// or a pixel file for fractions.
+#[test]
+fn what_is_not_openpose_keypoints_is_named() {
+    let not = |text: &str| match ObservedPose::from_json(text, None) {
+        Err(LiftError::NotOpenPose(what)) => what,
+        other => panic!("{other:?}"),
+    };
+    assert!(not(r#"{"version": 1, "posture": {}}"#).contains("a Stance document"));
+    assert!(not(r#"{"skeleton": {}, "tasks": []}"#).contains("problem file"));
+    assert!(not("[1, 2]").contains("an array"));
+    assert!(not("{oops").starts_with("not JSON"));
+    assert!(
+        not(
+            r#"{"people": [{"pose_keypoints_2d": [1, 2]}], "canvas_width": 9, "canvas_height": 9}"#
+        )
+        .contains("has 2 numbers, expected 54")
+    );
+    let body25 = format!(
+        r#"{{"people": [{{"pose_keypoints_2d": [{}]}}], "canvas_width": 9, "canvas_height": 9}}"#,
+        vec!["1"; 75].join(",")
+    );
+    assert!(not(&body25).contains("BODY_25"));
+    assert_eq!(
+        ObservedPose::from_json(r#"{"people": []}"#, None),
+        Err(LiftError::NoImageSize)
+    );
+    let empty = ObservedPose::from_json(
+        r#"{"people": [], "canvas_width": 8, "canvas_height": 8}"#,
+        None,
+    )
+    .unwrap();
+    assert_eq!(empty.first_person(), Err(LiftError::NoPeople));
+    let s = body();
+    assert!(matches!(
+        lift(&s, &OpenPosePerson::EMPTY, SIZE, None),
+        Err(LiftError::NoKeypoints)
+    ));
+    // Fractions of the canvas are read as such.
+    let mut person = OpenPosePerson::EMPTY;
+    person.body[1] = Some(DVec2::new(0.5, 0.25));
+    person.body[2] = Some(DVec2::new(0.4, 0.25));
+    let json = OpenPose {
+        size_px: [200, 100],
+        people: vec![person],
+    }
+    .to_json(KeypointUnits::Pixels);
+    let read = ObservedPose::from_json(&json, None).unwrap();
+    assert_eq!(read.units, KeypointUnits::Normalized);
+    assert_eq!(read.people[0].body[1], Some(DVec2::new(100.0, 25.0)));
+}
