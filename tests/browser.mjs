@@ -250,10 +250,8 @@ export function isFigureColour(rgb) {
 }
 const FIGURE_CACHE = new Map();
 
-// The floor's colours (floor.wgsl): its base, its lines (minor ones at 0.35), the red and
-// blue axes, each faded into the background with distance, in sRGB levels.
-// The floor's colours (linear), and the light a contact shadow leaves on them: from 1 down to
-// 0.15 (the floor shader darkens at most by 0.85 under a thing resting on it).
+// The floor's colours (linear), and the light a contact shadow leaves on its base and lines:
+// from 1 down to 0.15 (the floor shader darkens at most by 0.85 under a thing resting on it).
 const FLOOR_LINEAR = {
   base: [0.055, 0.06, 0.07],
   line: [0.2, 0.21, 0.23],
@@ -263,14 +261,19 @@ const FLOOR_LINEAR = {
 const SHADOW_LIGHTS = Array.from({ length: 18 }, (_, i) => 1 - i * 0.05);
 const BACKGROUND_LEVELS = [0.13, 0.145, 0.17].map((c) => c * 255);
 const mix = (a, b, t) => a.map((v, i) => v + (b[i] - v) * t);
-const FLOOR_SEGMENTS = SHADOW_LIGHTS.flatMap((light) =>
-  [["base", "line"], ["base", "red"], ["base", "blue"]].map(([a, b]) =>
-    [FLOOR_LINEAR[a], FLOOR_LINEAR[b]].map((linear) => linear.map((c) => srgbByte(c * light)))));
+// The shadow darkens the base and its lines, not the axes (blended with the base at their
+// edges).
+const shaded = (linear, light) => linear.map((c) => srgbByte(c * light));
+const FLOOR_SEGMENTS = SHADOW_LIGHTS.flatMap((light) => [
+  [shaded(FLOOR_LINEAR.base, light), shaded(FLOOR_LINEAR.line, light)],
+  [shaded(FLOOR_LINEAR.base, light), shaded(FLOOR_LINEAR.red, 1)],
+  [shaded(FLOOR_LINEAR.base, light), shaded(FLOOR_LINEAR.blue, 1)],
+]);
 
 /**
  * A pixel of the viewport's backdrop: the background, or the floor (its colours blended as
- * the edges of its lines and axes blend them with its base, darkened by a contact shadow,
- * faded into the background), within 4 sRGB levels.
+ * the edges of its lines and axes blend them with its base, the base and lines darkened by a
+ * contact shadow, faded into the background), within 4 sRGB levels.
  */
 export function isBackdrop(rgb) {
   const key = (rgb[0] << 16) | (rgb[1] << 8) | rgb[2];
@@ -388,9 +391,13 @@ export function pointsAwayFromFigure(state, margin = 70) {
   return away.filter(([x, y]) => inside(rect, x - 5, y - 5) && inside(rect, x + 5, y + 5));
 }
 
-/** Asserts that none of the pixels around the points pass `test` (the figure's colours). */
-export function assertNotDrawnAt(image, points, { test = isFigureColour, radius = 4, label = "" } = {}) {
-  const drawn = points.filter((point) => shareNear(image, point, test, radius) > 0);
+/** Asserts that no more than a few pixels around each point pass `test` (the figure's colours). */
+export function assertNotDrawnAt(image, points, {
+  test = isFigureColour, radius = 4, label = "", minShare = 0.1,
+} = {}) {
+  // A tenth of the square: a body part drawn there covers far more; a pixel or two where the
+  // floor's lines and an axis blend into a colour of the figure's do not count.
+  const drawn = points.filter((point) => shareNear(image, point, test, radius) >= minShare);
   assert.deepEqual(drawn.map((p) => p.map(Math.round)), [],
     `${label}figure pixels where only the backdrop should be (around each point, ${radius} px)`);
 }

@@ -55,6 +55,11 @@ pub struct BenchArgs {
     /// and lower-back loads without and with a comfort level, and its cost per iteration.
     #[arg(long, value_name = "N", num_args = 0..=1, default_missing_value = "40")]
     pub comfort: Option<usize>,
+    /// The collision task's cost per iteration on the LOA 2 body (feet pinned, self and floor
+    /// collision, two reaches) at postures holding 0, about 4 and about 10 constraints, with
+    /// and without it.
+    #[arg(long)]
+    pub collision: bool,
     /// Time retargeting this clip (.bvh, .glb) onto the H-Anim default body at LOA2 (50
     /// DOF): the plain rotation copy and the five-level problem with contacts, frames per
     /// second on one core.
@@ -98,6 +103,9 @@ pub fn run(args: BenchArgs) -> Result<()> {
     }
     if let Some(cases) = args.comfort {
         return crate::bench_comfort::run(cases, args.json);
+    }
+    if args.collision {
+        return crate::bench_collision::run(budget, args.json);
     }
     if let Some(path) = &args.clip {
         return bench_clip(path, budget, args.json);

@@ -4,6 +4,7 @@ use clap::{Parser, Subcommand};
 
 mod avatar;
 mod bench;
+mod bench_collision;
 mod bench_comfort;
 mod bench_suite;
 mod comfort;

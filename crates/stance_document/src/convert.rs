@@ -4,6 +4,7 @@ use std::sync::Arc;
 
 use glam::{DQuat, DVec3};
 use stance_hanim::HumanoidSkeleton;
+use stance_hanim::capsules::{BodyCollision, COLLISION_ROWS};
 use stance_hanim::comfort::{ComfortSettings, comfort_model};
 use stance_hanim::strength::{aligned_axes, built_axes};
 use stance_ik::{Axes, Effector, Limb, LimbGoal, Posture, Skeleton, Task, TaskKind};
@@ -112,8 +113,10 @@ impl PostureValues {
 
 impl TaskSpec {
     /// The problem-file form of a solver task on `skeleton` (joints by name); `None` for the
-    /// kinds a problem file cannot hold (comfort, posture attraction, collision: not yet) and
-    /// joints out of range.
+    /// kinds a problem file cannot hold (comfort, posture attraction, a collision task on
+    /// other capsules than the body's: `stance_hanim::capsules::BodyCollision`) and joints out
+    /// of range. A collision task's radii set by hand are the skeleton's in a problem file
+    /// (`skeleton.joints[].radius`, which [`crate::problem_json`] writes), not the task's.
     pub fn from_task(skeleton: &Skeleton, task: &Task) -> Option<Self> {
         let name = |j: usize| skeleton.joints().get(j).map(|joint| joint.name.clone());
         let kind = match &task.kind {
@@ -180,9 +183,16 @@ impl TaskSpec {
                 normal: normal.to_array(),
                 above: *above,
             },
-            TaskKind::Comfort { .. }
-            | TaskKind::PostureAttraction { .. }
-            | TaskKind::Collision(_) => return None,
+            TaskKind::Collision(c) => {
+                // The radii set by hand go with the skeleton (`problem_json` writes them).
+                let body = BodyCollision::of(skeleton, c).filter(|b| b.rows == COLLISION_ROWS)?;
+                TaskKindSpec::Collision {
+                    margin: body.margin,
+                    self_collision: body.self_collision,
+                    floor: body.floor,
+                }
+            }
+            TaskKind::Comfort { .. } | TaskKind::PostureAttraction { .. } => return None,
         };
         Some(Self {
             level: task.level,
@@ -462,6 +472,19 @@ impl TaskSpec {
                     model: Arc::new(comfort_model(skeleton, &axes, &settings)),
                 }
             }
+            TaskKindSpec::Collision {
+                margin,
+                self_collision,
+                floor,
+            } => TaskKind::Collision(
+                BodyCollision {
+                    margin: *margin,
+                    self_collision: *self_collision,
+                    floor: *floor,
+                    ..BodyCollision::default()
+                }
+                .collision(skeleton),
+            ),
             TaskKindSpec::Limb { target, .. } => {
                 let j = self
                     .limb_joints(skeleton)?

@@ -285,6 +285,17 @@ pub enum TaskKindSpec {
         /// Weight of the smooth stand-in for RULA.
         rula: f64,
     },
+    /// `"collision"`: the body's capsules (`stance_hanim::capsules`, radii from its
+    /// proportions) kept `margin` apart from each other and above the floor; an inequality
+    /// (no constraint while the body is clear).
+    Collision {
+        /// Distance kept between surfaces (m), >= 0.
+        margin: f64,
+        /// The capsules kept apart from each other (`"self"`).
+        self_collision: bool,
+        /// The capsules kept above the floor.
+        floor: bool,
+    },
     /// `"limb"`: the analytic arm/leg task (wrist/ankle goal plus swivel angle).
     Limb {
         /// The limb by name (`"l_arm"`...); either this or `joints`.
@@ -339,6 +350,7 @@ impl TaskKindSpec {
             TaskKindSpec::Com { .. } => "com",
             TaskKindSpec::Posture { .. } => "posture",
             TaskKindSpec::Comfort { .. } => "comfort",
+            TaskKindSpec::Collision { .. } => "collision",
             TaskKindSpec::Limb { .. } => "limb",
             TaskKindSpec::Line { .. } => "line",
             TaskKindSpec::Plane { .. } => "plane",
@@ -426,6 +438,14 @@ impl TaskSpec {
                 nonzero(axis, "axis", "axis")?;
                 finite_all(target, "target")?;
                 nonzero(target, "target", "direction")?;
+            }
+            TaskKindSpec::Collision { margin, .. } => {
+                if !margin.is_finite() || *margin < 0.0 {
+                    return Err(DocumentError::field(
+                        "margin",
+                        "must be a finite number >= 0",
+                    ));
+                }
             }
             TaskKindSpec::Balance { support, margin } => {
                 if !margin.is_finite() || *margin < 0.0 {

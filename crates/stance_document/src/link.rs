@@ -38,13 +38,14 @@ use crate::scene::{Prop, PropShape, Scene};
 /// task kinds), 4 the joint stiffness, 5 what the posture values are relative to (a document
 /// made on an avatar, whose values are relative to the H-Anim standard pose), 6 the clip the
 /// keys were made over (its file name, size and content hash; never the file), 7 the
-/// point-on-a-line and point-on-a-plane tasks, 8 a scene of several characters and props
+/// point-on-a-line and point-on-a-plane tasks, 8 the collision task (its margin and whether it
+/// holds the body and the floor), 9 a scene of several characters and props
 /// ([`encode_scene`]). A document is written in the oldest format that holds it.
-pub const LINK_FORMAT: u8 = 8;
+pub const LINK_FORMAT: u8 = 9;
 /// The format of a scene's link ([`encode_scene`]): several characters (or one with a name or
 /// a placement) and the props, each character its name, placement and document payload in the
 /// oldest format that holds it.
-pub const SCENE_FORMAT: u8 = 8;
+pub const SCENE_FORMAT: u8 = 9;
 /// Quantisation step of a character's turn on the floor: 0.005 degrees in radians.
 const YAW_STEP_RAD: f64 = ROTATION_STEP_RAD;
 /// Longest link [`encode_for_sharing`] makes with the timeline in it, in characters: beyond,
@@ -127,7 +128,8 @@ fn engine() -> GeneralPurpose {
 
 /// The URL fragment (without `#`) that carries `document`. Values are quantised (see the module
 /// documentation); non-finite numbers, which a validated document never holds, are written as 0.
-/// Format 7 when a task is a point-on-a-line or point-on-a-plane task, else 6 when the document
+/// Format 8 when a task is a collision task, else 7 when a task is a point-on-a-line or
+/// point-on-a-plane task, else 6 when the document
 /// names a clip, else 5 when the document names an avatar and its values are relative to the standard pose
 /// (what the editor writes), else 4 when the document sets a joint stiffness, else 3 when a task is a comfort task,
 /// else 2 when the document has a timeline or a task interval, else 1 (the oldest format that
@@ -154,7 +156,13 @@ fn document_payload(document: &Document) -> (u8, Vec<u8>) {
             TaskKindSpec::Line { .. } | TaskKindSpec::Plane { .. }
         )
     });
-    let format = if on_line_or_plane {
+    let collision = document
+        .tasks
+        .iter()
+        .any(|t| matches!(t.kind, TaskKindSpec::Collision { .. }));
+    let format = if collision {
+        8
+    } else if on_line_or_plane {
         7
     } else if document.clip.is_some() {
         6

@@ -9,9 +9,10 @@ use std::collections::BTreeMap;
 use serde_json::{Map, Value, json};
 use stance_ik::{
     Damping, Dof, Frames, IkError, Iteration, JointDef, Limb, Posture, Skeleton, SolveReport,
-    Solver, SolverSettings, Task,
+    Solver, SolverSettings, Task, TaskKind,
 };
 
+use stance_hanim::capsules::BodyCollision;
 use stance_hanim::comfort::ComfortSettings;
 
 use crate::comfort::{comfort_json, parse_comfort_settings};
@@ -92,7 +93,11 @@ impl Problem {
                 PostureValues::from_json_value(v, "posture")?.to_posture_at(&skeleton, "posture")?
             }
         };
+        let radius = parse_radii(field(root, "skeleton", "")?, &skeleton)?;
         let mut problem = Self::build(skeleton, specs, start, settings, level_damping, hybrid)?;
+        if !radius.is_empty() {
+            problem.set_capsule_radii(&radius);
+        }
         if let Some(v) = root.get("comfort").filter(|v| !v.is_null()) {
             problem.comfort = parse_comfort_settings(v, "comfort")?;
         }
@@ -136,6 +141,19 @@ impl Problem {
             hybrid_limbs,
             comfort: ComfortSettings::default(),
         })
+    }
+
+    /// Gives the capsules every joint of `radius` carries that radius (m) in the collision
+    /// tasks (a problem file's `skeleton.joints[].radius`).
+    fn set_capsule_radii(&mut self, radius: &BTreeMap<usize, f64>) {
+        for task in &mut self.tasks {
+            if let TaskKind::Collision(c) = &task.kind
+                && let Some(mut body) = BodyCollision::of(&self.skeleton, c)
+            {
+                body.radius.clone_from(radius);
+                task.kind = TaskKind::Collision(body.collision(&self.skeleton));
+            }
+        }
     }
 
     /// The solver of this problem with `settings` (usually [`Problem::settings`]): its
@@ -307,6 +325,32 @@ pub fn parse_skeleton(v: &Value) -> Result<Skeleton, DocumentError> {
         defs.push(def);
     }
     Skeleton::new(defs).map_err(|e| DocumentError::field("skeleton", e.to_string()))
+}
+
+/// The capsule radii of a problem file's `skeleton.joints[].radius` (m, > 0), by joint index
+/// on `skeleton`; errors at `skeleton.joints[i] (`name`).radius`.
+fn parse_radii(v: &Value, skeleton: &Skeleton) -> Result<BTreeMap<usize, f64>, DocumentError> {
+    let mut radius = BTreeMap::new();
+    let joints = arr(
+        field(obj(v, "skeleton")?, "joints", "skeleton")?,
+        "skeleton.joints",
+    )?;
+    for (i, j) in joints.iter().enumerate() {
+        let o = obj(j, &format!("skeleton.joints[{i}]"))?;
+        let Some(r) = o.get("radius").filter(|r| !r.is_null()) else {
+            continue;
+        };
+        let name = string(field(o, "name", "")?, "name")?;
+        let here = format!("skeleton.joints[{i}] (`{name}`).radius");
+        let r = number(r, &here)?;
+        if r <= 0.0 {
+            return Err(DocumentError::field(here, "must be a number > 0 (m)"));
+        }
+        if let Some(index) = skeleton.joint_index(name) {
+            radius.insert(index, r);
+        }
+    }
+    Ok(radius)
 }
 
 fn dof(v: &Value, at: &str) -> Result<Dof, DocumentError> {
@@ -554,8 +598,24 @@ pub fn problem_json(
             })
         })
         .collect::<Result<Vec<_>, _>>()?;
+    let mut skeleton_value = skeleton_json(skeleton);
+    // A collision task's radii set by hand, on the joints that carry the capsules.
+    let radius = tasks.iter().find_map(|t| match &t.kind {
+        TaskKind::Collision(c) => BodyCollision::of(skeleton, c).map(|b| b.radius),
+        _ => None,
+    });
+    if let Some(joints) = skeleton_value
+        .get_mut("joints")
+        .and_then(Value::as_array_mut)
+    {
+        for (&j, &r) in radius.iter().flatten() {
+            if let Some(o) = joints.get_mut(j).and_then(Value::as_object_mut) {
+                o.insert("radius".into(), json!(r));
+            }
+        }
+    }
     Ok(json!({
-        "skeleton": skeleton_json(skeleton),
+        "skeleton": skeleton_value,
         "tasks": specs,
         "posture": PostureValues::from_posture(skeleton, start),
     }))

@@ -4,13 +4,14 @@
 use serde::ser::SerializeMap;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use serde_json::Value;
+use stance_hanim::capsules::COLLISION_MARGIN;
 use stance_ik::Axes;
 
 use crate::DocumentError;
 use crate::document::{
     DEFAULT_BALANCE_MARGIN, DEFAULT_COMFORT, LimbName, PostureValues, TaskKindSpec, TaskSpec,
 };
-use crate::json::{arr, field, number, numbers, obj, string, vec3};
+use crate::json::{arr, field, number, numbers, obj, optional_bool, string, vec3};
 use crate::motion::TaskInterval;
 
 impl TaskSpec {
@@ -173,6 +174,23 @@ impl TaskSpec {
                     rula: weight("rula", DEFAULT_COMFORT.2)?,
                 }
             }
+            "collision" => {
+                let margin = match opt("margin") {
+                    None => COLLISION_MARGIN,
+                    Some(m) => {
+                        let m = number(m, &here("margin"))?;
+                        if m < 0.0 {
+                            return Err(DocumentError::field(here("margin"), "must be >= 0"));
+                        }
+                        m
+                    }
+                };
+                TaskKindSpec::Collision {
+                    margin,
+                    self_collision: optional_bool(o, at, "self")?.unwrap_or(true),
+                    floor: optional_bool(o, at, "floor")?.unwrap_or(true),
+                }
+            }
             "limb" => {
                 let limb = match opt("limb") {
                     None => None,
@@ -276,7 +294,7 @@ impl TaskSpec {
                 return Err(DocumentError::field(
                     here("kind"),
                     format!(
-                        "unknown kind `{other}` (expected position, orientation, direction, gaze, com, balance, posture, comfort, limb, line or plane)"
+                        "unknown kind `{other}` (expected position, orientation, direction, gaze, com, balance, posture, comfort, collision, limb, line or plane)"
                     ),
                 ));
             }
@@ -404,6 +422,15 @@ impl Serialize for TaskSpec {
                 m.serialize_entry("effort", effort)?;
                 m.serialize_entry("range", range)?;
                 m.serialize_entry("rula", rula)?;
+            }
+            TaskKindSpec::Collision {
+                margin,
+                self_collision,
+                floor,
+            } => {
+                m.serialize_entry("margin", margin)?;
+                m.serialize_entry("self", self_collision)?;
+                m.serialize_entry("floor", floor)?;
             }
             TaskKindSpec::Limb {
                 limb,

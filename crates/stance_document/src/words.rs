@@ -136,7 +136,7 @@ impl TaskSpec {
                 axes: *axes,
                 target: reflect(*target),
             },
-            TaskKindSpec::Comfort { .. } => self.kind.clone(),
+            TaskKindSpec::Comfort { .. } | TaskKindSpec::Collision { .. } => self.kind.clone(),
             TaskKindSpec::Posture { joints, reference } => TaskKindSpec::Posture {
                 joints: joints.as_deref().map(mirror_names),
                 reference: reference.as_ref().map(PostureValues::mirrored),
@@ -223,6 +223,19 @@ impl TaskSpec {
             }
             TaskKindSpec::Posture { .. } => "rest posture".to_owned(),
             TaskKindSpec::Comfort { .. } => "comfort (effort, ranges, RULA)".to_owned(),
+            TaskKindSpec::Collision {
+                margin,
+                self_collision,
+                floor,
+            } => {
+                let what = match (self_collision, floor) {
+                    (true, true) => "body and floor",
+                    (true, false) => "body",
+                    (false, true) => "floor",
+                    (false, false) => "nothing",
+                };
+                format!("collision: {what}, {:.0} mm apart", margin * 1e3)
+            }
             TaskKindSpec::Limb { limb, joints, .. } => match (limb, joints) {
                 (Some(limb), _) => format!("{} reach", limb.name().replace('_', " ")),
                 (None, Some(joints)) => format!("{} limb", readable_name(&joints[2])),

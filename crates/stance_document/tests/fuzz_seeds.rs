@@ -50,7 +50,8 @@ const EVERYTHING: &str = r#"{
     {"level": 3, "kind": "limb", "joints": ["l_hip", "l_knee", "l_ankle"], "target": [0.1, 0.1, 0.1]},
     {"level": 4, "kind": "posture", "weight": 0.1, "joints": ["l_hip", "vl5"],
      "reference": {"l_hip": {"rx": -0.2}}},
-    {"level": 5, "kind": "comfort", "effort": 1, "range": 0.1, "rula": 0.5}
+    {"level": 5, "kind": "comfort", "effort": 1, "range": 0.1, "rula": 0.5},
+    {"level": 2, "kind": "collision", "margin": 0.015, "floor": false}
   ],
   "motion": {
     "frame_time": 0.0333333, "frame_count": 40,
@@ -66,8 +67,9 @@ const EVERYTHING: &str = r#"{
 /// A two-frame clip of one joint, embedded in the `clip` document seed.
 const TINY_BVH: &str = "HIERARCHY\nROOT Hips\n{\n\tOFFSET 0 0 0\n\tCHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n\tEnd Site\n\t{\n\t\tOFFSET 0 10 0\n\t}\n}\nMOTION\nFrames: 2\nFrame Time: 0.033333\n0 90 0 0 0 0\n1 90 0 0 5 0\n";
 
-/// `EVERYTHING` cut down to what link format `format` holds (6: with a clip; 4: no clip; 3: no stiffness; 2: no
-/// comfort task either; 1: no timeline nor interval either).
+/// `EVERYTHING` cut down to what link format `format` holds (8: with a collision task; 6: with
+/// a clip; 4: no clip; 3: no stiffness; 2: no comfort task either; 1: no timeline nor interval
+/// either).
 fn document(format: u8) -> Document {
     let mut d = Document::from_json(EVERYTHING).unwrap();
     // Made on an avatar: before format 5 relative to its own rest, from 5 to the standard
@@ -82,6 +84,10 @@ fn document(format: u8) -> Document {
     // From format 7 a point-on-a-line and a point-on-a-plane task.
     if format >= 7 {
         d.tasks.extend(on_line_and_plane());
+    }
+    if format < 8 {
+        d.tasks
+            .retain(|t| !matches!(t.kind, TaskKindSpec::Collision { .. }));
     }
     if format < 4 {
         d.stiffness = Default::default();
@@ -133,7 +139,7 @@ fn skeleton_json(s: &Skeleton) -> serde_json::Value {
                 }
             }
             let dofs: Vec<&str> = j.dofs.iter().map(|d| d.name()).collect();
-            serde_json::json!({
+            let mut joint = serde_json::json!({
                 "name": j.name,
                 "parent": j.parent.map(|p| s.joints()[p].name.clone()),
                 "offset": [j.offset.x, j.offset.y, j.offset.z],
@@ -141,7 +147,12 @@ fn skeleton_json(s: &Skeleton) -> serde_json::Value {
                 "limits": limits,
                 "mass": j.mass,
                 "com": [j.com.x, j.com.y, j.com.z],
-            })
+            });
+            // A capsule radius set by hand (the collision task's).
+            if j.name.ends_with("_elbow") {
+                joint["radius"] = serde_json::json!(0.05);
+            }
+            joint
         })
         .collect();
     serde_json::json!({ "joints": joints })
@@ -176,8 +187,8 @@ const ARM: &str = r#"{
   "posture": {"l_elbow": {"rx": -0.3}, "base": {"ty": 0.01}}
 }"#;
 
-/// The default H-Anim body at LOA1 with a balance, a comfort task, foot limbs and the
-/// comfort settings.
+/// The default H-Anim body at LOA1 with a balance, a comfort task, foot limbs, the comfort
+/// settings and a collision task (the forearms' capsules thicker).
 fn loa1_problem() -> String {
     let body = default_skeleton(&SkeletonOptions {
         loa: LevelOfArticulation::Loa1,
@@ -193,7 +204,8 @@ fn loa1_problem() -> String {
             {"level": 3, "kind": "limb", "joints": ["r_shoulder", "r_elbow", "r_wrist"], "target": [-0.3, 1.2, 0.3]},
             {"level": 3, "kind": "line", "joint": "l_wrist", "origin": [0.3, 1.2, 0.35], "direction": [1, 0, 0]},
             {"level": 3, "kind": "plane", "joint": "l_knee", "origin": [0, 0.3, 0], "normal": [0, 0, -1], "above": true},
-            {"level": 4, "kind": "comfort", "effort": 1, "range": 0.2, "rula": 0.5}
+            {"level": 4, "kind": "comfort", "effort": 1, "range": 0.2, "rula": 0.5},
+            {"level": 2, "kind": "collision", "self": true, "floor": true}
         ],
         "settings": {"max_iterations": 20, "iteration": "textbook", "lambda": 0.01},
         "posture": {"l_knee": {"rx": 0.3}},

@@ -355,7 +355,7 @@ fn broken_links_give_distinct_clear_errors() {
     );
     assert_eq!(
         e.to_string(),
-        "this link was made by a newer version of Stance (format 9); this version reads format 8"
+        "this link was made by a newer version of Stance (format 10); this version reads format 9"
     );
     // Valid checksum, nonsense inside.
     let e = link::decode(&reframe(vec![1, 3, 0xFF, 0xFF, 0xFF])).unwrap_err();
@@ -791,4 +791,45 @@ fn line_and_plane_tasks_travel_in_a_format_7_link() {
         Err(LinkError::Malformed(m)) => assert!(m.contains("unknown task kind 9"), "{m}"),
         other => panic!("{other:?}"),
     }
+}
+
+/// Catches a collision task lost or garbled on the way through a link, or written in a
+/// format older readers would misread: its margin (to 0.1 mm) and both switches come back,
+/// in a format 8 link; the same payload framed as format 6 is refused (format 6 has no
+/// collision kind), and the document without it is written as before.
+#[test]
+fn a_collision_task_travels_in_a_format_8_link() {
+    let mut d = all_kinds();
+    let mut collision = TaskSpec::new(TaskKindSpec::Collision {
+        margin: 0.0137,
+        self_collision: false,
+        floor: true,
+    });
+    collision.level = 2;
+    d.tasks.push(collision);
+    d.validate().unwrap();
+    let back = round_trip(&d);
+    let Some(TaskKindSpec::Collision {
+        margin,
+        self_collision,
+        floor,
+    }) = back.tasks.last().map(|t| t.kind.clone())
+    else {
+        panic!("no collision task: {:?}", back.tasks.last());
+    };
+    assert!((margin - 0.0137).abs() < 1e-9, "{margin}");
+    assert!(!self_collision && floor);
+    assert_eq!(back.tasks.last().map(|t| t.level), Some(2));
+    let frame = frame_of(&d);
+    assert_eq!(frame[0], 8);
+    let mut body = frame;
+    body.truncate(body.len() - 4);
+    body[0] = 6;
+    assert!(matches!(
+        link::decode(&reframe(body)),
+        Err(LinkError::Malformed(_))
+    ));
+    let mut without = d.clone();
+    without.tasks.pop();
+    assert_eq!(frame_of(&without)[0], 3);
 }

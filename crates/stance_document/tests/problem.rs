@@ -179,3 +179,121 @@ fn close(a: &serde_json::Value, b: &serde_json::Value) -> bool {
         _ => a == b,
     }
 }
+
+/// The H-Anim default body at LOA 2 as a problem file's skeleton, with `radius` set on the
+/// joints named.
+fn loa2_skeleton_json(radius: &[(&str, f64)]) -> (Skeleton, serde_json::Value) {
+    let s = stance_hanim::default_skeleton(&stance_hanim::SkeletonOptions {
+        loa: stance_hanim::LevelOfArticulation::Loa2,
+        ..Default::default()
+    })
+    .unwrap()
+    .skeleton;
+    let mut json = stance_document::skeleton_json(&s);
+    for joint in json["joints"].as_array_mut().unwrap() {
+        if let Some((_, r)) = radius.iter().find(|(n, _)| joint["name"] == *n) {
+            joint["radius"] = serde_json::json!(r);
+        }
+    }
+    (s, json)
+}
+
+/// Catches a collision kind read with the wrong defaults, switches or radii, or lost on the
+/// way back to a problem file: `{"kind": "collision"}` is the body's capsules held apart and
+/// above the floor, 1 cm apart; `self`, `floor`, `margin` and the joints' `radius` change
+/// exactly that; `TaskSpec::from_task` and `problem_json` give the same problem back.
+#[test]
+fn a_collision_task_reads_from_a_problem_file_and_back() {
+    use stance_hanim::capsules::{BodyCollision, body_capsules};
+    let (s, skeleton) = loa2_skeleton_json(&[("l_elbow", 0.06)]);
+    let read = |task: &str| {
+        let p =
+            Problem::from_json(&format!(r#"{{"skeleton":{skeleton},"tasks":[{task}]}}"#)).unwrap();
+        let TaskKind::Collision(c) = p.tasks[0].kind.clone() else {
+            panic!("{task}: {:?}", p.tasks[0].kind);
+        };
+        (p, c)
+    };
+    let (p, c) = read(r#"{"kind":"collision","level":2}"#);
+    assert_eq!(p.tasks[0].level, 2);
+    assert_eq!(c.margin(), 0.01);
+    assert!(!c.pairs().is_empty() && !c.floor().is_empty());
+    // The forearm's capsule (carried by the elbow) 6 cm thick, every other one the body's.
+    let elbow = s.joint_index("l_elbow").unwrap();
+    for (got, default) in c.capsules().iter().zip(body_capsules(&s)) {
+        let expected = if got.joint == elbow {
+            0.06
+        } else {
+            default.radius
+        };
+        assert_eq!(got.radius, expected);
+    }
+    let (_, c) = read(r#"{"kind":"collision","margin":0.02,"self":false}"#);
+    assert_eq!(c.margin(), 0.02);
+    assert!(c.pairs().is_empty() && !c.floor().is_empty());
+    let (_, c) = read(r#"{"kind":"collision","floor":false}"#);
+    assert!(!c.pairs().is_empty() && c.floor().is_empty());
+    // Back to a file and read again: the same task, radius included.
+    let (p, c) = read(r#"{"kind":"collision","level":2,"margin":0.015}"#);
+    let spec = stance_document::TaskSpec::from_task(&s, &p.tasks[0]).unwrap();
+    assert_eq!(
+        serde_json::to_value(&spec).unwrap()["kind"],
+        serde_json::json!("collision")
+    );
+    let json = stance_document::problem_json(&s, &p.tasks, &p.start).unwrap();
+    let back = Problem::from_json(&json.to_string()).unwrap();
+    assert_eq!(back.tasks, p.tasks);
+    assert_eq!(
+        BodyCollision::of(&s, &c).map(|b| b.radius.len()),
+        Some(1),
+        "one joint's radius set by hand"
+    );
+}
+
+/// Catches bad collision input read silently: each error names its field.
+#[test]
+fn bad_collision_input_names_its_field() {
+    let (_, skeleton) = loa2_skeleton_json(&[]);
+    let error = |task: &str, skeleton: &serde_json::Value| {
+        Problem::from_json(&format!(r#"{{"skeleton":{skeleton},"tasks":[{task}]}}"#))
+            .unwrap_err()
+            .to_string()
+    };
+    let e = error(r#"{"kind":"collision","margin":-0.01}"#, &skeleton);
+    assert!(e.contains("tasks[0].margin"), "{e}");
+    let e = error(r#"{"kind":"collision","self":"yes"}"#, &skeleton);
+    assert!(
+        e.contains("tasks[0].self") && e.contains("true or false"),
+        "{e}"
+    );
+    let (_, thin) = loa2_skeleton_json(&[("r_knee", 0.0)]);
+    let e = error(r#"{"kind":"collision"}"#, &thin);
+    assert!(e.contains("(`r_knee`).radius"), "{e}");
+}
+
+/// Catches a collision task that `stance solve`'s problem does not hold: the right wrist
+/// pulled into the chest with the collision task at level 2 ends outside every capsule it
+/// may touch (within a millimetre), the feet held.
+#[test]
+fn a_problem_with_a_collision_task_solves_clear_of_the_body() {
+    let (s, skeleton) = loa2_skeleton_json(&[]);
+    let rest = Frames::new(&s, &stance_ik::Posture::rest(&s));
+    let at = |n: &str| rest.joint_position[s.joint_index(n).unwrap()];
+    let chest = at("l_sternoclavicular").lerp(at("r_sternoclavicular"), 0.5);
+    let (l, r) = (at("l_talocrural"), at("r_talocrural"));
+    let p = Problem::from_json(&format!(
+        r#"{{"skeleton":{skeleton},"tasks":[
+          {{"kind":"position","joint":"l_talocrural","target":[{},{},{}]}},
+          {{"kind":"position","joint":"r_talocrural","target":[{},{},{}]}},
+          {{"kind":"collision","level":2}},
+          {{"kind":"position","joint":"r_radiocarpal","level":3,"target":[{},{},{}]}}
+        ],"settings":{{"max_iterations":300}}}}"#,
+        l.x, l.y, l.z, r.x, r.y, r.z, chest.x, chest.y, chest.z
+    ))
+    .unwrap();
+    let (posture, report) = p.solve().unwrap();
+    assert!(report.levels[0].met && report.levels[1].met, "{report:?}");
+    let collision = &p.tasks[2];
+    let residual = collision.residual(&s, &Frames::new(&s, &posture), posture.values());
+    assert!(residual < 1e-3, "{residual}");
+}

@@ -109,7 +109,10 @@ fn frame_cost_of_three_characters_against_one() {
     click_button(&mut harness, "scene_add");
     click_button(&mut harness, "scene_add");
     settle(&mut harness);
-    assert_eq!(state(&harness)["characters"].as_array().map(Vec::len), Some(3));
+    assert_eq!(
+        state(&harness)["characters"].as_array().map(Vec::len),
+        Some(3)
+    );
     let three = pull_frames(&mut harness, 90);
     let (one, three) = (percentile(&one, 0.5), percentile(&three, 0.5));
     println!(

@@ -8,8 +8,12 @@
 //! anthropometric tables the body's proportions come from, rounded: a modelling choice, not
 //! a measurement of any one avatar.
 
+use std::collections::BTreeMap;
+
 use glam::DVec3;
-use stance_ik::{Capsule, Frames, Posture, Skeleton};
+use stance_ik::{
+    COLLISION_BAND, Capsule, Collision, Frames, Posture, Skeleton, collision_pairs, floor_capsules,
+};
 
 /// The head's capsule above the skull base, along the joint's +Y: from, to (m) and radius.
 const HEAD: (f64, f64, f64) = (0.07, 0.15, 0.095);
@@ -100,6 +104,90 @@ pub fn body_capsules(skeleton: &Skeleton) -> Vec<Capsule> {
         }
     }
     capsules
+}
+
+/// A body's collision task, as a problem file or a document asks for it: which collisions
+/// it holds and how far apart, on [`body_capsules`] with some radii set by hand.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BodyCollision {
+    /// Distance kept between surfaces (m).
+    pub margin: f64,
+    /// The body's capsules kept apart from each other ([`collision_pairs`]).
+    pub self_collision: bool,
+    /// The body's capsules kept above the floor ([`floor_capsules`]).
+    pub floor: bool,
+    /// Radius (m) of every capsule a joint (by index) carries, instead of its segment's.
+    pub radius: BTreeMap<usize, f64>,
+    /// Constraints held at once.
+    pub rows: usize,
+}
+
+/// A collision task's default margin (m).
+pub const COLLISION_MARGIN: f64 = 0.01;
+/// The most constraints a body's collision task holds at once: a level has rows only for the
+/// constraints found, so a larger number costs nothing while the body is clear.
+pub const COLLISION_ROWS: usize = 16;
+
+impl Default for BodyCollision {
+    fn default() -> Self {
+        Self {
+            margin: COLLISION_MARGIN,
+            self_collision: true,
+            floor: true,
+            radius: BTreeMap::new(),
+            rows: COLLISION_ROWS,
+        }
+    }
+}
+
+impl BodyCollision {
+    /// The collision task's data on `skeleton`: its capsules (radii set by `radius` where
+    /// given), the pairs clear at rest by the margin and the band (`self_collision`), the
+    /// capsules clear of the floor at rest (`floor`).
+    pub fn collision(&self, skeleton: &Skeleton) -> Collision {
+        let mut capsules = body_capsules(skeleton);
+        for capsule in &mut capsules {
+            if let Some(&r) = self.radius.get(&capsule.joint) {
+                capsule.radius = r;
+            }
+        }
+        let rest = Frames::new(skeleton, &Posture::rest(skeleton));
+        let pairs = if self.self_collision {
+            collision_pairs(skeleton, &capsules, &rest, self.margin + COLLISION_BAND)
+        } else {
+            Vec::new()
+        };
+        let floor = if self.floor {
+            floor_capsules(&capsules, &rest)
+        } else {
+            Vec::new()
+        };
+        Collision::new(skeleton, capsules, pairs, floor, self.margin, self.rows)
+    }
+
+    /// What `collision` holds, where it is a body's collision task on `skeleton` (the body's
+    /// capsules with the radii of one joint alike, the pairs and floor capsules of
+    /// [`BodyCollision::collision`]); `None` for any other.
+    pub fn of(skeleton: &Skeleton, collision: &Collision) -> Option<Self> {
+        let defaults = body_capsules(skeleton);
+        if defaults.len() != collision.capsules().len() {
+            return None;
+        }
+        let mut radius = BTreeMap::new();
+        for (default, capsule) in defaults.iter().zip(collision.capsules()) {
+            if capsule.radius != default.radius {
+                radius.insert(capsule.joint, capsule.radius);
+            }
+        }
+        let found = Self {
+            margin: collision.margin(),
+            self_collision: !collision.pairs().is_empty(),
+            floor: !collision.floor().is_empty(),
+            radius,
+            rows: collision.rows(),
+        };
+        (found.collision(skeleton) == *collision).then_some(found)
+    }
 }
 
 #[cfg(test)]

@@ -53,6 +53,9 @@ struct LevelLayout {
     /// A comfort level: never met, but compared in priority order (its residual is the
     /// cost), so that the solve goes on while the cost falls.
     comfort: bool,
+    /// Holds a task whose rows in use vary with the posture (collision): `rows` is then the
+    /// most the level has, and its support is found at each linearisation.
+    variable: bool,
 }
 
 /// How one run of iterations ended.
@@ -445,6 +448,7 @@ impl Solver {
                     rows: members.iter().map(|&i| tasks[i].rows()).sum(),
                     posture_only: members.iter().all(|&i| tasks[i].is_posture()),
                     comfort: members.iter().any(|&i| tasks[i].is_comfort()),
+                    variable: members.iter().any(|&i| tasks[i].rows_vary()),
                     tasks: members,
                 }
             })
@@ -533,15 +537,24 @@ impl Solver {
                 sys.jacobian_t.as_mut_slice().fill(0.0);
                 continue;
             }
-            sys.jacobian_t.as_mut_slice().fill(0.0);
+            // The level's rows written on plain buffers at full size (no allocation once they
+            // have it), then cut to the rows in use: a collision task uses only the rows of the
+            // constraints it found, and a level without any has no rows at all (the kernel
+            // skips it).
+            let mut jt_all: Vec<f64> = std::mem::take(&mut sys.jacobian_t).data.into();
+            let mut dx_all: Vec<f64> = std::mem::take(&mut sys.dx).data.into();
+            jt_all.clear();
+            jt_all.resize(n * layout.rows, 0.0);
+            dx_all.clear();
+            dx_all.resize(layout.rows, 0.0);
             let mut row = 0;
             *res = 0.0;
             *wres = 0.0;
             for &ti in &layout.tasks {
                 let task = &tasks[ti];
                 let rows = task.rows();
-                let err = &mut sys.dx.as_mut_slice()[row..row + rows];
-                let jt = &mut sys.jacobian_t.as_mut_slice()[row * n..(row + rows) * n];
+                let err = &mut dx_all[row..row + rows];
+                let jt = &mut jt_all[row * n..(row + rows) * n];
                 let support = &self.supports[ti];
                 // A comfort level waiting for the levels above it (see below) only weighs its
                 // cost: no gradient, an empty row the kernel skips. Comfort and collision find
@@ -550,6 +563,7 @@ impl Solver {
                 let at_once = if waiting {
                     err.fill(0.0);
                     task.comfort_cost(skeleton, &self.frames, values)
+                        .map(|cost| (cost, rows))
                 } else {
                     task.system_at_once(
                         skeleton,
@@ -560,22 +574,32 @@ impl Solver {
                         Some(limits),
                     )
                 };
-                let r = match at_once {
+                let (r, used) = match at_once {
                     Some(r) => r,
                     None => {
                         let r = task.error(skeleton, &self.frames, values, err, Some(limits));
                         task.jacobian_t(skeleton, &self.frames, values, support, jt, n);
-                        r
+                        (r, rows)
                     }
                 };
                 *res += r * r;
                 *wres += task.weight * r * r;
                 let w = task.weight.sqrt();
                 if w != 1.0 {
-                    err.iter_mut().for_each(|v| *v *= w);
-                    jt.iter_mut().for_each(|v| *v *= w);
+                    err[..used].iter_mut().for_each(|v| *v *= w);
+                    jt[..used * n].iter_mut().for_each(|v| *v *= w);
                 }
-                row += rows;
+                row += used;
+            }
+            dx_all.truncate(row);
+            jt_all.truncate(row * n);
+            sys.dx = DVector::from_vec(dx_all);
+            sys.jacobian_t = DMatrix::from_vec(n, row, jt_all);
+            if layout.variable {
+                // The support of the rows in use: the DOF with a nonzero entry.
+                sys.support.clear();
+                sys.support
+                    .extend((0..n).filter(|&d| (0..row).any(|c| sys.jacobian_t[(d, c)] != 0.0)));
             }
             if layout.comfort {
                 if above_met {

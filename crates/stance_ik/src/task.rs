@@ -164,11 +164,13 @@ pub enum TaskKind {
         model: Arc<ComfortModel>,
     },
     /// Collision avoidance as an inequality ([`Collision`]): the surfaces of pairs of capsules
-    /// (and some capsules and the floor `y = 0`) keep at least a margin apart. `rows`
-    /// rows, one per constraint along its line of closest approach, the nearest first: an
-    /// error where two surfaces are closer than the margin, a zero error within
-    /// [`COLLISION_BAND`] beyond it (they may slide along each other but not come closer),
-    /// empty rows for the rest. Pairs far apart cost the distance of two bounding spheres.
+    /// (and some capsules and the floor `y = 0`) keep at least a margin apart. Up to
+    /// [`Collision::rows`] rows, one per constraint along its line of closest approach, the
+    /// nearest first: an error where two surfaces are closer than the margin, a zero error
+    /// within [`COLLISION_BAND`] beyond it (they may slide along each other but not come
+    /// closer). The solver's level has rows only for the constraints found (see
+    /// [`Task::rows_vary`]); [`Task::error_vector`] and [`Task::feature`] keep all of them,
+    /// the others empty.
     Collision(Collision),
     /// Point on a line: the effector point kept on the world line through `origin` along
     /// `direction` (a hand on a bar, a keypoint on the camera ray through its pixel). 2 rows:
@@ -351,7 +353,7 @@ impl Task {
             TaskKind::Balance { .. } | TaskKind::Comfort { .. } | TaskKind::PointOnPlane { .. } => {
                 1
             }
-            TaskKind::Collision(c) => c.rows,
+            TaskKind::Collision(c) => c.rows(),
             TaskKind::PostureAttraction { dofs, .. } => dofs.len(),
         }
     }
@@ -362,6 +364,12 @@ impl Task {
             self.kind,
             TaskKind::PostureAttraction { .. } | TaskKind::Comfort { .. }
         )
+    }
+
+    /// Whether the rows the task uses vary with the posture (collision: one per constraint
+    /// found, at most [`Task::rows`]).
+    pub fn rows_vary(&self) -> bool {
+        matches!(self.kind, TaskKind::Collision(_))
     }
 
     /// Whether the task is a comfort task (its level goes on while its cost falls).
@@ -524,16 +532,7 @@ impl Task {
             TaskKind::CenterOfMass { .. } | TaskKind::Balance { .. } => {
                 (0..skeleton.dof_count()).collect()
             }
-            TaskKind::Collision(c) => {
-                let mut d: Vec<usize> = c
-                    .capsules
-                    .iter()
-                    .flat_map(|capsule| skeleton.chain_dofs(capsule.joint))
-                    .collect();
-                d.sort_unstable();
-                d.dedup();
-                d
-            }
+            TaskKind::Collision(c) => c.support(skeleton),
             TaskKind::Comfort { .. } => (0..skeleton.dof_count())
                 .filter(|&d| skeleton.dof_kinds()[d].is_rotation())
                 .collect(),
@@ -671,11 +670,11 @@ impl Task {
                 // The distances of the rows held; constant where a row is empty.
                 let found = c.constraints(frames);
                 TaskFeature::Vector(
-                    (0..c.rows)
+                    (0..c.rows())
                         .map(|i| {
                             found
                                 .get(i)
-                                .map_or(c.margin + COLLISION_BAND, |f| f.distance)
+                                .map_or(c.margin() + COLLISION_BAND, |f| f.distance)
                         })
                         .collect(),
                 )
@@ -800,7 +799,7 @@ impl Task {
             }
             TaskKind::Collision(c) => {
                 let found = c.constraints(frames);
-                collision::errors(&found, c.margin, err);
+                collision::errors(&found, c.margin(), err);
                 clamp_vec(err, limits.map(|l| l.linear))
             }
             TaskKind::PointOnLine {
@@ -1006,9 +1005,11 @@ impl Task {
     }
 
     /// The rows and errors at once for the kinds that find both together, as
-    /// [`Task::error`] and [`Task::jacobian_t`] write them (`jac_t` zero on entry, `n` DOF):
-    /// comfort (one gradient; returns the cost) and collision (one search for its
-    /// constraints; returns the error's norm). `None` for other kinds.
+    /// [`Task::error`] and [`Task::jacobian_t`] write them (`jac_t` zero on entry, `n` DOF),
+    /// and how many rows are in use: comfort (one gradient; returns the cost, one row) and
+    /// collision (one search for its constraints; returns the error's norm and one row per
+    /// constraint found, the first rows: the others stay empty and the solver leaves them
+    /// out of the level). `None` for other kinds.
     pub(crate) fn system_at_once(
         &self,
         skeleton: &Skeleton,
@@ -1017,17 +1018,17 @@ impl Task {
         support: &[usize],
         (err, jac_t, n): (&mut [f64], &mut [f64], usize),
         limits: Option<StepLimits>,
-    ) -> Option<f64> {
+    ) -> Option<(f64, usize)> {
         match &self.kind {
             TaskKind::Comfort { model } => {
                 let (cost, gradient) = comfort_gradient(model, skeleton, frames, values);
                 err[0] = comfort_step(&gradient, limits);
                 unit_gradient_row(&gradient, support, jac_t);
-                Some(cost)
+                Some((cost, 1))
             }
             TaskKind::Collision(c) => {
                 let found = c.constraints(frames);
-                let norm = collision::errors(&found, c.margin, err);
+                let norm = collision::errors(&found, c.margin(), err);
                 if let Some(l) = limits
                     && norm > l.linear
                 {
@@ -1035,7 +1036,7 @@ impl Task {
                     err.iter_mut().for_each(|v| *v *= s);
                 }
                 collision::write_rows(skeleton, frames, &found, jac_t, n);
-                Some(norm)
+                Some((norm, found.len()))
             }
             _ => None,
         }

@@ -3,7 +3,7 @@
 //! set, the rest is a payload framed as a link of format `(byte >> 1) % 8` with its length and
 //! a valid CRC-32, so that mutations reach the payload decoder instead of the checksum. A
 //! link that opens is a valid document, opens again once written again with the same
-//! posture, and survives the document's JSON; the same input read as a scene (format 8) opens
+//! posture, and survives the document's JSON; the same input read as a scene (format 9) opens
 //! again once written again.
 //!
 //! Seeds: `fuzz/seeds/link/` (written by `cargo test -p stance_document --test all fuzz_seeds:: --

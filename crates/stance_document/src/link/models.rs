@@ -23,7 +23,7 @@ pub(super) const ANGLE_PRIOR: [u32; 8] = [15, 16, 14, 15, 16, 13, 15, 14];
 /// Adaptive contexts, one per kind of value; the encoder and the decoder evolve them alike.
 #[derive(Debug)]
 pub(super) struct Models {
-    pub(super) flags: [Bit; 21],
+    pub(super) flags: [Bit; 23],
     pub(super) rotation: UintModel,
     pub(super) translation: UintModel,
     pub(super) position: UintModel,
@@ -94,6 +94,9 @@ pub(super) const STANDARD_REST: usize = 18;
 pub(super) const HAS_CLIP: usize = 19;
 // Format 7.
 pub(super) const ABOVE: usize = 20;
+// Format 8.
+pub(super) const COLLISION_SELF: usize = 21;
+pub(super) const COLLISION_FLOOR: usize = 22;
 
 /// `m / 10^k`, correctly rounded (both are exact in f64 for the ranges used).
 pub(super) fn from_decimal(m: u64, k: i32) -> f64 {
@@ -114,8 +117,9 @@ pub(super) fn short_decimal(w: f64) -> Option<(u64, u8)> {
 }
 
 /// Task kinds by symbol: formats 1 and 2 code the first eight (an 8-symbol model), formats 3
-/// to 6 the first nine (a 16-symbol model), format 7 all.
-pub(super) const KINDS: [&str; 11] = [
+/// to 6 the first nine (a 16-symbol model), format 7 eleven (`line`, `plane`), format 8 and
+/// later all (`collision`).
+pub(super) const KINDS: [&str; 12] = [
     "position",
     "orientation",
     "gaze",
@@ -127,6 +131,7 @@ pub(super) const KINDS: [&str; 11] = [
     "comfort",
     "line",
     "plane",
+    "collision",
 ];
 
 /// Largest quantised value a link holds (2^48: 2.4e10 rad, 2.8e10 m); larger ones are written

@@ -5,10 +5,11 @@ use glam::{DQuat, DVec3};
 use stance_ik::{Axes, Dof};
 
 use super::models::{
-    ABOVE, ACTIVE, AVATAR_URL, AXES_XYZ, AXIS_Y, AXIS_Z, HANIM_JOINT, HAS_CLIP, HAS_INTERVAL,
-    HAS_JOINTS, HAS_LIMB, HAS_MOTION, HAS_ORIENTATION, HAS_REFERENCE, HAS_SWIVEL,
-    JOINT_MASK_DEFAULT, KINDS, MASKS_DEFAULT, MAX_QUANTISED, Models, POINT_ZERO, STANDARD_REST,
-    WEIGHT_DECIMAL, WEIGHT_ONE, default_mask, dequantise, from_decimal, in_loa_base,
+    ABOVE, ACTIVE, AVATAR_URL, AXES_XYZ, AXIS_Y, AXIS_Z, COLLISION_FLOOR, COLLISION_SELF,
+    HANIM_JOINT, HAS_CLIP, HAS_INTERVAL, HAS_JOINTS, HAS_LIMB, HAS_MOTION, HAS_ORIENTATION,
+    HAS_REFERENCE, HAS_SWIVEL, JOINT_MASK_DEFAULT, KINDS, MASKS_DEFAULT, MAX_QUANTISED, Models,
+    POINT_ZERO, STANDARD_REST, WEIGHT_DECIMAL, WEIGHT_ONE, default_mask, dequantise, from_decimal,
+    in_loa_base,
 };
 use super::{
     DIRECTION_STEP, MAX_COUNT, MAX_OVERRUN, MAX_STRING_BYTES, POSITION_STEP_M, ROTATION_STEP_RAD,
@@ -241,8 +242,13 @@ impl Reader<'_> {
             .ok_or("level out of range")?;
         let active = self.flag(ACTIVE);
         let weight = self.weight()?;
-        // The point-on-a-line and point-on-a-plane kinds came with format 7.
-        let known = if self.format >= 7 { KINDS.len() } else { 9 };
+        // The point-on-a-line and point-on-a-plane kinds came with format 7, the collision
+        // kind with 8.
+        let known = match self.format {
+            0..=6 => 9,
+            7 => 11,
+            _ => KINDS.len(),
+        };
         let kind = match KINDS[..known].get(kind).copied() {
             Some("position") => TaskKindSpec::Position {
                 joint: self.joint()?,
@@ -295,6 +301,14 @@ impl Reader<'_> {
                 range: self.weight()?,
                 rula: self.weight()?,
             },
+            Some("collision") if self.format >= 8 => {
+                let margin = Self::signed(&mut self.m.position, &mut self.d, POSITION_STEP_M)?;
+                TaskKindSpec::Collision {
+                    margin,
+                    self_collision: self.flag(COLLISION_SELF),
+                    floor: self.flag(COLLISION_FLOOR),
+                }
+            }
             Some("posture") => {
                 let joints = self.joint_list("posture joints")?;
                 let reference = if self.flag(HAS_REFERENCE) {

@@ -4,10 +4,11 @@ use glam::{DQuat, DVec3};
 use stance_ik::Axes;
 
 use super::models::{
-    ABOVE, ACTIVE, AVATAR_URL, AXES_XYZ, AXIS_Y, AXIS_Z, HANIM_JOINT, HAS_CLIP, HAS_INTERVAL,
-    HAS_JOINTS, HAS_LIMB, HAS_MOTION, HAS_ORIENTATION, HAS_REFERENCE, HAS_SWIVEL,
-    JOINT_MASK_DEFAULT, KINDS, MASKS_DEFAULT, Models, POINT_ZERO, STANDARD_REST, WEIGHT_DECIMAL,
-    WEIGHT_ONE, default_mask, hanim_index, in_loa_base, mask_of, quantise, short_decimal, unit,
+    ABOVE, ACTIVE, AVATAR_URL, AXES_XYZ, AXIS_Y, AXIS_Z, COLLISION_FLOOR, COLLISION_SELF,
+    HANIM_JOINT, HAS_CLIP, HAS_INTERVAL, HAS_JOINTS, HAS_LIMB, HAS_MOTION, HAS_ORIENTATION,
+    HAS_REFERENCE, HAS_SWIVEL, JOINT_MASK_DEFAULT, KINDS, MASKS_DEFAULT, Models, POINT_ZERO,
+    STANDARD_REST, WEIGHT_DECIMAL, WEIGHT_ONE, default_mask, hanim_index, in_loa_base, mask_of,
+    quantise, short_decimal, unit,
 };
 use super::{DIRECTION_STEP, POSITION_STEP_M, ROTATION_STEP_RAD};
 use crate::document::{
@@ -241,6 +242,17 @@ impl Writer {
                 for w in [effort, range, rula] {
                     self.weight(*w);
                 }
+            }
+            TaskKindSpec::Collision {
+                margin,
+                self_collision,
+                floor,
+            } => {
+                self.m
+                    .position
+                    .encode_signed(&mut self.e, quantise(*margin, POSITION_STEP_M));
+                self.flag(COLLISION_SELF, *self_collision);
+                self.flag(COLLISION_FLOOR, *floor);
             }
             TaskKindSpec::Posture { joints, reference } => {
                 self.joint_list(joints.as_deref());

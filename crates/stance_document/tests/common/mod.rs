@@ -489,6 +489,18 @@ pub fn document_close(a: &Document, b: &Document) -> Result<(), String> {
             ) => a1 == a2 && close3(*t1, *t2, POSITION_STEP_M),
             (a @ TaskKindSpec::Comfort { .. }, b @ TaskKindSpec::Comfort { .. }) => a == b,
             (
+                TaskKindSpec::Collision {
+                    margin: m1,
+                    self_collision: s1,
+                    floor: f1,
+                },
+                TaskKindSpec::Collision {
+                    margin: m2,
+                    self_collision: s2,
+                    floor: f2,
+                },
+            ) => s1 == s2 && f1 == f2 && (m1 - m2).abs() <= POSITION_STEP_M / 2.0,
+            (
                 TaskKindSpec::Posture {
                     joints: j1,
                     reference: r1,

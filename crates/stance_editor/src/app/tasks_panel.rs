@@ -650,8 +650,11 @@ fn kind_fields(
             target,
         } => rows.direction(joint, axis, target),
         TaskKindSpec::Balance { support, margin } => rows.balance(support.as_deref(), margin),
-        // No fields of their own in the panel yet (made by `stance lift`).
-        TaskKindSpec::Posture { .. } | TaskKindSpec::Line { .. } | TaskKindSpec::Plane { .. } => {}
+        // No fields of their own in the panel yet (made by `stance lift`, or problem files).
+        TaskKindSpec::Posture { .. }
+        | TaskKindSpec::Line { .. }
+        | TaskKindSpec::Plane { .. }
+        | TaskKindSpec::Collision { .. } => {}
         TaskKindSpec::Comfort {
             effort,
             range,

@@ -2,15 +2,15 @@
 //! `margin` between their surfaces, and above the floor (`y = 0`). Each row is one
 //! constraint along its line of closest approach: the distance between the surfaces, with an
 //! error where it is under the margin, a zero error within [`COLLISION_BAND`] over it (the
-//! surfaces may slide along each other but not come closer), nothing further out. A task has a
-//! fixed number of rows: the nearest constraints fill them, nearest first; the rest are empty
-//! (zero rows).
+//! surfaces may slide along each other but not come closer), nothing further out. The
+//! nearest constraints fill the task's rows, nearest first, up to their number; the level
+//! has rows only for the constraints found (none while the body is clear: the level then
+//! costs its search alone), each on the DOF that move one point against the other.
 
 use std::sync::Arc;
 
 use glam::DVec3;
 
-use super::point_column;
 use crate::{Frames, Skeleton};
 
 /// How far past the margin a constraint still holds (with a zero error): the lower levels may
@@ -18,26 +18,188 @@ use crate::{Frames, Skeleton};
 pub const COLLISION_BAND: f64 = 0.002;
 
 /// A collision task's data: the surfaces of the `pairs` of `capsules` (and of the `floor`
-/// capsules and the floor `y = 0`) keep at least `margin` apart, `rows` constraints at once.
+/// capsules and the floor `y = 0`) keep at least `margin` apart, `rows` constraints at most.
 /// One row per constraint along its line of closest approach, the nearest first: an error
 /// where two surfaces are closer than the margin, a zero error within [`COLLISION_BAND`]
-/// beyond it (they may slide along each other but not come closer), empty rows for the rest.
-/// Pairs far apart cost the distance of two bounding spheres.
+/// beyond it (they may slide along each other but not come closer); the level has no row
+/// for the rest.
+///
+/// The search for the constraints (once per linearisation) is a broad phase on boxes: the
+/// capsules are grouped by branch of the skeleton (a leg, an arm, a finger, the spine...;
+/// [`Collision::new`]) and the pairs by the two groups they join, so that two groups whose
+/// boxes are further apart than the margin and the band skip every pair between them; then
+/// each pair's boxes, then its closest points.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Collision {
-    /// The body's capsules.
-    pub capsules: Arc<[Capsule]>,
-    /// Indices into `capsules` of the pairs tested ([`collision_pairs`]).
-    pub pairs: Arc<[(usize, usize)]>,
-    /// Indices into `capsules` of those kept above the floor ([`floor_capsules`]).
-    pub floor: Arc<[usize]>,
-    /// Distance kept between surfaces (m), >= 0.
-    pub margin: f64,
-    /// Constraints held at once (>= 1).
-    pub rows: usize,
+    capsules: Arc<[Capsule]>,
+    pairs: Arc<[(usize, usize)]>,
+    floor: Arc<[usize]>,
+    margin: f64,
+    rows: usize,
+    broad: Arc<BroadPhase>,
+}
+
+/// Joints of a branch in one group of the broad phase.
+const BRANCH_PIECE: usize = 2;
+
+/// The capsules' groups and the pairs sorted by the groups they join (see [`Collision`]).
+#[derive(Debug, Clone, PartialEq, Default)]
+struct BroadPhase {
+    /// Each capsule's group.
+    group: Vec<usize>,
+    groups: usize,
+    /// The pairs in the order of `runs`.
+    pairs: Vec<(usize, usize)>,
+    /// Two groups and the range of `pairs` that joins them.
+    runs: Vec<(usize, usize, std::ops::Range<usize>)>,
+}
+
+impl BroadPhase {
+    /// Groups: each capsule goes with the highest joint of its branch, the lowest ancestor
+    /// (or itself) of its joint whose parent has other children or none (a leg from its
+    /// hip, an arm from its collarbone, each finger), in pieces of [`BRANCH_PIECE`] joints
+    /// down the branch (the thigh and the shank, the upper arm, the forearm and the palm).
+    fn new(skeleton: &Skeleton, capsules: &[Capsule], pairs: &[(usize, usize)]) -> Self {
+        let joints = skeleton.joints();
+        let mut children = vec![0usize; joints.len()];
+        for joint in joints {
+            if let Some(p) = joint.parent.and_then(|p| children.get_mut(p)) {
+                *p += 1;
+            }
+        }
+        // The branch's highest joint and how far down it `j` is, in pieces of
+        // `BRANCH_PIECE` joints (a long branch's box would hold most of the body).
+        let branch = |mut j: usize| {
+            let mut depth = 0;
+            while let Some(p) = joints.get(j).and_then(|joint| joint.parent) {
+                if children.get(p).copied().unwrap_or(0) != 1 {
+                    break;
+                }
+                j = p;
+                depth += 1;
+            }
+            (j, depth / BRANCH_PIECE)
+        };
+        let mut roots: Vec<(usize, usize)> = Vec::new();
+        let group: Vec<usize> = capsules
+            .iter()
+            .map(|c| {
+                let root = branch(c.joint);
+                roots.iter().position(|&r| r == root).unwrap_or_else(|| {
+                    roots.push(root);
+                    roots.len() - 1
+                })
+            })
+            .collect();
+        let key = |&(i, j): &(usize, usize)| {
+            let (a, b) = (
+                group.get(i).copied().unwrap_or(0),
+                group.get(j).copied().unwrap_or(0),
+            );
+            (a.min(b), a.max(b))
+        };
+        let mut sorted = pairs.to_vec();
+        sorted.sort_by_key(key);
+        let mut runs: Vec<(usize, usize, std::ops::Range<usize>)> = Vec::new();
+        for (k, pair) in sorted.iter().enumerate() {
+            let (a, b) = key(pair);
+            match runs.last_mut() {
+                Some((ra, rb, range)) if (*ra, *rb) == (a, b) => range.end = k + 1,
+                _ => runs.push((a, b, k..k + 1)),
+            }
+        }
+        Self {
+            group,
+            groups: roots.len(),
+            pairs: sorted,
+            runs,
+        }
+    }
+}
+
+/// An axis-aligned box.
+#[derive(Debug, Clone, Copy)]
+struct Aabb {
+    min: DVec3,
+    max: DVec3,
+}
+
+impl Aabb {
+    const EMPTY: Aabb = Aabb {
+        min: DVec3::INFINITY,
+        max: DVec3::NEG_INFINITY,
+    };
+
+    /// The box of a capsule whose axis runs from `a` to `b`.
+    fn capsule(a: DVec3, b: DVec3, radius: f64) -> Self {
+        Self {
+            min: a.min(b) - radius,
+            max: a.max(b) + radius,
+        }
+    }
+
+    fn union(self, other: Aabb) -> Self {
+        Self {
+            min: self.min.min(other.min),
+            max: self.max.max(other.max),
+        }
+    }
+
+    /// Whether the boxes come within `reach` of each other along every axis.
+    fn near(&self, other: &Aabb, reach: f64) -> bool {
+        self.min.cmple(other.max + reach).all() && other.min.cmple(self.max + reach).all()
+    }
 }
 
 impl Collision {
+    /// The task's data: the `pairs` of `capsules` kept apart ([`collision_pairs`]), the
+    /// `floor` capsules kept above the floor ([`floor_capsules`]), `margin` between surfaces,
+    /// at most `rows` constraints at once; the capsules grouped by the branches of
+    /// `skeleton` for the search (see [`Collision`]). [`Collision::validate`] checks it.
+    pub fn new(
+        skeleton: &Skeleton,
+        capsules: Vec<Capsule>,
+        pairs: Vec<(usize, usize)>,
+        floor: Vec<usize>,
+        margin: f64,
+        rows: usize,
+    ) -> Self {
+        let broad = BroadPhase::new(skeleton, &capsules, &pairs);
+        Self {
+            capsules: Arc::from(capsules),
+            pairs: Arc::from(pairs),
+            floor: Arc::from(floor),
+            margin,
+            rows,
+            broad: Arc::new(broad),
+        }
+    }
+
+    /// The body's capsules.
+    pub fn capsules(&self) -> &[Capsule] {
+        &self.capsules
+    }
+
+    /// Indices into [`Collision::capsules`] of the pairs tested.
+    pub fn pairs(&self) -> &[(usize, usize)] {
+        &self.pairs
+    }
+
+    /// Indices into [`Collision::capsules`] of those kept above the floor.
+    pub fn floor(&self) -> &[usize] {
+        &self.floor
+    }
+
+    /// Distance kept between surfaces (m).
+    pub fn margin(&self) -> f64 {
+        self.margin
+    }
+
+    /// Constraints held at once, at most.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
     /// Checks the data against a skeleton; the reason names the offending part.
     pub fn validate(&self, skeleton: &Skeleton) -> Result<(), String> {
         for (i, c) in self.capsules.iter().enumerate() {
@@ -71,17 +233,105 @@ impl Collision {
         Ok(())
     }
 
+    /// The DOF whose columns may be nonzero: those of the capsules' joints and their
+    /// ancestors, sorted.
+    pub(super) fn support(&self, skeleton: &Skeleton) -> Vec<usize> {
+        let joints = skeleton.joints();
+        let mut moved = vec![false; joints.len()];
+        for c in self.capsules.iter() {
+            let mut at = Some(c.joint);
+            while let Some(j) = at {
+                match moved.get_mut(j) {
+                    Some(m) if !*m => *m = true,
+                    _ => break,
+                }
+                at = joints.get(j).and_then(|joint| joint.parent);
+            }
+        }
+        joints
+            .iter()
+            .zip(&moved)
+            .filter(|(_, m)| **m)
+            .flat_map(|(joint, _)| joint.dof_range())
+            .collect::<std::collections::BTreeSet<usize>>()
+            .into_iter()
+            .collect()
+    }
+
     /// The constraints at `frames`: every pair and every floor capsule within the margin plus
     /// the band, nearest first, at most `rows`.
     pub(super) fn constraints(&self, frames: &Frames) -> Vec<Constraint> {
-        constraints(
-            frames,
-            &self.capsules,
-            &self.pairs,
-            self.margin,
-            &self.floor,
-            self.rows,
-        )
+        let reach = self.margin + COLLISION_BAND;
+        let capsules = &self.capsules;
+        let broad = &self.broad;
+        // Each capsule's ends in the world and its box, once; each group's box.
+        let ends: Vec<(DVec3, DVec3)> = capsules.iter().map(|c| c.world(frames)).collect();
+        let boxes: Vec<Aabb> = capsules
+            .iter()
+            .zip(&ends)
+            .map(|(c, &(a, b))| Aabb::capsule(a, b, c.radius))
+            .collect();
+        // Bounding spheres: tighter than the boxes for a capsule across the axes.
+        let spheres: Vec<(DVec3, f64)> = capsules
+            .iter()
+            .zip(&ends)
+            .map(|(c, &(a, b))| ((a + b) * 0.5, (b - a).length() * 0.5 + c.radius))
+            .collect();
+        let mut group_boxes = vec![Aabb::EMPTY; broad.groups];
+        for (&g, b) in broad.group.iter().zip(&boxes) {
+            if let Some(gb) = group_boxes.get_mut(g) {
+                *gb = gb.union(*b);
+            }
+        }
+        let mut found = Vec::new();
+        for (ga, gb, range) in &broad.runs {
+            let (Some(box_a), Some(box_b)) = (group_boxes.get(*ga), group_boxes.get(*gb)) else {
+                continue;
+            };
+            if !box_a.near(box_b, reach) {
+                continue;
+            }
+            for &(i, j) in broad.pairs.get(range.clone()).unwrap_or(&[]) {
+                let (Some(a), Some(b), Some(ba), Some(bb)) =
+                    (capsules.get(i), capsules.get(j), boxes.get(i), boxes.get(j))
+                else {
+                    continue;
+                };
+                let ((ca, ra), (cb, rb)) = (spheres[i], spheres[j]);
+                let apart = ra + rb + reach;
+                if !ba.near(bb, reach) || (ca - cb).length_squared() > apart * apart {
+                    continue;
+                }
+                let (distance, pa, pb) = surface_distance(a, ends[i], b, ends[j]);
+                let gap = pa - pb;
+                if distance < reach && gap.length() > 1e-9 {
+                    found.push(Constraint {
+                        distance,
+                        a: (a.joint, pa),
+                        b: Some((b.joint, pb)),
+                        normal: gap.normalize(),
+                    });
+                }
+            }
+        }
+        for &i in self.floor.iter() {
+            let (Some(c), Some(&(p0, p1))) = (capsules.get(i), ends.get(i)) else {
+                continue;
+            };
+            let low = if p0.y <= p1.y { p0 } else { p1 };
+            let distance = low.y - c.radius;
+            if distance < reach {
+                found.push(Constraint {
+                    distance,
+                    a: (c.joint, low),
+                    b: None,
+                    normal: DVec3::Y,
+                });
+            }
+        }
+        found.sort_by(|x, y| x.distance.total_cmp(&y.distance));
+        found.truncate(self.rows);
+        found
     }
 }
 
@@ -252,8 +502,13 @@ pub(super) fn errors(found: &[Constraint], margin: f64, err: &mut [f64]) -> f64 
     err.iter().map(|e| e * e).sum::<f64>().sqrt()
 }
 
-/// The task's rows at `found` into `jac_t` (`n x rows`, column-major, zero on entry): each
-/// the distance's change for unit velocities of the DOF of the two points' chains.
+/// The task's rows at `found` into `jac_t` (`n x found.len()`, column-major, zero on entry):
+/// each the distance's change for unit velocities of the DOF that move one point against the
+/// other. A DOF of the two points' common ancestors (or of the lowest common joint itself)
+/// carries both rigidly: it changes `pa - pb` by `axis x (pa - pb)` (or not at all), which
+/// is normal to the line of closest approach, so its entry is zero and is not written; the
+/// rows are sparse, on the chains from each point's joint up to their lowest common joint.
+/// A floor row has the whole chain of its point.
 pub(super) fn write_rows(
     skeleton: &Skeleton,
     frames: &Frames,
@@ -265,79 +520,60 @@ pub(super) fn write_rows(
         let Some(column) = jac_t.get_mut(row * n..(row + 1) * n) else {
             return;
         };
-        let ends = [(c.a.0, c.a.1, 1.0)]
-            .into_iter()
-            .chain(c.b.map(|(j, p)| (j, p, -1.0)));
-        for (joint, point, sign) in ends {
-            for d in skeleton.chain_dofs(joint) {
-                column[d] += sign
-                    * c.normal
-                        .dot(point_column(skeleton, frames, d, joint, point));
+        let (ja, pa) = c.a;
+        match c.b {
+            None => add_chain(skeleton, frames, (ja, pa), None, c.normal, column),
+            Some((jb, pb)) => {
+                let common = lowest_common_joint(skeleton, ja, jb);
+                add_chain(skeleton, frames, (ja, pa), common, c.normal, column);
+                add_chain(skeleton, frames, (jb, pb), common, -c.normal, column);
             }
         }
     }
 }
 
-/// The task's constraints at `frames`: every pair and every capsule of `floor` within
-/// `margin` plus the band, nearest first, at most `rows`. Pairs whose capsules' bounding
-/// spheres are further apart cost a distance of centres only.
-fn constraints(
+/// Adds to `column` `normal` dotted with the velocity of the world point `point` carried by
+/// `joint` for each DOF of `joint` and its ancestors below `stop` (the whole chain for
+/// `None`).
+fn add_chain(
+    skeleton: &Skeleton,
     frames: &Frames,
-    capsules: &[Capsule],
-    pairs: &[(usize, usize)],
-    margin: f64,
-    floor: &[usize],
-    rows: usize,
-) -> Vec<Constraint> {
-    let reach = margin + COLLISION_BAND;
-    // Each capsule's ends in the world and its bounding sphere, once.
-    let ends: Vec<(DVec3, DVec3)> = capsules.iter().map(|c| c.world(frames)).collect();
-    let spheres: Vec<(DVec3, f64)> = capsules
-        .iter()
-        .zip(&ends)
-        .map(|(c, &(a, b))| ((a + b) * 0.5, (b - a).length() * 0.5 + c.radius))
-        .collect();
-    let mut found = Vec::new();
-    for &(i, j) in pairs {
-        let (Some(a), Some(b)) = (capsules.get(i), capsules.get(j)) else {
-            continue;
+    (joint, point): (usize, DVec3),
+    stop: Option<usize>,
+    normal: DVec3,
+    column: &mut [f64],
+) {
+    let joints = skeleton.joints();
+    let kinds = skeleton.dof_kinds();
+    let mut at = Some(joint);
+    while let Some(j) = at.filter(|&j| Some(j) != stop) {
+        let Some(def) = joints.get(j) else {
+            return;
         };
-        let ((ca, ra), (cb, rb)) = (spheres[i], spheres[j]);
-        let apart = ra + rb + reach;
-        if (ca - cb).length_squared() > apart * apart {
-            continue;
-        }
-        let (distance, pa, pb) = surface_distance(a, ends[i], b, ends[j]);
-        let gap = pa - pb;
-        if distance < reach && gap.length() > 1e-9 {
-            found.push(Constraint {
-                distance,
-                a: (a.joint, pa),
-                b: Some((b.joint, pb)),
-                normal: gap.normalize(),
-            });
-        }
-    }
-    for (c, &(p0, p1)) in floor
-        .iter()
-        .filter_map(|&i| Some((capsules.get(i)?, ends.get(i)?)))
-    {
-        {
-            let low = if p0.y <= p1.y { p0 } else { p1 };
-            let distance = low.y - c.radius;
-            if distance < reach {
-                found.push(Constraint {
-                    distance,
-                    a: (c.joint, low),
-                    b: None,
-                    normal: DVec3::Y,
-                });
+        for d in def.dof_range() {
+            let axis = frames.dof_axis[d];
+            let velocity = if kinds[d].is_rotation() {
+                axis.cross(point - frames.joint_position[j])
+            } else {
+                axis
+            };
+            if let Some(entry) = column.get_mut(d) {
+                *entry += normal.dot(velocity);
             }
         }
+        at = def.parent;
     }
-    found.sort_by(|x, y| x.distance.total_cmp(&y.distance));
-    found.truncate(rows);
-    found
+}
+
+/// The lowest joint that is an ancestor of (or is) both `a` and `b` (joints are ordered
+/// parents first), `None` in a forest without one.
+fn lowest_common_joint(skeleton: &Skeleton, mut a: usize, mut b: usize) -> Option<usize> {
+    let joints = skeleton.joints();
+    while a != b {
+        let deeper = if a > b { &mut a } else { &mut b };
+        *deeper = joints.get(*deeper)?.parent?;
+    }
+    Some(a)
 }
 
 #[cfg(test)]

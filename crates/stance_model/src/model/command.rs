@@ -508,7 +508,8 @@ pub(super) fn goals_moved(
             | TaskKindSpec::Posture { .. }
             | TaskKindSpec::Comfort { .. }
             | TaskKindSpec::Line { .. }
-            | TaskKindSpec::Plane { .. } => {}
+            | TaskKindSpec::Plane { .. }
+            | TaskKindSpec::Collision { .. } => {}
         }
     }
     tasks

@@ -139,7 +139,8 @@ pub fn blended(spec: &TaskSpec, weight: f64, skeleton: &Skeleton, frames: &Frame
         | TaskKindSpec::Posture { .. }
         | TaskKindSpec::Comfort { .. }
         | TaskKindSpec::Line { .. }
-        | TaskKindSpec::Plane { .. } => out.weight *= weight,
+        | TaskKindSpec::Plane { .. }
+        | TaskKindSpec::Collision { .. } => out.weight *= weight,
     }
     out
 }

@@ -61,14 +61,8 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     let line = max(major, minor);
     var color = vec3<f32>(0.055, 0.06, 0.07);
     color = mix(color, vec3<f32>(0.2, 0.21, 0.23), line);
-    let axis_width = fwidth(xz) * 1.5;
-    if (abs(xz.y) < axis_width.y) {
-        color = vec3<f32>(0.55, 0.12, 0.12);
-    }
-    if (abs(xz.x) < axis_width.x) {
-        color = vec3<f32>(0.12, 0.2, 0.6);
-    }
-    // Soft dark discs under the characters and props: darker the nearer they rest.
+    // Soft dark discs under the characters and props (darker the nearer they rest), on the
+    // grid, not on the axes.
     var light = 1.0;
     for (var i = 0; i < 16; i = i + 1) {
         let shadow = shadows[i];
@@ -78,6 +72,14 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         }
     }
     color = color * light;
+
+    let axis_width = fwidth(xz) * 1.5;
+    if (abs(xz.y) < axis_width.y) {
+        color = vec3<f32>(0.55, 0.12, 0.12);
+    }
+    if (abs(xz.x) < axis_width.x) {
+        color = vec3<f32>(0.12, 0.2, 0.6);
+    }
     let distance_m = length(in.position_world - frame.camera_position_world.xyz);
     let fade = smoothstep(8.0, 30.0, distance_m);
     // Into the background, alpha too: a transparent background (0, 0, 0, 0) leaves the
