@@ -8,7 +8,8 @@ use egui::Pos2;
 use stance_editor::{MemoryHost, StanceApp};
 
 use crate::common::{
-    click_at, click_button, drag_right_forearm_up, harness_for, release_at, settle, state,
+    click_at, click_button, drag_right_forearm_up, harness_for, open_scene_panel, release_at,
+    settle, state,
 };
 
 fn characters(harness: &egui_kittest::Harness<'static, StanceApp>) -> Vec<serde_json::Value> {
@@ -29,6 +30,7 @@ fn a_second_character_is_added_posed_alone_and_selected_by_a_click_on_it() {
     let app = StanceApp::without_gpu(Box::new(host.clone())).unwrap();
     let mut harness = harness_for(app);
     settle(&mut harness);
+    open_scene_panel(&mut harness);
     click_button(&mut harness, "scene_add");
     settle(&mut harness);
     let cast = characters(&harness);

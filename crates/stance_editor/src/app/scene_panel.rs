@@ -21,14 +21,37 @@ const CHARACTER_BUTTONS: [&str; 8] = [
     "character_7",
 ];
 
-/// The scene panel.
+/// The scene panel: a section that starts closed while the scene is one character and no
+/// prop (the panel below stays where it was), open once there are more.
 pub(super) fn show(
     ui: &mut egui::Ui,
     model: &EditorModel,
     outbox: &mut Outbox,
     buttons: &mut ButtonRects,
 ) {
-    ui.heading("Scene");
+    let busy = model.character_count() > 1 || !model.props().is_empty();
+    let title = if busy {
+        format!(
+            "Scene: {} characters, {} props",
+            model.character_count(),
+            model.props().len()
+        )
+    } else {
+        "Scene".to_owned()
+    };
+    let header = egui::CollapsingHeader::new(RichText::new(title).heading())
+        .id_salt("scene_panel")
+        .default_open(busy)
+        .show(ui, |ui| scene_contents(ui, model, outbox, buttons));
+    buttons.push(("scene_panel", header.header_response.rect));
+}
+
+fn scene_contents(
+    ui: &mut egui::Ui,
+    model: &EditorModel,
+    outbox: &mut Outbox,
+    buttons: &mut ButtonRects,
+) {
     for (index, (character, selected)) in model.characters().enumerate() {
         let label = if selected {
             RichText::new(character.name()).strong()

@@ -132,3 +132,13 @@ pub fn release_at(harness: &mut Harness<'static, StanceApp>, pos: Pos2) {
         modifiers: Modifiers::NONE,
     });
 }
+
+/// Opens the side panel's *Scene* section (closed while the scene is one character) unless it
+/// shows its buttons already.
+pub fn open_scene_panel(harness: &mut Harness<'static, StanceApp>) {
+    if state(harness)["buttons"]["scene_add"].is_array() {
+        return;
+    }
+    click_button(harness, "scene_panel");
+    harness.run_steps(2);
+}
