@@ -250,30 +250,25 @@ export function isFigureColour(rgb) {
 }
 const FIGURE_CACHE = new Map();
 
-// The floor's colours (linear), and the light a contact shadow leaves on its base and lines:
-// from 1 down to 0.15 (the floor shader darkens at most by 0.85 under a thing resting on it).
-const FLOOR_LINEAR = {
-  base: [0.055, 0.06, 0.07],
-  line: [0.2, 0.21, 0.23],
-  red: [0.55, 0.12, 0.12],
-  blue: [0.12, 0.2, 0.6],
+// The floor's colours (floor.wgsl): its base, its lines (minor ones at 0.35), the red and
+// blue axes, each faded into the background with distance, in sRGB levels. Not under a contact
+// shadow (which darkens the base and lines near the feet): a darkened grey is also a textured
+// avatar's grey in shade, and the checks that use this look away from the feet.
+const FLOOR = {
+  base: [0.055, 0.06, 0.07].map(srgbByte),
+  line: [0.2, 0.21, 0.23].map(srgbByte),
+  red: [0.55, 0.12, 0.12].map(srgbByte),
+  blue: [0.12, 0.2, 0.6].map(srgbByte),
 };
-const SHADOW_LIGHTS = Array.from({ length: 18 }, (_, i) => 1 - i * 0.05);
 const BACKGROUND_LEVELS = [0.13, 0.145, 0.17].map((c) => c * 255);
 const mix = (a, b, t) => a.map((v, i) => v + (b[i] - v) * t);
-// The shadow darkens the base and its lines, not the axes (blended with the base at their
-// edges).
-const shaded = (linear, light) => linear.map((c) => srgbByte(c * light));
-const FLOOR_SEGMENTS = SHADOW_LIGHTS.flatMap((light) => [
-  [shaded(FLOOR_LINEAR.base, light), shaded(FLOOR_LINEAR.line, light)],
-  [shaded(FLOOR_LINEAR.base, light), shaded(FLOOR_LINEAR.red, 1)],
-  [shaded(FLOOR_LINEAR.base, light), shaded(FLOOR_LINEAR.blue, 1)],
-]);
+const FLOOR_SEGMENTS = [["base", "line"], ["base", "red"], ["base", "blue"]]
+  .map(([a, b]) => [FLOOR[a], FLOOR[b]]);
 
 /**
  * A pixel of the viewport's backdrop: the background, or the floor (its colours blended as
- * the edges of its lines and axes blend them with its base, the base and lines darkened by a
- * contact shadow, faded into the background), within 4 sRGB levels.
+ * the edges of its lines and axes blend them with its base, faded into the background), within
+ * 4 sRGB levels.
  */
 export function isBackdrop(rgb) {
   const key = (rgb[0] << 16) | (rgb[1] << 8) | rgb[2];
