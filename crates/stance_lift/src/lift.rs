@@ -114,10 +114,11 @@ pub fn lift(
         camera: Some(camera_spec(&camera)),
         ..Document::default()
     };
-    let (mut posture, mut report) = solve(skeleton, &document, &start)?;
+    let (mut posture, mut report) = solve_pose(skeleton, &document, &start, POSE_ITERATIONS)?;
     let mut flips = Vec::new();
-    let off = |p: &Posture| worst_pixel(skeleton, &finder, p, &view, person);
-    let mut worst = off(&posture);
+    let off =
+        |p: &Posture, below: Option<usize>| worst_pixel(skeleton, &finder, p, &view, person, below);
+    let mut worst = off(&posture, None);
     for _ in 0..MAX_FLIPS {
         if worst <= ON_PIXEL_PX {
             break;
@@ -128,10 +129,17 @@ pub fn lift(
             break;
         };
         flips.push(joint);
-        posture = flipped;
-        report = flipped_report;
-        worst = flipped_worst;
+        // The chosen flip solved to the end.
+        let (solved, solved_report) = solve_pose(skeleton, &document, &flipped, POSE_ITERATIONS)?;
+        let solved_worst = off(&solved, None);
+        (posture, report, worst) = if solved_worst <= flipped_worst {
+            (solved, solved_report, solved_worst)
+        } else {
+            (flipped, flipped_report, flipped_worst)
+        };
     }
+    // Comfort last, once, from the posture the image, the floor and balance chose.
+    let (posture, report) = settle_comfort(skeleton, &document, &posture, report)?;
     document.posture = PostureValues::from_posture(skeleton, &posture);
     Ok(Lifted {
         document,
@@ -170,19 +178,40 @@ fn floor_residual(report: &SolveReport) -> f64 {
         .map_or(0.0, |l| l.residual_after)
 }
 
-/// A keypoint this close to its pixel counts as on it: no flip is tried (px).
-const ON_PIXEL_PX: f64 = 0.5;
+/// A keypoint this close to its pixel counts as on it: no flip is tried (px). A wrong depth
+/// puts a limb's keypoints pixels off its rays; a right one that the pose stage left short of
+/// its tolerance stays within a pixel or so.
+const ON_PIXEL_PX: f64 = 1.5;
 
 /// The largest distance in the image between a seen keypoint and where `posture` puts it
 /// (pixels; the renderer's projection of the body's keypoints, as `stance render` draws them).
+/// With `below`, only the keypoints on that joint's segment or below it (a limb whose depth a
+/// flip would change).
 fn worst_pixel(
     skeleton: &Skeleton,
     finder: &KeypointFinder,
     posture: &Posture,
     view: &View,
     person: &OpenPosePerson,
+    below: Option<usize>,
 ) -> f64 {
     let points = finder.find(skeleton, &Frames::new(skeleton, posture));
+    let sources = finder.sources(skeleton);
+    let on_limb = |joints: [Option<usize>; 2]| {
+        below.is_none_or(|limb| {
+            joints
+                .into_iter()
+                .flatten()
+                .any(|joint| descends_from(skeleton, joint, limb))
+        })
+    };
+    let body_joints = sources.body.map(|source| match source {
+        Some(KeypointSource::On(e)) => [Some(e.joint), None],
+        Some(KeypointSource::Between(a, b)) => [Some(a.joint), Some(b.joint)],
+        None => [None, None],
+    });
+    let hand_joints =
+        |hand: [Option<Effector>; HAND_KEYPOINTS]| hand.map(|e| [e.map(|e| e.joint), None]);
     let project = |p: Option<DVec3>| {
         let p = p?;
         view.camera
@@ -193,11 +222,37 @@ fn worst_pixel(
         .body
         .iter()
         .zip(points.body.map(project))
-        .chain(person.left_hand.iter().zip(points.left_hand.map(project)))
-        .chain(person.right_hand.iter().zip(points.right_hand.map(project)));
+        .zip(body_joints)
+        .chain(
+            person
+                .left_hand
+                .iter()
+                .zip(points.left_hand.map(project))
+                .zip(hand_joints(sources.left_hand)),
+        )
+        .chain(
+            person
+                .right_hand
+                .iter()
+                .zip(points.right_hand.map(project))
+                .zip(hand_joints(sources.right_hand)),
+        );
     pairs
-        .filter_map(|(seen, got)| Some((*seen)?.distance(got.unwrap_or(DVec2::splat(1e9)))))
+        .filter(|(_, joints)| on_limb(*joints))
+        .filter_map(|((seen, got), _)| Some((*seen)?.distance(got.unwrap_or(DVec2::splat(1e9)))))
         .fold(0.0, f64::max)
+}
+
+/// Whether `joint` is `ancestor` or below it in the skeleton.
+fn descends_from(skeleton: &Skeleton, joint: usize, ancestor: usize) -> bool {
+    let mut at = Some(joint);
+    while let Some(index) = at {
+        if index == ancestor {
+            return true;
+        }
+        at = skeleton.joints().get(index).and_then(|j| j.parent);
+    }
+    false
 }
 
 /// Each candidate joint's depth flipped and the tasks solved again: the one that brings the
@@ -209,16 +264,21 @@ fn best_flip(
     camera: &OrbitCamera,
     report: &SolveReport,
     worst: f64,
-    off: &dyn Fn(&Posture) -> f64,
+    off: &dyn Fn(&Posture, Option<usize>) -> f64,
 ) -> Result<Option<(String, Posture, SolveReport, f64)>, LiftError> {
     let mut best: Option<(String, Posture, SolveReport, f64)> = None;
     for joint in FLIP_CANDIDATES {
-        if skeleton.joint_index(joint).is_none() {
+        // Only a limb whose own keypoints are off its rays is tried.
+        let Some(index) = skeleton.joint_index(joint) else {
+            continue;
+        };
+        if off(posture, Some(index)) <= ON_PIXEL_PX {
             continue;
         }
         let flipped = crate::flip_depth(skeleton, posture, camera, joint)?;
-        let (solved, solved_report) = solve(skeleton, document, &flipped)?;
-        let solved_worst = off(&solved);
+        let (solved, solved_report) =
+            solve_pose(skeleton, document, &flipped, CANDIDATE_ITERATIONS)?;
+        let solved_worst = off(&solved, None);
         // Kept when it halves the worst keypoint's distance and leaves the feet where they
         // stood (the floor's level within 5 mm of what it was).
         let floor_kept = floor_residual(&solved_report) <= floor_residual(report) + 0.005;
@@ -234,18 +294,97 @@ fn best_flip(
 }
 
 /// Solves `document`'s tasks on `skeleton` from `start` (a lift's, or one flipped by
-/// [`crate::flip_depth`]).
+/// [`crate::flip_depth`]): the image, the floor and balance first ([`solve_pose`]), then a few
+/// iterations of comfort among the postures they leave ([`settle_comfort`]).
 pub fn solve(
     skeleton: &Skeleton,
     document: &Document,
     start: &Posture,
 ) -> Result<(Posture, SolveReport), LiftError> {
+    let (posture, report) = solve_pose(skeleton, document, start, POSE_ITERATIONS)?;
+    settle_comfort(skeleton, document, &posture, report)
+}
+
+/// Iterations each flip candidate is solved for before they are compared: the chosen one is
+/// then solved to the end.
+const CANDIDATE_ITERATIONS: usize = 50;
+/// A level is met within this (m): a keypoint 0.1 mm off its ray is a hundredth of a pixel
+/// at the distances images are taken from.
+const LIFT_TOLERANCE_M: f64 = 1e-4;
+/// Iterations of the pose stage: the image, the floor and balance are met well within them
+/// when they can be; a stage that stalls stops sooner.
+const POSE_ITERATIONS: usize = 200;
+/// Iterations of comfort after the pose stage: the comfort level is never "met" (it moves
+/// while its cost falls), so its share of the lift is bounded here.
+const COMFORT_ITERATIONS: usize = 12;
+
+/// `document`'s tasks without comfort, solved from `start`: what the flip search compares,
+/// stopping once every level is met.
+fn solve_pose(
+    skeleton: &Skeleton,
+    document: &Document,
+    start: &Posture,
+    iterations: usize,
+) -> Result<(Posture, SolveReport), LiftError> {
+    let pose = Document {
+        tasks: document
+            .tasks
+            .iter()
+            .filter(|t| !matches!(t.kind, TaskKindSpec::Comfort { .. }))
+            .cloned()
+            .collect(),
+        ..document.clone()
+    };
+    solve_with(skeleton, &pose, start, iterations)
+}
+
+/// Comfort among the postures that keep the image, the floor and balance: a few iterations
+/// from `posture`; the pose stage's result (`report`) stands when the document has no comfort
+/// task or the comfort stage loses a higher level.
+fn settle_comfort(
+    skeleton: &Skeleton,
+    document: &Document,
+    posture: &Posture,
+    report: SolveReport,
+) -> Result<(Posture, SolveReport), LiftError> {
+    if !document
+        .tasks
+        .iter()
+        .any(|t| matches!(t.kind, TaskKindSpec::Comfort { .. }))
+    {
+        return Ok((posture.clone(), report));
+    }
+    let (settled, settled_report) = solve_with(skeleton, document, posture, COMFORT_ITERATIONS)?;
+    // Strict priority keeps the higher levels; a level that was met and no longer is (the
+    // iteration budget cut a correction short) keeps the pose stage's posture.
+    let lost = report.levels.iter().any(|before| {
+        before.met
+            && settled_report
+                .levels
+                .iter()
+                .any(|after| after.level == before.level && !after.met)
+    });
+    if lost {
+        Ok((posture.clone(), report))
+    } else {
+        Ok((settled, settled_report))
+    }
+}
+
+fn solve_with(
+    skeleton: &Skeleton,
+    document: &Document,
+    start: &Posture,
+    max_iterations: usize,
+) -> Result<(Posture, SolveReport), LiftError> {
     let with_start = Document {
         posture: PostureValues::from_posture(skeleton, start),
         ..document.clone()
     };
-    let problem = Problem::from_document(&with_start, skeleton.clone())
+    let mut problem = Problem::from_document(&with_start, skeleton.clone())
         .map_err(|e| LiftError::Problem(e.to_string()))?;
+    problem.settings.max_iterations = max_iterations;
+    problem.settings.tolerance = LIFT_TOLERANCE_M;
     problem
         .solve()
         .map_err(|e| LiftError::Problem(e.to_string()))
