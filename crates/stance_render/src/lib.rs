@@ -63,22 +63,33 @@ pub use skinned_gpu::{AvatarGpu, AvatarUpload, UPLOAD_STEP_BYTES};
 
 use glam::Vec3;
 
-/// Every WGSL shader of the renderer, by file name (validated by naga in the tests); the two
-/// that draw bodies end with the control maps' colour (`shaders/control_map.wgsl.part`, a
-/// piece of both, not a shader of its own).
+/// Every WGSL shader of the renderer, by file name (validated by naga in the tests), each ended
+/// with the pieces it shares (`shaders/*.wgsl.part`, not shaders of their own): the frame's
+/// uniforms and sRGB encoding (all), the capsules' and props' light (`lit`), the control maps'
+/// colour (those that draw bodies and props).
 pub const SHADERS: &[(&str, &str)] = &[
     (
         "capsule.wgsl",
         concat!(
             include_str!("shaders/capsule.wgsl"),
+            include_str!("shaders/frame.wgsl.part"),
+            include_str!("shaders/lit.wgsl.part"),
             include_str!("shaders/control_map.wgsl.part")
         ),
     ),
-    ("floor.wgsl", include_str!("shaders/floor.wgsl")),
+    (
+        "floor.wgsl",
+        concat!(
+            include_str!("shaders/floor.wgsl"),
+            include_str!("shaders/frame.wgsl.part")
+        ),
+    ),
     (
         "prop.wgsl",
         concat!(
             include_str!("shaders/prop.wgsl"),
+            include_str!("shaders/frame.wgsl.part"),
+            include_str!("shaders/lit.wgsl.part"),
             include_str!("shaders/control_map.wgsl.part")
         ),
     ),
@@ -86,6 +97,7 @@ pub const SHADERS: &[(&str, &str)] = &[
         "skinned.wgsl",
         concat!(
             include_str!("shaders/skinned.wgsl"),
+            include_str!("shaders/frame.wgsl.part"),
             include_str!("shaders/control_map.wgsl.part")
         ),
     ),

@@ -312,14 +312,27 @@ impl EditorModel {
         if placement.validate_at("placement").is_err() {
             return super::Change::Nothing;
         }
+        self.edit_character(id, |character| {
+            let changed = character.placement != placement;
+            character.placement = placement;
+            changed
+        })
+    }
+
+    /// A change of the character `id`'s entry in the cast (its name, its place) that `edit`
+    /// makes, saying whether it changed anything: one undo step over a drag or typing.
+    fn edit_character(
+        &mut self,
+        id: u64,
+        edit: impl FnOnce(&mut Character) -> bool,
+    ) -> super::Change {
         let before = self.cast_snapshot();
         let Some(character) = self.character_mut(id) else {
             return super::Change::Nothing;
         };
-        if character.placement == placement {
+        if !edit(character) {
             return super::Change::Nothing;
         }
-        character.placement = placement;
         self.history.record_cast(before, true, self.now_secs);
         super::Change::Document
     }
@@ -459,16 +472,11 @@ impl EditorModel {
             self.warn("A character's name cannot be empty.");
             return super::Change::Nothing;
         };
-        let before = self.cast_snapshot();
-        let Some(character) = self.character_mut(id) else {
-            return super::Change::Nothing;
-        };
-        if character.name == name {
-            return super::Change::Nothing;
-        }
-        character.name = name;
-        self.history.record_cast(before, true, self.now_secs);
-        super::Change::Document
+        self.edit_character(id, |character| {
+            let changed = character.name != name;
+            character.name = name;
+            changed
+        })
     }
 
     /// Makes the character `id` the selected one; the gesture, the joint selection, the
@@ -481,12 +489,7 @@ impl EditorModel {
         let Some(index) = self.cast.others.iter().position(|c| c.id == id) else {
             return false;
         };
-        self.end_gesture();
-        self.cancel_opening();
-        self.sensors.release();
-        self.selected_joint = None;
-        self.hovered_joint = None;
-        self.trace.clear();
+        self.character_switched_out();
         let selected_at = self.cast.selected_at;
         // The incoming character's place in the scene's order.
         let incoming_at = if index < selected_at {
@@ -503,6 +506,17 @@ impl EditorModel {
         self.cast.selected_at = incoming_at;
         self.character_switched_in();
         true
+    }
+
+    /// What belonged to the character left ends: the gesture, the joint selection and hover,
+    /// the trace, the sensors' hold, and a clip on its way to it (cancelled).
+    fn character_switched_out(&mut self) {
+        self.end_gesture();
+        self.cancel_opening();
+        self.sensors.release();
+        self.selected_joint = None;
+        self.hovered_joint = None;
+        self.trace.clear();
     }
 
     /// The incoming character's bones are rebuilt, its avatar's GPU model made again if the
@@ -539,12 +553,7 @@ impl EditorModel {
                 .position(|c| c.id == snapshot.selected)
             {
                 let incoming = self.cast.removed.remove(at);
-                self.end_gesture();
-                self.cancel_opening();
-                self.sensors.release();
-                self.selected_joint = None;
-                self.hovered_joint = None;
-                self.trace.clear();
+                self.character_switched_out();
                 let outgoing = std::mem::replace(&mut self.character, incoming);
                 self.cast.others.push(outgoing);
                 self.character_switched_in();

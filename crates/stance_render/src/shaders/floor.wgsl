@@ -2,18 +2,6 @@
 // the X axis in red and the Z axis in blue, soft contact shadows under what stands on it,
 // fading into the background with distance.
 
-struct Frame {
-    clip_from_world: mat4x4<f32>,
-    camera_position_world: vec4<f32>,
-    light_direction_world: vec4<f32>,
-    background: vec4<f32>,
-    view_from_world: mat4x4<f32>,
-    // A control map instead of the shaded picture: x 0 shaded, 1 depth, 2 normals, 3 mask;
-    // y, z: the depth (m along the view) drawn white and black.
-    control_map: vec4<f32>,
-};
-
-@group(0) @binding(0) var<uniform> frame: Frame;
 // Contact shadows: x, z of the centre, radius (m), strength (0: none).
 @group(0) @binding(1) var<uniform> shadows: array<vec4<f32>, 16>;
 
@@ -44,13 +32,6 @@ fn grid_line(coordinate: vec2<f32>, spacing: f32) -> f32 {
     let width = fwidth(scaled);
     let distance_to_line = abs(fract(scaled - 0.5) - 0.5) / max(width, vec2<f32>(1e-4));
     return 1.0 - min(min(distance_to_line.x, distance_to_line.y), 1.0);
-}
-
-fn linear_to_srgb(linear: vec3<f32>) -> vec3<f32> {
-    let c = clamp(linear, vec3<f32>(0.0), vec3<f32>(1.0));
-    let low = c * 12.92;
-    let high = 1.055 * pow(c, vec3<f32>(1.0 / 2.4)) - 0.055;
-    return select(high, low, c <= vec3<f32>(0.0031308));
 }
 
 @fragment

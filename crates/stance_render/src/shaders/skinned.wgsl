@@ -2,17 +2,6 @@
 // vertex, from a palette of at most 256 matrices in a uniform buffer (WebGL2 has no storage
 // buffers). Matrices map the mesh's space to the H-Anim world (+Y up, metres).
 
-struct Frame {
-    clip_from_world: mat4x4<f32>,
-    camera_position_world: vec4<f32>,
-    light_direction_world: vec4<f32>,
-    background: vec4<f32>,
-    view_from_world: mat4x4<f32>,
-    // A control map instead of the shaded picture: x 0 shaded, 1 depth, 2 normals, 3 mask;
-    // y, z: the depth (m along the view) drawn white and black.
-    control_map: vec4<f32>,
-};
-
 struct Palette {
     world_from_mesh: array<mat4x4<f32>, 256>,
 };
@@ -24,7 +13,6 @@ struct Material {
     params: vec4<f32>,
 };
 
-@group(0) @binding(0) var<uniform> frame: Frame;
 @group(1) @binding(0) var<uniform> palette: Palette;
 @group(2) @binding(0) var<uniform> material: Material;
 @group(2) @binding(1) var base_texture: texture_2d<f32>;
@@ -64,14 +52,6 @@ fn vs_main(in: VertexIn) -> VertexOut {
     out.uv = in.uv;
     return out;
 }
-
-fn linear_to_srgb(linear: vec3<f32>) -> vec3<f32> {
-    let c = clamp(linear, vec3<f32>(0.0), vec3<f32>(1.0));
-    let low = c * 12.92;
-    let high = 1.055 * pow(c, vec3<f32>(1.0 / 2.4)) - 0.055;
-    return select(high, low, c <= vec3<f32>(0.0031308));
-}
-
 
 @fragment
 fn fs_main(in: VertexOut, @builtin(front_facing) front_facing: bool) -> @location(0) vec4<f32> {
