@@ -1,6 +1,7 @@
-//! `stance lift K.json --out DOC.json`: a posture lifted from OpenPose keypoints
-//! (`stance_lift`): each keypoint of the first person kept on its camera ray, the feet on the
-//! floor, comfort below; the document keeps the camera as its saved view.
+//! `stance lift K.json --out DOC.json`: postures lifted from OpenPose keypoints
+//! (`stance_lift`): each keypoint kept on its camera ray, the feet on the floor, comfort below;
+//! the document keeps the camera as its saved view. One person gives a document; several give
+//! a scene of one character each (or `--person N` lifts one of them).
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -8,7 +9,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
 use stance_hanim::{LevelOfArticulation, SkeletonOptions, default_skeleton};
-use stance_lift::{ObservedPose, flip_depth, lift, solve};
+use stance_lift::{ObservedPose, flip_depth, lift, lift_people, lifted_scene, solve};
 use stance_render::OrbitCamera;
 
 use crate::render::parse_size;
@@ -39,6 +40,10 @@ pub struct LiftArgs {
     /// Level of articulation of the body (1 to 4).
     #[arg(long, default_value_t = 2)]
     pub loa: u8,
+    /// Lift only this person of the file (1 for the first): a document. Without it, a file
+    /// of several people gives a scene with a character each.
+    #[arg(long)]
+    pub person: Option<usize>,
 }
 
 /// The camera of `--camera`: inline JSON, or a file of it or of a document.
@@ -71,12 +76,23 @@ pub fn run(args: LiftArgs) -> Result<()> {
         .with_context(|| format!("cannot read {}", args.keypoints.display()))?;
     let observed = ObservedPose::from_json(&text, size)
         .map_err(|e| anyhow!("{}: {e}", args.keypoints.display()))?;
-    let person = observed
-        .first_person()
-        .map_err(|e| anyhow!("{}: {e}", args.keypoints.display()))?;
-    if observed.people.len() > 1 {
-        eprintln!(
-            "note: {} people in {}: only the first is lifted (several people come with the scene)",
+    let chosen = match args.person {
+        Some(n) => {
+            let count = observed.people.len();
+            let person = n
+                .checked_sub(1)
+                .and_then(|i| observed.people.get(i))
+                .ok_or_else(|| {
+                    anyhow!("--person {n}: the file lists {count} people (1 to {count})")
+                })?;
+            Some(person)
+        }
+        None if observed.people.len() == 1 => observed.people.first(),
+        None => None,
+    };
+    if chosen.is_none() && !args.flip.is_empty() {
+        bail!(
+            "--flip: {} people in {}: pick the one to flip with --person N",
             observed.people.len(),
             args.keypoints.display()
         );
@@ -86,6 +102,12 @@ pub fn run(args: LiftArgs) -> Result<()> {
         ..SkeletonOptions::default()
     })?;
     let skeleton = &body.skeleton;
+    if args.out == args.keypoints {
+        bail!("--out {}: the keypoints file itself", args.out.display());
+    }
+    let Some(person) = chosen else {
+        return lift_scene(&args, &observed, skeleton, camera);
+    };
     let started = Instant::now();
     let mut lifted = lift(
         skeleton,
@@ -104,9 +126,6 @@ pub fn run(args: LiftArgs) -> Result<()> {
     }
     lifted.document.posture =
         stance_document::PostureValues::from_posture(skeleton, &lifted.posture);
-    if args.out == args.keypoints {
-        bail!("--out {}: the keypoints file itself", args.out.display());
-    }
     std::fs::write(&args.out, lifted.document.to_json(true))
         .with_context(|| format!("cannot write {}", args.out.display()))?;
     let camera_words = if lifted.camera_fitted {
@@ -117,8 +136,9 @@ pub fn run(args: LiftArgs) -> Result<()> {
         "the camera the keypoints file carries"
     };
     eprintln!(
-        "{}: {} keypoints of the first person lifted with {camera_words}, feet on the floor: {}; {} iterations{}; lift {:.1} ms",
+        "{}: {} keypoints of person {} lifted with {camera_words}, feet on the floor: {}; {} iterations{}; lift {:.1} ms",
         args.out.display(),
+        args.person.unwrap_or(1),
         lifted.keypoints_used,
         if lifted.standing.is_empty() {
             "none".to_owned()
@@ -131,6 +151,44 @@ pub fn run(args: LiftArgs) -> Result<()> {
         } else {
             format!(", depth flipped at {}", lifted.flips.join(", "))
         },
+        lift_time.as_secs_f64() * 1e3
+    );
+    Ok(())
+}
+
+/// Every person of `observed` lifted through one camera, written as a scene of one character
+/// each.
+fn lift_scene(
+    args: &LiftArgs,
+    observed: &ObservedPose,
+    skeleton: &stance_ik::Skeleton,
+    camera: Option<OrbitCamera>,
+) -> Result<()> {
+    let started = Instant::now();
+    let people = lift_people(skeleton, observed, camera)
+        .map_err(|e| anyhow!("{}: {e}", args.keypoints.display()))?;
+    let lift_time = started.elapsed();
+    let scene = lifted_scene(&people);
+    std::fs::write(&args.out, scene.to_json(true))
+        .with_context(|| format!("cannot write {}", args.out.display()))?;
+    let fitted = people.first().is_some_and(|p| p.camera_fitted);
+    eprintln!(
+        "{}: {} people lifted as {} characters of one scene, through {}; keypoints used {}; lift {:.1} ms",
+        args.out.display(),
+        people.len(),
+        scene.characters.len(),
+        if camera.is_some() {
+            "the camera of --camera"
+        } else if fitted {
+            "a camera fitted to the first person"
+        } else {
+            "the camera the keypoints file carries"
+        },
+        people
+            .iter()
+            .map(|p| p.keypoints_used.to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
         lift_time.as_secs_f64() * 1e3
     );
     Ok(())

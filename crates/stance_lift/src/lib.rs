@@ -14,7 +14,7 @@ mod lift;
 mod read;
 
 pub use flip::flip_depth;
-pub use lift::{Lifted, camera_spec, lift, solve};
+pub use lift::{Lifted, camera_spec, lift, lift_people, lifted_scene, solve};
 pub use read::ObservedPose;
 
 /// Why keypoints cannot be lifted. The messages are meant for the person who gave them.
@@ -31,6 +31,9 @@ pub enum LiftError {
     /// The file lists nobody.
     #[error("the keypoints file lists no person (`people` is empty)")]
     NoPeople,
+    /// One person of several (1-based) could not be lifted.
+    #[error("person {0}: {1}")]
+    Person(usize, Box<LiftError>),
     /// Every keypoint of the person is missing.
     #[error("every keypoint of the person is missing (0, 0, 0): nothing to lift")]
     NoKeypoints,

@@ -723,3 +723,45 @@ fn rest_root(skeleton: &Skeleton) -> DVec3 {
         .copied()
         .unwrap_or_default()
 }
+
+/// Lifts every person of `observed` onto `skeleton`, in the file's order, through one camera:
+/// `camera`, else the one the file carries, else the one fitted to the first person (so that
+/// where the people stand relative to each other comes from one view). A person whose
+/// keypoints cannot be lifted fails the whole, naming them (1-based).
+pub fn lift_people(
+    skeleton: &Skeleton,
+    observed: &crate::ObservedPose,
+    camera: Option<OrbitCamera>,
+) -> Result<Vec<Lifted>, LiftError> {
+    let mut camera = camera.or(observed.camera);
+    let mut lifted = Vec::with_capacity(observed.people.len());
+    for (index, person) in observed.people.iter().enumerate() {
+        let one = lift(skeleton, person, observed.size_px, camera)
+            .map_err(|e| LiftError::Person(index + 1, Box::new(e)))?;
+        camera = Some(one.camera);
+        lifted.push(one);
+    }
+    if lifted.is_empty() {
+        return Err(LiftError::NoPeople);
+    }
+    Ok(lifted)
+}
+
+/// The lifted people as one scene: a character each ("Person 1", "Person 2"...), where the lift
+/// put them (their placements at the origin: each body's root holds its place in the camera's
+/// world), the first one selected.
+pub fn lifted_scene(people: &[Lifted]) -> stance_document::Scene {
+    stance_document::Scene {
+        characters: people
+            .iter()
+            .enumerate()
+            .map(|(index, person)| stance_document::SceneCharacter {
+                name: format!("Person {}", index + 1),
+                placement: stance_document::Placement::default(),
+                document: person.document.clone(),
+            })
+            .collect(),
+        props: Vec::new(),
+        selected: 0,
+    }
+}

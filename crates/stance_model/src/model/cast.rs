@@ -116,10 +116,15 @@ impl Character {
         }
     }
 
-    /// Its entry in the scene document.
-    fn scene_character(&self) -> SceneCharacter {
+    /// Its entry in the scene document; `for_autosave`: its clip file kept only when small
+    /// (`Timeline::autosaved_clip`), else named.
+    fn scene_character(&self, for_autosave: bool) -> SceneCharacter {
         let mut document = document_of(&self.session, self.avatar_url.as_deref());
-        document.clip = self.timeline.document_clip().cloned();
+        document.clip = if for_autosave {
+            self.timeline.autosaved_clip()
+        } else {
+            self.timeline.document_clip().cloned()
+        };
         SceneCharacter {
             name: self.name.clone(),
             placement: self.placement,
@@ -205,11 +210,17 @@ impl EditorModel {
         self.cast.others.len() + 1
     }
 
-    /// The whole scene as a document: every character's document, name and placement.
+    /// The whole scene as a document: every character's document (its clip embedded), name and
+    /// placement, and the props.
     pub fn scene(&self) -> Scene {
+        self.scene_of(false)
+    }
+
+    /// The scene; `for_autosave`: each character's clip file kept only when small.
+    pub(super) fn scene_of(&self, for_autosave: bool) -> Scene {
         let characters = self
             .characters()
-            .map(|(c, _)| c.scene_character())
+            .map(|(c, _)| c.scene_character(for_autosave))
             .collect();
         Scene {
             characters,

@@ -90,14 +90,10 @@ impl EditorModel {
         }
     }
 
-    /// The scene as the autosave keeps it: the selected character's clip embedded when it
-    /// is small enough (see [`Self::autosaved_clip`]).
+    /// The scene as the autosave keeps it: each character's clip file only when small (see
+    /// `Timeline::autosaved_clip`).
     pub(super) fn autosaved_scene(&self) -> Scene {
-        let mut scene = self.scene();
-        if let Some(entry) = scene.characters.get_mut(scene.selected) {
-            entry.document.clip = self.character.timeline.autosaved_clip();
-        }
-        scene
+        self.scene_of(true)
     }
 
     pub(super) fn autosave(&mut self) {
