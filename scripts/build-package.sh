@@ -25,12 +25,14 @@ if [ "$workspace" != "$package" ]; then
   exit 1
 fi
 pkg=packages/stance-ik/pkg
-# One module: crate $1 built as pkg/$2*, each in a cargo run of its own (built together,
-# cargo would unify features and give the solver's bindings to the retargeting module).
-module() {
+# One module: crate $1 compiled (each in a cargo run of its own: built together, cargo would
+# unify features and give the solver's bindings to the retargeting module).
+compile() {
+  cargo rustc --quiet --release -p "$1" --lib --crate-type cdylib --target wasm32-unknown-unknown
+}
+# Crate $1's wasm given its glue and shrunk as pkg/$2*, when cargo's is newer.
+finish() {
   local crate=$1 name=$2
-  cargo rustc --quiet --release -p "$crate" --lib --crate-type cdylib \
-    --target wasm32-unknown-unknown
   local wasm=${CARGO_TARGET_DIR:-target}/wasm32-unknown-unknown/release/$crate.wasm
   local out=$pkg/${name}_bg.wasm
   if [ -f "$out" ] && [ -f "$pkg/$name.js" ] && [ ! "$wasm" -nt "$out" ]; then
@@ -54,5 +56,12 @@ module() {
   say "$name ready: wasm $((gzip_size / 1024)) KiB gzipped"
 }
 mkdir -p "$pkg"
-module stance_js stance_ik
-module stance_js_motion stance_ik_motion
+compile stance_js
+compile stance_js_motion
+# wasm-opt takes about 10 s a module: the two side by side, one per core.
+finish stance_js stance_ik &
+solver=$!
+finish stance_js_motion stance_ik_motion &
+motion=$!
+wait "$solver"
+wait "$motion"

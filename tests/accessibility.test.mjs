@@ -46,7 +46,9 @@ describe("accessibility on WebGL2", () => {
   let context;
   let page;
   before(async () => {
-    context = await launch(CONFIGURATIONS.webgl2);
+    // A smaller window: the keyboard's way through the panels is the same, and each Tab's
+    // frame draws a smaller 3D view (software GL).
+    context = await launch({ ...CONFIGURATIONS.webgl2, viewport: { width: 1000, height: 640 } });
     ({ page } = await openEditor(context, site.url));
     await page.waitForFunction(() => document.querySelectorAll("#a11y button").length > 5,
       null, { timeout: 30_000 });

@@ -45,7 +45,7 @@ export async function launch(configuration) {
     executablePath: CHROMIUM,
     headless: true,
     args: [...BASE_ARGS, ...configuration.args],
-    viewport: { width: 1280, height: 720 },
+    viewport: configuration.viewport ?? { width: 1280, height: 720 },
   });
 }
 
