@@ -353,3 +353,99 @@ fn props_are_added_in_front_edited_removed_and_undone_with_the_scene() {
     assert_eq!(editor.model.props().len(), 2);
     assert_eq!(editor.model.props()[0], ball);
 }
+
+/// The selected character's joint `name` in the scene (its placement applied).
+fn in_scene(editor: &Clocked, name: &str) -> glam::DVec3 {
+    let placement = editor.model.character().placement();
+    placement
+        .scene_from_character()
+        .transform_point3(editor.position(name))
+}
+
+#[test]
+fn a_hand_put_on_a_bar_reaches_its_axis_and_one_put_on_a_table_rests_on_it() {
+    // Catches: a prop's geometry taken in the wrong frame (the character is moved and turned
+    // here), the bar's axis or the box's top misplaced, the task not added at all. The oracle
+    // is the props' own scene geometry, not the tasks made from them.
+    use stance_document::PropShape;
+    use stance_model::model::TaskCommand;
+    let mut editor = Clocked::new();
+    let id = editor.model.character().id();
+    editor.apply(Command::Scene(SceneCommand::Place(
+        id,
+        Placement {
+            position: [0.4, 0.0, 0.2],
+            yaw_degrees: 30.0,
+        },
+    )));
+    editor.settle();
+    // A vertical bar 12 cm beside the right wrist (in the scene).
+    editor.apply(Command::Scene(SceneCommand::AddProp(PropShape::Cylinder {
+        radius: 0.02,
+        height: 2.0,
+    })));
+    let wrist = in_scene(&editor, "r_radiocarpal");
+    let mut bar = editor.model.props()[0].clone();
+    bar.position = [wrist.x - 0.12, 1.0, wrist.z + 0.05];
+    bar.rotation = [0.0, 0.0, 0.0, 1.0];
+    editor.apply(Command::Scene(SceneCommand::EditProp(0, bar.clone())));
+    let r_wrist = editor.joint("r_radiocarpal");
+    let feet = (
+        in_scene(&editor, "l_talocrural"),
+        in_scene(&editor, "r_talocrural"),
+    );
+    let added = editor.apply(Command::Task(TaskCommand::AddOnProp {
+        joint: r_wrist,
+        prop: 0,
+    }));
+    assert_eq!(added, Change::Document);
+    editor.settle();
+    let wrist = in_scene(&editor, "r_radiocarpal");
+    let off_axis = glam::DVec2::new(wrist.x - bar.position[0], wrist.z - bar.position[2]).length();
+    assert!(
+        off_axis < 1e-3,
+        "the wrist is {off_axis} m from the bar's axis"
+    );
+    assert!((in_scene(&editor, "l_talocrural") - feet.0).length() < 1e-3);
+    assert!((in_scene(&editor, "r_talocrural") - feet.1).length() < 1e-3);
+
+    // A table top 8 cm under the left hand: the hand put on it.
+    editor.apply(Command::Scene(SceneCommand::AddProp(PropShape::Plane {
+        size: [0.6, 0.4],
+    })));
+    let hand = in_scene(&editor, "l_radiocarpal");
+    let mut table = editor.model.props()[1].clone();
+    table.position = [hand.x + 0.05, hand.y - 0.08, hand.z + 0.1];
+    table.rotation = [0.0, 0.0, 0.0, 1.0];
+    editor.apply(Command::Scene(SceneCommand::EditProp(1, table.clone())));
+    let l_wrist = editor.joint("l_radiocarpal");
+    editor.apply(Command::Task(TaskCommand::AddOnProp {
+        joint: l_wrist,
+        prop: 1,
+    }));
+    editor.settle();
+    let hand = in_scene(&editor, "l_radiocarpal");
+    assert!(
+        (hand.y - table.position[1]).abs() < 1e-3,
+        "the hand at {} m, the table at {} m",
+        hand.y,
+        table.position[1]
+    );
+    // The bar still held.
+    let wrist = in_scene(&editor, "r_radiocarpal");
+    let off_axis = glam::DVec2::new(wrist.x - bar.position[0], wrist.z - bar.position[2]).length();
+    assert!(off_axis < 1e-3);
+    // A prop that is not there is refused by name, nothing added.
+    let before = editor.model.session().tasks().len();
+    editor.apply(Command::Task(TaskCommand::AddOnProp {
+        joint: l_wrist,
+        prop: 9,
+    }));
+    assert_eq!(editor.model.session().tasks().len(), before);
+    assert!(
+        editor
+            .model
+            .notice()
+            .is_some_and(|n| n.text.contains("no prop 9"))
+    );
+}

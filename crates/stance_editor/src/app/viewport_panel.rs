@@ -700,8 +700,20 @@ fn context_menu(response: &egui::Response, model: &EditorModel, outbox: &mut Out
         {
             command = Some(Command::Task(TaskCommand::Add(NewTask::Limb(limb))));
         }
+        // On a prop: a hand on a bar, a foot on a step, a hand on a ball or a table.
+        if !model.props().is_empty() {
+            ui.separator();
+        }
+        for (index, prop) in model.props().iter().enumerate() {
+            if ui.button(format!("Put on {}", prop.name)).clicked() {
+                command = Some(Command::Task(TaskCommand::AddOnProp { joint, prop: index }));
+            }
+        }
         if let Some(command) = command {
-            if matches!(command, Command::Task(TaskCommand::Add(_))) {
+            if matches!(
+                command,
+                Command::Task(TaskCommand::Add(_) | TaskCommand::AddOnProp { .. })
+            ) {
                 outbox.send(Command::View(ViewCommand::Select(Some(joint))));
             }
             outbox.send(command);

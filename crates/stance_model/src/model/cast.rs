@@ -248,6 +248,25 @@ impl EditorModel {
         &self.cast.props
     }
 
+    /// The task that puts `joint` of the selected character on the prop at `prop`.
+    pub(super) fn task_on_prop(
+        &self,
+        joint: usize,
+        prop: usize,
+    ) -> Result<stance_document::TaskSpec, String> {
+        let prop = self
+            .cast
+            .props
+            .get(prop)
+            .ok_or_else(|| format!("the scene has no prop {prop}"))?;
+        super::tasks::task_on_prop(
+            &self.character.session,
+            joint,
+            prop,
+            self.character.placement.scene_from_character(),
+        )
+    }
+
     fn add_prop(&mut self, shape: PropShape) -> super::Change {
         if self.cast.props.len() >= MAX_PROPS {
             self.warn(format!("A scene holds at most {MAX_PROPS} props."));

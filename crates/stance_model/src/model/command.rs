@@ -232,6 +232,15 @@ pub enum TaskCommand {
     },
     /// Add a task made from where the body stands.
     Add(NewTask),
+    /// Put a part of the selected character on a prop: a hand on a bar (the point on its axis),
+    /// a hand or foot on a box's top or a plane (the point on its surface), a hand on a ball
+    /// (the point on its surface nearest the part).
+    AddOnProp {
+        /// The part (skeleton index of its joint).
+        joint: usize,
+        /// The prop (index in the scene's props).
+        prop: usize,
+    },
     /// The paper's Table 1 in place of the tasks.
     LoadTable1Example,
     /// Remove the task at this index of the list.

@@ -208,6 +208,16 @@ impl EditorModel {
                 tasks = new;
                 kind
             }
+            TaskCommand::AddOnProp { joint, prop } => match self.task_on_prop(joint, prop) {
+                Ok(task) => {
+                    tasks.push(task);
+                    EditKind::Command
+                }
+                Err(error) => {
+                    self.warn(format!("The task could not be added: {error}."));
+                    return Change::View;
+                }
+            },
             TaskCommand::Add(what) => match make_task(&self.character.session, what) {
                 Ok(task) => {
                     tasks.push(task);

@@ -212,3 +212,66 @@ mod tests {
         assert!(make_task(&session, NewTask::Position(10_000)).is_err());
     }
 }
+
+/// The task that puts `joint` of `session`'s body on `prop` (in the scene; the character stands
+/// at `scene_from_character`), at the level below the hard tasks: on a cylinder's axis (a hand
+/// on a bar), on a box's top face or a plane (the joint's centre on the surface), on a ball's
+/// surface at the point nearest the joint now.
+pub fn task_on_prop(
+    session: &PosingSession,
+    joint: usize,
+    prop: &stance_document::Prop,
+    scene_from_character: glam::DAffine3,
+) -> Result<TaskSpec, String> {
+    use stance_document::PropShape;
+    let skeleton = session.skeleton();
+    let name = skeleton
+        .joints()
+        .get(joint)
+        .map(|definition| definition.name.clone())
+        .ok_or_else(|| format!("this body has no joint {joint}"))?;
+    // The prop's frame in the character's (where its tasks are).
+    let character_from_prop = scene_from_character.inverse() * prop.scene_from_prop();
+    let up = character_from_prop.transform_vector3(DVec3::Y).normalize();
+    let centre = character_from_prop.transform_point3(DVec3::ZERO);
+    let kind = match prop.shape {
+        PropShape::Cylinder { .. } => TaskKindSpec::Line {
+            joint: name,
+            point: [0.0; 3],
+            origin: centre.to_array(),
+            direction: up.to_array(),
+        },
+        PropShape::Box { size } => TaskKindSpec::Plane {
+            joint: name,
+            point: [0.0; 3],
+            origin: (centre + up * (size[1] / 2.0)).to_array(),
+            normal: up.to_array(),
+            above: false,
+        },
+        PropShape::Plane { .. } => TaskKindSpec::Plane {
+            joint: name,
+            point: [0.0; 3],
+            origin: centre.to_array(),
+            normal: up.to_array(),
+            above: false,
+        },
+        PropShape::Sphere { radius } => {
+            let at = session
+                .frames()
+                .joint_position
+                .get(joint)
+                .copied()
+                .unwrap_or_default();
+            let outward = (at - centre).try_normalize().unwrap_or(DVec3::Y);
+            TaskKindSpec::Position {
+                joint: name,
+                point: [0.0; 3],
+                axes: Axes::XYZ,
+                target: (centre + outward * radius).to_array(),
+            }
+        }
+    };
+    let mut task = TaskSpec::new(kind);
+    task.level = next_level(session);
+    Ok(task)
+}
