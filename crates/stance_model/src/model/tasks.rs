@@ -173,46 +173,6 @@ pub fn table1_example(session: &PosingSession) -> Vec<TaskSpec> {
     ]
 }
 
-#[cfg(test)]
-mod tests {
-    use stance_hanim::LevelOfArticulation;
-
-    use super::*;
-
-    #[test]
-    fn a_new_task_holds_the_body_where_it_stands_below_the_others() {
-        let Ok(session) = PosingSession::new(LevelOfArticulation::Loa2) else {
-            panic!("the mannequin builds");
-        };
-        let Some(wrist) = session.skeleton().joint_index("l_radiocarpal") else {
-            panic!("the mannequin has a left wrist");
-        };
-        let Ok(task) = make_task(&session, NewTask::Position(wrist)) else {
-            panic!("a position task can be made");
-        };
-        let Some(position) = session.joint_position("l_radiocarpal") else {
-            panic!("the wrist has a position");
-        };
-        let TaskKindSpec::Position { target, .. } = task.kind else {
-            panic!("a position task");
-        };
-        assert_eq!(target, position.to_array());
-        // The default tasks stop at level 2 (balance) before the comfort.
-        assert_eq!(task.level, 3);
-        let Ok(limb) = make_task(&session, NewTask::Limb(LimbName::RightArm)) else {
-            panic!("a limb task can be made");
-        };
-        assert!(matches!(
-            limb.kind,
-            TaskKindSpec::Limb {
-                swivel: Some(_),
-                ..
-            }
-        ));
-        assert!(make_task(&session, NewTask::Position(10_000)).is_err());
-    }
-}
-
 /// The task that puts `joint` of `session`'s body on `prop` (in the scene; the character stands
 /// at `scene_from_character`), at the level below the hard tasks: on a cylinder's axis (a hand
 /// on a bar), on a box's top face or a plane (the joint's centre on the surface), on a ball's
@@ -274,4 +234,44 @@ pub fn task_on_prop(
     let mut task = TaskSpec::new(kind);
     task.level = next_level(session);
     Ok(task)
+}
+
+#[cfg(test)]
+mod tests {
+    use stance_hanim::LevelOfArticulation;
+
+    use super::*;
+
+    #[test]
+    fn a_new_task_holds_the_body_where_it_stands_below_the_others() {
+        let Ok(session) = PosingSession::new(LevelOfArticulation::Loa2) else {
+            panic!("the mannequin builds");
+        };
+        let Some(wrist) = session.skeleton().joint_index("l_radiocarpal") else {
+            panic!("the mannequin has a left wrist");
+        };
+        let Ok(task) = make_task(&session, NewTask::Position(wrist)) else {
+            panic!("a position task can be made");
+        };
+        let Some(position) = session.joint_position("l_radiocarpal") else {
+            panic!("the wrist has a position");
+        };
+        let TaskKindSpec::Position { target, .. } = task.kind else {
+            panic!("a position task");
+        };
+        assert_eq!(target, position.to_array());
+        // The default tasks stop at level 2 (balance) before the comfort.
+        assert_eq!(task.level, 3);
+        let Ok(limb) = make_task(&session, NewTask::Limb(LimbName::RightArm)) else {
+            panic!("a limb task can be made");
+        };
+        assert!(matches!(
+            limb.kind,
+            TaskKindSpec::Limb {
+                swivel: Some(_),
+                ..
+            }
+        ));
+        assert!(make_task(&session, NewTask::Position(10_000)).is_err());
+    }
 }
