@@ -693,13 +693,7 @@ impl Document {
 
     /// The JSON text (pretty or compact).
     pub fn to_json(&self, pretty: bool) -> String {
-        let r = if pretty {
-            serde_json::to_string_pretty(self)
-        } else {
-            serde_json::to_string(self)
-        };
-        // Serialising plain maps, strings and numbers cannot fail.
-        r.unwrap_or_default()
+        crate::json::text(self, pretty)
     }
 }
 

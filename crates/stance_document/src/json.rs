@@ -5,6 +5,17 @@ use serde_json::{Map, Value};
 
 use crate::DocumentError;
 
+/// `value` as JSON text, pretty or compact. Serialising plain maps, strings and numbers cannot
+/// fail (an empty text if it ever did).
+pub(crate) fn text(value: &impl serde::Serialize, pretty: bool) -> String {
+    let text = if pretty {
+        serde_json::to_string_pretty(value)
+    } else {
+        serde_json::to_string(value)
+    };
+    text.unwrap_or_default()
+}
+
 pub(crate) fn obj<'a>(v: &'a Value, at: &str) -> Result<&'a Map<String, Value>, DocumentError> {
     v.as_object()
         .ok_or_else(|| DocumentError::field(at, "expected an object"))

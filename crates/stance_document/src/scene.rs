@@ -574,15 +574,13 @@ impl Scene {
         }
     }
 
-    /// The JSON text (pretty or compact).
+    /// The JSON text (pretty or compact); a plain document's own (the autosave writes one
+    /// every time it changed: no value tree made on the way).
     pub fn to_json(&self, pretty: bool) -> String {
-        let value = self.to_json_value();
-        let text = if pretty {
-            serde_json::to_string_pretty(&value)
-        } else {
-            serde_json::to_string(&value)
-        };
-        text.unwrap_or_default()
+        match self.characters.as_slice() {
+            [only] if self.is_plain_document() => only.document.to_json(pretty),
+            _ => crate::json::text(&self.to_json_value(), pretty),
+        }
     }
 }
 

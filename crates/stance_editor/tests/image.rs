@@ -275,18 +275,43 @@ fn the_rendered_control_maps_come_one_after_another_as_their_own_downloads() {
     }
 }
 
-#[test]
-fn the_image_shows_every_character_and_prop_where_they_stand() {
-    // Catches: other characters or props left out of the picture, a placement ignored.
-    use stance_document::{Placement, PropShape};
+/// The editor with a second character added and placed 0.7 m to the first one's right (-X),
+/// and that placement.
+fn two_characters(host: &MemoryHost) -> (Clocked, stance_document::Placement) {
     use stance_editor::Command;
     use stance_editor::model::SceneCommand;
-    let host = MemoryHost::default();
     let mut editor = Clocked::with_host(host.clone());
     editor.apply(Command::Scene(SceneCommand::Add));
     let second = editor.model.character().id();
-    let placement = Placement::at([-0.7, 0.0, 0.0]);
+    let placement = stance_document::Placement::at([-0.7, 0.0, 0.0]);
     editor.apply(Command::Scene(SceneCommand::Place(second, placement)));
+    (editor, placement)
+}
+
+/// A 320x240 image's pixel (RGBA) where the default camera sees `point`; with the environment
+/// variable `keep` set to a file name the PNG is kept there, to look at.
+fn seen_at(png: &[u8], keep: &str) -> impl Fn(glam::Vec3) -> [u8; 4] {
+    if let Ok(path) = std::env::var(keep) {
+        std::fs::write(path, png).unwrap();
+    }
+    let (width, _, rgba) = decode(png);
+    move |point| {
+        let at = OrbitCamera::default()
+            .project(point, glam::Vec2::new(320.0, 240.0))
+            .expect("in front of the camera");
+        let i = ((at.y.round() as u32 * width + at.x.round() as u32) * 4) as usize;
+        [rgba[i], rgba[i + 1], rgba[i + 2], rgba[i + 3]]
+    }
+}
+
+#[test]
+fn the_image_shows_every_character_and_prop_where_they_stand() {
+    // Catches: other characters or props left out of the picture, a placement ignored.
+    use stance_document::PropShape;
+    use stance_editor::Command;
+    use stance_editor::model::SceneCommand;
+    let host = MemoryHost::default();
+    let (mut editor, placement) = two_characters(&host);
     editor.apply(Command::Scene(SceneCommand::AddProp(PropShape::Box {
         size: [0.3, 0.3, 0.3],
     })));
@@ -294,32 +319,18 @@ fn the_image_shows_every_character_and_prop_where_they_stand() {
     prop.position = [0.7, 0.15, 0.0];
     editor.apply(Command::Scene(SceneCommand::EditProp(0, prop)));
     editor.settle();
-    let size = [320u32, 240];
     let png = save_image(
         &mut editor,
         &host,
         ImageOptions {
-            size_px: size,
+            size_px: [320, 240],
             transparent: true,
             overlays: false,
         },
     );
-    // STANCE_SCENE_PNG=FILE keeps the picture, to look at.
-    if let Ok(path) = std::env::var("STANCE_SCENE_PNG") {
-        std::fs::write(path, &png).unwrap();
-    }
-    let (width, _, rgba) = decode(&png);
-    let camera = OrbitCamera::default();
-    let pixel = |point: [f32; 3]| {
-        let at = camera
-            .project(glam::Vec3::from_array(point), glam::Vec2::new(320.0, 240.0))
-            .expect("in front of the camera");
-        let (x, y) = (at.x.round() as u32, at.y.round() as u32);
-        let i = ((y * width + x) * 4) as usize;
-        [rgba[i], rgba[i + 1], rgba[i + 2], rgba[i + 3]]
-    };
+    let pixel = seen_at(&png, "STANCE_SCENE_PNG");
     // The box: opaque, wood-coloured (more red than blue).
-    let box_pixel = pixel([0.7, 0.15, 0.15]);
+    let box_pixel = pixel(glam::Vec3::new(0.7, 0.15, 0.15));
     assert_eq!(box_pixel[3], 255, "{box_pixel:?}");
     assert!(box_pixel[0] > box_pixel[2] + 20, "{box_pixel:?}");
     // The second character stands where it was placed: its pelvis is drawn there, and the
@@ -331,27 +342,21 @@ fn the_image_shows_every_character_and_prop_where_they_stand() {
         .joint_position("sacroiliac")
         .unwrap();
     let placed = placement.scene_from_character().transform_point3(pelvis);
-    assert_eq!(pixel(placed.as_vec3().to_array())[3], 255);
-    assert_eq!(pixel(pelvis.as_vec3().to_array())[3], 255);
+    assert_eq!(pixel(placed.as_vec3())[3], 255);
+    assert_eq!(pixel(pelvis.as_vec3())[3], 255);
     // Between them, at pelvis height, nothing.
-    assert_eq!(pixel([-0.35, pelvis.y as f32 + 0.3, 0.0])[3], 0);
+    assert_eq!(
+        pixel(glam::Vec3::new(-0.35, pelvis.y as f32 + 0.3, 0.0))[3],
+        0
+    );
 }
 
 #[test]
 fn characters_on_the_mannequin_are_all_drawn_as_its_figure() {
     // Catches: a second pose of the uploaded model not drawn (the other character would be
     // missing, or grey capsules in the figure's place).
-    use stance_document::Placement;
-    use stance_editor::Command;
-    use stance_editor::model::SceneCommand;
     let host = MemoryHost::default();
-    let mut editor = Clocked::with_host(host.clone());
-    editor.apply(Command::Scene(SceneCommand::Add));
-    let second = editor.model.character().id();
-    editor.apply(Command::Scene(SceneCommand::Place(
-        second,
-        Placement::at([-0.7, 0.0, 0.0]),
-    )));
+    let (mut editor, placement) = two_characters(&host);
     editor.settle();
     let options = ImageOptions {
         size_px: [320, 240],
@@ -359,27 +364,20 @@ fn characters_on_the_mannequin_are_all_drawn_as_its_figure() {
         overlays: false,
     };
     let png = save_image_with(&mut editor, &host, options, true);
-    // STANCE_FIGURES_PNG=FILE keeps the picture, to look at.
-    if let Ok(path) = std::env::var("STANCE_FIGURES_PNG") {
-        std::fs::write(path, &png).unwrap();
-    }
-    let (width, _, rgba) = decode(&png);
-    let camera = OrbitCamera::default();
+    let colour = seen_at(&png, "STANCE_FIGURES_PNG");
     let pelvis = editor
         .model
         .character()
         .session()
         .joint_position("sacroiliac")
         .unwrap();
-    let colour = |point: glam::Vec3| {
-        let at = camera
-            .project(point, glam::Vec2::new(320.0, 240.0))
-            .unwrap();
-        let i = ((at.y.round() as u32 * width + at.x.round() as u32) * 4) as usize;
-        [rgba[i], rgba[i + 1], rgba[i + 2], rgba[i + 3]]
-    };
     let first = colour(pelvis.as_vec3());
-    let placed = colour((pelvis + glam::DVec3::new(-0.7, 0.0, 0.0)).as_vec3());
+    let placed = colour(
+        placement
+            .scene_from_character()
+            .transform_point3(pelvis)
+            .as_vec3(),
+    );
     assert_eq!((first[3], placed[3]), (255, 255), "{first:?} {placed:?}");
     // Both drawn by the figure's materials: not the grey of the other characters' capsules.
     let grey = |p: [u8; 4]| p[0].abs_diff(p[2]) < 12 && p[0].abs_diff(p[1]) < 12;

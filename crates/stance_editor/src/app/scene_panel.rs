@@ -4,7 +4,7 @@
 //! remove it. Every change goes to the model as a [`SceneCommand`].
 
 use egui::RichText;
-use stance_document::{Placement, Prop, PropShape};
+use stance_document::{Prop, PropShape};
 
 use super::ButtonRects;
 use crate::model::{Command, EditorModel, Outbox, SceneCommand};
@@ -265,11 +265,8 @@ fn selected_character(ui: &mut egui::Ui, model: &EditorModel, outbox: &mut Outbo
                 .suffix("°"),
         );
     });
-    if moved != placement && placement_is_finite(&moved) {
+    // The model refuses a placement that is not finite.
+    if moved != placement {
         outbox.send(Command::Scene(SceneCommand::Place(id, moved)));
     }
-}
-
-fn placement_is_finite(placement: &Placement) -> bool {
-    placement.validate_at("placement").is_ok()
 }

@@ -56,9 +56,6 @@ impl std::fmt::Debug for Character {
 
 impl Character {
     pub(super) fn new(id: u64, name: String, session: PosingSession) -> Self {
-        let mut timeline = Timeline::default();
-        // Clip requests are answered by id: each character's run apart.
-        timeline.next_request = id << 32;
         let mut character = Self {
             id,
             name,
@@ -67,12 +64,20 @@ impl Character {
             avatar: None,
             avatar_url: None,
             mapping_corrections: MappingCorrections::default(),
-            timeline,
+            timeline: Timeline::default(),
             bones: Vec::new(),
             bones_revision: None,
         };
+        character.set_id(id);
         character.refresh_bones();
         character
+    }
+
+    /// Gives it the id `id`; its clip requests to the host are numbered from `id << 32` (the
+    /// host answers by number: each character's run apart).
+    fn set_id(&mut self, id: u64) {
+        self.id = id;
+        self.timeline.next_request = id << 32;
     }
 
     /// Its id (stable while the editor runs).
@@ -415,11 +420,11 @@ impl EditorModel {
             self.duplicate_selected()
         } else {
             PosingSession::new(self.character.session.level_of_articulation())
-                .map(|session| (session, None, None, self.free_name()))
+                .map(|session| Character::new(0, self.free_name(), session))
                 .map_err(|error| error.to_string())
         };
-        let (session, avatar, avatar_url, name) = match made {
-            Ok(made) => made,
+        let mut character = match made {
+            Ok(character) => character,
             Err(error) => {
                 self.warn(format!("Could not add a character: {error}"));
                 return super::Change::Nothing;
@@ -427,11 +432,9 @@ impl EditorModel {
         };
         let before = self.cast_snapshot();
         let id = self.next_character_id();
-        let mut character = Character::new(id, name.clone(), session);
-        character.avatar = avatar;
-        character.avatar_url = avatar_url;
+        character.set_id(id);
         character.placement = self.free_placement();
-        character.refresh_bones();
+        let name = character.name.clone();
         self.history.record_cast(before, false, self.now_secs);
         self.cast.others.push(character);
         self.switch_to_character(id);
@@ -442,11 +445,9 @@ impl EditorModel {
         super::Change::Document
     }
 
-    /// The selected character's body and document in a new session, and a name for the copy.
-    #[allow(clippy::type_complexity)]
-    fn duplicate_selected(
-        &self,
-    ) -> Result<(PosingSession, Option<LoadedAvatar>, Option<String>, String), String> {
+    /// A copy of the selected character (its body and document, not its saved view) under a
+    /// name of its own; its id is given by the caller.
+    fn duplicate_selected(&self) -> Result<Character, String> {
         let source = &self.character;
         let humanoid = source.session.humanoid().clone();
         let mut session = PosingSession::with_humanoid(humanoid).map_err(|e| e.to_string())?;
@@ -455,13 +456,10 @@ impl EditorModel {
         session
             .restore_document(&document)
             .map_err(|e| e.to_string())?;
-        let avatar = source.avatar.as_ref().map(LoadedAvatar::duplicate);
-        Ok((
-            session,
-            avatar,
-            source.avatar_url.clone(),
-            self.copy_name(&source.name),
-        ))
+        let mut copy = Character::new(0, self.copy_name(&source.name), session);
+        copy.avatar = source.avatar.as_ref().map(LoadedAvatar::duplicate);
+        copy.avatar_url.clone_from(&source.avatar_url);
+        Ok(copy)
     }
 
     fn remove_character(&mut self, id: u64) -> super::Change {
@@ -574,21 +572,18 @@ impl EditorModel {
     /// placements, and the selection as `snapshot` has them; characters it leaves out are
     /// kept as removed (a later step may bring them back).
     pub(super) fn restore_cast(&mut self, snapshot: &CastSnapshot) {
-        if snapshot.selected != self.character.id && !self.switch_to_character(snapshot.selected) {
-            // The selection comes back from the removed characters.
-            if let Some(at) = self
-                .cast
-                .removed
-                .iter()
-                .position(|c| c.id == snapshot.selected)
-            {
-                let incoming = self.cast.removed.remove(at);
-                self.character_switched_out();
-                let outgoing = std::mem::replace(&mut self.character, incoming);
-                self.cast.others.push(outgoing);
-                self.character_switched_in();
-            }
+        // A selection that comes back from the removed characters joins the others first (the
+        // order is made again below).
+        if let Some(at) = self
+            .cast
+            .removed
+            .iter()
+            .position(|c| c.id == snapshot.selected)
+        {
+            let back = self.cast.removed.remove(at);
+            self.cast.others.push(back);
         }
+        self.switch_to_character(snapshot.selected);
         let mut pool: Vec<Character> = self.cast.others.drain(..).collect();
         pool.append(&mut self.cast.removed);
         let mut others = Vec::with_capacity(snapshot.order.len());
@@ -637,8 +632,7 @@ impl EditorModel {
         let mut selected_id = None;
         let mut fetch = None;
         for (i, (mut character, wanted_url)) in built.into_iter().enumerate() {
-            character.id = self.next_character_id();
-            character.timeline.next_request = character.id << 32;
+            character.set_id(self.next_character_id());
             if i == scene.selected {
                 selected_id = Some(character.id);
                 fetch = wanted_url.map(|url| (url, scene.characters[i].document.clone()));
@@ -687,12 +681,12 @@ impl EditorModel {
             stance_document::AvatarReference::Url(url) => Some(url.clone()),
             stance_document::AvatarReference::Default => None,
         };
-        let on_avatar = named_url.is_some() && named_url.as_ref() == current_url;
-        let avatar = if on_avatar {
-            self.character.avatar.as_ref().map(LoadedAvatar::duplicate)
-        } else {
-            None
-        };
+        let avatar = self
+            .character
+            .avatar
+            .as_ref()
+            .filter(|_| named_url.is_some() && named_url.as_ref() == current_url)
+            .map(LoadedAvatar::duplicate);
         let session = match &avatar {
             Some(avatar) => avatar
                 .skeleton(loa)
@@ -712,8 +706,14 @@ impl EditorModel {
         let mut character = Character::new(0, entry.name.clone(), session);
         character.placement = entry.placement;
         character.avatar = avatar;
-        character.avatar_url = if on_avatar { named_url.clone() } else { None };
-        Ok((character, named_url.filter(|_| !on_avatar)))
+        // The URL goes with the avatar when it is the one loaded, else it is still wanted.
+        let (had, wanted) = if on_avatar {
+            (named_url, None)
+        } else {
+            (None, named_url)
+        };
+        character.avatar_url = had;
+        Ok((character, wanted))
     }
 
     /// Forgets the removed characters no step of the history names.
