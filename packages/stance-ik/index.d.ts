@@ -137,7 +137,15 @@ export interface RetargetedClip {
   /** `frameCount * skeleton.dofCount` DOF values, frame after frame. */
   values: Float64Array;
   /** Contacts held (heel, ball, hands, knees, pelvis), in frames (inclusive), at `point`. */
-  contacts: { joint: string; part: string; start: number; end: number; point: Vec3 }[];
+  /** `slides`: a foot point kept on the floor while the clip moves it along, not held still. */
+  contacts: {
+    joint: string;
+    part: string;
+    start: number;
+    end: number;
+    slides: boolean;
+    point: Vec3;
+  }[];
   /** Solver iterations over the clip. */
   iterations: number;
   /** What the reader and retargeting noticed (units, unmapped joints...). */

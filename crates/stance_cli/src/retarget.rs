@@ -183,6 +183,7 @@ fn retarget_one(
         "duration_s": clip.duration(),
         "contacts": result.contacts.iter().map(|c| json!({
             "joint": c.joint, "part": c.part, "start": c.start, "end": c.end,
+            "slides": c.slides,
             "point": [c.point.x, c.point.y, c.point.z],
             "position": [c.position.x, c.position.y, c.position.z],
         })).collect::<Vec<_>>(),

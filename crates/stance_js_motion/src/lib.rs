@@ -56,7 +56,7 @@ pub fn retarget_bvh(recipe: &str, bvh: &str, contacts: bool) -> JsResult<Retarge
     let report = serde_json::json!({
         "contacts": result.contacts.iter().map(|c| serde_json::json!({
             "joint": c.joint, "part": c.part, "start": c.start, "end": c.end,
-            "point": [c.point.x, c.point.y, c.point.z],
+            "slides": c.slides, "point": [c.point.x, c.point.y, c.point.z],
         })).collect::<Vec<_>>(),
         "iterations": result.iterations,
         "notes": clip.notes.iter().chain(&result.notes).collect::<Vec<_>>(),

@@ -21,6 +21,11 @@
 //!    scales with the clip's pace (its median root speed) over [`REFERENCE_PACE`] (runs). Runs of
 //!    low and still frames shorter than `min_duration` are dropped, gaps shorter than the
 //!    window are bridged.
+//! 5. **Sliding contacts**: a point of a foot that stays low for `min_duration` but moves
+//!    faster than `speed` (at most [`SLIDE_SPEED_FACTOR`] times faster: a foot passing low
+//!    in its swing moves faster still), at frames where no contact of that foot holds it
+//!    still, slides on the ground: it is kept from sinking under the floor, not held in
+//!    place ([`Contact::slides`]).
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -33,6 +38,9 @@ pub const REFERENCE_LEG: f64 = 0.9;
 /// The pace (median horizontal root speed, m/s) up to which [`ContactSettings::speed`] holds
 /// as given; a faster clip (a run) scales it up in proportion to its pace.
 pub const REFERENCE_PACE: f64 = 1.2;
+/// A point of a foot low on the ground and moving at most this many times `speed` slides on
+/// it; faster, it is passing low in its swing.
+pub const SLIDE_SPEED_FACTOR: f64 = 3.0;
 /// Half the width of the window over which the ground is taken (s).
 const GROUND_WINDOW: f64 = 0.5;
 
@@ -216,6 +224,13 @@ pub struct Contact {
     /// The ground under the contact: the median height of the point less its clearance over
     /// the contact (m, on the clip).
     pub floor: f64,
+    /// A sliding contact: a point of a foot low on the ground but moving (a shuffle, a toe
+    /// that drags, a video capture's skating foot, a landing or toe-off under way), where no
+    /// contact of that foot holds it still. It is kept from sinking under the floor (the
+    /// height of `position`), not held in place: the clip moves it along. Its `floor` is the
+    /// ground's there.
+    #[serde(default)]
+    pub slides: bool,
 }
 
 /// The ground near each frame: the 10th percentile, within `GROUND_WINDOW` seconds and
@@ -282,18 +297,9 @@ pub fn detect_contacts(
         let positions = &track.positions[..ground.len().min(track.positions.len())];
         let clearance = track.part.clearance() * scale.leg;
         let speed = speeds(positions, scale.start, half, frame_time);
-        // The height that makes the point low: its own, or the toes' tip's under a ball.
-        let low_height = |f: usize| {
-            let own = positions[f].y - clearance;
-            track
-                .tip
-                .as_ref()
-                .and_then(|t| t.get(f))
-                .map_or(own, |t| own.min(t.y))
-        };
         let rest = |f: usize| {
             f >= scale.start
-                && low_height(f) - ground[f] <= limits.height
+                && low_height(track, clearance, f) - ground[f] <= limits.height
                 && speed[f] <= limits.speed
         };
         let mut runs: Vec<(usize, usize)> = Vec::new();
@@ -333,20 +339,93 @@ pub fn detect_contacts(
             if end + 1 - start < min_frames {
                 continue;
             }
-            let run = &positions[start..=end];
-            let mean = run.iter().copied().sum::<DVec3>() / run.len() as f64;
-            contacts.push(Contact {
-                joint: track.joint.clone(),
-                part: track.part,
-                point: track.point,
-                start,
-                end,
-                position: mean,
-                floor,
-            });
+            contacts.push(contact_over(track, (start, end), floor, false));
+        }
+    }
+    let held = contacts.len();
+    for track in tracks.iter().filter(|t| t.part.is_foot()) {
+        let positions = &track.positions[..ground.len().min(track.positions.len())];
+        let speed = speeds(positions, scale.start, half, frame_time);
+        // Frames where a contact of this foot (either point) holds it still.
+        let mut still = vec![false; positions.len()];
+        for c in contacts[..held].iter().filter(|c| c.joint == track.joint) {
+            for s in still.iter_mut().take(c.end + 1).skip(c.start) {
+                *s = true;
+            }
+        }
+        let low = |f: usize| {
+            f >= scale.start
+                && !still[f]
+                && low_height(track, 0.0, f) - ground[f] <= limits.height
+                && speed[f] <= SLIDE_SPEED_FACTOR * limits.speed
+        };
+        let mut runs: Vec<(usize, usize)> = Vec::new();
+        let mut f = 0;
+        while f < positions.len() {
+            if !low(f) {
+                f += 1;
+                continue;
+            }
+            let start = f;
+            while f < positions.len() && low(f) {
+                f += 1;
+            }
+            // A short rise bridged, not a frame held still.
+            match runs.last_mut() {
+                Some(last)
+                    if start - last.1 <= half && !still[last.1..start].iter().any(|&s| s) =>
+                {
+                    last.1 = f - 1;
+                }
+                _ => runs.push((start, f - 1)),
+            }
+        }
+        for (start, end) in runs {
+            if end + 1 - start < min_frames {
+                continue;
+            }
+            let mut under = ground[start..=end].to_vec();
+            let middle = under.len() / 2;
+            let floor = *under.select_nth_unstable_by(middle, f64::total_cmp).1;
+            contacts.push(contact_over(track, (start, end), floor, true));
         }
     }
     contacts
+}
+
+/// The height that makes a track's point low at frame `f`: its own less its `clearance`, or,
+/// under a ball, the toes' tip's where lower.
+fn low_height(track: &PointTrack, clearance: f64, f: usize) -> f64 {
+    let own = track
+        .positions
+        .get(f)
+        .map_or(f64::INFINITY, |p| p.y - clearance);
+    track
+        .tip
+        .as_ref()
+        .and_then(|t| t.get(f))
+        .map_or(own, |t| own.min(t.y))
+}
+
+/// A contact of `track`'s point over the frames `start..=end`, held at its mean position.
+fn contact_over(
+    track: &PointTrack,
+    (start, end): (usize, usize),
+    floor: f64,
+    slides: bool,
+) -> Contact {
+    let run = &track.positions[start..=end];
+    let mean = run.iter().copied().sum::<DVec3>() / run.len().max(1) as f64;
+    Contact {
+        joint: track.joint.clone(),
+        part: track.part,
+        point: track.point,
+        start,
+        end,
+        position: mean,
+        floor,
+        slides,
+    }
 }
 
 /// The frames at the start of `clip` that are a reference rather than motion: a T-pose or an
@@ -500,20 +579,20 @@ mod tests {
     }
 
     #[test]
-    fn a_low_but_sliding_foot_and_a_short_touch_are_no_contacts() {
+    fn a_low_but_sliding_foot_slides_and_a_short_touch_is_no_contact() {
         let dt = 1.0 / 30.0;
-        let slide: Vec<DVec3> = (0..20)
-            .map(|f| DVec3::new(f as f64 * 0.05, 0.0, 0.0))
-            .collect();
-        assert!(
-            detect_contacts(
-                &[track(slide)],
-                dt,
-                &scale(0.9),
-                &ContactSettings::default()
-            )
-            .is_empty()
-        );
+        // 0.6 m/s along the floor for 20 frames: one sliding contact over all of them, none
+        // held still; at 1.5 m/s (over three times the still speed) it is passing low.
+        let at = |speed: f64| -> Vec<DVec3> {
+            (0..20)
+                .map(|f| DVec3::new(f as f64 * speed * dt, 0.0, 0.0))
+                .collect()
+        };
+        let s = ContactSettings::default();
+        let c = detect_contacts(&[track(at(0.6))], dt, &scale(0.9), &s);
+        assert_eq!(c.len(), 1, "{c:?}");
+        assert!(c[0].slides && (c[0].start, c[0].end) == (0, 19), "{c:?}");
+        assert!(detect_contacts(&[track(at(1.5))], dt, &scale(0.9), &s).is_empty());
         let mut touch = vec![DVec3::new(0.0, 0.3, 0.0); 10];
         touch[5] = DVec3::new(0.0, 0.0, 0.0);
         let s = ContactSettings {
@@ -529,6 +608,66 @@ mod tests {
         let c = detect_contacts(&[track(touch), standing], dt, &scale(0.9), &s);
         assert!(c.iter().all(|c| c.joint == "r_talocrural"), "{c:?}");
         assert_eq!(c.len(), 1);
+    }
+
+    #[test]
+    fn a_foot_slides_only_where_no_contact_of_it_holds_it_still() {
+        // At 100 fps: the heel lands sliding at 0.8 m/s for 10 frames, stands still for 20,
+        // then rolls up; the ball is low and still from frame 15 to 45, then drags forward at
+        // 0.8 m/s on the floor to frame 60. The other foot stands and sets the ground.
+        let dt = 0.01;
+        let mut heel = Vec::new();
+        for f in 0..10 {
+            heel.push(DVec3::new(-0.08 + f as f64 * 0.008, 0.0, 0.0));
+        }
+        heel.extend(std::iter::repeat_n(DVec3::ZERO, 20));
+        for f in 0..31 {
+            heel.push(DVec3::new(0.0, 0.01 * f as f64, 0.0));
+        }
+        let mut ball = vec![DVec3::new(0.1, 0.05 + 0.01, 0.0); 15];
+        ball.extend(std::iter::repeat_n(DVec3::new(0.2, 0.0, 0.0), 31));
+        for f in 0..15 {
+            ball.push(DVec3::new(0.2 + 0.008 * (f + 1) as f64, 0.0, 0.0));
+        }
+        let standing = PointTrack {
+            joint: "r_talocrural".into(),
+            ..track(vec![DVec3::new(0.0, 0.0, 0.3); 61])
+        };
+        let tracks = [
+            track(heel),
+            PointTrack {
+                part: ContactPart::Ball,
+                ..track(ball)
+            },
+            standing,
+        ];
+        let c = detect_contacts(&tracks, dt, &scale(0.9), &ContactSettings::default());
+        let left = |slides: bool| -> Vec<(ContactPart, usize, usize)> {
+            c.iter()
+                .filter(|c| c.joint == "l_talocrural" && c.slides == slides)
+                .map(|c| (c.part, c.start, c.end))
+                .collect()
+        };
+        // Held still: the heel while it stands, the ball while it stands (the speed is
+        // measured over 4 frames each side, so a still run ends 4 frames from the slide).
+        let held = left(false);
+        assert!(held.iter().any(|h| h.0 == ContactPart::Heel), "{c:?}");
+        assert!(held.iter().any(|h| h.0 == ContactPart::Ball), "{c:?}");
+        // Sliding: the heel's landing before any point of that foot is held, and the ball's
+        // drag after; nothing sliding at a frame the foot is held.
+        let sliding = left(true);
+        assert_eq!(sliding.len(), 2, "{c:?}");
+        let (first, last) = (sliding[0], sliding[1]);
+        assert!(first.0 == ContactPart::Heel && first.1 == 0, "{sliding:?}");
+        assert!(last.0 == ContactPart::Ball && last.2 == 60, "{sliding:?}");
+        for s in &sliding {
+            for h in &held {
+                assert!(s.2 < h.1 || s.1 > h.2, "{s:?} slides while {h:?} holds");
+            }
+        }
+        // Kept from sinking under the ground there, not held in place.
+        let drag = c.iter().find(|c| c.slides && c.part == ContactPart::Ball);
+        assert!(drag.is_some_and(|d| d.floor.abs() < 1e-12 && d.position.y.abs() < 1e-12));
     }
 
     #[test]

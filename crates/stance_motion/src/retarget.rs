@@ -40,7 +40,7 @@ pub use report::{
 pub const CONTACT_JOINTS: [&str; 2] = ["l_talocrural", "r_talocrural"];
 /// The H-Anim knees held by contacts.
 const KNEES: [&str; 2] = ["l_knee", "r_knee"];
-/// The H-Anim wrists kept at level 3.
+/// The H-Anim wrists kept at [`WRIST_LEVEL`].
 const WRISTS: [&str; 2] = ["l_radiocarpal", "r_radiocarpal"];
 
 /// Levels of the retargeting problem.
@@ -48,12 +48,15 @@ pub const CONTACT_LEVEL: u32 = 1;
 /// The point of a foot that gives way where the leg cannot hold both its heel and its ball
 /// (the one whose contact ends first: the heel at heel-off), below the other.
 pub const YIELDING_CONTACT_LEVEL: u32 = 2;
+/// The sliding contacts: points of a foot kept from sinking under the floor while the clip
+/// moves them along ([`Contact::slides`]).
+pub const SLIDING_CONTACT_LEVEL: u32 = 3;
 /// The root's path.
-pub const ROOT_LEVEL: u32 = 3;
+pub const ROOT_LEVEL: u32 = 4;
 /// The wrists.
-pub const WRIST_LEVEL: u32 = 4;
+pub const WRIST_LEVEL: u32 = 5;
 /// The copied frame as a posture reference.
-pub const POSTURE_LEVEL: u32 = 5;
+pub const POSTURE_LEVEL: u32 = 6;
 
 /// Errors of retargeting.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -390,6 +393,7 @@ impl Retargeting {
             levels: vec![
                 CONTACT_LEVEL,
                 YIELDING_CONTACT_LEVEL,
+                SLIDING_CONTACT_LEVEL,
                 ROOT_LEVEL,
                 WRIST_LEVEL,
                 POSTURE_LEVEL,
@@ -455,7 +459,8 @@ fn frame_tasks(
     let skeleton = &target.skeleton;
     let frames = Frames::new(skeleton, copy);
     let mut tasks = Vec::new();
-    // Per held point (joint and part), the firmest of its contacts at this frame.
+    // Per point (joint and part), the firmest of its contacts at this frame that hold it
+    // still, and of those that keep it on the floor while it slides.
     let mut firmest: Vec<(&Contact, f64)> = Vec::new();
     for c in contacts {
         let w = contact_weight(c, frame, ease);
@@ -464,13 +469,14 @@ fn frame_tasks(
         }
         match firmest
             .iter_mut()
-            .find(|(h, _)| h.joint == c.joint && h.part == c.part)
+            .find(|(h, _)| h.joint == c.joint && h.part == c.part && h.slides == c.slides)
         {
             Some(slot) if slot.1 < w => *slot = (c, w),
             Some(_) => {}
             None => firmest.push((c, w)),
         }
     }
+    let (sliding, mut firmest): (Vec<_>, Vec<_>) = firmest.into_iter().partition(|h| h.0.slides);
     // Firmest first: a point easing in or out on a foot whose other point is held more
     // firmly eases from where the copy's foot puts it relative to that point's goal (not
     // from the copy's own position), so that the goals fit the foot and it rolls about the
@@ -488,7 +494,15 @@ fn frame_tasks(
             .map_or(own, |(h, _, _, goal)| {
                 *goal + (own - frames.point(j, h.point))
             });
-        let goal = from.lerp(c.position, w);
+        let mut goal = from.lerp(c.position, w);
+        // Easing into or out of a slide of that point, the hold keeps it from sinking under
+        // the floor the slide keeps (the copy's point can be under it).
+        if let Some((s, _)) = sliding
+            .iter()
+            .find(|(s, _)| s.joint == c.joint && s.part == c.part)
+        {
+            goal.y = goal.y.max(c.position.y.min(s.position.y));
+        }
         goals.push((c, w, j, goal));
     }
     // Where both points of a foot are held, one gives way to the other where the leg cannot
@@ -513,6 +527,28 @@ fn frame_tasks(
         };
         tasks.push(Task::position(j, c.point, goal).at_level(level));
     }
+    // A sliding point goes along with the copy, kept on or above the floor (an inequality:
+    // never pulled down). Easing in or out, the floor is eased from the copy's point where
+    // that is lower, and it is never above the goal of a hold of that point easing in or
+    // out: nothing pops, and the two never pull against each other.
+    for (c, w) in sliding {
+        let Some(j) = skeleton.joint_index(&c.joint) else {
+            continue;
+        };
+        let own = frames.point(j, c.point).y;
+        let floor = goals
+            .iter()
+            .filter(|(h, _, k, _)| *k == j && h.part == c.part)
+            .map(|g| g.3.y)
+            .fold(
+                c.position.y - (1.0 - w) * (c.position.y - own).max(0.0),
+                f64::min,
+            );
+        tasks.push(
+            Task::point_on_plane(j, c.point, DVec3::new(0.0, floor, 0.0), DVec3::Y, true)
+                .at_level(SLIDING_CONTACT_LEVEL),
+        );
+    }
     tasks.push(Task::position(0, DVec3::ZERO, frames.joint_position[0]).at_level(ROOT_LEVEL));
     for wrist in WRISTS {
         if let Some(j) = skeleton.joint_index(wrist) {
@@ -531,6 +567,25 @@ const FIRST_FRAME_ITERATIONS: usize = 100;
 /// The firm contacts' residual (m) over which a frame is solved on (guarded), then again
 /// from the copy.
 const RETRY_RESIDUAL: f64 = 1e-3;
+
+/// Whether a frame's residuals (per level of [`Retargeted::levels`]) leave its firm or
+/// sliding contacts unmet.
+fn unmet(residual: &[f64]) -> bool {
+    residual.first().is_some_and(|&r| r > RETRY_RESIDUAL)
+        || residual.get(2).is_some_and(|&r| r > RETRY_RESIDUAL)
+}
+
+/// Whether residuals `a` are better than `b`: the firm contacts closer, or, both met, the
+/// sliding ones.
+fn better(a: &[f64], b: &[f64]) -> bool {
+    let (firm_a, firm_b) = (a.first().copied(), b.first().copied());
+    let met = |r: Option<f64>| r.is_some_and(|r| r <= RETRY_RESIDUAL);
+    if met(firm_a) && met(firm_b) {
+        a.get(2) < b.get(2)
+    } else {
+        firm_a < firm_b
+    }
+}
 
 /// Solves the frames one by one, each from the previous frame's correction of the copy.
 #[derive(Debug)]
@@ -631,22 +686,22 @@ impl FrameSolver {
         // copy itself; the best is kept. (Solving from the copy with the guarded iteration
         // holds as well but takes another branch: joint jumps over 0.55 rad at contact
         // boundaries on the CMU walk.)
-        if residual.first().is_some_and(|&r| r > RETRY_RESIDUAL) {
+        if unmet(&residual) {
             let mut more = posture.clone();
             let report = self.guarded.solve(skeleton, &tasks, &mut more)?;
             out.iterations += report.iterations;
             let second = residuals(&report);
-            if second.first() < residual.first() {
+            if better(&second, &residual) {
                 posture = more;
                 residual = second;
             }
         }
-        if residual.first().is_some_and(|&r| r > RETRY_RESIDUAL) {
+        if unmet(&residual) {
             let mut again = copy.clone();
             let report = self.solver.solve(skeleton, &tasks, &mut again)?;
             out.iterations += report.iterations;
             let second = residuals(&report);
-            if second.first() < residual.first() {
+            if better(&second, &residual) {
                 posture = again;
                 residual = second;
             }
@@ -680,6 +735,7 @@ mod tests {
             end,
             position: DVec3::ZERO,
             floor: 0.0,
+            slides: false,
         }
     }
 

@@ -142,20 +142,33 @@ fn counts(contacts: &[Contact], annotation: &Annotation) -> Counts {
     n
 }
 
-/// Largest horizontal drift and sinking of the held points within the annotated footfalls,
-/// on the result and on the plain copy (m): per contact of a foot, over the frames it shares
-/// with a footfall of that foot, from where the point is on the first of them.
-fn drift(
+/// How the held and sliding points fare within the annotated footfalls (m).
+#[derive(Default, Clone, Copy)]
+struct Hold {
+    /// Largest horizontal drift of a held point, on the result and on the plain copy: per
+    /// contact of a foot, over the frames it shares with a footfall of that foot, from where
+    /// the point is on the first of them.
+    drift: f64,
+    plain_drift: f64,
+    /// Deepest a held point went below the floor it is held on.
+    sink: f64,
+    /// Deepest a sliding point went below the floor it is kept on, on the result and on the
+    /// plain copy.
+    slide_sink: f64,
+    plain_slide_sink: f64,
+}
+
+fn hold(
     target: &stance_hanim::HumanoidSkeleton,
     contacts: &[Contact],
     annotation: &Annotation,
     postures: &[Posture],
     copy: &[Posture],
-) -> (f64, f64, f64) {
+) -> Hold {
     let skeleton = &target.skeleton;
     let frames: Vec<Frames> = postures.iter().map(|p| Frames::new(skeleton, p)).collect();
     let copied: Vec<Frames> = copy.iter().map(|p| Frames::new(skeleton, p)).collect();
-    let (mut out, mut sink, mut plain) = (0.0f64, 0.0f64, 0.0f64);
+    let mut h = Hold::default();
     for ((_, ankle), annotated) in FEET.iter().zip(&annotation.feet) {
         let j = skeleton.joint_index(ankle).unwrap();
         for c in contacts.iter().filter(|c| c.joint == *ankle) {
@@ -169,14 +182,20 @@ fn drift(
                 let first_copy = copied[from].point(j, c.point);
                 for f in from..=to {
                     let p = frames[f].point(j, c.point);
-                    out = out.max(horizontal(p - first));
-                    sink = sink.max(c.position.y - p.y);
-                    plain = plain.max(horizontal(copied[f].point(j, c.point) - first_copy));
+                    let q = copied[f].point(j, c.point);
+                    if c.slides {
+                        h.slide_sink = h.slide_sink.max(c.position.y - p.y);
+                        h.plain_slide_sink = h.plain_slide_sink.max(c.position.y - q.y);
+                    } else {
+                        h.sink = h.sink.max(c.position.y - p.y);
+                        h.drift = h.drift.max(horizontal(p - first));
+                        h.plain_drift = h.plain_drift.max(horizontal(q - first_copy));
+                    }
                 }
             }
         }
     }
-    (out, sink, plain)
+    h
 }
 
 /// Per contact whose held point drifts or sinks over 2 mm within an annotated footfall: where
@@ -203,6 +222,41 @@ fn drift_detail(
                 }
                 let first = frames[from].point(j, c.point);
                 let (mut worst, mut at, mut sink) = (0.0f64, from, 0.0f64);
+                if c.slides {
+                    for f in from..=to {
+                        let sink = c.position.y - frames[f].point(j, c.point).y;
+                        if sink > 0.002 {
+                            println!(
+                                "    legs {legs}: {}{:?} sliding {}..{} (footfall {a}..{b}) \
+                                 {:.1} mm under the floor at {f}, residuals {:?} mm, active {:?}",
+                                &c.joint[..1],
+                                c.part,
+                                c.start,
+                                c.end,
+                                sink * 1e3,
+                                r.residuals[f]
+                                    .iter()
+                                    .map(|x| (x * 1e4).round() / 10.0)
+                                    .collect::<Vec<_>>(),
+                                r.contacts
+                                    .iter()
+                                    .filter(|o| o.start <= f + 6 && o.end + 6 >= f)
+                                    .map(|o| format!(
+                                        "{}{:?}{}{}..{} y{:.3}",
+                                        &o.joint[..1],
+                                        o.part,
+                                        if o.slides { "~" } else { "" },
+                                        o.start,
+                                        o.end,
+                                        o.position.y
+                                    ))
+                                    .collect::<Vec<_>>()
+                            );
+                            break;
+                        }
+                    }
+                    continue;
+                }
                 for f in from..=to {
                     let p = frames[f].point(j, c.point);
                     let d = DVec3::new(p.x - first.x, 0.0, p.z - first.z).length();
@@ -247,14 +301,17 @@ fn the_corpus_footfalls_are_found_and_held_on_legs_0_7_to_1_3() {
         .map(|legs| (legs, legs_scaled(legs)))
         .collect();
     let options = RetargetOptions::default();
+    // Per tuned / kept out: footfalls found by every contact, by those that hold still
+    // alone; the worst of each body's hold.
     let mut totals = [Counts::default(); 2];
-    let mut worst = [(0.0f64, 0.0f64); 2];
+    let mut still_only = [Counts::default(); 2];
+    let mut worst = [Hold::default(); 2];
     let (mut frames, mut seconds, mut iterations) = (0usize, 0.0f64, 0usize);
-    let mut worse: Vec<(String, f64, f64, f64)> = Vec::new();
-    let mut held: Vec<(String, f64, f64, f64)> = Vec::new();
+    let mut holds: Vec<(String, f64, Hold)> = Vec::new();
     println!(
-        "clip                                fps  frames reference (annotated/found)  footfalls annotated/found  \
-         detected/right  drift mm max 0.7/1.0/1.3 (plain copy)  sink mm max"
+        "clip                                fps  frames reference (annotated/found)  footfalls annotated/found \
+         (held still)  detected/right  held drift mm max 0.7/1.0/1.3 (plain copy)  sink mm max  \
+         sliding sink mm max (plain copy)"
     );
     for (kept_out, title) in [(false, "tuned on"), (true, "kept out of tuning")] {
         println!("-- {title}");
@@ -264,10 +321,11 @@ fn the_corpus_footfalls_are_found_and_held_on_legs_0_7_to_1_3() {
             let clip = read_bvh(&bytes, "clip", &BvhLimits::default()).unwrap();
             let truth = annotation(&file);
             let mut row = String::new();
-            let mut sinks = 0.0f64;
+            let mut clip_hold = Hold::default();
             let mut n = Counts::default();
+            let mut n_still = Counts::default();
             let mut reference = 0;
-            for (k, (_, body)) in bodies.iter().enumerate() {
+            for (k, (legs, body)) in bodies.iter().enumerate() {
                 let t = Instant::now();
                 let r = retarget(&clip, body, &options).unwrap();
                 seconds += t.elapsed().as_secs_f64();
@@ -293,21 +351,31 @@ fn the_corpus_footfalls_are_found_and_held_on_legs_0_7_to_1_3() {
                 if k == 1 {
                     reference = r.reference_frames;
                     n = counts(&r.contacts, &truth);
+                    let still: Vec<Contact> =
+                        r.contacts.iter().filter(|c| !c.slides).cloned().collect();
+                    n_still = counts(&still, &truth);
                     totals[usize::from(*holdout)].add(n);
+                    still_only[usize::from(*holdout)].add(n_still);
                 }
-                let (d, s, plain) = drift(body, &r.contacts, &truth, &r.postures, &r.copy);
-                if std::env::var("DRIFT_DETAIL").is_ok() && (d > 0.002 || s > 0.002) {
-                    drift_detail(body, &r, &truth, bodies[k].0);
+                let h = hold(body, &r.contacts, &truth, &r.postures, &r.copy);
+                if std::env::var("DRIFT_DETAIL").is_ok()
+                    && (h.drift > 0.002 || h.sink > 0.002 || h.slide_sink > 0.002)
+                {
+                    drift_detail(body, &r, &truth, *legs);
                 }
-                if plain > 0.005 {
-                    worse.push((path.to_string(), bodies[k].0, d, plain));
+                holds.push((path.to_string(), *legs, h));
+                for w in [&mut worst[usize::from(*holdout)], &mut clip_hold] {
+                    w.drift = w.drift.max(h.drift);
+                    w.plain_drift = w.plain_drift.max(h.plain_drift);
+                    w.sink = w.sink.max(h.sink);
+                    w.slide_sink = w.slide_sink.max(h.slide_sink);
+                    w.plain_slide_sink = w.plain_slide_sink.max(h.plain_slide_sink);
                 }
-                held.push((path.to_string(), bodies[k].0, d, s));
-                let w = &mut worst[usize::from(*holdout)];
-                w.0 = w.0.max(d);
-                w.1 = w.1.max(s);
-                sinks = sinks.max(s);
-                row.push_str(&format!(" {:6.2} ({:5.1})", d * 1e3, plain * 1e3));
+                row.push_str(&format!(
+                    " {:6.2} ({:5.1})",
+                    h.drift * 1e3,
+                    h.plain_drift * 1e3
+                ));
             }
             let name = path.rsplit("tests/").next().unwrap_or(path);
             // The reference frames at the start (a T-pose cut or blended into the motion)
@@ -318,31 +386,41 @@ fn the_corpus_footfalls_are_found_and_held_on_legs_0_7_to_1_3() {
                 truth.start
             );
             println!(
-                "{name:35} {:5.0} {:5} {:3}/{:3}  {:3}/{:3}  {:3}/{:3} {row}  {:5.2}",
+                "{name:35} {:5.0} {:5} {:3}/{:3}  {:3}/{:3} ({:3})  {:3}/{:3} {row}  {:5.2}  \
+                 {:5.2} ({:5.1})",
                 clip.fps(),
                 clip.frame_count(),
                 truth.start,
                 reference,
                 n.annotated,
                 n.found,
+                n_still.found,
                 n.detected,
                 n.right,
-                sinks * 1e3
+                clip_hold.sink * 1e3,
+                clip_hold.slide_sink * 1e3,
+                clip_hold.plain_slide_sink * 1e3
             );
         }
     }
     for (k, title) in ["tuned on", "kept out"].iter().enumerate() {
         println!(
-            "{title}: recall {:.1} % ({}/{}), precision {:.1} % ({}/{}), drift max {:.2} mm, \
-             sink max {:.2} mm",
+            "{title}: recall {:.1} % ({}/{}; held still alone {}/{}), precision {:.1} % \
+             ({}/{}), held drift max {:.2} mm (plain copy {:.1}), sink max {:.2} mm, sliding \
+             sink max {:.2} mm (plain copy {:.1})",
             totals[k].recall() * 100.0,
             totals[k].found,
             totals[k].annotated,
+            still_only[k].found,
+            still_only[k].annotated,
             totals[k].precision() * 100.0,
             totals[k].right,
             totals[k].detected,
-            worst[k].0 * 1e3,
-            worst[k].1 * 1e3
+            worst[k].drift * 1e3,
+            worst[k].plain_drift * 1e3,
+            worst[k].sink * 1e3,
+            worst[k].slide_sink * 1e3,
+            worst[k].plain_slide_sink * 1e3
         );
     }
     println!(
@@ -351,24 +429,26 @@ fn the_corpus_footfalls_are_found_and_held_on_legs_0_7_to_1_3() {
         frames as f64 / seconds,
         iterations as f64 / frames as f64
     );
-    // The issue's targets: recall and precision 95 % (not met: recall 88.5 %, precision
-    // 95.5 % over the corpus; the misses are feet low but moving, docs/motion.md), and
-    // within each annotated footfall the held points drift and sink at most 2 mm on every
-    // clip and body (met: at most 0.95 and 0.92 mm), less than the plain copy drifts.
+    // The issue's targets: recall and precision 95 % over the corpus, and within each
+    // annotated footfall the held points drift and sink at most 2 mm on every clip and body,
+    // less than the plain copy drifts; the sliding points do not sink under the floor.
     let mut all = totals[0];
     all.add(totals[1]);
-    assert!(all.recall() >= 0.88, "recall {}", all.recall());
+    assert!(all.recall() >= 0.95, "recall {}", all.recall());
     assert!(all.precision() >= 0.95, "precision {}", all.precision());
-    for (clip, legs, output, sink) in &held {
+    for (clip, legs, h) in &holds {
         assert!(
-            *output <= 0.002 && *sink <= 0.002,
-            "{clip} legs {legs}: drift {output}, sink {sink}"
+            h.drift <= 0.002 && h.sink <= 0.002 && h.slide_sink <= 0.002,
+            "{clip} legs {legs}: drift {}, sink {}, sliding sink {}",
+            h.drift,
+            h.sink,
+            h.slide_sink
         );
-    }
-    for (clip, legs, output, plain) in &worse {
         assert!(
-            output < plain,
-            "{clip} legs {legs}: {output} against the copy's {plain}"
+            h.plain_drift <= 0.005 || h.drift < h.plain_drift,
+            "{clip} legs {legs}: {} against the copy's {}",
+            h.drift,
+            h.plain_drift
         );
     }
 }

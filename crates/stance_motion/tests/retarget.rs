@@ -237,8 +237,9 @@ fn a_planted_foot_stays_put_where_the_copy_slides() {
     let left: Vec<_> = r
         .contacts
         .iter()
-        .filter(|c| c.joint == "l_talocrural" && c.part == ContactPart::Heel)
+        .filter(|c| c.joint == "l_talocrural" && c.part == ContactPart::Heel && !c.slides)
         .collect();
+    // Held still once (the landing and lift-off low but moving are slides).
     assert_eq!(left.len(), 1, "{:?}", r.contacts);
     assert!(left[0].start <= 12 && left[0].end >= 27, "{:?}", left[0]);
     let measure = |postures: &[Posture]| -> ContactMetrics {

@@ -424,7 +424,17 @@ impl TimelinePanel<'_> {
                     bottom,
                 ),
             );
-            ui.painter().rect_filled(rect, 1.0, CONTACT_COLOR);
+            // A sliding contact (kept on the floor, not held still): an outline.
+            if contact.slides {
+                ui.painter().rect_stroke(
+                    rect,
+                    1.0,
+                    egui::Stroke::new(1.0, CONTACT_COLOR),
+                    egui::StrokeKind::Inside,
+                );
+            } else {
+                ui.painter().rect_filled(rect, 1.0, CONTACT_COLOR);
+            }
         }
     }
 }

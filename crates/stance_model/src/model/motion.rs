@@ -969,22 +969,31 @@ impl EditorModel {
 /// thresholds to change) and of reference frames left out.
 fn contact_words(retargeted: &Retargeted) -> String {
     use stance_motion::ContactPart;
-    let counts: Vec<String> = ContactPart::ALL
-        .iter()
-        .filter_map(|part| {
-            let n = retargeted
-                .contacts
-                .iter()
-                .filter(|c| c.part == *part)
-                .count();
-            (n > 0).then(|| format!("{n} {}", part.label()))
-        })
-        .collect();
-    let mut text = if counts.is_empty() {
+    let count = |slides: bool| -> Vec<String> {
+        ContactPart::ALL
+            .iter()
+            .filter_map(|part| {
+                let n = retargeted
+                    .contacts
+                    .iter()
+                    .filter(|c| c.part == *part && c.slides == slides)
+                    .count();
+                (n > 0).then(|| format!("{n} {}", part.label()))
+            })
+            .collect()
+    };
+    let (still, sliding) = (count(false), count(true));
+    let mut text = if still.is_empty() {
         "no contact held".to_owned()
     } else {
-        format!("contacts held: {}", counts.join(", "))
+        format!("contacts held: {}", still.join(", "))
     };
+    if !sliding.is_empty() {
+        text.push_str(&format!(
+            "; kept on the floor while sliding: {}",
+            sliding.join(", ")
+        ));
+    }
     for note in retargeted
         .notes
         .iter()

@@ -304,10 +304,21 @@ pub(super) fn held_contacts(
                 && h.part != c.part
                 && h.part.is_foot()
                 && c.part.is_foot()
+                && !h.slides
+                && !c.slides
                 && h.start <= c.start
                 && h.end >= c.start
         });
+        // The floor under the contact on the target: the point's standing height, raised by
+        // the step it stands on (the floor under the contact over the point's own lowest).
+        let step = c.floor - own_floor(&c);
+        let floor = standing + placement.root_scale * step.max(0.0);
         c.position = match partner {
+            // A sliding point: kept at that height where the copy takes it.
+            None if c.slides => {
+                let at = on_copy(&c, c.start);
+                DVec3::new(at.x, floor, at.z)
+            }
             Some(h) => h.position + (on_copy(&c, c.start) - on_copy(h, c.start)),
             None => {
                 // The first point of a stance: where the copy lands it, moved by the copy's
@@ -330,11 +341,32 @@ pub(super) fn held_contacts(
                     .sum::<DVec3>()
                     / (end + 1 - c.start) as f64;
                 let at = on_copy(&c, c.start) + slide;
-                let y = standing + placement.root_scale * (c.floor - own_floor(&c)).max(0.0);
-                DVec3::new(at.x, y, at.z)
+                DVec3::new(at.x, floor, at.z)
             }
         };
         held.push(c);
+    }
+    // A sliding point next to a hold of its own (easing out of it or into it) is kept from
+    // sinking under where that hold puts it, when lower (the foot's roll can hold a ball
+    // under its standing height): the two never pull against each other.
+    let ease = settings.ease_frames(clip.frame_time);
+    for k in 0..held.len() {
+        if !held[k].slides {
+            continue;
+        }
+        let c = &held[k];
+        let next_to = held
+            .iter()
+            .filter(|h| {
+                !h.slides
+                    && h.joint == c.joint
+                    && h.part == c.part
+                    && h.start <= c.end + ease
+                    && h.end + ease >= c.start
+            })
+            .map(|h| h.position.y)
+            .fold(c.position.y, f64::min);
+        held[k].position.y = next_to;
     }
     let mut notes = Vec::new();
     let travel = root
@@ -345,11 +377,21 @@ pub(super) fn held_contacts(
         .sum::<f64>();
     if travel > clip_leg {
         for (side, ankle) in ["left", "right"].iter().zip(CONTACT_JOINTS) {
-            if clip.joint_of(ankle).is_some() && !held.iter().any(|c| c.joint == ankle) {
+            if clip.joint_of(ankle).is_some() && !held.iter().any(|c| c.joint == ankle && !c.slides)
+            {
+                let sliding = held.iter().filter(|c| c.joint == ankle).count();
+                let how = if sliding > 0 {
+                    format!(
+                        "no contact that holds it still ({sliding} sliding, kept on the floor \
+                         only)"
+                    )
+                } else {
+                    "no contact".to_owned()
+                };
                 notes.push(format!(
-                    "the clip moves ({travel:.1} m) but the {side} foot got no contact: raise \
-                     the contact height ({:.3} m, {:.3} m on this clip's legs) or speed ({:.2} \
-                     m/s, {:.2} m/s on this clip's legs and pace)",
+                    "the clip moves ({travel:.1} m) but the {side} foot got {how}: raise the \
+                     contact height ({:.3} m, {:.3} m on this clip's legs) or speed ({:.2} m/s, \
+                     {:.2} m/s on this clip's legs and pace)",
                     settings.height, thresholds.height, settings.speed, thresholds.speed
                 ));
             }
@@ -389,7 +431,7 @@ pub(super) fn stride_scale(
     };
     let s0 = placement.stride_scale;
     let (mut lr, mut rr) = (0.0, 0.0);
-    for c in contacts.iter().filter(|c| c.part.is_foot()) {
+    for c in contacts.iter().filter(|c| c.part.is_foot() && !c.slides) {
         let r = root(c.end)? - root(c.start)?;
         let d = point(c, c.end)? - point(c, c.start)?;
         let l = d - r * s0;
@@ -418,6 +460,8 @@ pub(super) fn contacts_after<'a>(all: &'a [Contact], c: &Contact) -> Vec<&'a Con
         if o.joint == c.joint
             && o.part.is_foot()
             && c.part.is_foot()
+            && !o.slides
+            && !c.slides
             && o.start > from
             && o.start <= end
         {

@@ -14,14 +14,17 @@ pub struct ContactMetrics {
     pub max_drift: f64,
     /// Mean of that distance over the contact frames (m).
     pub mean_drift: f64,
-    /// Deepest a held point went below the height it is held at (m, 0 if never).
+    /// Deepest a held or sliding point went below the height it is held at (m, 0 if never).
     pub max_sink: f64,
-    /// Contact frames measured.
+    /// Highest a sliding point rose above the floor it is kept on (m, 0 if never).
+    pub max_lift: f64,
+    /// Contact frames measured (a held point's).
     pub frames: usize,
 }
 
 /// Contact metrics of point tracks: `track(contact, frame)` gives the world position of the
-/// contact's point at that frame; it sinks where it is below the contact's held height.
+/// contact's point at that frame; it sinks where it is below the contact's held height, a
+/// sliding point lifts where it is above it (a sliding point's drift is the clip's own).
 pub fn contact_metrics(
     contacts: &[Contact],
     track: impl Fn(&Contact, usize) -> Option<DVec3>,
@@ -36,9 +39,13 @@ pub fn contact_metrics(
             let Some(p) = track(c, f) else {
                 continue;
             };
+            m.max_sink = m.max_sink.max(c.position.y - p.y);
+            if c.slides {
+                m.max_lift = m.max_lift.max(p.y - c.position.y);
+                continue;
+            }
             let d = DVec3::new(p.x - first.x, 0.0, p.z - first.z).length();
             m.max_drift = m.max_drift.max(d);
-            m.max_sink = m.max_sink.max(c.position.y - p.y);
             sum += d;
             m.frames += 1;
         }
