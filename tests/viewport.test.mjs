@@ -2,7 +2,7 @@
 import { after, before, describe, test } from "node:test";
 import assert from "node:assert/strict";
 import {
-  CONFIGURATIONS, assertDrawnAtJoints, assertNotDrawnAt, decodePng, isFigureColour, launch,
+  CONFIGURATIONS, DESKTOP_VIEWPORT, assertDrawnAtJoints, assertNotDrawnAt, decodePng, isFigureColour, launch,
   openEditor, pointsAwayFromFigure, saveArtifact, serve, viewportRect, waitForSettled,
 } from "./browser.mjs";
 
@@ -25,7 +25,8 @@ for (const [name, configuration] of Object.entries(CONFIGURATIONS)) {
     let context;
     let editor;
     before(async () => {
-      context = await launch(configuration);
+      // The figure's pixel counts below are for a laptop's window.
+      context = await launch({ ...configuration, viewport: DESKTOP_VIEWPORT });
       editor = await openEditor(context, site.url);
     });
     after(async () => { await context?.close(); });
