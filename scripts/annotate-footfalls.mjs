@@ -6,23 +6,35 @@
 // speed, no smoothing and no knowledge of the detector's thresholds.
 //
 // A footfall of a foot is a run of frames in which both its heel and its toe are within BAND
-// of their own lowest heights over the clip (5th percentile), BAND being 6 % of the clip's leg
-// length (hip to knee to ankle at rest): the flat-foot core of a stance, from just after the
-// heel strike to just before the heel lifts. Runs shorter than 50 ms are dropped, and two runs
+// of their own lowest heights over the clip (5th percentile), BAND being 4 % of the clip's leg
+// length (knee to ankle and hip to knee at rest); precisely: the lower of the two, each less its
+// own lowest, is within BAND (a foot on its heel or on its toes is down). Runs shorter than 50 ms are dropped, and two runs
 // less than 50 ms apart are one footfall. Reference frames at the start (the rest pose, a
 // T-pose, and the frames that blend out of it) are not annotated: the annotation starts at the
 // first frame after the last one whose joint rotations are all within 3 degrees of the rest
 // pose's, plus the frames over which the pose still moves faster than 200 degrees per frame
 // summed over the joints (a blend or a cut out of the reference).
 //
-// Usage: node scripts/annotate-footfalls.mjs CLIP.bvh...   (writes CLIP.footfalls.json beside
-// each clip; --print prints instead)
+// That is one floor per clip: a foot resting on a stair or a raised step is not annotated.
+// --levels annotates such clips instead (see levelsDown): footfalls at any height, from how the
+// sole's height moves alone, still no speed and nothing of the detector's. --parts adds the
+// knees and the hands (wrist and fingertip), one floor per clip, for clips on all fours or
+// kneeling, and takes the feet by the toe alone (the ankle rests on the shin there); --up=Y
+// names the file's up axis where the first frame is not upright (on all fours). All three are
+// opt-in, so the annotations made without them do not change.
+//
+// Usage: node scripts/annotate-footfalls.mjs [--levels] [--parts] [--up=Y] CLIP.bvh...   (writes
+// CLIP.footfalls.json beside each clip; --print prints instead)
 
 import { readFileSync, writeFileSync } from 'node:fs';
 
 const BAND = 0.04;
 const MIN_RUN_S = 0.05;
 const MAX_GAP_S = 0.05;
+// --levels: how long either side a frame must stay still, and how far either side its level
+// must be the lowest.
+const STILL_S = 0.05;
+const LOCAL_S = 0.2;
 
 function parse(text) {
   const tokens = text.split(/\s+/).filter((t) => t.length > 0);
@@ -113,6 +125,16 @@ const find = (clip, patterns) => {
   return -1;
 };
 const side = (s) => (s === 'l' ? '(l|left|l_)' : '(r|right|r_)');
+// The deepest point under a joint: follow first children to the end (a toe joint's or the
+// hand's End Site, or the joint itself).
+function deepest(clip, k) {
+  let j = k;
+  for (;;) {
+    const child = clip.joints.findIndex((x) => x.parent === j);
+    if (child < 0) return j;
+    j = child;
+  }
+}
 function limb(clip, s) {
   const pre = `^(character1_|mixamorig:|bip01_?)?${side(s)}`;
   const ankle = find(clip, [new RegExp(`${pre}_?(foot|ankle)$`, 'i')]);
@@ -134,7 +156,7 @@ const percentile = (xs, p) => {
   return s[Math.min(s.length - 1, Math.floor(p * s.length))];
 };
 
-export function annotate(text) {
+export function annotate(text, options = {}) {
   const clip = parse(text);
   const legs = { l: limb(clip, 'l'), r: limb(clip, 'r') };
   for (const [s, l] of Object.entries(legs)) {
@@ -147,11 +169,17 @@ export function annotate(text) {
   // exporters lay every bone along its own axis at rest).
   const head = find(clip, [/head$/i]);
   const first = frames[0];
-  const up = [0, 1, 2].reduce((best, a) => {
-    const h = (k) => first[head][k] - (first[legs.l.ankle][k] + first[legs.r.ankle][k]) / 2;
-    return Math.abs(h(a)) > Math.abs(h(best)) ? a : best;
-  }, 0);
-  const upSign = Math.sign(first[head][up] - first[legs.l.ankle][up]);
+  // --up=X|Y|Z (+ or -) instead: the file's own up axis, for a clip whose first frame is not
+  // upright (on all fours the head is ahead of the ankles more than above them).
+  const given = options.up ? /^([+-]?)([XYZ])$/i.exec(options.up) : null;
+  if (options.up && !given) throw new Error(`--up=${options.up}: X, Y or Z, + or -`);
+  const up = given
+    ? 'XYZ'.indexOf(given[2].toUpperCase())
+    : [0, 1, 2].reduce((best, a) => {
+        const h = (k) => first[head][k] - (first[legs.l.ankle][k] + first[legs.r.ankle][k]) / 2;
+        return Math.abs(h(a)) > Math.abs(h(best)) ? a : best;
+      }, 0);
+  const upSign = given ? (given[1] === '-' ? -1 : 1) : Math.sign(first[head][up] - first[legs.l.ankle][up]);
   // Reference frames: at most the first two seconds, while the arms are stretched out
   // sideways (wrists at least 85 % of the skeleton's widest wrist span apart, a T-pose), then
   // the frames that blend or cut out of it (the summed joint-rotation change to the next
@@ -187,40 +215,119 @@ export function annotate(text) {
   const minRun = Math.max(1, Math.round(MIN_RUN_S / clip.frameTime));
   const maxGap = Math.max(1, Math.round(MAX_GAP_S / clip.frameTime));
   const out = { frames: clip.motion.length, frame_time: clip.frameTime, start, leg_length: legLength, band, feet: {} };
+  if (options.levels) out.floors = 'levels';
+  if (given) out.up = `${upSign < 0 ? '-' : '+'}${'XYZ'[up]}`;
+  // Heights (up) of a point over the annotated frames, and their 5th percentile: the point's
+  // own lowest over the clip.
+  const heights = (k) => frames.slice(start).map((p) => upSign * p[k][up]);
+  // A run of frames where a point pair (a joint and the deepest point below it) is down: the
+  // lower of the two, each less its own lowest, is within BAND of the floor (one floor per
+  // clip) or of the level it rests on (--levels).
+  const annotatePair = (s, name, a, b) => {
+    const ha = heights(a);
+    const hb = heights(b);
+    // --levels: each point's lowest itself (a foot may rest on the lowest level for a few
+    // frames only), so that the two points agree on the height of every level.
+    const lowA = percentile(ha, options.levels ? 0 : 0.05);
+    const lowB = percentile(hb, options.levels ? 0 : 0.05);
+    const d = ha.map((y, f) => Math.min(y - lowA, hb[f] - lowB));
+    const down = options.levels ? levelsDown(d, [ha, hb], band, clip.frameTime) : d.map((x) => x <= band);
+    if (process.env.TRACE === `${name}${s}` || (name === 'feet' && process.env.TRACE === s)) {
+      ha.forEach((y, f) => console.error(`${s} ${f + start} ${name} ${((y - lowA) / band).toFixed(2)} ${((hb[f] - lowB) / band).toFixed(2)} ${down[f] ? 'down' : ''}`));
+    }
+    return runsOf(down, minRun, maxGap).map(([x, y]) => [x + start, y + start]);
+  };
+  // --parts: the feet by the toe alone. On all fours the ankle rests on the shin, never on
+  // the floor, so its own lowest is no floor: a foot lying still with its toes well up would
+  // count as down.
   for (const [s, l] of Object.entries(legs)) {
-    const h = (k) => frames.slice(start).map((p) => upSign * p[k][up]);
-    const heel = h(l.ankle);
-    const toe = h(l.toe);
-    const heelLow = percentile(heel, 0.05);
-    const toeLow = percentile(toe, 0.05);
-    const down = heel.map((y, f) => Math.min(y - heelLow, toe[f] - toeLow) <= band);
-    if (process.env.TRACE === s) {
-      heel.forEach((y, f) => console.error(`${s} ${f + start} heel ${((y - heelLow) / band).toFixed(2)} toe ${((toe[f] - toeLow) / band).toFixed(2)} ${down[f] ? 'down' : ''}`));
-    }
-    let runs = [];
-    for (let f = 0; f < down.length; f++) {
-      if (!down[f]) continue;
-      const a = f;
-      while (f + 1 < down.length && down[f + 1]) f++;
-      runs.push([a, f]);
-    }
-    const merged = [];
-    for (const r of runs) {
-      const last = merged[merged.length - 1];
-      if (last && r[0] - last[1] - 1 < maxGap) last[1] = r[1];
-      else merged.push(r.slice());
-    }
-    runs = merged.filter(([a, b]) => b - a + 1 >= minRun).map(([a, b]) => [a + start, b + start]);
-    out.feet[s] = runs;
+    out.feet[s] = annotatePair(s, 'feet', options.parts ? l.toe : l.ankle, l.toe);
+  }
+  if (options.parts) {
+    // Knees (the knee joint alone) and hands (the wrist and the deepest point below it), each
+    // with one floor per clip: for clips on all fours or kneeling, where they do reach the floor.
+    out.knees = {};
+    out.hands = {};
+    for (const [s, l] of Object.entries(legs)) out.knees[s] = annotatePair(s, 'knees', l.knee, l.knee);
+    wrists.forEach((w, i) => {
+      const s = i === 0 ? 'l' : 'r';
+      if (w < 0) throw new Error(`no ${s} wrist found by name`);
+      out.hands[s] = annotatePair(s, 'hands', w, deepest(clip, w));
+    });
   }
   return out;
 }
 
+// Runs of true frames: gaps shorter than maxGap bridged, runs shorter than minRun dropped.
+function runsOf(down, minRun, maxGap) {
+  const runs = [];
+  for (let f = 0; f < down.length; f++) {
+    if (!down[f]) continue;
+    const a = f;
+    while (f + 1 < down.length && down[f + 1]) f++;
+    runs.push([a, f]);
+  }
+  const merged = [];
+  for (const r of runs) {
+    const last = merged[merged.length - 1];
+    if (last && r[0] - last[1] - 1 < maxGap) last[1] = r[1];
+    else merged.push(r.slice());
+  }
+  return merged.filter(([a, b]) => b - a + 1 >= minRun);
+}
+
+// --levels: footfalls on several levels (stairs, a raised step, uneven ground), from the
+// heights alone. A frame is still when the heel's or the toe's height (either: a heel strike
+// or a toe-off rolls about one of them) varies by at most half the band within STILL_S either
+// side; with d the sole's height (the lower of the two, each less its lowest), a run of still frames at least MIN_RUN_S long whose lowest d (its
+// level) is, within half the band, the lowest of d from LOCAL_S before it to LOCAL_S after it
+// (a foot resting, not the top of a swing) is grown while d stays within the band of its
+// level. No speed: only how the sole's height moves.
+function levelsDown(d, points, band, frameTime) {
+  const k = Math.max(1, Math.round(STILL_S / frameTime));
+  const w = Math.max(1, Math.round(LOCAL_S / frameTime));
+  const minRun = Math.max(1, Math.round(MIN_RUN_S / frameTime));
+  const n = d.length;
+  const range = (a, b, h = d) => {
+    let lo = Infinity;
+    let hi = -Infinity;
+    for (let i = Math.max(0, a); i <= Math.min(n - 1, b); i++) {
+      lo = Math.min(lo, h[i]);
+      hi = Math.max(hi, h[i]);
+    }
+    return [lo, hi];
+  };
+  const still = d.map((_, f) =>
+    points.some((h) => {
+      const [lo, hi] = range(f - k, f + k, h);
+      return hi - lo <= band / 2;
+    }),
+  );
+  const down = new Array(n).fill(false);
+  for (let f = 0; f < n; f++) {
+    if (!still[f]) continue;
+    const a = f;
+    while (f + 1 < n && still[f + 1]) f++;
+    const b = f;
+    if (b - a + 1 < minRun) continue;
+    const level = range(a, b)[0];
+    if (level > range(a - w, b + w)[0] + band / 2) continue;
+    let x = a;
+    while (x > 0 && d[x - 1] <= level + band) x--;
+    let y = b;
+    while (y < n - 1 && d[y + 1] <= level + band) y++;
+    for (let i = x; i <= y; i++) down[i] = true;
+  }
+  return down;
+}
+
 const args = process.argv.slice(2);
-const print = args.includes('--print');
-for (const path of args.filter((a) => a !== '--print')) {
-  const result = annotate(readFileSync(path, 'utf8'));
+const flags = new Set(args.filter((a) => a.startsWith('--') && !a.startsWith('--up=')));
+for (const flag of flags) if (!['--print', '--levels', '--parts'].includes(flag)) throw new Error(`unknown option ${flag}`);
+const upFlag = args.find((a) => a.startsWith('--up='));
+for (const path of args.filter((a) => !a.startsWith('--'))) {
+  const result = annotate(readFileSync(path, 'utf8'), { levels: flags.has('--levels'), parts: flags.has('--parts'), up: upFlag?.slice(5) });
   const text = `${JSON.stringify(result)}\n`;
-  if (print) process.stdout.write(`${path}: ${text}`);
+  if (flags.has('--print')) process.stdout.write(`${path}: ${text}`);
   else writeFileSync(path.replace(/\.bvh$/i, '.footfalls.json'), text);
 }
