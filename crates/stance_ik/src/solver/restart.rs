@@ -16,10 +16,6 @@ const GUARDED_STALL_WINDOW: usize = 5;
 /// instead of a crawl near a singular level (the textbook's constant 0.01 shortens each by a
 /// constant ratio there).
 const RESTART_ERROR_SCALE: f64 = 0.01;
-/// The restart with the textbook's recipe takes this many times the settings' priority budget:
-/// its levels' shares are cut less than the first run's (inside its own trust region), another
-/// path out of a first run's basin (docs/solver-families.md, `limits-0021`).
-const RESTART_BUDGET_FACTOR: f64 = 2.0;
 
 /// One run of a multi-start after the first.
 #[derive(Debug, Clone, Copy)]
@@ -45,7 +41,7 @@ impl Solver {
     /// posture:
     /// 1. the textbook's recipe (trust region pi/4, task clamps 0.1 m / 0.3 rad where the
     ///    settings' are longer, damping 0.01 falling with the error below 1 cm / 0.01 rad),
-    ///    with twice the settings' priority budget;
+    ///    the priority budget kept;
     /// 2. the settings' own iteration without the priority budget (the plain recursion's
     ///    whole steps: another path, into another basin);
     ///
@@ -93,7 +89,6 @@ impl Solver {
                         lambda: TEXTBOOK_DAMPING,
                         error_scale: RESTART_ERROR_SCALE,
                     },
-                    priority_budget: RESTART_BUDGET_FACTOR * self.settings.priority_budget,
                     ..textbook
                 };
                 let unbudgeted = RestartStage {
