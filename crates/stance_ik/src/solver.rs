@@ -214,6 +214,7 @@ impl Solver {
             self.settings.max_linear_step = stage.max_linear_step;
             self.settings.max_angular_step = stage.max_angular_step;
             self.settings.damping = stage.damping;
+            self.settings.priority_budget = stage.priority_budget;
             self.settings.max_iterations = iterations_left;
             if stage.from_start {
                 values.copy_from_slice(&initial);

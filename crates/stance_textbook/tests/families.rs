@@ -22,10 +22,12 @@ const STATED: &[(&str, usize, usize, usize)] = &[
     ("partial", 40, 38, 0),
     ("mixed", 40, 40, 0),
     ("loa1", 40, 40, 0),
-    ("loa2", 38, 37, 0),
+    ("loa2", 39, 37, 0),
     ("limits", 35, 33, 1),
-    ("stand", 38, 38, 1),
-    ("wide", 31, 28, 1),
+    ("stand", 39, 38, 0),
+    ("wide", 35, 28, 0),
+    ("aim", 37, 35, 0),
+    ("com", 37, 36, 1),
 ];
 
 /// Stance's solve of `text`, the posture as the oracle reads postures (by joint and DOF

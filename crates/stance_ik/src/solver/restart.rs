@@ -7,12 +7,18 @@ use crate::limb::LimbGoal;
 use crate::priority::Damping;
 use crate::{Posture, Skeleton, Task, TaskKind};
 
-/// The stall window of the multi-start's plain recursion from the start posture.
+/// The stall window of the multi-start's runs from the start posture.
 const RESTART_STALL_WINDOW: usize = 20;
 /// The stall window of the multi-start's guarded run.
 const GUARDED_STALL_WINDOW: usize = 5;
+/// Below this error (m or rad) the damping of the restart with the textbook's recipe falls in
+/// proportion (Levenberg-Marquardt style): its last iterations are undamped Newton steps
+/// instead of a crawl near a singular level (the textbook's constant 0.01 shortens each by a
+/// constant ratio there).
+const RESTART_ERROR_SCALE: f64 = 0.01;
 
 /// One run of a multi-start after the first.
+#[derive(Debug, Clone, Copy)]
 pub(super) struct RestartStage {
     pub(super) iteration: Iteration,
     pub(super) trust_region: f64,
@@ -24,15 +30,28 @@ pub(super) struct RestartStage {
     pub(super) from_start: bool,
     /// The damping of the levels without their own.
     pub(super) damping: Damping,
+    /// The levels' shared budget of a textbook iteration (`priority_budget`).
+    pub(super) priority_budget: f64,
 }
 
 impl Solver {
-    /// The runs a stalled solve goes on with, in order (none without `settings.restarts`):
-    /// after textbook iterations, guarded ones from the best posture so far (their line
-    /// search settles what whole steps leave oscillating), then the plain recursion from the
-    /// start posture with the textbook's damping (0.01) and trust region (pi/4); after guarded
-    /// ones, that plain recursion. Both with the textbook's task clamps where the settings' are
-    /// longer.
+    /// The runs a stalled solve goes on with, in order (none without `settings.restarts`),
+    /// each within what the runs before left of the iteration budget and kept only if better
+    /// in priority order. After textbook iterations (with a trust region), from the start
+    /// posture:
+    /// 1. the textbook's recipe (trust region pi/4, task clamps 0.1 m / 0.3 rad where the
+    ///    settings' are longer, damping 0.01 falling with the error below 1 cm / 0.01 rad),
+    ///    the priority budget kept;
+    /// 2. the settings' own iteration without the priority budget (the plain recursion's
+    ///    whole steps: another path, into another basin);
+    ///
+    /// then 3. guarded iterations from the best posture so far (their line search settles what
+    /// whole steps leave oscillating). After guarded iterations: the textbook's recipe with its
+    /// constant damping; after the plain recursion without a trust region: guarded iterations.
+    ///
+    /// Each stalled run has met a local minimum (a zero step on joint limits) or a crawl, and
+    /// the runs from the start posture take other paths there: the first run and a restart
+    /// alike may settle in a minimum one of the others avoids (docs/solver-families.md).
     pub(super) fn restart_stages(&self) -> Vec<RestartStage> {
         if !self.settings.restarts {
             return Vec::new();
@@ -47,8 +66,9 @@ impl Solver {
             max_angular_step,
             from_start: false,
             damping: self.settings.damping,
+            priority_budget: self.settings.priority_budget,
         };
-        let plain = RestartStage {
+        let textbook = RestartStage {
             iteration: Iteration::Textbook,
             trust_region: TEXTBOOK_TRUST_REGION,
             stall_window: RESTART_STALL_WINDOW,
@@ -58,11 +78,31 @@ impl Solver {
             damping: Damping::Constant {
                 lambda: TEXTBOOK_DAMPING,
             },
+            priority_budget: self.settings.priority_budget,
         };
         match self.settings.iteration {
-            Iteration::Guarded => vec![plain],
+            Iteration::Guarded => vec![textbook],
             Iteration::Textbook if self.settings.trust_region == f64::INFINITY => vec![guarded],
-            Iteration::Textbook => vec![guarded, plain],
+            Iteration::Textbook => {
+                let falling = RestartStage {
+                    damping: Damping::Levenberg {
+                        lambda: TEXTBOOK_DAMPING,
+                        error_scale: RESTART_ERROR_SCALE,
+                    },
+                    ..textbook
+                };
+                let unbudgeted = RestartStage {
+                    iteration: Iteration::Textbook,
+                    trust_region: self.settings.trust_region,
+                    stall_window: RESTART_STALL_WINDOW,
+                    max_linear_step: self.settings.max_linear_step,
+                    max_angular_step: self.settings.max_angular_step,
+                    from_start: true,
+                    damping: self.settings.damping,
+                    priority_budget: f64::INFINITY,
+                };
+                vec![falling, unbudgeted, guarded]
+            }
         }
     }
 

@@ -94,10 +94,12 @@ pub struct SolverSettings {
     /// Linear-algebra implementation of the step (default: the slice kernel).
     pub backend: Backend,
     /// When a solve stalls with a level unmet (and at least half the time budget is left), go
-    /// on with guarded iterations, then solve once more from the start posture with the
-    /// textbook's recipe (damping 0.01, trust region pi/4, task clamps 0.1 m / 0.3 rad),
-    /// within what is left of the iteration budget, each run kept only if better in priority
-    /// order (default true).
+    /// on with other runs within what is left of the iteration budget, each kept only if
+    /// better in priority order (default true): after textbook iterations, from the start
+    /// posture the textbook's recipe (damping 0.01 falling with the error below 0.01, trust
+    /// region pi/4, task clamps 0.1 m / 0.3 rad), then these settings without the priority
+    /// budget, then guarded iterations from the best posture so far; after guarded
+    /// iterations, the textbook's recipe (constant damping) from the start posture.
     pub restarts: bool,
 }
 
