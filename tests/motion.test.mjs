@@ -223,7 +223,7 @@ describe("motion", () => {
       });
     }
     console.log(`# the page's ${r.contacts.length} contacts are the CLI's; feet within ${mm(worst)} mm of the native held positions`);
-    console.log(`# retargeting the walk with contacts (4 levels, H-Anim LOA2 body): ` +
+    console.log(`# retargeting the walk with contacts (6 levels, H-Anim LOA2 body): ` +
       `${(r.frames / (r.ms / 1000)).toFixed(0)} frames/s in Chromium (wasm, release), ` +
       `${report.frames_per_second.toFixed(0)} frames/s native (debug build of the CLI)`);
   });

@@ -302,23 +302,7 @@ pub fn detect_contacts(
                 && low_height(track, clearance, f) - ground[f] <= limits.height
                 && speed[f] <= limits.speed
         };
-        let mut runs: Vec<(usize, usize)> = Vec::new();
-        let mut f = 0;
-        while f < positions.len() {
-            if !rest(f) {
-                f += 1;
-                continue;
-            }
-            let start = f;
-            while f < positions.len() && rest(f) {
-                f += 1;
-            }
-            match runs.last_mut() {
-                Some(last) if start - last.1 <= half => last.1 = f - 1,
-                _ => runs.push((start, f - 1)),
-            }
-        }
-        for (start, end) in runs {
+        for (start, end) in runs_of(positions.len(), rest, |a, b| b - a <= half) {
             // The run's own floor (its lower quartile); frames at either end that have
             // risen over a third of `height` above it are no longer resting (a heel lifting
             // while the ball holds, a ball lifting after the heel strike).
@@ -359,28 +343,9 @@ pub fn detect_contacts(
                 && low_height(track, 0.0, f) - ground[f] <= limits.height
                 && speed[f] <= SLIDE_SPEED_FACTOR * limits.speed
         };
-        let mut runs: Vec<(usize, usize)> = Vec::new();
-        let mut f = 0;
-        while f < positions.len() {
-            if !low(f) {
-                f += 1;
-                continue;
-            }
-            let start = f;
-            while f < positions.len() && low(f) {
-                f += 1;
-            }
-            // A short rise bridged, not a frame held still.
-            match runs.last_mut() {
-                Some(last)
-                    if start - last.1 <= half && !still[last.1..start].iter().any(|&s| s) =>
-                {
-                    last.1 = f - 1;
-                }
-                _ => runs.push((start, f - 1)),
-            }
-        }
-        for (start, end) in runs {
+        // A short rise bridged, not a frame held still.
+        let bridged = |a: usize, b: usize| b - a <= half && !still[a..b].iter().any(|&s| s);
+        for (start, end) in runs_of(positions.len(), low, bridged) {
             if end + 1 - start < min_frames {
                 continue;
             }
@@ -391,6 +356,32 @@ pub fn detect_contacts(
         }
     }
     contacts
+}
+
+/// The runs of frames `0..len` that are `in_run` (first and last, inclusive), a gap from the
+/// last frame `a` of one to the first `b` of the next joined where `bridged(a, b)`.
+fn runs_of(
+    len: usize,
+    in_run: impl Fn(usize) -> bool,
+    bridged: impl Fn(usize, usize) -> bool,
+) -> Vec<(usize, usize)> {
+    let mut runs: Vec<(usize, usize)> = Vec::new();
+    let mut f = 0;
+    while f < len {
+        if !in_run(f) {
+            f += 1;
+            continue;
+        }
+        let start = f;
+        while f < len && in_run(f) {
+            f += 1;
+        }
+        match runs.last_mut() {
+            Some(last) if bridged(last.1, start) => last.1 = f - 1,
+            _ => runs.push((start, f - 1)),
+        }
+    }
+    runs
 }
 
 /// The height that makes a track's point low at frame `f`: its own less its `clearance`, or,
