@@ -57,6 +57,15 @@ pub const ROOT_LEVEL: u32 = 4;
 pub const WRIST_LEVEL: u32 = 5;
 /// The copied frame as a posture reference.
 pub const POSTURE_LEVEL: u32 = 6;
+/// The levels, in the order of [`Retargeted::levels`] and of each frame's residuals.
+const LEVELS: [u32; 6] = [
+    CONTACT_LEVEL,
+    YIELDING_CONTACT_LEVEL,
+    SLIDING_CONTACT_LEVEL,
+    ROOT_LEVEL,
+    WRIST_LEVEL,
+    POSTURE_LEVEL,
+];
 
 /// Errors of retargeting.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -390,14 +399,7 @@ impl Retargeting {
             contacts,
             reference_frames: reference,
             thresholds,
-            levels: vec![
-                CONTACT_LEVEL,
-                YIELDING_CONTACT_LEVEL,
-                SLIDING_CONTACT_LEVEL,
-                ROOT_LEVEL,
-                WRIST_LEVEL,
-                POSTURE_LEVEL,
-            ],
+            levels: LEVELS.to_vec(),
             residuals: Vec::new(),
             iterations: 0,
             frame_time: self.clip.frame_time,
@@ -529,21 +531,14 @@ fn frame_tasks(
     }
     // A sliding point goes along with the copy, kept on or above the floor (an inequality:
     // never pulled down). Easing in or out, the floor is eased from the copy's point where
-    // that is lower, and it is never above the goal of a hold of that point easing in or
-    // out: nothing pops, and the two never pull against each other.
+    // that is lower: nothing pops. (A hold of that point easing in or out beside it is never
+    // lower than the slide's floor: see above and `held_contacts`.)
     for (c, w) in sliding {
         let Some(j) = skeleton.joint_index(&c.joint) else {
             continue;
         };
         let own = frames.point(j, c.point).y;
-        let floor = goals
-            .iter()
-            .filter(|(h, _, k, _)| *k == j && h.part == c.part)
-            .map(|g| g.3.y)
-            .fold(
-                c.position.y - (1.0 - w) * (c.position.y - own).max(0.0),
-                f64::min,
-            );
+        let floor = c.position.y - (1.0 - w) * (c.position.y - own).max(0.0);
         tasks.push(
             Task::point_on_plane(j, c.point, DVec3::new(0.0, floor, 0.0), DVec3::Y, true)
                 .at_level(SLIDING_CONTACT_LEVEL),
@@ -576,20 +571,26 @@ const RETRY_ITERATIONS: usize = 32;
 /// from the copy.
 const RETRY_RESIDUAL: f64 = 1e-3;
 
-/// Whether a frame's residuals (per level of [`Retargeted::levels`]) leave its firm or
-/// sliding contacts unmet.
+/// A frame's residual at `level` (its residuals are per level of [`LEVELS`]).
+fn at_level(residual: &[f64], level: u32) -> Option<f64> {
+    let k = LEVELS.iter().position(|&l| l == level)?;
+    residual.get(k).copied()
+}
+
+/// Whether a frame's residuals leave its firm or sliding contacts unmet.
 fn unmet(residual: &[f64]) -> bool {
-    residual.first().is_some_and(|&r| r > RETRY_RESIDUAL)
-        || residual.get(2).is_some_and(|&r| r > RETRY_RESIDUAL)
+    [CONTACT_LEVEL, SLIDING_CONTACT_LEVEL]
+        .into_iter()
+        .any(|level| at_level(residual, level).is_some_and(|r| r > RETRY_RESIDUAL))
 }
 
 /// Whether residuals `a` are better than `b`: the firm contacts closer, or, both met, the
 /// sliding ones.
 fn better(a: &[f64], b: &[f64]) -> bool {
-    let (firm_a, firm_b) = (a.first().copied(), b.first().copied());
+    let (firm_a, firm_b) = (at_level(a, CONTACT_LEVEL), at_level(b, CONTACT_LEVEL));
     let met = |r: Option<f64>| r.is_some_and(|r| r <= RETRY_RESIDUAL);
     if met(firm_a) && met(firm_b) {
-        a.get(2) < b.get(2)
+        at_level(a, SLIDING_CONTACT_LEVEL) < at_level(b, SLIDING_CONTACT_LEVEL)
     } else {
         firm_a < firm_b
     }

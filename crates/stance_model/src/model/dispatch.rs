@@ -208,26 +208,20 @@ impl EditorModel {
                 tasks = new;
                 kind
             }
-            TaskCommand::AddOnProp { joint, prop } => match self.task_on_prop(joint, prop) {
-                Ok(task) => {
-                    tasks.push(task);
-                    EditKind::Command
-                }
-                Err(error) => {
-                    self.warn(format!("The task could not be added: {error}."));
+            TaskCommand::AddOnProp { joint, prop } => {
+                let Some(task) = self.task_made(self.task_on_prop(joint, prop)) else {
                     return Change::View;
-                }
-            },
-            TaskCommand::Add(what) => match make_task(&self.character.session, what) {
-                Ok(task) => {
-                    tasks.push(task);
-                    EditKind::Command
-                }
-                Err(error) => {
-                    self.warn(format!("The task could not be added: {error}."));
+                };
+                tasks.push(task);
+                EditKind::Command
+            }
+            TaskCommand::Add(what) => {
+                let Some(task) = self.task_made(make_task(&self.character.session, what)) else {
                     return Change::View;
-                }
-            },
+                };
+                tasks.push(task);
+                EditKind::Command
+            }
             TaskCommand::LoadTable1Example => {
                 tasks = table1_example(&self.character.session);
                 self.inform("Table 1 of the paper: level 1 holds the left foot, the gaze and the right hand; balance is level 2; the left hand on the bar level 3.");
@@ -255,6 +249,12 @@ impl EditorModel {
             }
         };
         self.commit_tasks(kind, tasks)
+    }
+
+    /// A new task, or, where it could not be made, `None` and a warning saying why.
+    fn task_made(&mut self, made: Result<TaskSpec, String>) -> Option<TaskSpec> {
+        made.map_err(|error| self.warn(format!("The task could not be added: {error}.")))
+            .ok()
     }
 
     /// Replaces the task list as one edit of `kind`, when it changed.
