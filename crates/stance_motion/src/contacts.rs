@@ -293,10 +293,16 @@ pub fn detect_contacts(
     let half = frames_of(settings.window * 0.5, frame_time).max(1);
     let min_frames = frames_of(settings.min_duration, frame_time).max(1);
     let mut contacts = Vec::new();
-    for track in tracks {
-        let positions = &track.positions[..ground.len().min(track.positions.len())];
+    // Each track's positions up to the ground's length, and its speeds.
+    let measured: Vec<(&[DVec3], Vec<f64>)> = tracks
+        .iter()
+        .map(|track| {
+            let positions = &track.positions[..ground.len().min(track.positions.len())];
+            (positions, speeds(positions, scale.start, half, frame_time))
+        })
+        .collect();
+    for (track, (positions, speed)) in tracks.iter().zip(&measured) {
         let clearance = track.part.clearance() * scale.leg;
-        let speed = speeds(positions, scale.start, half, frame_time);
         let rest = |f: usize| {
             f >= scale.start
                 && low_height(track, clearance, f) - ground[f] <= limits.height
@@ -327,9 +333,10 @@ pub fn detect_contacts(
         }
     }
     let held = contacts.len();
-    for track in tracks.iter().filter(|t| t.part.is_foot()) {
-        let positions = &track.positions[..ground.len().min(track.positions.len())];
-        let speed = speeds(positions, scale.start, half, frame_time);
+    for (track, (positions, speed)) in tracks.iter().zip(&measured) {
+        if !track.part.is_foot() {
+            continue;
+        }
         // Frames where a contact of this foot (either point) holds it still.
         let mut still = vec![false; positions.len()];
         for c in contacts[..held].iter().filter(|c| c.joint == track.joint) {
