@@ -27,7 +27,9 @@ const STATED: &[(&str, usize, usize, usize)] = &[
     ("stand", 39, 38, 0),
     ("wide", 35, 28, 0),
     ("aim", 37, 35, 0),
-    ("com", 37, 36, 1),
+    ("com", 38, 36, 0),
+    ("poise", 37, 36, 1),
+    ("far", 37, 33, 1),
 ];
 
 /// Stance's solve of `text`, the posture as the oracle reads postures (by joint and DOF
