@@ -11,7 +11,8 @@
 //!    ([`reference_frames`]).
 //! 2. **The ground** near each frame is a robust statistic, not the minimum: the 10th
 //!    percentile, within half a second, of the lowest point of the body (each part's point
-//!    less its clearance, [`ContactPart::clearance`]), so that a stray frame does not set it,
+//!    less its clearance: how high it stands over the ground when it rests, found on the clip
+//!    for the hands, knees and pelvis, [`clearances`]), so that a stray frame does not set it,
 //!    and each contact finds its own floor (slopes, steps).
 //! 3. A point is **low** within `height` of that ground and **still** while its horizontal
 //!    speed, measured over `window` seconds (a central difference, so that 120-240 fps capture
@@ -75,15 +76,31 @@ impl ContactPart {
         matches!(self, ContactPart::Heel | ContactPart::Ball)
     }
 
-    /// How high the part's point is above the ground it rests on, as a share of the leg
-    /// (hip to ankle): 0 for the sole's points, the wrist's centre over the palm, the knee's
-    /// centre over the kneecap, the hip joints over the seat.
+    /// How high the part's point typically is above the ground it rests on, as a share of
+    /// the leg (hip to ankle): 0 for the sole's points, the wrist's centre over the palm, the
+    /// knee's centre over the kneecap, the hip joints over the seat. A clip that shows the
+    /// part resting gives its own ([`clearances`]); this holds where it does not.
     pub fn clearance(self) -> f64 {
         match self {
             ContactPart::Heel | ContactPart::Ball => 0.0,
             ContactPart::Hand => 0.04,
             ContactPart::Knee => 0.07,
             ContactPart::Pelvis => 0.12,
+        }
+    }
+
+    /// The most the part's point can stand above the ground it rests on, as a share of the
+    /// leg (hip to ankle, about 0.49 of the stature): the wrist's centre a hand's length over
+    /// the fingertips (0.11 of the stature), the knee's centre its depth over the shin it
+    /// kneels on (0.06), the hip joints over the seat leaning back. A part found resting
+    /// higher on a clip does not rest on it (standing, the corpus's knees rest no lower than
+    /// 0.43 of the leg, its hands 0.74 and its pelvis 0.55).
+    pub fn max_clearance(self) -> f64 {
+        match self {
+            ContactPart::Heel | ContactPart::Ball => 0.0,
+            ContactPart::Hand => 0.22,
+            ContactPart::Knee => 0.12,
+            ContactPart::Pelvis => 0.2,
         }
     }
 
@@ -224,6 +241,10 @@ pub struct Contact {
     /// The ground under the contact: the median height of the point less its clearance over
     /// the contact (m, on the clip).
     pub floor: f64,
+    /// How high the point stands over the ground it rests on, on the clip (m): the part's
+    /// clearance found on the clip ([`clearances`]).
+    #[serde(default)]
+    pub clearance: f64,
     /// A sliding contact: a point of a foot low on the ground but moving (a shuffle, a toe
     /// that drags, a video capture's skating foot, a landing or toe-off under way), where no
     /// contact of that foot holds it still. It is kept from sinking under the floor (the
@@ -233,15 +254,93 @@ pub struct Contact {
     pub slides: bool,
 }
 
+/// The value a share `q` (0 to 1) of the way up `values` (reordering them): the one at
+/// index `len · q` once sorted. `None` when there are none.
+pub(crate) fn quantile(values: &mut [f64], q: f64) -> Option<f64> {
+    let last = values.len().checked_sub(1)?;
+    let k = ((values.len() as f64 * q) as usize).min(last);
+    Some(*values.select_nth_unstable_by(k, f64::total_cmp).1)
+}
+
+/// How high each track's point stands over the ground when it rests, on this clip (m): 0 for
+/// the sole's points; for a hand, a knee or the pelvis, its resting height found on the clip,
+/// the 10th percentile of its height over the frames it is still (`speeds` at most
+/// `limits.speed`, both sides of the body together), over the feet's floor (the 10th
+/// percentile of the lowest sole point's height). A joint's centre stands over what it rests
+/// on by as much as the capture's skeleton puts it there (the crawl of the corpus rests its
+/// wrists 16 % of its leg over the floor, its knees 8 %), not by a share fixed for every body.
+/// A part found resting higher than [`ContactPart::max_clearance`] never rests on the clip
+/// (a hand hanging at the side, a knee standing): it keeps [`ContactPart::clearance`].
+pub fn clearances(
+    tracks: &[PointTrack],
+    speeds: &[Vec<f64>],
+    limits: &Thresholds,
+    scale: &ClipScale,
+) -> Vec<f64> {
+    let n = tracks.iter().map(|t| t.positions.len()).min().unwrap_or(0);
+    let typical: Vec<f64> = tracks
+        .iter()
+        .map(|t| t.part.clearance() * scale.leg)
+        .collect();
+    let mut soles: Vec<f64> = (scale.start..n)
+        .map(|f| {
+            tracks
+                .iter()
+                .filter(|t| t.part.is_foot())
+                .map(|t| low_height(t, 0.0, f))
+                .fold(f64::INFINITY, f64::min)
+        })
+        .filter(|y| y.is_finite())
+        .collect();
+    let Some(floor) = quantile(&mut soles, 0.1) else {
+        return typical;
+    };
+    let mut resting = Vec::new();
+    for part in ContactPart::ALL.into_iter().filter(|p| !p.is_foot()) {
+        let mut heights: Vec<f64> = tracks
+            .iter()
+            .zip(speeds)
+            .filter(|(t, _)| t.part == part)
+            .flat_map(|(t, speed)| {
+                (scale.start..n)
+                    .filter(|&f| speed.get(f).is_some_and(|&v| v <= limits.speed))
+                    .map(move |f| t.positions[f].y - floor)
+            })
+            .filter(|h| h.is_finite())
+            .collect();
+        if let Some(h) = quantile(&mut heights, 0.1)
+            && h <= part.max_clearance() * scale.leg
+        {
+            resting.push((part, h.max(0.0)));
+        }
+    }
+    tracks
+        .iter()
+        .zip(typical)
+        .map(|(t, typical)| {
+            resting
+                .iter()
+                .find(|(p, _)| *p == t.part)
+                .map_or(typical, |&(_, h)| h)
+        })
+        .collect()
+}
+
 /// The ground near each frame: the 10th percentile, within `GROUND_WINDOW` seconds and
-/// from `start` on, of the lowest of the tracks' points less their clearances (m).
-pub fn ground(tracks: &[PointTrack], frame_time: f64, scale: &ClipScale) -> Vec<f64> {
+/// from `start` on, of the lowest of the tracks' points less their `clearances` (m).
+pub fn ground(
+    tracks: &[PointTrack],
+    clearances: &[f64],
+    frame_time: f64,
+    scale: &ClipScale,
+) -> Vec<f64> {
     let n = tracks.iter().map(|t| t.positions.len()).min().unwrap_or(0);
     let lowest: Vec<f64> = (0..n)
         .map(|f| {
             tracks
                 .iter()
-                .map(|t| t.positions[f].y - t.part.clearance() * scale.leg)
+                .zip(clearances)
+                .map(|(t, c)| t.positions[f].y - c)
                 .fold(f64::INFINITY, f64::min)
         })
         .collect();
@@ -254,11 +353,7 @@ pub fn ground(tracks: &[PointTrack], frame_time: f64, scale: &ClipScale) -> Vec<
             let b = (f + half).min(n - 1).max(a);
             window.clear();
             window.extend(lowest[a..=b].iter().copied().filter(|y| y.is_finite()));
-            if window.is_empty() {
-                return 0.0;
-            }
-            let k = window.len() / 10;
-            *window.select_nth_unstable_by(k, f64::total_cmp).1
+            quantile(&mut window, 0.1).unwrap_or(0.0)
         })
         .collect()
 }
@@ -289,20 +384,21 @@ pub fn detect_contacts(
     settings: &ContactSettings,
 ) -> Vec<Contact> {
     let limits = settings.thresholds(scale);
-    let ground = ground(tracks, frame_time, scale);
+    let n = tracks.iter().map(|t| t.positions.len()).min().unwrap_or(0);
     let half = frames_of(settings.window * 0.5, frame_time).max(1);
     let min_frames = frames_of(settings.min_duration, frame_time).max(1);
-    let mut contacts = Vec::new();
-    // Each track's positions up to the ground's length, and its speeds.
-    let measured: Vec<(&[DVec3], Vec<f64>)> = tracks
+    // Each track's positions up to the shortest track's length, and its speeds.
+    let positions: Vec<&[DVec3]> = tracks.iter().map(|t| &t.positions[..n]).collect();
+    let speed: Vec<Vec<f64>> = positions
         .iter()
-        .map(|track| {
-            let positions = &track.positions[..ground.len().min(track.positions.len())];
-            (positions, speeds(positions, scale.start, half, frame_time))
-        })
+        .map(|p| speeds(p, scale.start, half, frame_time))
         .collect();
-    for (track, (positions, speed)) in tracks.iter().zip(&measured) {
-        let clearance = track.part.clearance() * scale.leg;
+    let clearances = clearances(tracks, &speed, &limits, scale);
+    let ground = ground(tracks, &clearances, frame_time, scale);
+    let mut contacts = Vec::new();
+    for (((track, positions), speed), &clearance) in
+        tracks.iter().zip(&positions).zip(&speed).zip(&clearances)
+    {
         let rest = |f: usize| {
             f >= scale.start
                 && low_height(track, clearance, f) - ground[f] <= limits.height
@@ -316,8 +412,9 @@ pub fn detect_contacts(
                 .iter()
                 .map(|p| p.y - clearance)
                 .collect();
-            let quarter = heights.len() / 4;
-            let floor = *heights.select_nth_unstable_by(quarter, f64::total_cmp).1;
+            let Some(floor) = quantile(&mut heights, 0.25) else {
+                continue;
+            };
             let up = |f: usize| positions[f].y - clearance - floor > limits.height / 3.0;
             let (mut start, mut end) = (start, end);
             while start < end && up(start) {
@@ -329,11 +426,11 @@ pub fn detect_contacts(
             if end + 1 - start < min_frames {
                 continue;
             }
-            contacts.push(contact_over(track, (start, end), floor, false));
+            contacts.push(contact_over(track, (start, end), (floor, clearance), false));
         }
     }
     let held = contacts.len();
-    for (track, (positions, speed)) in tracks.iter().zip(&measured) {
+    for ((track, positions), speed) in tracks.iter().zip(&positions).zip(&speed) {
         if !track.part.is_foot() {
             continue;
         }
@@ -357,9 +454,10 @@ pub fn detect_contacts(
                 continue;
             }
             let mut under = ground[start..=end].to_vec();
-            let middle = under.len() / 2;
-            let floor = *under.select_nth_unstable_by(middle, f64::total_cmp).1;
-            contacts.push(contact_over(track, (start, end), floor, true));
+            let Some(floor) = quantile(&mut under, 0.5) else {
+                continue;
+            };
+            contacts.push(contact_over(track, (start, end), (floor, 0.0), true));
         }
     }
     contacts
@@ -405,11 +503,12 @@ fn low_height(track: &PointTrack, clearance: f64, f: usize) -> f64 {
         .map_or(own, |t| own.min(t.y))
 }
 
-/// A contact of `track`'s point over the frames `start..=end`, held at its mean position.
+/// A contact of `track`'s point over the frames `start..=end`, held at its mean position,
+/// over `floor` by `clearance`.
 fn contact_over(
     track: &PointTrack,
     (start, end): (usize, usize),
-    floor: f64,
+    (floor, clearance): (f64, f64),
     slides: bool,
 ) -> Contact {
     let run = &track.positions[start..=end];
@@ -422,6 +521,7 @@ fn contact_over(
         end,
         position: mean,
         floor,
+        clearance,
         slides,
     }
 }
@@ -691,6 +791,96 @@ mod tests {
         let bare = PointTrack { tip: None, ..ball };
         let c = detect_contacts(&[bare, standing], dt, &scale(0.9), &s);
         assert!(c.iter().all(|c| c.part != ContactPart::Ball), "{c:?}");
+    }
+
+    /// The track of `part` on `joint`.
+    fn part_track(part: ContactPart, joint: &str, positions: Vec<DVec3>) -> PointTrack {
+        PointTrack {
+            joint: joint.into(),
+            part,
+            ..track(positions)
+        }
+    }
+
+    #[test]
+    fn a_crawl_s_hands_rest_at_the_height_the_clip_rests_them() {
+        // At 30 fps on hands and knees: the toes on the floor, the knee joints 3 cm over it,
+        // each wrist still 10 cm over it (a palm planted: over twice the typical clearance
+        // and the contact height together) for 20 frames, then swung 8 cm up and 30 cm
+        // forward in 10 frames, then planted again; the right hand a half cycle later.
+        let dt = 1.0 / 30.0;
+        let hand = |phase: usize| -> Vec<DVec3> {
+            (0..60)
+                .map(|f| {
+                    let k = (f + phase) % 30;
+                    let x = 0.3 * ((f + phase) / 30) as f64;
+                    if k < 20 {
+                        DVec3::new(x, 0.10, 0.0)
+                    } else {
+                        let s = (k - 19) as f64 / 10.0;
+                        DVec3::new(
+                            x + 0.3 * s,
+                            0.10 + 0.08 * (s * std::f64::consts::PI).sin(),
+                            0.0,
+                        )
+                    }
+                })
+                .collect()
+        };
+        let on_floor = vec![DVec3::ZERO; 60];
+        let knee = vec![DVec3::new(0.0, 0.03, 0.0); 60];
+        let tracks = [
+            part_track(ContactPart::Ball, "l_talocrural", on_floor.clone()),
+            part_track(ContactPart::Ball, "r_talocrural", on_floor),
+            part_track(ContactPart::Knee, "l_knee", knee.clone()),
+            part_track(ContactPart::Knee, "r_knee", knee),
+            part_track(ContactPart::Hand, "l_radiocarpal", hand(0)),
+            part_track(ContactPart::Hand, "r_radiocarpal", hand(15)),
+        ];
+        let s = ContactSettings::default();
+        let c = detect_contacts(&tracks, dt, &scale(0.9), &s);
+        let hands: Vec<(&str, usize, usize)> = c
+            .iter()
+            .filter(|c| c.part == ContactPart::Hand)
+            .map(|c| (c.joint.as_str(), c.start, c.end))
+            .collect();
+        // Each stance of each hand found (the left's 0-19 and 30-49, the right's 0-4, 15-34
+        // and 45-59), none while it swings.
+        assert_eq!(hands.len(), 5, "{hands:?}");
+        for (joint, start, end) in &hands {
+            let phase = if *joint == "l_radiocarpal" { 0 } else { 15 };
+            assert!(
+                (*start..=*end).all(|f| (f + phase) % 30 < 20),
+                "{joint} {start}..{end} swings"
+            );
+        }
+        let held = c.iter().find(|c| c.part == ContactPart::Hand);
+        assert!(held.is_some_and(|h| (h.clearance - 0.10).abs() < 1e-9 && h.floor.abs() < 1e-9));
+        // The knees too, resting at their own 3 cm.
+        assert_eq!(c.iter().filter(|c| c.part == ContactPart::Knee).count(), 2);
+    }
+
+    #[test]
+    fn hands_that_never_come_down_keep_the_typical_clearance_and_get_no_contact() {
+        // Standing still: the feet on the floor, the wrists still 0.75 m over it (over the
+        // most a hand's rest can be), the knees 0.45 m.
+        let dt = 1.0 / 30.0;
+        let tracks = [
+            part_track(ContactPart::Heel, "l_talocrural", vec![DVec3::ZERO; 30]),
+            part_track(
+                ContactPart::Hand,
+                "l_radiocarpal",
+                vec![DVec3::Y * 0.75; 30],
+            ),
+            part_track(ContactPart::Knee, "l_knee", vec![DVec3::Y * 0.45; 30]),
+        ];
+        let s = ContactSettings::default();
+        let limits = s.thresholds(&scale(0.9));
+        let speeds = vec![vec![0.0; 30]; 3];
+        let found = clearances(&tracks, &speeds, &limits, &scale(0.9));
+        assert_eq!(found, vec![0.0, 0.04 * 0.9, 0.07 * 0.9]);
+        let c = detect_contacts(&tracks, dt, &scale(0.9), &s);
+        assert!(c.iter().all(|c| c.part.is_foot()), "{c:?}");
     }
 
     #[test]
