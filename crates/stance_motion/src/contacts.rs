@@ -12,16 +12,21 @@
 //! 2. **The ground** near each frame is a robust statistic, not the minimum: the 10th
 //!    percentile, within half a second, of the lowest point of the body (each part's point
 //!    less its clearance: how high it stands over the ground when it rests, found on the clip
-//!    for the hands, knees and pelvis, [`clearances`]), so that a stray frame does not set it,
-//!    and each contact finds its own floor (slopes, steps).
-//! 3. A point is **low** within `height` of that ground and **still** while its horizontal
-//!    speed, measured over `window` seconds (a central difference, so that 120-240 fps capture
-//!    noise does not break a stance), is at most `speed`.
+//!    for the hands, knees and pelvis, [`clearances`]), so that a stray frame does not set it.
+//!    Where a foot is the body's lowest still point above that ground for longer than a jump
+//!    keeps still at its top (a step, a slope: the window still sees the floor below), the
+//!    floor is raised there to that foot's level (`raised_floors`).
+//! 3. A point is **low** within `height` of that ground (or of a floor raised there) and
+//!    **still** while its horizontal speed, measured over `window` seconds (a central
+//!    difference, so that 120-240 fps capture noise does not break a stance), is at most
+//!    `speed`.
 //! 4. **Thresholds scale** with the body and the clip: `height` and `speed` are given for a
 //!    leg (hip to ankle) of [`REFERENCE_LEG`] and scale with the clip's leg; `speed` also
 //!    scales with the clip's pace (its median root speed) over [`REFERENCE_PACE`] (runs). Runs of
 //!    low and still frames shorter than `min_duration` are dropped, gaps shorter than the
-//!    window are bridged.
+//!    window are bridged. Each contact finds its own floor (its lower quartile) and spans the
+//!    still frames at it on either side, whatever the ground there (a foot landed on a step
+//!    while the other still stands on the floor below).
 //! 5. **Sliding contacts**: a point of a foot that stays low for `min_duration` but moves
 //!    faster than `speed` (at most [`SLIDE_SPEED_FACTOR`] times faster: a foot passing low
 //!    in its swing moves faster still), at frames where no contact of that foot holds it
@@ -44,6 +49,8 @@ pub const REFERENCE_PACE: f64 = 1.2;
 pub const SLIDE_SPEED_FACTOR: f64 = 3.0;
 /// Half the width of the window over which the ground is taken (s).
 const GROUND_WINDOW: f64 = 0.5;
+/// Gravity's acceleration (m/s²).
+const GRAVITY: f64 = 9.81;
 
 /// A part of the body that can rest on the ground.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -358,19 +365,91 @@ pub fn ground(
         .collect()
 }
 
-/// Horizontal speed of `positions` at each frame, over `half` frames on either side (within
+/// The floors raised over the ground where a foot stands above it (a step, a slope climbed, a
+/// stair walked down: the window's statistic still sees, for up to half a second, the floor
+/// the other foot left), per frame: over every stretch of at least `hold` frames where the
+/// lowest of the points still then (horizontally, `velocity`) is a point of a foot, still in
+/// height too, at one level (each frame within a third of `height` of the one before), and
+/// that level (the stretch's lower quartile) is over `ground` by more than `height` at one
+/// frame of it at least. The body stands on its lowest still point; a foot still at the top
+/// of a jump, the one other way to be lowest and still, stays within the still speed
+/// vertically for `2 · speed / g` only, under `hold`. A hand or a knee still in the air while
+/// the feet move raises nothing.
+fn raised_floors(
+    tracks: &[PointTrack],
+    (clearances, velocity): (&[f64], &[Vec<DVec3>]),
+    ground: &[f64],
+    limits: &Thresholds,
+    (start, hold): (usize, usize),
+) -> Vec<Option<f64>> {
+    let n = ground.len();
+    // Per frame, the height of the foot that supports the body, where a foot does.
+    let support = |f: usize| -> Option<f64> {
+        let (k, y) = tracks
+            .iter()
+            .zip(clearances)
+            .enumerate()
+            .filter(|(k, _)| {
+                velocity[*k]
+                    .get(f)
+                    .is_some_and(|v| horizontal(*v) <= limits.speed)
+            })
+            .map(|(k, (t, &c))| (k, low_height(t, c, f)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))?;
+        let still = velocity[k]
+            .get(f)
+            .is_some_and(|v| v.y.abs() <= limits.speed);
+        (tracks[k].part.is_foot() && still).then_some(y)
+    };
+    let levels: Vec<Option<f64>> = (0..n)
+        .map(|f| if f >= start { support(f) } else { None })
+        .collect();
+    let mut raised = vec![None; n];
+    let mut f = 0;
+    while f < n {
+        let Some(mut last) = levels[f] else {
+            f += 1;
+            continue;
+        };
+        let a = f;
+        f += 1;
+        while let Some(y) = levels.get(f).copied().flatten() {
+            if (y - last).abs() > limits.height / 3.0 {
+                break;
+            }
+            last = y;
+            f += 1;
+        }
+        let mut stretch: Vec<f64> = levels[a..f].iter().flatten().copied().collect();
+        let Some(level) = quantile(&mut stretch, 0.25) else {
+            continue;
+        };
+        if f - a >= hold && ground[a..f].iter().any(|g| level - g > limits.height) {
+            for r in &mut raised[a..f] {
+                *r = Some(level);
+            }
+        }
+    }
+    raised
+}
+
+/// The horizontal length of `v`.
+fn horizontal(v: DVec3) -> f64 {
+    DVec3::new(v.x, 0.0, v.z).length()
+}
+
+/// Velocity of `positions` at each frame, over `half` frames on either side (within
 /// `start..`), m/s.
-fn speeds(positions: &[DVec3], start: usize, half: usize, frame_time: f64) -> Vec<f64> {
+fn velocities(positions: &[DVec3], start: usize, half: usize, frame_time: f64) -> Vec<DVec3> {
     let n = positions.len();
     (0..n)
         .map(|f| {
             let a = f.saturating_sub(half).max(start.min(f));
             let b = (f + half).min(n - 1);
             if b <= a {
-                return 0.0;
+                return DVec3::ZERO;
             }
-            let d = positions[b] - positions[a];
-            DVec3::new(d.x, 0.0, d.z).length() / (frame_time * (b - a) as f64)
+            (positions[b] - positions[a]) / (frame_time * (b - a) as f64)
         })
         .collect()
 }
@@ -387,24 +466,45 @@ pub fn detect_contacts(
     let n = tracks.iter().map(|t| t.positions.len()).min().unwrap_or(0);
     let half = frames_of(settings.window * 0.5, frame_time).max(1);
     let min_frames = frames_of(settings.min_duration, frame_time).max(1);
-    // Each track's positions up to the shortest track's length, and its speeds.
+    // Each track's positions up to the shortest track's length, its velocities and its
+    // horizontal speeds.
     let positions: Vec<&[DVec3]> = tracks.iter().map(|t| &t.positions[..n]).collect();
-    let speed: Vec<Vec<f64>> = positions
+    let velocity: Vec<Vec<DVec3>> = positions
         .iter()
-        .map(|p| speeds(p, scale.start, half, frame_time))
+        .map(|p| velocities(p, scale.start, half, frame_time))
+        .collect();
+    let speed: Vec<Vec<f64>> = velocity
+        .iter()
+        .map(|v| v.iter().copied().map(horizontal).collect())
         .collect();
     let clearances = clearances(tracks, &speed, &limits, scale);
     let ground = ground(tracks, &clearances, frame_time, scale);
+    // Twice as long as a free fall stays within the still speed vertically.
+    let hold = frames_of(4.0 * limits.speed / GRAVITY, frame_time).max(min_frames);
+    let raised = raised_floors(
+        tracks,
+        (&clearances, &velocity),
+        &ground,
+        &limits,
+        (scale.start, hold),
+    );
     let mut contacts = Vec::new();
     for (((track, positions), speed), &clearance) in
         tracks.iter().zip(&positions).zip(&speed).zip(&clearances)
     {
+        // Low: at most `height` over the ground, or within `height` of a floor raised there
+        // (a point under it stands on the ground below).
         let rest = |f: usize| {
+            let h = low_height(track, clearance, f);
             f >= scale.start
-                && low_height(track, clearance, f) - ground[f] <= limits.height
+                && (h - ground[f] <= limits.height
+                    || raised[f].is_some_and(|y| (h - y).abs() <= limits.height))
                 && speed[f] <= limits.speed
         };
-        for (start, end) in runs_of(positions.len(), rest, |a, b| b - a <= half) {
+        let runs = runs_of(positions.len(), rest, |a, b| b - a <= half);
+        // The first frame the next contact may take (after the last one pushed).
+        let mut free = scale.start;
+        for (k, &(start, end)) in runs.iter().enumerate() {
             // The run's own floor (its lower quartile); frames at either end that have
             // risen over a third of `height` above it are no longer resting (a heel lifting
             // while the ball holds, a ball lifting after the heel strike).
@@ -426,6 +526,18 @@ pub fn detect_contacts(
             if end + 1 - start < min_frames {
                 continue;
             }
+            // Frames either side where the point is still at that floor rest on it too,
+            // whatever the ground there: a foot landed on a step while the other still
+            // stood on the floor below (the lowest still point, the ground then).
+            let next = runs.get(k + 1).map_or(positions.len(), |r| r.0);
+            let on_floor = |f: usize| speed[f] <= limits.speed && !up(f);
+            while start > free && on_floor(start - 1) {
+                start -= 1;
+            }
+            while end + 1 < next && on_floor(end + 1) {
+                end += 1;
+            }
+            free = end + 1;
             contacts.push(contact_over(track, (start, end), (floor, clearance), false));
         }
     }
@@ -881,6 +993,80 @@ mod tests {
         assert_eq!(found, vec![0.0, 0.04 * 0.9, 0.07 * 0.9]);
         let c = detect_contacts(&tracks, dt, &scale(0.9), &s);
         assert!(c.iter().all(|c| c.part.is_foot()), "{c:?}");
+    }
+
+    #[test]
+    fn a_foot_on_a_step_rests_from_its_landing_and_the_next_step_from_its_own() {
+        // At 30 fps, up two 20 cm steps: the left foot swings onto the first step (still on
+        // it from frame 10), lifts off at 50; the right stands on the floor to frame 24,
+        // swings 30 cm up over the step and lands on the second (40 cm) at 45. While the
+        // right swings, the ground of the window (half a second either side) is still the
+        // floor for the left on the step: it was found from frame 37 only.
+        let dt = 1.0 / 30.0;
+        let left: Vec<DVec3> = (0..60)
+            .map(|f| match f {
+                0..10 => DVec3::new(0.03 * f as f64, 0.25, 0.0),
+                10..50 => DVec3::new(0.3, 0.2, 0.0),
+                _ => DVec3::new(0.3 + 0.05 * (f - 49) as f64, 0.5, 0.0),
+            })
+            .collect();
+        let right: Vec<DVec3> = (0..60)
+            .map(|f| match f {
+                0..25 => DVec3::new(0.0, 0.0, 0.2),
+                25..45 => DVec3::new(0.05 * (f - 24) as f64, 0.45, 0.2),
+                _ => DVec3::new(1.0, 0.4, 0.2),
+            })
+            .collect();
+        let tracks = [
+            part_track(ContactPart::Heel, "l_talocrural", left),
+            part_track(ContactPart::Heel, "r_talocrural", right),
+        ];
+        let c = detect_contacts(&tracks, dt, &scale(0.9), &ContactSettings::default());
+        let held = |joint: &str| -> Vec<(usize, usize, f64)> {
+            c.iter()
+                .filter(|c| c.joint == joint && !c.slides)
+                .map(|c| (c.start, c.end, c.floor))
+                .collect()
+        };
+        // The central difference over a frame each side: still from the frame after landing
+        // to the one before lifting off.
+        let (left, right) = (held("l_talocrural"), held("r_talocrural"));
+        assert_eq!(left.len(), 1, "{c:?}");
+        assert_eq!((left[0].0, left[0].1), (11, 48), "{left:?}");
+        assert!((left[0].2 - 0.2).abs() < 1e-9, "{left:?}");
+        assert_eq!(right.len(), 2, "{c:?}");
+        assert_eq!((right[0].0, right[0].1), (0, 23), "{right:?}");
+        assert_eq!((right[1].0, right[1].1), (45, 59), "{right:?}");
+        assert!((right[1].2 - 0.4).abs() < 1e-9, "{right:?}");
+    }
+
+    #[test]
+    fn feet_still_at_the_top_of_a_jump_get_no_contact() {
+        // At 30 fps both feet stand, jump straight up (0.5 s in the air, 31 cm high: still
+        // horizontally all along, vertically near the top) and land.
+        let dt = 1.0 / 30.0;
+        let foot = |z: f64| -> Vec<DVec3> {
+            (0..75)
+                .map(|f| {
+                    let t = (f as f64 - 30.0) * dt;
+                    let y = if (0.0..0.5).contains(&t) {
+                        t * (2.45 - 4.905 * t)
+                    } else {
+                        0.0
+                    };
+                    DVec3::new(0.0, y.max(0.0), z)
+                })
+                .collect()
+        };
+        let tracks = [
+            part_track(ContactPart::Heel, "l_talocrural", foot(0.1)),
+            part_track(ContactPart::Heel, "r_talocrural", foot(-0.1)),
+        ];
+        let c = detect_contacts(&tracks, dt, &scale(0.9), &ContactSettings::default());
+        for c in &c {
+            assert!(c.end < 32 || c.start > 43, "{c:?} in the air");
+        }
+        assert_eq!(c.len(), 4, "{c:?}");
     }
 
     #[test]
