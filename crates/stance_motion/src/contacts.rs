@@ -275,7 +275,8 @@ pub(crate) fn quantile(values: &mut [f64], q: f64) -> Option<f64> {
 /// `limits.speed`, both sides of the body together), over the feet's floor (the 10th
 /// percentile of the lowest sole point's height). A joint's centre stands over what it rests
 /// on by as much as the capture's skeleton puts it there (the crawl of the corpus rests its
-/// wrists 16 % of its leg over the floor, its knees 8 %), not by a share fixed for every body.
+/// wrists 14 % of its leg over its feet's floor, its knees 3.4 %), not by a share fixed for
+/// every body.
 /// A part found resting higher than [`ContactPart::max_clearance`] never rests on the clip
 /// (a hand hanging at the side, a knee standing): it keeps [`ContactPart::clearance`].
 pub fn clearances(
