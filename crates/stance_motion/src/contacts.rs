@@ -11,16 +11,22 @@
 //!    ([`reference_frames`]).
 //! 2. **The ground** near each frame is a robust statistic, not the minimum: the 10th
 //!    percentile, within half a second, of the lowest point of the body (each part's point
-//!    less its clearance, [`ContactPart::clearance`]), so that a stray frame does not set it,
-//!    and each contact finds its own floor (slopes, steps).
-//! 3. A point is **low** within `height` of that ground and **still** while its horizontal
-//!    speed, measured over `window` seconds (a central difference, so that 120-240 fps capture
-//!    noise does not break a stance), is at most `speed`.
+//!    less its clearance: how high it stands over the ground when it rests, found on the clip
+//!    for the hands, knees and pelvis, [`clearances`]), so that a stray frame does not set it.
+//!    Where a foot is the body's lowest still point above that ground for longer than a jump
+//!    keeps still at its top (a step, a slope: the window still sees the floor below), the
+//!    floor is raised there to that foot's level (`raised_floors`).
+//! 3. A point is **low** within `height` of that ground (or of a floor raised there) and
+//!    **still** while its horizontal speed, measured over `window` seconds (a central
+//!    difference, so that 120-240 fps capture noise does not break a stance), is at most
+//!    `speed`.
 //! 4. **Thresholds scale** with the body and the clip: `height` and `speed` are given for a
 //!    leg (hip to ankle) of [`REFERENCE_LEG`] and scale with the clip's leg; `speed` also
 //!    scales with the clip's pace (its median root speed) over [`REFERENCE_PACE`] (runs). Runs of
 //!    low and still frames shorter than `min_duration` are dropped, gaps shorter than the
-//!    window are bridged.
+//!    window are bridged. Each contact finds its own floor (its lower quartile) and spans the
+//!    still frames at it on either side, whatever the ground there (a foot landed on a step
+//!    while the other still stands on the floor below).
 //! 5. **Sliding contacts**: a point of a foot that stays low for `min_duration` but moves
 //!    faster than `speed` (at most [`SLIDE_SPEED_FACTOR`] times faster: a foot passing low
 //!    in its swing moves faster still), at frames where no contact of that foot holds it
@@ -43,6 +49,8 @@ pub const REFERENCE_PACE: f64 = 1.2;
 pub const SLIDE_SPEED_FACTOR: f64 = 3.0;
 /// Half the width of the window over which the ground is taken (s).
 const GROUND_WINDOW: f64 = 0.5;
+/// Gravity's acceleration (m/s²).
+const GRAVITY: f64 = 9.81;
 
 /// A part of the body that can rest on the ground.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -75,15 +83,31 @@ impl ContactPart {
         matches!(self, ContactPart::Heel | ContactPart::Ball)
     }
 
-    /// How high the part's point is above the ground it rests on, as a share of the leg
-    /// (hip to ankle): 0 for the sole's points, the wrist's centre over the palm, the knee's
-    /// centre over the kneecap, the hip joints over the seat.
+    /// How high the part's point typically is above the ground it rests on, as a share of
+    /// the leg (hip to ankle): 0 for the sole's points, the wrist's centre over the palm, the
+    /// knee's centre over the kneecap, the hip joints over the seat. A clip that shows the
+    /// part resting gives its own ([`clearances`]); this holds where it does not.
     pub fn clearance(self) -> f64 {
         match self {
             ContactPart::Heel | ContactPart::Ball => 0.0,
             ContactPart::Hand => 0.04,
             ContactPart::Knee => 0.07,
             ContactPart::Pelvis => 0.12,
+        }
+    }
+
+    /// The most the part's point can stand above the ground it rests on, as a share of the
+    /// leg (hip to ankle, about 0.49 of the stature): the wrist's centre a hand's length over
+    /// the fingertips (0.11 of the stature), the knee's centre its depth over the shin it
+    /// kneels on (0.06), the hip joints over the seat leaning back. A part found resting
+    /// higher on a clip does not rest on it (standing, the corpus's knees rest no lower than
+    /// 0.43 of the leg, its hands 0.74 and its pelvis 0.55).
+    pub fn max_clearance(self) -> f64 {
+        match self {
+            ContactPart::Heel | ContactPart::Ball => 0.0,
+            ContactPart::Hand => 0.22,
+            ContactPart::Knee => 0.12,
+            ContactPart::Pelvis => 0.2,
         }
     }
 
@@ -224,6 +248,10 @@ pub struct Contact {
     /// The ground under the contact: the median height of the point less its clearance over
     /// the contact (m, on the clip).
     pub floor: f64,
+    /// How high the point stands over the ground it rests on, on the clip (m): the part's
+    /// clearance found on the clip ([`clearances`]).
+    #[serde(default)]
+    pub clearance: f64,
     /// A sliding contact: a point of a foot low on the ground but moving (a shuffle, a toe
     /// that drags, a video capture's skating foot, a landing or toe-off under way), where no
     /// contact of that foot holds it still. It is kept from sinking under the floor (the
@@ -233,15 +261,94 @@ pub struct Contact {
     pub slides: bool,
 }
 
+/// The value a share `q` (0 to 1) of the way up `values` (reordering them): the one at
+/// index `len · q` once sorted. `None` when there are none.
+pub(crate) fn quantile(values: &mut [f64], q: f64) -> Option<f64> {
+    let last = values.len().checked_sub(1)?;
+    let k = ((values.len() as f64 * q) as usize).min(last);
+    Some(*values.select_nth_unstable_by(k, f64::total_cmp).1)
+}
+
+/// How high each track's point stands over the ground when it rests, on this clip (m): 0 for
+/// the sole's points; for a hand, a knee or the pelvis, its resting height found on the clip,
+/// the 10th percentile of its height over the frames it is still (`speeds` at most
+/// `limits.speed`, both sides of the body together), over the feet's floor (the 10th
+/// percentile of the lowest sole point's height). A joint's centre stands over what it rests
+/// on by as much as the capture's skeleton puts it there (the crawl of the corpus rests its
+/// wrists 14 % of its leg over its feet's floor, its knees 3.4 %), not by a share fixed for
+/// every body.
+/// A part found resting higher than [`ContactPart::max_clearance`] never rests on the clip
+/// (a hand hanging at the side, a knee standing): it keeps [`ContactPart::clearance`].
+pub fn clearances(
+    tracks: &[PointTrack],
+    speeds: &[Vec<f64>],
+    limits: &Thresholds,
+    scale: &ClipScale,
+) -> Vec<f64> {
+    let n = tracks.iter().map(|t| t.positions.len()).min().unwrap_or(0);
+    let typical: Vec<f64> = tracks
+        .iter()
+        .map(|t| t.part.clearance() * scale.leg)
+        .collect();
+    let mut soles: Vec<f64> = (scale.start..n)
+        .map(|f| {
+            tracks
+                .iter()
+                .filter(|t| t.part.is_foot())
+                .map(|t| low_height(t, 0.0, f))
+                .fold(f64::INFINITY, f64::min)
+        })
+        .filter(|y| y.is_finite())
+        .collect();
+    let Some(floor) = quantile(&mut soles, 0.1) else {
+        return typical;
+    };
+    let mut resting = Vec::new();
+    for part in ContactPart::ALL.into_iter().filter(|p| !p.is_foot()) {
+        let mut heights: Vec<f64> = tracks
+            .iter()
+            .zip(speeds)
+            .filter(|(t, _)| t.part == part)
+            .flat_map(|(t, speed)| {
+                (scale.start..n)
+                    .filter(|&f| speed.get(f).is_some_and(|&v| v <= limits.speed))
+                    .map(move |f| t.positions[f].y - floor)
+            })
+            .filter(|h| h.is_finite())
+            .collect();
+        if let Some(h) = quantile(&mut heights, 0.1)
+            && h <= part.max_clearance() * scale.leg
+        {
+            resting.push((part, h.max(0.0)));
+        }
+    }
+    tracks
+        .iter()
+        .zip(typical)
+        .map(|(t, typical)| {
+            resting
+                .iter()
+                .find(|(p, _)| *p == t.part)
+                .map_or(typical, |&(_, h)| h)
+        })
+        .collect()
+}
+
 /// The ground near each frame: the 10th percentile, within `GROUND_WINDOW` seconds and
-/// from `start` on, of the lowest of the tracks' points less their clearances (m).
-pub fn ground(tracks: &[PointTrack], frame_time: f64, scale: &ClipScale) -> Vec<f64> {
+/// from `start` on, of the lowest of the tracks' points less their `clearances` (m).
+pub fn ground(
+    tracks: &[PointTrack],
+    clearances: &[f64],
+    frame_time: f64,
+    scale: &ClipScale,
+) -> Vec<f64> {
     let n = tracks.iter().map(|t| t.positions.len()).min().unwrap_or(0);
     let lowest: Vec<f64> = (0..n)
         .map(|f| {
             tracks
                 .iter()
-                .map(|t| t.positions[f].y - t.part.clearance() * scale.leg)
+                .zip(clearances)
+                .map(|(t, c)| t.positions[f].y - c)
                 .fold(f64::INFINITY, f64::min)
         })
         .collect();
@@ -254,28 +361,96 @@ pub fn ground(tracks: &[PointTrack], frame_time: f64, scale: &ClipScale) -> Vec<
             let b = (f + half).min(n - 1).max(a);
             window.clear();
             window.extend(lowest[a..=b].iter().copied().filter(|y| y.is_finite()));
-            if window.is_empty() {
-                return 0.0;
-            }
-            let k = window.len() / 10;
-            *window.select_nth_unstable_by(k, f64::total_cmp).1
+            quantile(&mut window, 0.1).unwrap_or(0.0)
         })
         .collect()
 }
 
-/// Horizontal speed of `positions` at each frame, over `half` frames on either side (within
+/// The floors raised over the ground where a foot stands above it (a step, a slope climbed, a
+/// stair walked down: the window's statistic still sees, for up to half a second, the floor
+/// the other foot left), per frame: over every stretch of at least `hold` frames where the
+/// lowest of the points still then (horizontally, `velocity`) is a point of a foot, still in
+/// height too, at one level (each frame within a third of `height` of the one before), and
+/// that level (the stretch's lower quartile) is over `ground` by more than `height` at one
+/// frame of it at least. The body stands on its lowest still point; a foot still at the top
+/// of a jump, the one other way to be lowest and still, stays within the still speed
+/// vertically for `2 · speed / g` only, under `hold`. A hand or a knee still in the air while
+/// the feet move raises nothing.
+fn raised_floors(
+    tracks: &[PointTrack],
+    (clearances, velocity): (&[f64], &[Vec<DVec3>]),
+    ground: &[f64],
+    limits: &Thresholds,
+    (start, hold): (usize, usize),
+) -> Vec<Option<f64>> {
+    let n = ground.len();
+    // Per frame, the height of the foot that supports the body, where a foot does.
+    let support = |f: usize| -> Option<f64> {
+        let (k, y) = tracks
+            .iter()
+            .zip(clearances)
+            .enumerate()
+            .filter(|(k, _)| {
+                velocity[*k]
+                    .get(f)
+                    .is_some_and(|v| horizontal(*v) <= limits.speed)
+            })
+            .map(|(k, (t, &c))| (k, low_height(t, c, f)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))?;
+        let still = velocity[k]
+            .get(f)
+            .is_some_and(|v| v.y.abs() <= limits.speed);
+        (tracks[k].part.is_foot() && still).then_some(y)
+    };
+    let levels: Vec<Option<f64>> = (0..n)
+        .map(|f| if f >= start { support(f) } else { None })
+        .collect();
+    let mut raised = vec![None; n];
+    let mut f = 0;
+    while f < n {
+        let Some(mut last) = levels[f] else {
+            f += 1;
+            continue;
+        };
+        let a = f;
+        f += 1;
+        while let Some(y) = levels.get(f).copied().flatten() {
+            if (y - last).abs() > limits.height / 3.0 {
+                break;
+            }
+            last = y;
+            f += 1;
+        }
+        let mut stretch: Vec<f64> = levels[a..f].iter().flatten().copied().collect();
+        let Some(level) = quantile(&mut stretch, 0.25) else {
+            continue;
+        };
+        if f - a >= hold && ground[a..f].iter().any(|g| level - g > limits.height) {
+            for r in &mut raised[a..f] {
+                *r = Some(level);
+            }
+        }
+    }
+    raised
+}
+
+/// The horizontal length of `v`.
+fn horizontal(v: DVec3) -> f64 {
+    DVec3::new(v.x, 0.0, v.z).length()
+}
+
+/// Velocity of `positions` at each frame, over `half` frames on either side (within
 /// `start..`), m/s.
-fn speeds(positions: &[DVec3], start: usize, half: usize, frame_time: f64) -> Vec<f64> {
+fn velocities(positions: &[DVec3], start: usize, half: usize, frame_time: f64) -> Vec<DVec3> {
     let n = positions.len();
     (0..n)
         .map(|f| {
             let a = f.saturating_sub(half).max(start.min(f));
             let b = (f + half).min(n - 1);
             if b <= a {
-                return 0.0;
+                return DVec3::ZERO;
             }
-            let d = positions[b] - positions[a];
-            DVec3::new(d.x, 0.0, d.z).length() / (frame_time * (b - a) as f64)
+            (positions[b] - positions[a]) / (frame_time * (b - a) as f64)
         })
         .collect()
 }
@@ -289,26 +464,48 @@ pub fn detect_contacts(
     settings: &ContactSettings,
 ) -> Vec<Contact> {
     let limits = settings.thresholds(scale);
-    let ground = ground(tracks, frame_time, scale);
+    let n = tracks.iter().map(|t| t.positions.len()).min().unwrap_or(0);
     let half = frames_of(settings.window * 0.5, frame_time).max(1);
     let min_frames = frames_of(settings.min_duration, frame_time).max(1);
-    let mut contacts = Vec::new();
-    // Each track's positions up to the ground's length, and its speeds.
-    let measured: Vec<(&[DVec3], Vec<f64>)> = tracks
+    // Each track's positions up to the shortest track's length, its velocities and its
+    // horizontal speeds.
+    let positions: Vec<&[DVec3]> = tracks.iter().map(|t| &t.positions[..n]).collect();
+    let velocity: Vec<Vec<DVec3>> = positions
         .iter()
-        .map(|track| {
-            let positions = &track.positions[..ground.len().min(track.positions.len())];
-            (positions, speeds(positions, scale.start, half, frame_time))
-        })
+        .map(|p| velocities(p, scale.start, half, frame_time))
         .collect();
-    for (track, (positions, speed)) in tracks.iter().zip(&measured) {
-        let clearance = track.part.clearance() * scale.leg;
+    let speed: Vec<Vec<f64>> = velocity
+        .iter()
+        .map(|v| v.iter().copied().map(horizontal).collect())
+        .collect();
+    let clearances = clearances(tracks, &speed, &limits, scale);
+    let ground = ground(tracks, &clearances, frame_time, scale);
+    // Twice as long as a free fall stays within the still speed vertically.
+    let hold = frames_of(4.0 * limits.speed / GRAVITY, frame_time).max(min_frames);
+    let raised = raised_floors(
+        tracks,
+        (&clearances, &velocity),
+        &ground,
+        &limits,
+        (scale.start, hold),
+    );
+    let mut contacts = Vec::new();
+    for (((track, positions), speed), &clearance) in
+        tracks.iter().zip(&positions).zip(&speed).zip(&clearances)
+    {
+        // Low: at most `height` over the ground, or within `height` of a floor raised there
+        // (a point under it stands on the ground below).
         let rest = |f: usize| {
+            let h = low_height(track, clearance, f);
             f >= scale.start
-                && low_height(track, clearance, f) - ground[f] <= limits.height
+                && (h - ground[f] <= limits.height
+                    || raised[f].is_some_and(|y| (h - y).abs() <= limits.height))
                 && speed[f] <= limits.speed
         };
-        for (start, end) in runs_of(positions.len(), rest, |a, b| b - a <= half) {
+        let runs = runs_of(positions.len(), rest, |a, b| b - a <= half);
+        // The first frame the next contact may take (after the last one pushed).
+        let mut free = scale.start;
+        for (k, &(start, end)) in runs.iter().enumerate() {
             // The run's own floor (its lower quartile); frames at either end that have
             // risen over a third of `height` above it are no longer resting (a heel lifting
             // while the ball holds, a ball lifting after the heel strike).
@@ -316,8 +513,9 @@ pub fn detect_contacts(
                 .iter()
                 .map(|p| p.y - clearance)
                 .collect();
-            let quarter = heights.len() / 4;
-            let floor = *heights.select_nth_unstable_by(quarter, f64::total_cmp).1;
+            let Some(floor) = quantile(&mut heights, 0.25) else {
+                continue;
+            };
             let up = |f: usize| positions[f].y - clearance - floor > limits.height / 3.0;
             let (mut start, mut end) = (start, end);
             while start < end && up(start) {
@@ -329,11 +527,23 @@ pub fn detect_contacts(
             if end + 1 - start < min_frames {
                 continue;
             }
-            contacts.push(contact_over(track, (start, end), floor, false));
+            // Frames either side where the point is still at that floor rest on it too,
+            // whatever the ground there: a foot landed on a step while the other still
+            // stood on the floor below (the lowest still point, the ground then).
+            let next = runs.get(k + 1).map_or(positions.len(), |r| r.0);
+            let on_floor = |f: usize| speed[f] <= limits.speed && !up(f);
+            while start > free && on_floor(start - 1) {
+                start -= 1;
+            }
+            while end + 1 < next && on_floor(end + 1) {
+                end += 1;
+            }
+            free = end + 1;
+            contacts.push(contact_over(track, (start, end), (floor, clearance), false));
         }
     }
     let held = contacts.len();
-    for (track, (positions, speed)) in tracks.iter().zip(&measured) {
+    for ((track, positions), speed) in tracks.iter().zip(&positions).zip(&speed) {
         if !track.part.is_foot() {
             continue;
         }
@@ -357,9 +567,10 @@ pub fn detect_contacts(
                 continue;
             }
             let mut under = ground[start..=end].to_vec();
-            let middle = under.len() / 2;
-            let floor = *under.select_nth_unstable_by(middle, f64::total_cmp).1;
-            contacts.push(contact_over(track, (start, end), floor, true));
+            let Some(floor) = quantile(&mut under, 0.5) else {
+                continue;
+            };
+            contacts.push(contact_over(track, (start, end), (floor, 0.0), true));
         }
     }
     contacts
@@ -405,11 +616,12 @@ fn low_height(track: &PointTrack, clearance: f64, f: usize) -> f64 {
         .map_or(own, |t| own.min(t.y))
 }
 
-/// A contact of `track`'s point over the frames `start..=end`, held at its mean position.
+/// A contact of `track`'s point over the frames `start..=end`, held at its mean position,
+/// over `floor` by `clearance`.
 fn contact_over(
     track: &PointTrack,
     (start, end): (usize, usize),
-    floor: f64,
+    (floor, clearance): (f64, f64),
     slides: bool,
 ) -> Contact {
     let run = &track.positions[start..=end];
@@ -422,6 +634,7 @@ fn contact_over(
         end,
         position: mean,
         floor,
+        clearance,
         slides,
     }
 }
@@ -691,6 +904,170 @@ mod tests {
         let bare = PointTrack { tip: None, ..ball };
         let c = detect_contacts(&[bare, standing], dt, &scale(0.9), &s);
         assert!(c.iter().all(|c| c.part != ContactPart::Ball), "{c:?}");
+    }
+
+    /// The track of `part` on `joint`.
+    fn part_track(part: ContactPart, joint: &str, positions: Vec<DVec3>) -> PointTrack {
+        PointTrack {
+            joint: joint.into(),
+            part,
+            ..track(positions)
+        }
+    }
+
+    #[test]
+    fn a_crawl_s_hands_rest_at_the_height_the_clip_rests_them() {
+        // At 30 fps on hands and knees: the toes on the floor, the knee joints 3 cm over it,
+        // each wrist still 10 cm over it (a palm planted: over twice the typical clearance
+        // and the contact height together) for 20 frames, then swung 8 cm up and 30 cm
+        // forward in 10 frames, then planted again; the right hand a half cycle later.
+        let dt = 1.0 / 30.0;
+        let hand = |phase: usize| -> Vec<DVec3> {
+            (0..60)
+                .map(|f| {
+                    let k = (f + phase) % 30;
+                    let x = 0.3 * ((f + phase) / 30) as f64;
+                    if k < 20 {
+                        DVec3::new(x, 0.10, 0.0)
+                    } else {
+                        let s = (k - 19) as f64 / 10.0;
+                        DVec3::new(
+                            x + 0.3 * s,
+                            0.10 + 0.08 * (s * std::f64::consts::PI).sin(),
+                            0.0,
+                        )
+                    }
+                })
+                .collect()
+        };
+        let on_floor = vec![DVec3::ZERO; 60];
+        let knee = vec![DVec3::new(0.0, 0.03, 0.0); 60];
+        let tracks = [
+            part_track(ContactPart::Ball, "l_talocrural", on_floor.clone()),
+            part_track(ContactPart::Ball, "r_talocrural", on_floor),
+            part_track(ContactPart::Knee, "l_knee", knee.clone()),
+            part_track(ContactPart::Knee, "r_knee", knee),
+            part_track(ContactPart::Hand, "l_radiocarpal", hand(0)),
+            part_track(ContactPart::Hand, "r_radiocarpal", hand(15)),
+        ];
+        let s = ContactSettings::default();
+        let c = detect_contacts(&tracks, dt, &scale(0.9), &s);
+        let hands: Vec<(&str, usize, usize)> = c
+            .iter()
+            .filter(|c| c.part == ContactPart::Hand)
+            .map(|c| (c.joint.as_str(), c.start, c.end))
+            .collect();
+        // Each stance of each hand found (the left's 0-19 and 30-49, the right's 0-4, 15-34
+        // and 45-59), none while it swings.
+        assert_eq!(hands.len(), 5, "{hands:?}");
+        for (joint, start, end) in &hands {
+            let phase = if *joint == "l_radiocarpal" { 0 } else { 15 };
+            assert!(
+                (*start..=*end).all(|f| (f + phase) % 30 < 20),
+                "{joint} {start}..{end} swings"
+            );
+        }
+        let held = c.iter().find(|c| c.part == ContactPart::Hand);
+        assert!(held.is_some_and(|h| (h.clearance - 0.10).abs() < 1e-9 && h.floor.abs() < 1e-9));
+        // The knees too, resting at their own 3 cm.
+        assert_eq!(c.iter().filter(|c| c.part == ContactPart::Knee).count(), 2);
+    }
+
+    #[test]
+    fn hands_that_never_come_down_keep_the_typical_clearance_and_get_no_contact() {
+        // Standing still: the feet on the floor, the wrists still 0.75 m over it (over the
+        // most a hand's rest can be), the knees 0.45 m.
+        let dt = 1.0 / 30.0;
+        let tracks = [
+            part_track(ContactPart::Heel, "l_talocrural", vec![DVec3::ZERO; 30]),
+            part_track(
+                ContactPart::Hand,
+                "l_radiocarpal",
+                vec![DVec3::Y * 0.75; 30],
+            ),
+            part_track(ContactPart::Knee, "l_knee", vec![DVec3::Y * 0.45; 30]),
+        ];
+        let s = ContactSettings::default();
+        let limits = s.thresholds(&scale(0.9));
+        let speeds = vec![vec![0.0; 30]; 3];
+        let found = clearances(&tracks, &speeds, &limits, &scale(0.9));
+        assert_eq!(found, vec![0.0, 0.04 * 0.9, 0.07 * 0.9]);
+        let c = detect_contacts(&tracks, dt, &scale(0.9), &s);
+        assert!(c.iter().all(|c| c.part.is_foot()), "{c:?}");
+    }
+
+    #[test]
+    fn a_foot_on_a_step_rests_from_its_landing_and_the_next_step_from_its_own() {
+        // At 30 fps, up two 20 cm steps: the left foot swings onto the first step (still on
+        // it from frame 10), lifts off at 50; the right stands on the floor to frame 24,
+        // swings 30 cm up over the step and lands on the second (40 cm) at 45. While the
+        // right swings, the ground of the window (half a second either side) is still the
+        // floor for the left on the step: it was found from frame 37 only.
+        let dt = 1.0 / 30.0;
+        let left: Vec<DVec3> = (0..60)
+            .map(|f| match f {
+                0..10 => DVec3::new(0.03 * f as f64, 0.25, 0.0),
+                10..50 => DVec3::new(0.3, 0.2, 0.0),
+                _ => DVec3::new(0.3 + 0.05 * (f - 49) as f64, 0.5, 0.0),
+            })
+            .collect();
+        let right: Vec<DVec3> = (0..60)
+            .map(|f| match f {
+                0..25 => DVec3::new(0.0, 0.0, 0.2),
+                25..45 => DVec3::new(0.05 * (f - 24) as f64, 0.45, 0.2),
+                _ => DVec3::new(1.0, 0.4, 0.2),
+            })
+            .collect();
+        let tracks = [
+            part_track(ContactPart::Heel, "l_talocrural", left),
+            part_track(ContactPart::Heel, "r_talocrural", right),
+        ];
+        let c = detect_contacts(&tracks, dt, &scale(0.9), &ContactSettings::default());
+        let held = |joint: &str| -> Vec<(usize, usize, f64)> {
+            c.iter()
+                .filter(|c| c.joint == joint && !c.slides)
+                .map(|c| (c.start, c.end, c.floor))
+                .collect()
+        };
+        // The central difference over a frame each side: still from the frame after landing
+        // to the one before lifting off.
+        let (left, right) = (held("l_talocrural"), held("r_talocrural"));
+        assert_eq!(left.len(), 1, "{c:?}");
+        assert_eq!((left[0].0, left[0].1), (11, 48), "{left:?}");
+        assert!((left[0].2 - 0.2).abs() < 1e-9, "{left:?}");
+        assert_eq!(right.len(), 2, "{c:?}");
+        assert_eq!((right[0].0, right[0].1), (0, 23), "{right:?}");
+        assert_eq!((right[1].0, right[1].1), (45, 59), "{right:?}");
+        assert!((right[1].2 - 0.4).abs() < 1e-9, "{right:?}");
+    }
+
+    #[test]
+    fn feet_still_at_the_top_of_a_jump_get_no_contact() {
+        // At 30 fps both feet stand, jump straight up (0.5 s in the air, 31 cm high: still
+        // horizontally all along, vertically near the top) and land.
+        let dt = 1.0 / 30.0;
+        let foot = |z: f64| -> Vec<DVec3> {
+            (0..75)
+                .map(|f| {
+                    let t = (f as f64 - 30.0) * dt;
+                    let y = if (0.0..0.5).contains(&t) {
+                        t * (2.45 - 4.905 * t)
+                    } else {
+                        0.0
+                    };
+                    DVec3::new(0.0, y.max(0.0), z)
+                })
+                .collect()
+        };
+        let tracks = [
+            part_track(ContactPart::Heel, "l_talocrural", foot(0.1)),
+            part_track(ContactPart::Heel, "r_talocrural", foot(-0.1)),
+        ];
+        let c = detect_contacts(&tracks, dt, &scale(0.9), &ContactSettings::default());
+        for c in &c {
+            assert!(c.end < 32 || c.start > 43, "{c:?} in the air");
+        }
+        assert_eq!(c.len(), 4, "{c:?}");
     }
 
     #[test]

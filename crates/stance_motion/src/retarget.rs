@@ -752,6 +752,7 @@ mod tests {
             end,
             position: DVec3::ZERO,
             floor: 0.0,
+            clearance: 0.0,
             slides: false,
         }
     }

@@ -10,6 +10,7 @@ use super::{CONTACT_JOINTS, KNEES, Placement, WRISTS};
 use crate::clip::Clip;
 use crate::contacts::{
     ClipScale, Contact, ContactPart, ContactSettings, PointTrack, Thresholds, detect_contacts,
+    quantile,
 };
 
 /// The contacts found on a clip and held on a body.
@@ -239,18 +240,13 @@ pub(super) fn held_contacts(
         else {
             return c.floor;
         };
-        let clearance = c.part.clearance() * clip_leg;
         let mut heights: Vec<f64> = track
             .positions
             .iter()
             .skip(reference)
-            .map(|p| p.y - clearance)
+            .map(|p| p.y - c.clearance)
             .collect();
-        if heights.is_empty() {
-            return c.floor;
-        }
-        let k = heights.len() / 10;
-        *heights.select_nth_unstable_by(k, f64::total_cmp).1
+        quantile(&mut heights, 0.1).unwrap_or(c.floor)
     };
     // On the target: the copy's points over each contact, the standing height of each point.
     let target_rest = Frames::new(skeleton, &Posture::rest(skeleton));
@@ -295,7 +291,8 @@ pub(super) fn held_contacts(
                 let j = skeleton.joint_index(&c.joint).unwrap_or(0);
                 target_rest.point(j, c.point).y
             } else {
-                target_floor + c.part.clearance() * target_leg
+                // The clip's clearance as a share of its leg, on the target's leg.
+                target_floor + c.clearance / clip_leg * target_leg
             };
         // The other point of the same foot, held when this one lands: this one is held where
         // the copy's foot puts it from there, so that the two goals fit the foot.
