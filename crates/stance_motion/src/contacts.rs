@@ -974,6 +974,45 @@ mod tests {
     }
 
     #[test]
+    fn sitting_down_on_the_floor_rests_the_pelvis_there_and_standing_up_lifts_it() {
+        // At 30 fps: standing (the pelvis joint 0.95 m up) for 20 frames, sitting down over
+        // 30, on the floor for 40 (the hip joints 10 cm over it, where the buttocks put
+        // them), standing up over 20, standing for 20; both heels on the floor throughout.
+        let dt = 1.0 / 30.0;
+        let height = |f: usize| -> f64 {
+            let ease = |t: f64| t * t * (3.0 - 2.0 * t);
+            match f {
+                0..20 => 0.95,
+                20..50 => 0.95 - 0.85 * ease((f - 20) as f64 / 30.0),
+                50..90 => 0.10,
+                90..110 => 0.10 + 0.85 * ease((f - 90) as f64 / 20.0),
+                _ => 0.95,
+            }
+        };
+        let pelvis: Vec<DVec3> = (0..130).map(|f| DVec3::new(0.0, height(f), -0.1)).collect();
+        let tracks = [
+            part_track(ContactPart::Heel, "l_talocrural", vec![DVec3::ZERO; 130]),
+            part_track(ContactPart::Heel, "r_talocrural", vec![DVec3::ZERO; 130]),
+            part_track(ContactPart::Pelvis, "humanoid_root", pelvis),
+        ];
+        let c = detect_contacts(&tracks, dt, &scale(0.9), &ContactSettings::default());
+        let sat: Vec<&Contact> = c.iter().filter(|c| c.part == ContactPart::Pelvis).collect();
+        assert_eq!(sat.len(), 1, "{c:?}");
+        let (start, end) = (sat[0].start, sat[0].end);
+        // Held from when it settles to when it rises (a frame or two of the ease at each
+        // end is within the contact height), never while standing.
+        assert!(
+            (46..=52).contains(&start) && (88..=94).contains(&end),
+            "{start}..{end}"
+        );
+        assert!(
+            (sat[0].clearance - 0.10).abs() < 1e-9 && sat[0].floor.abs() < 1e-9,
+            "{:?}",
+            sat[0]
+        );
+    }
+
+    #[test]
     fn hands_that_never_come_down_keep_the_typical_clearance_and_get_no_contact() {
         // Standing still: the feet on the floor, the wrists still 0.75 m over it (over the
         // most a hand's rest can be), the knees 0.45 m.
