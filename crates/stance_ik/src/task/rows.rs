@@ -1,0 +1,559 @@
+//! Each task's measured feature, error and Jacobian rows (the solver's linearisation), and
+//! the comfort task's gradient step: split from `task.rs`, which defines the tasks.
+
+use glam::{DQuat, DVec3};
+
+use super::balance::{BalanceGeometry, convex_hull, floor_points};
+use super::collision;
+use super::gaze::{GazeGeometry, direction_error};
+use super::locus::{line_basis, line_offset, plane_active, plane_distance, plane_error};
+use super::{
+    Axes, BALANCE_BAND, COLLISION_BAND, PLANE_BAND, StepLimits, Task, TaskFeature, TaskKind,
+};
+use crate::comfort::ComfortModel;
+use crate::{Frames, Skeleton};
+
+/// The velocity of the world point `p` carried by `joint` for a unit velocity of DOF `d`.
+fn point_column(skeleton: &Skeleton, frames: &Frames, d: usize, joint: usize, p: DVec3) -> DVec3 {
+    let owner = skeleton.dof_joint(d);
+    if !skeleton.is_ancestor_or_self(owner, joint) {
+        DVec3::ZERO
+    } else if skeleton.dof_kinds()[d].is_rotation() {
+        frames.dof_axis[d].cross(p - frames.joint_position[owner])
+    } else {
+        frames.dof_axis[d]
+    }
+}
+
+/// The centre of mass's velocity for a unit velocity of DOF `d`.
+fn com_column(skeleton: &Skeleton, frames: &Frames, d: usize, total: f64) -> DVec3 {
+    let j = skeleton.dof_joint(d);
+    let axis = frames.dof_axis[d];
+    if skeleton.dof_kinds()[d].is_rotation() {
+        axis.cross(frames.subtree_moment[j] - frames.subtree_mass[j] * frames.joint_position[j])
+            / total
+    } else {
+        axis * (frames.subtree_mass[j] / total)
+    }
+}
+
+/// Shortest rotation vector of `q`.
+pub(crate) fn log_rotation(q: DQuat) -> DVec3 {
+    let q = if q.w < 0.0 { -q } else { q };
+    let v = q.xyz();
+    let s = v.length();
+    if s < 1e-12 {
+        return 2.0 * v;
+    }
+    let angle = 2.0 * s.atan2(q.w);
+    v * (angle / s)
+}
+
+impl Task {
+    /// The measured feature (see [`TaskFeature`]).
+    pub fn feature(&self, skeleton: &Skeleton, frames: &Frames, values: &[f64]) -> TaskFeature {
+        match &self.kind {
+            TaskKind::Position { effector, axes, .. } => {
+                let p = frames.point(effector.joint, effector.point);
+                TaskFeature::Vector((0..3).filter(|&i| axes.has(i)).map(|i| p[i]).collect())
+            }
+            TaskKind::Orientation { joint, .. } => TaskFeature::Rotation(frames.rotation(*joint)),
+            TaskKind::Gaze {
+                effector,
+                axis,
+                target,
+            } => {
+                let x = GazeGeometry::new(frames, effector, *axis, *target)
+                    .map_or([0.0, 0.0], |g| g.log());
+                TaskFeature::Vector(x.to_vec())
+            }
+            TaskKind::Direction {
+                joint,
+                axis,
+                target,
+            } => {
+                let x = GazeGeometry::direction(frames, *joint, *axis, *target)
+                    .map_or([0.0, 0.0], |g| g.log());
+                TaskFeature::Vector(x.to_vec())
+            }
+            TaskKind::CenterOfMass { axes, .. } => {
+                let c = frames.center_of_mass();
+                TaskFeature::Vector((0..3).filter(|&i| axes.has(i)).map(|i| c[i]).collect())
+            }
+            TaskKind::Balance { support, margin } => {
+                // The signed distance past the shrunk polygon; constant where the row is empty.
+                let x = BalanceGeometry::new(frames, support, *margin)
+                    .filter(BalanceGeometry::active)
+                    .map_or(-BALANCE_BAND, |g| g.violation);
+                TaskFeature::Vector(vec![x])
+            }
+            TaskKind::Comfort { model } => {
+                TaskFeature::Vector(vec![model.terms(skeleton, frames, values).total])
+            }
+            TaskKind::PointOnLine {
+                effector,
+                origin,
+                direction,
+            } => {
+                let p = frames.point(effector.joint, effector.point);
+                TaskFeature::Vector(line_offset(p, *origin, *direction).to_vec())
+            }
+            TaskKind::PointOnPlane {
+                effector,
+                origin,
+                normal,
+                above,
+            } => {
+                // The signed distance; constant where an inequality's row is empty.
+                let s = plane_distance(
+                    frames.point(effector.joint, effector.point),
+                    *origin,
+                    *normal,
+                );
+                TaskFeature::Vector(vec![if plane_active(s, *above) {
+                    s
+                } else {
+                    PLANE_BAND
+                }])
+            }
+            TaskKind::Collision(c) => {
+                // The distances of the rows held; constant where a row is empty.
+                let found = c.constraints(frames);
+                TaskFeature::Vector(
+                    (0..c.rows())
+                        .map(|i| {
+                            found
+                                .get(i)
+                                .map_or(c.margin() + COLLISION_BAND, |f| f.distance)
+                        })
+                        .collect(),
+                )
+            }
+            TaskKind::PostureAttraction { dofs, .. } => TaskFeature::Vector(
+                dofs.iter()
+                    .map(|&d| values.get(d).copied().unwrap_or(0.0))
+                    .collect(),
+            ),
+        }
+    }
+
+    /// Error (unclamped residual norm, in metres or radians; a comfort task's cost) of the
+    /// task at `frames`.
+    pub fn residual(&self, skeleton: &Skeleton, frames: &Frames, values: &[f64]) -> f64 {
+        self.residual_with(skeleton, frames, values, &mut Vec::new())
+    }
+
+    /// [`Task::residual`] with a scratch buffer for the error rows. A comfort task weighs its
+    /// cost alone: its gradient is only needed to step.
+    pub(crate) fn residual_with(
+        &self,
+        skeleton: &Skeleton,
+        frames: &Frames,
+        values: &[f64],
+        scratch: &mut Vec<f64>,
+    ) -> f64 {
+        if let Some(cost) = self.comfort_cost(skeleton, frames, values) {
+            return cost;
+        }
+        scratch.resize(self.rows(), 0.0);
+        self.error(skeleton, frames, values, scratch, None)
+    }
+
+    /// The support polygon of a balance task at `frames`, as the solver sees it: the corners
+    /// of the convex hull of the support points, counter-clockwise seen from below (x, z), on
+    /// the floor plane y = 0. Empty for other kinds.
+    pub fn support_polygon(&self, frames: &Frames) -> Vec<DVec3> {
+        let TaskKind::Balance { support, .. } = &self.kind else {
+            return Vec::new();
+        };
+        convex_hull(floor_points(frames, support))
+            .into_iter()
+            .map(|([x, z], _)| DVec3::new(x, 0.0, z))
+            .collect()
+    }
+
+    /// The desired change of the task's feature (unclamped, one value per row): the error
+    /// the solver drives to zero, whose derivative is minus the Jacobian.
+    pub fn error_vector(&self, skeleton: &Skeleton, frames: &Frames, values: &[f64]) -> Vec<f64> {
+        let mut err = vec![0.0; self.rows()];
+        self.error(skeleton, frames, values, &mut err, None);
+        err
+    }
+
+    /// Writes the desired change (clamped by `limits` when given) into `err` and returns the
+    /// unclamped residual norm.
+    pub(crate) fn error(
+        &self,
+        skeleton: &Skeleton,
+        frames: &Frames,
+        values: &[f64],
+        err: &mut [f64],
+        limits: Option<StepLimits>,
+    ) -> f64 {
+        let clamp_vec = |e: &mut [f64], max: Option<f64>| {
+            let norm = e.iter().map(|v| v * v).sum::<f64>().sqrt();
+            if let Some(max) = max
+                && norm > max
+            {
+                let s = max / norm;
+                e.iter_mut().for_each(|v| *v *= s);
+            }
+            norm
+        };
+        match &self.kind {
+            TaskKind::Position {
+                effector,
+                axes,
+                target,
+            } => {
+                let d = *target - frames.point(effector.joint, effector.point);
+                fill_axes(err, d, *axes);
+                clamp_vec(err, limits.map(|l| l.linear))
+            }
+            TaskKind::CenterOfMass { axes, target } => {
+                let d = *target - frames.center_of_mass();
+                fill_axes(err, d, *axes);
+                clamp_vec(err, limits.map(|l| l.linear))
+            }
+            TaskKind::Orientation { joint, target } => {
+                let e = log_rotation(target.normalize() * frames.rotation(*joint).inverse());
+                err[..3].copy_from_slice(&e.to_array());
+                clamp_vec(err, limits.map(|l| l.angular))
+            }
+            TaskKind::Gaze {
+                effector,
+                axis,
+                target,
+            } => {
+                let geometry = GazeGeometry::new(frames, effector, *axis, *target);
+                direction_error(geometry, err, limits)
+            }
+            TaskKind::Direction {
+                joint,
+                axis,
+                target,
+            } => {
+                let geometry = GazeGeometry::direction(frames, *joint, *axis, *target);
+                direction_error(geometry, err, limits)
+            }
+            TaskKind::Balance { support, margin } => {
+                let violation = BalanceGeometry::new(frames, support, *margin)
+                    .map_or(0.0, |g| g.violation.max(0.0));
+                err[0] = -violation;
+                clamp_vec(err, limits.map(|l| l.linear))
+            }
+            TaskKind::Comfort { model } => {
+                let (cost, gradient) = comfort_gradient(model, skeleton, frames, values);
+                err[0] = comfort_step(&gradient, limits);
+                cost
+            }
+            TaskKind::Collision(c) => {
+                let found = c.constraints(frames);
+                collision::errors(&found, c.margin(), err);
+                clamp_vec(err, limits.map(|l| l.linear))
+            }
+            TaskKind::PointOnLine {
+                effector,
+                origin,
+                direction,
+            } => {
+                let p = frames.point(effector.joint, effector.point);
+                let [a, b] = line_offset(p, *origin, *direction);
+                err[0] = -a;
+                err[1] = -b;
+                clamp_vec(err, limits.map(|l| l.linear))
+            }
+            TaskKind::PointOnPlane {
+                effector,
+                origin,
+                normal,
+                above,
+            } => {
+                let s = plane_distance(
+                    frames.point(effector.joint, effector.point),
+                    *origin,
+                    *normal,
+                );
+                err[0] = plane_error(s, *above);
+                clamp_vec(err, limits.map(|l| l.linear))
+            }
+            TaskKind::PostureAttraction { reference, dofs } => {
+                for (e, &d) in err.iter_mut().zip(dofs) {
+                    let v = values.get(d).copied().unwrap_or(0.0);
+                    *e = reference.get(d).copied().unwrap_or(0.0) - v;
+                }
+                let norm = err.iter().map(|v| v * v).sum::<f64>().sqrt();
+                if let Some(l) = limits {
+                    err.iter_mut()
+                        .for_each(|v| *v = v.clamp(-l.angular, l.angular));
+                }
+                norm
+            }
+        }
+    }
+
+    /// Writes the Jacobian rows: `jac_t` is column-major `N x rows` (one column per row of
+    /// J, i.e. J transposed), already zero outside this task's support.
+    pub(crate) fn jacobian_t(
+        &self,
+        skeleton: &Skeleton,
+        frames: &Frames,
+        values: &[f64],
+        support: &[usize],
+        jac_t: &mut [f64],
+        n: usize,
+    ) {
+        let kinds = skeleton.dof_kinds();
+        match &self.kind {
+            TaskKind::Position { effector, axes, .. } => {
+                let p = frames.point(effector.joint, effector.point);
+                for &d in support {
+                    let axis = frames.dof_axis[d];
+                    let v = if kinds[d].is_rotation() {
+                        axis.cross(p - frames.joint_position[skeleton.dof_joint(d)])
+                    } else {
+                        axis
+                    };
+                    write_axes(jac_t, n, d, v, *axes);
+                }
+            }
+            TaskKind::CenterOfMass { axes, .. } => {
+                let total = frames.subtree_mass.first().copied().unwrap_or(0.0);
+                if total <= 0.0 {
+                    return;
+                }
+                for &d in support {
+                    write_axes(jac_t, n, d, com_column(skeleton, frames, d, total), *axes);
+                }
+            }
+            TaskKind::Balance {
+                support: contacts,
+                margin,
+            } => {
+                let total = frames.subtree_mass.first().copied().unwrap_or(0.0);
+                let Some(g) = BalanceGeometry::new(frames, contacts, *margin) else {
+                    return;
+                };
+                if total <= 0.0 || !g.active() {
+                    return;
+                }
+                let (a, b) = (&contacts[g.a], &contacts[g.b]);
+                let (pa, pb) = (
+                    frames.point(a.joint, a.point),
+                    frames.point(b.joint, b.point),
+                );
+                for &d in support {
+                    let moved = point_column(skeleton, frames, d, a.joint, pa) * (1.0 - g.t)
+                        + point_column(skeleton, frames, d, b.joint, pb) * g.t;
+                    jac_t[d] = g.normal.dot(com_column(skeleton, frames, d, total) - moved);
+                }
+            }
+            TaskKind::Collision(c) => {
+                let found = c.constraints(frames);
+                collision::write_rows(skeleton, frames, &found, jac_t, n);
+            }
+            TaskKind::PointOnLine {
+                effector,
+                direction,
+                ..
+            } => {
+                let p = frames.point(effector.joint, effector.point);
+                let [e1, e2] = line_basis(*direction);
+                for &d in support {
+                    let v = point_column(skeleton, frames, d, effector.joint, p);
+                    jac_t[d] = e1.dot(v);
+                    jac_t[n + d] = e2.dot(v);
+                }
+            }
+            TaskKind::PointOnPlane {
+                effector,
+                origin,
+                normal,
+                above,
+            } => {
+                let p = frames.point(effector.joint, effector.point);
+                if !plane_active(plane_distance(p, *origin, *normal), *above) {
+                    return;
+                }
+                let unit = normal.normalize_or(DVec3::Y);
+                for &d in support {
+                    jac_t[d] = unit.dot(point_column(skeleton, frames, d, effector.joint, p));
+                }
+            }
+            TaskKind::Orientation { .. } => {
+                for &d in support {
+                    if kinds[d].is_rotation() {
+                        write_axes(jac_t, n, d, frames.dof_axis[d], Axes::XYZ);
+                    }
+                }
+            }
+            TaskKind::Gaze {
+                effector,
+                axis,
+                target,
+            } => {
+                let Some(g) = GazeGeometry::new(frames, effector, *axis, *target) else {
+                    return;
+                };
+                let rot_t = frames.world_from_joint_rotation[effector.joint].transpose();
+                for &d in support {
+                    let axis_w = frames.dof_axis[d];
+                    let dq = if kinds[d].is_rotation() {
+                        -(rot_t
+                            * axis_w.cross(*target - frames.joint_position[skeleton.dof_joint(d)]))
+                    } else {
+                        -(rot_t * axis_w)
+                    };
+                    let [r1, r2] = g.log_derivative(dq);
+                    jac_t[d] = r1;
+                    jac_t[n + d] = r2;
+                }
+            }
+            TaskKind::Direction {
+                joint,
+                axis,
+                target,
+            } => {
+                let Some(g) = GazeGeometry::direction(frames, *joint, *axis, *target) else {
+                    return;
+                };
+                let rot_t = frames.world_from_joint_rotation[*joint].transpose();
+                let world = target.normalize_or_zero();
+                for &d in support {
+                    if kinds[d].is_rotation() {
+                        let dq = -(rot_t * frames.dof_axis[d].cross(world));
+                        let [r1, r2] = g.log_derivative(dq);
+                        jac_t[d] = r1;
+                        jac_t[n + d] = r2;
+                    }
+                }
+            }
+            TaskKind::PostureAttraction { dofs, .. } => {
+                for (row, &d) in dofs.iter().enumerate() {
+                    jac_t[row * n + d] = 1.0;
+                }
+            }
+            TaskKind::Comfort { model } => {
+                let (_, gradient) = comfort_gradient(model, skeleton, frames, values);
+                unit_gradient_row(&gradient, support, jac_t);
+            }
+        }
+    }
+
+    /// A comfort task's cost alone (no gradient: a level waiting for the levels above it, or
+    /// a candidate posture weighed); `None` for other kinds.
+    pub(crate) fn comfort_cost(
+        &self,
+        skeleton: &Skeleton,
+        frames: &Frames,
+        values: &[f64],
+    ) -> Option<f64> {
+        let TaskKind::Comfort { model } = &self.kind else {
+            return None;
+        };
+        Some(model.terms(skeleton, frames, values).total)
+    }
+
+    /// The rows and errors at once for the kinds that find both together, as
+    /// [`Task::error`] and [`Task::jacobian_t`] write them (`jac_t` zero on entry, `n` DOF),
+    /// and how many rows are in use: comfort (one gradient; returns the cost, one row) and
+    /// collision (one search for its constraints; returns the error's norm and one row per
+    /// constraint found, the first rows: the others stay empty and the solver leaves them
+    /// out of the level). `None` for other kinds.
+    pub(crate) fn system_at_once(
+        &self,
+        skeleton: &Skeleton,
+        frames: &Frames,
+        values: &[f64],
+        support: &[usize],
+        (err, jac_t, n): (&mut [f64], &mut [f64], usize),
+        limits: Option<StepLimits>,
+    ) -> Option<(f64, usize)> {
+        match &self.kind {
+            TaskKind::Comfort { model } => {
+                let (cost, gradient) = comfort_gradient(model, skeleton, frames, values);
+                err[0] = comfort_step(&gradient, limits);
+                unit_gradient_row(&gradient, support, jac_t);
+                Some((cost, 1))
+            }
+            TaskKind::Collision(c) => {
+                let found = c.constraints(frames);
+                let norm = collision::errors(&found, c.margin(), err);
+                if let Some(l) = limits
+                    && norm > l.linear
+                {
+                    let s = l.linear / norm;
+                    err.iter_mut().for_each(|v| *v *= s);
+                }
+                collision::write_rows(skeleton, frames, &found, jac_t, n);
+                Some((norm, found.len()))
+            }
+            _ => None,
+        }
+    }
+}
+
+/// The comfort cost and its gradient, projected onto the joint ranges: a DOF on a limit that
+/// the descent would push further out stays out of the row (else every step would clamp it
+/// again, a whole prioritized step per clamping pass).
+fn comfort_gradient(
+    model: &ComfortModel,
+    skeleton: &Skeleton,
+    frames: &Frames,
+    values: &[f64],
+) -> (f64, Vec<f64>) {
+    let mut gradient = vec![0.0; skeleton.dof_count()];
+    let terms = model.gradient(skeleton, frames, values, &mut gradient);
+    let (lo, hi) = (skeleton.lower_limits(), skeleton.upper_limits());
+    for (d, g) in gradient.iter_mut().enumerate() {
+        let q = values.get(d).copied().unwrap_or(0.0);
+        if (q >= hi[d] && *g < 0.0) || (q <= lo[d] && *g > 0.0) {
+            *g = 0.0;
+        }
+    }
+    (terms.total, gradient)
+}
+
+/// The comfort row's error: a gradient step of `gain * |grad|` radians, at most
+/// [`COMFORT_MAX_STEP`] (and the angular step limit).
+fn comfort_step(gradient: &[f64], limits: Option<StepLimits>) -> f64 {
+    let slope = gradient.iter().map(|g| g * g).sum::<f64>().sqrt();
+    let most = limits.map_or(COMFORT_MAX_STEP, |l| l.angular.min(COMFORT_MAX_STEP));
+    -(COMFORT_STEP_GAIN * slope).min(most)
+}
+
+/// The comfort row: the unit gradient (the step is the projected gradient times the error).
+fn unit_gradient_row(gradient: &[f64], support: &[usize], jac_t: &mut [f64]) {
+    let slope = gradient.iter().map(|g| g * g).sum::<f64>().sqrt();
+    if slope > 0.0 && slope.is_finite() {
+        for &d in support {
+            jac_t[d] = gradient[d] / slope;
+        }
+    }
+}
+
+/// The comfort task's gradient step: `gain * |grad|` radians (a plain gradient descent with
+/// this rate where the levels above leave the gradient free) ...
+const COMFORT_STEP_GAIN: f64 = 0.05;
+/// ... as far as this (rad) per iteration.
+const COMFORT_MAX_STEP: f64 = 0.1;
+
+fn fill_axes(err: &mut [f64], d: DVec3, axes: Axes) {
+    let mut k = 0;
+    for i in 0..3 {
+        if axes.has(i) {
+            err[k] = d[i];
+            k += 1;
+        }
+    }
+}
+
+fn write_axes(jac_t: &mut [f64], n: usize, dof: usize, v: DVec3, axes: Axes) {
+    let mut k = 0;
+    for i in 0..3 {
+        if axes.has(i) {
+            jac_t[k * n + dof] = v[i];
+            k += 1;
+        }
+    }
+}
