@@ -1,6 +1,8 @@
 //! `stance render DOC.json --out IMAGE.png`: the document's posture on the default H-Anim body
 //! (the mannequin) or on an avatar (its skinned mesh), drawn natively with wgpu on any adapter
-//! (lavapipe will do) through the same image path as the editor's *File > Save image*.
+//! (lavapipe will do) through the same image path as the editor's *File > Save image*. A scene
+//! (`stance_document::Scene`) draws every character at its `Placement` and its props, placed
+//! by `stance_render::placed` as the editor places them.
 //!
 //! `--map openpose|depth|normal|mask` writes a control map for image generation instead, seen
 //! by the same camera: the OpenPose skeleton (drawn on the CPU; with `--keypoints-out` its
@@ -32,12 +34,14 @@ use crate::avatar;
 /// [--map depth|normal|mask|lines]`.
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
-    /// The document (JSON, as the editor exports it).
+    /// The document or scene (JSON, as the editor exports it): a scene's characters are all
+    /// drawn at their placements on the same body, with its props, one OpenPose person each.
     pub document: PathBuf,
     /// The PNG to write.
     #[arg(long)]
     pub out: PathBuf,
-    /// An avatar (.glb, .gltf, .vrm) to pose instead of the default body.
+    /// An avatar (.glb, .gltf, .vrm) to pose instead of the default body (every character of
+    /// a scene; a document's own avatar URL is not loaded).
     #[arg(long)]
     pub avatar: Option<PathBuf>,
     /// A standard view framed on the body; without it the document's saved camera (or the
