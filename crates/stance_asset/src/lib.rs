@@ -26,7 +26,8 @@
 //! transforms; [`Avatar::skinning_matrices`] gives the renderer its joint matrices;
 //! [`export_glb`] writes the posed avatar; importing that file and calling
 //! [`Avatar::current_posture`] gives the posture back. [`export_glb_animation`] writes the
-//! avatar with a sequence of postures as one glTF animation.
+//! avatar with a sequence of postures as one glTF animation. [`export_scene_glb`] writes a
+//! scene: several posed avatars and static meshes, each under a named, placed node.
 
 #![warn(missing_docs)]
 
@@ -36,6 +37,7 @@ mod clip_transfer;
 mod error;
 mod export;
 mod export_animation;
+mod export_scene;
 mod generate;
 mod import;
 mod meshopt;
@@ -54,6 +56,9 @@ pub use clip_transfer::{
 pub use error::AssetError;
 pub use export::export_glb;
 pub use export_animation::export_glb_animation;
+pub use export_scene::{
+    SceneContent, SceneNode, StaticMesh, export_scene_glb, posed_default_avatar,
+};
 pub use generate::make_default_avatar;
 pub use import::{Resolver, SUPPORTED_EXTENSIONS};
 pub use model::{

@@ -52,7 +52,7 @@ enum Command {
     MakeAvatar(avatar::MakeAvatarArgs),
     /// Encode a document into a posture link, or decode a link into a document.
     Link(link::LinkArgs),
-    /// Render a document's posture (on the default body or an avatar) as a PNG image.
+    /// Render a document's posture or a scene (on the default body or an avatar) as a PNG image.
     Render(render::RenderArgs),
     /// Lift a posture from OpenPose keypoints (JSON) into a document.
     Lift(lift::LiftArgs),

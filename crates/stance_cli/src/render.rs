@@ -1,6 +1,8 @@
 //! `stance render DOC.json --out IMAGE.png`: the document's posture on the default H-Anim body
 //! (the mannequin) or on an avatar (its skinned mesh), drawn natively with wgpu on any adapter
-//! (lavapipe will do) through the same image path as the editor's *File > Save image*.
+//! (lavapipe will do) through the same image path as the editor's *File > Save image*. A scene
+//! (`stance_document::Scene`) draws every character at its `Placement` and its props, placed
+//! by `stance_render::placed` as the editor places them.
 //!
 //! `--map openpose|depth|normal|mask` writes a control map for image generation instead, seen
 //! by the same camera: the OpenPose skeleton (drawn on the CPU; with `--keypoints-out` its
@@ -13,14 +15,16 @@ use std::time::Instant;
 use anyhow::{Context, Result, anyhow, bail};
 use glam::{DVec3, Vec3};
 use stance_asset::{LoadOptions, make_default_avatar};
-use stance_document::{Document, PostureRest};
+use stance_document::{AvatarReference, Document, Placement, PostureRest, Prop, SceneCharacter};
 use stance_hanim::keypoints::KeypointFinder;
 use stance_hanim::{HumanoidSkeleton, LevelOfArticulation, SkeletonOptions, default_skeleton};
 use stance_ik::{Frames, Posture};
 use stance_render::{
     Capsule, GOAL_COLOR_LINEAR, HiddenKeypoints, ImageOptions, KeypointUnits, OpenPose,
     OpenPosePerson, OrbitCamera, Pixels, Scene, SceneRenderer, Shading, ViewPreset, avatar_model,
-    encode_png, headless_gpu, line_art, posed_mannequin_bones, render_image,
+    character_shadow, encode_png, headless_gpu, line_art, placed_capsule, placed_keypoints,
+    placed_palettes, posed_mannequin_bones, prop_corners, prop_instance, prop_shadow, render_image,
+    scene_from_character,
 };
 
 use crate::avatar;
@@ -30,12 +34,14 @@ use crate::avatar;
 /// [--map depth|normal|mask|lines]`.
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
-    /// The document (JSON, as the editor exports it).
+    /// The document or scene (JSON, as the editor exports it): a scene's characters are all
+    /// drawn at their placements on the same body, with its props, one OpenPose person each.
     pub document: PathBuf,
     /// The PNG to write.
     #[arg(long)]
     pub out: PathBuf,
-    /// An avatar (.glb, .gltf, .vrm) to pose instead of the default body.
+    /// An avatar (.glb, .gltf, .vrm) to pose instead of the default body (every character of
+    /// a scene; a document's own avatar URL is not loaded).
     #[arg(long)]
     pub avatar: Option<PathBuf>,
     /// A standard view framed on the body; without it the document's saved camera (or the
@@ -251,10 +257,10 @@ fn figure(args: &RenderArgs) -> Result<Figure> {
     })
 }
 
-/// The body's extent: each capsule's ends widened by its radius.
-fn extent_points(capsules: &[Capsule]) -> Vec<Vec3> {
+/// The bodies' extent: each capsule's ends widened by its radius.
+fn extent_points<'a>(capsules: impl IntoIterator<Item = &'a Capsule>) -> Vec<Vec3> {
     capsules
-        .iter()
+        .into_iter()
         .flat_map(|capsule| {
             [capsule.start_world, capsule.end_world]
                 .into_iter()
@@ -269,62 +275,132 @@ fn extent_points(capsules: &[Capsule]) -> Vec<Vec3> {
         .collect()
 }
 
-/// The document's posture on its body, and the camera that sees it.
-struct Posed {
-    figure: Figure,
+/// One character of the scene posed on the figure.
+struct PosedCharacter {
+    /// Its name (the outliner's): what notes and errors call it.
+    name: String,
+    placement: Placement,
     document: Document,
     posture: Posture,
     frames: Frames,
-    /// The mannequin's capsules of the posed body (drawn without an avatar; the body that
-    /// hides keypoints in a control map).
+    /// The mannequin's capsules of the posed body, in the scene (drawn without an avatar; the
+    /// body that hides keypoints in a control map).
     capsules: Vec<Capsule>,
+}
+
+/// The scene's characters posed on their body, its props, and the camera that sees them.
+struct Posed {
+    figure: Figure,
+    characters: Vec<PosedCharacter>,
+    props: Vec<Prop>,
     camera: OrbitCamera,
 }
 
 impl Posed {
     fn new(args: &RenderArgs, size_px: [u32; 2]) -> Result<Posed> {
+        let path = args.document.display();
         let text = std::fs::read_to_string(&args.document)
-            .with_context(|| format!("cannot read {}", args.document.display()))?;
-        let document = Document::from_json(&text)
-            .map_err(|e| anyhow!("invalid document {}: {e}", args.document.display()))?;
+            .with_context(|| format!("cannot read {path}"))?;
+        // A plain document is a scene of one character at the origin.
+        let scene = stance_document::Scene::from_json(&text)
+            .map_err(|e| anyhow!("invalid document {path}: {e}"))?;
         let figure = figure(args)?;
-        // Made on an avatar before a posture meant the same pose on every body: relative to
-        // that avatar's own rest, taken to be the one drawn (as `export-posed` takes it).
-        let document = if args.avatar.is_some() && document.rest == PostureRest::Avatar {
-            eprintln!(
-                "note: the document's values are relative to the avatar's own rest (made before a posture meant the same pose on every body); converted to the H-Anim standard pose"
-            );
-            document.in_standard_rest(&figure.humanoid)
-        } else {
-            document
-        };
-        let skeleton = &figure.humanoid.skeleton;
-        let posture = document
-            .to_posture(skeleton)
-            .map_err(|e| anyhow!("{}: {e}", args.document.display()))?;
-        let frames = Frames::new(skeleton, &posture);
-        let capsules: Vec<Capsule> = posed_mannequin_bones(skeleton, &frames)
+        let several = scene.characters.len() > 1;
+        let characters = scene
+            .characters
             .into_iter()
-            .map(|bone| bone.capsule)
-            .collect();
-        let camera = camera(args.view, &document, &capsules, size_px);
+            .enumerate()
+            .map(|(index, character)| {
+                // A scene's error names the character (its index and name in the outliner).
+                let which = if several {
+                    format!("character {index} ({})", character.name)
+                } else {
+                    String::new()
+                };
+                pose_character(args, &figure, character).map_err(|e| {
+                    if several {
+                        anyhow!("{path}: {which}: {e:#}")
+                    } else {
+                        anyhow!("{path}: {e:#}")
+                    }
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let selected = characters
+            .get(scene.selected)
+            .or(characters.first())
+            .ok_or_else(|| anyhow!("{path}: the scene has no character"))?;
+        let mut extent = extent_points(characters.iter().flat_map(|c| &c.capsules));
+        extent.extend(scene.props.iter().flat_map(prop_corners));
+        let camera = camera(args.view, &selected.document, &extent, size_px);
         Ok(Posed {
             figure,
-            document,
-            posture,
-            frames,
-            capsules,
+            characters,
+            props: scene.props,
             camera,
         })
     }
+
+    /// Every character's capsules, in the scene.
+    fn capsules(&self) -> Vec<Capsule> {
+        self.characters
+            .iter()
+            .flat_map(|character| character.capsules.iter().copied())
+            .collect()
+    }
 }
 
-/// `--view` framed on the body, else the document's saved camera, else the editor's default
-/// view framed on the body.
+/// `character`'s document posed on `figure`, its capsules placed in the scene.
+fn pose_character(
+    args: &RenderArgs,
+    figure: &Figure,
+    character: SceneCharacter,
+) -> Result<PosedCharacter> {
+    let SceneCharacter {
+        name,
+        placement,
+        document,
+    } = character;
+    if let (None, AvatarReference::Url(url)) = (&args.avatar, &document.avatar) {
+        // The CLI loads avatars from --avatar alone: a document's URL is the browser's.
+        eprintln!(
+            "note: {name} names the avatar {url}; drawn on the mannequin (--avatar poses every character on a file)"
+        );
+    }
+    // Made on an avatar before a posture meant the same pose on every body: relative to
+    // that avatar's own rest, taken to be the one drawn (as `export-posed` takes it).
+    let document = if args.avatar.is_some() && document.rest == PostureRest::Avatar {
+        eprintln!(
+            "note: {name}: the document's values are relative to the avatar's own rest (made before a posture meant the same pose on every body); converted to the H-Anim standard pose"
+        );
+        document.in_standard_rest(&figure.humanoid)
+    } else {
+        document
+    };
+    let skeleton = &figure.humanoid.skeleton;
+    let posture = document.to_posture(skeleton)?;
+    let frames = Frames::new(skeleton, &posture);
+    let place = scene_from_character(&placement);
+    let capsules: Vec<Capsule> = posed_mannequin_bones(skeleton, &frames)
+        .into_iter()
+        .map(|bone| placed_capsule(bone.capsule, place))
+        .collect();
+    Ok(PosedCharacter {
+        name,
+        placement,
+        document,
+        posture,
+        frames,
+        capsules,
+    })
+}
+
+/// `--view` framed on the scene, else the selected character's saved camera, else the
+/// editor's default view framed on the scene (`extent`: its points).
 fn camera(
     view: Option<View>,
     document: &Document,
-    capsules: &[Capsule],
+    extent: &[Vec3],
     size_px: [u32; 2],
 ) -> OrbitCamera {
     let aspect = size_px[0] as f32 / size_px[1] as f32;
@@ -332,7 +408,7 @@ fn camera(
         (Some(view), _) => {
             let mut camera = OrbitCamera::default();
             camera.set_view(view.preset());
-            camera.frame_points(&extent_points(capsules), aspect);
+            camera.frame_points(extent, aspect);
             camera
         }
         (None, Some(spec)) => OrbitCamera::saved(
@@ -344,7 +420,7 @@ fn camera(
         ),
         (None, None) => {
             let mut camera = OrbitCamera::default();
-            camera.frame_points(&extent_points(capsules), aspect);
+            camera.frame_points(extent, aspect);
             camera
         }
     }
@@ -430,7 +506,8 @@ fn check_map_options(args: &RenderArgs) -> Result<()> {
     Ok(())
 }
 
-/// `--map openpose`: the skeleton image (and the keypoints' JSON) drawn on the CPU.
+/// `--map openpose`: the skeleton image (and the keypoints' JSON) drawn on the CPU: one person
+/// per character in view, in the scene's order, each hidden by every body of the scene.
 fn write_openpose(
     args: &RenderArgs,
     posed: &Posed,
@@ -438,18 +515,30 @@ fn write_openpose(
     started: Instant,
 ) -> Result<()> {
     let skeleton = &posed.figure.humanoid.skeleton;
-    let keypoints = KeypointFinder::new(skeleton).find(skeleton, &posed.frames);
-    let person = OpenPosePerson::seen(
-        &keypoints,
-        &posed.camera,
-        size_px,
-        &posed.capsules,
-        args.hidden.unwrap_or(Hidden::Keep).keypoints(),
-    );
-    let pose = OpenPose {
-        size_px,
-        people: vec![person],
-    };
+    let finder = KeypointFinder::new(skeleton);
+    let bodies = posed.capsules();
+    let hidden = args.hidden.unwrap_or(Hidden::Keep).keypoints();
+    let people: Vec<OpenPosePerson> = posed
+        .characters
+        .iter()
+        .map(|character| {
+            let keypoints = placed_keypoints(
+                &finder.find(skeleton, &character.frames),
+                &character.placement,
+            );
+            OpenPosePerson::seen(&keypoints, &posed.camera, size_px, &bodies, hidden)
+        })
+        .filter(|person| {
+            // A character out of view is nobody in the picture.
+            person
+                .body
+                .iter()
+                .chain(&person.left_hand)
+                .chain(&person.right_hand)
+                .any(Option::is_some)
+        })
+        .collect();
+    let pose = OpenPose { size_px, people };
     let png = encode_png(&Pixels {
         width: size_px[0],
         height: size_px[1],
@@ -466,18 +555,25 @@ fn write_openpose(
     }
     std::fs::write(&args.out, png)
         .with_context(|| format!("cannot write {}", args.out.display()))?;
-    let seen = person.body.iter().flatten().count();
-    let hands = person
-        .left_hand
+    let seen: usize = pose
+        .people
         .iter()
-        .chain(&person.right_hand)
-        .flatten()
-        .count();
+        .map(|p| p.body.iter().flatten().count())
+        .sum();
+    let hands: usize = pose
+        .people
+        .iter()
+        .map(|p| p.left_hand.iter().chain(&p.right_hand).flatten().count())
+        .sum();
+    let people = pose.people.len();
     eprintln!(
-        "{}: OpenPose {}x{}, {seen} of 18 body and {hands} of 42 hand keypoints in view, in {:.2} s",
+        "{}: OpenPose {}x{}, {people} of {} people in view, {seen} of {} body and {hands} of {} hand keypoints in view, in {:.2} s",
         args.out.display(),
         size_px[0],
         size_px[1],
+        posed.characters.len(),
+        18 * posed.characters.len(),
+        42 * posed.characters.len(),
         started.elapsed().as_secs_f64()
     );
     Ok(())
@@ -490,44 +586,78 @@ fn render_picture(
     size_px: [u32; 2],
     started: Instant,
 ) -> Result<()> {
+    let capsules = posed.capsules();
     let Posed {
         figure,
-        document,
-        posture,
-        capsules,
+        characters,
+        props,
         camera,
-        ..
     } = posed;
     let skeleton = &figure.humanoid.skeleton;
-    let capsules_for_depth = capsules.clone();
-    let avatar_palettes = match &figure.mesh {
-        Some(mesh) => {
-            let carried = Posture::carried_over(&mesh.skeleton.skeleton, skeleton, &posture);
-            mesh.palettes
+    // Every character on the one uploaded mesh: the first's poses as the avatar's, the others'
+    // as more poses of it (the renderer holds one skinned model).
+    let mut poses = Vec::with_capacity(characters.len());
+    if let Some(mesh) = &figure.mesh {
+        for character in &characters {
+            let carried =
+                Posture::carried_over(&mesh.skeleton.skeleton, skeleton, &character.posture);
+            let palettes = mesh
+                .palettes
                 .pose(&mesh.avatar, &mesh.skeleton, &carried)
-                .ok_or_else(|| anyhow!("the posture does not fit the avatar's skeleton"))?
+                .ok_or_else(|| {
+                    anyhow!(
+                        "{}: the posture does not fit the avatar's skeleton",
+                        character.name
+                    )
+                })?;
+            poses.push(placed_palettes(
+                palettes,
+                scene_from_character(&character.placement),
+            ));
         }
-        None => Vec::new(),
-    };
-    let markers = document
-        .tasks
+    }
+    let mut poses = poses.into_iter();
+    let avatar_palettes = poses.next().unwrap_or_default();
+    let more_avatar_poses = poses.collect();
+    let markers = characters
         .iter()
-        .filter_map(|task| task.kind.goal_point())
-        .map(|goal| Capsule::marker(DVec3::from_array(goal).as_vec3(), GOAL_COLOR_LINEAR))
+        .flat_map(|character| {
+            let place = scene_from_character(&character.placement);
+            character
+                .document
+                .tasks
+                .iter()
+                .filter_map(|task| task.kind.goal_point())
+                .map(move |goal| {
+                    placed_capsule(
+                        Capsule::marker(DVec3::from_array(goal).as_vec3(), GOAL_COLOR_LINEAR),
+                        place,
+                    )
+                })
+        })
+        .collect();
+    // The contact shadows as the editor draws them: one under each character, one under
+    // each prop.
+    let shadows = characters
+        .iter()
+        .filter_map(|character| character_shadow(&character.capsules))
+        .chain(props.iter().filter_map(prop_shadow))
         .collect();
     let scene = Scene {
         capsules: if figure.mesh.is_some() {
             Vec::new()
         } else {
-            capsules
+            capsules.clone()
         },
         show_floor: true,
         show_avatar: figure.mesh.is_some(),
         avatar_palettes,
+        more_avatar_poses,
+        props: props.iter().map(prop_instance).collect(),
+        shadows,
         markers,
         transparent_background: false,
-        shading: shading(args.map, &camera, &capsules_for_depth),
-        ..Scene::default()
+        shading: shading(args.map, &camera, &capsules),
     };
     let options = ImageOptions {
         size_px,
@@ -555,7 +685,7 @@ fn render_picture(
     let pixels = if args.map == Some(ControlMap::Lines) {
         // Line art: from the depth and normal maps of the same view.
         let depth = render(&Scene {
-            shading: Shading::depth_seen_by(&camera, &capsules_for_depth),
+            shading: Shading::depth_seen_by(&camera, &capsules),
             ..scene.clone()
         })?;
         let normal = render(&Scene {

@@ -619,3 +619,163 @@ fn line_art_outlines_the_figure_inside_its_mask() {
     });
     assert!(inner.count() > 20);
 }
+
+/// A scene of two characters standing 2 m apart (the first on the right, at x = +1, the
+/// second turned to face +X at x = -1) and a 0.3 m box on the floor in front between them;
+/// `camera`: the first character's saved camera (JSON fields), or none.
+fn two_character_scene(name: &str, camera: &str) -> String {
+    write(
+        name,
+        &format!(
+            r#"{{"characters": [
+                {{"name": "Ann", "placement": {{"position": [1.0, 0, 0], "yaw": 0}}, "version": 1 {camera}}},
+                {{"name": "Bob", "placement": {{"position": [-1.0, 0, 0], "yaw": 90}}, "version": 1}}
+            ],
+            "props": [{{"name": "Crate", "shape": "box", "size": [0.3, 0.3, 0.3], "position": [0, 0.15, 0.6]}}],
+            "selected": 0}}"#
+        ),
+    )
+}
+
+const SCENE_CAMERA: &str =
+    r#", "camera": {"target": [0, 1.0, 0], "yaw": 0, "pitch": 0, "distance": 6.0}"#;
+
+#[test]
+fn a_scene_draws_every_character_and_its_props_where_they_stand() {
+    // Catches: only the selected character drawn, a placement (or its turn) ignored, props
+    // left out, a default view framed on one character rather than the scene.
+    let scene = two_character_scene("scene.json", SCENE_CAMERA);
+    let mask = render(
+        &scene,
+        "scene-mask.png",
+        &["--map", "mask", "--size", "400x300"],
+    );
+    let camera = stance_render::OrbitCamera::saved([0.0, 1.0, 0.0], 0.0, 0.0, 6.0, false);
+    let white = |point: [f32; 3]| pixel_at(&mask, &camera, point)[0] > 128;
+    for (what, point) in [
+        ("Ann's chest", [1.0, 1.2, 0.0]),
+        ("Ann's hips", [1.0, 0.95, 0.0]),
+        ("Bob's chest", [-1.0, 1.2, 0.0]),
+        ("Bob's knees", [-1.0, 0.5, 0.0]),
+        ("the crate", [0.0, 0.15, 0.6]),
+    ] {
+        assert!(white(point), "{what} is not drawn");
+    }
+    for (what, point) in [
+        ("between them", [0.0, 1.2, 0.0]),
+        ("at the origin", [0.0, 0.9, 0.0]),
+        ("beside Ann", [2.0, 1.2, 0.0]),
+    ] {
+        assert!(!white(point), "something is drawn {what}");
+    }
+    // Bob is turned a quarter: seen from the front he shows his side, narrower than Ann.
+    let width_at = |x: f32| {
+        let y = camera
+            .project(glam::Vec3::new(x, 1.2, 0.0), glam::Vec2::new(400.0, 300.0))
+            .unwrap()
+            .y as u32;
+        let centre = camera
+            .project(glam::Vec3::new(x, 1.2, 0.0), glam::Vec2::new(400.0, 300.0))
+            .unwrap()
+            .x as u32;
+        let covered = |px: u32| mask.rgba[((y * mask.width + px) * 4) as usize] > 128;
+        let left = (0..centre).rev().take_while(|&px| covered(px)).count();
+        let right = (centre..mask.width).take_while(|&px| covered(px)).count();
+        left + right
+    };
+    let (ann, bob) = (width_at(1.0), width_at(-1.0));
+    assert!(
+        ann as f32 > 1.3 * bob as f32,
+        "Ann {ann} px wide, Bob {bob} px"
+    );
+
+    // The default view takes in the whole scene: both figures, neither cut by the edges,
+    // wider than one character alone.
+    let framed = two_character_scene("scene-framed.json", "");
+    let picture = render(
+        &framed,
+        "scene-framed.png",
+        &["--size", "400x300", "--transparent"],
+    );
+    let (x0, y0, x1, y1) = picture.covered_box();
+    assert!(
+        x0 > 0 && y0 > 0 && x1 < 399 && y1 < 299,
+        "cut: {x0} {y0} {x1} {y1}"
+    );
+    // Centred on the scene (on Ann alone, Bob would be off to the left), with an empty
+    // column between the two figures.
+    let middle = (x0 + x1) as f32 / 2.0;
+    assert!((middle - 200.0).abs() < 30.0, "centred at {middle}");
+    let empty = (x0..x1).filter(|&x| (0..picture.height).all(|y| picture.alpha(x, y) == 0));
+    assert!(empty.count() > 0, "the figures run together");
+}
+
+#[test]
+fn a_scenes_openpose_map_has_one_person_per_character_in_the_scenes_order() {
+    // Catches: one person only (the selected character), people sorted by place rather than
+    // the scene's order, keypoints left in each character's own frame (both at the origin).
+    let scene = two_character_scene("scene-openpose-doc.json", SCENE_CAMERA);
+    let (width, height) = (600.0, 400.0);
+    let (_, json) = openpose(&scene, "scene-openpose", &["--size", "600x400"]);
+    let people = json["people"].as_array().unwrap();
+    assert_eq!(people.len(), 2);
+    let neck = |person: &serde_json::Value| {
+        let body = numbers(&person["pose_keypoints_2d"]);
+        assert_eq!(body[3 + 2], 1.0, "the neck is seen");
+        (body[3], body[4])
+    };
+    let (ann, bob) = (neck(&people[0]), neck(&people[1]));
+    // H-Anim's default neck keypoint (between the shoulders) in a character's frame, put in
+    // the scene by each placement by hand: Ann moved 1 m along +X; Bob turned a quarter
+    // (x, z) -> (z, -x), then moved 1 m along -X.
+    let own = [0.0061, 1.43915, -0.0356];
+    let placed = [
+        [own[0] + 1.0, own[1], own[2]],
+        [own[2] - 1.0, own[1], -own[0]],
+    ];
+    let camera = stance_render::OrbitCamera::saved([0.0, 1.0, 0.0], 0.0, 0.0, 6.0, false);
+    for ((who, seen), point) in [("Ann", ann), ("Bob", bob)].into_iter().zip(placed) {
+        let expected = camera
+            .project(
+                glam::Vec3::from_array(point.map(|v: f64| v as f32)),
+                glam::Vec2::new(width as f32, height as f32),
+            )
+            .unwrap();
+        assert!(
+            (seen.0 - f64::from(expected.x)).abs() < 0.5
+                && (seen.1 - f64::from(expected.y)).abs() < 0.5,
+            "{who}'s neck at {seen:?}, placed at {expected}"
+        );
+    }
+    // In the scene's order: Ann, first, stands on the right.
+    assert!(
+        ann.0 > width / 2.0 && bob.0 < width / 2.0,
+        "Ann {ann:?}, Bob {bob:?}"
+    );
+}
+
+#[test]
+fn a_scene_with_a_bad_character_says_which() {
+    // Catches: an error that does not name the character whose document is wrong.
+    let scene = write(
+        "bad-scene.json",
+        r#"{"characters": [
+            {"name": "Ann", "version": 1},
+            {"name": "Bob", "placement": {"position": [1, 0, 0]}, "version": 1, "posture": {"no_such_joint": {"rx": 0.3}}}
+        ]}"#,
+    );
+    let out = temp("bad-scene.png");
+    let (ok, err) = stance(&["render", &scene, "--out", &out.to_string_lossy()]);
+    assert!(!ok && !out.exists());
+    assert!(
+        err.contains("Bob") && err.contains("no_such_joint"),
+        "{err}"
+    );
+    let malformed = write(
+        "malformed-scene.json",
+        r#"{"characters": [{"name": "Ann", "version": 1}, {"name": "Bob", "placement": {"yaw": "left"}}]}"#,
+    );
+    let (ok, err) = stance(&["render", &malformed, "--out", &out.to_string_lossy()]);
+    assert!(!ok && !out.exists());
+    assert!(err.contains("characters[1]"), "{err}");
+}

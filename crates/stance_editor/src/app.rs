@@ -280,12 +280,14 @@ impl StanceApp {
             command = Some(Command::Library(LibraryCommand::Export));
         }
         ui.separator();
-        let posed = ui
-            .add_enabled(
-                self.model.avatar().is_some(),
-                egui::Button::new("Export posed avatar (GLB)…"),
-            )
-            .on_disabled_hover_text("load an avatar first (Avatar menu)");
+        // One character at the origin exports its avatar file; anything more, the scene
+        // (a mannequin as its figure).
+        let label = if self.model.is_single_character() && self.model.avatar().is_some() {
+            "Export posed avatar (GLB)…"
+        } else {
+            "Export posed scene (GLB)…"
+        };
+        let posed = ui.button(label);
         self.button_rects.push(("export_posed", posed.rect));
         if posed.clicked() {
             command = Some(Command::Avatar(AvatarCommand::ExportPosedAvatar));

@@ -1,43 +1,20 @@
 //! The scene's characters as the renderer draws them: each character's capsules and skinning
 //! palettes are in its own frame, put in the scene by its placement
-//! ([`stance_document::Placement::scene_from_character`]). The characters that are not
-//! selected are drawn as their mannequin capsules in a quieter colour.
+//! ([`stance_document::Placement::scene_from_character`]; `stance_render::placed` does the
+//! placing, as `stance render` does). The characters that are not selected are drawn as their
+//! mannequin capsules in a quieter colour.
 
-use glam::{DMat4, DVec3, Mat4, Vec3};
-use stance_document::{Prop, PropShape};
-use stance_render::{Capsule, ContactShadow, PropInstance, PropTemplate};
+use glam::{Mat4, Vec3};
+use stance_render::{
+    Capsule, ContactShadow, PropInstance, character_shadow, prop_instance, prop_shadow,
+};
+pub(crate) use stance_render::{placed_capsule, placed_palettes};
 
 use crate::figure::MannequinFigure;
 use crate::model::{Character, EditorModel};
 
 /// The colour of the characters that are not selected (linear RGB): the body's, greyer.
 pub(crate) const OTHER_COLOR_LINEAR: [f32; 4] = [0.42, 0.42, 0.45, 1.0];
-
-/// The colour of the props (linear RGB): a light wood.
-pub(crate) const PROP_COLOR_LINEAR: [f32; 4] = [0.52, 0.40, 0.28, 1.0];
-/// How thick a plane prop is drawn (m).
-pub(crate) const PLANE_THICKNESS_M: f64 = 0.01;
-
-/// How the renderer draws `prop`: its unit shape, sized, turned and placed.
-pub(crate) fn prop_instance(prop: &Prop) -> PropInstance {
-    let (template, size) = match prop.shape {
-        PropShape::Box { size } => (PropTemplate::Box, DVec3::from_array(size)),
-        PropShape::Sphere { radius } => (PropTemplate::Sphere, DVec3::splat(radius)),
-        PropShape::Cylinder { radius, height } => {
-            (PropTemplate::Cylinder, DVec3::new(radius, height, radius))
-        }
-        PropShape::Plane { size } => (
-            PropTemplate::Box,
-            DVec3::new(size[0], PLANE_THICKNESS_M, size[1]),
-        ),
-    };
-    let world_from_unit = DMat4::from(prop.scene_from_prop()) * DMat4::from_scale(size);
-    PropInstance {
-        template,
-        world_from_unit: world_from_unit.as_mat4(),
-        color_linear: PROP_COLOR_LINEAR,
-    }
-}
 
 /// Every prop of the scene as the renderer draws it.
 pub(crate) fn prop_instances(model: &EditorModel) -> Vec<PropInstance> {
@@ -49,61 +26,20 @@ pub(crate) fn prop_instances(model: &EditorModel) -> Vec<PropInstance> {
 pub(crate) fn contact_shadows(model: &EditorModel) -> Vec<ContactShadow> {
     let characters = model.characters().filter_map(|(character, _)| {
         let place = scene_from_character(character);
-        let ends = character.bones().iter().flat_map(|bone| {
-            let capsule = placed_capsule(bone.capsule, place);
-            [capsule.start_world, capsule.end_world]
-        });
-        ContactShadow::under(ends, 0.15, 0.6)
+        let capsules: Vec<Capsule> = character
+            .bones()
+            .iter()
+            .map(|bone| placed_capsule(bone.capsule, place))
+            .collect();
+        character_shadow(&capsules)
     });
-    let props = model.props().iter().filter_map(|prop| {
-        let instance = prop_instance(prop);
-        let half = match instance.template {
-            PropTemplate::Box | PropTemplate::Cylinder => 0.5,
-            PropTemplate::Sphere => 1.0,
-        };
-        let corners = (0..8).map(move |i| {
-            let corner = Vec3::new(
-                if i & 1 == 0 { -half } else { half },
-                if i & 2 == 0 { -half } else { half },
-                if i & 4 == 0 { -half } else { half },
-            );
-            instance.world_from_unit.transform_point3(corner)
-        });
-        ContactShadow::under(corners, 0.05, 0.6)
-    });
+    let props = model.props().iter().filter_map(prop_shadow);
     characters.chain(props).collect()
 }
 
 /// The character's frame in the scene, for the GPU.
 pub(crate) fn scene_from_character(character: &Character) -> Mat4 {
-    character
-        .placement()
-        .scene_from_character()
-        .as_affine3a()
-        .into()
-}
-
-/// `capsule`, in a character's frame, put in the scene.
-pub(crate) fn placed_capsule(capsule: Capsule, scene_from_character: Mat4) -> Capsule {
-    let place = |point: Vec3| scene_from_character.transform_point3(point);
-    Capsule {
-        start_world: place(capsule.start_world),
-        end_world: place(capsule.end_world),
-        ..capsule
-    }
-}
-
-/// Skinning palettes (mesh space to the character's frame) put in the scene.
-pub(crate) fn placed_palettes(
-    mut palettes: Vec<Vec<Mat4>>,
-    scene_from_character: Mat4,
-) -> Vec<Vec<Mat4>> {
-    if scene_from_character != Mat4::IDENTITY {
-        for matrix in palettes.iter_mut().flatten() {
-            *matrix = scene_from_character * *matrix;
-        }
-    }
-    palettes
+    stance_render::scene_from_character(&character.placement())
 }
 
 /// The model on the GPU this frame, which characters other than the selected one are drawn

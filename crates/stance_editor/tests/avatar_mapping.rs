@@ -304,9 +304,15 @@ fn the_posed_avatar_is_exported_as_glb_that_reads_back_in_the_same_posture() {
 #[test]
 fn an_export_the_host_cannot_download_says_why() {
     let mut app = StanceApp::without_gpu(Box::new(NoHostHooks)).unwrap();
+    // The mannequin exports as its figure (the scene's file); the host cannot take it.
     app.apply(Command::Avatar(AvatarCommand::ExportPosedAvatar));
     let notice = app.model().notice().unwrap();
-    assert!(notice.is_error && notice.text.contains("Load an avatar first"));
+    assert!(notice.is_error, "{}", notice.text);
+    assert!(
+        notice.text.contains("stance-scene.glb") && notice.text.contains("cannot download"),
+        "{}",
+        notice.text
+    );
     app.apply(Command::Avatar(AvatarCommand::LoadAvatar {
         name: "figure.glb".to_owned(),
         bytes: avatar_bytes(),

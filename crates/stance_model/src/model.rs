@@ -59,6 +59,8 @@ use crate::sensors::{SensorCommand, SensorHub, SensorSettings};
 
 /// The name a *Save image* PNG downloads as.
 pub const IMAGE_FILE_NAME: &str = "stance-posture.png";
+/// The file name of an exported scene (GLB).
+pub const SCENE_FILE_NAME: &str = "stance-scene.glb";
 /// Seconds an information notice stays (errors stay until dismissed).
 pub const NOTICE_SECS: f64 = 8.0;
 /// Points of the effector trace kept.
@@ -675,18 +677,26 @@ impl EditorModel {
         }
     }
 
-    /// Offers the avatar in the current posture as a GLB download (what `stance
-    /// export-posed` writes); says why when it cannot.
+    /// Offers the scene in its current postures as a GLB download: the avatar file alone
+    /// (what `stance export-posed` writes) for one character at the origin without props,
+    /// else the whole scene (`scene_glb`); says why when it cannot.
     fn export_posed_avatar(&mut self) {
-        let Some(avatar) = self.character.avatar.as_mut() else {
-            self.warn("Load an avatar first (Avatar menu): the mannequin cannot be exported.");
-            return;
+        let single = self.is_single_character();
+        let (file_name, posed, what) = match self.character.avatar.as_mut() {
+            Some(avatar) if single => (
+                crate::avatar::posed_file_name(&avatar.name),
+                avatar.posed_glb(
+                    self.character.session.humanoid(),
+                    self.character.session.posture(),
+                ),
+                "the avatar in this posture",
+            ),
+            _ => (
+                SCENE_FILE_NAME.to_owned(),
+                self.scene_glb(),
+                "the scene in these postures",
+            ),
         };
-        let file_name = crate::avatar::posed_file_name(&avatar.name);
-        let posed = avatar.posed_glb(
-            self.character.session.humanoid(),
-            self.character.session.posture(),
-        );
         let result = posed.and_then(|bytes| {
             self.hooks
                 .download_bytes(&file_name, &bytes)
@@ -694,7 +704,7 @@ impl EditorModel {
         });
         match result {
             Ok(size) => self.inform(format!(
-                "Exported {file_name} ({} KB): the avatar in this posture, for any glTF viewer or engine.",
+                "Exported {file_name} ({} KB): {what}, for any glTF viewer or engine.",
                 size.div_ceil(1024)
             )),
             Err(error) => self.warn(format!("{file_name} could not be exported: {error}")),

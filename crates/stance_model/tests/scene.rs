@@ -449,3 +449,138 @@ fn a_hand_put_on_a_bar_reaches_its_axis_and_one_put_on_a_table_rests_on_it() {
             .is_some_and(|n| n.text.contains("no prop 9"))
     );
 }
+
+/// Every node's world matrix in a glTF document, by index.
+fn world_matrices(document: &gltf::Document) -> Vec<glam::DMat4> {
+    let mut world = vec![glam::DMat4::IDENTITY; document.nodes().len()];
+    fn walk(node: gltf::Node<'_>, parent: glam::DMat4, world: &mut [glam::DMat4]) {
+        let local = glam::Mat4::from_cols_array_2d(&node.transform().matrix()).as_dmat4();
+        world[node.index()] = parent * local;
+        for child in node.children() {
+            walk(child, world[node.index()], world);
+        }
+    }
+    for scene in document.scenes() {
+        for node in scene.nodes() {
+            walk(node, glam::DMat4::IDENTITY, &mut world);
+        }
+    }
+    world
+}
+
+#[test]
+fn the_scene_exports_as_one_glb_with_every_character_posed_where_it_stands_and_the_props() {
+    // Catches: only the selected character exported, a placement (or its turn) dropped, the
+    // mannequin left out, a prop missing or misplaced, nodes not named as in the outliner,
+    // indices of the second avatar not moved along (its skin on the first's joints).
+    use stance_document::{Prop, PropShape};
+    use stance_model::model::AvatarCommand;
+    let host = MemoryHost::default();
+    let storage = host.inner.clone();
+    let mut editor = Clocked::with_host(host);
+    // The first on an avatar file, the second on the mannequin (drawn as its figure).
+    editor.apply(Command::Avatar(AvatarCommand::LoadAvatar {
+        name: "figure.glb".to_owned(),
+        bytes: stance_asset::export_glb(&stance_asset::make_default_avatar().unwrap()).unwrap(),
+    }));
+    assert!(editor.model.avatar().is_some());
+    let first = editor.model.character().id();
+    editor.apply(Command::Scene(SceneCommand::Add));
+    let second = editor.model.character().id();
+    bend_elbow(&mut editor, -1.1);
+    let placements = [
+        Placement {
+            position: [-0.6, 0.0, 0.25],
+            yaw_degrees: 0.0,
+        },
+        Placement {
+            position: [1.2, 0.1, -0.4],
+            yaw_degrees: 90.0,
+        },
+    ];
+    editor.apply(Command::Scene(SceneCommand::Place(first, placements[0])));
+    editor.apply(Command::Scene(SceneCommand::Place(second, placements[1])));
+    editor.apply(Command::Scene(SceneCommand::AddProp(PropShape::Box {
+        size: [0.4, 0.3, 0.5],
+    })));
+    let mut prop: Prop = editor.model.props()[0].clone();
+    prop.position = [0.3, 0.15, 0.9];
+    prop.rotation = glam::DQuat::from_rotation_y(0.5).to_array();
+    editor.apply(Command::Scene(SceneCommand::EditProp(0, prop.clone())));
+    editor.settle();
+
+    editor.apply(Command::Avatar(AvatarCommand::ExportPosedAvatar));
+    let notice = editor.model.notice().unwrap();
+    assert!(!notice.is_error, "{}", notice.text);
+    let (name, bytes) = storage.borrow().binary_downloads.last().cloned().unwrap();
+    assert_eq!(name, "stance-scene.glb");
+    let glb = gltf::Gltf::from_slice(&bytes).expect("a GLB the gltf crate reads");
+    let document = &glb.document;
+    let world = world_matrices(document);
+    let roots: Vec<gltf::Node<'_>> = document.scenes().next().unwrap().nodes().collect();
+    let names: Vec<&str> = roots.iter().map(|n| n.name().unwrap()).collect();
+    let expected: Vec<String> = editor
+        .model
+        .characters()
+        .map(|(c, _)| c.name().to_owned())
+        .chain([prop.name.clone()])
+        .collect();
+    assert_eq!(names, expected);
+    // Two skinned bodies and the box: three meshes at least, two skins, one mesh at the prop.
+    assert_eq!(document.skins().len(), 2);
+    assert!(roots[2].mesh().is_some() && roots[2].children().len() == 0);
+
+    // Each character's joints where its posture puts them, in the scene (within 1 mm).
+    for ((character, _), (root, placement)) in
+        editor.model.characters().zip(roots.iter().zip(placements))
+    {
+        let place = placement.scene_from_character();
+        let origin = world[root.index()].transform_point3(glam::DVec3::ZERO);
+        assert!(
+            (origin - glam::DVec3::from_array(placement.position)).length() < 1e-3,
+            "{}: its node at {origin}",
+            character.name()
+        );
+        let mut below = Vec::new();
+        let mut stack = vec![root.clone()];
+        while let Some(node) = stack.pop() {
+            stack.extend(node.children());
+            below.push(node);
+        }
+        for joint in [
+            "humanoid_root",
+            "l_radiocarpal",
+            "r_talocrural",
+            "skullbase",
+        ] {
+            let node = below
+                .iter()
+                .find(|n| n.name() == Some(joint))
+                .unwrap_or_else(|| panic!("{}: no {joint} node", character.name()));
+            let exported = world[node.index()].transform_point3(glam::DVec3::ZERO);
+            let posed = place.transform_point3(character.session().joint_position(joint).unwrap());
+            assert!(
+                (exported - posed).length() < 1e-3,
+                "{} {joint}: exported at {exported}, posed at {posed}",
+                character.name()
+            );
+        }
+    }
+    // The box: placed and turned as the prop, its mesh its size.
+    let box_world = world[roots[2].index()];
+    let (scale, rotation, translation) = box_world.to_scale_rotation_translation();
+    assert!((translation - glam::DVec3::from_array(prop.position)).length() < 1e-6);
+    assert!(rotation.angle_between(glam::DQuat::from_array(prop.rotation)) < 1e-6);
+    assert!((scale - glam::DVec3::ONE).length() < 1e-6);
+    let bounds = roots[2]
+        .mesh()
+        .unwrap()
+        .primitives()
+        .next()
+        .unwrap()
+        .bounding_box();
+    for axis in 0..3 {
+        let extent = f64::from(bounds.max[axis] - bounds.min[axis]);
+        assert!((extent - [0.4, 0.3, 0.5][axis]).abs() < 1e-6, "{bounds:?}");
+    }
+}

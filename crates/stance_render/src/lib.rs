@@ -23,6 +23,7 @@ mod line_art;
 mod openpose;
 mod openpose_draw;
 mod pick;
+mod placed;
 mod props;
 mod raster;
 #[cfg(feature = "gpu")]
@@ -51,6 +52,11 @@ pub use openpose_draw::{
     hand_bone_color,
 };
 pub use pick::{CapsuleHit, pick_capsule};
+pub use placed::{
+    PLANE_THICKNESS_M, PROP_COLOR_LINEAR, character_shadow, placed_capsule, placed_keypoints,
+    placed_palettes, prop_corners, prop_instance, prop_shadow, prop_static_mesh, prop_template,
+    scene_from_character,
+};
 pub use props::{PropInstance, PropMesh, PropTemplate, normal_matrix, prop_mesh};
 #[cfg(feature = "gpu")]
 pub use renderer::{COLOR_FORMAT, DEPTH_FORMAT, RenderTarget, SceneRenderer};

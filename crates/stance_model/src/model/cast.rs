@@ -6,6 +6,7 @@
 //! renaming, moving and selecting characters are [`SceneCommand`]s, undone like any edit
 //! (the history keeps the cast as it was; a removed character is kept while a step names it).
 
+use stance_asset::{SceneContent, SceneNode, export_scene_glb};
 use stance_document::scene::MAX_PROPS;
 use stance_document::{
     Placement, Prop, PropShape, Scene, SceneCharacter, clean_name, default_character_name,
@@ -246,6 +247,65 @@ impl EditorModel {
             SceneCommand::RemoveProp(index) => self.remove_prop(index),
             SceneCommand::EditProp(index, prop) => self.edit_prop(index, prop),
         }
+    }
+
+    /// Whether the scene is one character at the origin, without props: its export is the
+    /// posed avatar file alone (a VRM stays a VRM), as before scenes.
+    pub fn is_single_character(&self) -> bool {
+        self.cast.others.is_empty()
+            && self.cast.props.is_empty()
+            && self.character.placement.is_identity()
+    }
+
+    /// The whole scene as one GLB: every character posed at its placement (its avatar, or the
+    /// mannequin's figure), each prop as a mesh, one node each named as in the outliner.
+    pub fn scene_glb(&self) -> Result<Vec<u8>, String> {
+        let bodies = self
+            .characters()
+            .map(|(character, _)| {
+                let session = &character.session;
+                let posed = match &character.avatar {
+                    Some(loaded) => {
+                        let mut avatar = loaded.avatar.clone();
+                        avatar
+                            .apply_posture(session.humanoid(), session.posture())
+                            .map(|()| avatar)
+                    }
+                    None => stance_asset::posed_default_avatar(
+                        session.skeleton(),
+                        session.posture(),
+                        session.level_of_articulation(),
+                    ),
+                };
+                posed.map_err(|error| format!("{}: {error}", character.name))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let meshes: Vec<_> = self
+            .cast
+            .props
+            .iter()
+            .map(stance_render::prop_static_mesh)
+            .collect();
+        let characters = self
+            .characters()
+            .zip(&bodies)
+            .map(|((character, _), avatar)| SceneNode {
+                name: character.name.clone(),
+                scene_from_node: character.placement.scene_from_character(),
+                content: SceneContent::Avatar(avatar),
+            });
+        let props = self
+            .cast
+            .props
+            .iter()
+            .zip(&meshes)
+            .map(|(prop, mesh)| SceneNode {
+                name: prop.name.clone(),
+                scene_from_node: prop.scene_from_prop(),
+                content: SceneContent::Mesh(mesh),
+            });
+        let nodes: Vec<SceneNode<'_>> = characters.chain(props).collect();
+        export_scene_glb(&nodes).map_err(|error| error.to_string())
     }
 
     /// The scene's props.
