@@ -21,9 +21,9 @@ use stance_hanim::{HumanoidSkeleton, LevelOfArticulation, SkeletonOptions, defau
 use stance_ik::{Frames, Posture};
 use stance_render::{
     Capsule, GOAL_COLOR_LINEAR, HiddenKeypoints, ImageOptions, KeypointUnits, OpenPose,
-    OpenPosePerson, OrbitCamera, Pixels, Scene, SceneRenderer, Shading, ViewPreset, avatar_model,
-    character_shadow, encode_png, headless_gpu, line_art, placed_capsule, placed_keypoints,
-    placed_palettes, posed_mannequin_bones, prop_corners, prop_instance, prop_shadow, render_image,
+    OrbitCamera, Pixels, Scene, SceneRenderer, Shading, ViewPreset, avatar_model, character_shadow,
+    encode_png, headless_gpu, line_art, placed_capsule, placed_keypoints, placed_palettes,
+    posed_mannequin_bones, prop_corners, prop_instance, prop_shadow, render_image,
     scene_from_character,
 };
 
@@ -518,27 +518,17 @@ fn write_openpose(
     let finder = KeypointFinder::new(skeleton);
     let bodies = posed.capsules();
     let hidden = args.hidden.unwrap_or(Hidden::Keep).keypoints();
-    let people: Vec<OpenPosePerson> = posed
+    let people: Vec<_> = posed
         .characters
         .iter()
         .map(|character| {
-            let keypoints = placed_keypoints(
+            placed_keypoints(
                 &finder.find(skeleton, &character.frames),
                 &character.placement,
-            );
-            OpenPosePerson::seen(&keypoints, &posed.camera, size_px, &bodies, hidden)
-        })
-        .filter(|person| {
-            // A character out of view is nobody in the picture.
-            person
-                .body
-                .iter()
-                .chain(&person.left_hand)
-                .chain(&person.right_hand)
-                .any(Option::is_some)
+            )
         })
         .collect();
-    let pose = OpenPose { size_px, people };
+    let pose = OpenPose::of_scene(&people, &posed.camera, size_px, &bodies, hidden);
     let png = encode_png(&Pixels {
         width: size_px[0],
         height: size_px[1],

@@ -584,3 +584,63 @@ fn the_scene_exports_as_one_glb_with_every_character_posed_where_it_stands_and_t
         assert!((extent - [0.4, 0.3, 0.5][axis]).abs() < 1e-6, "{bounds:?}");
     }
 }
+
+#[test]
+fn the_openpose_map_has_every_character_in_view_placed_in_the_scene() {
+    // Catches: only the selected character in the map, or its keypoints left in its own
+    // frame (the second character standing 1.2 m to the right and turned to face +X would
+    // then be drawn on top of the first, facing the camera).
+    use stance_render::{HiddenKeypoints, OrbitCamera};
+    let mut editor = Clocked::new();
+    editor.settle_within(200);
+    editor.apply(Command::Scene(SceneCommand::Add));
+    editor.settle_within(200);
+    let second = editor.model.character().id();
+    let placement = Placement {
+        position: [1.2, 0.0, 0.0],
+        yaw_degrees: 90.0,
+    };
+    editor.apply(Command::Scene(SceneCommand::Place(second, placement)));
+    let front = OrbitCamera {
+        target_world: glam::Vec3::new(0.6, 1.0, 0.0),
+        yaw: 0.0,
+        pitch: 0.0,
+        distance_m: 5.0,
+        ..OrbitCamera::default()
+    };
+    let size = [800, 600];
+    let pose = editor.model.openpose(&front, size, HiddenKeypoints::Keep);
+    assert_eq!(pose.people.len(), 2, "one person per character in view");
+    // Each neck (COCO-18's 1) where its character's shoulders' midpoint lands, placed by
+    // hand: the character's frame turned about the vertical, then moved.
+    let neck_of = |index: usize, place: Placement| {
+        let (character, _) = editor.model.characters().nth(index).unwrap();
+        let session = character.session();
+        let frames = session.frames();
+        let joint = |name: &str| {
+            let j = session.skeleton().joint_index(name).unwrap();
+            frames.joint_position[j]
+        };
+        let mid = (joint("l_shoulder") + joint("r_shoulder")) * 0.5;
+        let turn = place.yaw_degrees.to_radians();
+        let turned = glam::DVec3::new(
+            mid.x * turn.cos() + mid.z * turn.sin(),
+            mid.y,
+            -mid.x * turn.sin() + mid.z * turn.cos(),
+        );
+        let world = turned + glam::DVec3::from_array(place.position);
+        front
+            .project(world.as_vec3(), glam::Vec2::new(800.0, 600.0))
+            .unwrap()
+            .as_dvec2()
+    };
+    let expected = [neck_of(0, Placement::default()), neck_of(1, placement)];
+    for (person, expected) in pose.people.iter().zip(expected) {
+        let neck = person.body[1].expect("the neck is seen");
+        assert!((neck - expected).length() < 0.5, "{neck} vs {expected}");
+    }
+    assert!(
+        expected[1].x - expected[0].x > 100.0,
+        "the second stands to the right"
+    );
+}

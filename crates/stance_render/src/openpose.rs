@@ -191,6 +191,32 @@ fn distance_to_axis(capsule: &Capsule, point: glam::Vec3) -> f32 {
 }
 
 impl OpenPose {
+    /// The people of a scene seen by `camera` in an image of `size_px`: one per pose of
+    /// `people` (each in the scene's frame), in their order, each hidden by `bodies` (every
+    /// body's capsules, in the scene's frame) as `hidden` says; a person with no point in the
+    /// picture is left out (nobody is there).
+    pub fn of_scene<'a>(
+        people: impl IntoIterator<Item = &'a PoseKeypoints>,
+        camera: &OrbitCamera,
+        size_px: [u32; 2],
+        bodies: &[Capsule],
+        hidden: HiddenKeypoints,
+    ) -> Self {
+        let people = people
+            .into_iter()
+            .map(|keypoints| OpenPosePerson::seen(keypoints, camera, size_px, bodies, hidden))
+            .filter(|person| {
+                person
+                    .body
+                    .iter()
+                    .chain(&person.left_hand)
+                    .chain(&person.right_hand)
+                    .any(Option::is_some)
+            })
+            .collect();
+        Self { size_px, people }
+    }
+
     /// The JSON of OpenPose's output as image-generation tools read it (OpenPose's
     /// `people` with each person's `pose_keypoints_2d`, `hand_left_keypoints_2d`,
     /// `hand_right_keypoints_2d` and `face_keypoints_2d` as flat `x, y, confidence` lists, and

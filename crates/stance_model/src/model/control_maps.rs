@@ -9,9 +9,12 @@
 //! [`FileCommand::SaveControlMap`]: crate::model::FileCommand::SaveControlMap
 
 use stance_hanim::keypoints::KeypointFinder;
-use stance_render::{HiddenKeypoints, OpenPose, OpenPosePerson, OrbitCamera};
+use stance_render::{
+    HiddenKeypoints, OpenPose, OrbitCamera, placed_capsule, placed_keypoints, scene_from_character,
+};
 
 use super::EditorModel;
+use super::cast::Character;
 
 /// The file name of the OpenPose skeleton image.
 pub const OPENPOSE_IMAGE_FILE_NAME: &str = "stance-openpose.png";
@@ -70,16 +73,28 @@ impl EditorModel {
         size_px: [u32; 2],
         hidden: HiddenKeypoints,
     ) -> OpenPose {
-        let session = self.session();
-        let skeleton = session.skeleton();
-        let keypoints = KeypointFinder::new(skeleton).find(skeleton, session.frames());
-        let body: Vec<_> = self.bones().iter().map(|bone| bone.capsule).collect();
-        OpenPose {
-            size_px,
-            people: vec![OpenPosePerson::seen(
-                &keypoints, camera, size_px, &body, hidden,
-            )],
-        }
+        // Every character in view, in the scene's order, its keypoints and capsules placed in
+        // the scene (the camera's frame), each hidden by every body.
+        let characters: Vec<&Character> = self.characters().map(|(c, _)| c).collect();
+        let people: Vec<_> = characters
+            .iter()
+            .map(|c| {
+                let session = c.session();
+                let skeleton = session.skeleton();
+                let keypoints = KeypointFinder::new(skeleton).find(skeleton, session.frames());
+                placed_keypoints(&keypoints, &c.placement())
+            })
+            .collect();
+        let bodies: Vec<_> = characters
+            .iter()
+            .flat_map(|c| {
+                let place = scene_from_character(&c.placement());
+                c.bones()
+                    .iter()
+                    .map(move |bone| placed_capsule(bone.capsule, place))
+            })
+            .collect();
+        OpenPose::of_scene(&people, camera, size_px, &bodies, hidden)
     }
 
     /// Hands a rendered control map (PNG, `width` x `height` pixels) to the host.
