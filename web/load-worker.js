@@ -6,15 +6,16 @@
 //   whole avatar (glTF parsing, meshopt, skins, the H-Anim mapping) with the editor's own
 //   importer and returns it split for the trip: the avatar's bytes and each texture's pixels
 //   (WebHandle.avatar_texture, then WebHandle.avatar_imported);
-// - and reads and retargets the clip files the editor asks for (stanceHost.openClip) with the
-//   editor's own code in steps, reporting its progress between them, and returns the clip
-//   and its retargeting in parts of frames (WebHandle.clip_head, clip_part, clip_opened).
+// - and runs the editor's jobs (stanceHost.runJob) with the editor's own code: reads and
+//   retargets a clip file in steps, reporting its progress between them, and returns the
+//   clip and its retargeting in parts of frames; or lifts keypoints, returned in one part
+//   (WebHandle.job_head, job_part, job_done).
 //
 // In:  { type: "init", module }                      -> { type: "ready", ok, error }
 //      { type: "decode", id, files: [{ name, bytes }] } -> { id, file, images, skipped }
 //      { type: "import", id, files, images?, follow? }  -> { id, avatar, textures, pixels:
 //                          [Uint8Array], importMs, imagesFromHost } or { id, error }
-//      { type: "clip", id, job: Uint8Array }           -> { type: "progress", id, fraction }...
+//      { type: "job", id, job: Uint8Array }            -> { type: "progress", id, fraction }...
 //                          then { id, parts: [Uint8Array] (head, frames...), ms } or { id, error }
 //      (images: those a "decode" request returned; follow: the page decodes them meanwhile
 //      and fills the textures' empty pixels, textures giving image, width and height of
@@ -23,7 +24,7 @@
 // OffscreenCanvas, an unknown format, a missing file) is left out: the importer decodes it
 // itself and names the problem.
 
-import init, { import_avatar_file, open_clip_job } from "./pkg/stance_web.js";
+import init, { import_avatar_file, run_job } from "./pkg/stance_web.js";
 import { isModel } from "./model-files.js";
 import { concat, describe } from "./common.js";
 
@@ -48,8 +49,8 @@ self.onmessage = async ({ data }) => {
     return;
   }
   const { id, files } = data;
-  if (data.type === "clip") {
-    const reply = await openClip(id, data.job);
+  if (data.type === "job") {
+    const reply = await runJob(id, data.job);
     self.postMessage(reply, reply.parts ? reply.parts.map((part) => part.buffer) : []);
     return;
   }
@@ -108,15 +109,15 @@ function importAvatar(id, files, images, toFollow) {
   }
 }
 
-// The clip job `job` read and retargeted, its progress posted as it goes (each whole per
-// cent); the parts to hand over, or what is wrong.
-async function openClip(id, job) {
+// The job `job` run (a clip read and retargeted, keypoints lifted), its progress posted as it
+// goes (each whole per cent); the parts to hand over, or what is wrong.
+async function runJob(id, job) {
   const started = performance.now();
   try {
     if (!initialized) throw new Error("the loading worker has no module");
     await initialized;
     let shown = -1;
-    const parts = open_clip_job(job, (fraction) => {
+    const parts = run_job(job, (fraction) => {
       const percent = Math.floor(fraction * 100);
       if (percent > shown) {
         shown = percent;

@@ -6,9 +6,11 @@
 // that the main thread only receives the imported avatar and uploads it to the GPU in tasks
 // of its own (stanceHost.uploadAvatar). Before that (or where no worker can run) the editor
 // receives the file with its decoded pixels and imports it itself. A third one, with the
-// same module, reads and retargets the clip files the editor asks for (stanceHost.openClip),
-// its progress going to the editor as it goes; Cancel (stanceHost.cancelClip) stops it (the
-// worker is ended; the next clip starts another).
+// same module, runs the editor's jobs (stanceHost.runJob): reads and retargets the clip files
+// it asks for, its progress going to the editor as it goes; a fourth lifts keypoints (File >
+// Open keypoints, a depth flip): one worker per kind of job, so that one does not cancel the
+// other. Cancel (stanceHost.cancelJob) stops a job (its worker is ended; the next job of its
+// kind starts another).
 
 import { isModel } from "./model-files.js";
 import { concat, describe } from "./common.js";
@@ -216,66 +218,69 @@ function fillTextures(reply, decoded) {
 
 let delivery = Promise.resolve();
 
-// The worker that opens clips (undefined: none started; null: none can run), and the editor's
-// request it works on.
-let clipper;
-let clipRequest = null;
+// The workers that run the editor's jobs, one per kind ("clip", "lift"): each with its worker
+// (undefined: none started; null: none can run) and the editor's request it works on.
+const lanes = new Map();
 
-function clipWorker() {
-  if (clipper === undefined) {
-    clipper = startWorker(null);
-    clipper?.post({ type: "init", module: editorModule });
+function lane(kind) {
+  if (!lanes.has(kind)) lanes.set(kind, { worker: undefined, request: null });
+  const it = lanes.get(kind);
+  if (it.worker === undefined) {
+    it.worker = startWorker(null);
+    it.worker?.post({ type: "init", module: editorModule });
   }
-  return clipper;
+  return it;
 }
 
-// stanceHost.openClip: the editor asks for the clip job `job` (stance_asset::ClipJob as
-// bytes: the file, the body, the settings) to be read and retargeted off the main thread,
-// as its request `id`. The progress goes to the editor as it comes; the result in parts,
-// each in a task of its own (the frames of a long clip are tens of megabytes). False when
-// no worker can: the editor does it itself. While the first worker is still starting (the
-// autosave's clip, asked for as the editor starts) the request goes to the clip worker, which
-// takes it once it has compiled the editor's code.
-export function openClip(handle, id, job) {
+// stanceHost.runJob: the editor asks for the job `job` (stance_model::HostJob as bytes: a clip
+// file with the body and the settings, or keypoints to lift) of kind `kind` to run off the
+// main thread, as its request `id`. The progress goes to the editor as it comes; the result
+// in parts, each in a task of its own (the frames of a long clip are tens of megabytes).
+// False when no worker can: the editor does it itself. While the first worker is still
+// starting (the autosave's clip, asked for as the editor starts) the request goes to the
+// kind's worker, which takes it once it has compiled the editor's code.
+export function runJob(handle, kind, id, job) {
   if (!editorModule || workersFailed) return false;
-  // Another clip asked for: the one under way is not wanted any more.
-  if (clipRequest !== null) cancelClip(clipRequest);
-  const worker = clipWorker();
-  if (!worker) return false;
-  clipRequest = id;
-  performance.mark("stance:clip-requested");
+  // Another job of this kind asked for: the one under way is not wanted any more.
+  const previous = lanes.get(kind)?.request;
+  if (previous != null) cancelJob(previous);
+  const it = lane(kind);
+  if (!it.worker) return false;
+  it.request = id;
+  performance.mark(`stance:${kind}-requested`);
   // A copy: `job` is a view of the editor's memory.
   const bytes = job.slice();
-  worker.request({ type: "clip", job: bytes }, [bytes.buffer], (fraction) => {
-    if (clipRequest === id) timed("stance:clip-progress", () => handle.clip_progress(id, fraction));
+  it.worker.request({ type: "job", job: bytes }, [bytes.buffer], (fraction) => {
+    if (it.request === id) timed(`stance:${kind}-progress`, () => handle.job_progress(id, fraction));
   }).then((reply) => {
-    performance.mark("stance:clip-retargeted");
+    // (The end-to-end tests time the clip's trip by these marks.)
+    performance.mark(kind === "clip" ? "stance:clip-retargeted" : `stance:${kind}-done`);
     delivery = delivery.then(async () => {
-      if (clipRequest !== id) return;
+      if (it.request !== id) return;
       try {
         if (reply?.parts) {
           const [head, ...parts] = reply.parts;
-          timed("stance:clip-head", () => handle.clip_head(id, head));
+          timed(`stance:${kind}-head`, () => handle.job_head(id, head));
           // Cancelled meanwhile: the parts taken so far are let go (the editor ignores the
           // reply to a request it cancelled).
-          const dropped = () => handle.clip_failed(id, "cancelled");
+          const dropped = () => handle.job_failed(id, "cancelled");
           for (const part of parts) {
             await nextTask();
-            if (clipRequest !== id) return dropped();
-            timed("stance:clip-part", () => handle.clip_part(id, part));
+            if (it.request !== id) return dropped();
+            timed(`stance:${kind}-part`, () => handle.job_part(id, part));
           }
           await nextTask();
-          if (clipRequest !== id) return dropped();
-          clipRequest = null;
-          timed("stance:clip-opened", () => handle.clip_opened(id));
-          console.log(`clip ${id} read and retargeted in the worker in ${reply.ms.toFixed(0)} ms`);
+          if (it.request !== id) return dropped();
+          it.request = null;
+          timed(`stance:${kind}-opened`, () => handle.job_done(id));
+          console.log(`${kind} job ${id} done in the worker in ${reply.ms.toFixed(0)} ms`);
         } else {
-          clipRequest = null;
-          handle.clip_failed(id, reply?.error ?? "the loading worker stopped");
+          it.request = null;
+          handle.job_failed(id, reply?.error ?? "the loading worker stopped");
         }
       } catch (error) {
-        clipRequest = null;
-        handle.clip_failed(id, describe(error));
+        it.request = null;
+        handle.job_failed(id, describe(error));
       }
     });
   });
@@ -293,13 +298,15 @@ function timed(name, work) {
   }
 }
 
-// stanceHost.cancelClip: the editor no longer wants its request `id`: the worker working on
-// it is ended (its steps run without a break), and the next clip starts another.
-export function cancelClip(id) {
-  if (clipRequest !== id) return;
-  clipRequest = null;
-  clipper?.stop();
-  clipper = undefined;
+// stanceHost.cancelJob: the editor no longer wants its request `id`: the worker working on
+// it is ended (its steps run without a break), and the next job of its kind starts another.
+export function cancelJob(id) {
+  for (const it of lanes.values()) {
+    if (it.request !== id) continue;
+    it.request = null;
+    it.worker?.stop();
+    it.worker = undefined;
+  }
 }
 
 // stanceHost.uploadAvatar: the editor began putting an avatar on the GPU. The page steps the

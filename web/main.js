@@ -3,7 +3,7 @@
 import init, { WebHandle } from "./pkg/stance_web.js";
 import { connectSensor, disconnectSensor } from "./sensors.js";
 import {
-  cancelClip, fetchWithProgress, importAvatar, openClip, openFiles, startImporter, uploadAvatar,
+  cancelJob, fetchWithProgress, importAvatar, runJob, openFiles, startImporter, uploadAvatar,
 } from "./loading.js";
 import { createAccessibilityMirror } from "./accessibility.js";
 import { describe } from "./common.js";
@@ -99,13 +99,14 @@ window.stanceHost = {
     if (!window.stance) return false;
     return importAvatar(window.stance, name, names, lengths, bytes);
   },
-  // Reads and retargets a clip in the loading worker; false when it cannot (see loading.js).
-  openClip(id, job) {
+  // Runs a job (a clip read and retargeted, keypoints lifted) in a loading worker; false
+  // when it cannot (see loading.js).
+  runJob(kind, id, job) {
     if (!window.stance) return false;
-    return openClip(window.stance, id, job);
+    return runJob(window.stance, kind, id, job);
   },
-  cancelClip(id) {
-    cancelClip(id);
+  cancelJob(id) {
+    cancelJob(id);
   },
 };
 

@@ -276,6 +276,13 @@ impl StanceApp {
         if ui.button("Import pose or library (JSON)…").clicked() {
             command = Some(Command::File(FileCommand::PickFile));
         }
+        let keypoints = ui.button("Open keypoints (OpenPose JSON)…").on_hover_text(
+            "a character per person, posed to match the keypoints through their camera",
+        );
+        self.button_rects.push(("open_keypoints", keypoints.rect));
+        if keypoints.clicked() {
+            command = Some(Command::Keypoints(crate::model::KeypointsCommand::Pick));
+        }
         if ui.button("Export pose library (JSON)…").clicked() {
             command = Some(Command::Library(LibraryCommand::Export));
         }
@@ -541,6 +548,30 @@ impl StanceApp {
         });
     }
 
+    /// While the host lifts keypoints (off the editor's thread): a busy notice and *Cancel*.
+    fn lifting_strip(&mut self, ui: &mut egui::Ui) {
+        let Some(words) = self.model.lifting().map(crate::model::Lifting::words) else {
+            return;
+        };
+        egui::Frame::new()
+            .fill(Color32::from_rgb(30, 60, 90))
+            .inner_margin(egui::Margin::symmetric(8, 4))
+            .show(ui, |ui| {
+                ui.horizontal(|ui| {
+                    let cancel = ui
+                        .button("Cancel")
+                        .on_hover_text("stop the lift: the scene stays as it is");
+                    self.button_rects.push(("cancel_lift", cancel.rect));
+                    if cancel.clicked() {
+                        self.outbox
+                            .send(Command::Keypoints(crate::model::KeypointsCommand::Cancel));
+                    }
+                    ui.spinner();
+                    ui.label(words);
+                });
+            });
+    }
+
     /// While the host opens a clip (off the editor's thread): its progress and *Cancel*.
     fn opening_strip(&mut self, ui: &mut egui::Ui) {
         let Some((name, progress)) = self
@@ -756,6 +787,7 @@ impl StanceApp {
     /// the body drawn follows the pointer read in the same frame.
     fn central(&mut self, ui: &mut egui::Ui, frame: &eframe::Frame, clock: &dyn Clock) {
         self.opening_strip(ui);
+        self.lifting_strip(ui);
         self.notice_strip(ui);
         self.carry_out();
         self.viewport.follow_document_camera(&self.model);

@@ -15,8 +15,9 @@ mod viewport;
 
 pub use app::StanceApp;
 pub use stance_model::{
-    AvatarImport, BackendSummary, ClipRetarget, Command, EditorModel, Gesture, HostHooks,
-    HostMessage, ImportedAvatar, MemoryHost, MemoryHostState, NoHostHooks, Notice, SessionChange,
+    AvatarImport, BackendSummary, Command, EditorModel, Gesture, HostHooks, HostJob, HostMessage,
+    ImportedAvatar, JobHead, JobOutput, JobRequest, MemoryHost, MemoryHostState, NoHostHooks,
+    Notice, SessionChange,
 };
 pub use stance_model::{avatar, history, library, model, posing, sensors};
 pub use viewport::{CameraGesture, ViewportInput};

@@ -7,7 +7,7 @@
 
 use stance_editor::model::MotionCommand;
 use stance_editor::model::{AvatarCommand, FileCommand, ViewCommand};
-use stance_editor::{ClipRetarget, Command, HostMessage, MemoryHost, StanceApp};
+use stance_editor::{Command, HostMessage, JobOutput, JobRequest, MemoryHost, StanceApp};
 use stance_hanim::LevelOfArticulation;
 
 use egui_kittest::kittest::Queryable;
@@ -20,19 +20,30 @@ const RUN: &[u8] = include_bytes!("../../../tests/fixtures/motion/run.bvh");
 /// A host that retargets clips (answered by the test).
 fn worker_host() -> MemoryHost {
     let host = MemoryHost::default();
-    host.inner.borrow_mut().retargets_clips = true;
+    host.inner.borrow_mut().runs_jobs = true;
     host
 }
 
 /// The last request the host took.
-fn last_request(host: &MemoryHost) -> ClipRetarget {
-    host.inner.borrow().clip_requests.last().cloned().unwrap()
+fn last_request(host: &MemoryHost) -> JobRequest {
+    host.inner.borrow().jobs.last().cloned().unwrap()
+}
+
+/// The clip job of a request.
+fn clip(request: &JobRequest) -> &stance_asset::ClipJob {
+    match &request.job {
+        stance_editor::HostJob::Clip(job) => job,
+        stance_editor::HostJob::Lift(_) => panic!("a clip request"),
+    }
 }
 
 /// What the worker does: the request read and retargeted (in steps), as the host's reply.
-fn answer(request: ClipRetarget) -> HostMessage {
+fn answer(request: JobRequest) -> HostMessage {
     let id = request.id;
-    let result = request.job.run(&mut |_| {}).map(Box::new);
+    let result = request.job.run(&mut |_| {}).map(|output| match output {
+        JobOutput::Clip(opened) => opened,
+        JobOutput::Lift(_) => panic!("a clip request"),
+    });
     HostMessage::ClipOpened { id, result }
 }
 
@@ -46,16 +57,16 @@ fn a_clip_opened_by_the_host_shows_its_progress_then_is_the_editors_own() {
     let before = model.document();
     open(&mut model, "walk.bvh", WALK);
     let request = last_request(&host);
-    assert_eq!(request.job.name, "walk.bvh");
-    assert_eq!(request.job.bytes, WALK);
-    assert_eq!(&request.job.body, model.session().humanoid());
+    assert_eq!(clip(&request).name, "walk.bvh");
+    assert_eq!(clip(&request).bytes, WALK);
+    assert_eq!(&clip(&request).body, model.session().humanoid());
     assert_eq!(model.timeline().opening(), Some(("walk.bvh", 0.0)));
     assert!(!model.timeline().has_clip());
     assert_eq!(model.document(), before, "nothing changes while it opens");
 
     let id = request.id;
     for (from, fraction) in [(id, 0.4), (id + 7, 0.9), (id, 0.2), (id, f64::NAN)] {
-        model.receive(HostMessage::ClipProgress { id: from, fraction });
+        model.receive(HostMessage::JobProgress { id: from, fraction });
     }
     assert_eq!(model.timeline().opening(), Some(("walk.bvh", 0.4)));
 
@@ -96,12 +107,12 @@ fn cancel_leaves_the_document_and_the_timeline_as_they_were() {
 
     open(&mut model, "walk.bvh", WALK);
     let request = last_request(&host);
-    model.receive(HostMessage::ClipProgress {
+    model.receive(HostMessage::JobProgress {
         id: request.id,
         fraction: 0.3,
     });
     model.apply(Command::Motion(MotionCommand::CancelOpening));
-    assert_eq!(host.inner.borrow().cancelled_clips, vec![request.id]);
+    assert_eq!(host.inner.borrow().cancelled_jobs, vec![request.id]);
     assert_eq!(model.timeline().opening(), None);
     let notice = model.notice().unwrap().text.clone();
     assert!(notice.contains("walk.bvh was cancelled"), "{notice}");
@@ -126,9 +137,9 @@ fn a_change_of_body_while_a_clip_opens_asks_again_on_the_new_body() {
     )));
     let second = last_request(&host);
     assert_ne!(second.id, first.id);
-    assert_eq!(host.inner.borrow().cancelled_clips, vec![first.id]);
-    assert_eq!(&second.job.body, model.session().humanoid());
-    assert_ne!(second.job.body, first.job.body);
+    assert_eq!(host.inner.borrow().cancelled_jobs, vec![first.id]);
+    assert_eq!(&clip(&second).body, model.session().humanoid());
+    assert_ne!(clip(&second).body, clip(&first).body);
     model.receive(answer(first));
     assert!(
         !model.timeline().has_clip(),
@@ -208,7 +219,7 @@ fn the_progress_strip_shows_and_its_cancel_button_stops_the_opening() {
     click_button(&mut harness, "cancel_clip");
     harness.run_steps(2);
     assert!(state(&harness)["motion"]["opening"].is_null());
-    assert_eq!(host.inner.borrow().cancelled_clips, vec![id]);
+    assert_eq!(host.inner.borrow().cancelled_jobs, vec![id]);
     assert!(state(&harness)["buttons"]["cancel_clip"].is_null());
 }
 
@@ -268,17 +279,17 @@ fn a_change_of_body_puts_the_open_clip_on_it_again_through_the_host() {
     model.receive(answer(last_request(&host)));
     model.apply(Command::Motion(MotionCommand::Seek(40)));
     let named = model.document().clip.unwrap();
-    let requests = host.inner.borrow().clip_requests.len();
+    let requests = host.inner.borrow().jobs.len();
 
     model.apply(Command::Avatar(AvatarCommand::SetLevelOfArticulation(
         LevelOfArticulation::Loa1,
     )));
-    assert_eq!(host.inner.borrow().clip_requests.len(), requests + 1);
+    assert_eq!(host.inner.borrow().jobs.len(), requests + 1);
     let request = last_request(&host);
-    assert_eq!(request.job.bytes, WALK);
-    assert_eq!(&request.job.body, model.session().humanoid());
+    assert_eq!(clip(&request).bytes, WALK);
+    assert_eq!(&clip(&request).body, model.session().humanoid());
     assert_eq!(
-        request.job.mapping.as_ref(),
+        clip(&request).mapping.as_ref(),
         Some(&model.timeline().clip().unwrap().mapping)
     );
     assert!(
@@ -335,7 +346,7 @@ fn a_mapping_correction_goes_with_the_file_and_cancel_closes_the_clip_but_keeps_
         mapping.clone(),
     ))));
     let request = last_request(&host);
-    assert_eq!(request.job.mapping.as_ref(), Some(&mapping));
+    assert_eq!(clip(&request).mapping.as_ref(), Some(&mapping));
     model.receive(answer(request));
     assert_eq!(model.timeline().clip().unwrap().mapping, mapping);
     assert!(model.timeline().has_clip());
@@ -377,12 +388,12 @@ fn the_open_clip_asked_for_again_survives_another_clip_a_new_mapping_and_close()
     let walk_again = last_request(&host);
     open(&mut model, "run.bvh", RUN);
     let run = last_request(&host);
-    assert!(host.inner.borrow().cancelled_clips.contains(&walk_again.id));
+    assert!(host.inner.borrow().cancelled_jobs.contains(&walk_again.id));
     model.apply(Command::Motion(MotionCommand::CancelOpening));
     let asked = last_request(&host);
     assert_ne!(asked.id, run.id, "the walk is asked for again");
-    assert_eq!(asked.job.bytes, WALK);
-    assert_eq!(&asked.job.body, model.session().humanoid());
+    assert_eq!(clip(&asked).bytes, WALK);
+    assert_eq!(&clip(&asked).body, model.session().humanoid());
     model.receive(answer(walk_again));
     assert!(
         !model.timeline().has_clip(),
@@ -395,7 +406,7 @@ fn the_open_clip_asked_for_again_survives_another_clip_a_new_mapping_and_close()
         mapping.clone(),
     ))));
     let corrected = last_request(&host);
-    assert_eq!(corrected.job.mapping.as_ref(), Some(&mapping));
+    assert_eq!(clip(&corrected).mapping.as_ref(), Some(&mapping));
     model.receive(answer(asked));
     assert!(
         !model.timeline().has_clip(),
@@ -412,7 +423,7 @@ fn the_open_clip_asked_for_again_survives_another_clip_a_new_mapping_and_close()
     )));
     let last = last_request(&host);
     model.apply(Command::Motion(MotionCommand::CloseClip));
-    assert!(host.inner.borrow().cancelled_clips.contains(&last.id));
+    assert!(host.inner.borrow().cancelled_jobs.contains(&last.id));
     model.receive(answer(last));
     assert!(model.timeline().clip().is_none() && !model.timeline().has_clip());
     assert!(

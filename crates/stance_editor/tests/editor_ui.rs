@@ -1001,3 +1001,33 @@ fn the_hands_section_poses_both_hands_with_a_click_and_is_gone_without_fingers()
     assert!(harness.query_by_label("fist").is_none());
     assert!(harness.query_by_label("Hands").is_none());
 }
+
+#[test]
+fn file_open_keypoints_asks_the_page_for_a_file_and_the_file_is_lifted() {
+    // Catches: the menu entry missing, not opening the picker, or the picked file opened as
+    // something else (a document) instead of lifted.
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    harness.get_by_label("File").click();
+    harness.run_steps(2);
+    harness
+        .get_by_label("Open keypoints (OpenPose JSON)…")
+        .click();
+    harness.run_steps(2);
+    assert_eq!(host.inner.borrow().file_requests, 1);
+    // The page answers with a file that is not keypoints: the lift says so by name.
+    harness
+        .state_mut()
+        .apply(Command::File(FileCommand::OpenFile {
+            name: "pose.json".to_owned(),
+            bytes: br#"{"people": [{"pose_keypoints_2d": [1, 2]}]}"#.to_vec(),
+        }));
+    harness.run_steps(2);
+    let notice = harness.state().model().notice().cloned().unwrap();
+    assert!(notice.is_error, "{}", notice.text);
+    assert!(
+        notice.text.contains("pose.json could not be lifted"),
+        "{}",
+        notice.text
+    );
+}

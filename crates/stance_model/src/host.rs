@@ -6,6 +6,7 @@ use std::cell::RefCell;
 use std::collections::BTreeMap;
 use std::rc::Rc;
 
+use crate::jobs::JobRequest;
 use crate::sensors::SensorConnection;
 
 /// The graphics backend and adapter the viewport runs on, as the status bar names them.
@@ -42,16 +43,6 @@ pub struct ImportedAvatar {
     pub transfer_ms: f64,
     /// Texture images the host's own decoders decoded for it.
     pub images_from_host: usize,
-}
-
-/// A clip file for the host to read and retarget off the editor's thread
-/// ([`HostHooks::retarget_clip`]).
-#[derive(Debug, Clone, PartialEq)]
-pub struct ClipRetarget {
-    /// Names the request: the reply and the progress reports carry it.
-    pub id: u64,
-    /// The file, the body and the settings.
-    pub job: Box<stance_asset::ClipJob>,
 }
 
 /// What the editor asks of its host. Every method but the first has a do-nothing default.
@@ -122,17 +113,19 @@ pub trait HostHooks {
         Err(request)
     }
 
-    /// Reads a clip file and retargets it off the editor's thread (the page's loading
-    /// worker, in steps), so that a long clip does not hold up the frames; its progress
-    /// arrives as [`HostMessage::ClipProgress`], the result as [`HostMessage::ClipOpened`].
-    /// Gives the request back when this host cannot: the editor then does it itself.
-    fn retarget_clip(&self, request: ClipRetarget) -> Result<(), ClipRetarget> {
+    /// Runs a job off the editor's thread (the page's loading worker): a clip file read and
+    /// retargeted in steps, keypoints lifted, so that they do not hold up the frames; a
+    /// clip's progress arrives as [`HostMessage::JobProgress`], the result as
+    /// [`HostMessage::ClipOpened`] or [`HostMessage::KeypointsLifted`], a failure of either
+    /// as [`HostMessage::JobFailed`]. Gives the request back when this host cannot: the
+    /// editor then does it itself.
+    fn run_job(&self, request: JobRequest) -> Result<(), JobRequest> {
         Err(request)
     }
 
-    /// Stops the clip request `id` ([`HostHooks::retarget_clip`]): nothing more of it
-    /// arrives (a reply already on its way is ignored by its id).
-    fn cancel_retarget(&self, _id: u64) {}
+    /// Stops the job `id` ([`HostHooks::run_job`]): nothing more of it arrives (a reply
+    /// already on its way is ignored by its id).
+    fn cancel_job(&self, _id: u64) {}
 }
 
 /// What the host tells the editor, through the sender given to `StanceApp::with_inbox`.
@@ -168,20 +161,35 @@ pub enum HostMessage {
         /// The avatar, or what is wrong with the file.
         result: Result<Box<ImportedAvatar>, String>,
     },
-    /// How far the clip request `id` ([`HostHooks::retarget_clip`]) has got.
-    ClipProgress {
+    /// How far the job `id` ([`HostHooks::run_job`]) has got.
+    JobProgress {
         /// The request.
         id: u64,
         /// From 0 to 1.
         fraction: f64,
     },
-    /// The clip asked for with [`HostHooks::retarget_clip`], read and retargeted, or what is
+    /// The clip asked for with [`HostHooks::run_job`], read and retargeted, or what is
     /// wrong with it (in words).
     ClipOpened {
         /// The request.
         id: u64,
         /// The clip and its retargeting, or why not.
         result: Result<Box<stance_asset::OpenedClip>, String>,
+    },
+    /// The keypoints asked for with [`HostHooks::run_job`] lifted (a scene of a character
+    /// per person, or a flip's one character), or what is wrong with them (in words).
+    KeypointsLifted {
+        /// The request.
+        id: u64,
+        /// The lifted scene, or why not.
+        result: Result<Box<stance_document::Scene>, String>,
+    },
+    /// The job `id` ([`HostHooks::run_job`]) failed where it ran: `reason` says why.
+    JobFailed {
+        /// The request.
+        id: u64,
+        /// What went wrong, in words.
+        reason: String,
     },
     /// The sensor device is open.
     SensorConnected {
@@ -252,12 +260,12 @@ pub struct MemoryHostState {
     pub imports_avatars: bool,
     /// The avatar imports it took, in order (a test answers them).
     pub avatar_imports: Vec<AvatarImport>,
-    /// Whether it takes clips to retarget ([`HostHooks::retarget_clip`]; default no).
-    pub retargets_clips: bool,
-    /// The clip requests it took, in order (a test answers them).
-    pub clip_requests: Vec<ClipRetarget>,
-    /// The clip requests cancelled, in order.
-    pub cancelled_clips: Vec<u64>,
+    /// Whether it takes jobs ([`HostHooks::run_job`]; default no).
+    pub runs_jobs: bool,
+    /// The jobs it took, in order (a test answers them).
+    pub jobs: Vec<JobRequest>,
+    /// The jobs cancelled, in order.
+    pub cancelled_jobs: Vec<u64>,
 }
 
 impl HostHooks for MemoryHost {
@@ -329,16 +337,16 @@ impl HostHooks for MemoryHost {
         Ok(())
     }
 
-    fn retarget_clip(&self, request: ClipRetarget) -> Result<(), ClipRetarget> {
+    fn run_job(&self, request: JobRequest) -> Result<(), JobRequest> {
         let mut inner = self.inner.borrow_mut();
-        if !inner.retargets_clips {
+        if !inner.runs_jobs {
             return Err(request);
         }
-        inner.clip_requests.push(request);
+        inner.jobs.push(request);
         Ok(())
     }
 
-    fn cancel_retarget(&self, id: u64) {
-        self.inner.borrow_mut().cancelled_clips.push(id);
+    fn cancel_job(&self, id: u64) {
+        self.inner.borrow_mut().cancelled_jobs.push(id);
     }
 }

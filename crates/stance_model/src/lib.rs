@@ -9,13 +9,15 @@
 pub mod avatar;
 pub mod history;
 mod host;
+pub mod jobs;
 pub mod library;
 pub mod model;
 pub mod posing;
 pub mod sensors;
 
 pub use host::{
-    AvatarImport, BackendSummary, ClipRetarget, HostHooks, HostMessage, ImportedAvatar, MemoryHost,
+    AvatarImport, BackendSummary, HostHooks, HostMessage, ImportedAvatar, MemoryHost,
     MemoryHostState, NoHostHooks,
 };
+pub use jobs::{HostJob, JobHead, JobOutput, JobRequest, LiftJob};
 pub use model::{Change, Command, EditorModel, Gesture, Notice, Outbox, SessionChange};

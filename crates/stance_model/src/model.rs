@@ -18,6 +18,7 @@ mod command;
 mod control_maps;
 mod dispatch;
 mod hands;
+mod keypoints;
 mod mapping;
 mod motion;
 mod opening;
@@ -45,6 +46,7 @@ pub use self::command::{
 };
 pub use self::dispatch::{Outbox, SharedLink};
 pub use self::hands::{HandCommand, Hands};
+pub use self::keypoints::{FLIPPABLE_LIMBS, KeypointsCommand, LiftPurpose, Lifting};
 pub use self::mapping::{Correction, carry_posture};
 pub use self::motion::{
     IntervalEdge, MotionCommand, SPEED_RANGE, TRAJECTORY_FRAMES_PER_STEP, Timeline,
@@ -111,6 +113,10 @@ pub struct EditorModel {
     session_generation: u64,
     /// The comfort panel: report and heat map.
     comfort: ComfortView,
+    /// The keypoints lift the host is running (*File > Open keypoints*, a depth flip).
+    lifting: Option<Lifting>,
+    /// Counts the lift requests.
+    next_lift: u64,
 }
 
 impl std::fmt::Debug for EditorModel {
@@ -153,6 +159,8 @@ impl EditorModel {
             solver_ms: 0.0,
             session_generation: 0,
             comfort: ComfortView::default(),
+            lifting: None,
+            next_lift: 0,
         };
         model.load_library();
         if let Some(settings) = SensorSettings::load(model.hooks.as_ref()) {

@@ -8,6 +8,7 @@ mod clips;
 mod clocked;
 mod hands;
 mod kept_clips;
+mod keypoints;
 mod model;
 mod motion;
 mod scene;

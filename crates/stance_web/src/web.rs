@@ -11,7 +11,8 @@ use eframe::wasm_bindgen::{self, prelude::*};
 use stance_editor::avatar::LoadedAvatar;
 use stance_editor::sensors::SensorConnection;
 use stance_editor::{
-    AvatarImport, BackendSummary, ClipRetarget, HostHooks, HostMessage, ImportedAvatar, StanceApp,
+    AvatarImport, BackendSummary, HostHooks, HostJob, HostMessage, ImportedAvatar, JobRequest,
+    StanceApp,
 };
 
 use crate::accessibility::{AccessibilityBridge, PageAction, PendingActions};
@@ -45,10 +46,10 @@ extern "C" {
         lengths: Vec<u32>,
         bytes: &[u8],
     ) -> Result<bool, JsValue>;
-    #[wasm_bindgen(js_namespace = stanceHost, js_name = openClip, catch)]
-    fn host_open_clip(id: f64, job: &[u8]) -> Result<bool, JsValue>;
-    #[wasm_bindgen(js_namespace = stanceHost, js_name = cancelClip, catch)]
-    fn host_cancel_clip(id: f64) -> Result<(), JsValue>;
+    #[wasm_bindgen(js_namespace = stanceHost, js_name = runJob, catch)]
+    fn host_run_job(kind: &str, id: f64, job: &[u8]) -> Result<bool, JsValue>;
+    #[wasm_bindgen(js_namespace = stanceHost, js_name = cancelJob, catch)]
+    fn host_cancel_job(id: f64) -> Result<(), JsValue>;
     #[wasm_bindgen(js_namespace = stanceHost, js_name = accessibility, catch)]
     fn host_accessibility(tree_json: &str) -> Result<(), JsValue>;
 }
@@ -164,25 +165,26 @@ impl HostHooks for PageHooks {
         }
     }
 
-    fn retarget_clip(&self, request: ClipRetarget) -> Result<(), ClipRetarget> {
-        // The job as bytes for the page's loading worker (the file, the body, the settings);
-        // a page that cannot take it gives the request back.
+    fn run_job(&self, request: JobRequest) -> Result<(), JobRequest> {
+        // The job as bytes for the page's loading worker (a clip: the file, the body, the
+        // settings; a lift: the keypoints or the document); a page that cannot take it gives
+        // the request back.
         let Ok(job) = request.job.to_bytes() else {
             return Err(request);
         };
-        match host_open_clip(request.id as f64, &job) {
+        match host_run_job(request.job.kind(), request.id as f64, &job) {
             Ok(true) => Ok(()),
             Ok(false) => Err(request),
             Err(error) => {
-                log::warn!("the page could not open the clip: {}", describe(&error));
+                log::warn!("the page could not run the job: {}", describe(&error));
                 Err(request)
             }
         }
     }
 
-    fn cancel_retarget(&self, id: u64) {
-        if let Err(error) = host_cancel_clip(id as f64) {
-            log::warn!("cancelling the clip: {}", describe(&error));
+    fn cancel_job(&self, id: u64) {
+        if let Err(error) = host_cancel_job(id as f64) {
+            log::warn!("cancelling the job: {}", describe(&error));
         }
     }
 }
@@ -240,22 +242,20 @@ pub fn import_avatar_file(
     Ok(out)
 }
 
-/// Reads and retargets a clip in the page's loading worker: `job` is the request the editor
-/// gave the page (`stanceHost.openClip`: `stance_asset::ClipJob` as bytes); `progress` is
-/// called with the fraction done between steps. Returns the clip and its retargeting split
-/// for the trip (`stance_asset::ClipTransfer`): `[head, frames of part 0, ...]`, for
-/// [`WebHandle::clip_head`], [`WebHandle::clip_part`] and [`WebHandle::clip_opened`]. Throws
-/// what is wrong (the file, or the clip on this body), in the editor's words.
+/// Runs a job in the page's loading worker: `job` is the request the editor gave the page
+/// (`stanceHost.runJob`: `stance_editor::HostJob` as bytes, a clip to read and retarget or
+/// keypoints to lift); `progress` is called with the fraction done between steps. Returns the
+/// result split for the trip (`stance_editor::HostJob::run_for_transfer`): `[head, part 0,
+/// ...]`, for [`WebHandle::job_head`], [`WebHandle::job_part`] and [`WebHandle::job_done`].
+/// Throws what is wrong (the file, the clip on this body, the keypoints), in the editor's
+/// words.
 #[wasm_bindgen]
-pub fn open_clip_job(job: Vec<u8>, progress: &js_sys::Function) -> Result<js_sys::Array, String> {
-    let job = stance_asset::ClipJob::from_bytes(&job).map_err(|error| error.to_string())?;
-    let opened = job.run(&mut |fraction| {
+pub fn run_job(job: Vec<u8>, progress: &js_sys::Function) -> Result<js_sys::Array, String> {
+    let parts = HostJob::run_for_transfer(&job, &mut |fraction| {
         let _ = progress.call1(&JsValue::NULL, &JsValue::from_f64(fraction));
     })?;
-    let transfer = stance_asset::ClipTransfer::new(&opened).map_err(|error| error.to_string())?;
     let out = js_sys::Array::new();
-    out.push(&js_sys::Uint8Array::from(transfer.head.as_slice()));
-    for part in &transfer.parts {
+    for part in &parts {
         out.push(&js_sys::Uint8Array::from(part.as_slice()));
     }
     Ok(out)
@@ -318,6 +318,8 @@ pub struct WebHandle {
     arriving_pixels: RefCell<Vec<Vec<u8>>>,
     /// The clip the loading worker opened, until its last part arrives.
     arriving_clip: RefCell<Option<ArrivingClip>>,
+    /// The scene the loading worker lifted (the request's id), until its job is done.
+    arriving_lift: RefCell<Option<(u64, stance_document::Scene)>>,
 }
 
 #[wasm_bindgen]
@@ -335,6 +337,7 @@ impl WebHandle {
             accessibility: PendingActions::default(),
             arriving_pixels: RefCell::new(Vec::new()),
             arriving_clip: RefCell::new(None),
+            arriving_lift: RefCell::new(None),
         }
     }
 
@@ -541,19 +544,30 @@ impl WebHandle {
         });
     }
 
-    /// How far the loading worker has got with the clip request `id` (0 to 1).
+    /// How far the loading worker has got with the job `id` (0 to 1).
     #[wasm_bindgen]
-    pub fn clip_progress(&self, id: f64, fraction: f64) {
-        self.send(HostMessage::ClipProgress {
+    pub fn job_progress(&self, id: f64, fraction: f64) {
+        self.send(HostMessage::JobProgress {
             id: id as u64,
             fraction,
         });
     }
 
-    /// The head of the clip the loading worker opened for the request `id`
-    /// ([`open_clip_job`]); its parts follow ([`WebHandle::clip_part`]), one task each.
+    /// The head of the result of the job `id` ([`run_job`]): a lifted scene whole, or the
+    /// head of a clip whose parts follow ([`WebHandle::job_part`]), one task each.
     #[wasm_bindgen]
-    pub fn clip_head(&self, id: f64, head: Vec<u8>) {
+    pub fn job_head(&self, id: f64, head: Vec<u8>) {
+        let head = match stance_editor::JobHead::from_bytes(&head) {
+            Ok(stance_editor::JobHead::Clip(head)) => head,
+            Ok(stance_editor::JobHead::Lift(scene)) => {
+                *self.arriving_lift.borrow_mut() = Some((id as u64, scene));
+                return;
+            }
+            Err(error) => {
+                self.job_failed(id, format!("The result could not be handed over: {error}."));
+                return;
+            }
+        };
         let dofs = self
             .runner
             .app_mut::<StanceApp>()
@@ -576,7 +590,7 @@ impl WebHandle {
 
     /// The next part of frames of the clip request `id`, decoded now (a task of the page).
     #[wasm_bindgen]
-    pub fn clip_part(&self, id: f64, part: Vec<u8>) {
+    pub fn job_part(&self, id: f64, part: Vec<u8>) {
         let mut arriving = self.arriving_clip.borrow_mut();
         let Some(clip) = arriving.as_mut().filter(|clip| clip.id == id as u64) else {
             return;
@@ -590,9 +604,19 @@ impl WebHandle {
         }
     }
 
-    /// The clip request `id` has all its parts: the clip goes to the editor.
+    /// The job `id` has all its parts: the lifted scene or the clip goes to the editor.
     #[wasm_bindgen]
-    pub fn clip_opened(&self, id: f64) {
+    pub fn job_done(&self, id: f64) {
+        let lifted = self.arriving_lift.borrow_mut().take();
+        if let Some((lift, scene)) = lifted
+            && lift == id as u64
+        {
+            self.deliver_now(HostMessage::KeypointsLifted {
+                id: lift,
+                result: Ok(Box::new(scene)),
+            });
+            return;
+        }
         let Some(clip) = self
             .arriving_clip
             .borrow_mut()
@@ -614,17 +638,20 @@ impl WebHandle {
         });
     }
 
-    /// The clip request `id` could not be read or retargeted: `reason` says why.
+    /// The job `id` could not be done: `reason` says why.
     #[wasm_bindgen]
-    pub fn clip_failed(&self, id: f64, reason: String) {
+    pub fn job_failed(&self, id: f64, reason: String) {
         let mut arriving = self.arriving_clip.borrow_mut();
         if arriving.as_ref().is_some_and(|clip| clip.id == id as u64) {
             *arriving = None;
         }
         drop(arriving);
-        self.send(HostMessage::ClipOpened {
+        self.arriving_lift
+            .borrow_mut()
+            .take_if(|(lift, _)| *lift == id as u64);
+        self.send(HostMessage::JobFailed {
             id: id as u64,
-            result: Err(reason),
+            reason,
         });
     }
 

@@ -7,7 +7,7 @@ use egui::RichText;
 use stance_document::{Prop, PropShape};
 
 use super::ButtonRects;
-use crate::model::{Command, EditorModel, Outbox, SceneCommand};
+use crate::model::{Command, EditorModel, KeypointsCommand, Outbox, SceneCommand};
 
 /// The names the page's tests find the scene panel's buttons by.
 const CHARACTER_BUTTONS: [&str; 8] = [
@@ -29,7 +29,9 @@ pub(super) fn show(
     outbox: &mut Outbox,
     buttons: &mut ButtonRects,
 ) {
-    let busy = model.character_count() > 1 || !model.props().is_empty();
+    let busy = model.character_count() > 1
+        || !model.props().is_empty()
+        || !model.flippable_limbs().is_empty();
     let title = if busy {
         format!(
             "Scene: {} characters, {} props",
@@ -46,12 +48,38 @@ pub(super) fn show(
     buttons.push(("scene_panel", header.header_response.rect));
 }
 
+/// A character lifted from keypoints: one button per limb whose depth a single image cannot
+/// tell (toward the camera or away), flipping it and solving the keypoints again.
+fn depth_flips(ui: &mut egui::Ui, model: &EditorModel, outbox: &mut Outbox) {
+    let limbs = model.flippable_limbs();
+    if limbs.is_empty() {
+        return;
+    }
+    ui.label("Lifted from keypoints: flip a limb's depth");
+    ui.horizontal_wrapped(|ui| {
+        for (words, joint) in limbs {
+            let flip = ui
+                .add_enabled(model.lifting().is_none(), egui::Button::new(words))
+                .on_hover_text(format!(
+                    "the {words} to the other side in depth, as the camera sees it the same"
+                ));
+            if flip.clicked() {
+                outbox.send(Command::Keypoints(KeypointsCommand::Flip {
+                    joint: joint.to_owned(),
+                }));
+            }
+        }
+    });
+    ui.separator();
+}
+
 fn scene_contents(
     ui: &mut egui::Ui,
     model: &EditorModel,
     outbox: &mut Outbox,
     buttons: &mut ButtonRects,
 ) {
+    depth_flips(ui, model, outbox);
     for (index, (character, selected)) in model.characters().enumerate() {
         let label = if selected {
             RichText::new(character.name()).strong()

@@ -15,7 +15,7 @@ use stance_motion::{BvhWriteOptions, Clip, RetargetOptions, write_bvh};
 
 use super::EditorModel;
 use super::motion::MotionCommand;
-use crate::host::ClipRetarget;
+use crate::jobs::{HostJob, JobOutput, JobRequest};
 
 /// Frames per second of a recorded clip.
 pub const CLIP_FPS: f64 = 30.0;
@@ -33,7 +33,7 @@ pub(super) fn written_source(clip: &Clip) -> ClipReference {
 }
 
 /// A clip file the host is reading and retargeting off the editor's thread
-/// ([`HostHooks::retarget_clip`](crate::HostHooks::retarget_clip)).
+/// ([`HostHooks::run_job`](crate::HostHooks::run_job)).
 #[derive(Debug)]
 pub(super) struct Opening {
     /// The host's request.
@@ -62,6 +62,8 @@ pub enum PickPurpose {
     Recording,
     /// A motion clip (BVH, or a glTF file's animation).
     Clip,
+    /// OpenPose keypoints to lift (*File > Open keypoints*).
+    Keypoints,
 }
 
 /// How a baked animation is written.
@@ -100,7 +102,7 @@ impl EditorModel {
         again: Option<Mapping>,
     ) -> Option<Result<String, String>> {
         if let Some(previous) = self.character.timeline.opening.take() {
-            self.hooks.cancel_retarget(previous.id);
+            self.hooks.cancel_job(previous.id);
         }
         let id = self.character.timeline.next_request;
         self.character.timeline.next_request += 1;
@@ -120,13 +122,20 @@ impl EditorModel {
             from_document,
             again,
         };
-        match self.hooks.retarget_clip(ClipRetarget { id, job }) {
+        let job = HostJob::Clip(job);
+        match self.hooks.run_job(JobRequest { id, job }) {
             Ok(()) => {
                 self.character.timeline.opening = Some(opening);
                 None
             }
             Err(request) => {
-                let result = request.job.run(&mut |_| {});
+                let result = request
+                    .job
+                    .run(&mut |_| {})
+                    .and_then(|output| match output {
+                        JobOutput::Clip(opened) => Ok(*opened),
+                        JobOutput::Lift(_) => Err("a clip job lifted keypoints".to_owned()),
+                    });
                 Some(self.finish_opening(opening, result))
             }
         }
@@ -237,7 +246,7 @@ impl EditorModel {
         let Some(opening) = self.character.timeline.opening.take() else {
             return;
         };
-        self.hooks.cancel_retarget(opening.id);
+        self.hooks.cancel_job(opening.id);
         if opening.again.is_some() {
             self.clip_lost(format!(
                 "Putting the clip {} on the body again was cancelled",
@@ -270,7 +279,7 @@ impl EditorModel {
             self.retarget_clip();
             return;
         };
-        self.hooks.cancel_retarget(opening.id);
+        self.hooks.cancel_job(opening.id);
         let again = opening.again.map(|old| {
             self.character
                 .timeline
@@ -313,7 +322,7 @@ impl EditorModel {
             .is_some_and(|opening| opening.again.is_some())
             && let Some(opening) = self.character.timeline.opening.take()
         {
-            self.hooks.cancel_retarget(opening.id);
+            self.hooks.cancel_job(opening.id);
         }
     }
 

@@ -115,6 +115,8 @@ pub enum Command {
     Notice(NoticeCommand),
     /// The scene's characters: add, duplicate, remove, rename, select, place.
     Scene(SceneCommand),
+    /// Keypoints lifted into characters, and a lifted limb's depth flipped.
+    Keypoints(super::KeypointsCommand),
 }
 
 /// What a command changed: the views redraw, the document is saved, the timeline keys a
@@ -385,6 +387,13 @@ pub enum FileCommand {
         /// Height, pixels.
         height: u32,
     },
+    /// The host's job `id` (a clip, a lift) failed where it ran: `reason` says why.
+    JobFailed {
+        /// The request.
+        id: u64,
+        /// What went wrong, in words.
+        reason: String,
+    },
     /// The host failed to do what the editor asked (reading a file...).
     HostFailed(String),
     /// The views shared the document's posture link ([`EditorModel::share_link`]): the
@@ -540,8 +549,15 @@ impl From<HostMessage> for Command {
             HostMessage::AvatarImported { name, result } => {
                 Command::Avatar(AvatarCommand::AvatarImported { name, result })
             }
-            HostMessage::ClipProgress { id, fraction } => {
+            // Only clips report their progress (a lift shows a busy notice).
+            HostMessage::JobProgress { id, fraction } => {
                 Command::Motion(MotionCommand::ClipProgress { id, fraction })
+            }
+            HostMessage::KeypointsLifted { id, result } => {
+                Command::Keypoints(super::KeypointsCommand::Lifted { id, result })
+            }
+            HostMessage::JobFailed { id, reason } => {
+                Command::File(FileCommand::JobFailed { id, reason })
             }
             HostMessage::ClipOpened { id, result } => {
                 Command::Motion(MotionCommand::ClipOpened { id, result })

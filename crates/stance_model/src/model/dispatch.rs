@@ -90,6 +90,7 @@ impl EditorModel {
             Command::Comfort(command) => self.comfort.apply(command),
             Command::Notice(command) => self.apply_notice(command),
             Command::Scene(command) => self.apply_scene(command),
+            Command::Keypoints(command) => self.apply_keypoints(command),
         };
         if change == Change::Posture {
             self.motion_posture_edited();
@@ -343,6 +344,13 @@ impl EditorModel {
                 width,
                 height,
             } => self.save_control_map(map, &png, width, height),
+            FileCommand::JobFailed { id, reason } => {
+                // The reply names its request: a lift's, else a clip's.
+                if self.is_lift(id) {
+                    return self.lift_done(id, Err(reason));
+                }
+                self.clip_opened(id, Err(reason));
+            }
             FileCommand::HostFailed(reason) => {
                 self.pending_pick = None;
                 self.warn(reason);
@@ -357,7 +365,7 @@ impl EditorModel {
 
     /// Asks the host for a file to open for `purpose`; `what` names the feature when it
     /// cannot.
-    fn pick(&mut self, purpose: PickPurpose, what: &str) {
+    pub(super) fn pick(&mut self, purpose: PickPurpose, what: &str) {
         match self.hooks.pick_file() {
             Ok(()) => self.pending_pick = Some(purpose),
             Err(error) => self.warn(format!("{what}: {error}")),

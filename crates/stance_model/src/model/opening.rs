@@ -164,6 +164,11 @@ impl EditorModel {
                 self.open_clip_file(name, &bytes);
                 return;
             }
+            Some(PickPurpose::Keypoints) => {
+                let name = name.to_owned();
+                self.apply(Command::Keypoints(KeypointsCommand::Open { name, bytes }));
+                return;
+            }
             None if stance_asset::is_bvh_file(name) => {
                 self.open_clip_file(name, &bytes);
                 return;
