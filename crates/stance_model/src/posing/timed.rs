@@ -89,8 +89,7 @@ pub fn blended(spec: &TaskSpec, weight: f64, skeleton: &Skeleton, frames: &Frame
         } => {
             let end = match (limb, joints) {
                 (Some(limb), _) => joint(limb.joints()[2]),
-                (None, Some(names)) => joint(&names[2]),
-                (None, None) => None,
+                (None, names) => names.as_ref().and_then(|names| joint(&names[2])),
             };
             if let Some(j) = end {
                 lerp(frames.joint_position[j], target);
@@ -106,10 +105,7 @@ pub fn blended(spec: &TaskSpec, weight: f64, skeleton: &Skeleton, frames: &Frame
             target,
         } => {
             if let Some(j) = joint(name) {
-                let eye = frames.point(j, DVec3::from_array(*point));
-                let aim = (frames.rotation(j) * DVec3::from_array(*axis)).normalize_or_zero();
-                let distance = (DVec3::from_array(*target) - eye).length();
-                lerp(eye + aim * distance, target);
+                lerp(gazed_at(frames, j, *point, *axis, *target), target);
             }
         }
         TaskKindSpec::Orientation {
@@ -143,6 +139,14 @@ pub fn blended(spec: &TaskSpec, weight: f64, skeleton: &Skeleton, frames: &Frame
         | TaskKindSpec::Collision { .. } => out.weight *= weight,
     }
     out
+}
+
+/// Where the joint `j`'s eye at `point` looks now (along `axis`, joint frame), as far off as
+/// the gaze's `target`.
+fn gazed_at(frames: &Frames, j: usize, point: [f64; 3], axis: [f64; 3], target: [f64; 3]) -> DVec3 {
+    let eye = frames.point(j, DVec3::from_array(point));
+    let aim = (frames.rotation(j) * DVec3::from_array(axis)).normalize_or_zero();
+    eye + aim * (DVec3::from_array(target) - eye).length()
 }
 
 /// The rotation `weight` of the way from `own` to the quaternion `[x, y, z, w]`.
