@@ -553,23 +553,12 @@ impl StanceApp {
         let Some(words) = self.model.lifting().map(crate::model::Lifting::words) else {
             return;
         };
-        egui::Frame::new()
-            .fill(Color32::from_rgb(30, 60, 90))
-            .inner_margin(egui::Margin::symmetric(8, 4))
-            .show(ui, |ui| {
-                ui.horizontal(|ui| {
-                    let cancel = ui
-                        .button("Cancel")
-                        .on_hover_text("stop the lift: the scene stays as it is");
-                    self.button_rects.push(("cancel_lift", cancel.rect));
-                    if cancel.clicked() {
-                        self.outbox
-                            .send(Command::Keypoints(crate::model::KeypointsCommand::Cancel));
-                    }
-                    ui.spinner();
-                    ui.label(words);
-                });
-            });
+        let cancel = Command::Keypoints(crate::model::KeypointsCommand::Cancel);
+        let hover = "stop the lift: the scene stays as it is";
+        self.job_strip(ui, ("cancel_lift", hover, cancel), |ui| {
+            ui.spinner();
+            ui.label(words);
+        });
     }
 
     /// While the host opens a clip (off the editor's thread): its progress and *Cancel*.
@@ -582,24 +571,36 @@ impl StanceApp {
         else {
             return;
         };
+        let cancel = Command::Motion(crate::model::MotionCommand::CancelOpening);
+        let hover = "stop opening the clip: the document stays as it is";
+        self.job_strip(ui, ("cancel_clip", hover, cancel), |ui| {
+            let file = name.rsplit('/').next().unwrap_or(&name);
+            ui.add(egui::ProgressBar::new(progress as f32).text(format!(
+                "Opening {file}: {:.0} %",
+                (progress * 100.0).floor()
+            )));
+        });
+    }
+
+    /// The strip of a job the host runs off the editor's thread: *Cancel* (its button's
+    /// name for the tests, its hover text, the command it sends), then what `show` draws.
+    fn job_strip(
+        &mut self,
+        ui: &mut egui::Ui,
+        (name, hover, command): (&'static str, &str, Command),
+        show: impl FnOnce(&mut egui::Ui),
+    ) {
         egui::Frame::new()
             .fill(Color32::from_rgb(30, 60, 90))
             .inner_margin(egui::Margin::symmetric(8, 4))
             .show(ui, |ui| {
                 ui.horizontal(|ui| {
-                    let cancel = ui
-                        .button("Cancel")
-                        .on_hover_text("stop opening the clip: the document stays as it is");
-                    self.button_rects.push(("cancel_clip", cancel.rect));
+                    let cancel = ui.button("Cancel").on_hover_text(hover);
+                    self.button_rects.push((name, cancel.rect));
                     if cancel.clicked() {
-                        self.outbox
-                            .send(Command::Motion(crate::model::MotionCommand::CancelOpening));
+                        self.outbox.send(command);
                     }
-                    let file = name.rsplit('/').next().unwrap_or(&name);
-                    ui.add(egui::ProgressBar::new(progress as f32).text(format!(
-                        "Opening {file}: {:.0} %",
-                        (progress * 100.0).floor()
-                    )));
+                    show(ui);
                 });
             });
     }
