@@ -429,3 +429,79 @@ fn solve_says_which_task_gave_way_and_why() {
     // The comfort (posture) task is minimised, never "given way".
     assert!(tasks[5]["gave_way"].is_null(), "{}", tasks[5]);
 }
+
+/// Two characters, each with its feet pinned where they stand and a wrist goal in its own
+/// frame; the second placed and turned.
+const SCENE: &str = r#"{"characters": [
+  {"name": "Ann", "tasks": [
+    {"level": 1, "kind": "position", "joint": "l_talocrural", "target": [0.1, 0.07, 0.0]},
+    {"level": 2, "kind": "position", "joint": "r_radiocarpal", "target": [-0.3, 1.3, 0.3]}]},
+  {"name": "Bo", "placement": {"position": [0.8, 0, -0.2], "yaw": 90}, "tasks": [
+    {"level": 1, "kind": "position", "joint": "l_radiocarpal", "target": [0.35, 1.2, 0.25]}]}
+]}"#;
+
+#[test]
+fn solve_reads_a_scene_and_solves_every_character_in_its_own_frame() {
+    // Catches: a scene refused or only its selected character solved, a goal read in the
+    // scene's frame instead of the character's, a solved scene not written back.
+    let path = write_temp("scene.json", SCENE);
+    let out = path.with_file_name("scene-solved.json");
+    let (ok, stdout, stderr) = stance(&[
+        "solve",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    let v: Value = serde_json::from_str(&stdout).expect("one JSON object");
+    let characters = v["characters"].as_array().expect("one entry per character");
+    assert_eq!(characters.len(), 2);
+    let near = |c: &Value, joint: &str, target: [f64; 3]| {
+        let p = c["joints"][joint].as_array().expect("the joint's position");
+        p.iter()
+            .zip(target)
+            .all(|(a, b)| (a.as_f64().unwrap() - b).abs() < 1e-3)
+    };
+    assert_eq!(characters[0]["name"], "Ann");
+    assert!(near(&characters[0], "r_radiocarpal", [-0.3, 1.3, 0.3]));
+    assert!(near(&characters[0], "l_talocrural", [0.1, 0.07, 0.0]));
+    assert_eq!(characters[1]["name"], "Bo");
+    assert_eq!(characters[1]["placement"]["yaw"], 90.0);
+    assert!(near(&characters[1], "l_radiocarpal", [0.35, 1.2, 0.25]));
+    assert!(characters.iter().all(|c| c["report"]["gave_way"].is_null()));
+    // The scene written back solves again where it stands (its postures are the solved ones).
+    let (ok, again, stderr) = stance(&["solve", out.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    let again: Value = serde_json::from_str(&again).unwrap();
+    for c in again["characters"].as_array().unwrap() {
+        assert!(
+            c["report"]["iterations"].as_u64().unwrap() <= 1,
+            "{}",
+            c["report"]
+        );
+    }
+    // A plain document is a scene of one.
+    let document = write_temp(
+        "document.json",
+        r#"{"tasks": [{"level": 1, "kind": "position", "joint": "l_radiocarpal", "target": [0.3, 1.0, 0.3]}]}"#,
+    );
+    let (ok, stdout, stderr) = stance(&["solve", document.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    let v: Value = serde_json::from_str(&stdout).unwrap();
+    assert!(near(&v["characters"][0], "l_radiocarpal", [0.3, 1.0, 0.3]));
+    // A bad character is named; a problem file with --out is refused.
+    let bad = write_temp(
+        "bad-scene.json",
+        r#"{"characters": [{"name": "Ann"}, {"name": "Bo", "tasks": [{"level": 1, "kind": "position", "joint": "no_such_joint", "target": [0, 1, 0]}]}]}"#,
+    );
+    let (ok, _, stderr) = stance(&["solve", bad.to_str().unwrap()]);
+    assert!(!ok);
+    assert!(
+        stderr.contains("Bo") || stderr.contains("no_such_joint"),
+        "{stderr}"
+    );
+    let problem = write_temp("problem.json", EXAMPLE);
+    let (ok, _, stderr) = stance(&["solve", problem.to_str().unwrap(), "--out", "x.json"]);
+    assert!(!ok);
+    assert!(stderr.contains("problem file"), "{stderr}");
+}

@@ -93,7 +93,8 @@ impl Placement {
         Ok(placement)
     }
 
-    fn to_json_value(self) -> Value {
+    /// `{"position": [x, y, z], "yaw": degrees}`, as a scene's character carries it.
+    pub fn to_json_value(self) -> Value {
         serde_json::json!({ "position": self.position, "yaw": self.yaw_degrees })
     }
 }
