@@ -270,11 +270,13 @@ impl Solver {
         let tol = self.settings.tolerance;
         self.layout
             .iter()
+            .zip(&self.systems)
             .zip(before.iter().zip(&self.residual_sq))
-            .map(|(l, (b, a))| LevelReport {
+            .map(|((l, system), (b, a))| LevelReport {
                 level: l.level,
                 tasks: l.tasks.len(),
-                rows: l.rows,
+                // A level whose rows vary (collisions): those in use when last linearised.
+                rows: if l.variable { system.dx.len() } else { l.rows },
                 residual_before: b.sqrt(),
                 residual_after: a.sqrt(),
                 met: a.sqrt() <= tol,

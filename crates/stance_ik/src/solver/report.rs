@@ -24,7 +24,8 @@ pub struct LevelReport {
     pub level: u32,
     /// Active tasks in the level.
     pub tasks: usize,
-    /// Rows of the level's Jacobian.
+    /// Rows of the level's Jacobian (a level whose rows vary, a collision task's: the rows
+    /// of the constraints found when it was last linearised, none while the body is clear).
     pub rows: usize,
     /// Norm of the residuals at the start (m / rad).
     pub residual_before: f64,
