@@ -31,9 +31,10 @@ pub fn run(args: SolveArgs) -> Result<()> {
     let path = &args.problem;
     let text =
         std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let root: Value =
-        serde_json::from_str(&text).map_err(|e| anyhow!("{}: not JSON: {e}", path.display()))?;
-    let out = if root.get("skeleton").is_some() {
+    // A problem file has a skeleton; text that is not JSON at all gets the problem file's
+    // message (which names where it breaks).
+    let root: Option<Value> = serde_json::from_str(&text).ok();
+    let out = if root.is_none_or(|root| root.get("skeleton").is_some()) {
         if args.out.is_some() {
             bail!(
                 "--out writes a document or scene; {} is a problem file",
