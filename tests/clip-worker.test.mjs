@@ -197,9 +197,12 @@ describe("a long clip opens in the loading worker", () => {
     // frame is a few milliseconds.)
     const slowCalls = calls.filter((c) => c.duration > 50);
     assert.deepEqual(slowCalls, [], "no call of the page into the editor over 50 ms");
-    const withCalls = tasks.filter((t) => t.calls.length > 0 && (!t.frame || t.callsMs > 50));
+    // (A long task with the clip's calls may go unattributed to a frame under load: a
+    // fresh-clone run saw one of 746 ms with 3 progress calls of 0.0 ms in all; it counts
+    // below with the tasks that are not frames.)
+    const withCalls = tasks.filter((t) => t.calls.length > 0 && t.callsMs > 50);
     assert.deepEqual(withCalls.map((t) => describeTask(t, started)), [],
-      "every main-thread task over 50 ms with the clip's calls in it is an editor frame with under 50 ms of them");
+      "every main-thread task over 50 ms with the clip's calls in it has under 50 ms of them");
     // Tasks that are neither a frame nor hold a call of the clip's happen without a clip too
     // (the baseline has them: a fresh-clone run saw one of 51 ms in each, another one of 355
     // ms while the other end-to-end file loaded the machine): at most two, none longer than
@@ -210,7 +213,7 @@ describe("a long clip opens in the loading worker", () => {
     // outside the measured calls (a parse or a copy of the result in the page's message
     // handler: one per part, ten for this clip, or one for the whole file, longer than a
     // frame).
-    const others = tasks.filter((t) => !t.frame && t.calls.length === 0);
+    const others = tasks.filter((t) => !t.frame);
     const baselineOthers = baseline.tasks.filter((t) => !t.frame);
     const frameCost = Math.max(100, ...frameTasks(baseline.tasks).map((t) => t.duration),
       ...frameTasks(tasks).map((t) => t.duration));
