@@ -90,6 +90,14 @@ pub enum IkError {
     /// Three joints that do not form a limb the closed form can solve.
     #[error("not a solvable limb: {0}")]
     BadLimb(String),
+    /// A body that [`crate::Bodies`] cannot join or place.
+    #[error("body {body}: {reason}")]
+    BadBody {
+        /// The body's index.
+        body: usize,
+        /// What is wrong.
+        reason: String,
+    },
     /// A setting is out of range.
     #[error("setting `{0}` is out of range")]
     BadSetting(&'static str),

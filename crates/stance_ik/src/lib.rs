@@ -28,6 +28,7 @@
 
 #![warn(missing_docs)]
 
+mod bodies;
 pub mod comfort;
 pub mod conflict;
 mod error;
@@ -40,6 +41,7 @@ mod skeleton;
 mod solver;
 mod task;
 
+pub use bodies::{Bodies, BodyPlacement, SCENE_ROOT};
 pub use error::IkError;
 pub use joint_rotation::{UNLIMITED_RANGE, nearest_rotation_vector, rotation_angle};
 pub use kernel::prioritized_step;

@@ -314,6 +314,19 @@ impl Frames {
         DQuat::from_mat3(&self.world_from_joint_rotation[joint])
     }
 
+    /// Centre of mass of the body rooted at joint `root` (the subtree from it; the whole
+    /// body for joint 0), or that joint's position when the body has no mass.
+    pub fn body_center_of_mass(&self, root: usize) -> DVec3 {
+        match (self.subtree_mass.get(root), self.subtree_moment.get(root)) {
+            (Some(&m), Some(&s)) if m > 0.0 => s / m,
+            _ => self
+                .joint_position
+                .get(root)
+                .copied()
+                .unwrap_or(DVec3::ZERO),
+        }
+    }
+
     /// Whole-body centre of mass (the root position when the body has no mass).
     pub fn center_of_mass(&self) -> DVec3 {
         match (self.subtree_mass.first(), self.subtree_moment.first()) {

@@ -482,6 +482,42 @@ impl Skeleton {
         chain
     }
 
+    /// The joints of the body rooted at `root`: `root` and everything below it, a range
+    /// (joints are stored depth first). Empty when `root` is out of range.
+    pub fn body_joints(&self, root: usize) -> std::ops::Range<usize> {
+        if root >= self.joints.len() {
+            return 0..0;
+        }
+        let end = (root + 1..self.joints.len())
+            .find(|&j| !self.is_ancestor_or_self(root, j))
+            .unwrap_or(self.joints.len());
+        root..end
+    }
+
+    /// The mass of the body rooted at `root` (kg); the whole skeleton's for joint 0.
+    pub fn body_mass(&self, root: usize) -> f64 {
+        self.joints
+            .get(self.body_joints(root))
+            .map_or(0.0, |joints| joints.iter().map(|j| j.mass).sum())
+    }
+
+    /// Posture indices of the DOF that move the body rooted at `root`: those of its joints and
+    /// of the joints above it, in posture order.
+    pub fn body_dofs(&self, root: usize) -> Vec<usize> {
+        let joints = self.body_joints(root);
+        let mut dofs = match self.joints.get(root).and_then(|j| j.parent) {
+            Some(parent) => self.chain_dofs(parent),
+            None => Vec::new(),
+        };
+        if let (Some(first), Some(last)) = (
+            self.joints.get(joints.start),
+            joints.end.checked_sub(1).and_then(|l| self.joints.get(l)),
+        ) {
+            dofs.extend(first.dof_start..last.dof_start + last.dof_count());
+        }
+        dofs
+    }
+
     /// Whether `ancestor` is `joint` or one of its ancestors.
     pub fn is_ancestor_or_self(&self, ancestor: usize, joint: usize) -> bool {
         let mut j = Some(joint);

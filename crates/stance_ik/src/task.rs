@@ -138,6 +138,10 @@ pub enum TaskKind {
         axes: Axes,
         /// World target.
         target: DVec3,
+        /// The body whose centre of mass it is, by its root joint: the subtree from it (one
+        /// character of a skeleton that holds several, [`crate::Bodies`]); `None`: the whole
+        /// skeleton.
+        body: Option<usize>,
     },
     /// Balance as an inequality: the horizontal projection of the centre of mass stays inside
     /// the support polygon (the convex hull, in the floor plane XZ, of the `support` points)
@@ -152,6 +156,9 @@ pub enum TaskKind {
         support: Vec<Effector>,
         /// Distance kept from the polygon's edges (m), >= 0.
         margin: f64,
+        /// The body whose centre of mass is balanced, by its root joint (as for
+        /// [`TaskKind::CenterOfMass`]); `None`: the whole skeleton.
+        body: Option<usize>,
     },
     /// Comfort (the paper's open question): the cost of a [`ComfortModel`] (effort against
     /// gravity, joint-range discomfort, angle bands) lowered along its gradient projected into
@@ -196,6 +203,17 @@ pub enum TaskKind {
         normal: DVec3,
         /// On or above the plane (an inequality) instead of on it.
         above: bool,
+    },
+    /// Two points of the body meet along the selected world axes: hands clasped, a hand on
+    /// a shoulder; on a skeleton that holds several characters ([`crate::Bodies`]) a hand in
+    /// another's hand. Each point moves toward the other; the rows are `b - a`.
+    Meet {
+        /// The first point.
+        a: Effector,
+        /// The second point.
+        b: Effector,
+        /// Which world axes are controlled.
+        axes: Axes,
     },
     /// Attraction of the chosen DOF toward a reference posture (Jacobian = identity rows).
     PostureAttraction {
@@ -267,7 +285,26 @@ impl Task {
 
     /// The centre of mass inside the support polygon of `support`, `margin` from its edges.
     pub fn balance(support: Vec<Effector>, margin: f64) -> Self {
-        Self::new(TaskKind::Balance { support, margin })
+        Self::new(TaskKind::Balance {
+            support,
+            margin,
+            body: None,
+        })
+    }
+
+    /// `point_a` of `joint_a` and `point_b` of `joint_b` (joint frames) meet, all three axes.
+    pub fn meet(joint_a: usize, point_a: DVec3, joint_b: usize, point_b: DVec3) -> Self {
+        Self::new(TaskKind::Meet {
+            a: Effector {
+                joint: joint_a,
+                point: point_a,
+            },
+            b: Effector {
+                joint: joint_b,
+                point: point_b,
+            },
+            axes: Axes::XYZ,
+        })
     }
 
     /// `point` (joint frame) of `joint` on the world line through `origin` along `direction`.
@@ -298,7 +335,11 @@ impl Task {
 
     /// Centre of mass on `axes`.
     pub fn center_of_mass(axes: Axes, target: DVec3) -> Self {
-        Self::new(TaskKind::CenterOfMass { axes, target })
+        Self::new(TaskKind::CenterOfMass {
+            axes,
+            target,
+            body: None,
+        })
     }
 
     /// Attraction of `dofs` toward `reference`.
@@ -329,9 +370,9 @@ impl Task {
     /// Sets the axes of a position or centre-of-mass task (builder style).
     pub fn with_axes(mut self, new_axes: Axes) -> Self {
         match &mut self.kind {
-            TaskKind::Position { axes, .. } | TaskKind::CenterOfMass { axes, .. } => {
-                *axes = new_axes
-            }
+            TaskKind::Position { axes, .. }
+            | TaskKind::CenterOfMass { axes, .. }
+            | TaskKind::Meet { axes, .. } => *axes = new_axes,
             _ => {}
         }
         self
@@ -346,7 +387,9 @@ impl Task {
     /// Number of Jacobian rows.
     pub fn rows(&self) -> usize {
         match &self.kind {
-            TaskKind::Position { axes, .. } | TaskKind::CenterOfMass { axes, .. } => axes.count(),
+            TaskKind::Position { axes, .. }
+            | TaskKind::CenterOfMass { axes, .. }
+            | TaskKind::Meet { axes, .. } => axes.count(),
             TaskKind::Orientation { .. } => 3,
             TaskKind::Gaze { .. } | TaskKind::Direction { .. } | TaskKind::PointOnLine { .. } => 2,
             TaskKind::Balance { .. } | TaskKind::Comfort { .. } | TaskKind::PointOnPlane { .. } => {
@@ -400,6 +443,22 @@ impl Task {
                 Err(bad(format!("{what} is not finite")))
             }
         };
+        let body_ok = |body: Option<usize>| {
+            let root = body.unwrap_or(0);
+            joint_ok(root)?;
+            if skeleton.body_mass(root) > 0.0 {
+                Ok(())
+            } else {
+                Err(bad(format!(
+                    "{} task on a body without mass",
+                    if matches!(self.kind, TaskKind::Balance { .. }) {
+                        "balance"
+                    } else {
+                        "centre-of-mass"
+                    }
+                )))
+            }
+        };
         if !(self.weight.is_finite() && self.weight >= 0.0) {
             return Err(bad("weight must be finite and >= 0".into()));
         }
@@ -448,13 +507,21 @@ impl Task {
                     return Err(bad("target direction has zero length".into()));
                 }
             }
-            TaskKind::CenterOfMass { target, .. } => {
+            TaskKind::CenterOfMass { target, body, .. } => {
                 finite(*target, "target")?;
-                if skeleton.total_mass() <= 0.0 {
-                    return Err(bad("centre-of-mass task on a skeleton without mass".into()));
-                }
+                body_ok(*body)?;
             }
-            TaskKind::Balance { support, margin } => {
+            TaskKind::Meet { a, b, .. } => {
+                joint_ok(a.joint)?;
+                joint_ok(b.joint)?;
+                finite(a.point, "point a")?;
+                finite(b.point, "point b")?;
+            }
+            TaskKind::Balance {
+                support,
+                margin,
+                body,
+            } => {
                 if support.is_empty() {
                     return Err(bad("balance needs at least one support point".into()));
                 }
@@ -465,9 +532,7 @@ impl Task {
                 if !(margin.is_finite() && *margin >= 0.0) {
                     return Err(bad("margin must be finite and >= 0".into()));
                 }
-                if skeleton.total_mass() <= 0.0 {
-                    return Err(bad("balance task on a skeleton without mass".into()));
-                }
+                body_ok(*body)?;
             }
             TaskKind::Comfort { model } => {
                 model.validate(skeleton).map_err(bad)?;
@@ -528,8 +593,25 @@ impl Task {
                 .into_iter()
                 .filter(|&d| skeleton.dof_kinds()[d].is_rotation())
                 .collect(),
-            TaskKind::CenterOfMass { .. } | TaskKind::Balance { .. } => {
-                (0..skeleton.dof_count()).collect()
+            TaskKind::CenterOfMass { body, .. } => skeleton.body_dofs(body.unwrap_or(0)),
+            TaskKind::Balance { body, support, .. } => {
+                let mut d = skeleton.body_dofs(body.unwrap_or(0));
+                if body.is_some_and(|root| root != 0) {
+                    // The support points move the polygon: their chains count too.
+                    for point in support {
+                        d.extend(skeleton.chain_dofs(point.joint));
+                    }
+                    d.sort_unstable();
+                    d.dedup();
+                }
+                d
+            }
+            TaskKind::Meet { a, b, .. } => {
+                let mut d = skeleton.chain_dofs(a.joint);
+                d.extend(skeleton.chain_dofs(b.joint));
+                d.sort_unstable();
+                d.dedup();
+                d
             }
             TaskKind::Collision(c) => c.support(skeleton),
             TaskKind::Comfort { .. } => (0..skeleton.dof_count())

@@ -6,6 +6,7 @@
 wasm_bindgen_test::wasm_bindgen_test_configure!(run_in_browser);
 
 mod balance_direction;
+mod bodies;
 mod collision;
 mod comfort;
 mod common;

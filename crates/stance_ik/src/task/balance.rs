@@ -44,9 +44,15 @@ pub(super) fn floor_points(frames: &Frames, support: &[Effector]) -> Vec<FloorPo
 }
 
 impl BalanceGeometry {
-    pub(super) fn new(frames: &Frames, support: &[Effector], margin: f64) -> Option<Self> {
+    /// `body`: the balanced body's root joint (0: the whole skeleton).
+    pub(super) fn new(
+        frames: &Frames,
+        support: &[Effector],
+        margin: f64,
+        body: usize,
+    ) -> Option<Self> {
         let points = floor_points(frames, support);
-        let c = frames.center_of_mass();
+        let c = frames.body_center_of_mass(body);
         let c = [c.x, c.z];
         let hull = convex_hull(points);
         let (nearest, margin) = match hull.as_slice() {

@@ -25,10 +25,15 @@ fn point_column(skeleton: &Skeleton, frames: &Frames, d: usize, joint: usize, p:
     }
 }
 
-/// The centre of mass's velocity for a unit velocity of DOF `d`.
-fn com_column(skeleton: &Skeleton, frames: &Frames, d: usize, total: f64) -> DVec3 {
+/// The velocity of the centre of mass of the body rooted at `root` (of mass `total`) for a
+/// unit velocity of DOF `d`.
+fn com_column(skeleton: &Skeleton, frames: &Frames, d: usize, root: usize, total: f64) -> DVec3 {
     let j = skeleton.dof_joint(d);
     let axis = frames.dof_axis[d];
+    if root != 0 && !skeleton.is_ancestor_or_self(root, j) {
+        // A DOF above the body moves it as a whole (one of another body: not at all).
+        return point_column(skeleton, frames, d, root, frames.body_center_of_mass(root));
+    }
     if skeleton.dof_kinds()[d].is_rotation() {
         axis.cross(frames.subtree_moment[j] - frames.subtree_mass[j] * frames.joint_position[j])
             / total
@@ -76,13 +81,21 @@ impl Task {
                     .map_or([0.0, 0.0], |g| g.log());
                 TaskFeature::Vector(x.to_vec())
             }
-            TaskKind::CenterOfMass { axes, .. } => {
-                let c = frames.center_of_mass();
+            TaskKind::CenterOfMass { axes, body, .. } => {
+                let c = frames.body_center_of_mass(body.unwrap_or(0));
                 TaskFeature::Vector((0..3).filter(|&i| axes.has(i)).map(|i| c[i]).collect())
             }
-            TaskKind::Balance { support, margin } => {
+            TaskKind::Meet { a, b, axes } => {
+                let d = frames.point(b.joint, b.point) - frames.point(a.joint, a.point);
+                TaskFeature::Vector((0..3).filter(|&i| axes.has(i)).map(|i| -d[i]).collect())
+            }
+            TaskKind::Balance {
+                support,
+                margin,
+                body,
+            } => {
                 // The signed distance past the shrunk polygon; constant where the row is empty.
-                let x = BalanceGeometry::new(frames, support, *margin)
+                let x = BalanceGeometry::new(frames, support, *margin, body.unwrap_or(0))
                     .filter(BalanceGeometry::active)
                     .map_or(-BALANCE_BAND, |g| g.violation);
                 TaskFeature::Vector(vec![x])
@@ -210,8 +223,13 @@ impl Task {
                 fill_axes(err, d, *axes);
                 clamp_vec(err, limits.map(|l| l.linear))
             }
-            TaskKind::CenterOfMass { axes, target } => {
-                let d = *target - frames.center_of_mass();
+            TaskKind::CenterOfMass { axes, target, body } => {
+                let d = *target - frames.body_center_of_mass(body.unwrap_or(0));
+                fill_axes(err, d, *axes);
+                clamp_vec(err, limits.map(|l| l.linear))
+            }
+            TaskKind::Meet { a, b, axes } => {
+                let d = frames.point(b.joint, b.point) - frames.point(a.joint, a.point);
                 fill_axes(err, d, *axes);
                 clamp_vec(err, limits.map(|l| l.linear))
             }
@@ -236,8 +254,12 @@ impl Task {
                 let geometry = GazeGeometry::direction(frames, *joint, *axis, *target);
                 direction_error(geometry, err, limits)
             }
-            TaskKind::Balance { support, margin } => {
-                let violation = BalanceGeometry::new(frames, support, *margin)
+            TaskKind::Balance {
+                support,
+                margin,
+                body,
+            } => {
+                let violation = BalanceGeometry::new(frames, support, *margin, body.unwrap_or(0))
                     .map_or(0.0, |g| g.violation.max(0.0));
                 err[0] = -violation;
                 clamp_vec(err, limits.map(|l| l.linear))
@@ -317,21 +339,36 @@ impl Task {
                     write_axes(jac_t, n, d, v, *axes);
                 }
             }
-            TaskKind::CenterOfMass { axes, .. } => {
-                let total = frames.subtree_mass.first().copied().unwrap_or(0.0);
+            TaskKind::CenterOfMass { axes, body, .. } => {
+                let root = body.unwrap_or(0);
+                let total = frames.subtree_mass.get(root).copied().unwrap_or(0.0);
                 if total <= 0.0 {
                     return;
                 }
                 for &d in support {
-                    write_axes(jac_t, n, d, com_column(skeleton, frames, d, total), *axes);
+                    let column = com_column(skeleton, frames, d, root, total);
+                    write_axes(jac_t, n, d, column, *axes);
+                }
+            }
+            TaskKind::Meet { a, b, axes } => {
+                let (pa, pb) = (
+                    frames.point(a.joint, a.point),
+                    frames.point(b.joint, b.point),
+                );
+                for &d in support {
+                    let v = point_column(skeleton, frames, d, a.joint, pa)
+                        - point_column(skeleton, frames, d, b.joint, pb);
+                    write_axes(jac_t, n, d, v, *axes);
                 }
             }
             TaskKind::Balance {
                 support: contacts,
                 margin,
+                body,
             } => {
-                let total = frames.subtree_mass.first().copied().unwrap_or(0.0);
-                let Some(g) = BalanceGeometry::new(frames, contacts, *margin) else {
+                let root = body.unwrap_or(0);
+                let total = frames.subtree_mass.get(root).copied().unwrap_or(0.0);
+                let Some(g) = BalanceGeometry::new(frames, contacts, *margin, root) else {
                     return;
                 };
                 if total <= 0.0 || !g.active() {
@@ -345,7 +382,9 @@ impl Task {
                 for &d in support {
                     let moved = point_column(skeleton, frames, d, a.joint, pa) * (1.0 - g.t)
                         + point_column(skeleton, frames, d, b.joint, pb) * g.t;
-                    jac_t[d] = g.normal.dot(com_column(skeleton, frames, d, total) - moved);
+                    jac_t[d] = g
+                        .normal
+                        .dot(com_column(skeleton, frames, d, root, total) - moved);
                 }
             }
             TaskKind::Collision(c) => {
