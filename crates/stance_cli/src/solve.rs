@@ -7,9 +7,13 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, anyhow, bail};
+use glam::DVec3;
 use serde_json::{Value, json};
-use stance_document::{PostureValues, Problem, Scene};
+use stance_document::{
+    CharacterPoint, JoinedProblem, PostureValues, Problem, Scene, joined_groups,
+};
 use stance_hanim::{LevelOfArticulation, SkeletonOptions, default_skeleton};
+use stance_ik::{Frames, Posture, SolveReport};
 
 #[derive(clap::Args, Debug)]
 pub struct SolveArgs {
@@ -59,7 +63,11 @@ pub fn run(args: SolveArgs) -> Result<()> {
 
 /// Each character of the scene (a document: a scene of one) solved on the default body:
 /// `{"characters": [{"name", "placement", "joints", "posture", "report", "tasks"}...]}`, the
-/// joints in the character's own frame (its placement puts it in the scene).
+/// joints in the character's own frame (its placement puts it in the scene). Characters that
+/// tasks between characters join are solved together, as one problem over their bodies
+/// (`stance_document::JoinedProblem`): each of them says with whom (`"solved_with"`) and which
+/// of its tasks the joined solve left out (`"left_out"`), and `"between"` says how far apart
+/// each such task's points ended (m).
 fn solve_scene(args: &SolveArgs, text: &str) -> Result<Value> {
     let mut scene = Scene::from_json(text).map_err(|e| anyhow!("{e}"))?;
     let loa = LevelOfArticulation::from_number(args.loa)
@@ -69,25 +77,109 @@ fn solve_scene(args: &SolveArgs, text: &str) -> Result<Value> {
         ..SkeletonOptions::default()
     })?
     .skeleton;
-    let mut solved = Vec::with_capacity(scene.characters.len());
-    for (i, character) in scene.characters.iter_mut().enumerate() {
-        let named = |e: &dyn std::fmt::Display| anyhow!("character {i} ({}): {e}", character.name);
-        let problem =
-            Problem::from_document(&character.document, body.clone()).map_err(|e| named(&e))?;
-        let (posture, report) = problem.solve().map_err(|e| named(&e))?;
-        let mut out = problem.solution_json(&posture, &report);
-        if let Some(o) = out.as_object_mut() {
-            o.insert("name".into(), json!(character.name));
-            o.insert("placement".into(), character.placement.to_json_value());
+    let mut problems = Vec::with_capacity(scene.characters.len());
+    for (i, character) in scene.characters.iter().enumerate() {
+        let problem = Problem::from_document(&character.document, body.clone())
+            .map_err(|e| anyhow!("character {i} ({}): {e}", character.name))?;
+        problems.push(problem);
+    }
+    let mut solved: Vec<Value> = vec![Value::Null; scene.characters.len()];
+    let mut postures: Vec<Option<Posture>> = vec![None; scene.characters.len()];
+    for group in joined_groups(&scene) {
+        let named = |e: &dyn std::fmt::Display| {
+            let names: Vec<String> = group
+                .iter()
+                .map(|&i| format!("character {i} ({})", scene.characters[i].name))
+                .collect();
+            anyhow!("{}: {e}", names.join(" and "))
+        };
+        let results: Vec<(usize, Posture, SolveReport, Vec<String>)> = if let [only] = group[..] {
+            let (posture, report) = problems[only].solve().map_err(|e| named(&e))?;
+            vec![(only, posture, report, Vec::new())]
+        } else {
+            let members: Vec<Problem> = group.iter().map(|&i| problems[i].clone()).collect();
+            let joined = JoinedProblem::new(&scene, &group, &members).map_err(|e| named(&e))?;
+            let (each, report) = joined.solve().map_err(|e| named(&e))?;
+            group
+                .iter()
+                .zip(each)
+                .map(|(&i, posture)| {
+                    let prefix = format!("character {i} (");
+                    let left: Vec<String> = joined
+                        .left_out
+                        .iter()
+                        .filter(|m| m.starts_with(&prefix))
+                        .cloned()
+                        .collect();
+                    (i, posture, report.clone(), left)
+                })
+                .collect()
+        };
+        for (i, posture, report, left_out) in results {
+            let character = &scene.characters[i];
+            let mut out = problems[i].solution_json(&posture, &report);
+            if let Some(o) = out.as_object_mut() {
+                o.insert("name".into(), json!(character.name));
+                o.insert("placement".into(), character.placement.to_json_value());
+                if group.len() > 1 {
+                    let with: Vec<usize> = group.iter().copied().filter(|&j| j != i).collect();
+                    o.insert("solved_with".into(), json!(with));
+                    o.insert("left_out".into(), json!(left_out));
+                }
+            }
+            solved[i] = out;
+            postures[i] = Some(posture);
         }
-        character.document.posture = PostureValues::from_posture(&problem.skeleton, &posture);
-        solved.push(out);
+    }
+    let between = between_distances(&scene, &problems, &postures);
+    for (character, (problem, posture)) in scene
+        .characters
+        .iter_mut()
+        .zip(problems.iter().zip(&postures))
+    {
+        if let Some(posture) = posture {
+            character.document.posture = PostureValues::from_posture(&problem.skeleton, posture);
+        }
     }
     if let Some(path) = &args.out {
         std::fs::write(path, scene.to_json(true))
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
-    Ok(json!({ "characters": solved }))
+    let mut out = json!({ "characters": solved });
+    if !scene.between.is_empty()
+        && let Some(o) = out.as_object_mut()
+    {
+        o.insert("between".into(), json!(between));
+    }
+    Ok(out)
+}
+
+/// How far apart each task between characters left its two points (m, in the scene), each
+/// character's posture placed by its placement; `null` for a joint its body lacks.
+fn between_distances(
+    scene: &Scene,
+    problems: &[Problem],
+    postures: &[Option<Posture>],
+) -> Vec<Value> {
+    let point = |p: &CharacterPoint| -> Option<DVec3> {
+        let problem = problems.get(p.character)?;
+        let posture = postures.get(p.character)?.as_ref()?;
+        let joint = problem.skeleton.joint_index(&p.joint)?;
+        let frames = Frames::new(&problem.skeleton, posture);
+        let local = frames.point(joint, DVec3::from_array(p.point));
+        let placement = scene.characters.get(p.character)?.placement;
+        Some(placement.scene_from_character().transform_point3(local))
+    };
+    scene
+        .between
+        .iter()
+        .map(|task| {
+            let distance = point(&task.a)
+                .zip(point(&task.b))
+                .map(|(a, b)| (a - b).length());
+            json!({ "level": task.level, "distance": distance })
+        })
+        .collect()
 }
 
 pub fn load_problem(path: &std::path::Path) -> Result<Problem> {

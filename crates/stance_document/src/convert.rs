@@ -113,8 +113,8 @@ impl PostureValues {
 
 impl TaskSpec {
     /// The problem-file form of a solver task on `skeleton` (joints by name); `None` for the
-    /// kinds a problem file cannot hold (comfort, posture attraction, a collision task on
-    /// other capsules than the body's: `stance_hanim::capsules::BodyCollision`) and joints out
+    /// kinds a problem file cannot hold (comfort, posture attraction, one body's centre of
+    /// mass or balance among several, a meet, a collision task on other capsules than the body's: `stance_hanim::capsules::BodyCollision`) and joints out
     /// of range. A collision task's radii set by hand are the skeleton's in a problem file
     /// (`skeleton.joints[].radius`, which [`crate::problem_json`] writes), not the task's.
     pub fn from_task(skeleton: &Skeleton, task: &Task) -> Option<Self> {
@@ -153,11 +153,19 @@ impl TaskSpec {
                 axis: axis.to_array(),
                 target: target.to_array(),
             },
-            TaskKind::CenterOfMass { axes, target } => TaskKindSpec::Com {
+            TaskKind::CenterOfMass {
+                axes,
+                target,
+                body: None | Some(0),
+            } => TaskKindSpec::Com {
                 axes: *axes,
                 target: target.to_array(),
             },
-            TaskKind::Balance { support, margin } => TaskKindSpec::Balance {
+            TaskKind::Balance {
+                support,
+                margin,
+                body: None | Some(0),
+            } => TaskKindSpec::Balance {
                 support: Some(support_names(skeleton, support)?),
                 margin: *margin,
             },
@@ -191,6 +199,10 @@ impl TaskSpec {
                     self_collision: body.self_collision,
                     floor: body.floor,
                 }
+            }
+            // One body of several (`stance_ik::Bodies`) and two points meeting: scene tasks.
+            TaskKind::CenterOfMass { .. } | TaskKind::Balance { .. } | TaskKind::Meet { .. } => {
+                return None;
             }
             TaskKind::Comfort { .. } | TaskKind::PostureAttraction { .. } => return None,
         };
@@ -427,10 +439,12 @@ impl TaskSpec {
             TaskKindSpec::Balance { support, margin } => TaskKind::Balance {
                 support: support_points(skeleton, support.as_deref(), problem)?,
                 margin: *margin,
+                body: None,
             },
             TaskKindSpec::Com { axes, target } => TaskKind::CenterOfMass {
                 axes: *axes,
                 target: v3(*target),
+                body: None,
             },
             TaskKindSpec::Posture { joints, reference } => {
                 let reference = match reference {

@@ -17,6 +17,7 @@
 
 #![warn(missing_docs)]
 
+pub mod between;
 pub mod camera;
 pub mod clip;
 pub mod comfort;
@@ -35,6 +36,7 @@ pub mod stiffness;
 mod task_json;
 mod words;
 
+pub use between::{BetweenTask, CharacterPoint, JoinedProblem, joined_groups};
 pub use camera::CameraSpec;
 pub use clip::{ClipReference, EmbeddedClip, content_hash};
 pub use convert::{

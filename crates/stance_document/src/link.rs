@@ -30,6 +30,7 @@ pub(crate) use models::ROTATION_PRIOR;
 use read::decode_payload;
 use write::encode_payload;
 
+use crate::between::{BetweenTask, CharacterPoint};
 use crate::document::{Document, TaskKindSpec};
 use crate::scene::{Prop, PropShape, Scene};
 
@@ -40,12 +41,17 @@ use crate::scene::{Prop, PropShape, Scene};
 /// keys were made over (its file name, size and content hash; never the file), 7 the
 /// point-on-a-line and point-on-a-plane tasks, 8 the collision task (its margin and whether it
 /// holds the body and the floor), 9 a scene of several characters and props
-/// ([`encode_scene`]). A document is written in the oldest format that holds it.
-pub const LINK_FORMAT: u8 = 9;
+/// ([`encode_scene`]), 10 a scene with tasks between its characters ([`BETWEEN_FORMAT`]). A
+/// document is written in the oldest format that holds it.
+pub const LINK_FORMAT: u8 = 10;
 /// The format of a scene's link ([`encode_scene`]): several characters (or one with a name or
 /// a placement) and the props, each character its name, placement and document payload in the
 /// oldest format that holds it.
 pub const SCENE_FORMAT: u8 = 9;
+/// The format of a scene's link with tasks between its characters: [`SCENE_FORMAT`]'s
+/// payload, then the tasks (count; each its level, weight, flags, axes and two points: the
+/// character, the joint's name, the point).
+pub const BETWEEN_FORMAT: u8 = 10;
 /// Quantisation step of a character's turn on the floor: 0.005 degrees in radians.
 const YAW_STEP_RAD: f64 = ROTATION_STEP_RAD;
 /// Longest link [`encode_for_sharing`] makes with the timeline in it, in characters: beyond,
@@ -236,7 +242,30 @@ pub fn encode_scene(scene: &Scene) -> String {
             write_zigzag(&mut payload, models::quantise(value, DIRECTION_STEP));
         }
     }
-    frame(SCENE_FORMAT, &payload)
+    if scene.between.is_empty() {
+        return frame(SCENE_FORMAT, &payload);
+    }
+    write_leb128(&mut payload, scene.between.len() as u64);
+    for task in &scene.between {
+        write_leb128(&mut payload, u64::from(task.level));
+        payload.extend_from_slice(&task.weight.to_le_bytes());
+        payload.push(u8::from(task.active));
+        payload.push(
+            (0..3)
+                .filter(|&i| task.axes.has(i))
+                .fold(0u8, |mask, i| mask | (1 << i)),
+        );
+        for point in [&task.a, &task.b] {
+            write_leb128(&mut payload, point.character as u64);
+            let joint = point.joint.as_bytes();
+            write_leb128(&mut payload, joint.len() as u64);
+            payload.extend_from_slice(joint);
+            for value in point.point {
+                write_zigzag(&mut payload, models::quantise(value, POSITION_STEP_M));
+            }
+        }
+    }
+    frame(BETWEEN_FORMAT, &payload)
 }
 
 /// [`encode_scene`]'s link to share: with every character's timeline when the link stays
@@ -264,17 +293,17 @@ pub fn encode_scene_for_sharing(scene: &Scene) -> SharedLink {
 /// The scene in a link of any format (a document's link is a scene of one character).
 pub fn decode_scene(link: &str) -> Result<Scene, LinkError> {
     let (format, payload) = unframe(link)?;
-    if format != SCENE_FORMAT {
+    if format < SCENE_FORMAT {
         return document_from_payload(&payload, format).map(Scene::of_one);
     }
-    let scene = decode_scene_payload(&payload).map_err(LinkError::Malformed)?;
+    let scene = decode_scene_payload(&payload, format).map_err(LinkError::Malformed)?;
     scene
         .validate()
         .map_err(|e| LinkError::Malformed(e.to_string()))?;
     Ok(scene)
 }
 
-fn decode_scene_payload(bytes: &[u8]) -> Result<Scene, String> {
+fn decode_scene_payload(bytes: &[u8], format: u8) -> Result<Scene, String> {
     let mut at = 0usize;
     let leb = |at: &mut usize, what: &str| -> Result<u64, String> {
         let (value, used) = bytes
@@ -379,14 +408,83 @@ fn decode_scene_payload(bytes: &[u8]) -> Result<Scene, String> {
             rotation,
         });
     }
+    let between = if format >= BETWEEN_FORMAT {
+        decode_between(bytes, &mut at)?
+    } else {
+        Vec::new()
+    };
     if at != bytes.len() {
-        return Err(format!("{} bytes after the last prop", bytes.len() - at));
+        return Err(format!("{} bytes after the scene", bytes.len() - at));
     }
     Ok(Scene {
         props,
         characters,
         selected: usize::try_from(selected).unwrap_or(usize::MAX),
+        between,
     })
+}
+
+/// The tasks between characters of a [`BETWEEN_FORMAT`] link, from `at`.
+fn decode_between(bytes: &[u8], at: &mut usize) -> Result<Vec<BetweenTask>, String> {
+    let leb = |at: &mut usize, what: &str| -> Result<u64, String> {
+        let (value, used) = bytes
+            .get(*at..)
+            .and_then(read_leb128)
+            .ok_or_else(|| format!("the scene's {what} is cut"))?;
+        *at += used;
+        Ok(value)
+    };
+    let count = leb(at, "task count")?;
+    if count > crate::between::MAX_BETWEEN_TASKS as u64 {
+        return Err(format!("{count} tasks between characters"));
+    }
+    let mut tasks = Vec::new();
+    for i in 0..count {
+        let level = u32::try_from(leb(at, "task")?).map_err(|_| format!("task {i}'s level"))?;
+        let fixed = bytes
+            .get(*at..*at + 10)
+            .ok_or_else(|| format!("task {i} between characters is cut"))?;
+        *at += 10;
+        let mut weight = [0u8; 8];
+        weight.copy_from_slice(&fixed[..8]);
+        let weight = f64::from_le_bytes(weight);
+        let (active, mask) = (fixed[8] != 0, fixed[9]);
+        let axes = stance_ik::Axes::new(mask & 1 != 0, mask & 2 != 0, mask & 4 != 0);
+        if mask == 0 || mask > 7 {
+            return Err(format!("task {i} between characters has no axes"));
+        }
+        let mut point = |side: &str| -> Result<CharacterPoint, String> {
+            let character = usize::try_from(leb(at, "task")?).unwrap_or(usize::MAX);
+            let length = usize::try_from(leb(at, "task")?).unwrap_or(usize::MAX);
+            let joint = bytes
+                .get(*at..at.saturating_add(length))
+                .ok_or_else(|| format!("task {i}'s joint {side} is cut"))?;
+            *at += length;
+            let joint = std::str::from_utf8(joint)
+                .map_err(|_| format!("task {i}'s joint {side} is not UTF-8"))?
+                .to_owned();
+            let mut point = [0.0; 3];
+            for value in &mut point {
+                *value = models::dequantise(read_zigzag(leb(at, "task")?)?, POSITION_STEP_M);
+            }
+            Ok(CharacterPoint {
+                character,
+                joint,
+                point,
+            })
+        };
+        let a = point("a")?;
+        let b = point("b")?;
+        tasks.push(BetweenTask {
+            level,
+            weight,
+            active,
+            a,
+            b,
+            axes,
+        });
+    }
+    Ok(tasks)
 }
 
 fn write_zigzag(out: &mut Vec<u8>, value: i64) {
@@ -435,7 +533,7 @@ pub fn encode_for_sharing(document: &Document) -> SharedLink {
 /// The document in a link: a bare fragment, `#fragment`, or a whole URL containing `#`.
 pub fn decode(link: &str) -> Result<Document, LinkError> {
     let (format, payload) = unframe(link)?;
-    if format == SCENE_FORMAT {
+    if format >= SCENE_FORMAT {
         let count = payload.first().copied().unwrap_or(0);
         return Err(LinkError::Malformed(format!(
             "it holds a scene of {count} characters, not one posture (open it in the editor)"

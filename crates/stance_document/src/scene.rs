@@ -12,6 +12,7 @@ use glam::{DAffine3, DQuat, DVec3};
 use serde::Serialize;
 use serde_json::{Map, Value};
 
+use crate::between::{BetweenTask, MAX_BETWEEN_TASKS, between_from_json};
 use crate::document::Document;
 use crate::error::DocumentError;
 use crate::json::{number, numbers, obj, string};
@@ -378,6 +379,9 @@ pub struct Scene {
     pub props: Vec<Prop>,
     /// The selected character's index.
     pub selected: usize,
+    /// Tasks between characters (a hand in another's hand): the characters they join are
+    /// solved together ([`crate::between::JoinedProblem`]).
+    pub between: Vec<BetweenTask>,
 }
 
 impl Default for Scene {
@@ -402,6 +406,7 @@ impl Scene {
             }],
             props: Vec::new(),
             selected: 0,
+            between: Vec::new(),
         }
     }
 
@@ -447,6 +452,16 @@ impl Scene {
                 .validate_at(&format!("{at}.placement"))?;
             character.document.validate().map_err(|e| e.within(&at))?;
         }
+        if self.between.len() > MAX_BETWEEN_TASKS {
+            return Err(DocumentError::field(
+                "between",
+                format!("more than {MAX_BETWEEN_TASKS} tasks between characters"),
+            ));
+        }
+        for (i, task) in self.between.iter().enumerate() {
+            task.validate(self.characters.len())
+                .map_err(|e| e.within(&format!("between[{i}]")))?;
+        }
         Ok(())
     }
 
@@ -454,6 +469,7 @@ impl Scene {
     /// written as a plain document (nothing is lost).
     pub fn is_plain_document(&self) -> bool {
         self.props.is_empty()
+            && self.between.is_empty()
             && matches!(self.characters.as_slice(), [only]
             if only.placement.is_identity() && only.name == default_character_name(1))
     }
@@ -541,6 +557,7 @@ impl Scene {
             characters,
             props,
             selected,
+            between: between_from_json(o)?,
         };
         scene.validate()?;
         Ok(scene)
@@ -568,11 +585,21 @@ impl Scene {
             })
             .collect();
         let props: Vec<Value> = self.props.iter().map(Prop::to_json_value).collect();
-        if props.is_empty() {
-            serde_json::json!({ "characters": characters, "selected": self.selected })
-        } else {
-            serde_json::json!({ "characters": characters, "props": props, "selected": self.selected })
+        let mut o = Map::new();
+        o.insert("characters".into(), Value::Array(characters));
+        if !props.is_empty() {
+            o.insert("props".into(), Value::Array(props));
         }
+        if !self.between.is_empty() {
+            let between = self
+                .between
+                .iter()
+                .map(BetweenTask::to_json_value)
+                .collect();
+            o.insert("between".into(), Value::Array(between));
+        }
+        o.insert("selected".into(), serde_json::json!(self.selected));
+        Value::Object(o)
     }
 
     /// The JSON text (pretty or compact); a plain document's own (the autosave writes one

@@ -303,7 +303,9 @@ fn direction_and_balance_convert() {
         k => panic!("{k:?}"),
     }
     match &t[2].kind {
-        TaskKind::Balance { support, margin } => {
+        TaskKind::Balance {
+            support, margin, ..
+        } => {
             // The left foot once (named twice, one sole: 4 corners), the wrist as a
             // point.
             let ankle = s.joint_index("l_talocrural").unwrap();
@@ -346,7 +348,9 @@ fn balance_without_support_stands_on_the_pinned_contacts() {
     let t = d.to_tasks(&s).unwrap();
     assert_eq!(joint_of(&t[4].kind), ["l_talocrural", "r_knee"]);
     match &t[4].kind {
-        TaskKind::Balance { support, margin } => {
+        TaskKind::Balance {
+            support, margin, ..
+        } => {
             assert_eq!(*margin, stance_document::DEFAULT_BALANCE_MARGIN);
             assert_eq!(support[4].point, glam::DVec3::new(0.0, 0.0, 0.05));
         }

@@ -59,6 +59,7 @@ fn two_characters() -> Scene {
             ),
         ],
         selected: 1,
+        between: Vec::new(),
     }
 }
 

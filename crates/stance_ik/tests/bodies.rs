@@ -148,7 +148,11 @@ fn meet_and_a_bodys_centre_of_mass_match_central_differences() {
             let (plus, minus) = (at(h), at(-h));
             for row in 0..task.rows() {
                 let numeric = (plus[row] - minus[row]) / (2.0 * h);
-                assert!((numeric + analytic[(row, d)]).abs() < 2e-6, "{:?}", task.kind);
+                assert!(
+                    (numeric + analytic[(row, d)]).abs() < 2e-6,
+                    "{:?}",
+                    task.kind
+                );
             }
         }
         if matches!(task.kind, TaskKind::Balance { .. }) && analytic.amax() > 0.0 {
@@ -174,7 +178,9 @@ fn joined_bodies_stand_where_each_body_placed_by_hand_stands() {
     let places = [placed(-0.6, 90.0), placed(0.7, -135.0), placed(0.0, 0.0)];
     let postures: Vec<Posture> = (0..3).map(|_| random_posture(&mut r, &body, 0.8)).collect();
     let bodies = Bodies::new(&places.map(|p| (&body, p))).unwrap();
-    let joined = bodies.posture(&postures.iter().collect::<Vec<_>>()).unwrap();
+    let joined = bodies
+        .posture(&postures.iter().collect::<Vec<_>>())
+        .unwrap();
     let frames = Frames::new(bodies.skeleton(), &joined);
     for (b, (posture, place)) in postures.iter().zip(&places).enumerate() {
         let alone = Frames::new(&body, posture);
@@ -209,7 +215,11 @@ fn own_tasks(s: &Skeleton, posture: &Posture) -> Vec<Task> {
     for foot in ["l_ankle", "r_ankle"] {
         let j = s.joint_index(foot).unwrap();
         tasks.push(Task::position(j, DVec3::ZERO, frames.joint_position[j]).at_level(1));
-        for corner in [[-0.05, -0.08, -0.06], [0.05, -0.08, -0.06], [0.0, -0.08, 0.16]] {
+        for corner in [
+            [-0.05, -0.08, -0.06],
+            [0.05, -0.08, -0.06],
+            [0.0, -0.08, 0.16],
+        ] {
             support.push(Effector {
                 joint: j,
                 point: DVec3::from(corner),
@@ -262,11 +272,17 @@ fn two_bodies_hand_in_hand_keep_their_own_priorities() {
             for foot in ["l_ankle", "r_ankle"] {
                 let j = body.joint_index(foot).unwrap();
                 let moved = (f.joint_position[j] - rest_frames.joint_position[j]).length();
-                assert!(moved < 1e-4, "body {b}'s {foot} moved {moved} m (gap {gap})");
+                assert!(
+                    moved < 1e-4,
+                    "body {b}'s {foot} moved {moved} m (gap {gap})"
+                );
             }
             // Over its own feet: between the ankles' x, within the soles' z.
             let c = summed_center_of_mass(&body, f, 0);
-            assert!(c.x.abs() < 0.1 && (-0.06..0.16).contains(&c.z), "body {b}: {c}");
+            assert!(
+                c.x.abs() < 0.1 && (-0.06..0.16).contains(&c.z),
+                "body {b}: {c}"
+            );
         }
         let hands = (places[0].point(frames[0].joint_position[rw])
             - places[1].point(frames[1].joint_position[lw]))

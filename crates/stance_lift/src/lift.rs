@@ -763,5 +763,6 @@ pub fn lifted_scene(people: &[Lifted]) -> stance_document::Scene {
             .collect(),
         props: Vec::new(),
         selected: 0,
+        between: Vec::new(),
     }
 }

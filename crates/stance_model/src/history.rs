@@ -4,7 +4,7 @@
 //! An edit that goes on over many frames (dragging a value, pulling a body part) is one step:
 //! edits with the same [`EditKind`] that follow each other within [`COALESCE_SECS`] merge.
 
-use stance_document::{Document, Placement, Prop};
+use stance_document::{BetweenTask, Document, Placement, Prop};
 use stance_hanim::hands::Finger;
 
 use crate::model::Hands;
@@ -56,6 +56,8 @@ pub struct CastSnapshot {
     pub selected: u64,
     /// The props.
     pub props: Vec<Prop>,
+    /// The tasks between characters.
+    pub between: Vec<BetweenTask>,
 }
 
 /// One step back or forward.
@@ -321,6 +323,7 @@ mod tests {
                 .collect(),
             selected,
             props: Vec::new(),
+            between: Vec::new(),
         }
     }
 

@@ -9,8 +9,8 @@
 use stance_asset::{SceneContent, SceneNode, export_scene_glb};
 use stance_document::scene::MAX_PROPS;
 use stance_document::{
-    Placement, Prop, PropShape, Scene, SceneCharacter, clean_name, default_character_name,
-    default_prop_name,
+    BetweenTask, Placement, Prop, PropShape, Scene, SceneCharacter, clean_name,
+    default_character_name, default_prop_name,
 };
 use stance_render::MannequinBone;
 
@@ -160,6 +160,9 @@ pub struct Cast {
     removed: Vec<Character>,
     /// The scene's props, in the outliner's order.
     props: Vec<Prop>,
+    /// The tasks between characters (by their places in the scene's order), kept as opened:
+    /// saved, shared and undone with the cast; a removed character's go with it.
+    between: Vec<BetweenTask>,
 }
 
 /// A command for the scene's characters.
@@ -232,6 +235,7 @@ impl EditorModel {
             characters,
             props: self.cast.props.clone(),
             selected: self.cast.selected_at,
+            between: self.cast.between.clone(),
         }
     }
 
@@ -528,6 +532,14 @@ impl EditorModel {
             return super::Change::Nothing;
         }
         let before = self.cast_snapshot();
+        let index = self.characters().position(|(c, _)| c.id == id);
+        if let Some(index) = index {
+            let between = std::mem::take(&mut self.cast.between);
+            self.cast.between = between
+                .iter()
+                .filter_map(|task| task.without_character(index))
+                .collect();
+        }
         if self.character.id == id {
             // Select the next one in the scene's order (else the one before).
             let next = self
@@ -625,6 +637,7 @@ impl EditorModel {
             order: self.characters().map(|(c, _)| c.cast_entry()).collect(),
             selected: self.character.id,
             props: self.cast.props.clone(),
+            between: self.cast.between.clone(),
         }
     }
 
@@ -664,6 +677,7 @@ impl EditorModel {
         self.cast.selected_at = selected_at;
         self.cast.removed = pool;
         self.cast.props.clone_from(&snapshot.props);
+        self.cast.between.clone_from(&snapshot.between);
     }
 
     /// Opens `scene` in place of the scene's characters, as one undoable change of the cast
@@ -711,6 +725,7 @@ impl EditorModel {
         self.cast.removed.extend(gone);
         self.cast.selected_at = scene.selected.min(self.cast.others.len());
         self.cast.props.clone_from(&scene.props);
+        self.cast.between.clone_from(&scene.between);
         self.history.record_cast(before, false, self.now_secs);
         if let Some((url, document)) = fetch {
             self.pending_document = Some(document);
