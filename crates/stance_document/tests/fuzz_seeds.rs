@@ -26,6 +26,14 @@ const SCENE: &str = r#"{"characters": [
   {"name": "Bo", "placement": {"position": [0.8, 0, -0.2], "yaw": 90}}
 ], "selected": 1}"#;
 
+/// [`SCENE`] with a task between its characters (a link of format 10).
+const SCENE_BETWEEN: &str = r#"{"characters": [
+  {"name": "Ann", "tasks": [{"level": 1, "kind": "position", "joint": "l_talocrural", "target": [0.1, 0.07, 0.0]}]},
+  {"name": "Bo", "placement": {"position": [0.8, 0, -0.2], "yaw": 90}}
+], "between": [{"kind": "meet", "a": {"character": 0, "joint": "r_radiocarpal"},
+  "b": {"character": 1, "joint": "l_radiocarpal", "point": [0, -0.05, 0]}, "axes": "xz", "level": 3}],
+"selected": 0}"#;
+
 /// A document with every kind of task, a timeline, a camera and joint stiffness.
 const EVERYTHING: &str = r#"{
   "version": 1,
@@ -222,6 +230,8 @@ fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
     for format in 1..=link::LINK_FORMAT {
         let text = if format == link::SCENE_FORMAT {
             link::encode_scene(&Scene::from_json(SCENE).unwrap())
+        } else if format == link::BETWEEN_FORMAT {
+            link::encode_scene(&Scene::from_json(SCENE_BETWEEN).unwrap())
         } else {
             link::encode(&document(format))
         };
@@ -253,6 +263,7 @@ fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
         document(link::SCENE_FORMAT - 1).to_json(false).into_bytes(),
     ));
     out.push(("document", "scene.json".into(), SCENE.into()));
+    out.push(("document", "scene-between.json".into(), SCENE_BETWEEN.into()));
     out.push(("problem", "arm.json".into(), ARM.into()));
     out.push(("problem", "loa1.json".into(), loa1_problem().into_bytes()));
     out
