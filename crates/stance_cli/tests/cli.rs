@@ -505,3 +505,71 @@ fn solve_reads_a_scene_and_solves_every_character_in_its_own_frame() {
     assert!(!ok);
     assert!(stderr.contains("problem file"), "{stderr}");
 }
+
+/// Two characters facing each other 0.7 m apart with their feet pinned, the first's right
+/// wrist in the second's left (a task between characters, level 3).
+const HAND_IN_HAND: &str = r#"{"characters": [
+  {"name": "Ann", "placement": {"position": [-0.35, 0, 0], "yaw": 90}, "tasks": [
+    {"level": 1, "kind": "position", "joint": "l_talocrural", "target": [0.1, 0.08, 0.0]},
+    {"level": 1, "kind": "position", "joint": "r_talocrural", "target": [-0.1, 0.08, 0.0]},
+    {"level": 2, "kind": "balance"}]},
+  {"name": "Bo", "placement": {"position": [0.35, 0, 0], "yaw": -90}, "tasks": [
+    {"level": 1, "kind": "position", "joint": "l_talocrural", "target": [0.1, 0.08, 0.0]},
+    {"level": 1, "kind": "position", "joint": "r_talocrural", "target": [-0.1, 0.08, 0.0]},
+    {"level": 2, "kind": "balance"}, {"level": 9, "kind": "comfort"}]},
+  {"name": "Cy", "placement": {"position": [3, 0, 0]}}
+], "between": [{"kind": "meet", "level": 3,
+  "a": {"character": 0, "joint": "r_radiocarpal"}, "b": {"character": 1, "joint": "l_radiocarpal"}}]}"#;
+
+#[test]
+fn solve_joins_the_characters_a_task_between_them_joins() {
+    // Catches: the task between characters ignored (each solved alone), a placement applied
+    // twice or not at all (hands apart in the scene), a character's own pins given up for the
+    // hands, the solved scene written without the task.
+    let path = write_temp("hand-in-hand.json", HAND_IN_HAND);
+    let out = path.with_file_name("hand-in-hand-solved.json");
+    let (ok, stdout, stderr) = stance(&[
+        "solve",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    let v: Value = serde_json::from_str(&stdout).expect("one JSON object");
+    let c = v["characters"].as_array().unwrap();
+    let joint = |c: &Value, name: &str| -> [f64; 3] {
+        let p = c["joints"][name].as_array().expect("the joint's position");
+        [0, 1, 2].map(|i| p[i].as_f64().unwrap())
+    };
+    // Placed by hand: turned about +Y by `yaw` degrees, then moved.
+    let placed = |p: [f64; 3], x: f64, yaw: f64| {
+        let (s, co) = yaw.to_radians().sin_cos();
+        [co * p[0] + s * p[2] + x, p[1], -s * p[0] + co * p[2]]
+    };
+    let a = placed(joint(&c[0], "r_radiocarpal"), -0.35, 90.0);
+    let b = placed(joint(&c[1], "l_radiocarpal"), 0.35, -90.0);
+    let apart = (0..3).map(|i| (a[i] - b[i]).powi(2)).sum::<f64>().sqrt();
+    assert!(apart < 1e-3, "the hands are {apart} m apart: {a:?} {b:?}");
+    let reported = v["between"][0]["distance"].as_f64().unwrap();
+    assert!((reported - apart).abs() < 1e-6, "{reported} against {apart}");
+    for (i, character) in c[..2].iter().enumerate() {
+        for (ankle, target) in [("l_talocrural", 0.1), ("r_talocrural", -0.1)] {
+            let p = joint(character, ankle);
+            let off = ((p[0] - target).powi(2) + (p[1] - 0.08).powi(2) + p[2].powi(2)).sqrt();
+            assert!(off < 1e-3, "character {i}'s {ankle} is {off} m off");
+        }
+        assert_eq!(character["solved_with"], serde_json::json!([1 - i]));
+    }
+    // The comfort task could not join; the third character was solved alone.
+    let left = c[1]["left_out"].as_array().unwrap();
+    assert!(left.len() == 1 && left[0].as_str().unwrap().contains("comfort"));
+    assert!(c[2].get("solved_with").is_none());
+    // Written back with the task; solving it again moves nothing.
+    let written = std::fs::read_to_string(&out).unwrap();
+    assert!(written.contains("\"between\""), "{written}");
+    let (ok, again, stderr) = stance(&["solve", out.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    let again: Value = serde_json::from_str(&again).unwrap();
+    assert!(again["between"][0]["distance"].as_f64().unwrap() < 1e-3);
+    assert!(again["characters"][0]["report"]["iterations"].as_u64().unwrap() <= 2);
+}
