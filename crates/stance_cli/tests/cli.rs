@@ -551,7 +551,10 @@ fn solve_joins_the_characters_a_task_between_them_joins() {
     let apart = (0..3).map(|i| (a[i] - b[i]).powi(2)).sum::<f64>().sqrt();
     assert!(apart < 1e-3, "the hands are {apart} m apart: {a:?} {b:?}");
     let reported = v["between"][0]["distance"].as_f64().unwrap();
-    assert!((reported - apart).abs() < 1e-6, "{reported} against {apart}");
+    assert!(
+        (reported - apart).abs() < 1e-6,
+        "{reported} against {apart}"
+    );
     for (i, character) in c[..2].iter().enumerate() {
         for (ankle, target) in [("l_talocrural", 0.1), ("r_talocrural", -0.1)] {
             let p = joint(character, ankle);
@@ -571,5 +574,10 @@ fn solve_joins_the_characters_a_task_between_them_joins() {
     assert!(ok, "{stderr}");
     let again: Value = serde_json::from_str(&again).unwrap();
     assert!(again["between"][0]["distance"].as_f64().unwrap() < 1e-3);
-    assert!(again["characters"][0]["report"]["iterations"].as_u64().unwrap() <= 2);
+    assert!(
+        again["characters"][0]["report"]["iterations"]
+            .as_u64()
+            .unwrap()
+            <= 2
+    );
 }

@@ -219,7 +219,11 @@ pub fn body_placement(placement: &Placement) -> BodyPlacement {
 /// between characters join (directly or through others), in scene order; a character no
 /// active task joins is a group of its own.
 pub fn joined_groups(scene: &Scene) -> Vec<Vec<usize>> {
-    let n = scene.characters.len();
+    joined_groups_of(scene.characters.len(), &scene.between)
+}
+
+/// [`joined_groups`] of `n` characters and the tasks `between` them.
+pub fn joined_groups_of(n: usize, between: &[BetweenTask]) -> Vec<Vec<usize>> {
     let mut group: Vec<usize> = (0..n).collect();
     fn find(group: &mut [usize], i: usize) -> usize {
         let mut i = i;
@@ -229,7 +233,7 @@ pub fn joined_groups(scene: &Scene) -> Vec<Vec<usize>> {
         }
         i
     }
-    for task in scene.between.iter().filter(|t| t.active) {
+    for task in between.iter().filter(|t| t.active) {
         let [a, b] = task.characters();
         if a < n && b < n {
             let (ra, rb) = (find(&mut group, a), find(&mut group, b));

@@ -36,7 +36,9 @@ pub mod stiffness;
 mod task_json;
 mod words;
 
-pub use between::{BetweenTask, CharacterPoint, JoinedProblem, joined_groups};
+pub use between::{
+    BetweenTask, CharacterPoint, JoinedProblem, body_placement, joined_groups, joined_groups_of,
+};
 pub use camera::CameraSpec;
 pub use clip::{ClipReference, EmbeddedClip, content_hash};
 pub use convert::{

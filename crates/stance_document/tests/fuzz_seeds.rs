@@ -263,7 +263,11 @@ fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
         document(link::SCENE_FORMAT - 1).to_json(false).into_bytes(),
     ));
     out.push(("document", "scene.json".into(), SCENE.into()));
-    out.push(("document", "scene-between.json".into(), SCENE_BETWEEN.into()));
+    out.push((
+        "document",
+        "scene-between.json".into(),
+        SCENE_BETWEEN.into(),
+    ));
     out.push(("problem", "arm.json".into(), ARM.into()));
     out.push(("problem", "loa1.json".into(), loa1_problem().into_bytes()));
     out

@@ -18,6 +18,7 @@ mod command;
 mod control_maps;
 mod dispatch;
 mod hands;
+mod joined;
 mod keypoints;
 mod mapping;
 mod motion;
@@ -46,6 +47,7 @@ pub use self::command::{
 };
 pub use self::dispatch::{Outbox, SharedLink};
 pub use self::hands::{HandCommand, Hands};
+pub use self::joined::NewBetween;
 pub use self::keypoints::{FLIPPABLE_LIMBS, KeypointsCommand, LiftPurpose, Lifting};
 pub use self::mapping::{Correction, carry_posture};
 pub use self::motion::{
@@ -315,7 +317,9 @@ impl EditorModel {
         self.motion_before_solve(now_secs);
         self.sensors_drove = self.sensors.drive(&mut self.character.session);
         let started = web_time::Instant::now();
-        self.character.session.solve_frame(clock);
+        if !self.solve_joined_frame(clock) {
+            self.character.session.solve_frame(clock);
+        }
         self.solver_ms = started.elapsed().as_secs_f64() * 1000.0;
         self.motion_after_solve();
         self.capture_frame(now_secs);
@@ -334,7 +338,9 @@ impl EditorModel {
             return;
         }
         let started = web_time::Instant::now();
-        self.character.session.solve_frame(clock);
+        if !self.solve_joined_frame(clock) {
+            self.character.session.solve_frame(clock);
+        }
         self.solver_ms += started.elapsed().as_secs_f64() * 1000.0;
         self.extend_trace();
         self.refresh_bones();

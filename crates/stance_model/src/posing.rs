@@ -16,7 +16,7 @@ use stance_hanim::{
 };
 use stance_ik::{
     Clock, Frames, Iteration, Limb, LimbGoal, Posture, Skeleton, SolveReport, SolveStatus, Solver,
-    SolverSettings, SwivelInterval, TEXTBOOK_ANGULAR_STEP, TEXTBOOK_LINEAR_STEP,
+    SolverSettings, SwivelInterval, TEXTBOOK_ANGULAR_STEP, TEXTBOOK_LINEAR_STEP, Task,
 };
 
 pub use self::timed::{TimedFrame, blended, timed_tasks, timed_tasks_at};
@@ -103,6 +103,26 @@ pub enum PosingError {
 }
 
 impl PosingSession {
+    /// The solver's settings for one frame of posing (a session's own solve, and a solve of
+    /// characters joined by tasks between them).
+    pub fn frame_settings() -> SolverSettings {
+        SolverSettings {
+            max_iterations: ITERATIONS_PER_FRAME,
+            time_budget_secs: Some(FRAME_BUDGET_SECS),
+            // Every frame is shown and starts where the last one ended: the guarded
+            // iteration only (each iteration keeps the higher levels), no restart from the
+            // frame's start posture.
+            iteration: Iteration::Guarded,
+            stall_window: GUARDED_STALL_WINDOW,
+            restarts: false,
+            // A pull asks the textbook's short steps of its guarded iterations: a longer ask
+            // is halved by their line search before it is taken.
+            max_linear_step: TEXTBOOK_LINEAR_STEP,
+            max_angular_step: TEXTBOOK_ANGULAR_STEP,
+            ..SolverSettings::default()
+        }
+    }
+
     /// The H-Anim default body at `loa`, standing in its rest posture, with the default tasks:
     /// both feet pinned (level 1), balance over the feet (level 2), a light pull toward the
     /// rest posture (level 10).
@@ -117,21 +137,7 @@ impl PosingSession {
     /// A session on any humanoid skeleton (an avatar's), standing in its rest posture with
     /// the default tasks.
     pub fn with_humanoid(humanoid: HumanoidSkeleton) -> Result<Self, PosingError> {
-        let settings = SolverSettings {
-            max_iterations: ITERATIONS_PER_FRAME,
-            time_budget_secs: Some(FRAME_BUDGET_SECS),
-            // Every frame is shown and starts where the last one ended: the guarded
-            // iteration only (each iteration keeps the higher levels), no restart from the
-            // frame's start posture.
-            iteration: Iteration::Guarded,
-            stall_window: GUARDED_STALL_WINDOW,
-            restarts: false,
-            // A pull asks the textbook's short steps of its guarded iterations: a longer ask
-            // is halved by their line search before it is taken.
-            max_linear_step: TEXTBOOK_LINEAR_STEP,
-            max_angular_step: TEXTBOOK_ANGULAR_STEP,
-            ..SolverSettings::default()
-        };
+        let settings = Self::frame_settings();
         let posture = Posture::rest(&humanoid.skeleton);
         let frames = Frames::new(&humanoid.skeleton, &posture);
         // The hybrid of the paper's conclusion: a pull stuck in a local minimum restarts the
@@ -612,14 +618,7 @@ impl PosingSession {
         if self.settled {
             return false;
         }
-        let specs = self.timed_tasks();
-        let tasks = FrameProblem {
-            specs: &specs,
-            comfort: self.comfort_armed && self.grab.is_none() && self.held.is_none(),
-            held: self.held,
-            grab: self.grab,
-        }
-        .tasks(&self.humanoid.skeleton, Some(&self.humanoid));
+        let tasks = self.frame_tasks();
         let before = self.posture.values().to_vec();
         match self.solver.solve_with_clock(
             &self.humanoid.skeleton,
@@ -639,6 +638,38 @@ impl PosingSession {
         }
         self.refresh();
         before != self.posture.values()
+    }
+
+    /// The solver tasks of this frame: the document's (timed), the held joint, the pull, and
+    /// comfort once armed and nothing is held or pulled.
+    pub fn frame_tasks(&self) -> Vec<Task> {
+        let specs = self.timed_tasks();
+        FrameProblem {
+            specs: &specs,
+            comfort: self.comfort_armed && self.grab.is_none() && self.held.is_none(),
+            held: self.held,
+            grab: self.grab,
+        }
+        .tasks(&self.humanoid.skeleton, Some(&self.humanoid))
+    }
+
+    /// Takes the posture a solve of several characters together found for this one (see
+    /// `EditorModel`'s joined solve), as its own solve would: settled when that solve
+    /// converged or stalled.
+    pub fn take_joined_solve(&mut self, posture: Posture, report: SolveReport) {
+        if posture.values().len() != self.posture.values().len() {
+            return;
+        }
+        self.settled = matches!(report.status, SolveStatus::Converged | SolveStatus::Stalled);
+        self.posture = posture;
+        self.report = Some(report);
+        self.refresh();
+    }
+
+    /// Wakes the solver after something outside the session changed what the body must do
+    /// (a task between it and another character added or removed).
+    pub fn wake_for_tasks(&mut self) {
+        self.wake(Wake::Tasks);
     }
 
     fn wake(&mut self, cause: Wake) {

@@ -4,6 +4,7 @@
 //! `cargo test -p stance_model --test all FILE::`.
 
 mod avatar_swap;
+mod between;
 mod clips;
 mod clocked;
 mod hands;

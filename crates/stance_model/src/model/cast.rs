@@ -160,9 +160,11 @@ pub struct Cast {
     removed: Vec<Character>,
     /// The scene's props, in the outliner's order.
     props: Vec<Prop>,
-    /// The tasks between characters (by their places in the scene's order), kept as opened:
-    /// saved, shared and undone with the cast; a removed character's go with it.
+    /// The tasks between characters (by their places in the scene's order): saved, shared
+    /// and undone with the cast; a removed character's go with it.
     between: Vec<BetweenTask>,
+    /// The solver of frames where characters are joined (made when first needed).
+    joined_solver: Option<stance_ik::Solver>,
 }
 
 /// A command for the scene's characters.
@@ -188,6 +190,11 @@ pub enum SceneCommand {
     RemoveProp(usize),
     /// Sets the prop at this index (its name, size, place, turn), as one edit over frames.
     EditProp(usize, Prop),
+    /// A task between the selected character and another (a hand in another's hand): their
+    /// parts meet, one level below the hard tasks of both; the two are then posed together.
+    AddBetween(super::joined::NewBetween),
+    /// Removes the task between characters at this index.
+    RemoveBetween(usize),
 }
 
 impl EditorModel {
@@ -250,6 +257,8 @@ impl EditorModel {
             SceneCommand::AddProp(shape) => self.add_prop(shape),
             SceneCommand::RemoveProp(index) => self.remove_prop(index),
             SceneCommand::EditProp(index, prop) => self.edit_prop(index, prop),
+            SceneCommand::AddBetween(new) => self.add_between(new),
+            SceneCommand::RemoveBetween(index) => self.remove_between(index),
         }
     }
 
@@ -432,8 +441,63 @@ impl EditorModel {
         if !edit(character) {
             return super::Change::Nothing;
         }
+        self.wake_joined();
         self.history.record_cast(before, true, self.now_secs);
         super::Change::Document
+    }
+
+    /// The tasks between characters.
+    pub(super) fn cast_between(&self) -> &[BetweenTask] {
+        &self.cast.between
+    }
+
+    /// The selected character's place in the scene's order.
+    pub fn selected_index(&self) -> usize {
+        self.cast.selected_at
+    }
+
+    /// The other characters (in the scene's order, the selected one left out) and the
+    /// selected one, both to change.
+    pub(super) fn cast_and_selected_mut(&mut self) -> (&mut [Character], &mut Character) {
+        (&mut self.cast.others, &mut self.character)
+    }
+
+    /// The solver of joined frames.
+    pub(super) fn cast_solver(&mut self) -> &mut stance_ik::Solver {
+        self.cast
+            .joined_solver
+            .get_or_insert_with(super::joined::joined_solver)
+    }
+
+    /// An edit of the tasks between characters: one undo step; every joined character's
+    /// solver wakes (before and after the edit).
+    pub(super) fn edit_between(&mut self, edit: impl FnOnce(&mut Vec<BetweenTask>)) {
+        let before = self.cast_snapshot();
+        self.wake_joined();
+        edit(&mut self.cast.between);
+        self.wake_joined();
+        self.history.record_cast(before, false, self.now_secs);
+    }
+
+    /// Wakes the solver of every character a task between characters joins to another.
+    pub(super) fn wake_joined(&mut self) {
+        let joined: Vec<usize> = self
+            .cast
+            .between
+            .iter()
+            .filter(|t| t.active)
+            .flat_map(|t| t.characters())
+            .collect();
+        let selected = self.cast.selected_at;
+        if joined.contains(&selected) {
+            self.character.session.wake_for_tasks();
+        }
+        for (i, character) in self.cast.others.iter_mut().enumerate() {
+            let index = if i < selected { i } else { i + 1 };
+            if joined.contains(&index) {
+                character.session.wake_for_tasks();
+            }
+        }
     }
 
     fn character_mut(&mut self, id: u64) -> Option<&mut Character> {
@@ -678,6 +742,7 @@ impl EditorModel {
         self.cast.removed = pool;
         self.cast.props.clone_from(&snapshot.props);
         self.cast.between.clone_from(&snapshot.between);
+        self.wake_joined();
     }
 
     /// Opens `scene` in place of the scene's characters, as one undoable change of the cast
