@@ -7,7 +7,7 @@
 
 use glam::DVec3;
 use stance_document::Placement;
-use stance_model::model::{GestureCommand, HistoryCommand, NewBetween, SceneCommand};
+use stance_model::model::{GestureCommand, HistoryCommand, SceneCommand};
 use stance_model::{Command, EditorModel};
 
 use crate::clocked::Clocked;
@@ -55,14 +55,20 @@ fn facing() -> Clocked {
     editor
 }
 
-fn hold_hands(editor: &mut Clocked) {
+/// *Hold hands with* the first character: face to face, the hands on the same side of the
+/// space between them meet, one's left and the other's right (`hand`: the second's).
+fn hold_hands(editor: &mut Clocked) -> (&'static str, &'static str) {
     let first = editor.model.characters().next().unwrap().0.id();
-    let joint = editor.joint("l_radiocarpal");
-    editor.apply(Command::Scene(SceneCommand::AddBetween(NewBetween {
-        joint,
-        other: first,
-        other_joint: "r_radiocarpal".into(),
-    })));
+    let new = editor.model.hands_toward(first).unwrap();
+    let (left, right) = (editor.joint("l_radiocarpal"), editor.joint("r_radiocarpal"));
+    let pair = match (new.joint, new.other_joint.as_str()) {
+        (j, "r_radiocarpal") if j == left => ("l_radiocarpal", "r_radiocarpal"),
+        (j, "l_radiocarpal") if j == right => ("r_radiocarpal", "l_radiocarpal"),
+        _ => panic!("not a left hand in a right one: {new:?}"),
+    };
+    assert_eq!(new.other, first);
+    editor.apply(Command::Scene(SceneCommand::AddBetween(new)));
+    pair
 }
 
 #[test]
@@ -79,17 +85,15 @@ fn a_task_between_two_characters_poses_both_and_each_keeps_its_feet() {
             )
         })
         .collect();
-    let rest_hand = in_scene(&editor.model, 0, "r_radiocarpal");
-    hold_hands(&mut editor);
+    let (mine, theirs) = hold_hands(&mut editor);
+    let rest_hand = in_scene(&editor.model, 0, theirs);
     assert_eq!(editor.model.between_tasks().len(), 1);
     assert_eq!(editor.model.joined_with_selected(), vec![0, 1]);
     editor.settle();
-    let apart = (in_scene(&editor.model, 0, "r_radiocarpal")
-        - in_scene(&editor.model, 1, "l_radiocarpal"))
-    .length();
+    let apart = (in_scene(&editor.model, 0, theirs) - in_scene(&editor.model, 1, mine)).length();
     assert!(apart < 1e-3, "the hands are {apart} m apart");
     // The other character's hand came to meet it (not only the selected one's).
-    let moved = (in_scene(&editor.model, 0, "r_radiocarpal") - rest_hand).length();
+    let moved = (in_scene(&editor.model, 0, theirs) - rest_hand).length();
     assert!(moved > 0.05, "the first character's hand moved {moved} m");
     for (i, (l, r)) in feet.iter().enumerate() {
         assert!((own(&editor.model, i, "l_talocrural") - *l).length() < 1e-3);
@@ -111,9 +115,7 @@ fn a_task_between_two_characters_poses_both_and_each_keeps_its_feet() {
     }
     editor.apply(Command::Gesture(GestureCommand::EndGesture));
     editor.settle();
-    let apart = (in_scene(&editor.model, 0, "r_radiocarpal")
-        - in_scene(&editor.model, 1, "l_radiocarpal"))
-    .length();
+    let apart = (in_scene(&editor.model, 0, theirs) - in_scene(&editor.model, 1, mine)).length();
     assert!(apart < 1e-3, "after the pull the hands are {apart} m apart");
     for (i, (l, _)) in feet.iter().enumerate() {
         assert!((own(&editor.model, i, "l_talocrural") - *l).length() < 1e-3);
@@ -123,7 +125,7 @@ fn a_task_between_two_characters_poses_both_and_each_keeps_its_feet() {
 #[test]
 fn the_task_between_characters_is_undone_removed_with_a_character_and_shared() {
     let mut editor = facing();
-    hold_hands(&mut editor);
+    let (mine, theirs) = hold_hands(&mut editor);
     editor.settle();
     // The link carries it; another editor opens it and holds the hands together.
     let link = editor.model.share_link();
@@ -131,9 +133,7 @@ fn the_task_between_characters_is_undone_removed_with_a_character_and_shared() {
     other.model.open_startup(Some(&link.url));
     other.settle();
     assert_eq!(other.model.between_tasks(), editor.model.between_tasks());
-    let apart = (in_scene(&other.model, 0, "r_radiocarpal")
-        - in_scene(&other.model, 1, "l_radiocarpal"))
-    .length();
+    let apart = (in_scene(&other.model, 0, theirs) - in_scene(&other.model, 1, mine)).length();
     assert!(apart < 1e-3, "opened from the link: {apart} m apart");
     // Shared again, the same link.
     assert_eq!(other.model.share_link().url, link.url);

@@ -124,8 +124,82 @@ fn scene_contents(
         }
     });
     selected_character(ui, model, outbox);
+    between_section(ui, model, outbox, buttons);
     ui.separator();
     props_section(ui, model, outbox, buttons);
+}
+
+/// The names the page's tests find the *Hold hands* and the tasks' *Remove* buttons by.
+const HOLD_BUTTONS: [&str; 8] = [
+    "hold_hands_0",
+    "hold_hands_1",
+    "hold_hands_2",
+    "hold_hands_3",
+    "hold_hands_4",
+    "hold_hands_5",
+    "hold_hands_6",
+    "hold_hands_7",
+];
+const BETWEEN_REMOVE_BUTTONS: [&str; 4] = [
+    "between_remove_0",
+    "between_remove_1",
+    "between_remove_2",
+    "between_remove_3",
+];
+
+/// Tasks between characters: *Hold hands with* each other character (the two hands nearest
+/// each other meet, and the two are posed together), and each task with how far apart its
+/// points are and *Remove*. More parts meet from the body's right-click menu.
+fn between_section(
+    ui: &mut egui::Ui,
+    model: &EditorModel,
+    outbox: &mut Outbox,
+    buttons: &mut ButtonRects,
+) {
+    if model.character_count() < 2 {
+        return;
+    }
+    ui.horizontal_wrapped(|ui| {
+        ui.label("Hold hands with");
+        for (index, (character, selected)) in model.characters().enumerate() {
+            if selected {
+                continue;
+            }
+            let hold = ui
+                .button(character.name())
+                .on_hover_text("The nearest hands of the two meet; both are posed together");
+            if let Some(name) = HOLD_BUTTONS.get(index) {
+                buttons.push((name, hold.rect));
+            }
+            if hold.clicked()
+                && let Some(new) = model.hands_toward(character.id())
+            {
+                outbox.send(Command::Scene(SceneCommand::AddBetween(new)));
+            }
+        }
+    });
+    let distances = model.between_distances();
+    for (index, task) in model.between_tasks().iter().enumerate() {
+        ui.horizontal_wrapped(|ui| {
+            let apart = match distances.get(index).copied().flatten() {
+                Some(d) if d < 0.001 => "met".to_owned(),
+                Some(d) => format!("{:.0} mm apart", d * 1000.0),
+                None => "a part is missing".to_owned(),
+            };
+            ui.label(format!(
+                "{} (level {}): {apart}",
+                model.between_description(task),
+                task.level
+            ));
+            let remove = ui.small_button("Remove");
+            if let Some(name) = BETWEEN_REMOVE_BUTTONS.get(index) {
+                buttons.push((name, remove.rect));
+            }
+            if remove.clicked() {
+                outbox.send(Command::Scene(SceneCommand::RemoveBetween(index)));
+            }
+        });
+    }
 }
 
 /// The shapes the *Add prop* row offers, with their first size: a box (a step), a ball, a

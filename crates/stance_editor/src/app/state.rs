@@ -76,6 +76,11 @@ impl PageState<'_> {
             "swivel": self.viewport.handles(model).swivel_state(),
             "motion": self.motion(),
             "characters": self.characters(),
+            "between": model.between_tasks().iter().zip(model.between_distances()).map(|(task, distance)| json!({
+                "description": model.between_description(task),
+                "level": task.level,
+                "distance": distance,
+            })).collect::<Vec<_>>(),
         })
         .to_string()
     }

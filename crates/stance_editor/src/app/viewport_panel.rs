@@ -18,7 +18,7 @@ use crate::cast_view::{
 };
 use crate::figure::MannequinFigure;
 use crate::image::ImageExport;
-use crate::model::{AvatarCommand, Command, EditorModel, NewTask, heat_color};
+use crate::model::{AvatarCommand, Command, EditorModel, NewBetween, NewTask, heat_color};
 use crate::viewport::{ViewportInput, ViewportRenderer, apply_gestures};
 use stance_model::BackendSummary;
 
@@ -665,6 +665,17 @@ impl ViewportPanel {
     }
 }
 
+/// The parts of another character a part of the selected one can meet from the body's menu.
+const MEETING_PARTS: [&str; 7] = [
+    "l_radiocarpal",
+    "r_radiocarpal",
+    "l_shoulder",
+    "r_shoulder",
+    "l_elbow",
+    "r_elbow",
+    "skullbase",
+];
+
 /// Right-click on the body: pin, select, add a task on that part.
 fn context_menu(response: &egui::Response, model: &EditorModel, outbox: &mut Outbox) {
     let context_joint = model.hovered_joint().or(model.selected_joint());
@@ -708,6 +719,23 @@ fn context_menu(response: &egui::Response, model: &EditorModel, outbox: &mut Out
             if ui.button(format!("Put on {}", prop.name)).clicked() {
                 command = Some(Command::Task(TaskCommand::AddOnProp { joint, prop: index }));
             }
+        }
+        // On another character: this part meets one of theirs (both posed together).
+        for (other, selected) in model.characters() {
+            if selected {
+                continue;
+            }
+            ui.menu_button(format!("Meet {}'s", other.name()), |ui| {
+                for part in MEETING_PARTS {
+                    if ui.button(readable_name(part)).clicked() {
+                        command = Some(Command::Scene(SceneCommand::AddBetween(NewBetween {
+                            joint,
+                            other: other.id(),
+                            other_joint: (*part).to_owned(),
+                        })));
+                    }
+                }
+            });
         }
         if let Some(command) = command {
             if matches!(

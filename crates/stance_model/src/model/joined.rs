@@ -125,6 +125,68 @@ impl EditorModel {
         super::Change::Document
     }
 
+    /// How far apart each task between characters holds its two points now (m, in the
+    /// scene); `None` where a character or joint is missing.
+    pub fn between_distances(&self) -> Vec<Option<f64>> {
+        self.cast_between()
+            .iter()
+            .map(|task| {
+                let a = self.point_in_scene(&task.a)?;
+                let b = self.point_in_scene(&task.b)?;
+                Some((a - b).length())
+            })
+            .collect()
+    }
+
+    fn point_in_scene(&self, p: &CharacterPoint) -> Option<glam::DVec3> {
+        let (character, _) = self.characters().nth(p.character)?;
+        let session = character.session();
+        let joint = session.skeleton().joint_index(&p.joint)?;
+        let local = session
+            .frames()
+            .point(joint, glam::DVec3::from_array(p.point));
+        Some(
+            character
+                .placement()
+                .scene_from_character()
+                .transform_point3(local),
+        )
+    }
+
+    /// Hands held with the character `other`: the selected character's hand and the other's
+    /// that stand nearest each other now (side by side, the hands between them; face to
+    /// face, the hands on the same side of the space between them).
+    pub fn hands_toward(&self, other: u64) -> Option<NewBetween> {
+        let selected = self.selected_index();
+        let index = self.characters().position(|(c, _)| c.id() == other)?;
+        let hands = ["l_radiocarpal", "r_radiocarpal"];
+        let mut best: Option<(f64, &str, &str)> = None;
+        for mine in hands {
+            for theirs in hands {
+                let at = |character: usize, joint: &str| {
+                    self.point_in_scene(&CharacterPoint {
+                        character,
+                        joint: joint.to_owned(),
+                        point: [0.0; 3],
+                    })
+                };
+                let (Some(a), Some(b)) = (at(selected, mine), at(index, theirs)) else {
+                    continue;
+                };
+                let d = (a - b).length();
+                if best.is_none_or(|(bd, _, _)| d < bd) {
+                    best = Some((d, mine, theirs));
+                }
+            }
+        }
+        let (_, mine, theirs) = best?;
+        Some(NewBetween {
+            joint: self.character.session.skeleton().joint_index(mine)?,
+            other,
+            other_joint: theirs.to_owned(),
+        })
+    }
+
     /// "Ann's right hand meets Bo's left hand".
     pub fn between_description(&self, task: &BetweenTask) -> String {
         let part = |p: &CharacterPoint| {
