@@ -281,3 +281,59 @@ fn an_old_document_made_on_the_avatar_opens_as_it_was_saved() {
     let saved = editor.model.document();
     assert_eq!(saved.rest, stance_document::PostureRest::Standard);
 }
+
+/// A scene whose two characters name the same avatar: the selected one's is fetched, the other
+/// waits on the mannequin and still names it (saving loses nothing), and once the avatar has
+/// loaded both stand on it, each in its own posture.
+#[test]
+fn characters_waiting_for_the_avatar_get_it_once_it_has_loaded() {
+    let mut editor = Clocked::new();
+    let url = "https://example.org/avatars/t-pose.glb";
+    let scene = format!(
+        r#"{{"characters": [
+            {{"name": "Ann", "avatar": {{"url": "{url}"}}, "rest": "standard", "posture": {{"l_elbow": {{"rx": -0.7}}}}}},
+            {{"name": "Bo", "placement": {{"position": [0.8, 0, 0]}}, "avatar": {{"url": "{url}"}},
+              "rest": "standard", "posture": {{"r_elbow": {{"rx": -0.4}}}}}}],
+          "selected": 0}}"#
+    );
+    editor.apply(Command::File(FileCommand::OpenFile {
+        name: "scene.json".to_owned(),
+        bytes: scene.into_bytes(),
+    }));
+    let names = |editor: &Clocked| -> Vec<String> {
+        editor
+            .model
+            .scene()
+            .characters
+            .iter()
+            .map(|c| format!("{:?}", c.document.avatar))
+            .collect()
+    };
+    // Before the avatar arrives: nobody on it, both still name it.
+    assert!(editor.model.characters().all(|(c, _)| c.avatar().is_none()));
+    assert!(
+        names(&editor).iter().all(|n| n.contains(url)),
+        "{:?}",
+        names(&editor)
+    );
+    editor.apply(Command::Avatar(AvatarCommand::LoadAvatar {
+        name: url.to_owned(),
+        bytes: t_pose_glb(),
+    }));
+    editor.settle();
+    assert!(
+        editor.model.characters().all(|(c, _)| c.avatar().is_some()),
+        "{:?}",
+        editor.model.notice()
+    );
+    assert!(names(&editor).iter().all(|n| n.contains(url)));
+    // Each kept its own posture.
+    let dof = |editor: &Clocked, index: usize, joint: &str| {
+        let (character, _) = editor.model.characters().nth(index).unwrap();
+        let session = character.session();
+        let j = session.skeleton().joint_index(joint).unwrap();
+        session.posture().values()[session.skeleton().joints()[j].dof_start]
+    };
+    assert!((dof(&editor, 0, "l_elbow") + 0.7).abs() < 1e-3);
+    assert!((dof(&editor, 1, "r_elbow") + 0.4).abs() < 1e-3);
+}

@@ -151,6 +151,7 @@ impl EditorModel {
         }
         self.character.avatar = Some(avatar);
         self.character.avatar_url = crate::avatar::is_url(name).then(|| name.to_owned());
+        self.character.wanted_avatar_url = None;
         if let Some(document) = self.pending_document.take() {
             // Written before postures meant the same pose on every body: its values are
             // relative to this avatar's own rest.
@@ -164,6 +165,7 @@ impl EditorModel {
                 text.push_str(super::CONVERTED_NOTE);
             }
         }
+        text.push_str(&self.give_avatar_to_waiting());
         self.inform(text);
         if let Some(avatar) = &mut self.character.avatar {
             avatar.load.session_ms = started.elapsed().as_secs_f64() * 1e3 - avatar.load.build_ms;

@@ -36,6 +36,10 @@ pub struct Character {
     pub(super) avatar: Option<LoadedAvatar>,
     /// The URL the avatar came from (links and autosave name it); `None` for local files.
     pub(super) avatar_url: Option<String>,
+    /// The avatar its document names while it waits on the mannequin (opened with a scene,
+    /// not the selected character): saved and shared as its avatar, and given to it once the
+    /// editor has loaded that avatar.
+    pub(super) wanted_avatar_url: Option<String>,
     pub(super) mapping_corrections: MappingCorrections,
     /// The clip, the playhead and the trajectory (the keys are in the document).
     pub(super) timeline: Timeline,
@@ -64,6 +68,7 @@ impl Character {
             session,
             avatar: None,
             avatar_url: None,
+            wanted_avatar_url: None,
             mapping_corrections: MappingCorrections::default(),
             timeline: Timeline::default(),
             bones: Vec::new(),
@@ -125,7 +130,8 @@ impl Character {
     /// Its entry in the scene document; `for_autosave`: its clip file kept only when small
     /// (`Timeline::autosaved_clip`), else named.
     fn scene_character(&self, for_autosave: bool) -> SceneCharacter {
-        let mut document = document_of(&self.session, self.avatar_url.as_deref());
+        let url = self.avatar_url.as_ref().or(self.wanted_avatar_url.as_ref());
+        let mut document = document_of(&self.session, url.map(String::as_str));
         document.clip = if for_autosave {
             self.timeline.autosaved_clip()
         } else {
@@ -853,7 +859,43 @@ impl EditorModel {
             (None, named_url)
         };
         character.avatar_url = had;
+        character.wanted_avatar_url.clone_from(&wanted);
         Ok((character, wanted))
+    }
+
+    /// Gives the selected character's avatar, just loaded, to every other character waiting
+    /// for the same one on the mannequin: each rebuilt on it from its own document (posture,
+    /// tasks, placement and timeline kept). Returns what to tell the user (empty: none).
+    pub(super) fn give_avatar_to_waiting(&mut self) -> String {
+        let Some(url) = self.character.avatar_url.clone() else {
+            return String::new();
+        };
+        let loa = self.character.session.level_of_articulation();
+        let mut given = 0;
+        for i in 0..self.cast.others.len() {
+            if self.cast.others[i].wanted_avatar_url.as_ref() != Some(&url) {
+                continue;
+            }
+            let entry = self.cast.others[i].scene_character(false);
+            match self.built_character(&entry, loa, Some(&url)) {
+                Ok((mut built, _)) => {
+                    let old = &mut self.cast.others[i];
+                    built.set_id(old.id);
+                    built.timeline = std::mem::take(&mut old.timeline);
+                    *old = built;
+                    given += 1;
+                }
+                Err(error) => self.warn(format!(
+                    "{} stays on the mannequin: {error}",
+                    self.cast.others[i].name
+                )),
+            }
+        }
+        if given == 0 {
+            return String::new();
+        }
+        self.wake_joined();
+        format!(" Also given to {given} more character(s) of the scene waiting for it.")
     }
 
     /// Forgets the removed characters no step of the history names.
