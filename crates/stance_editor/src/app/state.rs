@@ -104,6 +104,7 @@ impl PageState<'_> {
                 json!({
                     "name": character.name(),
                     "id": character.id(),
+                    "avatar": character.avatar().map(|avatar| avatar.name.clone()),
                     "selected": selected,
                     "position": placement.position,
                     "yaw": placement.yaw_degrees,

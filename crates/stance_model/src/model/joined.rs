@@ -47,8 +47,12 @@ impl EditorModel {
             return false;
         }
         let between = self.cast_between().to_vec();
+        let waiting = self.pending_document.is_some();
         let mut members = self.members_mut(&group);
-        if members.iter().all(|m| m.session.is_settled()) {
+        // Joined characters wait while the selected one's avatar is on its way (solved on the
+        // mannequin's proportions, they would all move before it arrives and is given to the
+        // others waiting for it).
+        if waiting || members.iter().all(|m| m.session.is_settled()) {
             return true;
         }
         let joined = match joined_problem(&members, &group, &between) {
