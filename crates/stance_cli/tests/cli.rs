@@ -581,3 +581,36 @@ fn solve_joins_the_characters_a_task_between_them_joins() {
             <= 2
     );
 }
+
+/// The complete scene example of docs/document-format.md (Table 1 with its sphere and bar, a
+/// second character's hand on the first's shoulder), as the document shows it: every level
+/// of both characters met, the hand on the shoulder.
+#[test]
+fn the_documented_scene_example_solves_as_it_says() {
+    let doc = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../docs/document-format.md"
+    ))
+    .unwrap();
+    let heading = doc
+        .find("### Example: Table 1 with its sphere and bar")
+        .expect("the example's heading");
+    let start = heading + doc[heading..].find("```json\n").unwrap() + "```json\n".len();
+    let end = start + doc[start..].find("```").unwrap();
+    let path = write_temp("documented-scene.json", &doc[start..end]);
+    let (ok, stdout, stderr) = stance(&["solve", path.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    let v: Value = serde_json::from_str(&stdout).unwrap();
+    for character in v["characters"].as_array().unwrap() {
+        assert!(
+            character["report"]["gave_way"].is_null(),
+            "{}",
+            character["report"]
+        );
+        for task in character["tasks"].as_array().unwrap() {
+            assert_eq!(task["met"], true, "{} {task}", character["name"]);
+        }
+        assert_eq!(character["left_out"], serde_json::json!([]));
+    }
+    assert!(v["between"][0]["distance"].as_f64().unwrap() < 1e-3);
+}

@@ -644,3 +644,44 @@ fn the_openpose_map_has_every_character_in_view_placed_in_the_scene() {
         "the second stands to the right"
     );
 }
+
+#[test]
+fn table1_places_its_sphere_and_bar_where_its_hands_reach_them() {
+    // Catches: Table 1's hands reaching into empty space, props left at the origin when the
+    // character stands elsewhere, a second click adding a second pair.
+    use stance_document::PropShape;
+    use stance_model::model::TaskCommand;
+    let mut editor = Clocked::new();
+    let id = editor.model.character().id();
+    let placement = Placement {
+        position: [1.0, 0.0, -0.5],
+        yaw_degrees: 30.0,
+    };
+    editor.apply(Command::Scene(SceneCommand::Place(id, placement)));
+    editor.apply(Command::Task(TaskCommand::LoadTable1Example));
+    editor.apply(Command::Task(TaskCommand::LoadTable1Example));
+    editor.settle();
+    let props = editor.model.props();
+    assert_eq!(props.len(), 2, "{props:?}");
+    let right = in_scene(&editor, "r_radiocarpal");
+    let left = in_scene(&editor, "l_radiocarpal");
+    for prop in props {
+        let centre = glam::DVec3::from_array(prop.position);
+        match prop.shape {
+            PropShape::Sphere { radius } => {
+                let gap = (right - centre).length() - radius;
+                assert!(gap.abs() < 1e-3, "the right hand is {gap} m off the sphere");
+            }
+            PropShape::Cylinder { radius, .. } => {
+                let off = glam::DVec2::new(left.x - centre.x, left.z - centre.z).length();
+                assert!(off < radius, "the left hand is {off} m from the bar's axis");
+            }
+            _ => panic!("{prop:?}"),
+        }
+    }
+    // One undo takes the tasks back, the next the props.
+    editor.apply(Command::History(HistoryCommand::Undo));
+    editor.apply(Command::History(HistoryCommand::Undo));
+    editor.apply(Command::History(HistoryCommand::Undo));
+    assert!(editor.model.props().is_empty());
+}

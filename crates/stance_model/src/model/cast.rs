@@ -384,6 +384,58 @@ impl EditorModel {
         super::Change::Document
     }
 
+    /// Table 1's sphere and vertical bar where its tasks reach for them (in front of the
+    /// selected character): the sphere touched on its near side by the right hand's goal, the
+    /// bar's axis through the left hand's; one undo step; props of those names already in the
+    /// scene are moved there instead.
+    pub(super) fn place_table1_props(&mut self) {
+        use super::tasks::{TABLE1_BAR, TABLE1_SPHERE, TABLE1_SPHERE_RADIUS};
+        let scene_from_character = self.character.placement.scene_from_character();
+        let reach = glam::DVec3::from_array(TABLE1_SPHERE);
+        let shoulder = self
+            .character
+            .session
+            .joint_position("r_shoulder")
+            .unwrap_or(glam::DVec3::new(-0.2, 1.4, 0.0));
+        let centre = reach + (reach - shoulder).normalize_or(glam::DVec3::Z) * TABLE1_SPHERE_RADIUS;
+        let turn = glam::DQuat::from_rotation_y(self.character.placement.yaw_degrees.to_radians());
+        let props = [
+            (
+                "Table 1 sphere",
+                PropShape::Sphere {
+                    radius: TABLE1_SPHERE_RADIUS,
+                },
+                centre,
+            ),
+            (
+                "Table 1 bar",
+                PropShape::Cylinder {
+                    radius: 0.02,
+                    height: 2.0,
+                },
+                glam::DVec3::new(TABLE1_BAR[0], 1.0, TABLE1_BAR[2]),
+            ),
+        ];
+        let before = self.cast_snapshot();
+        for (name, shape, at) in props {
+            let mut prop = Prop::new(
+                name.to_owned(),
+                shape,
+                scene_from_character.transform_point3(at).to_array(),
+            );
+            prop.rotation = turn.to_array();
+            let full = self.cast.props.len() >= MAX_PROPS;
+            match self.cast.props.iter_mut().find(|p| p.name == name) {
+                Some(existing) => *existing = prop,
+                None if !full => self.cast.props.push(prop),
+                None => {}
+            }
+        }
+        if before.props != self.cast.props {
+            self.history.record_cast(before, false, self.now_secs);
+        }
+    }
+
     fn remove_prop(&mut self, index: usize) -> super::Change {
         if index >= self.cast.props.len() {
             return super::Change::Nothing;

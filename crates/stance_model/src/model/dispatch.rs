@@ -224,8 +224,9 @@ impl EditorModel {
                 EditKind::Command
             }
             TaskCommand::LoadTable1Example => {
+                self.place_table1_props();
                 tasks = table1_example(&self.character.session);
-                self.inform("Table 1 of the paper: level 1 holds the left foot, the gaze and the right hand; balance is level 2; the left hand on the bar level 3.");
+                self.inform("Table 1 of the paper: level 1 holds the left foot, the gaze and the right hand on the sphere; balance is level 2; the left hand on the bar level 3.");
                 EditKind::Command
             }
             TaskCommand::Remove(index) => {

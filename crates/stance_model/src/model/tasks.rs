@@ -131,13 +131,21 @@ fn limb_as_it_stands(session: &PosingSession, limb: LimbName) -> Result<TaskKind
     })
 }
 
+/// Where Table 1's right hand reaches and the gaze looks (the character's frame, m): the
+/// sphere's near side.
+pub const TABLE1_SPHERE: [f64; 3] = [-0.3, 1.15, 0.4];
+/// Where Table 1's left hand holds the vertical bar (its axis, the character's frame, m).
+pub const TABLE1_BAR: [f64; 3] = [0.35, 1.0, 0.2];
+/// The radius of Table 1's sphere (m).
+pub const TABLE1_SPHERE_RADIUS: f64 = 0.11;
+
 /// The paper's Table 1: left foot on the floor, gaze and right hand on a sphere (level 1);
 /// the centre of mass over a point between the feet (level 2); left hand on a vertical bar
 /// (level 3); the rest-posture attraction.
 pub fn table1_example(session: &PosingSession) -> Vec<TaskSpec> {
     let position = |name: &str| session.joint_position(name).unwrap_or_default();
-    let sphere = [-0.3, 1.15, 0.4];
-    let bar = [0.35, 1.0, 0.2];
+    let sphere = TABLE1_SPHERE;
+    let bar = TABLE1_BAR;
     let left = position("l_talocrural");
     let right = position("r_talocrural");
     let between = (left + right) * 0.5;
