@@ -10,7 +10,7 @@ import { tmpdir } from "node:os";
 import { join } from "node:path";
 import zlib from "node:zlib";
 import {
-  CONFIGURATIONS, assertDrawnAtJoints, assertNotDrawnAt, decodePng, describeLongTasks,
+  CONFIGURATIONS, assertDrawnAtJoints, assertNotDrawnAt, clickButton, decodePng, describeLongTasks,
   isAvatarPixel, isFigureColour, launch, longTasks, openEditor, pointsAwayFromFigure,
   pressKeys, saveArtifact, freshStoragePerTab, serve, viewportRect, waitForSettled, waitForState,
 } from "./browser.mjs";
