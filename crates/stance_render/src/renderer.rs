@@ -59,8 +59,10 @@ struct PropPipeline {
     pipeline: wgpu::RenderPipeline,
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
-    /// Per template (in [`PropTemplate::ALL`]'s order): its index range and first vertex.
-    ranges: Vec<(std::ops::Range<u32>, i32)>,
+    /// Per template (in [`PropTemplate::ALL`]'s order): its index range. The indices point
+    /// into the whole vertex buffer: WebGL2 draws no instances from a base vertex other than
+    /// 0 (glow panics: "Draw elements instanced base vertex is not supported").
+    ranges: Vec<std::ops::Range<u32>>,
     instances: wgpu::Buffer,
     capacity: usize,
 }
@@ -113,11 +115,11 @@ impl PropPipeline {
             cache: None,
         });
         let mut vertices = Vec::new();
-        let mut indices: Vec<u16> = Vec::new();
+        let mut indices: Vec<u32> = Vec::new();
         let mut ranges = Vec::new();
         for template in PropTemplate::ALL {
             let mesh = prop_mesh(template);
-            let first_vertex = i32::try_from(vertices.len()).unwrap_or(0);
+            let first_vertex = u32::try_from(vertices.len()).unwrap_or(0);
             let first_index = u32::try_from(indices.len()).unwrap_or(0);
             vertices.extend(
                 mesh.positions
@@ -128,9 +130,9 @@ impl PropPipeline {
                         normal: n.extend(0.0).to_array(),
                     }),
             );
-            indices.extend_from_slice(&mesh.indices);
+            indices.extend(mesh.indices.iter().map(|&i| first_vertex + u32::from(i)));
             let end = u32::try_from(indices.len()).unwrap_or(0);
-            ranges.push((first_index..end, first_vertex));
+            ranges.push(first_index..end);
         }
         let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("stance prop vertices"),
@@ -206,10 +208,10 @@ impl PropPipeline {
         pass.set_pipeline(&self.pipeline);
         pass.set_vertex_buffer(0, self.vertices.slice(..));
         pass.set_vertex_buffer(1, self.instances.slice(..));
-        pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint16);
-        for ((indices, first_vertex), instances) in self.ranges.iter().zip(groups) {
+        pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+        for (indices, instances) in self.ranges.iter().zip(groups) {
             if !instances.is_empty() {
-                pass.draw_indexed(indices.clone(), *first_vertex, instances.clone());
+                pass.draw_indexed(indices.clone(), 0, instances.clone());
             }
         }
     }
