@@ -212,6 +212,7 @@ impl TaskSpec {
             active: task.active,
             kind,
             interval: None,
+            on: None,
         })
     }
 }

@@ -195,6 +195,10 @@ pub struct TaskSpec {
     pub kind: TaskKindSpec,
     /// When the task acts on a timeline; `None`: always.
     pub interval: Option<TaskInterval>,
+    /// The prop (by name) the task is attached to in a scene: its goal follows the prop when
+    /// the prop or the character moves (the editor moves it with [`TaskSpec::moved`]; the
+    /// solver reads the goal as written).
+    pub on: Option<String>,
 }
 
 impl TaskSpec {
@@ -206,6 +210,7 @@ impl TaskSpec {
             active: true,
             kind,
             interval: None,
+            on: None,
         }
     }
 }

@@ -48,9 +48,10 @@ pub const LINK_FORMAT: u8 = 10;
 /// a placement) and the props, each character its name, placement and document payload in the
 /// oldest format that holds it.
 pub const SCENE_FORMAT: u8 = 9;
-/// The format of a scene's link with tasks between its characters: [`SCENE_FORMAT`]'s
-/// payload, then the tasks (count; each its level, weight, flags, axes and two points: the
-/// character, the joint's name, the point).
+/// The format of a scene's link with tasks between its characters or tasks attached to
+/// props: [`SCENE_FORMAT`]'s payload, then the tasks between characters (count; each its
+/// level, weight, flags, axes and two points: the character, the joint's name, the point),
+/// then the attached tasks (count; each the character, the task's index, the prop's name).
 pub const BETWEEN_FORMAT: u8 = 10;
 /// Quantisation step of a character's turn on the floor: 0.005 degrees in radians.
 const YAW_STEP_RAD: f64 = ROTATION_STEP_RAD;
@@ -242,7 +243,20 @@ pub fn encode_scene(scene: &Scene) -> String {
             write_zigzag(&mut payload, models::quantise(value, DIRECTION_STEP));
         }
     }
-    if scene.between.is_empty() {
+    let attached: Vec<(usize, usize, &str)> = scene
+        .characters
+        .iter()
+        .enumerate()
+        .flat_map(|(c, character)| {
+            character
+                .document
+                .tasks
+                .iter()
+                .enumerate()
+                .filter_map(move |(t, task)| task.on.as_deref().map(|on| (c, t, on)))
+        })
+        .collect();
+    if scene.between.is_empty() && attached.is_empty() {
         return frame(SCENE_FORMAT, &payload);
     }
     write_leb128(&mut payload, scene.between.len() as u64);
@@ -264,6 +278,13 @@ pub fn encode_scene(scene: &Scene) -> String {
                 write_zigzag(&mut payload, models::quantise(value, POSITION_STEP_M));
             }
         }
+    }
+    write_leb128(&mut payload, attached.len() as u64);
+    for (character, task, on) in attached {
+        write_leb128(&mut payload, character as u64);
+        write_leb128(&mut payload, task as u64);
+        write_leb128(&mut payload, on.len() as u64);
+        payload.extend_from_slice(on.as_bytes());
     }
     frame(BETWEEN_FORMAT, &payload)
 }
@@ -409,7 +430,9 @@ fn decode_scene_payload(bytes: &[u8], format: u8) -> Result<Scene, String> {
         });
     }
     let between = if format >= BETWEEN_FORMAT {
-        decode_between(bytes, &mut at)?
+        let between = decode_between(bytes, &mut at)?;
+        decode_attachments(bytes, &mut at, &mut characters)?;
+        between
     } else {
         Vec::new()
     };
@@ -422,6 +445,44 @@ fn decode_scene_payload(bytes: &[u8], format: u8) -> Result<Scene, String> {
         selected: usize::try_from(selected).unwrap_or(usize::MAX),
         between,
     })
+}
+
+/// The tasks attached to props of a [`BETWEEN_FORMAT`] link, from `at`: each (character, task,
+/// prop name) sets that task's `on`.
+fn decode_attachments(
+    bytes: &[u8],
+    at: &mut usize,
+    characters: &mut [crate::scene::SceneCharacter],
+) -> Result<(), String> {
+    let leb = |at: &mut usize| -> Result<u64, String> {
+        let (value, used) = bytes
+            .get(*at..)
+            .and_then(read_leb128)
+            .ok_or_else(|| "the scene's attached tasks are cut".to_owned())?;
+        *at += used;
+        Ok(value)
+    };
+    let count = leb(at)?;
+    if count > 64 * crate::scene::MAX_CHARACTERS as u64 {
+        return Err(format!("{count} attached tasks"));
+    }
+    for _ in 0..count {
+        let character = usize::try_from(leb(at)?).unwrap_or(usize::MAX);
+        let task = usize::try_from(leb(at)?).unwrap_or(usize::MAX);
+        let length = usize::try_from(leb(at)?).unwrap_or(usize::MAX);
+        let name = bytes
+            .get(*at..at.saturating_add(length))
+            .ok_or_else(|| "an attached task's prop name is cut".to_owned())?;
+        *at += length;
+        let name = std::str::from_utf8(name)
+            .map_err(|_| "an attached task's prop name is not UTF-8".to_owned())?;
+        let spec = characters
+            .get_mut(character)
+            .and_then(|c| c.document.tasks.get_mut(task))
+            .ok_or_else(|| format!("character {character} has no task {task} to attach"))?;
+        spec.on = Some(name.to_owned());
+    }
+    Ok(())
 }
 
 /// The tasks between characters of a [`BETWEEN_FORMAT`] link, from `at`.

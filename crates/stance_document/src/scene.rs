@@ -451,6 +451,16 @@ impl Scene {
                 .placement
                 .validate_at(&format!("{at}.placement"))?;
             character.document.validate().map_err(|e| e.within(&at))?;
+            for (k, task) in character.document.tasks.iter().enumerate() {
+                if let Some(on) = &task.on
+                    && !self.props.iter().any(|p| &p.name == on)
+                {
+                    return Err(DocumentError::field(
+                        format!("{at}.tasks[{k}].on"),
+                        format!("no prop is named `{on}`"),
+                    ));
+                }
+            }
         }
         if self.between.len() > MAX_BETWEEN_TASKS {
             return Err(DocumentError::field(

@@ -336,12 +336,20 @@ impl TaskSpec {
             None => None,
             Some(i) => Some(TaskInterval::from_json_value(i, &here("interval"))?),
         };
+        let on = match opt("on") {
+            None => None,
+            Some(name) => Some(
+                crate::scene::clean_name(string(name, &here("on"))?)
+                    .ok_or_else(|| DocumentError::field(here("on"), "an empty prop name"))?,
+            ),
+        };
         Ok(TaskSpec {
             level,
             weight,
             active,
             kind,
             interval,
+            on,
         })
     }
 }
@@ -480,6 +488,9 @@ impl Serialize for TaskSpec {
         }
         m.serialize_entry("weight", &self.weight)?;
         m.serialize_entry("active", &self.active)?;
+        if let Some(on) = &self.on {
+            m.serialize_entry("on", on)?;
+        }
         if let Some(interval) = &self.interval {
             m.serialize_entry("interval", interval)?;
         }

@@ -87,6 +87,48 @@ impl TaskSpec {
         comfort
     }
 
+    /// The task moved rigidly by `m` (a turn and a translation of the frame its goals are in):
+    /// goal points, line origins and plane points moved, directions, normals and orientations
+    /// turned; a task attached to a prop follows it with this (`on`). Local points, balance,
+    /// posture, comfort and collision stay.
+    pub fn moved(&self, m: glam::DAffine3) -> TaskSpec {
+        let point = |p: [f64; 3]| m.transform_point3(glam::DVec3::from_array(p)).to_array();
+        let vector = |v: [f64; 3]| m.transform_vector3(glam::DVec3::from_array(v)).to_array();
+        let turn = glam::DQuat::from_mat3(&m.matrix3);
+        let rotation = |q: [f64; 4]| (turn * glam::DQuat::from_array(q)).to_array();
+        let mut moved = self.clone();
+        match &mut moved.kind {
+            TaskKindSpec::Position { target, .. }
+            | TaskKindSpec::Gaze { target, .. }
+            | TaskKindSpec::Com { target, .. } => *target = point(*target),
+            TaskKindSpec::Orientation { target, .. } => *target = rotation(*target),
+            TaskKindSpec::Direction { target, .. } => *target = vector(*target),
+            TaskKindSpec::Limb {
+                target,
+                orientation,
+                ..
+            } => {
+                *target = point(*target);
+                *orientation = orientation.map(rotation);
+            }
+            TaskKindSpec::Line {
+                origin, direction, ..
+            } => {
+                *origin = point(*origin);
+                *direction = vector(*direction);
+            }
+            TaskKindSpec::Plane { origin, normal, .. } => {
+                *origin = point(*origin);
+                *normal = vector(*normal);
+            }
+            TaskKindSpec::Balance { .. }
+            | TaskKindSpec::Posture { .. }
+            | TaskKindSpec::Comfort { .. }
+            | TaskKindSpec::Collision { .. } => {}
+        }
+        moved
+    }
+
     /// The task mirrored left/right: joints swap sides, goals and local points are reflected
     /// in the sagittal plane (x -> -x), orientations accordingly; level, weight and active flag
     /// stay.

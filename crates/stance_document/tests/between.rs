@@ -226,3 +226,64 @@ fn placed_at_rest(scene: &Scene, skeleton: &Skeleton, c: usize, joint: &str) -> 
         .scene_from_character()
         .transform_point3(frames.joint_position[skeleton.joint_index(joint).unwrap()])
 }
+
+/// A task attached to a prop (`on`): kept by JSON and links, refused when no prop has that
+/// name; `TaskSpec::moved` against a turn and a translation done by hand.
+#[test]
+fn a_task_attached_to_a_prop_is_kept_checked_and_moved() {
+    let mut scene = hand_in_hand(0.7);
+    scene.between.clear();
+    scene.props.push(stance_document::Prop::new(
+        "Rail".into(),
+        stance_document::PropShape::Cylinder {
+            radius: 0.02,
+            height: 2.0,
+        },
+        [0.0, 1.0, 0.5],
+    ));
+    let mut task = stance_document::TaskSpec::new(stance_document::TaskKindSpec::Line {
+        joint: "r_radiocarpal".into(),
+        point: [0.0; 3],
+        origin: [0.1, 1.0, 0.2],
+        direction: [0.0, 1.0, 0.0],
+    });
+    task.on = Some("Rail".into());
+    scene.characters[1].document.tasks.push(task.clone());
+    let text = scene.to_json(false);
+    assert_eq!(Scene::from_json(&text).unwrap(), scene);
+    let back = link::decode_scene(&link::encode_scene(&scene)).unwrap();
+    let kept: Vec<_> = back.characters[1]
+        .document
+        .tasks
+        .iter()
+        .filter_map(|t| t.on.clone())
+        .collect();
+    assert_eq!(kept, vec!["Rail".to_owned()]);
+    let mut unknown = scene.clone();
+    unknown.props.clear();
+    let error = Scene::from_json(&unknown.to_json(false))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("characters[1].tasks[3].on") && error.contains("Rail"),
+        "{error}"
+    );
+    // A quarter turn about +Y then 1 m along +X, by hand: (x, y, z) -> (z + 1, y, -x).
+    let m = glam::DAffine3::from_rotation_translation(
+        glam::DQuat::from_rotation_y(std::f64::consts::FRAC_PI_2),
+        DVec3::X,
+    );
+    let moved = task.moved(m);
+    let stance_document::TaskKindSpec::Line {
+        origin, direction, ..
+    } = moved.kind
+    else {
+        panic!("a line")
+    };
+    for (got, want) in origin.iter().zip([1.2, 1.0, -0.1]) {
+        assert!((got - want).abs() < 1e-12, "{origin:?}");
+    }
+    for (got, want) in direction.iter().zip([0.0, 1.0, 0.0]) {
+        assert!((got - want).abs() < 1e-12, "{direction:?}");
+    }
+}

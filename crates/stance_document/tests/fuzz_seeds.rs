@@ -26,11 +26,13 @@ const SCENE: &str = r#"{"characters": [
   {"name": "Bo", "placement": {"position": [0.8, 0, -0.2], "yaw": 90}}
 ], "selected": 1}"#;
 
-/// [`SCENE`] with a task between its characters (a link of format 10).
+/// [`SCENE`] with a task between its characters and one attached to a prop (format 10).
 const SCENE_BETWEEN: &str = r#"{"characters": [
-  {"name": "Ann", "tasks": [{"level": 1, "kind": "position", "joint": "l_talocrural", "target": [0.1, 0.07, 0.0]}]},
+  {"name": "Ann", "tasks": [{"level": 1, "kind": "position", "joint": "l_talocrural", "target": [0.1, 0.07, 0.0]},
+    {"level": 2, "kind": "line", "joint": "r_radiocarpal", "origin": [-0.4, 1, 0.3], "direction": [0, 1, 0], "on": "Bar"}]},
   {"name": "Bo", "placement": {"position": [0.8, 0, -0.2], "yaw": 90}}
-], "between": [{"kind": "meet", "a": {"character": 0, "joint": "r_radiocarpal"},
+], "props": [{"name": "Bar", "shape": "cylinder", "radius": 0.02, "height": 2.0, "position": [-0.4, 1, 0.3]}],
+"between": [{"kind": "meet", "a": {"character": 0, "joint": "r_radiocarpal"},
   "b": {"character": 1, "joint": "l_radiocarpal", "point": [0, -0.05, 0]}, "axes": "xz", "level": 3}],
 "selected": 0}"#;
 

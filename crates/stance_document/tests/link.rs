@@ -43,6 +43,7 @@ fn all_kinds() -> Document {
         active,
         kind,
         interval: None,
+        on: None,
     };
     Document {
         // Made on an avatar before `rest` existed: the oldest formats hold it.

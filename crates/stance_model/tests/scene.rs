@@ -685,3 +685,97 @@ fn table1_places_its_sphere_and_bar_where_its_hands_reach_them() {
     editor.apply(Command::History(HistoryCommand::Undo));
     assert!(editor.model.props().is_empty());
 }
+
+#[test]
+fn a_hand_on_a_bar_follows_the_bar_and_stays_on_it_when_the_character_moves() {
+    // Catches: a goal left where the prop was (not attached), a goal moved with the character
+    // instead of staying on the prop, an undo that moves the bar back but not the hand, the
+    // attachment lost in the link.
+    use stance_document::PropShape;
+    use stance_model::model::TaskCommand;
+    let mut editor = Clocked::new();
+    editor.apply(Command::Scene(SceneCommand::AddProp(PropShape::Cylinder {
+        radius: 0.02,
+        height: 2.0,
+    })));
+    let wrist = in_scene(&editor, "r_radiocarpal");
+    let mut bar = editor.model.props()[0].clone();
+    bar.position = [wrist.x - 0.1, 1.0, wrist.z + 0.1];
+    editor.apply(Command::Scene(SceneCommand::EditProp(0, bar.clone())));
+    let r_wrist = editor.joint("r_radiocarpal");
+    editor.apply(Command::Task(TaskCommand::AddOnProp {
+        joint: r_wrist,
+        prop: 0,
+    }));
+    editor.settle();
+    let on_bar = |editor: &Clocked| {
+        let bar = &editor.model.props()[0];
+        let wrist = in_scene(editor, "r_radiocarpal");
+        glam::DVec2::new(wrist.x - bar.position[0], wrist.z - bar.position[2]).length()
+    };
+    assert!(on_bar(&editor) < 1e-3);
+    // The bar moved 8 cm aside and renamed: the hand follows it.
+    let mut moved = bar.clone();
+    moved.position[2] += 0.08;
+    moved.name = "Rail".into();
+    editor.apply(Command::Scene(SceneCommand::EditProp(0, moved)));
+    editor.settle();
+    assert!(
+        on_bar(&editor) < 1e-3,
+        "{} m off the moved bar",
+        on_bar(&editor)
+    );
+    // The character moved 5 cm: the hand stays on the bar (in the scene).
+    let id = editor.model.character().id();
+    editor.apply(Command::Scene(SceneCommand::Place(
+        id,
+        Placement {
+            position: [0.05, 0.0, 0.0],
+            yaw_degrees: 10.0,
+        },
+    )));
+    editor.settle();
+    assert!(
+        on_bar(&editor) < 1e-3,
+        "{} m off after the move",
+        on_bar(&editor)
+    );
+    // Undo (the move and the bar's edit, one step when made in quick succession): the hand
+    // stays on the bar wherever undo puts it.
+    editor.apply(Command::History(HistoryCommand::Undo));
+    editor.settle();
+    assert!(
+        on_bar(&editor) < 1e-3,
+        "{} m off after undo",
+        on_bar(&editor)
+    );
+    editor.apply(Command::History(HistoryCommand::Redo));
+    editor.settle();
+    assert!(
+        on_bar(&editor) < 1e-3,
+        "{} m off after redo",
+        on_bar(&editor)
+    );
+    // The link keeps the attachment: moved in another editor, the hand follows.
+    let link = editor.model.share_link();
+    let mut other = Clocked::new();
+    other.model.open_startup(Some(&link.url));
+    other.settle();
+    let attached: Vec<_> = other
+        .model
+        .session()
+        .tasks()
+        .iter()
+        .filter_map(|t| t.on.clone())
+        .collect();
+    assert_eq!(attached, vec![other.model.props()[0].name.clone()]);
+    let mut again = other.model.props()[0].clone();
+    again.position[0] -= 0.06;
+    other.apply(Command::Scene(SceneCommand::EditProp(0, again)));
+    other.settle();
+    assert!(
+        on_bar(&other) < 1e-3,
+        "{} m off in the other editor",
+        on_bar(&other)
+    );
+}

@@ -380,6 +380,7 @@ impl Reader<'_> {
             active,
             kind,
             interval: None,
+            on: None,
         })
     }
 }

@@ -213,6 +213,7 @@ pub fn random_task(r: &mut StdRng) -> TaskSpec {
         active: r.random_bool(0.8),
         kind,
         interval: None,
+        on: None,
     }
 }
 

@@ -242,7 +242,21 @@ impl EditorModel {
     pub(super) fn scene_of(&self, for_autosave: bool) -> Scene {
         let characters = self
             .characters()
-            .map(|(c, _)| c.scene_character(for_autosave))
+            .map(|(c, _)| {
+                let mut character = c.scene_character(for_autosave);
+                // A task attached to a prop since removed (undo may bring it back) is saved
+                // where it stands, attached to nothing.
+                for task in &mut character.document.tasks {
+                    if task
+                        .on
+                        .as_ref()
+                        .is_some_and(|on| !self.cast.props.iter().any(|p| &p.name == on))
+                    {
+                        task.on = None;
+                    }
+                }
+                character
+            })
             .collect();
         Scene {
             characters,
@@ -460,9 +474,79 @@ impl EditorModel {
             return super::Change::Nothing;
         }
         let before = self.cast_snapshot();
-        self.cast.props[index] = prop;
+        let old = std::mem::replace(&mut self.cast.props[index], prop.clone());
         self.history.record_cast(before, true, self.now_secs);
+        self.follow_props(&[(old, prop)]);
         super::Change::Document
+    }
+
+    /// The tasks attached to props (`TaskSpec::on`) follow each prop from where it was to
+    /// where it is (`moves`: the prop before and after: moved, turned or renamed), each
+    /// character's goals moved in its own frame.
+    pub(super) fn follow_props(&mut self, moves: &[(Prop, Prop)]) {
+        let moves: Vec<(&str, &str, glam::DAffine3)> = moves
+            .iter()
+            .filter(|(old, new)| old != new)
+            .map(|(old, new)| {
+                let scene_move = new.scene_from_prop() * old.scene_from_prop().inverse();
+                (old.name.as_str(), new.name.as_str(), scene_move)
+            })
+            .collect();
+        if moves.is_empty() {
+            return;
+        }
+        let (others, character) = self.cast_and_selected_mut();
+        for character in others.iter_mut().chain(std::iter::once(character)) {
+            let scene_from_character = character.placement.scene_from_character();
+            let tasks: Vec<stance_document::TaskSpec> = character
+                .session
+                .tasks()
+                .iter()
+                .map(|task| {
+                    match moves
+                        .iter()
+                        .find(|(old, _, _)| task.on.as_deref() == Some(*old))
+                    {
+                        Some((_, new, scene_move)) => {
+                            let in_character =
+                                scene_from_character.inverse() * *scene_move * scene_from_character;
+                            let mut moved = task.moved(in_character);
+                            moved.on = Some((*new).to_owned());
+                            moved
+                        }
+                        None => task.clone(),
+                    }
+                })
+                .collect();
+            if tasks != character.session.tasks() {
+                character.session.set_tasks(tasks);
+            }
+        }
+    }
+
+    /// The tasks of character `id` attached to props keep their place in the scene while the
+    /// character moves from `before` to its placement now.
+    fn follow_placement(&mut self, id: u64, before: Placement) {
+        let Some(character) = self.character_mut(id) else {
+            return;
+        };
+        let now = character.placement;
+        if now == before {
+            return;
+        }
+        let in_character = now.scene_from_character().inverse() * before.scene_from_character();
+        let tasks: Vec<stance_document::TaskSpec> = character
+            .session
+            .tasks()
+            .iter()
+            .map(|task| match task.on {
+                Some(_) => task.moved(in_character),
+                None => task.clone(),
+            })
+            .collect();
+        if tasks != character.session.tasks() {
+            character.session.set_tasks(tasks);
+        }
     }
 
     fn select_character(&mut self, id: u64) -> super::Change {
@@ -478,11 +562,16 @@ impl EditorModel {
         if placement.validate_at("placement").is_err() {
             return super::Change::Nothing;
         }
-        self.edit_character(id, |character| {
+        let Some(before) = self.character_mut(id).map(|c| c.placement) else {
+            return super::Change::Nothing;
+        };
+        let change = self.edit_character(id, |character| {
             let changed = character.placement != placement;
             character.placement = placement;
             changed
-        })
+        });
+        self.follow_placement(id, before);
+        change
     }
 
     /// A change of the character `id`'s entry in the cast (its name, its place) that `edit`
@@ -767,6 +856,10 @@ impl EditorModel {
     /// placements, and the selection as `snapshot` has them; characters it leaves out are
     /// kept as removed (a later step may bring them back).
     pub(super) fn restore_cast(&mut self, snapshot: &CastSnapshot) {
+        let placements_before: Vec<(u64, Placement)> = self
+            .characters()
+            .map(|(c, _)| (c.id, c.placement))
+            .collect();
         // A selection that comes back from the removed characters joins the others first (the
         // order is made again below).
         if let Some(at) = self
@@ -798,7 +891,19 @@ impl EditorModel {
         self.cast.others = others;
         self.cast.selected_at = selected_at;
         self.cast.removed = pool;
-        self.cast.props.clone_from(&snapshot.props);
+        // The attached tasks keep their place in the scene while their characters move back,
+        // then follow their props back.
+        for (id, before) in placements_before {
+            self.follow_placement(id, before);
+        }
+        let props_before = std::mem::replace(&mut self.cast.props, snapshot.props.clone());
+        if props_before.len() == snapshot.props.len() {
+            let moves: Vec<(Prop, Prop)> = props_before
+                .into_iter()
+                .zip(snapshot.props.iter().cloned())
+                .collect();
+            self.follow_props(&moves);
+        }
         self.cast.between.clone_from(&snapshot.between);
         self.wake_joined();
     }

@@ -241,6 +241,7 @@ pub fn task_on_prop(
     };
     let mut task = TaskSpec::new(kind);
     task.level = next_level(session);
+    task.on = Some(prop.name.clone());
     Ok(task)
 }
 
