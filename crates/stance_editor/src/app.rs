@@ -10,6 +10,7 @@ mod hands_panel;
 mod image_window;
 mod lens;
 mod overlay;
+mod prop_gizmo;
 mod scene_panel;
 mod sensors_panel;
 mod side_panel;

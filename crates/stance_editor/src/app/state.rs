@@ -76,6 +76,7 @@ impl PageState<'_> {
             "swivel": self.viewport.handles(model).swivel_state(),
             "motion": self.motion(),
             "characters": self.characters(),
+            "props": self.props(),
             "between": model.between_tasks().iter().zip(model.between_distances()).map(|(task, distance)| json!({
                 "description": model.between_description(task),
                 "level": task.level,
@@ -87,6 +88,45 @@ impl PageState<'_> {
 
     /// The scene's characters in order: name, id, whether selected, placement, and where the
     /// middle of the pelvis shows on screen (to click one).
+    /// The props with their centres on screen, and the selected one's gizmo (two points of
+    /// its ring a quarter turn apart, and its square).
+    fn props(&self) -> Value {
+        let model = self.model;
+        let lens = self.viewport.lens();
+        let on_screen = |p: Option<egui::Pos2>| p.map(|p| [p.x, p.y]);
+        let props: Vec<Value> = model
+            .props()
+            .iter()
+            .map(|prop| {
+                let centre = glam::DVec3::from_array(prop.position);
+                json!({
+                    "name": prop.name,
+                    "position": prop.position,
+                    "rotation": prop.rotation,
+                    "dimensions": prop.shape.dimensions(),
+                    "screen": on_screen(lens.scene_screen_point(centre)),
+                })
+            })
+            .collect();
+        let gizmo = self
+            .viewport
+            .props
+            .handles_on_screen(model, &lens)
+            .map(|(ring, square)| {
+                json!({
+                    // An eighth of a turn from the square, and a quarter further.
+                    "ring": on_screen(ring.get(ring.len() / 8).copied()),
+                    "ring_quarter": on_screen(ring.get(3 * ring.len() / 8).copied()),
+                    "square": [square.x, square.y],
+                })
+            });
+        json!({
+            "list": props,
+            "selected": self.viewport.props.selected(model),
+            "gizmo": gizmo,
+        })
+    }
+
     fn characters(&self) -> Vec<Value> {
         let lens = self.viewport.lens();
         self.model

@@ -12,6 +12,7 @@ use stance_render::{BODY_COLOR_LINEAR, OrbitCamera, Scene, ViewPreset, pick_caps
 use super::handles::Handles;
 use super::lens::Lens;
 use super::overlay::Overlay;
+use super::prop_gizmo::{PropGizmo, pick_prop};
 use crate::cast_view::{
     Uploaded, other_figures, pick_other, placed_capsule, placed_palettes, prop_instances,
     scene_from_character,
@@ -80,6 +81,8 @@ pub(super) struct ViewportPanel {
     view_request: u64,
     /// *Save image*: asked, rendering on this viewport's GPU, handed to the model.
     pub image: ImageExport,
+    /// The selected prop, its gizmo and the drag on a prop under way.
+    pub(super) props: PropGizmo,
 }
 
 impl ViewportPanel {
@@ -112,6 +115,7 @@ impl ViewportPanel {
             render_ms: 0.0,
             view_request: 0,
             image: ImageExport::default(),
+            props: PropGizmo::default(),
         }
     }
 
@@ -262,6 +266,7 @@ impl ViewportPanel {
         }
         let handles = self.handles(model);
         handles.draw_rings(&clipped);
+        self.props.draw(&clipped, model, &self.lens());
         let gesture = model.gesture().is_some();
         let over_handle =
             !gesture && pointer.is_some_and(|pointer| handles.pick_handle(pointer).is_some());
@@ -308,7 +313,7 @@ impl ViewportPanel {
     /// selected joint) moves it; on the body it pulls that point; elsewhere it moves the
     /// camera ([`Self::follow_pointer`]). A click selects (and with the pin tool or Alt pins).
     fn begin_gesture(
-        &self,
+        &mut self,
         ui: &egui::Ui,
         response: &egui::Response,
         input: &ViewportInput,
@@ -323,7 +328,20 @@ impl ViewportPanel {
         {
             if let Some(handle) = self.handles(model).pick_handle(origin) {
                 outbox.send(Command::Gesture(GestureCommand::BeginHandle(handle)));
-            } else if let Some((joint, point_world)) = self.pick(model, origin) {
+                return;
+            }
+            let body = self.pick(model, origin);
+            let (ray_origin, _) = self.lens().pointer_scene_ray(origin);
+            let body_distance = body.map(|(_, point_world)| {
+                (self.scene_from_character.transform_point3(point_world) - ray_origin).length()
+            });
+            let mut props = std::mem::take(&mut self.props);
+            let began = props.begin(model, &self.lens(), origin, body_distance);
+            self.props = props;
+            if began {
+                return;
+            }
+            if let Some((joint, point_world)) = body {
                 outbox.send(Command::Gesture(GestureCommand::BeginPull {
                     joint,
                     point_world,
@@ -345,6 +363,12 @@ impl ViewportPanel {
         let pointer = response.hover_pos();
         let interact_pos = response.interact_pointer_pos();
         let dragging = response.dragged() && input.touch_count < 2;
+        if self.props.dragging() {
+            let mut props = std::mem::take(&mut self.props);
+            props.follow(&self.lens(), interact_pos.filter(|_| dragging), outbox);
+            self.props = props;
+            return;
+        }
         match (model.gesture().cloned(), interact_pos) {
             (Some(gesture), Some(pointer)) if dragging => {
                 if let Some(command) = self.lens().follow(&gesture, pointer) {
@@ -367,11 +391,21 @@ impl ViewportPanel {
         if response.clicked_by(egui::PointerButton::Primary) {
             let clicked =
                 interact_pos.and_then(|pointer| self.pick(model, pointer).map(|(joint, _)| joint));
-            // A click on another character selects it.
+            // A click on another character selects it; on a prop, the prop (its gizmo shows).
             if clicked.is_none()
                 && let Some(id) = interact_pos.and_then(|pointer| self.pick_other(model, pointer))
             {
                 outbox.send(Command::Scene(SceneCommand::Select(id)));
+                return;
+            }
+            let prop = interact_pos
+                .filter(|_| clicked.is_none())
+                .and_then(|pointer| {
+                    let (origin, direction) = self.lens().pointer_scene_ray(pointer);
+                    pick_prop(model, origin, direction).map(|(index, _)| index)
+                });
+            self.props.select(prop);
+            if prop.is_some() {
                 return;
             }
             outbox.send(Command::View(ViewCommand::Select(clicked)));
