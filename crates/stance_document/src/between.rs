@@ -65,18 +65,7 @@ impl BetweenTask {
 
     /// Checks it against a scene of `characters` characters; paths relative to the task.
     pub fn validate(&self, characters: usize) -> Result<(), DocumentError> {
-        if self.level < 1 {
-            return Err(DocumentError::field(
-                "level",
-                "levels are integers from 1 (highest priority)",
-            ));
-        }
-        if !self.weight.is_finite() || self.weight < 0.0 {
-            return Err(DocumentError::field(
-                "weight",
-                "must be a finite number >= 0",
-            ));
-        }
+        crate::document::check_level_and_weight(self.level, self.weight)?;
         for (side, p) in [("a", &self.a), ("b", &self.b)] {
             if p.character >= characters {
                 return Err(DocumentError::field(

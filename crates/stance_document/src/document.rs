@@ -394,22 +394,28 @@ fn nonzero(values: &[f64], at: &str, what: &str) -> Result<(), DocumentError> {
     Ok(())
 }
 
+/// A task's level (an integer from 1) and weight (finite, >= 0); paths `level`, `weight`.
+pub(crate) fn check_level_and_weight(level: u32, weight: f64) -> Result<(), DocumentError> {
+    if level < 1 {
+        return Err(DocumentError::field(
+            "level",
+            "levels are integers from 1 (highest priority)",
+        ));
+    }
+    if !weight.is_finite() || weight < 0.0 {
+        return Err(DocumentError::field(
+            "weight",
+            "must be a finite number >= 0",
+        ));
+    }
+    Ok(())
+}
+
 impl TaskSpec {
     /// Checks the task on its own (finite numbers, level >= 1, weight >= 0, non-zero
     /// quaternion and axis, a limb named once). Paths are relative (`target[0]`).
     pub fn validate(&self) -> Result<(), DocumentError> {
-        if self.level < 1 {
-            return Err(DocumentError::field(
-                "level",
-                "levels are integers from 1 (highest priority)",
-            ));
-        }
-        if !self.weight.is_finite() || self.weight < 0.0 {
-            return Err(DocumentError::field(
-                "weight",
-                "must be a finite number >= 0",
-            ));
-        }
+        check_level_and_weight(self.level, self.weight)?;
         if let Some(interval) = &self.interval {
             interval.validate()?;
         }

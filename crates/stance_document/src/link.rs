@@ -324,16 +324,20 @@ pub fn decode_scene(link: &str) -> Result<Scene, LinkError> {
     Ok(scene)
 }
 
+/// The LEB128 number at `at` of a scene's payload (`at` moved past it); a cut one names
+/// `what`.
+fn scene_leb(bytes: &[u8], at: &mut usize, what: &str) -> Result<u64, String> {
+    let (value, used) = bytes
+        .get(*at..)
+        .and_then(read_leb128)
+        .ok_or_else(|| format!("the scene's {what} is cut"))?;
+    *at += used;
+    Ok(value)
+}
+
 fn decode_scene_payload(bytes: &[u8], format: u8) -> Result<Scene, String> {
     let mut at = 0usize;
-    let leb = |at: &mut usize, what: &str| -> Result<u64, String> {
-        let (value, used) = bytes
-            .get(*at..)
-            .and_then(read_leb128)
-            .ok_or_else(|| format!("the scene's {what} is cut"))?;
-        *at += used;
-        Ok(value)
-    };
+    let leb = |at: &mut usize, what: &str| scene_leb(bytes, at, what);
     let count = leb(&mut at, "character count")?;
     if count == 0 || count > crate::scene::MAX_CHARACTERS as u64 {
         return Err(format!("a scene of {count} characters"));
@@ -454,14 +458,7 @@ fn decode_attachments(
     at: &mut usize,
     characters: &mut [crate::scene::SceneCharacter],
 ) -> Result<(), String> {
-    let leb = |at: &mut usize| -> Result<u64, String> {
-        let (value, used) = bytes
-            .get(*at..)
-            .and_then(read_leb128)
-            .ok_or_else(|| "the scene's attached tasks are cut".to_owned())?;
-        *at += used;
-        Ok(value)
-    };
+    let leb = |at: &mut usize| scene_leb(bytes, at, "attached tasks");
     let count = leb(at)?;
     if count > 64 * crate::scene::MAX_CHARACTERS as u64 {
         return Err(format!("{count} attached tasks"));
@@ -487,14 +484,7 @@ fn decode_attachments(
 
 /// The tasks between characters of a [`BETWEEN_FORMAT`] link, from `at`.
 fn decode_between(bytes: &[u8], at: &mut usize) -> Result<Vec<BetweenTask>, String> {
-    let leb = |at: &mut usize, what: &str| -> Result<u64, String> {
-        let (value, used) = bytes
-            .get(*at..)
-            .and_then(read_leb128)
-            .ok_or_else(|| format!("the scene's {what} is cut"))?;
-        *at += used;
-        Ok(value)
-    };
+    let leb = |at: &mut usize, what: &str| scene_leb(bytes, at, what);
     let count = leb(at, "task count")?;
     if count > crate::between::MAX_BETWEEN_TASKS as u64 {
         return Err(format!("{count} tasks between characters"));
