@@ -76,6 +76,17 @@ impl PageState<'_> {
             "swivel": self.viewport.handles(model).swivel_state(),
             "motion": self.motion(),
             "characters": self.characters(),
+            "photo": model.photo().map(|photo| json!({
+                "name": photo.name,
+                "size": photo.size_px,
+                "reference_size": photo.reference_size_px,
+                "shown": model.photo_shown(),
+                "rect": self.viewport.photo_rect.map(|r| [r.min.x, r.min.y, r.width(), r.height()]),
+                "keypoints": photo.keypoints,
+                "detect_ms": photo.detect_ms,
+                "lift_ms": photo.lift_ms,
+            })),
+            "lifting": model.lifting().map(|lifting| lifting.words()),
         })
         .to_string()
     }
