@@ -14,12 +14,9 @@ import { showProgress, hideProgress } from "./loading.js";
 // (WebGL2's smallest guaranteed limit).
 const MAX_REFERENCE_SIDE = 2048;
 
-const input = document.createElement("input");
-input.type = "file";
-input.accept = "image/*";
-input.hidden = true;
-input.id = "photo-input";
-document.body.append(input);
+// The photo picker, made the first time it is asked for (the page's other file input stays
+// the only one until then).
+let input = null;
 
 let worker = null;
 let nextRequest = 0;
@@ -104,6 +101,14 @@ export async function openPhoto(handle, file) {
 
 // stanceHost.pickPhoto: the picker for File > Open photo….
 export function pickPhoto(handle) {
+  if (!input) {
+    input = document.createElement("input");
+    input.type = "file";
+    input.accept = "image/*";
+    input.hidden = true;
+    input.id = "photo-input";
+    document.body.append(input);
+  }
   input.value = "";
   input.onchange = () => {
     const [file] = input.files;
