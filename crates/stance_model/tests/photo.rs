@@ -257,3 +257,45 @@ fn open_photo_asks_the_host_and_says_so_where_it_has_no_detector() {
         notice.text
     );
 }
+
+#[test]
+fn photo_after_photo_each_lift_answered_through_the_pages_numbers() {
+    // Catches: lift request ids the page cannot carry exactly (it holds them as JavaScript
+    // numbers, f64): from the second lift on, the reply came back with another id and was
+    // dropped, the editor left lifting for ever.
+    let host = MemoryHost::default();
+    host.inner.borrow_mut().runs_jobs = true;
+    let mut editor = Clocked::with_host(host.clone());
+    let (_, person) = standing();
+    for round in 0..3 {
+        editor.apply(Command::from(HostMessage::PhotoDetected(Box::new(photo(
+            &format!("photo-{round}.jpg"),
+            landmarks_of(&person),
+        )))));
+        let request = host.inner.borrow().jobs.last().cloned().unwrap();
+        // The page's trip: the id as a JavaScript number, the job run by the worker.
+        let id = request.id as f64 as u64;
+        assert_eq!(
+            id, request.id,
+            "request {round}'s id survives the page's numbers"
+        );
+        let result =
+            stance_model::HostJob::run_for_transfer(&request.job.to_bytes().unwrap(), &mut |_| {})
+                .unwrap();
+        let Ok(stance_model::JobHead::Lift(scene)) = stance_model::JobHead::from_bytes(&result[0])
+        else {
+            panic!("a lift's head");
+        };
+        editor.apply(Command::from(HostMessage::KeypointsLifted {
+            id,
+            result: Ok(Box::new(scene)),
+        }));
+        assert!(editor.model.lifting().is_none(), "photo {round} lifted");
+        let notice = editor.model.notice().unwrap();
+        assert!(
+            notice.text.contains(&format!("Lifted photo-{round}.jpg")),
+            "{}",
+            notice.text
+        );
+    }
+}
