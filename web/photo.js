@@ -75,9 +75,18 @@ export async function openPhoto(handle, file) {
     }
     const { width, height } = bitmap;
     const reference = referencePixels(bitmap);
+    // The detector sees the photo at the reference's size too (its landmarks are fractions of
+    // the picture; its own input is 256 px): a large photo would not fit the worker's WebGL
+    // texture. The bitmap goes to the worker (transferred, not copied).
+    let seen = bitmap;
+    if (reference.width !== width || reference.height !== height) {
+      seen = await createImageBitmap(bitmap, {
+        resizeWidth: reference.width, resizeHeight: reference.height, resizeQuality: "high",
+      });
+      bitmap.close();
+    }
     const decodedMs = performance.now() - started;
-    // The bitmap goes to the worker (transferred, not copied).
-    const reply = await detect(bitmap);
+    const reply = await detect(seen);
     if (reply.error) {
       handle.photo_failed(name, `the pose detector could not run: ${reply.error}`);
       return;
