@@ -224,6 +224,13 @@ fn a_photo_that_cannot_be_read_or_lifted_says_why_and_changes_nothing() {
             )))),
             "the detector gave 0 landmarks",
         ),
+        (
+            Command::from(HostMessage::PhotoDetected(Box::new(DetectedPhoto {
+                reference_size_px: [u32::MAX, u32::MAX],
+                ..photo("torn.jpg", landmarks_of(&standing().1))
+            }))),
+            "torn.jpg could not be opened as a photo: its pixels did not arrive whole",
+        ),
     ] {
         editor.apply(command);
         let notice = editor.model.notice().unwrap();

@@ -210,9 +210,11 @@ impl EditorModel {
                 return;
             }
         };
-        let expected =
-            photo.reference_size_px[0] as usize * photo.reference_size_px[1] as usize * 4;
-        if photo.size_px.contains(&0) || photo.reference_rgba.len() != expected {
+        let [width, height] = photo.reference_size_px.map(u64::from);
+        let expected = width.checked_mul(height).and_then(|n| n.checked_mul(4));
+        let whole =
+            expected.is_some() && u64::try_from(photo.reference_rgba.len()).ok() == expected;
+        if photo.size_px.contains(&0) || !whole {
             self.warn(format!(
                 "{name} could not be opened as a photo: its pixels did not arrive whole. Nothing was changed."
             ));
