@@ -24,6 +24,18 @@ fi
 cp -r web/. dist/
 cp -r public/. dist/
 
+# The pose detector of File > Open photo (web/photo-worker.js), served by the site itself:
+# MediaPipe Pose from its npm package (Apache-2.0; public/vendor/mediapipe-pose/ holds its
+# licence and notice), the "full" landmark model only. Loaded when a photo is opened.
+mediapipe=node_modules/@mediapipe/pose
+mkdir -p dist/vendor/mediapipe-pose
+for file in pose.js pose_solution_packed_assets_loader.js pose_solution_packed_assets.data \
+  pose_solution_simd_wasm_bin.js pose_solution_simd_wasm_bin.wasm pose_solution_simd_wasm_bin.data \
+  pose_solution_wasm_bin.js pose_solution_wasm_bin.wasm pose_web.binarypb \
+  pose_landmark_full.tflite; do
+  cp "$mediapipe/$file" dist/vendor/mediapipe-pose/
+done
+
 # The three.js example (examples/three, served at /examples/three/): the page, the stance-ik
 # package and the three.js modules it imports.
 bash scripts/build-package.sh

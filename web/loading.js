@@ -218,6 +218,16 @@ function fillTextures(reply, decoded) {
 
 let delivery = Promise.resolve();
 
+// The progress bar for the page's other work (photo.js: a photo's detection): a busy bar
+// saying `text`, then hidden as after a load.
+export function showProgress(text) {
+  progress(text);
+}
+
+export function hideProgress() {
+  done();
+}
+
 // The workers that run the editor's jobs, one per kind ("clip", "lift"): each with its worker
 // (undefined: none started; null: none can run) and the editor's request it works on.
 const lanes = new Map();

@@ -6,6 +6,7 @@ import {
   cancelJob, fetchWithProgress, importAvatar, runJob, openFiles, startImporter, uploadAvatar,
 } from "./loading.js";
 import { createAccessibilityMirror } from "./accessibility.js";
+import { pickPhoto } from "./photo.js";
 import { describe } from "./common.js";
 
 const loading = document.getElementById("loading");
@@ -82,6 +83,11 @@ window.stanceHost = {
   pickFile() {
     fileInput.value = "";
     fileInput.click();
+  },
+  // File > Open photo…: the picker, then the page's pose detector (see photo.js).
+  pickPhoto() {
+    if (!window.stance) throw new Error("the editor is not running");
+    pickPhoto(window.stance);
   },
   // Fetches an avatar with a progress bar; its textures are decoded off the main thread and
   // the bytes go to the editor.

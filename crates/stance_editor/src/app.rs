@@ -237,7 +237,8 @@ impl StanceApp {
             self.button_rects.push(("file_menu", file.response.rect));
             ui.menu_button("Avatar", |ui| self.avatar_menu(ui));
             ui.menu_button("Edit", |ui| self.edit_menu(ui));
-            ui.menu_button("View", |ui| self.view_menu(ui));
+            let view = ui.menu_button("View", |ui| self.view_menu(ui));
+            self.button_rects.push(("view_menu", view.response.rect));
             ui.menu_button("Motion", |ui| {
                 let before = self.timeline_shown();
                 let mut shown = before;
@@ -283,6 +284,15 @@ impl StanceApp {
         self.button_rects.push(("open_keypoints", keypoints.rect));
         if keypoints.clicked() {
             command = Some(Command::Keypoints(crate::model::KeypointsCommand::Pick));
+        }
+        let photo = ui.button("Open photo…").on_hover_text(
+            "the person in a photo, found by a pose detector in the browser and posed like keypoints; the photo stays behind the view",
+        );
+        self.button_rects.push(("open_photo", photo.rect));
+        if photo.clicked() {
+            command = Some(Command::Keypoints(
+                crate::model::KeypointsCommand::PickPhoto,
+            ));
         }
         if ui.button("Export pose library (JSON)…").clicked() {
             command = Some(Command::Library(LibraryCommand::Export));
@@ -480,6 +490,21 @@ impl StanceApp {
         ui.checkbox(&mut self.viewport.show_figure, "Mannequin as a figure")
             .on_hover_text("off: the mannequin's capsules (the heat map always colours them)");
         ui.checkbox(&mut self.viewport.show_floor, "Floor grid");
+        if let Some(photo) = self.model.photo() {
+            let mut shown = self.model.photo_shown();
+            let toggle = ui
+                .checkbox(&mut shown, "Photo behind the view")
+                .on_hover_text(format!(
+                    "{} as the reference (lined up through the lifted character's saved view; the floor is hidden meanwhile)",
+                    photo.name
+                ));
+            self.button_rects.push(("show_photo", toggle.rect));
+            if toggle.changed() {
+                self.outbox.send(Command::Keypoints(
+                    crate::model::KeypointsCommand::ShowPhoto(shown),
+                ));
+            }
+        }
         ui.checkbox(&mut self.viewport.show_trace, "Effector trace (T)");
         let mut timeline = self.timeline_shown();
         if ui.checkbox(&mut timeline, "Timeline").changed() {

@@ -84,6 +84,14 @@ pub trait HostHooks {
         false
     }
 
+    /// Opens a picker for a photo, decodes it and finds the person in it with the host's pose
+    /// detector (the page: MediaPipe Pose in a worker); the result arrives as
+    /// [`HostMessage::PhotoDetected`], a failure (not an image, no person found) as
+    /// [`HostMessage::PhotoFailed`].
+    fn pick_photo(&self) -> Result<(), String> {
+        Err("this shell has no pose detector: photos open in the browser".to_owned())
+    }
+
     /// Fetches `url` (an avatar); the bytes arrive as [`HostMessage::OpenFile`] named by the
     /// URL, a failure as [`HostMessage::Failed`].
     fn fetch(&self, _url: &str) -> Result<(), String> {
@@ -184,6 +192,17 @@ pub enum HostMessage {
         /// The lifted scene, or why not.
         result: Result<Box<stance_document::Scene>, String>,
     },
+    /// The person the host's pose detector found in the photo the user picked
+    /// ([`HostHooks::pick_photo`]).
+    PhotoDetected(Box<crate::model::photo::DetectedPhoto>),
+    /// The photo `name` could not be opened: `reason` says why (not an image, no person
+    /// found, the detector could not start).
+    PhotoFailed {
+        /// The file's name.
+        name: String,
+        /// What went wrong, in words.
+        reason: String,
+    },
     /// The job `id` ([`HostHooks::run_job`]) failed where it ran: `reason` says why.
     JobFailed {
         /// The request.
@@ -246,6 +265,8 @@ pub struct MemoryHostState {
     pub address_fragment: Option<String>,
     /// How many times the file picker was opened.
     pub file_requests: usize,
+    /// How many times a photo was asked for ([`HostHooks::pick_photo`]).
+    pub photo_requests: usize,
     /// The URLs asked for, in order.
     pub fetches: Vec<String>,
     /// The backend reported after the first rendered frame; `None` before it.
@@ -300,6 +321,11 @@ impl HostHooks for MemoryHost {
 
     fn pick_file(&self) -> Result<(), String> {
         self.inner.borrow_mut().file_requests += 1;
+        Ok(())
+    }
+
+    fn pick_photo(&self) -> Result<(), String> {
+        self.inner.borrow_mut().photo_requests += 1;
         Ok(())
     }
 

@@ -23,6 +23,7 @@ mod keypoints;
 mod mapping;
 mod motion;
 mod opening;
+pub mod photo;
 mod storage;
 mod tasks;
 
@@ -119,6 +120,11 @@ pub struct EditorModel {
     lifting: Option<Lifting>,
     /// Counts the lift requests.
     next_lift: u64,
+    /// The photo behind the viewport (*File > Open photo*), and whether it is shown.
+    photo: Option<photo::ReferencePhoto>,
+    photo_shown: bool,
+    /// Counts the photos opened.
+    next_photo: u64,
 }
 
 impl std::fmt::Debug for EditorModel {
@@ -163,6 +169,9 @@ impl EditorModel {
             comfort: ComfortView::default(),
             lifting: None,
             next_lift: 0,
+            photo: None,
+            photo_shown: false,
+            next_photo: 0,
         };
         model.load_library();
         if let Some(settings) = SensorSettings::load(model.hooks.as_ref()) {

@@ -12,5 +12,6 @@ mod kept_clips;
 mod keypoints;
 mod model;
 mod motion;
+mod photo;
 mod scene;
 mod tasks;

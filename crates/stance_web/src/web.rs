@@ -29,6 +29,8 @@ extern "C" {
     fn host_download(file_name: &str, text: &str) -> Result<(), JsValue>;
     #[wasm_bindgen(js_namespace = stanceHost, js_name = pickFile, catch)]
     fn host_pick_file() -> Result<(), JsValue>;
+    #[wasm_bindgen(js_namespace = stanceHost, js_name = pickPhoto, catch)]
+    fn host_pick_photo() -> Result<(), JsValue>;
     #[wasm_bindgen(js_namespace = stanceHost, js_name = fetchFile, catch)]
     fn host_fetch_file(url: &str) -> Result<(), JsValue>;
     #[wasm_bindgen(js_namespace = stanceHost, js_name = downloadBytes, catch)]
@@ -115,6 +117,10 @@ impl HostHooks for PageHooks {
 
     fn pick_file(&self) -> Result<(), String> {
         host_pick_file().map_err(|error| describe(&error))
+    }
+
+    fn pick_photo(&self) -> Result<(), String> {
+        host_pick_photo().map_err(|error| describe(&error))
     }
 
     fn fetch(&self, url: &str) -> Result<(), String> {
@@ -653,6 +659,51 @@ impl WebHandle {
             id: id as u64,
             reason,
         });
+    }
+
+    /// The person the page's pose detector (`web/photo.js`: MediaPipe Pose in a worker) found
+    /// in the photo `name` of `width` x `height` pixels: `landmarks` holds MediaPipe's 33
+    /// landmarks as `x, y, z, visibility` each (x and y fractions of the photo); `rgba` is the
+    /// photo to show behind the viewport, `reference_width` x `reference_height` RGBA8
+    /// pixels; `detect_ms` the detection's time. Lifted as keypoints by the editor.
+    #[wasm_bindgen]
+    #[allow(clippy::too_many_arguments)]
+    pub fn photo_detected(
+        &self,
+        name: String,
+        width: u32,
+        height: u32,
+        landmarks: Vec<f32>,
+        rgba: Vec<u8>,
+        reference_width: u32,
+        reference_height: u32,
+        detect_ms: f64,
+    ) {
+        let landmarks = landmarks
+            .chunks_exact(4)
+            .map(|l| stance_editor::model::photo::Landmark {
+                x: l[0],
+                y: l[1],
+                z: l[2],
+                visibility: l[3],
+            })
+            .collect();
+        let photo = stance_editor::model::photo::DetectedPhoto {
+            name,
+            size_px: [width, height],
+            landmarks,
+            reference_rgba: rgba,
+            reference_size_px: [reference_width, reference_height],
+            detect_ms,
+        };
+        self.deliver_now(HostMessage::PhotoDetected(Box::new(photo)));
+    }
+
+    /// The photo `name` could not be opened (not an image, no person found, no detector):
+    /// `reason` says why.
+    #[wasm_bindgen]
+    pub fn photo_failed(&self, name: String, reason: String) {
+        self.send(HostMessage::PhotoFailed { name, reason });
     }
 
     /// Tells the editor that something the page did for it failed.

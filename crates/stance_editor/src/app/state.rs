@@ -77,11 +77,9 @@ impl PageState<'_> {
             "motion": self.motion(),
             "characters": self.characters(),
             "props": self.props(),
-            "between": model.between_tasks().iter().zip(model.between_distances()).map(|(task, distance)| json!({
-                "description": model.between_description(task),
-                "level": task.level,
-                "distance": distance,
-            })).collect::<Vec<_>>(),
+            "between": self.between(),
+            "photo": self.photo(),
+            "lifting": model.lifting().map(|lifting| lifting.words()),
         })
         .to_string()
     }
@@ -125,6 +123,38 @@ impl PageState<'_> {
             "selected": self.viewport.props.selected(model),
             "gizmo": gizmo,
         })
+    }
+
+    /// The reference photo (*File > Open photo*), if any.
+    fn photo(&self) -> Value {
+        let model = self.model;
+        json!(model.photo().map(|photo| json!({
+            "name": photo.name,
+            "size": photo.size_px,
+            "reference_size": photo.reference_size_px,
+            "shown": model.photo_shown(),
+            "rect": self.viewport.photo_rect.map(|r| [r.min.x, r.min.y, r.width(), r.height()]),
+            "keypoints": photo.keypoints,
+            "detect_ms": photo.detect_ms,
+            "lift_ms": photo.lift_ms,
+        })))
+    }
+
+    /// The tasks between characters, each with how far apart its points are.
+    fn between(&self) -> Vec<Value> {
+        let model = self.model;
+        model
+            .between_tasks()
+            .iter()
+            .zip(model.between_distances())
+            .map(|(task, distance)| {
+                json!({
+                    "description": model.between_description(task),
+                    "level": task.level,
+                    "distance": distance,
+                })
+            })
+            .collect()
     }
 
     fn characters(&self) -> Vec<Value> {

@@ -83,6 +83,10 @@ pub(super) struct ViewportPanel {
     pub image: ImageExport,
     /// The selected prop, its gizmo and the drag on a prop under way.
     pub(super) props: PropGizmo,
+    /// The reference photo's texture (*File > Open photo*), by the photo's id.
+    photo_texture: Option<(u64, egui::TextureHandle)>,
+    /// Where the photo was drawn this frame (points), when it was.
+    pub photo_rect: Option<egui::Rect>,
 }
 
 impl ViewportPanel {
@@ -116,6 +120,8 @@ impl ViewportPanel {
             view_request: 0,
             image: ImageExport::default(),
             props: PropGizmo::default(),
+            photo_texture: None,
+            photo_rect: None,
         }
     }
 
@@ -438,6 +444,7 @@ impl ViewportPanel {
         let scene_started = web_time::Instant::now();
         let scene = self.scene(model);
         self.scene_ms = scene_started.elapsed().as_secs_f64() * 1000.0;
+        self.draw_photo(ui, model);
         match (&mut self.renderer, frame.wgpu_render_state()) {
             (Some(renderer), Some(render_state)) => {
                 let render_started = web_time::Instant::now();
@@ -462,6 +469,42 @@ impl ViewportPanel {
                 );
             }
         }
+    }
+
+    /// The reference photo behind the picture (*File > Open photo*): its height spans the
+    /// viewport's, as the lifted camera's vertical field of view spans the photo's, centred,
+    /// so that through the lifted character's saved view the body lies on the person.
+    fn draw_photo(&mut self, ui: &egui::Ui, model: &EditorModel) {
+        self.photo_rect = None;
+        let Some(photo) = model.photo().filter(|_| model.photo_shown()) else {
+            return;
+        };
+        if self
+            .photo_texture
+            .as_ref()
+            .is_none_or(|(id, _)| *id != photo.id)
+        {
+            let [width, height] = photo.reference_size_px;
+            let image = egui::ColorImage::from_rgba_unmultiplied(
+                [width as usize, height as usize],
+                &photo.rgba,
+            );
+            let texture =
+                ui.ctx()
+                    .load_texture("reference-photo", image, egui::TextureOptions::LINEAR);
+            self.photo_texture = Some((photo.id, texture));
+        }
+        let Some((_, texture)) = &self.photo_texture else {
+            return;
+        };
+        let [width, height] = photo.size_px.map(|n| n.max(1) as f32);
+        let size = egui::vec2(self.rect.height() * width / height, self.rect.height());
+        let rect = egui::Rect::from_center_size(self.rect.center(), size);
+        let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
+        ui.painter()
+            .with_clip_rect(self.rect)
+            .image(texture.id(), rect, uv, Color32::WHITE);
+        self.photo_rect = Some(rect);
     }
 
     /// Puts on the GPU what the body is drawn with: a loaded avatar's mesh, else the
@@ -686,11 +729,18 @@ impl ViewportPanel {
         };
         let (others, more_avatar_poses) = other_figures(model, uploaded);
         capsules.extend(others);
+        // Over the reference photo: no background, floor or shadows, which would cover it.
+        let photo = model.photo_shown();
         Scene {
             props: prop_instances(model),
-            shadows: crate::cast_view::contact_shadows(model),
+            shadows: if photo {
+                Vec::new()
+            } else {
+                crate::cast_view::contact_shadows(model)
+            },
             capsules,
-            show_floor: self.show_floor,
+            show_floor: self.show_floor && !photo,
+            transparent_background: photo,
             show_avatar: show_avatar || show_figure,
             avatar_palettes,
             more_avatar_poses,

@@ -559,6 +559,12 @@ impl From<HostMessage> for Command {
             HostMessage::JobFailed { id, reason } => {
                 Command::File(FileCommand::JobFailed { id, reason })
             }
+            HostMessage::PhotoDetected(photo) => {
+                Command::Keypoints(super::KeypointsCommand::OpenPhoto(photo))
+            }
+            HostMessage::PhotoFailed { name, reason } => {
+                Command::Keypoints(super::KeypointsCommand::PhotoFailed { name, reason })
+            }
             HostMessage::ClipOpened { id, result } => {
                 Command::Motion(MotionCommand::ClipOpened { id, result })
             }

@@ -13,12 +13,15 @@
 use stance_document::{Scene, TaskKindSpec};
 
 use super::EditorModel;
+use super::photo::{DetectedPhoto, ReferencePhoto, coco18_from_landmarks, openpose_json};
 use crate::history::EditKind;
 use crate::jobs::{HostJob, JobOutput, JobRequest, LiftJob};
 
 /// Lift requests are numbered apart from the clip requests (each character's from its id
-/// shifted by 32 bits), so that a reply's id names one request only.
-const LIFT_REQUESTS: u64 = 1 << 63;
+/// shifted by 32 bits), so that a reply's id names one request only. Below 2^53: the page
+/// carries ids as JavaScript numbers, exact only up to there (from 2^63 the second lift's
+/// reply came back as the first's id and was dropped, the editor left lifting).
+const LIFT_REQUESTS: u64 = 1 << 52;
 
 /// The limbs offered to flip: the words, and the joint that ends the flipped segment (the
 /// segment and what hangs below it turn about its parent joint, [`stance_lift::flip_depth`]).
@@ -50,6 +53,23 @@ pub enum KeypointsCommand {
         /// The joint that ends the flipped segment (`r_elbow`: the right arm).
         joint: String,
     },
+    /// Ask the host for a photo: it decodes the picture and finds the person in it
+    /// ([`crate::HostHooks::pick_photo`]), then sends [`KeypointsCommand::OpenPhoto`] or
+    /// [`KeypointsCommand::PhotoFailed`].
+    PickPhoto,
+    /// Lift the person the host's detector found in a photo, as [`KeypointsCommand::Open`]
+    /// lifts keypoints; once lifted, the photo is shown behind the viewport.
+    OpenPhoto(Box<DetectedPhoto>),
+    /// The host could not open the photo `name` (not an image, no person found): says why,
+    /// nothing changes.
+    PhotoFailed {
+        /// The file's name.
+        name: String,
+        /// What is wrong, in words.
+        reason: String,
+    },
+    /// Show or hide the reference photo behind the viewport.
+    ShowPhoto(bool),
     /// Drop the lift under way: nothing changes.
     Cancel,
     /// The host's result for the lift request `id`.
@@ -68,6 +88,8 @@ pub struct Lifting {
     pub id: u64,
     /// What it is for.
     pub purpose: LiftPurpose,
+    /// When it was asked for.
+    pub started: web_time::Instant,
 }
 
 /// What a lift is for.
@@ -75,6 +97,8 @@ pub struct Lifting {
 pub enum LiftPurpose {
     /// A keypoints file opened (its name).
     Open(String),
+    /// The person found in a photo (the photo, shown behind the viewport once lifted).
+    Photo(Box<ReferencePhoto>),
     /// A limb of the character `character` flipped (its words).
     Flip {
         /// The character's id.
@@ -89,6 +113,7 @@ impl Lifting {
     pub fn words(&self) -> String {
         match &self.purpose {
             LiftPurpose::Open(name) => format!("Lifting the keypoints of {name}…"),
+            LiftPurpose::Photo(photo) => format!("Lifting the person found in {}…", photo.name),
             LiftPurpose::Flip { limb, .. } => format!("Flipping the {limb} in depth…"),
         }
     }
@@ -102,6 +127,18 @@ impl EditorModel {
             }
             KeypointsCommand::Open { name, bytes } => self.open_keypoints(&name, bytes),
             KeypointsCommand::Flip { joint } => self.flip_limb(&joint),
+            KeypointsCommand::PickPhoto => {
+                if let Err(error) = self.hooks.pick_photo() {
+                    self.warn(format!("Open photo: {error}"));
+                }
+            }
+            KeypointsCommand::OpenPhoto(photo) => self.open_photo(*photo),
+            KeypointsCommand::PhotoFailed { name, reason } => {
+                self.warn(format!(
+                    "{name} could not be opened as a photo: {reason}. Nothing was changed."
+                ));
+            }
+            KeypointsCommand::ShowPhoto(shown) => self.photo_shown = shown,
             KeypointsCommand::Cancel => self.cancel_lift(),
             KeypointsCommand::Lifted { id, result } => {
                 return self.lift_done(id, result.map(|scene| *scene));
@@ -150,6 +187,58 @@ impl EditorModel {
         self.start_lift(job, LiftPurpose::Open(name.to_owned()));
     }
 
+    /// The photo behind the viewport, if one was opened.
+    pub fn photo(&self) -> Option<&ReferencePhoto> {
+        self.photo.as_ref()
+    }
+
+    /// Whether the reference photo is shown behind the viewport.
+    pub fn photo_shown(&self) -> bool {
+        self.photo_shown && self.photo.is_some()
+    }
+
+    /// The person the detector found in a photo, as COCO-18 keypoints in the photo's pixels,
+    /// lifted like a keypoints file of that image's size.
+    fn open_photo(&mut self, photo: DetectedPhoto) {
+        let name = photo.name.clone();
+        let keypoints = match coco18_from_landmarks(&photo.landmarks, photo.size_px) {
+            Ok(keypoints) => keypoints,
+            Err(error) => {
+                self.warn(format!(
+                    "{name} could not be opened as a photo: {error}. Nothing was changed."
+                ));
+                return;
+            }
+        };
+        let [width, height] = photo.reference_size_px.map(u64::from);
+        let expected = width.checked_mul(height).and_then(|n| n.checked_mul(4));
+        let whole =
+            expected.is_some() && u64::try_from(photo.reference_rgba.len()).ok() == expected;
+        if photo.size_px.contains(&0) || !whole {
+            self.warn(format!(
+                "{name} could not be opened as a photo: its pixels did not arrive whole. Nothing was changed."
+            ));
+            return;
+        }
+        self.next_photo += 1;
+        let reference = ReferencePhoto {
+            name: name.clone(),
+            id: self.next_photo,
+            size_px: photo.size_px,
+            rgba: std::sync::Arc::new(photo.reference_rgba),
+            reference_size_px: photo.reference_size_px,
+            keypoints,
+            detect_ms: photo.detect_ms,
+            lift_ms: 0.0,
+        };
+        let job = LiftJob::Open {
+            name: name.clone(),
+            keypoints: openpose_json(&keypoints, photo.size_px),
+            loa: self.character.session.level_of_articulation().number(),
+        };
+        self.start_lift(job, LiftPurpose::Photo(Box::new(reference)));
+    }
+
     fn flip_limb(&mut self, joint: &str) {
         let Some((limb, _)) = self
             .flippable_limbs()
@@ -183,7 +272,11 @@ impl EditorModel {
             id,
             job: HostJob::Lift(Box::new(job)),
         };
-        self.lifting = Some(Lifting { id, purpose });
+        self.lifting = Some(Lifting {
+            id,
+            purpose,
+            started: web_time::Instant::now(),
+        });
         match self.hooks.run_job(request) {
             Ok(()) => {
                 if let Some(lifting) = &self.lifting {
@@ -213,6 +306,7 @@ impl EditorModel {
         if let Some(lifting) = self.cancel_lift_quietly() {
             let what = match lifting.purpose {
                 LiftPurpose::Open(name) => format!("Lifting {name}"),
+                LiftPurpose::Photo(photo) => format!("Lifting the person in {}", photo.name),
                 LiftPurpose::Flip { limb, .. } => format!("The flip of the {limb}"),
             };
             self.inform(format!("{what} was cancelled: nothing was changed."));
@@ -242,6 +336,29 @@ impl EditorModel {
                 super::Change::View
             }
             (LiftPurpose::Open(name), Ok(scene)) => self.put_lifted_scene(&name, &scene),
+            (LiftPurpose::Photo(photo), Err(error)) => {
+                self.warn(format!(
+                    "The person found in {} could not be lifted: {error}. Nothing was changed.",
+                    photo.name
+                ));
+                super::Change::View
+            }
+            (LiftPurpose::Photo(mut photo), Ok(scene)) => {
+                let change = self.put_lifted_scene(&photo.name, &scene);
+                if change == super::Change::Document {
+                    photo.lift_ms = lifting.started.elapsed().as_secs_f64() * 1e3;
+                    if let Some(notice) = &self.notice {
+                        let text = format!(
+                            "{} The photo is behind the view (View > Photo behind the view).",
+                            notice.text
+                        );
+                        self.inform(text);
+                    }
+                    self.photo = Some(*photo);
+                    self.photo_shown = true;
+                }
+                change
+            }
             (LiftPurpose::Flip { limb, .. }, Err(error)) => {
                 self.warn(format!(
                     "The {limb} could not be flipped: {error}. Nothing was changed."
