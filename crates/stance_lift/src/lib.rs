@@ -11,7 +11,9 @@
 
 mod flip;
 mod lift;
+mod place;
 mod read;
+mod stages;
 
 pub use flip::flip_depth;
 pub use lift::{Lifted, camera_spec, lift, lift_people, lifted_scene, solve};
@@ -56,8 +58,7 @@ pub enum LiftError {
     Problem(String),
 }
 
-// Known limits (measured, docs/control-maps.md): a lift takes seconds, not the 50 ms aimed
-// at (each solve runs its 200 iterations: the comfort level is never met; a solve leaving a
-// keypoint over 0.5 px off tries eight flips, each a whole solve); a hand-made flip of an elbow
-// can leave the hand below it a few pixels off its rays (a local minimum of the solve from
-// the flipped start).
+// Known limits (measured, docs/control-maps.md): a flip of an arm whose hand's keypoints are
+// given can leave the hand's keypoints 5-11 px off (the mirrored arm needs the hand turned
+// where the forearm's and wrist's ranges do not reach); a fitted camera leaves keypoints a few
+// pixels off (its pitch and distance are the default's).
