@@ -34,10 +34,15 @@ pub fn flip_depth(
     let j =
         resolve_joint(skeleton, joint).ok_or_else(|| LiftError::UnknownJoint(joint.to_owned()))?;
     if let Some(flipped) = flip_limb(skeleton, posture, camera, j) {
-        return Ok(flipped);
+        return flipped;
     }
     flip_chain(skeleton, posture, camera, joint, j)
 }
+
+/// A flipped limb whose middle or end joint the closed form cannot put within this of its
+/// mirrored place (m; about 15 px at 3.4 m in a 768 px image) does not fit its keypoints
+/// within the joints' ranges: refused. Nearer, the solve afterwards puts it on its rays.
+const FLIP_FIT_M: f64 = 0.05;
 
 /// The exact flip of a limb's middle or end joint `j` (see [`flip_depth`]); `None` when `j`
 /// is neither.
@@ -46,7 +51,7 @@ fn flip_limb(
     posture: &Posture,
     camera: &OrbitCamera,
     j: usize,
-) -> Option<Posture> {
+) -> Option<Result<Posture, LiftError>> {
     let name = skeleton.joints().get(j)?.name.as_str();
     let (limb, middle) = LIMBS.iter().find_map(|limb| {
         let at = limb.joints.iter().position(|n| *n == name)?;
@@ -68,8 +73,16 @@ fn flip_limb(
     };
     let mut flipped = posture.clone();
     placed.place(skeleton, &mut flipped, goal);
+    let [_, middle_at, end_at] = placed.positions(&Frames::new(skeleton, &flipped));
+    let off = middle_at.distance(goal[0]).max(end_at.distance(goal[1]));
+    if off > FLIP_FIT_M {
+        return Some(Err(LiftError::FlipOutOfRange {
+            joint: name.to_owned(),
+            off_mm: off * 1e3,
+        }));
+    }
     mirror_hand(skeleton, &frames, &mut flipped, camera, placed.joints());
-    Some(flipped)
+    Some(Ok(flipped))
 }
 
 /// A ray's origin this far before the joint it passes through, back toward the camera (m):

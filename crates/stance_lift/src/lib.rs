@@ -53,6 +53,16 @@ pub enum LiftError {
     /// A joint with no turning parent (the root).
     #[error("`{0}` has no parent joint that turns: its depth cannot be flipped")]
     CannotFlip(String),
+    /// The limb flipped in depth does not fit its keypoints within the joints' ranges.
+    #[error(
+        "`{joint}` on the other side in depth does not fit its keypoints within the joints' ranges (its closed form stops {off_mm:.0} mm from the mirrored place): it stays on its side"
+    )]
+    FlipOutOfRange {
+        /// The joint asked to flip.
+        joint: String,
+        /// How far the limb's closed form stops from the mirrored place (mm).
+        off_mm: f64,
+    },
     /// The tasks could not be solved (an inconsistent body).
     #[error("the lift's problem cannot be solved: {0}")]
     Problem(String),

@@ -420,19 +420,21 @@ fn best_flip(
         if off(posture, Some(limb_top)) <= ON_PIXEL_PX {
             continue;
         }
-        let flipped_middle = crate::flip_depth(skeleton, posture, camera, middle)?;
+        // A flip that does not fit within the joints' ranges is no candidate.
+        let flip = |p: &Posture, joint: &str| crate::flip_depth(skeleton, p, camera, joint).ok();
+        let flipped_middle = flip(posture, middle);
         let candidates = [
-            (
-                vec![end],
-                crate::flip_depth(skeleton, posture, camera, end)?,
-            ),
+            (vec![end], flip(posture, end)),
             (
                 vec![middle, end],
-                crate::flip_depth(skeleton, &flipped_middle, camera, end)?,
+                flipped_middle.as_ref().and_then(|p| flip(p, end)),
             ),
             (vec![middle], flipped_middle),
         ];
         for (joints, trial) in candidates {
+            let Some(trial) = trial else {
+                continue;
+            };
             let (solved, solved_report) =
                 solve_pose(skeleton, document, &trial, CANDIDATE_ITERATIONS)?;
             let solved_worst = off(&solved, None);
