@@ -463,9 +463,9 @@ pub fn solve(
     settle_comfort(skeleton, document, &posture, report)
 }
 
-/// Iterations each flip candidate is solved for before they are compared: the chosen one is
-/// then solved to the end.
-const CANDIDATE_ITERATIONS: usize = 50;
+/// Iterations of each stage when a flip candidate is solved: from a flip's exact start a
+/// candidate that fits meets its levels within a few; the best one is kept as solved.
+const CANDIDATE_ITERATIONS: usize = 20;
 /// A level is met within this (m): a keypoint 0.1 mm off its ray is a hundredth of a pixel
 /// at the distances images are taken from.
 const LIFT_TOLERANCE_M: f64 = 1e-4;
