@@ -264,6 +264,12 @@ fn a_lift_the_host_runs_is_applied_when_it_comes_back_and_cancel_drops_it() {
         keypoints_file(&s, &[reaching(&s, DVec3::ZERO)]),
     );
     let failed = host.inner.borrow().jobs.last().cloned().unwrap();
+    // The page hands ids to its worker and back as JavaScript numbers (f64): each lift's id
+    // must come back as itself (at 2^63 the second came back as the first's).
+    for id in [request.id, failed.id] {
+        assert_eq!(id as f64 as u64, id, "the request id {id} is no exact f64");
+    }
+    assert_ne!(request.id as f64, failed.id as f64);
     editor.model.receive(HostMessage::JobFailed {
         id: failed.id,
         reason: "the loading worker stopped".to_owned(),

@@ -17,8 +17,10 @@ use crate::history::EditKind;
 use crate::jobs::{HostJob, JobOutput, JobRequest, LiftJob};
 
 /// Lift requests are numbered apart from the clip requests (each character's from its id
-/// shifted by 32 bits), so that a reply's id names one request only.
-const LIFT_REQUESTS: u64 = 1 << 63;
+/// shifted by 32 bits), so that a reply's id names one request only. Below 2^53: the page
+/// hands ids to its workers and back as JavaScript numbers, exact only up to there (at 2^63
+/// the second lift's id came back as the first's, and the lift never ended).
+const LIFT_REQUESTS: u64 = 1 << 52;
 
 /// The limbs offered to flip: the words, and the joint that ends the flipped segment (the
 /// segment and what hangs below it turn about its parent joint, [`stance_lift::flip_depth`]).
