@@ -129,6 +129,23 @@ pub fn lift(
     let (mut posture, mut report) = solve_pose(skeleton, &document, &placed, POSE_ITERATIONS)?;
     let mut flips = Vec::new();
     let mut worst = off(&posture, None);
+    if worst > LOST_PX {
+        // The placed start led astray (the torso's solve can run off along the rays from a
+        // start turned the wrong way): the plain start solved as the lift did before its
+        // stages (the whole problem, the solver's restarts), where it does better.
+        let (plain, plain_report) = crate::stages::solve_whole_with(
+            skeleton,
+            &document,
+            &start,
+            POSE_ITERATIONS,
+            LIFT_TOLERANCE_M,
+            true,
+        )?;
+        let plain_worst = off(&plain, None);
+        if plain_worst < worst {
+            (posture, report, worst) = (plain, plain_report, plain_worst);
+        }
+    }
     // Through a fitted camera no posture lands every keypoint on its pixel: more is tried only
     // for what a wrong depth leaves (a limb's keypoints many pixels off).
     let on_pixel = if camera_fitted {
@@ -177,6 +194,10 @@ pub fn lift(
         report,
     })
 }
+
+/// A lift from the placed start leaving a keypoint this far off its pixel (px) is solved again
+/// from the plain start (the rest body turned and placed).
+const LOST_PX: f64 = 20.0;
 
 /// Iterations of the whole problem after the stages when a keypoint is left off its pixel
 /// (about 2.5 ms each on the LOA 2 body with hands, against 0.1-0.2 ms for a stage's).
@@ -520,12 +541,14 @@ fn settle_comfort(
     )?;
     // Strict priority keeps the higher levels; a level that was met and no longer is (the
     // iteration budget cut a correction short) keeps the pose stage's posture.
+    // Nor does one that takes a level above comfort further from its goal (a stage whose
+    // start was far off can run away in 12 iterations).
     let lost = report.levels.iter().any(|before| {
-        before.met
-            && settled_report
-                .levels
-                .iter()
-                .any(|after| after.level == before.level && !after.met)
+        settled_report.levels.iter().any(|after| {
+            after.level == before.level
+                && ((before.met && !after.met)
+                    || after.residual_after > before.residual_after + LIFT_TOLERANCE_M)
+        })
     });
     if lost {
         Ok((posture.clone(), report))

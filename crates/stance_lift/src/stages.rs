@@ -207,6 +207,20 @@ pub(crate) fn solve_whole(
     max_iterations: usize,
     tolerance: f64,
 ) -> Result<(Posture, SolveReport), LiftError> {
+    solve_whole_with(skeleton, document, start, max_iterations, tolerance, false)
+}
+
+/// [`solve_whole`], with `patient` as the solver's defaults have it: its restarts of a stalled
+/// solve and its longer stall window (the lift before the stages; slow, for a start that led
+/// astray).
+pub(crate) fn solve_whole_with(
+    skeleton: &Skeleton,
+    document: &Document,
+    start: &Posture,
+    max_iterations: usize,
+    tolerance: f64,
+    patient: bool,
+) -> Result<(Posture, SolveReport), LiftError> {
     let with_start = Document {
         posture: PostureValues::from_posture(skeleton, start),
         ..document.clone()
@@ -214,12 +228,20 @@ pub(crate) fn solve_whole(
     let problem = Problem::from_document(&with_start, skeleton.clone())
         .map_err(|e| LiftError::Problem(e.to_string()))?;
     let mut solver = problem
-        .solver(SolverSettings {
-            max_iterations,
-            tolerance,
-            restarts: false,
-            stall_window: STALL_WINDOW,
-            ..problem.settings
+        .solver(if patient {
+            SolverSettings {
+                max_iterations,
+                tolerance,
+                ..problem.settings
+            }
+        } else {
+            SolverSettings {
+                max_iterations,
+                tolerance,
+                restarts: false,
+                stall_window: STALL_WINDOW,
+                ..problem.settings
+            }
         })
         .map_err(|e| LiftError::Problem(e.to_string()))?;
     let tasks: Vec<Task> = problem
