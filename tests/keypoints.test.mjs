@@ -1,7 +1,8 @@
 // File > Open keypoints… in the page: an OpenPose JSON that `stance render` wrote (a stride
-// seen from the left, its hidden keypoints missing: tests/fixtures/openpose/stride-768x512.json,
-// with the camera it was drawn with) is picked from the File menu and lifted in the page's
-// loading worker (web/loading.js runJob, the "lift" lane). The character becomes "Person 1" in
+// seen from the left, its hidden keypoints missing: tests/fixtures/openpose/stride-768x512.json;
+// it carries no camera, so the lift fits one and keeps it as the saved view) is picked from
+// the File menu and lifted in the page's loading worker (web/loading.js runJob, the "lift"
+// lane). The character becomes "Person 1" in
 // another posture; the lifted document, drawn again by the `stance` CLI through the saved view
 // it carries, gives back the file's keypoints (body and hands) within 3 px (an oracle outside the page: the
 // CLI's renderer, not the page's lift). A JSON that is OpenPose in form but not in content (a

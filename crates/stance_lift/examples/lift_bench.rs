@@ -10,8 +10,9 @@
 //! - **tuned**: the round-trip test's four postures from three views (the lift was developed
 //!   on these), through the true camera and a fitted one;
 //! - **fixtures**: the OpenPose files `stance render` wrote for `tests/fixtures/openpose`
-//!   (stand, reach, stride at two sizes, through the camera each file carries; legs outside
-//!   the frame, hidden points missing), not looked at while the lift was tuned;
+//!   (stand, reach, stride at two sizes; legs outside the frame, hidden points missing; the
+//!   files carry no camera, so each is lifted through a fitted one), not looked at while the
+//!   lift was tuned;
 //! - **random**: standing postures of a random family (feet on the floor, wrists pulled to
 //!   random points before and beside the body; seeded), seen from random views, through the
 //!   true camera; not tuned on either (seed 0x5eed0033; `LIFT_BENCH_SEED` for another draw).
@@ -258,7 +259,7 @@ fn main() {
     for (set, figures) in [
         ("tuned, true camera", &tuned.0),
         ("tuned, fitted camera", &tuned.1),
-        ("fixtures, file's camera", &fixtures),
+        ("fixtures, fitted camera", &fixtures),
         ("random, true camera", &randoms),
     ] {
         for f in figures.iter() {
