@@ -10,8 +10,9 @@
 //! 1. **The body**: every task but the hands' keypoints (the body's keypoints, the feet, balance,
 //!    comfort when asked), the DOF that move none of those tasks' points held: the hands (the
 //!    wrist joint and below) and the toes. About 38 rows on 68 DOF.
-//! 2. **Each hand**: its keypoints and those on its forearm (the wrist's), on the elbow's DOF
-//!    and those below it, everything else held. 42 rows on 30 DOF.
+//! 2. **Each hand**: its keypoints and those on its forearm (the wrist's), on the elbow's twist
+//!    and the DOF below it, everything else held (the elbow's hinge too: the body stage placed
+//!    the wrist). 42 rows on 29 DOF.
 //!
 //! The report is the whole problem's at the result (every level's residual as one solve
 //! reports it), its iterations the stages' sum.
@@ -66,13 +67,16 @@ pub(crate) fn descends_from(skeleton: &Skeleton, joint: usize, ancestor: usize) 
     false
 }
 
-/// The joint whose point a task holds, for the kinds a lift writes (a keypoint on its ray, an
-/// ankle on the floor); `None` for the others (balance, comfort), which hold the whole body.
+/// The joint a task holds: a keypoint on its ray, an ankle on the floor, and what a user may
+/// add to a lifted document (a point, a turn, a gaze, a direction); `None` for the tasks of
+/// the whole body (balance, comfort, ...), which go to the body stage.
 fn task_joint(task: &Task) -> Option<usize> {
     match &task.kind {
-        TaskKind::PointOnLine { effector, .. } | TaskKind::PointOnPlane { effector, .. } => {
-            Some(effector.joint)
-        }
+        TaskKind::PointOnLine { effector, .. }
+        | TaskKind::PointOnPlane { effector, .. }
+        | TaskKind::Position { effector, .. }
+        | TaskKind::Gaze { effector, .. } => Some(effector.joint),
+        TaskKind::Orientation { joint, .. } | TaskKind::Direction { joint, .. } => Some(*joint),
         _ => None,
     }
 }
