@@ -109,7 +109,8 @@ pub fn lift(
     let standing = standing_feet(person, &scale);
     tasks.extend(floor_tasks(skeleton, &rest, &standing));
     tasks.push(TaskSpec::comfort());
-    let start = start_posture(skeleton, person, &view, &rest_points, &scale);
+    let start = start_posture(skeleton, person, &view, &rest_points, &scale, false);
+    let about_face = start_posture(skeleton, person, &view, &rest_points, &scale, true);
     let mut document = Document {
         posture: PostureValues::from_posture(skeleton, &start),
         tasks,
@@ -125,7 +126,14 @@ pub fn lift(
     } else {
         &standing[..]
     };
-    let placed = placed_start(skeleton, &document, &start, person, &view, on_floor)?;
+    let placed = placed_start(
+        skeleton,
+        &document,
+        [&start, &about_face],
+        person,
+        &view,
+        on_floor,
+    )?;
     let (mut posture, mut report) = solve_pose(skeleton, &document, &placed, POSE_ITERATIONS)?;
     let mut flips = Vec::new();
     let mut worst = off(&posture, None);
@@ -347,7 +355,7 @@ const TORSO_ITERATIONS: usize = 30;
 fn placed_start(
     skeleton: &Skeleton,
     document: &Document,
-    start: &Posture,
+    starts: [&Posture; 2],
     person: &OpenPosePerson,
     view: &View,
     standing: &[String],
@@ -391,14 +399,29 @@ fn placed_start(
             .collect(),
         ..document.clone()
     };
-    let (mut posture, _) = crate::stages::solve_staged(
-        skeleton,
-        &torso,
-        start,
-        TORSO_ITERATIONS,
-        LIFT_TOLERANCE_M,
-        false,
-    )?;
+    // From the start facing as the keypoints say, and turned about: the torso's solve keeps
+    // to the side it starts on, and the image's left and right can mislead (a twisted trunk,
+    // a head turned over a shoulder).
+    let mut torsos = Vec::with_capacity(2);
+    for start in starts {
+        let (posture, report) = crate::stages::solve_staged(
+            skeleton,
+            &torso,
+            start,
+            TORSO_ITERATIONS,
+            LIFT_TOLERANCE_M,
+            false,
+        )?;
+        let residual = report
+            .levels
+            .iter()
+            .find(|l| l.level == IMAGE_LEVEL)
+            .map_or(f64::INFINITY, |l| l.residual_after);
+        torsos.push((posture, residual));
+    }
+    let Some((mut posture, _)) = torsos.into_iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
+        return Ok(starts[0].clone());
+    };
     for (placed, rays, floor) in &limbs {
         let best = limb_choices(skeleton, &posture, placed, *rays, *floor)
             .into_iter()
@@ -824,6 +847,7 @@ fn start_posture(
     view: &View,
     rest: &PoseKeypoints,
     scale: &Scale,
+    about_face: bool,
 ) -> Posture {
     let body = &person.body;
     let across = |r: usize, l: usize| {
@@ -845,7 +869,13 @@ fn start_posture(
         _ => 0.0,
     };
     // The image's x axis is the camera's right; turned by `camera.yaw` from the world's +X.
-    let turn = f64::from(view.camera.yaw) + side.atan2(facing);
+    let turn = f64::from(view.camera.yaw)
+        + side.atan2(facing)
+        + if about_face {
+            std::f64::consts::PI
+        } else {
+            0.0
+        };
     let rotation = DQuat::from_rotation_y(turn);
     let root = rest_root(skeleton);
     let visible: Vec<DVec3> = body
