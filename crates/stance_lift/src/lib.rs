@@ -72,5 +72,6 @@ pub enum LiftError {
 // given can leave the hand's keypoints 5-11 px off (the mirrored arm needs the hand turned
 // where the forearm's and wrist's ranges do not reach); a fitted camera leaves keypoints a few
 // pixels off (its pitch and distance are the default's); on a random family of standing
-// postures (examples/lift_bench) 7 of 20 lifts end over 2 px off and the slowest take
-// 0.2-0.7 s (the stages leave keypoints off; the fallbacks are the whole problem's solves).
+// postures (examples/lift_bench) 5 of 20 lifts end over 2 px off (up to 12 px) and 9 of 20
+// take over 50 ms, up to 0.14 s (the stages leave keypoints off; the fallbacks are the
+// whole problem's iterations and the flip search).
