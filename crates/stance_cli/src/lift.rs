@@ -138,8 +138,8 @@ pub fn run(args: LiftArgs) -> Result<()> {
     eprintln!(
         "{}: {} keypoints of person {} lifted with {camera_words}, feet on the floor: {}; {} iterations{}; lift {:.1} ms",
         args.out.display(),
-        args.person.unwrap_or(1),
         lifted.keypoints_used,
+        args.person.unwrap_or(1),
         if lifted.standing.is_empty() {
             "none".to_owned()
         } else {

@@ -11,7 +11,9 @@
 
 mod flip;
 mod lift;
+mod place;
 mod read;
+mod stages;
 
 pub use flip::flip_depth;
 pub use lift::{Lifted, camera_spec, lift, lift_people, lifted_scene, solve};
@@ -51,13 +53,25 @@ pub enum LiftError {
     /// A joint with no turning parent (the root).
     #[error("`{0}` has no parent joint that turns: its depth cannot be flipped")]
     CannotFlip(String),
+    /// The limb flipped in depth does not fit its keypoints within the joints' ranges.
+    #[error(
+        "`{joint}` on the other side in depth does not fit its keypoints within the joints' ranges (its closed form stops {off_mm:.0} mm from the mirrored place): it stays on its side"
+    )]
+    FlipOutOfRange {
+        /// The joint asked to flip.
+        joint: String,
+        /// How far the limb's closed form stops from the mirrored place (mm).
+        off_mm: f64,
+    },
     /// The tasks could not be solved (an inconsistent body).
     #[error("the lift's problem cannot be solved: {0}")]
     Problem(String),
 }
 
-// Known limits (measured, docs/control-maps.md): a lift takes seconds, not the 50 ms aimed
-// at (each solve runs its 200 iterations: the comfort level is never met; a solve leaving a
-// keypoint over 0.5 px off tries eight flips, each a whole solve); a hand-made flip of an elbow
-// can leave the hand below it a few pixels off its rays (a local minimum of the solve from
-// the flipped start).
+// Known limits (measured, docs/control-maps.md): a flip of an arm whose hand's keypoints are
+// given can leave the hand's keypoints 5-11 px off (the mirrored arm needs the hand turned
+// where the forearm's and wrist's ranges do not reach); a fitted camera leaves keypoints a few
+// pixels off (its pitch and distance are the default's); on a random family of standing
+// postures (examples/lift_bench) 5 of 20 lifts end over 2 px off (up to 12 px) and 9 of 20
+// take over 50 ms, up to 0.14 s (the stages leave keypoints off; the fallbacks are the
+// whole problem's iterations and the flip search).

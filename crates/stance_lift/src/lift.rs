@@ -4,7 +4,7 @@
 //! the solve.
 
 use glam::{DQuat, DVec2, DVec3, Vec2};
-use stance_document::{CameraSpec, Document, PostureValues, Problem, TaskKindSpec, TaskSpec};
+use stance_document::{CameraSpec, Document, PostureValues, TaskKindSpec, TaskSpec};
 use stance_hanim::keypoints::{
     HAND_KEYPOINTS, KeypointFinder, KeypointSource, NECK, PoseKeypoints,
 };
@@ -12,6 +12,8 @@ use stance_ik::{Dof, Effector, Frames, Posture, Skeleton, SolveReport};
 use stance_render::{OpenPosePerson, OrbitCamera};
 
 use crate::LiftError;
+use crate::place::{LIMBS, LimbKeypoints, PlacedLimb, Ray};
+use crate::stages::descends_from;
 
 /// COCO-18 indices.
 const NOSE: usize = 0;
@@ -107,36 +109,84 @@ pub fn lift(
     let standing = standing_feet(person, &scale);
     tasks.extend(floor_tasks(skeleton, &rest, &standing));
     tasks.push(TaskSpec::comfort());
-    let start = start_posture(skeleton, person, &view, &rest_points, &scale);
+    let start = start_posture(skeleton, person, &view, &rest_points, &scale, false);
+    let about_face = start_posture(skeleton, person, &view, &rest_points, &scale, true);
     let mut document = Document {
         posture: PostureValues::from_posture(skeleton, &start),
         tasks,
         camera: Some(camera_spec(&camera)),
         ..Document::default()
     };
-    let (mut posture, mut report) = solve_pose(skeleton, &document, &start, POSE_ITERATIONS)?;
-    let mut flips = Vec::new();
     let off =
         |p: &Posture, below: Option<usize>| worst_pixel(skeleton, &finder, p, &view, person, below);
+    // The feet on the floor where their rays meet it: only through the camera the keypoints were
+    // seen with (a fitted one sees the floor at another pitch).
+    let on_floor = if camera_fitted {
+        &[][..]
+    } else {
+        &standing[..]
+    };
+    let placed = placed_start(
+        skeleton,
+        &document,
+        [&start, &about_face],
+        person,
+        &view,
+        on_floor,
+    )?;
+    let (mut posture, mut report) = solve_pose(skeleton, &document, &placed, POSE_ITERATIONS)?;
+    let mut flips = Vec::new();
     let mut worst = off(&posture, None);
+    if worst > LOST_PX {
+        // The placed start led astray (the torso's solve can run off along the rays from a
+        // start turned the wrong way): the plain start solved as the lift did before its
+        // stages (the whole problem, the solver's restarts), where it does better.
+        let (plain, plain_report) = crate::stages::solve_whole_with(
+            skeleton,
+            &document,
+            &start,
+            POSE_ITERATIONS,
+            LIFT_TOLERANCE_M,
+            true,
+        )?;
+        let plain_worst = off(&plain, None);
+        if plain_worst < worst {
+            (posture, report, worst) = (plain, plain_report, plain_worst);
+        }
+    }
+    // Through a fitted camera no posture lands every keypoint on its pixel: more is tried only
+    // for what a wrong depth leaves (a limb's keypoints many pixels off).
+    let on_pixel = if camera_fitted {
+        FITTED_OFF_PX
+    } else {
+        ON_PIXEL_PX
+    };
+    if worst > on_pixel {
+        // What the stages leave off: a few iterations of the whole problem (the body's turn
+        // and the hands' weighed together) before any flip is tried.
+        let (polished, polished_report) = crate::stages::solve_whole(
+            skeleton,
+            &document,
+            &posture,
+            WHOLE_ITERATIONS,
+            LIFT_TOLERANCE_M,
+        )?;
+        let polished_worst = off(&polished, None);
+        if polished_worst < worst {
+            (posture, report, worst) = (polished, polished_report, polished_worst);
+        }
+    }
     for _ in 0..MAX_FLIPS {
-        if worst <= ON_PIXEL_PX {
+        if worst <= on_pixel {
             break;
         }
-        let Some((joint, flipped, flipped_report, flipped_worst)) =
+        let Some((joints, flipped, flipped_report, flipped_worst)) =
             best_flip(skeleton, &document, &posture, &camera, &report, worst, &off)?
         else {
             break;
         };
-        flips.push(joint);
-        // The chosen flip solved to the end.
-        let (solved, solved_report) = solve_pose(skeleton, &document, &flipped, POSE_ITERATIONS)?;
-        let solved_worst = off(&solved, None);
-        (posture, report, worst) = if solved_worst <= flipped_worst {
-            (solved, solved_report, solved_worst)
-        } else {
-            (flipped, flipped_report, flipped_worst)
-        };
+        flips.extend(joints);
+        (posture, report, worst) = (flipped, flipped_report, flipped_worst);
     }
     // Comfort last, once, from the posture the image, the floor and balance chose.
     let (posture, report) = settle_comfort(skeleton, &document, &posture, report)?;
@@ -153,21 +203,16 @@ pub fn lift(
     })
 }
 
+/// A lift from the placed start leaving a keypoint this far off its pixel (px) is solved again
+/// from the plain start (the rest body turned and placed).
+const LOST_PX: f64 = 20.0;
+
+/// Iterations of the whole problem after the stages when a keypoint is left off its pixel
+/// (about 2.5 ms each on the LOA 2 body with hands, against 0.1-0.2 ms for a stage's).
+const WHOLE_ITERATIONS: usize = 5;
+
 /// At most this many limbs are flipped in depth to meet the image level.
 const MAX_FLIPS: usize = 3;
-
-/// The joints whose depth a lift tries flipping when the image level is not met: where a
-/// limb's local minimum lies (the elbow or knee on the wrong side of its parent in depth).
-const FLIP_CANDIDATES: [&str; 8] = [
-    "r_elbow",
-    "l_elbow",
-    "r_knee",
-    "l_knee",
-    "r_radiocarpal",
-    "l_radiocarpal",
-    "r_talocrural",
-    "l_talocrural",
-];
 
 /// The floor level's residual in a solve (m).
 fn floor_residual(report: &SolveReport) -> f64 {
@@ -177,6 +222,11 @@ fn floor_residual(report: &SolveReport) -> f64 {
         .find(|l| l.level == FLOOR_LEVEL)
         .map_or(0.0, |l| l.residual_after)
 }
+
+/// Through a fitted camera, a keypoint this close to its pixel is taken as the camera's misfit
+/// (its pitch and distance are the default's), not a wrong depth: no flip is tried (px). A
+/// limb at the wrong depth leaves its keypoints 5 to 40 px off at 768 px.
+const FITTED_OFF_PX: f64 = 8.0;
 
 /// A keypoint this close to its pixel counts as on it: no flip is tried (px). A wrong depth
 /// puts a limb's keypoints pixels off its rays; a right one that the pose stage left short of
@@ -243,20 +293,159 @@ fn worst_pixel(
         .fold(0.0, f64::max)
 }
 
-/// Whether `joint` is `ancestor` or below it in the skeleton.
-fn descends_from(skeleton: &Skeleton, joint: usize, ancestor: usize) -> bool {
-    let mut at = Some(joint);
-    while let Some(index) = at {
-        if index == ancestor {
-            return true;
-        }
-        at = skeleton.joints().get(index).and_then(|j| j.parent);
-    }
-    false
+/// The keypoint rays of a limb's middle and end joints, when both are seen.
+fn limb_rays(person: &OpenPosePerson, view: &View, limb: &LimbKeypoints) -> Option<[Ray; 2]> {
+    let [middle, end] = limb.keypoints;
+    Some([view.ray(person.body[middle]?), view.ray(person.body[end]?)])
 }
 
-/// Each candidate joint's depth flipped and the tasks solved again: the one that brings the
-/// keypoints nearest their pixels, if any does better than `worst` (px).
+/// How far a limb's middle and end joints lie from their rays (m, summed).
+fn off_rays(frames: &Frames, placed: &PlacedLimb, rays: [Ray; 2]) -> f64 {
+    let [_, middle, end] = placed.positions(frames);
+    let off = |p: DVec3, (origin, direction): Ray| {
+        let v = p - origin;
+        (v - direction * v.dot(direction)).length()
+    };
+    off(middle, rays[0]) + off(end, rays[1])
+}
+
+/// How far a limb is turned from rest: the sum of its joints' rotation angles (rad).
+fn turned(skeleton: &Skeleton, posture: &Posture, placed: &PlacedLimb) -> f64 {
+    placed
+        .joints()
+        .iter()
+        .map(|&j| posture.rotation_vector(skeleton, j).length())
+        .sum()
+}
+
+/// The limb placed at each of its four depth choices from `posture` ([`PlacedLimb`]): the
+/// postures, with how far its joints land from their rays (m) and how far it turns from rest.
+fn limb_choices(
+    skeleton: &Skeleton,
+    posture: &Posture,
+    placed: &PlacedLimb,
+    rays: [Ray; 2],
+    floor: Option<f64>,
+) -> Vec<(usize, Posture, f64, f64)> {
+    let frames = Frames::new(skeleton, posture);
+    placed
+        .candidates(&frames, rays, floor)
+        .into_iter()
+        .enumerate()
+        .map(|(choice, goal)| {
+            let mut trial = posture.clone();
+            placed.place(skeleton, &mut trial, goal);
+            let off = off_rays(&Frames::new(skeleton, &trial), placed, rays);
+            let turn = turned(skeleton, &trial, placed);
+            (choice, trial, off, turn)
+        })
+        .collect()
+}
+
+/// Off the rays by no more than this more than the best choice (m), a limb's depth choices
+/// count as fitting as well: the one turned least from rest is taken.
+const CHOICE_SLACK_M: f64 = 0.005;
+/// Iterations of the torso's solve before the limbs are placed.
+const TORSO_ITERATIONS: usize = 30;
+
+/// The start of the solve: `start` with its torso solved onto the torso's keypoints (the limbs
+/// held), then each arm and leg placed on its keypoints' rays in closed form, at the depth
+/// choice that lands on them best and, among those that land as well, turns it least from
+/// rest.
+fn placed_start(
+    skeleton: &Skeleton,
+    document: &Document,
+    starts: [&Posture; 2],
+    person: &OpenPosePerson,
+    view: &View,
+    standing: &[String],
+) -> Result<Posture, LiftError> {
+    let rest = Frames::new(skeleton, &Posture::rest(skeleton));
+    let floor = |limb: &LimbKeypoints| {
+        let ankle = limb.joints[2];
+        standing
+            .iter()
+            .any(|s| s == ankle)
+            .then(|| skeleton.joint_index(ankle))
+            .flatten()
+            .map(|j| rest.joint_position[j].y)
+    };
+    let limbs: Vec<(PlacedLimb, [Ray; 2], Option<f64>)> = LIMBS
+        .iter()
+        .filter_map(|limb| {
+            Some((
+                PlacedLimb::new(skeleton, limb.joints)?,
+                limb_rays(person, view, limb)?,
+                floor(limb),
+            ))
+        })
+        .collect();
+    let middles: Vec<usize> = LIMBS
+        .iter()
+        .filter_map(|limb| skeleton.joint_index(limb.joints[1]))
+        .collect();
+    let on_torso = |task: &TaskSpec| match &task.kind {
+        TaskKindSpec::Line { joint, .. } => skeleton
+            .joint_index(joint)
+            .is_some_and(|j| !middles.iter().any(|&m| descends_from(skeleton, j, m))),
+        _ => false,
+    };
+    let torso = Document {
+        tasks: document
+            .tasks
+            .iter()
+            .filter(|t| on_torso(t))
+            .cloned()
+            .collect(),
+        ..document.clone()
+    };
+    // From the start facing as the keypoints say, and turned about: the torso's solve keeps
+    // to the side it starts on, and the image's left and right can mislead (a twisted trunk,
+    // a head turned over a shoulder).
+    let mut torsos = Vec::with_capacity(2);
+    for start in starts {
+        let (posture, report) = crate::stages::solve_staged(
+            skeleton,
+            &torso,
+            start,
+            TORSO_ITERATIONS,
+            LIFT_TOLERANCE_M,
+            false,
+        )?;
+        let residual = report
+            .levels
+            .iter()
+            .find(|l| l.level == IMAGE_LEVEL)
+            .map_or(f64::INFINITY, |l| l.residual_after);
+        torsos.push((posture, residual));
+    }
+    let Some((mut posture, _)) = torsos.into_iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
+        return Ok(starts[0].clone());
+    };
+    for (placed, rays, floor) in &limbs {
+        let best = limb_choices(skeleton, &posture, placed, *rays, *floor)
+            .into_iter()
+            .map(|(_, p, off, turn)| (p, off, turn))
+            .reduce(|a, b| {
+                let better =
+                    b.1 < a.1 - CHOICE_SLACK_M || (b.1 <= a.1 + CHOICE_SLACK_M && b.2 < a.2);
+                if better { b } else { a }
+            });
+        if let Some((p, _, _)) = best {
+            posture = p;
+        }
+    }
+    Ok(posture)
+}
+
+/// A flip the lift keeps: the joints flipped, the solved posture, its report and its worst
+/// keypoint's distance (px).
+type Flipped = (Vec<String>, Posture, SolveReport, f64);
+
+/// Each limb whose keypoints are off their rays flipped in depth ([`crate::flip_depth`]) at
+/// its middle joint, its end joint, and both, and the tasks solved again: the flip that brings
+/// the keypoints nearest their pixels, if any does better than half of `worst` (px) and keeps
+/// the feet where they stood, with the joints flipped.
 fn best_flip(
     skeleton: &Skeleton,
     document: &Document,
@@ -265,29 +454,42 @@ fn best_flip(
     report: &SolveReport,
     worst: f64,
     off: &dyn Fn(&Posture, Option<usize>) -> f64,
-) -> Result<Option<(String, Posture, SolveReport, f64)>, LiftError> {
-    let mut best: Option<(String, Posture, SolveReport, f64)> = None;
-    for joint in FLIP_CANDIDATES {
-        // Only a limb whose own keypoints are off its rays is tried.
-        let Some(index) = skeleton.joint_index(joint) else {
+) -> Result<Option<Flipped>, LiftError> {
+    let mut best: Option<Flipped> = None;
+    for limb in &LIMBS {
+        let [_, middle, end] = limb.joints;
+        let Some(limb_top) = skeleton.joint_index(middle) else {
             continue;
         };
-        if off(posture, Some(index)) <= ON_PIXEL_PX {
+        if off(posture, Some(limb_top)) <= ON_PIXEL_PX {
             continue;
         }
-        let flipped = crate::flip_depth(skeleton, posture, camera, joint)?;
-        let (solved, solved_report) =
-            solve_pose(skeleton, document, &flipped, CANDIDATE_ITERATIONS)?;
-        let solved_worst = off(&solved, None);
-        // Kept when it halves the worst keypoint's distance and leaves the feet where they
-        // stood (the floor's level within 5 mm of what it was).
-        let floor_kept = floor_residual(&solved_report) <= floor_residual(report) + 0.005;
-        if floor_kept && solved_worst < 0.5 * best.as_ref().map_or(worst, |b| b.3) {
-            let done = solved_worst <= ON_PIXEL_PX;
-            best = Some((joint.to_owned(), solved, solved_report, solved_worst));
-            if done {
-                break;
+        // A flip that does not fit within the joints' ranges is no candidate.
+        let flip = |p: &Posture, joint: &str| crate::flip_depth(skeleton, p, camera, joint).ok();
+        let flipped_middle = flip(posture, middle);
+        let candidates = [
+            (vec![end], flip(posture, end)),
+            (
+                vec![middle, end],
+                flipped_middle.as_ref().and_then(|p| flip(p, end)),
+            ),
+            (vec![middle], flipped_middle),
+        ];
+        for (joints, trial) in candidates {
+            let Some(trial) = trial else {
+                continue;
+            };
+            let (solved, solved_report) =
+                solve_pose(skeleton, document, &trial, CANDIDATE_ITERATIONS)?;
+            let solved_worst = off(&solved, None);
+            let floor_kept = floor_residual(&solved_report) <= floor_residual(report) + 0.005;
+            if floor_kept && solved_worst < 0.5 * best.as_ref().map_or(worst, |b| b.3) {
+                let joints = joints.into_iter().map(str::to_owned).collect();
+                best = Some((joints, solved, solved_report, solved_worst));
             }
+        }
+        if best.as_ref().is_some_and(|b| b.3 <= ON_PIXEL_PX) {
+            break;
         }
     }
     Ok(best)
@@ -305,9 +507,9 @@ pub fn solve(
     settle_comfort(skeleton, document, &posture, report)
 }
 
-/// Iterations each flip candidate is solved for before they are compared: the chosen one is
-/// then solved to the end.
-const CANDIDATE_ITERATIONS: usize = 50;
+/// Iterations of each stage when a flip candidate is solved: from a flip's exact start a
+/// candidate that fits meets its levels within a few; the best one is kept as solved.
+const CANDIDATE_ITERATIONS: usize = 20;
 /// A level is met within this (m): a keypoint 0.1 mm off its ray is a hundredth of a pixel
 /// at the distances images are taken from.
 const LIFT_TOLERANCE_M: f64 = 1e-4;
@@ -326,16 +528,14 @@ fn solve_pose(
     start: &Posture,
     iterations: usize,
 ) -> Result<(Posture, SolveReport), LiftError> {
-    let pose = Document {
-        tasks: document
-            .tasks
-            .iter()
-            .filter(|t| !matches!(t.kind, TaskKindSpec::Comfort { .. }))
-            .cloned()
-            .collect(),
-        ..document.clone()
-    };
-    solve_with(skeleton, &pose, start, iterations)
+    crate::stages::solve_staged(
+        skeleton,
+        document,
+        start,
+        iterations,
+        LIFT_TOLERANCE_M,
+        false,
+    )
 }
 
 /// Comfort among the postures that keep the image, the floor and balance: a few iterations
@@ -354,40 +554,30 @@ fn settle_comfort(
     {
         return Ok((posture.clone(), report));
     }
-    let (settled, settled_report) = solve_with(skeleton, document, posture, COMFORT_ITERATIONS)?;
+    let (settled, settled_report) = crate::stages::solve_staged(
+        skeleton,
+        document,
+        posture,
+        COMFORT_ITERATIONS,
+        LIFT_TOLERANCE_M,
+        true,
+    )?;
     // Strict priority keeps the higher levels; a level that was met and no longer is (the
     // iteration budget cut a correction short) keeps the pose stage's posture.
+    // Nor does one that takes a level above comfort further from its goal (a stage whose
+    // start was far off can run away in 12 iterations).
     let lost = report.levels.iter().any(|before| {
-        before.met
-            && settled_report
-                .levels
-                .iter()
-                .any(|after| after.level == before.level && !after.met)
+        settled_report.levels.iter().any(|after| {
+            after.level == before.level
+                && ((before.met && !after.met)
+                    || after.residual_after > before.residual_after + LIFT_TOLERANCE_M)
+        })
     });
     if lost {
         Ok((posture.clone(), report))
     } else {
         Ok((settled, settled_report))
     }
-}
-
-fn solve_with(
-    skeleton: &Skeleton,
-    document: &Document,
-    start: &Posture,
-    max_iterations: usize,
-) -> Result<(Posture, SolveReport), LiftError> {
-    let with_start = Document {
-        posture: PostureValues::from_posture(skeleton, start),
-        ..document.clone()
-    };
-    let mut problem = Problem::from_document(&with_start, skeleton.clone())
-        .map_err(|e| LiftError::Problem(e.to_string()))?;
-    problem.settings.max_iterations = max_iterations;
-    problem.settings.tolerance = LIFT_TOLERANCE_M;
-    problem
-        .solve()
-        .map_err(|e| LiftError::Problem(e.to_string()))
 }
 
 /// The document's saved view of `camera` (its field of view is the default one's).
@@ -657,6 +847,7 @@ fn start_posture(
     view: &View,
     rest: &PoseKeypoints,
     scale: &Scale,
+    about_face: bool,
 ) -> Posture {
     let body = &person.body;
     let across = |r: usize, l: usize| {
@@ -678,7 +869,13 @@ fn start_posture(
         _ => 0.0,
     };
     // The image's x axis is the camera's right; turned by `camera.yaw` from the world's +X.
-    let turn = f64::from(view.camera.yaw) + side.atan2(facing);
+    let turn = f64::from(view.camera.yaw)
+        + side.atan2(facing)
+        + if about_face {
+            std::f64::consts::PI
+        } else {
+            0.0
+        };
     let rotation = DQuat::from_rotation_y(turn);
     let root = rest_root(skeleton);
     let visible: Vec<DVec3> = body

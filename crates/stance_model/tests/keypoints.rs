@@ -264,6 +264,12 @@ fn a_lift_the_host_runs_is_applied_when_it_comes_back_and_cancel_drops_it() {
         keypoints_file(&s, &[reaching(&s, DVec3::ZERO)]),
     );
     let failed = host.inner.borrow().jobs.last().cloned().unwrap();
+    // The page hands ids to its worker and back as JavaScript numbers (f64): each lift's id
+    // must come back as itself (at 2^63 the second came back as the first's).
+    for id in [request.id, failed.id] {
+        assert_eq!(id as f64 as u64, id, "the request id {id} is no exact f64");
+    }
+    assert_ne!(request.id as f64, failed.id as f64);
     editor.model.receive(HostMessage::JobFailed {
         id: failed.id,
         reason: "the loading worker stopped".to_owned(),
@@ -294,10 +300,10 @@ fn a_lift_the_host_runs_is_applied_when_it_comes_back_and_cancel_drops_it() {
 
 #[test]
 fn a_flip_the_keypoints_undo_is_refused_by_name_and_changes_nothing() {
-    // Catches: a flip that the solve carried back to where it was told as done (or recorded
-    // as a step), or a flip whose failure changes the posture. On this view and posture
-    // `stance_lift::flip_depth` reaches only 23 mm across the shoulder (its range) and the
-    // solve of the keypoints brings the arm back (measured: 149 mm behind, then 146 mm).
+    // Catches: a flip that does not fit the keypoints told as done (or recorded as a step), or
+    // a flip whose failure changes the posture. On this view and posture the right elbow in
+    // front of the shoulder does not fit its keypoints within the shoulder's range:
+    // `stance_lift::flip_depth`'s closed form stops about 70 mm from the mirrored elbow.
     let s = body();
     let posture = reaching(&s, DVec3::ZERO);
     let mut editor = Clocked::new();
@@ -321,7 +327,7 @@ fn a_flip_the_keypoints_undo_is_refused_by_name_and_changes_nothing() {
         "{}",
         notice.text
     );
-    assert!(notice.text.contains("back to its side"), "{}", notice.text);
+    assert!(notice.text.contains("joints' ranges"), "{}", notice.text);
     assert_eq!(editor.model.session().posture(), &lifted);
     assert!(editor.model.lifting().is_none());
 }

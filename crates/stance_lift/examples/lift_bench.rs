@@ -1,0 +1,273 @@
+//! The lift's time, one person at a time (`stance lift`'s target: <= 50 ms natively):
+//!
+//! ```sh
+//! cargo run --release -p stance_lift --example lift_bench [-- RUNS]
+//! ```
+//!
+//! Three sets of keypoints on the LOA 2 default body (132 DOF, 18 body and 42 hand keypoints
+//! where seen), each lift timed `RUNS` times (default 5; the median and the slowest printed),
+//! with how far its keypoints land from their pixels:
+//! - **tuned**: the round-trip test's four postures from three views (the lift was developed
+//!   on these), through the true camera and a fitted one;
+//! - **fixtures**: the OpenPose files `stance render` wrote for `tests/fixtures/openpose`
+//!   (stand, reach, stride at two sizes; legs outside the frame, hidden points missing; the
+//!   files carry no camera, so each is lifted through a fitted one), not looked at while the
+//!   lift was tuned;
+//! - **random**: standing postures of a random family (feet on the floor, wrists pulled to
+//!   random points before and beside the body; seeded), seen from random views, through the
+//!   true camera; not tuned on either (seed 0x5eed0033; `LIFT_BENCH_SEED` for another draw).
+
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
+
+use std::path::Path;
+use std::time::Instant;
+
+use glam::{DVec3, Vec3};
+use stance_hanim::keypoints::KeypointFinder;
+use stance_hanim::{SkeletonOptions, default_skeleton};
+use stance_ik::{Frames, Posture, Skeleton, Solver, SolverSettings, Task};
+use stance_lift::{ObservedPose, lift};
+use stance_render::{HiddenKeypoints, OpenPosePerson, OrbitCamera};
+
+const SIZE: [u32; 2] = [768, 768];
+
+/// A posture with the feet pinned and the wrists pulled to `hands`, as the round-trip test
+/// draws them.
+fn drawn(s: &Skeleton, feet: [DVec3; 2], hands: [DVec3; 2]) -> Posture {
+    let at = |name: &str| s.joint_index(name).unwrap();
+    let tasks = vec![
+        Task::position(at("l_talocrural"), DVec3::ZERO, feet[0]),
+        Task::position(at("r_talocrural"), DVec3::ZERO, feet[1]),
+        Task::position(at("l_radiocarpal"), DVec3::ZERO, hands[0]).at_level(2),
+        Task::position(at("r_radiocarpal"), DVec3::ZERO, hands[1]).at_level(2),
+        Task::rest_posture(s).at_level(3).with_weight(0.05),
+    ];
+    let mut posture = Posture::rest(s);
+    let mut solver = Solver::new(SolverSettings {
+        max_iterations: 300,
+        ..SolverSettings::default()
+    })
+    .unwrap();
+    solver.solve(s, &tasks, &mut posture).unwrap();
+    posture
+}
+
+/// A small seeded generator (xorshift), uniform in [0, 1).
+struct Random(u64);
+
+impl Random {
+    fn next(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// A standing posture of the random family: each foot on the floor up to 25 cm aside and
+/// 30 cm forward or back of rest, each wrist pulled to a random point of a box before and
+/// beside the body (0.6 to 1.9 m up, 0.6 m to either side, 0.3 m behind to 0.6 m before).
+fn random_posture(s: &Skeleton, feet: [DVec3; 2], random: &mut Random) -> Posture {
+    let mut within = |lo: f64, hi: f64| lo + (hi - lo) * random.next();
+    let foot = |f: DVec3, within: &mut dyn FnMut(f64, f64) -> f64| {
+        f + DVec3::new(within(-0.25, 0.25), 0.0, within(-0.3, 0.3))
+    };
+    let feet = [foot(feet[0], &mut within), foot(feet[1], &mut within)];
+    let mut hand = || DVec3::new(within(-0.6, 0.6), within(0.6, 1.9), within(-0.3, 0.6));
+    let hands = [hand(), hand()];
+    drawn(s, feet, hands)
+}
+
+fn worst_px(
+    s: &Skeleton,
+    observed: &OpenPosePerson,
+    posture: &Posture,
+    camera: &OrbitCamera,
+    size: [u32; 2],
+) -> f64 {
+    let points = KeypointFinder::new(s).find(s, &Frames::new(s, posture));
+    let again = OpenPosePerson::seen(&points, camera, size, &[], HiddenKeypoints::Keep);
+    observed
+        .body
+        .iter()
+        .zip(&again.body)
+        .chain(observed.left_hand.iter().zip(&again.left_hand))
+        .chain(observed.right_hand.iter().zip(&again.right_hand))
+        .filter_map(|(a, b)| Some((*a)?.distance((*b)?)))
+        .fold(0.0, f64::max)
+}
+
+struct Figure {
+    name: String,
+    median_ms: f64,
+    slowest_ms: f64,
+    worst_px: f64,
+}
+
+fn timed(
+    runs: usize,
+    name: String,
+    s: &Skeleton,
+    person: &OpenPosePerson,
+    size: [u32; 2],
+    camera: Option<OrbitCamera>,
+) -> Figure {
+    let mut times = Vec::with_capacity(runs);
+    let mut worst = 0.0;
+    for _ in 0..runs {
+        let started = Instant::now();
+        let lifted = lift(s, person, size, camera).unwrap();
+        times.push(started.elapsed().as_secs_f64() * 1e3);
+        worst = worst_px(s, person, &lifted.posture, &lifted.camera, size);
+    }
+    times.sort_by(f64::total_cmp);
+    Figure {
+        name,
+        median_ms: times[times.len() / 2],
+        slowest_ms: times[times.len() - 1],
+        worst_px: worst,
+    }
+}
+
+fn summary(set: &str, figures: &[Figure]) {
+    let mut medians: Vec<f64> = figures.iter().map(|f| f.median_ms).collect();
+    medians.sort_by(f64::total_cmp);
+    let slowest = figures.iter().map(|f| f.slowest_ms).fold(0.0, f64::max);
+    let worst = figures.iter().map(|f| f.worst_px).fold(0.0, f64::max);
+    println!(
+        "{set}: {} lifts, median {:.1} ms (of the medians; {:.1} to {:.1}), slowest run {:.1} ms, worst keypoint {:.2} px",
+        figures.len(),
+        medians[medians.len() / 2],
+        medians[0],
+        medians[medians.len() - 1],
+        slowest,
+        worst
+    );
+}
+
+fn main() {
+    let runs: usize = std::env::args()
+        .nth(1)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(5);
+    let s = default_skeleton(&SkeletonOptions::default())
+        .unwrap()
+        .skeleton;
+    let finder = KeypointFinder::new(&s);
+    let rest = Frames::new(&s, &Posture::rest(&s));
+    let at = |name: &str| rest.joint_position[s.joint_index(name).unwrap()];
+    let (lf, rf) = (at("l_talocrural"), at("r_talocrural"));
+    let postures = [
+        ("standing", Posture::rest(&s)),
+        (
+            "hands toward the camera",
+            drawn(
+                &s,
+                [lf, rf],
+                [DVec3::new(0.15, 1.25, 0.5), DVec3::new(-0.2, 1.1, 0.45)],
+            ),
+        ),
+        (
+            "arm up, arm across",
+            drawn(
+                &s,
+                [lf, rf],
+                [DVec3::new(0.3, 1.85, 0.1), DVec3::new(0.1, 1.1, 0.3)],
+            ),
+        ),
+        (
+            "a step, a hand forward",
+            drawn(
+                &s,
+                [
+                    lf + DVec3::new(0.0, 0.0, 0.3),
+                    rf - DVec3::new(0.0, 0.0, 0.15),
+                ],
+                [DVec3::new(0.25, 1.0, 0.55), DVec3::new(-0.3, 0.85, -0.1)],
+            ),
+        ),
+    ];
+    let view = |yaw: f32, pitch: f32| OrbitCamera {
+        target_world: Vec3::new(0.0, 0.9, 0.0),
+        yaw,
+        pitch,
+        distance_m: 3.4,
+        ..OrbitCamera::default()
+    };
+    let seen = |posture: &Posture, camera: &OrbitCamera| {
+        let points = finder.find(&s, &Frames::new(&s, posture));
+        OpenPosePerson::seen(&points, camera, SIZE, &[], HiddenKeypoints::Keep)
+    };
+
+    let mut tuned = (Vec::new(), Vec::new());
+    for (yaw, pitch) in [(0.35f32, 0.12f32), (-0.6, 0.05), (1.2, 0.2)] {
+        let camera = view(yaw, pitch);
+        for (name, posture) in &postures {
+            let person = seen(posture, &camera);
+            let label = format!("yaw {yaw:5.2} {name}");
+            tuned
+                .0
+                .push(timed(runs, label.clone(), &s, &person, SIZE, Some(camera)));
+            tuned.1.push(timed(runs, label, &s, &person, SIZE, None));
+        }
+    }
+
+    let mut fixtures = Vec::new();
+    let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/fixtures/openpose");
+    for name in ["stand", "reach", "stride"] {
+        for size in ["512x512", "768x512"] {
+            let path = folder.join(format!("{name}-{size}.json"));
+            let Ok(text) = std::fs::read_to_string(&path) else {
+                println!("{}: not found", path.display());
+                continue;
+            };
+            let observed = ObservedPose::from_json(&text, None).unwrap();
+            let person = observed.people[0];
+            fixtures.push(timed(
+                runs,
+                format!("{name}-{size}"),
+                &s,
+                &person,
+                observed.size_px,
+                observed.camera,
+            ));
+        }
+    }
+
+    let seed = std::env::var("LIFT_BENCH_SEED")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0x5eed_0033);
+    let mut random = Random(seed);
+    let mut randoms = Vec::new();
+    for k in 0..20 {
+        let posture = random_posture(&s, [lf, rf], &mut random);
+        let yaw = (random.next() * 2.0 - 1.0) * std::f64::consts::PI;
+        let pitch = random.next() * 0.3;
+        let camera = view(yaw as f32, pitch as f32);
+        let person = seen(&posture, &camera);
+        randoms.push(timed(
+            runs,
+            format!("random {k:2} (yaw {yaw:5.2})"),
+            &s,
+            &person,
+            SIZE,
+            Some(camera),
+        ));
+    }
+
+    for (set, figures) in [
+        ("tuned, true camera", &tuned.0),
+        ("tuned, fitted camera", &tuned.1),
+        ("fixtures, fitted camera", &fixtures),
+        ("random, true camera", &randoms),
+    ] {
+        for f in figures.iter() {
+            println!(
+                "  {set:<24} {:<36} median {:6.1} ms, slowest {:6.1} ms, worst keypoint {:6.2} px",
+                f.name, f.median_ms, f.slowest_ms, f.worst_px
+            );
+        }
+        summary(set, figures);
+    }
+}
