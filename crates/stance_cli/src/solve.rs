@@ -59,7 +59,8 @@ pub fn run(args: SolveArgs) -> Result<()> {
 
 /// Each character of the scene (a document: a scene of one) solved on the default body:
 /// `{"characters": [{"name", "placement", "joints", "posture", "report", "tasks"}...]}`, the
-/// joints in the character's own frame (its placement puts it in the scene).
+/// joints in the character's own frame (its placement puts it in the scene); its collision
+/// tasks hold it off the scene's props.
 fn solve_scene(args: &SolveArgs, text: &str) -> Result<Value> {
     let mut scene = Scene::from_json(text).map_err(|e| anyhow!("{e}"))?;
     let loa = LevelOfArticulation::from_number(args.loa)
@@ -72,8 +73,16 @@ fn solve_scene(args: &SolveArgs, text: &str) -> Result<Value> {
     let mut solved = Vec::with_capacity(scene.characters.len());
     for (i, character) in scene.characters.iter_mut().enumerate() {
         let named = |e: &dyn std::fmt::Display| anyhow!("character {i} ({}): {e}", character.name);
-        let problem =
+        let mut problem =
             Problem::from_document(&character.document, body.clone()).map_err(|e| named(&e))?;
+        // Its collision tasks hold it off the scene's props, in its own frame.
+        let character_from_scene = character.placement.scene_from_character().inverse();
+        let props: Vec<_> = scene
+            .props
+            .iter()
+            .map(|prop| prop.obstacle(character_from_scene))
+            .collect();
+        problem.set_obstacles(&props);
         let (posture, report) = problem.solve().map_err(|e| named(&e))?;
         let mut out = problem.solution_json(&posture, &report);
         if let Some(o) = out.as_object_mut() {

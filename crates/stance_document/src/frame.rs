@@ -4,7 +4,7 @@
 
 use glam::DVec3;
 use stance_hanim::HumanoidSkeleton;
-use stance_ik::{Skeleton, Task};
+use stance_ik::{Obstacle, Skeleton, Task, TaskKind};
 
 use crate::{TaskKindSpec, TaskSpec};
 
@@ -32,6 +32,9 @@ pub struct FrameProblem<'a> {
     pub held: Option<(usize, DVec3)>,
     /// The point being pulled.
     pub grab: Option<Grab>,
+    /// Fixed solids the collision tasks hold the body off (the scene's props, in the
+    /// character's frame).
+    pub obstacles: &'a [Obstacle],
 }
 
 /// The level just below every hard (not soft) task of `specs`: where a pull goes, and a task
@@ -57,7 +60,15 @@ impl FrameProblem<'_> {
                 continue;
             }
             if let Ok(converted) = spec.solver_tasks_with(skeleton, body, self.specs) {
-                tasks.extend(converted);
+                tasks.extend(converted.into_iter().map(|mut task| {
+                    if let TaskKind::Collision(c) = &task.kind
+                        && !self.obstacles.is_empty()
+                    {
+                        task.kind =
+                            TaskKind::Collision(c.clone().with_obstacles(self.obstacles.to_vec()));
+                    }
+                    task
+                }));
             }
         }
         if let Some((joint, position)) = self.held {
@@ -77,7 +88,6 @@ impl FrameProblem<'_> {
 mod tests {
     #![allow(clippy::unwrap_used)]
     use stance_hanim::{SkeletonOptions, default_skeleton};
-    use stance_ik::TaskKind;
 
     use super::*;
 
@@ -105,6 +115,7 @@ mod tests {
             comfort: false,
             held: Some((wrist, DVec3::ONE)),
             grab: Some(grab),
+            obstacles: &[],
         };
         let tasks = frame.tasks(s, Some(&body));
         let summary: Vec<(u32, bool)> = tasks

@@ -8,8 +8,8 @@ use std::collections::BTreeMap;
 
 use serde_json::{Map, Value, json};
 use stance_ik::{
-    Damping, Dof, Frames, IkError, Iteration, JointDef, Limb, Posture, Skeleton, SolveReport,
-    Solver, SolverSettings, Task, TaskKind,
+    Damping, Dof, Frames, IkError, Iteration, JointDef, Limb, Obstacle, Posture, Skeleton,
+    SolveReport, Solver, SolverSettings, Task, TaskKind,
 };
 
 use stance_hanim::capsules::BodyCollision;
@@ -98,6 +98,18 @@ impl Problem {
         if !radius.is_empty() {
             problem.set_capsule_radii(&radius);
         }
+        if let Some(v) = root.get("obstacles").filter(|v| !v.is_null()) {
+            let list = arr(v, "obstacles")?;
+            let obstacles = list
+                .iter()
+                .enumerate()
+                .map(|(i, o)| {
+                    crate::Prop::from_json_value(o, &format!("obstacles[{i}]"), i)
+                        .map(|prop| prop.obstacle(glam::DAffine3::IDENTITY))
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            problem.set_obstacles(&obstacles);
+        }
         if let Some(v) = root.get("comfort").filter(|v| !v.is_null()) {
             problem.comfort = parse_comfort_settings(v, "comfort")?;
         }
@@ -152,6 +164,16 @@ impl Problem {
             {
                 body.radius.clone_from(radius);
                 task.kind = TaskKind::Collision(body.collision(&self.skeleton));
+            }
+        }
+    }
+
+    /// Holds the body's capsules off these fixed solids in every collision task (a problem
+    /// file's `obstacles`, a scene's props in the character's frame); none: as before.
+    pub fn set_obstacles(&mut self, obstacles: &[Obstacle]) {
+        for task in &mut self.tasks {
+            if let TaskKind::Collision(c) = &task.kind {
+                task.kind = TaskKind::Collision(c.clone().with_obstacles(obstacles.to_vec()));
             }
         }
     }

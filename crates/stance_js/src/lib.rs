@@ -372,6 +372,7 @@ impl PoseSolver {
             comfort: self.grab.is_none(),
             held: None,
             grab: self.grab,
+            obstacles: &[],
         }
         .tasks(&self.skeleton, body);
         let report = match clock {

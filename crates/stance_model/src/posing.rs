@@ -8,15 +8,16 @@ mod timed;
 
 use stance_document::{
     CameraSpec, Document, FrameProblem, LimbName, MotionSection, PostureValues, StiffnessValues,
-    TaskSpec,
+    TaskKindSpec, TaskSpec,
 };
 use stance_hanim::hands::{HandError, HandRig};
 use stance_hanim::{
     HumanoidSkeleton, LevelOfArticulation, Side, SkeletonOptions, default_skeleton, mirror_name,
 };
 use stance_ik::{
-    Clock, Frames, Iteration, Limb, LimbGoal, Posture, Skeleton, SolveReport, SolveStatus, Solver,
-    SolverSettings, SwivelInterval, TEXTBOOK_ANGULAR_STEP, TEXTBOOK_LINEAR_STEP,
+    Clock, Collision, Contact, Frames, Iteration, Limb, LimbGoal, Obstacle, Posture, Skeleton,
+    SolveReport, SolveStatus, Solver, SolverSettings, SwivelInterval, TEXTBOOK_ANGULAR_STEP,
+    TEXTBOOK_LINEAR_STEP, TaskKind,
 };
 
 pub use self::timed::{TimedFrame, blended, timed_tasks, timed_tasks_at};
@@ -62,6 +63,14 @@ pub struct PosingSession {
     stiffness: StiffnessValues,
     /// The left and right hands' finger joints (or why they cannot be posed).
     hands: [Result<HandRig, HandError>; 2],
+    /// The body's active collision tasks as the solver takes them, by their spec (built
+    /// once: the search for the contacts runs at every refresh).
+    collisions: Vec<(TaskKindSpec, Collision)>,
+    /// The contacts the collision tasks hold in the current posture.
+    contacts: Vec<Contact>,
+    /// Fixed solids the collision tasks hold the body off (the scene's props, in the body's
+    /// frame).
+    obstacles: Vec<Obstacle>,
 }
 
 impl std::fmt::Debug for PosingSession {
@@ -160,6 +169,9 @@ impl PosingSession {
             timed: None,
             anatomical_stiffness,
             stiffness: StiffnessValues::default(),
+            collisions: Vec::new(),
+            contacts: Vec::new(),
+            obstacles: Vec::new(),
         };
         session.tasks = session.default_tasks();
         session.refresh();
@@ -225,6 +237,39 @@ impl PosingSession {
     /// The grab-and-pull task while a pull goes on.
     pub fn grab(&self) -> Option<&Grab> {
         self.grab.as_ref()
+    }
+
+    /// Whether an active collision task keeps the body out of itself or the floor.
+    pub fn collision_on(&self) -> bool {
+        self.tasks
+            .iter()
+            .any(|task| task.active && matches!(task.kind, TaskKindSpec::Collision { .. }))
+    }
+
+    /// The contacts the active collision tasks hold in the current posture: the pairs of
+    /// surfaces (and surfaces and the floor) within their margin, nearest first.
+    pub fn contacts(&self) -> &[Contact] {
+        &self.contacts
+    }
+
+    /// Holds the body off these fixed solids in its collision tasks (the scene's props, in
+    /// the body's frame); when they changed and a collision task acts, the solver runs again
+    /// (comfort armed or not as it was: a prop moved is neither a change of tasks nor an edit
+    /// of the posture).
+    pub fn set_obstacles(&mut self, obstacles: Vec<Obstacle>) {
+        if obstacles != self.obstacles {
+            self.obstacles = obstacles;
+            self.collisions.clear();
+            if self.collision_on() {
+                self.settled = false;
+                self.refresh();
+            }
+        }
+    }
+
+    /// The fixed solids the collision tasks hold the body off.
+    pub fn obstacles(&self) -> &[Obstacle] {
+        &self.obstacles
     }
 
     /// Whether the solver has nothing left to do until something changes.
@@ -618,6 +663,7 @@ impl PosingSession {
             comfort: self.comfort_armed && self.grab.is_none() && self.held.is_none(),
             held: self.held,
             grab: self.grab,
+            obstacles: &self.obstacles,
         }
         .tasks(&self.humanoid.skeleton, Some(&self.humanoid));
         let before = self.posture.values().to_vec();
@@ -647,10 +693,51 @@ impl PosingSession {
         self.refresh();
     }
 
+    /// The active collision tasks' contacts in the current posture; each task is built once
+    /// for its spec.
+    fn refresh_contacts(&mut self) {
+        let active: Vec<&TaskSpec> = self
+            .tasks
+            .iter()
+            .filter(|task| task.active && matches!(task.kind, TaskKindSpec::Collision { .. }))
+            .collect();
+        let mut built = Vec::with_capacity(active.len());
+        for spec in active {
+            let kept = self
+                .collisions
+                .iter()
+                .position(|(kind, _)| *kind == spec.kind);
+            let collision = match kept {
+                Some(i) => self.collisions.swap_remove(i),
+                None => match spec.to_task_on(&self.humanoid, &self.tasks) {
+                    Ok(stance_ik::Task {
+                        kind: TaskKind::Collision(collision),
+                        ..
+                    }) => (
+                        spec.kind.clone(),
+                        collision.with_obstacles(self.obstacles.clone()),
+                    ),
+                    _ => continue,
+                },
+            };
+            built.push(collision);
+        }
+        self.collisions = built;
+        let frames = &self.frames;
+        let mut contacts: Vec<Contact> = self
+            .collisions
+            .iter()
+            .flat_map(|(_, collision)| collision.contacts(frames))
+            .collect();
+        contacts.sort_by(|a, b| a.distance.total_cmp(&b.distance));
+        self.contacts = contacts;
+    }
+
     /// Forward kinematics and the per-task statuses of the current posture.
     fn refresh(&mut self) {
         self.revision = self.revision.wrapping_add(1);
         self.frames = Frames::new(&self.humanoid.skeleton, &self.posture);
+        self.refresh_contacts();
         self.statuses = stance_document::task_statuses(
             &self.humanoid.skeleton,
             Some(&self.humanoid),

@@ -6,6 +6,7 @@
 mod avatar_swap;
 mod clips;
 mod clocked;
+mod collision;
 mod hands;
 mod kept_clips;
 mod keypoints;

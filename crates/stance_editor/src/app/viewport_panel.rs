@@ -604,8 +604,10 @@ impl ViewportPanel {
     /// What the renderer draws: the mannequin's figure, or its capsules (selection and hover
     /// coloured), or the avatar's skinning palettes once its mesh is on the GPU.
     fn scene(&self, model: &EditorModel) -> Scene {
-        let show_avatar = model.avatar().is_some() && self.avatar_uploaded;
-        let show_figure = self.figure_shown(model);
+        // The collision capsules shown on request: the body drawn as its capsules.
+        let capsules_asked = model.show_capsules();
+        let show_avatar = model.avatar().is_some() && self.avatar_uploaded && !capsules_asked;
+        let show_figure = self.figure_shown(model) && !capsules_asked;
         // With an avatar or the figure the capsules are hidden; the skeleton overlay shows the
         // bones of a selection.
         let heat = model.comfort().heat_shares(model.session().skeleton());
