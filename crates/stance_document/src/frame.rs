@@ -4,7 +4,7 @@
 
 use glam::DVec3;
 use stance_hanim::HumanoidSkeleton;
-use stance_ik::{Obstacle, Skeleton, Task, TaskKind};
+use stance_ik::{Collision, Obstacle, Skeleton, Task, TaskKind};
 
 use crate::{TaskKindSpec, TaskSpec};
 
@@ -35,6 +35,10 @@ pub struct FrameProblem<'a> {
     /// Fixed solids the collision tasks hold the body off (the scene's props, in the
     /// character's frame).
     pub obstacles: &'a [Obstacle],
+    /// Collision tasks already built for this body, by their kind (with `obstacles`): a
+    /// collision spec found here is not built again (its capsules' pairs cost a search over
+    /// every pair at rest).
+    pub collisions: &'a [(TaskKindSpec, Collision)],
 }
 
 /// The level just below every hard (not soft) task of `specs`: where a pull goes, and a task
@@ -57,6 +61,15 @@ impl FrameProblem<'_> {
         let mut tasks = Vec::with_capacity(self.specs.len() + 2);
         for spec in self.specs {
             if !self.comfort && matches!(spec.kind, TaskKindSpec::Comfort { .. }) {
+                continue;
+            }
+            if let Some((_, built)) = self.collisions.iter().find(|(kind, _)| *kind == spec.kind) {
+                tasks.push(Task {
+                    kind: TaskKind::Collision(built.clone()),
+                    level: spec.level,
+                    weight: spec.weight,
+                    active: spec.active,
+                });
                 continue;
             }
             if let Ok(converted) = spec.solver_tasks_with(skeleton, body, self.specs) {
@@ -116,6 +129,7 @@ mod tests {
             held: Some((wrist, DVec3::ONE)),
             grab: Some(grab),
             obstacles: &[],
+            collisions: &[],
         };
         let tasks = frame.tasks(s, Some(&body));
         let summary: Vec<(u32, bool)> = tasks

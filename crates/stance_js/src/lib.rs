@@ -373,6 +373,7 @@ impl PoseSolver {
             held: None,
             grab: self.grab,
             obstacles: &[],
+            collisions: &[],
         }
         .tasks(&self.skeleton, body);
         let report = match clock {

@@ -63,8 +63,8 @@ pub struct PosingSession {
     stiffness: StiffnessValues,
     /// The left and right hands' finger joints (or why they cannot be posed).
     hands: [Result<HandRig, HandError>; 2],
-    /// The body's active collision tasks as the solver takes them, by their spec (built
-    /// once: the search for the contacts runs at every refresh).
+    /// The body's collision tasks as the solver takes them (with `obstacles`), by their spec
+    /// (built once: building one searches every pair of capsules at rest).
     collisions: Vec<(TaskKindSpec, Collision)>,
     /// The contacts the collision tasks hold in the current posture.
     contacts: Vec<Contact>,
@@ -664,6 +664,7 @@ impl PosingSession {
             held: self.held,
             grab: self.grab,
             obstacles: &self.obstacles,
+            collisions: &self.collisions,
         }
         .tasks(&self.humanoid.skeleton, Some(&self.humanoid));
         let before = self.posture.values().to_vec();
@@ -693,40 +694,43 @@ impl PosingSession {
         self.refresh();
     }
 
-    /// The active collision tasks' contacts in the current posture; each task is built once
-    /// for its spec.
+    /// The collision tasks built for their specs (each once), and the active ones' contacts
+    /// in the current posture.
     fn refresh_contacts(&mut self) {
-        let active: Vec<&TaskSpec> = self
-            .tasks
-            .iter()
-            .filter(|task| task.active && matches!(task.kind, TaskKindSpec::Collision { .. }))
-            .collect();
-        let mut built = Vec::with_capacity(active.len());
-        for spec in active {
+        let mut built: Vec<(TaskKindSpec, Collision)> = Vec::new();
+        for spec in &self.tasks {
+            if !matches!(spec.kind, TaskKindSpec::Collision { .. })
+                || built.iter().any(|(kind, _)| *kind == spec.kind)
+            {
+                continue;
+            }
             let kept = self
                 .collisions
                 .iter()
                 .position(|(kind, _)| *kind == spec.kind);
-            let collision = match kept {
-                Some(i) => self.collisions.swap_remove(i),
-                None => match spec.to_task_on(&self.humanoid, &self.tasks) {
-                    Ok(stance_ik::Task {
+            match kept {
+                Some(i) => built.push(self.collisions.swap_remove(i)),
+                None => {
+                    if let Ok(stance_ik::Task {
                         kind: TaskKind::Collision(collision),
                         ..
-                    }) => (
-                        spec.kind.clone(),
-                        collision.with_obstacles(self.obstacles.clone()),
-                    ),
-                    _ => continue,
-                },
-            };
-            built.push(collision);
+                    }) = spec.to_task_on(&self.humanoid, &self.tasks)
+                    {
+                        built.push((
+                            spec.kind.clone(),
+                            collision.with_obstacles(self.obstacles.clone()),
+                        ));
+                    }
+                }
+            }
         }
         self.collisions = built;
         let frames = &self.frames;
+        let active = &self.tasks;
         let mut contacts: Vec<Contact> = self
             .collisions
             .iter()
+            .filter(|(kind, _)| active.iter().any(|t| t.active && t.kind == *kind))
             .flat_map(|(_, collision)| collision.contacts(frames))
             .collect();
         contacts.sort_by(|a, b| a.distance.total_cmp(&b.distance));
