@@ -552,7 +552,14 @@ fn solve_holds_a_scene_s_characters_off_its_props() {
         (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
     };
     let free = wrist_in_scene(&without);
-    assert!(outside(free) < 1e-3, "without the box the wrist reaches {free:?}");
+    assert!(
+        outside(free) < 1e-3,
+        "without the box the wrist reaches {free:?}"
+    );
     let held = wrist_in_scene(&with_box);
-    assert!(outside(held) > 0.022, "the wrist at {held:?}, {} m from the box", outside(held));
+    assert!(
+        outside(held) > 0.022,
+        "the wrist at {held:?}, {} m from the box",
+        outside(held)
+    );
 }
