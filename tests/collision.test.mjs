@@ -84,14 +84,15 @@ async function pullAcrossTheChest(page) {
   const solverMs = [];
   await page.mouse.move(grabX, grabY);
   await page.mouse.down();
-  for (let step = 1; step <= 16; step += 1) {
-    await page.mouse.move(grabX + (goalX - grabX) * step / 16, grabY + (goalY - grabY) * step / 16);
+  // 12 pointer moves and 4 held samples (each waits for a frame of software GL).
+  for (let step = 1; step <= 12; step += 1) {
+    await page.mouse.move(grabX + (goalX - grabX) * step / 12, grabY + (goalY - grabY) * step / 12);
     const sample = await state(page);
     deepest = Math.max(deepest, forearmInTorso(sample));
     solverMs.push(sample.solver_ms);
   }
   const during = await state(page);
-  for (let i = 0; i < 8; i += 1) {
+  for (let i = 0; i < 4; i += 1) {
     await page.waitForTimeout(50);
     const sample = await state(page);
     deepest = Math.max(deepest, forearmInTorso(sample));
