@@ -8,8 +8,8 @@ use std::collections::BTreeMap;
 
 use serde_json::{Map, Value, json};
 use stance_ik::{
-    Damping, Dof, Frames, IkError, Iteration, JointDef, Limb, Obstacle, Posture, Skeleton,
-    SolveReport, Solver, SolverSettings, Task, TaskKind,
+    Damping, Dof, Frames, IkError, Iteration, JointDef, Limb, Obstacle, ObstacleShape, Posture,
+    Skeleton, SolveReport, Solver, SolverSettings, Task, TaskKind,
 };
 
 use stance_hanim::capsules::BodyCollision;
@@ -636,9 +636,39 @@ pub fn problem_json(
             }
         }
     }
-    Ok(json!({
+    let mut out = json!({
         "skeleton": skeleton_value,
         "tasks": specs,
         "posture": PostureValues::from_posture(skeleton, start),
-    }))
+    });
+    // The collision tasks' obstacles (the problem's, the same for each), as props.
+    let obstacles = tasks.iter().find_map(|t| match &t.kind {
+        TaskKind::Collision(c) if !c.obstacles().is_empty() => Some(c.obstacles()),
+        _ => None,
+    });
+    if let (Some(obstacles), Some(o)) = (obstacles, out.as_object_mut()) {
+        o.insert(
+            "obstacles".into(),
+            Value::Array(obstacles.iter().map(obstacle_json).collect()),
+        );
+    }
+    Ok(out)
+}
+
+/// An obstacle as a problem file's `obstacles` entry (a prop's JSON; a plane's slab is a box).
+fn obstacle_json(obstacle: &Obstacle) -> Value {
+    let rotation = glam::DQuat::from_mat3(&obstacle.world_from_obstacle_rotation).normalize();
+    let mut o = match obstacle.shape {
+        ObstacleShape::Box { half } => json!({"shape": "box", "size": (half * 2.0).to_array()}),
+        ObstacleShape::Sphere { radius } => json!({"shape": "sphere", "radius": radius}),
+        ObstacleShape::Cylinder {
+            radius,
+            half_height,
+        } => json!({"shape": "cylinder", "radius": radius, "height": half_height * 2.0}),
+    };
+    if let Some(fields) = o.as_object_mut() {
+        fields.insert("position".into(), json!(obstacle.position.to_array()));
+        fields.insert("rotation".into(), json!(rotation.to_array()));
+    }
+    o
 }

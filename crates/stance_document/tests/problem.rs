@@ -301,8 +301,8 @@ fn a_problem_with_a_collision_task_solves_clear_of_the_body() {
 /// Catches a problem file's obstacles read wrongly or not held: a box 60 x 10 x 40 cm before
 /// the body, turned a quarter about Y (its 60 cm then run along Z), with the right wrist pulled
 /// to its middle. The box reaches the collision task in the problem's frame (its size and turn
-/// as written); solved, the collision task is met and the wrist is outside the box but at it;
-/// a bad obstacle names its field.
+/// as written) and comes back through `problem_json`; solved, the collision task is met and the
+/// wrist is outside the box but at it; a bad obstacle names its field.
 #[test]
 fn a_problem_file_s_obstacles_hold_the_body_off_them() {
     use stance_ik::{Obstacle, ObstacleShape};
@@ -364,6 +364,19 @@ fn a_problem_file_s_obstacles_hold_the_body_off_them() {
     assert!(
         outside > 0.02 && outside < 0.08,
         "the wrist {outside} m from the box"
+    );
+    // Written back as a problem file (`problem_json`) and read again: the same obstacle.
+    let json = stance_document::problem_json(&s, &p.tasks, &p.start).unwrap();
+    let back = Problem::from_json(&json.to_string()).unwrap();
+    let TaskKind::Collision(again) = &back.tasks[2].kind else {
+        panic!("{:?}", back.tasks[2].kind);
+    };
+    let again = again.obstacles()[0];
+    assert_eq!(again.shape, c.obstacles()[0].shape);
+    assert!((again.position - position).length() < 1e-12);
+    assert!(
+        (again.world_from_obstacle_rotation - world_from_obstacle_rotation)
+            .abs_diff_eq(glam::DMat3::ZERO, 1e-12)
     );
     let bad = text.replace("\"size\":[0.6,0.1,0.4]", "\"size\":[0.6,-0.1,0.4]");
     let e = Problem::from_json(&bad).unwrap_err().to_string();
