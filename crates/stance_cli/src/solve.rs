@@ -68,6 +68,7 @@ pub fn run(args: SolveArgs) -> Result<()> {
 /// (`stance_document::JoinedProblem`): each of them says with whom (`"solved_with"`) and which
 /// of its tasks the joined solve left out (`"left_out"`), and `"between"` says how far apart
 /// each such task's points ended (m).
+/// Its collision tasks hold it off the scene's props (in its own frame).
 fn solve_scene(args: &SolveArgs, text: &str) -> Result<Value> {
     let mut scene = Scene::from_json(text).map_err(|e| anyhow!("{e}"))?;
     let loa = LevelOfArticulation::from_number(args.loa)
@@ -79,8 +80,16 @@ fn solve_scene(args: &SolveArgs, text: &str) -> Result<Value> {
     .skeleton;
     let mut problems = Vec::with_capacity(scene.characters.len());
     for (i, character) in scene.characters.iter().enumerate() {
-        let problem = Problem::from_document(&character.document, body.clone())
+        let mut problem = Problem::from_document(&character.document, body.clone())
             .map_err(|e| anyhow!("character {i} ({}): {e}", character.name))?;
+        // Its collision tasks hold it off the scene's props, in its own frame.
+        let character_from_scene = character.placement.scene_from_character().inverse();
+        let props: Vec<_> = scene
+            .props
+            .iter()
+            .map(|prop| prop.obstacle(character_from_scene))
+            .collect();
+        problem.set_obstacles(&props);
         problems.push(problem);
     }
     let mut solved: Vec<Value> = vec![Value::Null; scene.characters.len()];

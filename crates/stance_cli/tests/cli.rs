@@ -614,3 +614,60 @@ fn the_documented_scene_example_solves_as_it_says() {
     }
     assert!(v["between"][0]["distance"].as_f64().unwrap() < 1e-3);
 }
+/// Catches a scene's props left out of its characters' collision tasks, or taken in the
+/// scene's frame instead of the character's: one character placed 1 m along X and turned a
+/// quarter, a 30 cm box 35 cm before it (in the scene) at chest height, its right
+/// wrist pulled to the box's middle (in its own frame) with the collision task at level 2.
+/// Solved, the wrist is outside the box (more than its capsule's 2.2 cm from it, in the
+/// scene); without the box the same problem puts the wrist at the middle.
+#[test]
+fn solve_holds_a_scene_s_characters_off_its_props() {
+    // The character's frame: its +Z (front) is the scene's +X after a quarter turn.
+    let scene = |props: &str| {
+        format!(
+            r#"{{"characters": [{{"name": "Ann", "placement": {{"position": [1.0, 0, 0], "yaw": 90}},
+              "tasks": [
+                {{"level": 1, "kind": "position", "joint": "l_talocrural", "target": [0.1101, 0.0656, -0.0736]}},
+                {{"level": 1, "kind": "position", "joint": "r_talocrural", "target": [-0.0801, 0.0712, -0.0766]}},
+                {{"level": 2, "kind": "collision"}},
+                {{"level": 3, "kind": "position", "joint": "r_radiocarpal", "target": [-0.2, 1.0, 0.35]}}]}}],
+              "props": [{props}]}}"#
+        )
+    };
+    // The goal in the scene: the character's (-0.2, 1.0, 0.35) turned a quarter about Y and
+    // moved 1 m along X: (1.35, 1.0, 0.2).
+    let with_box = write_temp(
+        "scene-box.json",
+        &scene(r#"{"shape": "box", "size": [0.3, 0.3, 0.3], "position": [1.35, 1.0, 0.2]}"#),
+    );
+    let without = write_temp("scene-no-box.json", &scene(""));
+    let wrist_in_scene = |path: &std::path::Path| {
+        let (ok, stdout, stderr) = stance(&["solve", path.to_str().unwrap()]);
+        assert!(ok, "{stderr}");
+        let v: Value = serde_json::from_str(&stdout).unwrap();
+        let p = v["characters"][0]["joints"]["r_radiocarpal"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect::<Vec<_>>();
+        // Character frame to scene: a quarter turn about Y (x' = z, z' = -x), then +1 m in X.
+        [p[2] + 1.0, p[1], -p[0]]
+    };
+    let outside = |p: [f64; 3]| {
+        let q = [p[0] - 1.35, p[1] - 1.0, p[2] - 0.2];
+        let d: Vec<f64> = q.iter().map(|v| (v.abs() - 0.15).max(0.0)).collect();
+        (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+    };
+    let free = wrist_in_scene(&without);
+    assert!(
+        outside(free) < 1e-3,
+        "without the box the wrist reaches {free:?}"
+    );
+    let held = wrist_in_scene(&with_box);
+    assert!(
+        outside(held) > 0.022,
+        "the wrist at {held:?}, {} m from the box",
+        outside(held)
+    );
+}

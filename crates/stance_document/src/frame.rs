@@ -4,7 +4,7 @@
 
 use glam::DVec3;
 use stance_hanim::HumanoidSkeleton;
-use stance_ik::{Skeleton, Task};
+use stance_ik::{Collision, Obstacle, Skeleton, Task, TaskKind};
 
 use crate::{TaskKindSpec, TaskSpec};
 
@@ -32,6 +32,13 @@ pub struct FrameProblem<'a> {
     pub held: Option<(usize, DVec3)>,
     /// The point being pulled.
     pub grab: Option<Grab>,
+    /// Fixed solids the collision tasks hold the body off (the scene's props, in the
+    /// character's frame).
+    pub obstacles: &'a [Obstacle],
+    /// Collision tasks already built for this body, by their kind (with `obstacles`): a
+    /// collision spec found here is not built again (its capsules' pairs cost a search over
+    /// every pair at rest).
+    pub collisions: &'a [(TaskKindSpec, Collision)],
 }
 
 /// The level just below every hard (not soft) task of `specs`: where a pull goes, and a task
@@ -56,8 +63,25 @@ impl FrameProblem<'_> {
             if !self.comfort && matches!(spec.kind, TaskKindSpec::Comfort { .. }) {
                 continue;
             }
+            if let Some((_, built)) = self.collisions.iter().find(|(kind, _)| *kind == spec.kind) {
+                tasks.push(Task {
+                    kind: TaskKind::Collision(built.clone()),
+                    level: spec.level,
+                    weight: spec.weight,
+                    active: spec.active,
+                });
+                continue;
+            }
             if let Ok(converted) = spec.solver_tasks_with(skeleton, body, self.specs) {
-                tasks.extend(converted);
+                tasks.extend(converted.into_iter().map(|mut task| {
+                    if let TaskKind::Collision(c) = &task.kind
+                        && !self.obstacles.is_empty()
+                    {
+                        task.kind =
+                            TaskKind::Collision(c.clone().with_obstacles(self.obstacles.to_vec()));
+                    }
+                    task
+                }));
             }
         }
         if let Some((joint, position)) = self.held {
@@ -77,7 +101,6 @@ impl FrameProblem<'_> {
 mod tests {
     #![allow(clippy::unwrap_used)]
     use stance_hanim::{SkeletonOptions, default_skeleton};
-    use stance_ik::TaskKind;
 
     use super::*;
 
@@ -105,6 +128,8 @@ mod tests {
             comfort: false,
             held: Some((wrist, DVec3::ONE)),
             grab: Some(grab),
+            obstacles: &[],
+            collisions: &[],
         };
         let tasks = frame.tasks(s, Some(&body));
         let summary: Vec<(u32, bool)> = tasks

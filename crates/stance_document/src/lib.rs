@@ -61,3 +61,4 @@ pub use scene::{
 };
 pub use status::{MET_TOLERANCE, TaskStatus, statuses_json, task_statuses};
 pub use stiffness::{StiffnessValues, apply_stiffness};
+pub use words::COLLISION_LEVEL;

@@ -8,8 +8,8 @@ use std::collections::BTreeMap;
 
 use serde_json::{Map, Value, json};
 use stance_ik::{
-    Damping, Dof, Frames, IkError, Iteration, JointDef, Limb, Posture, Skeleton, SolveReport,
-    Solver, SolverSettings, Task, TaskKind,
+    Damping, Dof, Frames, IkError, Iteration, JointDef, Limb, Obstacle, ObstacleShape, Posture,
+    Skeleton, SolveReport, Solver, SolverSettings, Task, TaskKind,
 };
 
 use stance_hanim::capsules::BodyCollision;
@@ -98,6 +98,18 @@ impl Problem {
         if !radius.is_empty() {
             problem.set_capsule_radii(&radius);
         }
+        if let Some(v) = root.get("obstacles").filter(|v| !v.is_null()) {
+            let list = arr(v, "obstacles")?;
+            let obstacles = list
+                .iter()
+                .enumerate()
+                .map(|(i, o)| {
+                    crate::Prop::from_json_value(o, &format!("obstacles[{i}]"), i)
+                        .map(|prop| prop.obstacle(glam::DAffine3::IDENTITY))
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            problem.set_obstacles(&obstacles);
+        }
         if let Some(v) = root.get("comfort").filter(|v| !v.is_null()) {
             problem.comfort = parse_comfort_settings(v, "comfort")?;
         }
@@ -152,6 +164,16 @@ impl Problem {
             {
                 body.radius.clone_from(radius);
                 task.kind = TaskKind::Collision(body.collision(&self.skeleton));
+            }
+        }
+    }
+
+    /// Holds the body's capsules off these fixed solids in every collision task (a problem
+    /// file's `obstacles`, a scene's props in the character's frame); none: as before.
+    pub fn set_obstacles(&mut self, obstacles: &[Obstacle]) {
+        for task in &mut self.tasks {
+            if let TaskKind::Collision(c) = &task.kind {
+                task.kind = TaskKind::Collision(c.clone().with_obstacles(obstacles.to_vec()));
             }
         }
     }
@@ -614,9 +636,39 @@ pub fn problem_json(
             }
         }
     }
-    Ok(json!({
+    let mut out = json!({
         "skeleton": skeleton_value,
         "tasks": specs,
         "posture": PostureValues::from_posture(skeleton, start),
-    }))
+    });
+    // The collision tasks' obstacles (the problem's, the same for each), as props.
+    let obstacles = tasks.iter().find_map(|t| match &t.kind {
+        TaskKind::Collision(c) if !c.obstacles().is_empty() => Some(c.obstacles()),
+        _ => None,
+    });
+    if let (Some(obstacles), Some(o)) = (obstacles, out.as_object_mut()) {
+        o.insert(
+            "obstacles".into(),
+            Value::Array(obstacles.iter().map(obstacle_json).collect()),
+        );
+    }
+    Ok(out)
+}
+
+/// An obstacle as a problem file's `obstacles` entry (a prop's JSON; a plane's slab is a box).
+fn obstacle_json(obstacle: &Obstacle) -> Value {
+    let rotation = glam::DQuat::from_mat3(&obstacle.world_from_obstacle_rotation).normalize();
+    let mut o = match obstacle.shape {
+        ObstacleShape::Box { half } => json!({"shape": "box", "size": (half * 2.0).to_array()}),
+        ObstacleShape::Sphere { radius } => json!({"shape": "sphere", "radius": radius}),
+        ObstacleShape::Cylinder {
+            radius,
+            half_height,
+        } => json!({"shape": "cylinder", "radius": radius, "height": half_height * 2.0}),
+    };
+    if let Some(fields) = o.as_object_mut() {
+        fields.insert("position".into(), json!(obstacle.position.to_array()));
+        fields.insert("rotation".into(), json!(rotation.to_array()));
+    }
+    o
 }

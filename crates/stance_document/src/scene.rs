@@ -11,6 +11,7 @@
 use glam::{DAffine3, DQuat, DVec3};
 use serde::Serialize;
 use serde_json::{Map, Value};
+use stance_ik::{Obstacle, ObstacleShape};
 
 use crate::between::{BetweenTask, MAX_BETWEEN_TASKS, between_from_json};
 use crate::document::Document;
@@ -115,6 +116,9 @@ pub struct SceneCharacter {
 pub const MAX_PROPS: usize = 64;
 /// The largest size of a prop along any axis (m).
 pub const MAX_PROP_SIZE_M: f64 = 100.0;
+
+/// How deep a plane prop is as an obstacle, under its surface (m).
+pub const PLANE_DEPTH: f64 = 0.1;
 
 /// A prop's shape, centred on its origin, in metres. A cylinder stands along its own +Y (a
 /// vertical bar); a plane is a rectangle in its own XZ plane facing +Y (a floor patch, a
@@ -238,6 +242,35 @@ impl Prop {
         )
     }
 
+    /// The prop as a collision task's obstacle in the frame `frame_from_scene` takes the
+    /// scene to (a character's, where its tasks are): a plane is a slab [`PLANE_DEPTH`] deep
+    /// under its surface (the body is kept above it, as above the floor).
+    pub fn obstacle(&self, frame_from_scene: DAffine3) -> Obstacle {
+        let mut frame_from_prop = frame_from_scene * self.scene_from_prop();
+        if let PropShape::Plane { .. } = self.shape {
+            frame_from_prop.translation =
+                frame_from_prop.transform_point3(DVec3::new(0.0, -PLANE_DEPTH / 2.0, 0.0));
+        }
+        let shape = match self.shape {
+            PropShape::Box { size } => ObstacleShape::Box {
+                half: DVec3::from_array(size) / 2.0,
+            },
+            PropShape::Sphere { radius } => ObstacleShape::Sphere { radius },
+            PropShape::Cylinder { radius, height } => ObstacleShape::Cylinder {
+                radius,
+                half_height: height / 2.0,
+            },
+            PropShape::Plane { size } => ObstacleShape::Box {
+                half: DVec3::new(size[0] / 2.0, PLANE_DEPTH / 2.0, size[1] / 2.0),
+            },
+        };
+        Obstacle {
+            shape,
+            world_from_obstacle_rotation: frame_from_prop.matrix3,
+            position: frame_from_prop.translation,
+        }
+    }
+
     /// Checks its numbers: sizes above 0 and at most [`MAX_PROP_SIZE_M`], a finite position,
     /// a rotation of unit length (within 1e-3).
     pub fn validate_at(&self, at: &str) -> Result<(), DocumentError> {
@@ -259,7 +292,11 @@ impl Prop {
         Ok(())
     }
 
-    fn from_json_value(v: &Value, at: &str, index: usize) -> Result<Self, DocumentError> {
+    pub(crate) fn from_json_value(
+        v: &Value,
+        at: &str,
+        index: usize,
+    ) -> Result<Self, DocumentError> {
         let o = obj(v, at)?;
         let word = string(
             o.get("shape").unwrap_or(&Value::Null),

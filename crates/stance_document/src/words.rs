@@ -2,10 +2,15 @@
 //! name it, a task or posture mirrored left/right (H-Anim sides swap, the sagittal plane
 //! reflects), and the tasks every editor makes (a pin, the comfort).
 
+use stance_hanim::capsules::COLLISION_MARGIN;
 use stance_hanim::{mirror_name, readable_name};
 use stance_ik::{Axes, Frames, Skeleton};
 
 use crate::{DEFAULT_BALANCE_MARGIN, DEFAULT_COMFORT, PostureValues, TaskKindSpec, TaskSpec};
+
+/// The level of the body's collision task the editor adds: just below the pins (level 1),
+/// beside balance.
+pub const COLLISION_LEVEL: u32 = 2;
 
 /// A point or direction reflected in the sagittal plane (x -> -x).
 fn reflect(v: [f64; 3]) -> [f64; 3] {
@@ -45,11 +50,26 @@ impl TaskSpec {
         balance
     }
 
+    /// The body's collision task just below the pins (level [`COLLISION_LEVEL`]): its
+    /// capsules kept [`COLLISION_MARGIN`] apart from each other and above the floor.
+    pub fn collision() -> TaskSpec {
+        let mut collision = TaskSpec::new(TaskKindSpec::Collision {
+            margin: COLLISION_MARGIN,
+            self_collision: true,
+            floor: true,
+        });
+        collision.level = COLLISION_LEVEL;
+        collision
+    }
+
     /// The tasks a new body starts with: feet on the floor before balance, balance before
     /// comfort. Each ankle (`l_talocrural`, `r_talocrural`) the skeleton has is pinned where
     /// `frames` put it; balance is the support polygon of the pinned feet (an inequality: the
     /// body leans freely while its centre of mass stays over them); comfort settles the rest.
-    /// The editor's new session and the `stance-ik` package's `defaultTasks` alike.
+    /// The editor's new session and the `stance-ik` package's `defaultTasks` alike. (The
+    /// body's collision task, [`TaskSpec::collision`], is not among them yet: its rows in the
+    /// margin's band hold the surfaces from parting as well as from meeting, so that with it
+    /// on a pulled hand can stall against the body; the editor's toggle adds it.)
     pub fn defaults(skeleton: &Skeleton, frames: &Frames) -> Vec<TaskSpec> {
         let mut tasks: Vec<TaskSpec> = ["l_talocrural", "r_talocrural"]
             .into_iter()

@@ -297,3 +297,88 @@ fn a_problem_with_a_collision_task_solves_clear_of_the_body() {
     let residual = collision.residual(&s, &Frames::new(&s, &posture), posture.values());
     assert!(residual < 1e-3, "{residual}");
 }
+
+/// Catches a problem file's obstacles read wrongly or not held: a box 60 x 10 x 40 cm before
+/// the body, turned a quarter about Y (its 60 cm then run along Z), with the right wrist pulled
+/// to its middle. The box reaches the collision task in the problem's frame (its size and turn
+/// as written) and comes back through `problem_json`; solved, the collision task is met and the
+/// wrist is outside the box but at it; a bad obstacle names its field.
+#[test]
+fn a_problem_file_s_obstacles_hold_the_body_off_them() {
+    use stance_ik::{Obstacle, ObstacleShape};
+    let (s, skeleton) = loa2_skeleton_json(&[]);
+    let rest = Frames::new(&s, &stance_ik::Posture::rest(&s));
+    let at = |n: &str| rest.joint_position[s.joint_index(n).unwrap()];
+    let (l, r, wrist) = (at("l_talocrural"), at("r_talocrural"), at("r_radiocarpal"));
+    let centre = wrist + glam::DVec3::new(0.0, 0.15, 0.45);
+    let turn = glam::DQuat::from_rotation_y(std::f64::consts::FRAC_PI_2);
+    let text = format!(
+        r#"{{"skeleton":{skeleton},"tasks":[
+          {{"kind":"position","joint":"l_talocrural","target":[{},{},{}]}},
+          {{"kind":"position","joint":"r_talocrural","target":[{},{},{}]}},
+          {{"kind":"collision","level":2}},
+          {{"kind":"position","joint":"r_radiocarpal","level":3,"target":[{},{},{}]}}
+        ],"settings":{{"max_iterations":300}},
+        "obstacles":[{{"shape":"box","size":[0.6,0.1,0.4],"position":[{},{},{}],"rotation":[{},{},{},{}]}}]}}"#,
+        l.x,
+        l.y,
+        l.z,
+        r.x,
+        r.y,
+        r.z,
+        centre.x,
+        centre.y,
+        centre.z,
+        centre.x,
+        centre.y,
+        centre.z,
+        turn.x,
+        turn.y,
+        turn.z,
+        turn.w
+    );
+    let p = Problem::from_json(&text).unwrap();
+    let TaskKind::Collision(c) = &p.tasks[2].kind else {
+        panic!("{:?}", p.tasks[2].kind);
+    };
+    let Some(Obstacle {
+        shape: ObstacleShape::Box { half },
+        world_from_obstacle_rotation,
+        position,
+    }) = c.obstacles().first().copied()
+    else {
+        panic!("{:?}", c.obstacles());
+    };
+    assert!((half - glam::DVec3::new(0.3, 0.05, 0.2)).length() < 1e-12);
+    assert!((position - centre).length() < 1e-12);
+    assert!((world_from_obstacle_rotation * glam::DVec3::X - glam::DVec3::NEG_Z).length() < 1e-9);
+    let (posture, report) = p.solve().unwrap();
+    assert!(report.levels[0].met, "{report:?}");
+    let f = Frames::new(&s, &posture);
+    let residual = p.tasks[2].residual(&s, &f, posture.values());
+    assert!(residual < 1e-3, "{residual}");
+    // The wrist at the box, outside it: its distance from the box by the clamp in its frame.
+    let hand = f.joint_position[s.joint_index("r_radiocarpal").unwrap()];
+    let q = world_from_obstacle_rotation.transpose() * (hand - centre);
+    let outside = (q - q.clamp(-half, half)).length();
+    assert!(
+        outside > 0.02 && outside < 0.08,
+        "the wrist {outside} m from the box"
+    );
+    // Written back as a problem file (`problem_json`) and read again: the same obstacle.
+    let json = stance_document::problem_json(&s, &p.tasks, &p.start).unwrap();
+    let back = Problem::from_json(&json.to_string()).unwrap();
+    let TaskKind::Collision(again) = &back.tasks[2].kind else {
+        panic!("{:?}", back.tasks[2].kind);
+    };
+    let again = again.obstacles()[0];
+    assert_eq!(again.shape, c.obstacles()[0].shape);
+    assert!((again.position - position).length() < 1e-12);
+    assert!(
+        (again.world_from_obstacle_rotation - world_from_obstacle_rotation)
+            .abs_diff_eq(glam::DMat3::ZERO, 1e-12)
+    );
+    let bad = text.replace("\"size\":[0.6,0.1,0.4]", "\"size\":[0.6,-0.1,0.4]");
+    let e = Problem::from_json(&bad).unwrap_err().to_string();
+    assert!(e.contains("obstacles[0]"), "{e}");
+}

@@ -489,6 +489,15 @@ impl StanceApp {
     fn view_menu(&mut self, ui: &mut egui::Ui) {
         ui.checkbox(&mut self.viewport.show_figure, "Mannequin as a figure")
             .on_hover_text("off: the mannequin's capsules (the heat map always colours them)");
+        let mut capsules = self.model.show_capsules();
+        if ui
+            .checkbox(&mut capsules, "Collision capsules")
+            .on_hover_text("the capsules the collision task holds apart, over the figure or avatar")
+            .changed()
+        {
+            self.outbox
+                .send(Command::View(ViewCommand::ShowCapsules(capsules)));
+        }
         ui.checkbox(&mut self.viewport.show_floor, "Floor grid");
         if let Some(photo) = self.model.photo() {
             let mut shown = self.model.photo_shown();

@@ -1184,3 +1184,46 @@ fn file_open_photo_asks_the_page_for_a_photo_and_view_toggles_it() {
     harness.run_steps(2);
     assert!(!harness.state().model().photo_shown());
 }
+
+/// Catches a Collision toggle or capsules entry that does nothing, or one that edits the
+/// document the wrong way: a click on the tasks panel's *Collision* adds the body's collision
+/// task at level 2 (the state says it is on), a second click leaves it in the list inactive,
+/// undo turns it back on; *View > Collision capsules* shows the capsules without changing the
+/// document.
+#[test]
+fn the_collision_toggle_and_the_capsules_entry_work_from_the_panels() {
+    let host = MemoryHost::default();
+    let mut harness = harness(&host);
+    let before = document(&harness);
+    harness.get_by_label("Collision (body and floor)").click();
+    settle(&mut harness);
+    let on = document(&harness);
+    assert_eq!(on.tasks.len(), before.tasks.len() + 1);
+    let collision: Vec<_> = on
+        .tasks
+        .iter()
+        .filter(|t| matches!(t.kind, TaskKindSpec::Collision { .. }))
+        .collect();
+    assert_eq!(collision.len(), 1);
+    assert!(collision[0].active && collision[0].level == 2);
+    assert_eq!(state(&harness)["collision"]["on"], true);
+    harness.get_by_label("Collision (body and floor)").click();
+    settle(&mut harness);
+    assert_eq!(state(&harness)["collision"]["on"], false);
+    assert_eq!(
+        document(&harness).tasks.len(),
+        on.tasks.len(),
+        "kept, inactive"
+    );
+    harness.key_press_modifiers(Modifiers::COMMAND, Key::Z);
+    settle(&mut harness);
+    assert_eq!(document(&harness), on);
+
+    harness.get_by_label("View").click();
+    harness.run_steps(2);
+    harness.get_by_label("Collision capsules").click();
+    harness.run_steps(2);
+    assert!(harness.state().model().show_capsules());
+    assert_eq!(state(&harness)["collision"]["capsules_shown"], true);
+    assert_eq!(document(&harness), on);
+}

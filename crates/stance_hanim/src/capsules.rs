@@ -122,6 +122,13 @@ pub struct BodyCollision {
     pub rows: usize,
 }
 
+/// How much further than the margin and the band two capsules may be apart at rest and still
+/// be taken as touching (m): the body's capsules are a coarse model, and pairs within a few
+/// millimetres of contact standing at rest (an upper arm beside the collarbones' bar, a hand
+/// beside the pelvis) touch as soon as the limb turns about its root; held apart, they would
+/// stop an arm from crossing the chest.
+pub const REST_TOUCH: f64 = 0.005;
+
 /// A collision task's default margin (m).
 pub const COLLISION_MARGIN: f64 = 0.01;
 /// The most constraints a body's collision task holds at once: a level has rows only for the
@@ -142,7 +149,8 @@ impl Default for BodyCollision {
 
 impl BodyCollision {
     /// The collision task's data on `skeleton`: its capsules (radii set by `radius` where
-    /// given), the pairs clear at rest by the margin and the band (`self_collision`), the
+    /// given), the pairs clear at rest by the margin, the band and [`REST_TOUCH`]
+    /// (`self_collision`), the
     /// capsules clear of the floor at rest (`floor`).
     pub fn collision(&self, skeleton: &Skeleton) -> Collision {
         let mut capsules = body_capsules(skeleton);
@@ -153,7 +161,12 @@ impl BodyCollision {
         }
         let rest = Frames::new(skeleton, &Posture::rest(skeleton));
         let pairs = if self.self_collision {
-            collision_pairs(skeleton, &capsules, &rest, self.margin + COLLISION_BAND)
+            collision_pairs(
+                skeleton,
+                &capsules,
+                &rest,
+                self.margin + COLLISION_BAND + REST_TOUCH,
+            )
         } else {
             Vec::new()
         };
@@ -167,7 +180,7 @@ impl BodyCollision {
 
     /// What `collision` holds, where it is a body's collision task on `skeleton` (the body's
     /// capsules with the radii of one joint alike, the pairs and floor capsules of
-    /// [`BodyCollision::collision`]); `None` for any other.
+    /// [`BodyCollision::collision`], any obstacles); `None` for any other.
     pub fn of(skeleton: &Skeleton, collision: &Collision) -> Option<Self> {
         let defaults = body_capsules(skeleton);
         if defaults.len() != collision.capsules().len() {
@@ -186,7 +199,11 @@ impl BodyCollision {
             radius,
             rows: collision.rows(),
         };
-        (found.collision(skeleton) == *collision).then_some(found)
+        // Obstacles are the problem's or the scene's, not the body's: compared as they are.
+        let rebuilt = found
+            .collision(skeleton)
+            .with_obstacles(collision.obstacles().to_vec());
+        (rebuilt == *collision).then_some(found)
     }
 }
 

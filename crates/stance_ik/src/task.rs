@@ -8,15 +8,17 @@ mod balance;
 mod collision;
 mod gaze;
 mod locus;
+mod obstacle;
 mod rows;
 
 use glam::{DQuat, DVec3};
 
 pub use balance::BALANCE_BAND;
 pub use collision::{
-    COLLISION_BAND, Capsule, Collision, closest_points, collision_pairs, floor_capsules,
+    COLLISION_BAND, Capsule, Collision, Contact, closest_points, collision_pairs, floor_capsules,
 };
 pub use locus::PLANE_BAND;
+pub use obstacle::{Obstacle, ObstacleShape};
 
 use std::sync::Arc;
 

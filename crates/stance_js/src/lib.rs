@@ -372,6 +372,8 @@ impl PoseSolver {
             comfort: self.grab.is_none(),
             held: None,
             grab: self.grab,
+            obstacles: &[],
+            collisions: &[],
         }
         .tasks(&self.skeleton, body);
         let report = match clock {

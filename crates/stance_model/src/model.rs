@@ -82,6 +82,8 @@ pub struct EditorModel {
     history: History,
     selected_joint: Option<usize>,
     hovered_joint: Option<usize>,
+    /// The body's collision capsules are shown in the viewport.
+    show_capsules: bool,
     gesture: Option<Gesture>,
     /// Earlier bodies that undo or redo of a change of body brings back, by the id the
     /// history names them with (see `model/avatars.rs`).
@@ -148,6 +150,7 @@ impl EditorModel {
             history: History::default(),
             selected_joint: None,
             hovered_joint: None,
+            show_capsules: false,
             gesture: None,
             kept_bodies: Vec::new(),
             next_body: 0,
@@ -207,6 +210,11 @@ impl EditorModel {
     /// The joint under the pointer (skeleton index), if any.
     pub fn hovered_joint(&self) -> Option<usize> {
         self.hovered_joint
+    }
+
+    /// Whether the viewport shows the body's collision capsules (`ViewCommand::ShowCapsules`).
+    pub fn show_capsules(&self) -> bool {
+        self.show_capsules
     }
 
     /// The gesture in progress, if any.
@@ -325,6 +333,7 @@ impl EditorModel {
         }
         self.motion_before_solve(now_secs);
         self.sensors_drove = self.sensors.drive(&mut self.character.session);
+        self.hold_off_props();
         let started = web_time::Instant::now();
         if !self.solve_joined_frame(clock) {
             self.character.session.solve_frame(clock);
@@ -335,6 +344,18 @@ impl EditorModel {
         self.extend_trace();
         self.refresh_bones();
         self.autosave();
+    }
+
+    /// The scene's props as obstacles of the selected character's collision tasks, in its
+    /// frame (a prop added, moved or removed, or the character placed, wakes the solver).
+    fn hold_off_props(&mut self) {
+        let character_from_scene = self.character.placement().scene_from_character().inverse();
+        let obstacles = self
+            .props()
+            .iter()
+            .map(|prop| prop.obstacle(character_from_scene))
+            .collect();
+        self.character.session.set_obstacles(obstacles);
     }
 
     /// The pointer moved a gesture in this frame, after its [`step`](Self::step) (the view

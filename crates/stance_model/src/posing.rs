@@ -8,15 +8,16 @@ mod timed;
 
 use stance_document::{
     CameraSpec, Document, FrameProblem, LimbName, MotionSection, PostureValues, StiffnessValues,
-    TaskSpec,
+    TaskKindSpec, TaskSpec,
 };
 use stance_hanim::hands::{HandError, HandRig};
 use stance_hanim::{
     HumanoidSkeleton, LevelOfArticulation, Side, SkeletonOptions, default_skeleton, mirror_name,
 };
 use stance_ik::{
-    Clock, Frames, Iteration, Limb, LimbGoal, Posture, Skeleton, SolveReport, SolveStatus, Solver,
-    SolverSettings, SwivelInterval, TEXTBOOK_ANGULAR_STEP, TEXTBOOK_LINEAR_STEP, Task,
+    Clock, Collision, Contact, Frames, Iteration, Limb, LimbGoal, Obstacle, Posture, Skeleton,
+    SolveReport, SolveStatus, Solver, SolverSettings, SwivelInterval, TEXTBOOK_ANGULAR_STEP,
+    TEXTBOOK_LINEAR_STEP, Task, TaskKind,
 };
 
 pub use self::timed::{TimedFrame, blended, timed_tasks, timed_tasks_at};
@@ -62,6 +63,14 @@ pub struct PosingSession {
     stiffness: StiffnessValues,
     /// The left and right hands' finger joints (or why they cannot be posed).
     hands: [Result<HandRig, HandError>; 2],
+    /// The body's collision tasks as the solver takes them (with `obstacles`), by their spec
+    /// (built once: building one searches every pair of capsules at rest).
+    collisions: Vec<(TaskKindSpec, Collision)>,
+    /// The contacts the collision tasks hold in the current posture.
+    contacts: Vec<Contact>,
+    /// Fixed solids the collision tasks hold the body off (the scene's props, in the body's
+    /// frame).
+    obstacles: Vec<Obstacle>,
 }
 
 impl std::fmt::Debug for PosingSession {
@@ -166,6 +175,9 @@ impl PosingSession {
             timed: None,
             anatomical_stiffness,
             stiffness: StiffnessValues::default(),
+            collisions: Vec::new(),
+            contacts: Vec::new(),
+            obstacles: Vec::new(),
         };
         session.tasks = session.default_tasks();
         session.refresh();
@@ -231,6 +243,39 @@ impl PosingSession {
     /// The grab-and-pull task while a pull goes on.
     pub fn grab(&self) -> Option<&Grab> {
         self.grab.as_ref()
+    }
+
+    /// Whether an active collision task keeps the body out of itself or the floor.
+    pub fn collision_on(&self) -> bool {
+        self.tasks
+            .iter()
+            .any(|task| task.active && matches!(task.kind, TaskKindSpec::Collision { .. }))
+    }
+
+    /// The contacts the active collision tasks hold in the current posture: the pairs of
+    /// surfaces (and surfaces and the floor) within their margin, nearest first.
+    pub fn contacts(&self) -> &[Contact] {
+        &self.contacts
+    }
+
+    /// Holds the body off these fixed solids in its collision tasks (the scene's props, in
+    /// the body's frame); when they changed and a collision task acts, the solver runs again
+    /// (comfort armed or not as it was: a prop moved is neither a change of tasks nor an edit
+    /// of the posture).
+    pub fn set_obstacles(&mut self, obstacles: Vec<Obstacle>) {
+        if obstacles != self.obstacles {
+            self.obstacles = obstacles;
+            self.collisions.clear();
+            if self.collision_on() {
+                self.settled = false;
+                self.refresh();
+            }
+        }
+    }
+
+    /// The fixed solids the collision tasks hold the body off.
+    pub fn obstacles(&self) -> &[Obstacle] {
+        &self.obstacles
     }
 
     /// Whether the solver has nothing left to do until something changes.
@@ -649,6 +694,8 @@ impl PosingSession {
             comfort: self.comfort_armed && self.grab.is_none() && self.held.is_none(),
             held: self.held,
             grab: self.grab,
+            obstacles: &self.obstacles,
+            collisions: &self.collisions,
         }
         .tasks(&self.humanoid.skeleton, Some(&self.humanoid))
     }
@@ -678,10 +725,54 @@ impl PosingSession {
         self.refresh();
     }
 
+    /// The collision tasks built for their specs (each once), and the active ones' contacts
+    /// in the current posture.
+    fn refresh_contacts(&mut self) {
+        let mut built: Vec<(TaskKindSpec, Collision)> = Vec::new();
+        for spec in &self.tasks {
+            if !matches!(spec.kind, TaskKindSpec::Collision { .. })
+                || built.iter().any(|(kind, _)| *kind == spec.kind)
+            {
+                continue;
+            }
+            let kept = self
+                .collisions
+                .iter()
+                .position(|(kind, _)| *kind == spec.kind);
+            match kept {
+                Some(i) => built.push(self.collisions.swap_remove(i)),
+                None => {
+                    if let Ok(stance_ik::Task {
+                        kind: TaskKind::Collision(collision),
+                        ..
+                    }) = spec.to_task_on(&self.humanoid, &self.tasks)
+                    {
+                        built.push((
+                            spec.kind.clone(),
+                            collision.with_obstacles(self.obstacles.clone()),
+                        ));
+                    }
+                }
+            }
+        }
+        self.collisions = built;
+        let frames = &self.frames;
+        let active = &self.tasks;
+        let mut contacts: Vec<Contact> = self
+            .collisions
+            .iter()
+            .filter(|(kind, _)| active.iter().any(|t| t.active && t.kind == *kind))
+            .flat_map(|(_, collision)| collision.contacts(frames))
+            .collect();
+        contacts.sort_by(|a, b| a.distance.total_cmp(&b.distance));
+        self.contacts = contacts;
+    }
+
     /// Forward kinematics and the per-task statuses of the current posture.
     fn refresh(&mut self) {
         self.revision = self.revision.wrapping_add(1);
         self.frames = Frames::new(&self.humanoid.skeleton, &self.posture);
+        self.refresh_contacts();
         self.statuses = stance_document::task_statuses(
             &self.humanoid.skeleton,
             Some(&self.humanoid),

@@ -7,6 +7,7 @@ mod avatar_swap;
 mod between;
 mod clips;
 mod clocked;
+mod collision;
 mod hands;
 mod kept_clips;
 mod keypoints;

@@ -1,6 +1,6 @@
 //! What the viewport draws over the 3D picture: task goals (met, gave way, inactive), the
-//! pulled point and the cursor's goal, the centre of mass over its support polygon, and the
-//! trace of the pulled effector (the paper's figure 9).
+//! pulled point and the cursor's goal, the centre of mass over its support polygon, the
+//! collision task's contacts, and the trace of the pulled effector (the paper's figure 9).
 
 use egui::{Color32, Pos2, Stroke};
 use glam::DVec3;
@@ -16,6 +16,7 @@ const PULL_COLOR: Color32 = Color32::from_rgb(250, 230, 80);
 const COM_COLOR: Color32 = Color32::from_rgb(120, 200, 255);
 const TRACE_COLOR: Color32 = Color32::from_rgba_premultiplied(200, 120, 250, 200);
 const TRAJECTORY_COLOR: Color32 = Color32::from_rgb(90, 220, 230);
+const CONTACT_COLOR: Color32 = Color32::from_rgb(255, 70, 70);
 
 /// What is drawn over the 3D picture, from the model, through the viewport's lens.
 #[derive(Debug, Clone, Copy)]
@@ -37,6 +38,20 @@ impl Overlay<'_> {
             self.draw_balance(&painter, &polygon);
         }
         self.draw_pull(&painter);
+        self.draw_contacts(&painter);
+    }
+
+    /// The collision task's contacts: the two closest points of each pair of surfaces held
+    /// apart (or of a surface and the floor), joined.
+    fn draw_contacts(&self, painter: &egui::Painter) {
+        for contact in self.model.session().contacts() {
+            let (a, b) = contact.points;
+            if let (Some(a), Some(b)) = (self.lens.screen_point(a), self.lens.screen_point(b)) {
+                painter.line_segment([a, b], Stroke::new(2.0, CONTACT_COLOR));
+                painter.circle_filled(a, 3.0, CONTACT_COLOR);
+                painter.circle_filled(b, 3.0, CONTACT_COLOR);
+            }
+        }
     }
 
     /// The trace of the pulled point (the paper's figure 9).

@@ -80,8 +80,38 @@ impl PageState<'_> {
             "between": self.between(),
             "photo": self.photo(),
             "lifting": model.lifting().map(|lifting| lifting.words()),
+            "collision": self.collision(),
         })
         .to_string()
+    }
+
+    /// Collision avoidance: on or off, the capsules shown or not, the contacts held (their
+    /// distances, m), and the body's capsules as posed (the joint carrying each, its ends in
+    /// the character's frame and its radius, m).
+    fn collision(&self) -> Value {
+        let model = self.model;
+        let session = model.session();
+        let skeleton = session.skeleton();
+        let capsules: Vec<Value> = model
+            .bones()
+            .iter()
+            .filter_map(|bone| {
+                let joint = skeleton.joints().get(bone.owner)?;
+                let (a, b) = (bone.capsule.start_world, bone.capsule.end_world);
+                Some(json!({
+                    "joint": joint.name,
+                    "a": [a.x, a.y, a.z],
+                    "b": [b.x, b.y, b.z],
+                    "radius": bone.capsule.radius_m,
+                }))
+            })
+            .collect();
+        json!({
+            "on": session.collision_on(),
+            "capsules_shown": model.show_capsules(),
+            "contacts": session.contacts().iter().map(|c| c.distance).collect::<Vec<_>>(),
+            "capsules": capsules,
+        })
     }
 
     /// The scene's characters in order: name, id, whether selected, placement, and where the

@@ -70,6 +70,17 @@ impl TasksPanel<'_> {
                 self.outbox.send(Command::Task(TaskCommand::LoadTable1Example));
             }
         });
+        let mut collision = self.model.session().collision_on();
+        let toggle = ui
+            .checkbox(&mut collision, "Collision (body and floor)")
+            .on_hover_text(
+                "the body's capsules kept apart from each other and above the floor, just below the pins",
+            );
+        self.buttons.push(("collision", toggle.rect));
+        if toggle.changed() {
+            self.outbox
+                .send(Command::Task(TaskCommand::SetCollision(collision)));
+        }
         ui.separator();
         let session = self.model.session();
         let mut tasks = session.tasks().to_vec();

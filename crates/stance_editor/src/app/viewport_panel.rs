@@ -670,18 +670,21 @@ impl ViewportPanel {
     }
 
     /// Whether the mannequin is drawn as its figure this frame (not with an avatar, nor with
-    /// the heat map, which colours the capsules).
+    /// the heat map, which colours the capsules, nor while the collision capsules are shown).
     pub(super) fn figure_shown(&self, model: &EditorModel) -> bool {
         model.avatar().is_none()
             && self.show_figure
             && self.figure.is_some()
             && !model.comfort().heat_map()
+            && !model.show_capsules()
     }
 
     /// What the renderer draws: the mannequin's figure, or its capsules (selection and hover
     /// coloured), or the avatar's skinning palettes once its mesh is on the GPU.
     fn scene(&self, model: &EditorModel) -> Scene {
-        let show_avatar = model.avatar().is_some() && self.avatar_uploaded;
+        // The collision capsules shown on request: the body drawn as its capsules.
+        let show_avatar =
+            model.avatar().is_some() && self.avatar_uploaded && !model.show_capsules();
         let show_figure = self.figure_shown(model);
         // With an avatar or the figure the capsules are hidden; the skeleton overlay shows the
         // bones of a selection.

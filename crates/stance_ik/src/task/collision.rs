@@ -1,5 +1,6 @@
 //! Collision avoidance as an inequality: capsules fixed in the joints' frames keep at least
-//! `margin` between their surfaces, and above the floor (`y = 0`). Each row is one
+//! `margin` between their surfaces, above the floor (`y = 0`) and off fixed solids (a scene's
+//! props: [`Obstacle`]). Each row is one
 //! constraint along its line of closest approach: the distance between the surfaces, with an
 //! error where it is under the margin, a zero error within [`COLLISION_BAND`] over it (the
 //! surfaces may slide along each other but not come closer), nothing further out. The
@@ -11,7 +12,8 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
-use crate::{Frames, Skeleton};
+use super::obstacle::Obstacle;
+use crate::{Frames, Posture, Skeleton};
 
 /// How far past the margin a constraint still holds (with a zero error): the lower levels may
 /// not pull the surfaces back together (m).
@@ -37,6 +39,11 @@ pub struct Collision {
     margin: f64,
     rows: usize,
     broad: Arc<BroadPhase>,
+    /// Fixed solids the capsules of `against` keep the margin from.
+    obstacles: Arc<[Obstacle]>,
+    /// The capsules held off the obstacles: those clear of the floor at rest (the feet, which
+    /// stand on things, are left to the tasks that place them).
+    against: Arc<[usize]>,
 }
 
 /// Joints of a branch in one group of the broad phase.
@@ -165,6 +172,8 @@ impl Collision {
         rows: usize,
     ) -> Self {
         let broad = BroadPhase::new(skeleton, &capsules, &pairs);
+        let rest = Frames::new(skeleton, &Posture::rest(skeleton));
+        let against = floor_capsules(&capsules, &rest);
         Self {
             capsules: Arc::from(capsules),
             pairs: Arc::from(pairs),
@@ -172,7 +181,21 @@ impl Collision {
             margin,
             rows,
             broad: Arc::new(broad),
+            obstacles: Arc::from(Vec::new()),
+            against: Arc::from(against),
         }
+    }
+
+    /// The same task with the body's capsules (those clear of the floor at rest: not the
+    /// feet) also held `margin` off these fixed solids (a scene's props).
+    pub fn with_obstacles(mut self, obstacles: Vec<Obstacle>) -> Self {
+        self.obstacles = Arc::from(obstacles);
+        self
+    }
+
+    /// The fixed solids the capsules keep off.
+    pub fn obstacles(&self) -> &[Obstacle] {
+        &self.obstacles
     }
 
     /// The body's capsules.
@@ -223,6 +246,16 @@ impl Collision {
         }
         if let Some(i) = self.floor.iter().find(|&&i| i >= n) {
             return Err(format!("floor capsule {i} is not one of the capsules"));
+        }
+        if let Some(i) = self.against.iter().find(|&&i| i >= n) {
+            return Err(format!(
+                "capsule {i} held off the obstacles is not one of the capsules"
+            ));
+        }
+        for (k, obstacle) in self.obstacles.iter().enumerate() {
+            obstacle
+                .validate()
+                .map_err(|reason| format!("obstacle {k}: {reason}"))?;
         }
         if !(self.margin.is_finite() && self.margin >= 0.0) {
             return Err("margin must be finite and >= 0".into());
@@ -305,11 +338,13 @@ impl Collision {
                 let (distance, pa, pb) = surface_distance(a, ends[i], b, ends[j]);
                 let gap = pa - pb;
                 if distance < reach && gap.length() > 1e-9 {
+                    let normal = gap.normalize();
                     found.push(Constraint {
                         distance,
                         a: (a.joint, pa),
                         b: Some((b.joint, pb)),
-                        normal: gap.normalize(),
+                        normal,
+                        surface: (pa - normal * a.radius, pb + normal * b.radius),
                     });
                 }
             }
@@ -326,13 +361,67 @@ impl Collision {
                     a: (c.joint, low),
                     b: None,
                     normal: DVec3::Y,
+                    surface: (low - DVec3::Y * c.radius, DVec3::new(low.x, 0.0, low.z)),
                 });
+            }
+        }
+        for obstacle in self.obstacles.iter() {
+            let (centre, bound) = (obstacle.position, obstacle.bounding_radius());
+            for &i in self.against.iter() {
+                let (Some(c), Some(&(p0, p1)), Some(&(sc, sr))) =
+                    (capsules.get(i), ends.get(i), spheres.get(i))
+                else {
+                    continue;
+                };
+                // Bounding balls apart: nothing to compute.
+                if (sc - centre).length() > sr + bound + reach {
+                    continue;
+                }
+                let (point, signed, gradient) = obstacle.nearest_on_segment(p0, p1);
+                let distance = signed - c.radius;
+                if distance < reach {
+                    let outward = gradient.normalize_or(DVec3::Y);
+                    found.push(Constraint {
+                        distance,
+                        a: (c.joint, point),
+                        b: None,
+                        normal: gradient,
+                        surface: (point - outward * c.radius, point - outward * signed),
+                    });
+                }
             }
         }
         found.sort_by(|x, y| x.distance.total_cmp(&y.distance));
         found.truncate(self.rows);
         found
     }
+
+    /// The contacts at `frames`: the constraints the task holds there (every pair and floor
+    /// capsule within the margin plus [`COLLISION_BAND`], nearest first, at most
+    /// [`Collision::rows`]), as the editor draws them.
+    pub fn contacts(&self, frames: &Frames) -> Vec<Contact> {
+        self.constraints(frames)
+            .into_iter()
+            .map(|c| Contact {
+                distance: c.distance,
+                joints: (c.a.0, c.b.map(|(joint, _)| joint)),
+                points: c.surface,
+            })
+            .collect()
+    }
+}
+
+/// Two surfaces a collision task holds apart (or a surface and the floor), within its margin
+/// and [`COLLISION_BAND`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Contact {
+    /// Distance between the surfaces (m; negative where they overlap).
+    pub distance: f64,
+    /// The joints carrying the two capsules (`None` for the floor or an obstacle).
+    pub joints: (usize, Option<usize>),
+    /// The closest points of the two surfaces (world, m): on the first capsule, then on the
+    /// second, the floor or the obstacle.
+    pub points: (DVec3, DVec3),
 }
 
 /// A capsule of the body: a segment fixed in a joint's frame, swept by a sphere.
@@ -486,10 +575,14 @@ pub(super) struct Constraint {
     pub distance: f64,
     /// Closest point of the first capsule's axis, and its joint.
     a: (usize, DVec3),
-    /// The second capsule's, or `None` for the floor.
+    /// The second capsule's, or `None` for the floor or an obstacle.
     b: Option<(usize, DVec3)>,
-    /// Unit direction from the second to the first (up for the floor).
+    /// Unit direction from the second to the first (up for the floor, the obstacle's outward
+    /// normal for an obstacle: the distance's gradient, of a length under 1 on a kink inside
+    /// one).
     normal: DVec3,
+    /// The closest points of the two surfaces (the second on the floor for the floor).
+    surface: (DVec3, DVec3),
 }
 
 /// The task's errors at `found` (`margin` less each distance where it is under it, 0 for the

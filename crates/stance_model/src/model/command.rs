@@ -141,6 +141,9 @@ pub enum ViewCommand {
     Select(Option<usize>),
     /// The joint under the pointer (or nothing).
     Hover(Option<usize>),
+    /// Show the body's collision capsules in the viewport (over a figure or an avatar), or
+    /// not.
+    ShowCapsules(bool),
 }
 
 /// The gesture in progress: begin, move, end.
@@ -245,6 +248,9 @@ pub enum TaskCommand {
     },
     /// The paper's Table 1 in place of the tasks.
     LoadTable1Example,
+    /// Collision avoidance on or off: on, the body's collision tasks act (one is added just
+    /// below the pins where there is none); off, they stay in the list, inactive.
+    SetCollision(bool),
     /// Remove the task at this index of the list.
     Remove(usize),
     /// Move the task at index `task` to level `level` (dropped onto it).

@@ -3,7 +3,7 @@
 //! carried out), and each says what it changed ([`Change`]): a posture edit becomes a key of a
 //! paused timeline.
 
-use stance_document::TaskSpec;
+use stance_document::{TaskKindSpec, TaskSpec};
 
 use super::command::{
     AvatarCommand, Change, Command, FileCommand, Gesture, GestureCommand, HistoryCommand,
@@ -103,6 +103,7 @@ impl EditorModel {
         match command {
             ViewCommand::Select(joint) => self.selected_joint = joint,
             ViewCommand::Hover(joint) => self.hovered_joint = joint,
+            ViewCommand::ShowCapsules(shown) => self.show_capsules = shown,
         }
         Change::View
     }
@@ -227,6 +228,10 @@ impl EditorModel {
                 self.place_table1_props();
                 tasks = table1_example(&self.character.session);
                 self.inform("Table 1 of the paper: level 1 holds the left foot, the gaze and the right hand on the sphere; balance is level 2; the left hand on the bar level 3.");
+                EditKind::Command
+            }
+            TaskCommand::SetCollision(on) => {
+                collision_switched(&mut tasks, on);
                 EditKind::Command
             }
             TaskCommand::Remove(index) => {
@@ -448,5 +453,26 @@ fn move_level(tasks: &mut [TaskSpec], from: u32, onto: Option<u32>) {
         {
             task.level = number;
         }
+    }
+}
+
+/// `tasks` with collision avoidance on (every collision task active; the body's own, just
+/// below the pins, added where there is none) or off (every collision task inactive).
+fn collision_switched(tasks: &mut Vec<TaskSpec>, on: bool) {
+    let mut found = false;
+    for task in tasks
+        .iter_mut()
+        .filter(|task| matches!(task.kind, TaskKindSpec::Collision { .. }))
+    {
+        task.active = on;
+        found = true;
+    }
+    if on && !found {
+        // After the tasks above it, so that the list reads in priority order.
+        let at = tasks
+            .iter()
+            .position(|task| task.level >= stance_document::COLLISION_LEVEL)
+            .unwrap_or(tasks.len());
+        tasks.insert(at, TaskSpec::collision());
     }
 }
