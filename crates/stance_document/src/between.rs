@@ -269,6 +269,12 @@ impl JoinedProblem {
         problems: &[Problem],
     ) -> Result<Self, DocumentError> {
         let ik = |e: IkError| DocumentError::field("characters", e.to_string());
+        if group.len() != problems.len() {
+            return Err(DocumentError::field(
+                "characters",
+                format!("{} problems for {} characters", problems.len(), group.len()),
+            ));
+        }
         let mut placed = Vec::with_capacity(group.len());
         for (&c, problem) in group.iter().zip(problems) {
             let character = scene
@@ -305,13 +311,15 @@ impl JoinedProblem {
             };
             let at = format!("between[{i}]");
             let point = |b: usize, p: &CharacterPoint, side: &str| {
-                let skeleton = &problems[b].skeleton;
-                let joint = skeleton.joint_index(&p.joint).ok_or_else(|| {
-                    DocumentError::field(
-                        format!("{at}.{side}.joint"),
-                        format!("unknown joint `{}`", p.joint),
-                    )
-                })?;
+                let joint = problems
+                    .get(b)
+                    .and_then(|problem| problem.skeleton.joint_index(&p.joint))
+                    .ok_or_else(|| {
+                        DocumentError::field(
+                            format!("{at}.{side}.joint"),
+                            format!("unknown joint `{}`", p.joint),
+                        )
+                    })?;
                 bodies
                     .effector(
                         b,

@@ -231,6 +231,13 @@ fn joined_problem(
     group: &[usize],
     between: &[BetweenTask],
 ) -> Result<Joined, String> {
+    if members.len() != group.len() {
+        return Err(format!(
+            "{} characters for a group of {}",
+            members.len(),
+            group.len()
+        ));
+    }
     let placed: Vec<(&Skeleton, stance_ik::BodyPlacement)> = members
         .iter()
         .map(|m| (m.session().skeleton(), body_placement(&m.placement())))
@@ -252,7 +259,11 @@ fn joined_problem(
             continue;
         };
         let effector = |body: usize, p: &CharacterPoint| -> Option<Effector> {
-            let joint = members[body].session().skeleton().joint_index(&p.joint)?;
+            let joint = members
+                .get(body)?
+                .session()
+                .skeleton()
+                .joint_index(&p.joint)?;
             bodies
                 .effector(
                     body,
