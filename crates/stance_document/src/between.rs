@@ -243,9 +243,10 @@ pub fn joined_groups_of(n: usize, between: &[BetweenTask]) -> Vec<Vec<usize>> {
 }
 
 /// Characters of a scene solved as one problem: each character's own problem (its tasks and
-/// start, [`Problem::from_document`]) moved onto the joined bodies, and the tasks between
-/// them. The tasks that cannot be moved (comfort, collision: built for one body) are left
-/// out, each with a message.
+/// start, [`Problem::from_document`]) moved onto the joined bodies, their collision tasks
+/// joined into one that also keeps the characters apart, and the tasks between them. The
+/// tasks that cannot be moved (comfort: built for one body) are left out, each with a
+/// message.
 #[derive(Debug, Clone)]
 pub struct JoinedProblem {
     /// The scene indices of the characters, in the bodies' order.
@@ -287,9 +288,14 @@ impl JoinedProblem {
         let mut tasks = Vec::new();
         let mut left_out = Vec::new();
         let mut starts = Vec::with_capacity(problems.len());
+        let mut collisions = Vec::new();
         for (b, (&c, problem)) in group.iter().zip(problems).enumerate() {
             let name = scene.characters.get(c).map_or("", |ch| ch.name.as_str());
             for task in &problem.tasks {
+                if matches!(task.kind, TaskKind::Collision(_)) {
+                    collisions.push((b, task));
+                    continue;
+                }
                 match bodies.task(b, task) {
                     Ok(moved) => tasks.push(moved),
                     Err(e) => left_out.push(format!(
@@ -301,6 +307,9 @@ impl JoinedProblem {
             }
             starts.push(problem.start_posture().0);
         }
+        // The characters' collision tasks as one: each keeps its own, and they keep apart
+        // (but for the limbs that meet, added below).
+        let collision_at = tasks.len();
         for (i, between) in scene.between.iter().enumerate() {
             let [ca, cb] = between.characters();
             let (Some(ba), Some(bb)) = (
@@ -340,6 +349,16 @@ impl JoinedProblem {
                 weight: between.weight,
                 active: between.active,
             });
+        }
+        let touching: Vec<(usize, usize)> = tasks[collision_at..]
+            .iter()
+            .filter_map(|task| match &task.kind {
+                TaskKind::Meet { a, b, .. } => Some((a.joint, b.joint)),
+                _ => None,
+            })
+            .collect();
+        if let Some(collision) = bodies.collision(&collisions, &touching).map_err(ik)? {
+            tasks.push(collision);
         }
         let start = bodies
             .posture(&starts.iter().collect::<Vec<_>>())

@@ -287,3 +287,116 @@ fn a_task_attached_to_a_prop_is_kept_checked_and_moved() {
         assert!((got - want).abs() < 1e-12, "{direction:?}");
     }
 }
+
+/// Two characters hand in hand with their collision tasks on, the first's left wrist asked
+/// (by a task of its own, level 4) into the second's spine (held where it stands): joined, the held hands still meet
+/// (the limbs a task between them joins may touch) while the left wrist stops outside the
+/// second's torso; without collision it reaches the spine. Distances in the scene, each
+/// character placed by its own placement.
+#[test]
+fn joined_characters_keep_apart_but_for_the_limbs_that_meet() {
+    let skeleton = body();
+    let solve = |collision: bool| {
+        let mut scene = hand_in_hand(0.55);
+        scene.characters.truncate(2);
+        // The second's spine (vl1) at rest, in the scene, then in the first's frame.
+        let rest = Frames::new(&skeleton, &Posture::rest(&skeleton));
+        let spine = scene.characters[1]
+            .placement
+            .scene_from_character()
+            .transform_point3(rest.joint_position[skeleton.joint_index("vl1").unwrap()]);
+        let goal = scene.characters[0]
+            .placement
+            .scene_from_character()
+            .inverse()
+            .transform_point3(spine);
+        for (c, character) in scene.characters.iter_mut().enumerate() {
+            character
+                .document
+                .tasks
+                .retain(|t| t.kind.name() != "comfort");
+            if collision {
+                let task: stance_document::TaskSpec =
+                    serde_json::from_str(r#"{"kind": "collision", "level": 2}"#).unwrap();
+                character.document.tasks.push(task);
+            }
+            // The first's left wrist toward the second's spine (level 4); the second's spine
+            // held where it stands (level 1), so that only its arm reaches for the hand.
+            let (joint, target, level) = if c == 0 {
+                ("l_radiocarpal", goal, 4)
+            } else {
+                (
+                    "vl1",
+                    rest.joint_position[skeleton.joint_index("vl1").unwrap()],
+                    1,
+                )
+            };
+            let task: stance_document::TaskSpec = serde_json::from_str(&format!(
+                r#"{{"kind": "position", "joint": "{joint}", "target": [{}, {}, {}], "level": {level}}}"#,
+                target.x, target.y, target.z
+            ))
+            .unwrap();
+            character.document.tasks.push(task);
+        }
+        let problems: Vec<Problem> = scene
+            .characters
+            .iter()
+            .map(|c| Problem::from_document(&c.document, skeleton.clone()).unwrap())
+            .collect();
+        let joined = JoinedProblem::new(&scene, &[0, 1], &problems).unwrap();
+        assert!(joined.left_out.is_empty(), "{:?}", joined.left_out);
+        let (postures, _) = joined.solve().unwrap();
+        let placed = |c: usize, joint: &str| {
+            let frames = Frames::new(&skeleton, &postures[c]);
+            scene.characters[c]
+                .placement
+                .scene_from_character()
+                .transform_point3(frames.joint_position[skeleton.joint_index(joint).unwrap()])
+        };
+        (
+            (placed(0, "l_radiocarpal") - placed(1, "vl1")).length(),
+            (placed(0, "r_radiocarpal") - placed(1, "l_radiocarpal")).length(),
+        )
+    };
+    let (free, _) = solve(false);
+    let (held, hands) = solve(true);
+    assert!(
+        free < 0.02,
+        "without collision the left wrist is {free} m from the spine"
+    );
+    assert!(
+        held > 0.08,
+        "with collision the left wrist is {held} m from the spine"
+    );
+    assert!(hands < 1e-3, "the held hands are {hands} m apart");
+}
+
+/// With both characters' collision tasks on, hands held still meet: the limbs a task between
+/// them joins may touch (they are not kept apart), while each body keeps its own capsules.
+#[test]
+fn hands_held_meet_with_collision_on() {
+    let skeleton = body();
+    let mut scene = hand_in_hand(0.7);
+    scene.characters.truncate(2);
+    for character in &mut scene.characters {
+        let task: stance_document::TaskSpec =
+            serde_json::from_str(r#"{"kind": "collision", "level": 2}"#).unwrap();
+        character.document.tasks.push(task);
+    }
+    let problems: Vec<Problem> = scene
+        .characters
+        .iter()
+        .map(|c| Problem::from_document(&c.document, skeleton.clone()).unwrap())
+        .collect();
+    let joined = JoinedProblem::new(&scene, &[0, 1], &problems).unwrap();
+    let (postures, report) = joined.solve().unwrap();
+    let placed = |c: usize, joint: &str| {
+        let frames = Frames::new(&skeleton, &postures[c]);
+        scene.characters[c]
+            .placement
+            .scene_from_character()
+            .transform_point3(frames.joint_position[skeleton.joint_index(joint).unwrap()])
+    };
+    let apart = (placed(0, "r_radiocarpal") - placed(1, "l_radiocarpal")).length();
+    assert!(apart < 1e-3, "{apart} m apart: {report:?}");
+}

@@ -209,8 +209,9 @@ impl Bodies {
     }
 
     /// `body`'s `task` (on its own skeleton, in its own frame) on the joined skeleton, in the
-    /// scene's frame. A comfort or collision task is refused (its model is built for one
-    /// skeleton), as is a position or centre-of-mass task on axes that the body's turn does
+    /// scene's frame. A comfort task is refused (its model is built for one skeleton), a
+    /// collision task too (the bodies' collision tasks join into one: [`Bodies::collision`]),
+    /// as is a position or centre-of-mass task on axes that the body's turn does
     /// not keep (`x` alone on a body turned by 90 degrees).
     pub fn task(&self, body: usize, task: &Task) -> Result<Task, IkError> {
         let member = self.member(body)?;
@@ -336,10 +337,13 @@ impl Bodies {
                         .collect::<Result<_, _>>()?,
                 }
             }
-            TaskKind::Comfort { .. } | TaskKind::Collision(_) => {
+            TaskKind::Comfort { .. } => {
+                return Err(bad_body(body, "comfort is solved for one body at a time"));
+            }
+            TaskKind::Collision(_) => {
                 return Err(bad_body(
                     body,
-                    "comfort and collision tasks are solved for one body at a time",
+                    "the bodies' collision tasks join into one (Bodies::collision)",
                 ));
             }
         };
@@ -347,6 +351,84 @@ impl Bodies {
             kind,
             ..task.clone()
         })
+    }
+}
+
+impl Bodies {
+    /// The bodies' collision tasks (`tasks`: each with the body it is for) as one on the joined
+    /// skeleton: each body's capsules, pairs and floor capsules kept, its obstacles (a scene's
+    /// props, in its own frame) moved into the scene, and every capsule of a body kept apart
+    /// from every capsule of each other body, so that two characters do not pass through each
+    /// other (the broad phase skips the pairs far apart). At the highest priority (smallest
+    /// level) of theirs, the largest margin, the rows of all. `None` when none is active.
+    ///
+    /// `touching`: pairs of joints (of the joined skeleton) that meet (a hand in another's hand,
+    /// on a shoulder): the limbs they end (everything below each one's parent) may touch each
+    /// other and are not kept apart from each other; everything else is.
+    pub fn collision(
+        &self,
+        tasks: &[(usize, &Task)],
+        touching: &[(usize, usize)],
+    ) -> Result<Option<Task>, IkError> {
+        let mut capsules = Vec::new();
+        let mut owner = Vec::new();
+        let (mut pairs, mut floor, mut obstacles) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut level, mut margin, mut rows) = (u32::MAX, 0.0f64, 0);
+        for &(body, task) in tasks {
+            let TaskKind::Collision(c) = &task.kind else {
+                continue;
+            };
+            if !task.active {
+                continue;
+            }
+            let place = self.member(body)?.placement;
+            let base = capsules.len();
+            for capsule in c.capsules() {
+                capsules.push(crate::Capsule {
+                    joint: self.joint(body, capsule.joint)?,
+                    ..*capsule
+                });
+                owner.push(body);
+            }
+            pairs.extend(c.pairs().iter().map(|&(i, j)| (base + i, base + j)));
+            floor.extend(c.floor().iter().map(|&i| base + i));
+            let turn = glam::DMat3::from_quat(place.rotation);
+            obstacles.extend(c.obstacles().iter().map(|o| crate::Obstacle {
+                world_from_obstacle_rotation: turn * o.world_from_obstacle_rotation,
+                position: place.point(o.position),
+                ..*o
+            }));
+            level = level.min(task.level);
+            margin = margin.max(c.margin());
+            rows += c.rows();
+        }
+        if capsules.is_empty() {
+            return Ok(None);
+        }
+        let in_limb = |capsule: &crate::Capsule, joint: usize| {
+            let root = self.skeleton.joints().get(joint).and_then(|j| j.parent);
+            root.is_some_and(|root| self.skeleton.is_ancestor_or_self(root, capsule.joint))
+        };
+        let meeting = |x: &crate::Capsule, y: &crate::Capsule| {
+            touching
+                .iter()
+                .any(|&(a, b)| (in_limb(x, a) && in_limb(y, b)) || (in_limb(x, b) && in_limb(y, a)))
+        };
+        for i in 0..capsules.len() {
+            for j in i + 1..capsules.len() {
+                if owner[i] != owner[j] && !meeting(&capsules[i], &capsules[j]) {
+                    pairs.push((i, j));
+                }
+            }
+        }
+        let collision = crate::Collision::new(&self.skeleton, capsules, pairs, floor, margin, rows)
+            .with_obstacles(obstacles);
+        Ok(Some(Task {
+            kind: TaskKind::Collision(collision),
+            level,
+            weight: 1.0,
+            active: true,
+        }))
     }
 }
 

@@ -2,8 +2,9 @@
 //! while the selected character is joined to others, each frame solves their bodies as one
 //! prioritized problem (`stance_ik::Bodies`): every member's frame tasks (the selected one's
 //! pull and held joint included) in the scene through its placement, the tasks between them,
-//! and the solved postures handed back to each member's session. Comfort and collision tasks
-//! are built for one body and wait while the characters are joined.
+//! and the solved postures handed back to each member's session. Their collision tasks join
+//! into one that also keeps them apart; comfort is built for one body and waits while the
+//! characters are joined.
 
 use stance_document::{BetweenTask, CharacterPoint, body_placement, joined_groups_of};
 use stance_ik::{Bodies, Clock, Effector, Posture, Skeleton, Solver, Task, TaskKind};
@@ -244,15 +245,18 @@ fn joined_problem(
         .collect();
     let bodies = Bodies::new(&placed).map_err(|e| e.to_string())?;
     let mut tasks = Vec::new();
-    for (b, member) in members.iter().enumerate() {
-        tasks.extend(
-            member
-                .session()
-                .frame_tasks()
-                .iter()
-                .filter_map(|task| bodies.task(b, task).ok()),
-        );
+    let frame_tasks: Vec<Vec<Task>> = members.iter().map(|m| m.session().frame_tasks()).collect();
+    let mut collisions = Vec::new();
+    for (b, own) in frame_tasks.iter().enumerate() {
+        for task in own {
+            if matches!(task.kind, TaskKind::Collision(_)) {
+                collisions.push((b, task));
+            } else if let Ok(moved) = bodies.task(b, task) {
+                tasks.push(moved);
+            }
+        }
     }
+    let collision_at = tasks.len();
     for task in between {
         let body = |p: &CharacterPoint| group.iter().position(|&c| c == p.character);
         let (Some(a), Some(b)) = (body(&task.a), body(&task.b)) else {
@@ -287,6 +291,21 @@ fn joined_problem(
             weight: task.weight,
             active: task.active,
         });
+    }
+    // Their collision tasks as one: each keeps its own, and they keep apart (but for the limbs
+    // that meet).
+    let touching: Vec<(usize, usize)> = tasks[collision_at..]
+        .iter()
+        .filter_map(|task| match &task.kind {
+            TaskKind::Meet { a, b, .. } => Some((a.joint, b.joint)),
+            _ => None,
+        })
+        .collect();
+    if let Some(collision) = bodies
+        .collision(&collisions, &touching)
+        .map_err(|e| e.to_string())?
+    {
+        tasks.push(collision);
     }
     let postures: Vec<&Posture> = members.iter().map(|m| m.session().posture()).collect();
     let posture = bodies.posture(&postures).map_err(|e| e.to_string())?;
