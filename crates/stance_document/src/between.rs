@@ -6,7 +6,8 @@
 use glam::{DQuat, DVec3};
 use serde_json::{Map, Value, json};
 use stance_ik::{
-    Axes, Bodies, BodyPlacement, Effector, IkError, Posture, SolveReport, Solver, Task, TaskKind,
+    Axes, Bodies, BodyPlacement, Effector, IkError, Posture, Skeleton, SolveReport, Solver, Task,
+    TaskKind,
 };
 
 use crate::error::DocumentError;
@@ -285,81 +286,22 @@ impl JoinedProblem {
             placed.push((&problem.skeleton, body_placement(&character.placement)));
         }
         let bodies = Bodies::new(&placed).map_err(ik)?;
-        let mut tasks = Vec::new();
-        let mut left_out = Vec::new();
-        let mut starts = Vec::with_capacity(problems.len());
-        let mut collisions = Vec::new();
-        for (b, (&c, problem)) in group.iter().zip(problems).enumerate() {
-            let name = scene.characters.get(c).map_or("", |ch| ch.name.as_str());
-            for task in &problem.tasks {
-                if matches!(task.kind, TaskKind::Collision(_)) {
-                    collisions.push((b, task));
-                    continue;
-                }
-                match bodies.task(b, task) {
-                    Ok(moved) => tasks.push(moved),
-                    Err(e) => left_out.push(format!(
-                        "character {c} ({name}): a {} task at level {} is left out of the joined solve: {e}",
-                        kind_word(&task.kind),
-                        task.level
-                    )),
-                }
-            }
-            starts.push(problem.start_posture().0);
-        }
-        // The characters' collision tasks as one: each keeps its own, and they keep apart
-        // (but for the limbs that meet, added below).
-        let collision_at = tasks.len();
-        for (i, between) in scene.between.iter().enumerate() {
-            let [ca, cb] = between.characters();
-            let (Some(ba), Some(bb)) = (
-                group.iter().position(|&c| c == ca),
-                group.iter().position(|&c| c == cb),
-            ) else {
-                continue;
-            };
-            let at = format!("between[{i}]");
-            let point = |b: usize, p: &CharacterPoint, side: &str| {
-                let joint = problems
-                    .get(b)
-                    .and_then(|problem| problem.skeleton.joint_index(&p.joint))
-                    .ok_or_else(|| {
-                        DocumentError::field(
-                            format!("{at}.{side}.joint"),
-                            format!("unknown joint `{}`", p.joint),
-                        )
-                    })?;
-                bodies
-                    .effector(
-                        b,
-                        Effector {
-                            joint,
-                            point: DVec3::from_array(p.point),
-                        },
-                    )
-                    .map_err(ik)
-            };
-            tasks.push(Task {
-                kind: TaskKind::Meet {
-                    a: point(ba, &between.a, "a")?,
-                    b: point(bb, &between.b, "b")?,
-                    axes: between.axes,
-                },
-                level: between.level,
-                weight: between.weight,
-                active: between.active,
-            });
-        }
-        let touching: Vec<(usize, usize)> = tasks[collision_at..]
-            .iter()
-            .filter_map(|task| match &task.kind {
-                TaskKind::Meet { a, b, .. } => Some((a.joint, b.joint)),
-                _ => None,
+        let own: Vec<&[Task]> = problems.iter().map(|p| p.tasks.as_slice()).collect();
+        let skeletons: Vec<&Skeleton> = problems.iter().map(|p| &p.skeleton).collect();
+        let (tasks, refused) = joined_tasks(&bodies, group, &own, &skeletons, &scene.between)?;
+        let left_out = refused
+            .into_iter()
+            .map(|(b, task, e)| {
+                let c = group.get(b).copied().unwrap_or(b);
+                let name = scene.characters.get(c).map_or("", |ch| ch.name.as_str());
+                format!(
+                    "character {c} ({name}): a {} task at level {} is left out of the joined solve: {e}",
+                    kind_word(&task.kind),
+                    task.level
+                )
             })
             .collect();
-        if let Some(collision) = bodies.collision(&collisions, &touching).map_err(ik)? {
-            tasks.push(collision);
-        }
+        let starts: Vec<Posture> = problems.iter().map(|p| p.start_posture().0).collect();
         let start = bodies
             .posture(&starts.iter().collect::<Vec<_>>())
             .map_err(ik)?;
@@ -380,6 +322,87 @@ impl JoinedProblem {
         Ok((self.bodies.split(&posture)?, report))
     }
 }
+
+/// The tasks of characters `group` (scene indices) joined on `bodies`: each body's own solver
+/// tasks (`own[b]`, on `skeletons[b]`, in its own frame) moved into the scene, their collision
+/// tasks joined into one that also keeps the bodies apart but for the limbs a task between
+/// them joins, and the tasks `between` the characters of the group (joints by name). Also
+/// returns the tasks that could not move (the body, the task, why). One builder for
+/// `stance solve`, the package and the editor's joined frames.
+pub fn joined_tasks(
+    bodies: &Bodies,
+    group: &[usize],
+    own: &[&[Task]],
+    skeletons: &[&Skeleton],
+    between: &[BetweenTask],
+) -> Result<JoinedTasks, DocumentError> {
+    let ik = |e: IkError| DocumentError::field("characters", e.to_string());
+    let mut tasks = Vec::new();
+    let mut refused = Vec::new();
+    let mut collisions = Vec::new();
+    for (b, own) in own.iter().enumerate() {
+        for task in own.iter() {
+            if matches!(task.kind, TaskKind::Collision(_)) {
+                collisions.push((b, task));
+                continue;
+            }
+            match bodies.task(b, task) {
+                Ok(moved) => tasks.push(moved),
+                Err(e) => refused.push((b, task.clone(), e)),
+            }
+        }
+    }
+    let mut touching = Vec::new();
+    for (i, task) in between.iter().enumerate() {
+        let [ca, cb] = task.characters();
+        let (Some(ba), Some(bb)) = (
+            group.iter().position(|&c| c == ca),
+            group.iter().position(|&c| c == cb),
+        ) else {
+            continue;
+        };
+        let at = format!("between[{i}]");
+        let point = |b: usize, p: &CharacterPoint, side: &str| {
+            let joint = skeletons
+                .get(b)
+                .and_then(|skeleton| skeleton.joint_index(&p.joint))
+                .ok_or_else(|| {
+                    DocumentError::field(
+                        format!("{at}.{side}.joint"),
+                        format!("unknown joint `{}`", p.joint),
+                    )
+                })?;
+            bodies
+                .effector(
+                    b,
+                    Effector {
+                        joint,
+                        point: DVec3::from_array(p.point),
+                    },
+                )
+                .map_err(ik)
+        };
+        let (a, b) = (point(ba, &task.a, "a")?, point(bb, &task.b, "b")?);
+        touching.push((a.joint, b.joint));
+        tasks.push(Task {
+            kind: TaskKind::Meet {
+                a,
+                b,
+                axes: task.axes,
+            },
+            level: task.level,
+            weight: task.weight,
+            active: task.active,
+        });
+    }
+    if let Some(collision) = bodies.collision(&collisions, &touching).map_err(ik)? {
+        tasks.push(collision);
+    }
+    Ok((tasks, refused))
+}
+
+/// [`joined_tasks`]'s tasks, and the ones that could not move: (body, task, why).
+pub type JoinedTasks = (Vec<Task>, Vec<(usize, Task, IkError)>);
 
 fn kind_word(kind: &TaskKind) -> &'static str {
     match kind {

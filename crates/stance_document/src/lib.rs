@@ -37,7 +37,8 @@ mod task_json;
 mod words;
 
 pub use between::{
-    BetweenTask, CharacterPoint, JoinedProblem, body_placement, joined_groups, joined_groups_of,
+    BetweenTask, CharacterPoint, JoinedProblem, JoinedTasks, body_placement, joined_groups,
+    joined_groups_of, joined_tasks,
 };
 pub use camera::CameraSpec;
 pub use clip::{ClipReference, EmbeddedClip, content_hash};

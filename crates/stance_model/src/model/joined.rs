@@ -6,8 +6,10 @@
 //! into one that also keeps them apart; comfort is built for one body and waits while the
 //! characters are joined.
 
-use stance_document::{BetweenTask, CharacterPoint, body_placement, joined_groups_of};
-use stance_ik::{Bodies, Clock, Effector, Posture, Skeleton, Solver, Task, TaskKind};
+use stance_document::{
+    BetweenTask, CharacterPoint, body_placement, joined_groups_of, joined_tasks,
+};
+use stance_ik::{Bodies, Clock, Posture, Skeleton, Solver, Task};
 
 use super::EditorModel;
 use super::cast::Character;
@@ -244,69 +246,12 @@ fn joined_problem(
         .map(|m| (m.session().skeleton(), body_placement(&m.placement())))
         .collect();
     let bodies = Bodies::new(&placed).map_err(|e| e.to_string())?;
-    let mut tasks = Vec::new();
     let frame_tasks: Vec<Vec<Task>> = members.iter().map(|m| m.session().frame_tasks()).collect();
-    let mut collisions = Vec::new();
-    for (b, own) in frame_tasks.iter().enumerate() {
-        for task in own {
-            if matches!(task.kind, TaskKind::Collision(_)) {
-                collisions.push((b, task));
-            } else if let Ok(moved) = bodies.task(b, task) {
-                tasks.push(moved);
-            }
-        }
-    }
-    let collision_at = tasks.len();
-    for task in between {
-        let body = |p: &CharacterPoint| group.iter().position(|&c| c == p.character);
-        let (Some(a), Some(b)) = (body(&task.a), body(&task.b)) else {
-            continue;
-        };
-        let effector = |body: usize, p: &CharacterPoint| -> Option<Effector> {
-            let joint = members
-                .get(body)?
-                .session()
-                .skeleton()
-                .joint_index(&p.joint)?;
-            bodies
-                .effector(
-                    body,
-                    Effector {
-                        joint,
-                        point: glam::DVec3::from_array(p.point),
-                    },
-                )
-                .ok()
-        };
-        let (Some(ea), Some(eb)) = (effector(a, &task.a), effector(b, &task.b)) else {
-            continue;
-        };
-        tasks.push(Task {
-            kind: TaskKind::Meet {
-                a: ea,
-                b: eb,
-                axes: task.axes,
-            },
-            level: task.level,
-            weight: task.weight,
-            active: task.active,
-        });
-    }
-    // Their collision tasks as one: each keeps its own, and they keep apart (but for the limbs
-    // that meet).
-    let touching: Vec<(usize, usize)> = tasks[collision_at..]
-        .iter()
-        .filter_map(|task| match &task.kind {
-            TaskKind::Meet { a, b, .. } => Some((a.joint, b.joint)),
-            _ => None,
-        })
-        .collect();
-    if let Some(collision) = bodies
-        .collision(&collisions, &touching)
-        .map_err(|e| e.to_string())?
-    {
-        tasks.push(collision);
-    }
+    let own: Vec<&[Task]> = frame_tasks.iter().map(Vec::as_slice).collect();
+    let skeletons: Vec<&Skeleton> = members.iter().map(|m| m.session().skeleton()).collect();
+    // Comfort, built for one body, waits while the characters are joined.
+    let (tasks, _) =
+        joined_tasks(&bodies, group, &own, &skeletons, between).map_err(|e| e.to_string())?;
     let postures: Vec<&Posture> = members.iter().map(|m| m.session().posture()).collect();
     let posture = bodies.posture(&postures).map_err(|e| e.to_string())?;
     Ok((bodies, tasks, posture))
