@@ -357,7 +357,7 @@ fn grid(a: f64, b: f64, i: usize, n: usize) -> f64 {
 }
 
 /// Golden-section search for a minimum of `f` on `[a, b]`; returns (argument, value).
-fn golden(f: &impl Fn(f64) -> f64, mut a: f64, mut b: f64) -> (f64, f64) {
+pub(crate) fn golden(f: &impl Fn(f64) -> f64, mut a: f64, mut b: f64) -> (f64, f64) {
     let g = 0.5 * (5f64.sqrt() - 1.0);
     let mut x1 = b - g * (b - a);
     let mut x2 = a + g * (b - a);

@@ -43,10 +43,6 @@ pub struct Obstacle {
     pub position: DVec3,
 }
 
-/// Iterations of the golden-section search along a capsule's axis: the bracket shrinks by
-/// 0.618 each, to under 1e-15 of the axis.
-const GOLDEN_STEPS: usize = 75;
-
 impl Obstacle {
     /// Checks its numbers; the reason names what is wrong.
     pub fn validate(&self) -> Result<(), String> {
@@ -95,29 +91,13 @@ impl Obstacle {
     pub fn nearest_on_segment(&self, a: DVec3, b: DVec3) -> (DVec3, f64, DVec3) {
         let at = |t: f64| a.lerp(b, t);
         let f = |t: f64| self.signed_distance(at(t)).0;
-        let (mut lo, mut hi) = (0.0f64, 1.0f64);
-        if (b - a).length_squared() > 0.0 {
-            let g = (5f64.sqrt() - 1.0) / 2.0;
-            let (mut m1, mut m2) = (hi - g * (hi - lo), lo + g * (hi - lo));
-            let (mut f1, mut f2) = (f(m1), f(m2));
-            for _ in 0..GOLDEN_STEPS {
-                if f1 <= f2 {
-                    hi = m2;
-                    m2 = m1;
-                    f2 = f1;
-                    m1 = hi - g * (hi - lo);
-                    f1 = f(m1);
-                } else {
-                    lo = m1;
-                    m1 = m2;
-                    f1 = f2;
-                    m2 = lo + g * (hi - lo);
-                    f2 = f(m2);
-                }
-            }
-        }
+        let inside = if (b - a).length_squared() > 0.0 {
+            crate::joint_rotation::golden(&f, 0.0, 1.0).0
+        } else {
+            0.5
+        };
         // The ends too: the minimum of a convex function on [0, 1] may sit on one.
-        let best = [0.0, (lo + hi) / 2.0, 1.0]
+        let best = [0.0, inside, 1.0]
             .into_iter()
             .min_by(|x, y| f(*x).total_cmp(&f(*y)))
             .unwrap_or(0.0);
