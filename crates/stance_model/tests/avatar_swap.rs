@@ -337,3 +337,56 @@ fn characters_waiting_for_the_avatar_get_it_once_it_has_loaded() {
     assert!((dof(&editor, 0, "l_elbow") + 0.7).abs() < 1e-3);
     assert!((dof(&editor, 1, "r_elbow") + 0.4).abs() < 1e-3);
 }
+
+/// A scene saved on the avatar before postures meant the same pose on every body (no `rest`),
+/// opened while that avatar is loaded: every character is converted as a single document is
+/// (each one's left upper arm as `an_old_document_made_on_the_avatar_opens_as_it_was_saved`
+/// finds it), not only the selected one.
+#[test]
+fn an_old_scene_on_the_loaded_avatar_converts_every_character() {
+    let mut editor = Clocked::new();
+    let url = "https://example.org/avatars/t-pose.glb";
+    editor.apply(Command::Avatar(AvatarCommand::LoadAvatar {
+        name: url.to_owned(),
+        bytes: t_pose_glb(),
+    }));
+    let old = format!(
+        r#"{{"avatar": {{"url": "{url}"}}, "posture": {{"l_shoulder": {{"rz": -1.5707963267948966}}}}}}"#
+    );
+    let mut single = Clocked::new();
+    single.apply(Command::Avatar(AvatarCommand::LoadAvatar {
+        name: url.to_owned(),
+        bytes: t_pose_glb(),
+    }));
+    single.apply(Command::File(FileCommand::OpenFile {
+        name: "old.json".to_owned(),
+        bytes: old.clone().into_bytes(),
+    }));
+    let want = bone(&single, "l_shoulder", "l_elbow");
+    let scene = format!(
+        r#"{{"characters": [{old_a}, {old_b}], "selected": 1}}"#,
+        old_a = old.replacen('{', r#"{"name": "Ann", "#, 1),
+        old_b = old.replacen(
+            '{',
+            r#"{"name": "Bo", "placement": {"position": [0.8, 0, 0]}, "#,
+            1
+        ),
+    );
+    editor.apply(Command::File(FileCommand::OpenFile {
+        name: "old-scene.json".to_owned(),
+        bytes: scene.into_bytes(),
+    }));
+    for index in [1, 0] {
+        let id = editor.model.characters().nth(index).unwrap().0.id();
+        editor.apply(Command::Scene(stance_model::model::SceneCommand::Select(
+            id,
+        )));
+        let angle = bone(&editor, "l_shoulder", "l_elbow")
+            .angle_between(want)
+            .to_degrees();
+        assert!(
+            angle < 1.0,
+            "character {index}'s upper arm {angle} degrees off"
+        );
+    }
+}

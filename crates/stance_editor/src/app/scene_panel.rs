@@ -33,10 +33,12 @@ pub(super) fn show(
         || !model.props().is_empty()
         || !model.flippable_limbs().is_empty();
     let title = if busy {
+        let count =
+            |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
         format!(
-            "Scene: {} characters, {} props",
-            model.character_count(),
-            model.props().len()
+            "Scene: {}, {}",
+            count(model.character_count(), "character", "characters"),
+            count(model.props().len(), "prop", "props")
         )
     } else {
         "Scene".to_owned()

@@ -997,7 +997,12 @@ impl EditorModel {
             None => PosingSession::new(loa).map_err(|e| e.to_string()),
         };
         let mut session = session.map_err(|e| format!("{}: {e}", entry.name))?;
-        let mut fitted = document.clone();
+        // Written before postures meant the same pose on every body, a document made on this
+        // avatar has values relative to its own rest: converted as the selected character's is.
+        let mut fitted = match &avatar {
+            Some(_) => document.in_standard_rest(session.humanoid()),
+            None => document.clone(),
+        };
         fitted.posture = fitted.posture.fitted(session.skeleton());
         let restored = if fitted.posture.joints.is_empty() {
             session.load_document(&fitted)
