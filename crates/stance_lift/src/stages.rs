@@ -96,6 +96,20 @@ fn dofs_where(skeleton: &Skeleton, keep: impl Fn(usize) -> bool) -> Vec<usize> {
         .collect()
 }
 
+/// `document`'s problem on `skeleton`, solved from `start`.
+fn problem_from(
+    skeleton: &Skeleton,
+    document: &Document,
+    start: &Posture,
+) -> Result<Problem, LiftError> {
+    let with_start = Document {
+        posture: PostureValues::from_posture(skeleton, start),
+        ..document.clone()
+    };
+    Problem::from_document(&with_start, skeleton.clone())
+        .map_err(|e| LiftError::Problem(e.to_string()))
+}
+
 /// Solves `document`'s tasks from `start` in the stages of the module's docs (the comfort
 /// task only with `comfort`), at most `max_iterations` each, a level met within `tolerance`.
 pub(crate) fn solve_staged(
@@ -106,12 +120,7 @@ pub(crate) fn solve_staged(
     tolerance: f64,
     comfort: bool,
 ) -> Result<(Posture, SolveReport), LiftError> {
-    let with_start = Document {
-        posture: PostureValues::from_posture(skeleton, start),
-        ..document.clone()
-    };
-    let problem = Problem::from_document(&with_start, skeleton.clone())
-        .map_err(|e| LiftError::Problem(e.to_string()))?;
+    let problem = problem_from(skeleton, document, start)?;
     let body = &problem.skeleton;
     let settings = SolverSettings {
         max_iterations,
@@ -225,12 +234,7 @@ pub(crate) fn solve_whole_with(
     tolerance: f64,
     patient: bool,
 ) -> Result<(Posture, SolveReport), LiftError> {
-    let with_start = Document {
-        posture: PostureValues::from_posture(skeleton, start),
-        ..document.clone()
-    };
-    let problem = Problem::from_document(&with_start, skeleton.clone())
-        .map_err(|e| LiftError::Problem(e.to_string()))?;
+    let problem = problem_from(skeleton, document, start)?;
     let mut solver = problem
         .solver(if patient {
             SolverSettings {
