@@ -40,6 +40,31 @@ fn standing(skeleton: &Skeleton, comfort: bool) -> Document {
     Document::from_json(&serde_json::json!({ "tasks": tasks }).to_string()).unwrap()
 }
 
+/// The first two characters of `scene`, each on `skeleton` from its own document, joined.
+fn joined_first_two(scene: &Scene, skeleton: &Skeleton) -> JoinedProblem {
+    let problems: Vec<Problem> = scene.characters[..2]
+        .iter()
+        .map(|c| Problem::from_document(&c.document, skeleton.clone()).unwrap())
+        .collect();
+    JoinedProblem::new(scene, &[0, 1], &problems).unwrap()
+}
+
+/// Joint `joint` of character `c` posed as `postures[c]`, in the scene through its own
+/// placement (not the joined skeleton).
+fn in_scene(
+    scene: &Scene,
+    skeleton: &Skeleton,
+    postures: &[Posture],
+    c: usize,
+    joint: &str,
+) -> DVec3 {
+    let frames = Frames::new(skeleton, &postures[c]);
+    scene.characters[c]
+        .placement
+        .scene_from_character()
+        .transform_point3(frames.joint_position[skeleton.joint_index(joint).unwrap()])
+}
+
 fn point(character: usize, joint: &str) -> CharacterPoint {
     CharacterPoint {
         character,
@@ -178,22 +203,11 @@ fn two_characters_hand_in_hand_each_keep_their_feet() {
     let skeleton = body();
     for (gap, reachable) in [(0.7, true), (4.0, false)] {
         let scene = hand_in_hand(gap);
-        let problems: Vec<Problem> = scene.characters[..2]
-            .iter()
-            .map(|c| Problem::from_document(&c.document, skeleton.clone()).unwrap())
-            .collect();
-        let joined = JoinedProblem::new(&scene, &[0, 1], &problems).unwrap();
+        let joined = joined_first_two(&scene, &skeleton);
         assert_eq!(joined.left_out.len(), 1, "{:?}", joined.left_out);
         assert!(joined.left_out[0].contains("Ann") && joined.left_out[0].contains("comfort"));
         let (postures, report) = joined.solve().unwrap();
-        let placed = |c: usize, joint: &str| {
-            let frames = Frames::new(&skeleton, &postures[c]);
-            let local = frames.joint_position[skeleton.joint_index(joint).unwrap()];
-            scene.characters[c]
-                .placement
-                .scene_from_character()
-                .transform_point3(local)
-        };
+        let placed = |c: usize, joint: &str| in_scene(&scene, &skeleton, &postures, c, joint);
         let rest = Frames::new(&skeleton, &Posture::rest(&skeleton));
         for (c, posture) in postures.iter().enumerate() {
             let frames = Frames::new(&skeleton, posture);
@@ -338,21 +352,10 @@ fn joined_characters_keep_apart_but_for_the_limbs_that_meet() {
             .unwrap();
             character.document.tasks.push(task);
         }
-        let problems: Vec<Problem> = scene
-            .characters
-            .iter()
-            .map(|c| Problem::from_document(&c.document, skeleton.clone()).unwrap())
-            .collect();
-        let joined = JoinedProblem::new(&scene, &[0, 1], &problems).unwrap();
+        let joined = joined_first_two(&scene, &skeleton);
         assert!(joined.left_out.is_empty(), "{:?}", joined.left_out);
         let (postures, _) = joined.solve().unwrap();
-        let placed = |c: usize, joint: &str| {
-            let frames = Frames::new(&skeleton, &postures[c]);
-            scene.characters[c]
-                .placement
-                .scene_from_character()
-                .transform_point3(frames.joint_position[skeleton.joint_index(joint).unwrap()])
-        };
+        let placed = |c: usize, joint: &str| in_scene(&scene, &skeleton, &postures, c, joint);
         (
             (placed(0, "l_radiocarpal") - placed(1, "vl1")).length(),
             (placed(0, "r_radiocarpal") - placed(1, "l_radiocarpal")).length(),
@@ -383,20 +386,8 @@ fn hands_held_meet_with_collision_on() {
             serde_json::from_str(r#"{"kind": "collision", "level": 2}"#).unwrap();
         character.document.tasks.push(task);
     }
-    let problems: Vec<Problem> = scene
-        .characters
-        .iter()
-        .map(|c| Problem::from_document(&c.document, skeleton.clone()).unwrap())
-        .collect();
-    let joined = JoinedProblem::new(&scene, &[0, 1], &problems).unwrap();
-    let (postures, report) = joined.solve().unwrap();
-    let placed = |c: usize, joint: &str| {
-        let frames = Frames::new(&skeleton, &postures[c]);
-        scene.characters[c]
-            .placement
-            .scene_from_character()
-            .transform_point3(frames.joint_position[skeleton.joint_index(joint).unwrap()])
-    };
+    let (postures, report) = joined_first_two(&scene, &skeleton).solve().unwrap();
+    let placed = |c: usize, joint: &str| in_scene(&scene, &skeleton, &postures, c, joint);
     let apart = (placed(0, "r_radiocarpal") - placed(1, "l_radiocarpal")).length();
     assert!(apart < 1e-3, "{apart} m apart: {report:?}");
 }
