@@ -250,9 +250,7 @@ pub fn joined_groups_of(n: usize, between: &[BetweenTask]) -> Vec<Vec<usize>> {
 /// message.
 #[derive(Debug, Clone)]
 pub struct JoinedProblem {
-    /// The scene indices of the characters, in the bodies' order.
-    pub characters: Vec<usize>,
-    /// The joined bodies.
+    /// The joined bodies (in the order of the group it was made for).
     pub bodies: Bodies,
     /// Every solver task on the joined skeleton.
     pub tasks: Vec<Task>,
@@ -306,7 +304,6 @@ impl JoinedProblem {
             .posture(&starts.iter().collect::<Vec<_>>())
             .map_err(ik)?;
         Ok(Self {
-            characters: group.to_vec(),
             bodies,
             tasks,
             start,

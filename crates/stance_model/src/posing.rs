@@ -671,11 +671,7 @@ impl PosingSession {
             &mut self.posture,
             clock,
         ) {
-            Ok(report) => {
-                self.settled =
-                    matches!(report.status, SolveStatus::Converged | SolveStatus::Stalled);
-                self.report = Some(report);
-            }
+            Ok(report) => self.take_report(report),
             Err(error) => {
                 log::warn!("solver: {error}");
                 self.settled = true;
@@ -707,10 +703,15 @@ impl PosingSession {
         if posture.values().len() != self.posture.values().len() {
             return;
         }
-        self.settled = matches!(report.status, SolveStatus::Converged | SolveStatus::Stalled);
         self.posture = posture;
-        self.report = Some(report);
+        self.take_report(report);
         self.refresh();
+    }
+
+    /// A solve's report: settled when it converged or stalled.
+    fn take_report(&mut self, report: SolveReport) {
+        self.settled = matches!(report.status, SolveStatus::Converged | SolveStatus::Stalled);
+        self.report = Some(report);
     }
 
     /// Wakes the solver after something outside the session changed what the body must do

@@ -635,15 +635,8 @@ impl EditorModel {
             .filter(|t| t.active)
             .flat_map(|t| t.characters())
             .collect();
-        let selected = self.cast.selected_at;
-        if joined.contains(&selected) {
-            self.character.session.wake_for_tasks();
-        }
-        for (i, character) in self.cast.others.iter_mut().enumerate() {
-            let index = if i < selected { i } else { i + 1 };
-            if joined.contains(&index) {
-                character.session.wake_for_tasks();
-            }
+        for member in self.members_mut(&joined) {
+            member.session.wake_for_tasks();
         }
     }
 

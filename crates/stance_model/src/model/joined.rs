@@ -206,8 +206,9 @@ impl EditorModel {
         format!("{} meets {}", part(&task.a), part(&task.b))
     }
 
-    /// The selected character and the others of `group` (scene indices, in that order).
-    fn members_mut(&mut self, group: &[usize]) -> Vec<&mut Character> {
+    /// The characters at the scene indices `group`, in the scene's order (the selected one
+    /// among them when it is in `group`).
+    pub(super) fn members_mut(&mut self, group: &[usize]) -> Vec<&mut Character> {
         let selected = self.selected_index();
         let (others, character) = self.cast_and_selected_mut();
         let mut picked: Vec<(usize, &mut Character)> = others
