@@ -149,7 +149,8 @@ fn the_damping_settings_read_as_written() {
         .settings
         .damping
     };
-    assert_eq!(damping("{}"), stance_ik::Damping::default());
+    // A problem file solves whole: the falling damping unless it says otherwise.
+    assert_eq!(damping("{}"), stance_ik::WHOLE_SOLVE_DAMPING);
     assert_eq!(
         damping(r#"{"levenberg":{"lambda":0.01,"error_scale":0.05}}"#),
         stance_ik::Damping::Levenberg {

@@ -52,8 +52,9 @@ pub use skeleton::{Dof, Joint, JointDef, Skeleton};
 #[cfg(not(all(target_arch = "wasm32", target_os = "unknown")))]
 pub use solver::SystemClock;
 pub use solver::{
-    AnalyticRestart, Backend, Clock, Iteration, LevelReport, SolveReport, SolveStatus, Solver,
-    SolverSettings, TEXTBOOK_ANGULAR_STEP, TEXTBOOK_LINEAR_STEP,
+    AnalyticRestart, Backend, CONSTANT_DAMPING, Clock, Iteration, LevelReport, SolveReport,
+    SolveStatus, Solver, SolverSettings, TEXTBOOK_ANGULAR_STEP, TEXTBOOK_LINEAR_STEP,
+    WHOLE_SOLVE_DAMPING,
 };
 pub use task::{
     Axes, BALANCE_BAND, COLLISION_BAND, Capsule, Collision, Contact, Effector, Obstacle,

@@ -43,9 +43,9 @@ pub enum Damping {
 }
 
 impl Default for Damping {
-    /// `Constant { lambda: 0.002 }`. ([`Damping::Levenberg`] converges faster on whole
-    /// solves, but near a straight knee its undamped last steps throw frame-by-frame solves
-    /// off: retargeting with contacts drifted by 29 mm; docs/solver-families.md.)
+    /// `Constant { lambda: 0.002 }`, the damping of one prioritized step. (A solve's default is
+    /// `crate::WHOLE_SOLVE_DAMPING`, which falls with the error; frame-by-frame solves take
+    /// `crate::CONSTANT_DAMPING`, this one.)
     fn default() -> Self {
         Damping::Constant { lambda: 0.002 }
     }

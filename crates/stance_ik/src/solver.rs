@@ -19,7 +19,8 @@ pub use report::{AnalyticRestart, LevelReport, SolveReport, SolveStatus};
 pub use settings::SystemClock;
 use settings::validate_damping;
 pub use settings::{
-    Backend, Clock, Iteration, SolverSettings, TEXTBOOK_ANGULAR_STEP, TEXTBOOK_LINEAR_STEP,
+    Backend, CONSTANT_DAMPING, Clock, Iteration, SolverSettings, TEXTBOOK_ANGULAR_STEP,
+    TEXTBOOK_LINEAR_STEP, WHOLE_SOLVE_DAMPING,
 };
 
 use crate::kernel::prioritized_step;

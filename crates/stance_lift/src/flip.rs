@@ -4,7 +4,10 @@
 
 use glam::{DQuat, DVec3};
 use stance_hanim::resolve_joint;
-use stance_ik::{Frames, Posture, Skeleton, Solver, SolverSettings, Task, nearest_rotation_vector};
+use stance_ik::{
+    CONSTANT_DAMPING, Frames, Posture, Skeleton, Solver, SolverSettings, Task,
+    nearest_rotation_vector,
+};
 use stance_render::OrbitCamera;
 
 use crate::LiftError;
@@ -145,6 +148,7 @@ fn mirror_hand(
     let Ok(mut solver) = Solver::new(SolverSettings {
         max_iterations: HAND_MIRROR_ITERATIONS,
         restarts: false,
+        damping: CONSTANT_DAMPING,
         ..SolverSettings::default()
     }) else {
         return;

@@ -15,9 +15,9 @@ use stance_hanim::{
     HumanoidSkeleton, LevelOfArticulation, Side, SkeletonOptions, default_skeleton, mirror_name,
 };
 use stance_ik::{
-    Clock, Collision, Contact, Frames, Iteration, Limb, LimbGoal, Obstacle, Posture, Skeleton,
-    SolveReport, SolveStatus, Solver, SolverSettings, SwivelInterval, TEXTBOOK_ANGULAR_STEP,
-    TEXTBOOK_LINEAR_STEP, Task, TaskKind,
+    CONSTANT_DAMPING, Clock, Collision, Contact, Frames, Iteration, Limb, LimbGoal, Obstacle,
+    Posture, Skeleton, SolveReport, SolveStatus, Solver, SolverSettings, SwivelInterval,
+    TEXTBOOK_ANGULAR_STEP, TEXTBOOK_LINEAR_STEP, Task, TaskKind,
 };
 
 pub use self::timed::{TimedFrame, blended, timed_tasks, timed_tasks_at};
@@ -128,6 +128,7 @@ impl PosingSession {
             // is halved by their line search before it is taken.
             max_linear_step: TEXTBOOK_LINEAR_STEP,
             max_angular_step: TEXTBOOK_ANGULAR_STEP,
+            damping: CONSTANT_DAMPING,
             ..SolverSettings::default()
         }
     }

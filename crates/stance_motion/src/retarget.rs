@@ -24,7 +24,9 @@ mod report;
 
 use glam::DVec3;
 use stance_hanim::HumanoidSkeleton;
-use stance_ik::{Frames, IkError, Iteration, Posture, Solver, SolverSettings, Task};
+use stance_ik::{
+    CONSTANT_DAMPING, Frames, IkError, Iteration, Posture, Solver, SolverSettings, Task,
+};
 
 use crate::clip::{Clip, ClipError};
 use crate::contacts::{
@@ -629,6 +631,7 @@ impl FrameSolver {
             priority_budget: f64::INFINITY,
             restarts: false,
             stall_window: 2,
+            damping: CONSTANT_DAMPING,
             ..SolverSettings::default()
         })?;
         let guarded_settings = SolverSettings {
@@ -636,6 +639,7 @@ impl FrameSolver {
             tolerance: 1e-5,
             iteration: Iteration::Guarded,
             restarts: false,
+            damping: CONSTANT_DAMPING,
             ..SolverSettings::default()
         };
         let retry = Solver::new(SolverSettings {

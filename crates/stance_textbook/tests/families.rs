@@ -24,12 +24,14 @@ const STATED: &[(&str, usize, usize, usize)] = &[
     ("loa1", 40, 40, 0),
     ("loa2", 39, 37, 0),
     ("limits", 35, 33, 1),
-    ("stand", 39, 38, 0),
+    ("stand", 40, 39, 0),
     ("wide", 35, 28, 0),
-    ("aim", 37, 35, 0),
+    ("aim", 38, 36, 0),
     ("com", 38, 36, 0),
-    ("poise", 37, 36, 1),
-    ("far", 37, 33, 1),
+    ("poise", 39, 37, 0),
+    ("far", 38, 33, 0),
+    ("lean", 40, 39, 0),
+    ("point", 40, 40, 0),
 ];
 
 /// Stance's solve of `text`, the posture as the oracle reads postures (by joint and DOF

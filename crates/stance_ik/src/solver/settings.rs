@@ -77,7 +77,8 @@ pub struct SolverSettings {
     pub priority_budget: f64,
     /// Wall-clock budget in seconds (needs a [`Clock`]; default none).
     pub time_budget_secs: Option<f64>,
-    /// Damping of every level without its own (default constant 0.002; see
+    /// Damping of every level without its own (default [`WHOLE_SOLVE_DAMPING`]: 0.002 falling
+    /// with the error below 0.01; frame-by-frame solves and fits take [`CONSTANT_DAMPING`]; see
     /// [`Solver::level_damping`](crate::Solver::level_damping)).
     pub damping: Damping,
     /// Relative rank threshold of the projector (default 1e-9).
@@ -146,7 +147,7 @@ impl Default for SolverSettings {
             trust_region: 0.5,
             priority_budget: 1.0,
             time_budget_secs: None,
-            damping: Damping::default(),
+            damping: WHOLE_SOLVE_DAMPING,
             rank_tolerance: 1e-9,
             max_linear_step: 0.3,
             max_angular_step: 0.5,
@@ -256,6 +257,24 @@ pub const TEXTBOOK_TRUST_REGION: f64 = std::f64::consts::FRAC_PI_4;
 /// than the default 0.002, so steps near a singularity are shorter and fall into the basin
 /// nearest the start more often. The plain recursion's restart of a stalled solve uses it.
 pub const TEXTBOOK_DAMPING: f64 = 0.01;
+
+/// The damping of a whole solve (the default): Levenberg-Marquardt style, 0.002 while a level's
+/// error is 1 cm / 0.01 rad or more and falling in proportion below, so that the last iterations
+/// are undamped Newton steps that converge quadratically instead of a crawl near a singular level
+/// (issue 29: on the problem families it met every problem the constant damping met and more,
+/// at fewer iterations; docs/solver-families.md).
+pub const WHOLE_SOLVE_DAMPING: Damping = Damping::Levenberg {
+    lambda: 0.002,
+    error_scale: 0.01,
+};
+
+/// The damping of frame-by-frame solves (the editor's frames, retargeting, a timeline's
+/// frames) and of fits that leave levels unmet (the keypoints' lift): constant 0.002. A frame
+/// starts where the last one ended, near its goal, and an undamped last step near a straight
+/// knee throws the next frame off (retargeting a CMU walk with contacts drifted by 29 mm with
+/// the falling damping, 0.01 mm with this one); the lift's round trip left keypoints 2.4 px
+/// off and a foot 2 cm low with the falling damping.
+pub const CONSTANT_DAMPING: Damping = Damping::Constant { lambda: 0.002 };
 
 /// Iterations without a meaningful new best (in priority order) before "stalled".
 const STALL_WINDOW: usize = 40;

@@ -10,7 +10,7 @@ use stance_asset::{
 };
 use stance_document::{ClipReference, Document};
 use stance_hanim::Mapping;
-use stance_ik::{Posture, Solver, SolverSettings};
+use stance_ik::{CONSTANT_DAMPING, Posture, Solver, SolverSettings};
 use stance_motion::{BvhWriteOptions, Clip, RetargetOptions, write_bvh};
 
 use super::EditorModel;
@@ -465,7 +465,12 @@ impl EditorModel {
     /// interval weights at that frame's time.
     pub fn baked_postures(&self) -> Vec<Posture> {
         let humanoid = self.character.session.humanoid();
-        let mut solver = Solver::new(SolverSettings::default()).unwrap_or_default();
+        // One solve per frame, as the editor shows it: the frame-by-frame damping.
+        let mut solver = Solver::new(SolverSettings {
+            damping: CONSTANT_DAMPING,
+            ..SolverSettings::default()
+        })
+        .unwrap_or_default();
         (0..self.frame_count())
             .map(|frame| {
                 let mut posture = self.frame_posture(frame);
