@@ -8,7 +8,7 @@
 use glam::{DMat4, DVec3, Mat4, Vec3};
 use stance_document::{Placement, Prop, PropShape};
 
-use crate::{Capsule, ContactShadow, PropInstance, PropTemplate};
+use crate::{Capsule, ContactShadow, MeshPropInstance, PropInstance, PropTemplate};
 
 /// The colour of the props (linear RGB): a light wood.
 pub const PROP_COLOR_LINEAR: [f32; 4] = [0.52, 0.40, 0.28, 1.0];
@@ -19,7 +19,10 @@ pub const PLANE_THICKNESS_M: f64 = 0.01;
 /// that makes the unit shape the prop, before its turn and place).
 pub fn prop_template(prop: &Prop) -> (PropTemplate, DVec3) {
     match prop.shape {
-        PropShape::Box { size } => (PropTemplate::Box, DVec3::from_array(size)),
+        // A mesh not drawn as its own triangles (its file not loaded) is its box.
+        PropShape::Box { size } | PropShape::Mesh { size, .. } => {
+            (PropTemplate::Box, DVec3::from_array(size))
+        }
         PropShape::Sphere { radius } => (PropTemplate::Sphere, DVec3::splat(radius)),
         PropShape::Cylinder { radius, height } => {
             (PropTemplate::Cylinder, DVec3::new(radius, height, radius))
@@ -39,6 +42,19 @@ pub fn prop_instance(prop: &Prop) -> PropInstance {
         template,
         world_from_unit: world_from_unit.as_mat4(),
         color_linear: PROP_COLOR_LINEAR,
+    }
+}
+
+/// How the renderer draws `prop` with `mesh`, its file's triangles: fitted to its box, turned
+/// and placed.
+pub fn mesh_prop_instance(
+    prop: &Prop,
+    mesh: &std::sync::Arc<stance_asset::PropMesh>,
+) -> MeshPropInstance {
+    let world_from_mesh = prop.scene_from_prop() * mesh.prop_from_mesh(prop.shape.extents());
+    MeshPropInstance {
+        mesh: mesh.clone(),
+        world_from_mesh: DMat4::from(world_from_mesh).as_mat4(),
     }
 }
 

@@ -31,6 +31,16 @@ pub struct PropInstance {
     pub color_linear: [f32; 4],
 }
 
+/// A prop drawn with its own triangles: a mesh prop whose file is loaded.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeshPropInstance {
+    /// The file's triangles (the renderer keeps them on the GPU while a frame draws them).
+    pub mesh: std::sync::Arc<stance_asset::PropMesh>,
+    /// The file's scene space to the world: the prop's place and turn times
+    /// [`stance_asset::PropMesh::prop_from_mesh`].
+    pub world_from_mesh: Mat4,
+}
+
 /// A unit shape's mesh: points, outward normals, triangles counter-clockwise seen from
 /// outside.
 #[derive(Debug, Clone, Default, PartialEq)]
