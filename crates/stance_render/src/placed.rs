@@ -154,3 +154,57 @@ pub fn prop_static_mesh(prop: &Prop) -> stance_asset::StaticMesh {
         color_linear: PROP_COLOR_LINEAR,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A mesh whose box runs from (1, 2, 3) to (3, 6, 4) fitted to a 1 m cube at (10, 0, 0),
+    /// turned a quarter about +Y, by hand: the box's centre (2, 4, 3.5) goes to the prop's
+    /// centre; its least corner, (-0.5, -0.5, -0.5) once centred and scaled by (1/2, 1/4, 1),
+    /// turns to (-0.5, -0.5, 0.5) (x to -z, z to x), then moves to (9.5, -0.5, 0.5).
+    #[test]
+    fn a_mesh_prop_is_fitted_to_its_box_turned_and_placed() {
+        let part = stance_asset::StaticMesh {
+            positions: vec![[1.0, 2.0, 3.0], [3.0, 2.0, 3.0], [1.0, 6.0, 4.0]],
+            normals: vec![[0.0, 0.0, 1.0]; 3],
+            indices: vec![0, 1, 2],
+            color_linear: [1.0; 4],
+        };
+        let mesh = std::sync::Arc::new(stance_asset::PropMesh {
+            parts: vec![part],
+            min: DVec3::new(1.0, 2.0, 3.0),
+            max: DVec3::new(3.0, 6.0, 4.0),
+        });
+        let mut prop = Prop::new(
+            "Crate".into(),
+            PropShape::Mesh {
+                file: "crate.glb".into(),
+                size: [1.0, 1.0, 1.0],
+            },
+            [10.0, 0.0, 0.0],
+        );
+        prop.rotation = glam::DQuat::from_rotation_y(std::f64::consts::FRAC_PI_2).to_array();
+        let instance = mesh_prop_instance(&prop, &mesh);
+        let at = |p: [f32; 3]| {
+            instance
+                .world_from_mesh
+                .transform_point3(Vec3::from_array(p))
+        };
+        assert!((at([2.0, 4.0, 3.5]) - Vec3::new(10.0, 0.0, 0.0)).length() < 1e-5);
+        let corner = at([1.0, 2.0, 3.0]);
+        assert!(
+            (corner - Vec3::new(9.5, -0.5, 0.5)).length() < 1e-5,
+            "{corner}"
+        );
+        // Its shadow and framing use its box: the same corners as a box prop of that size.
+        let boxed = Prop {
+            shape: PropShape::Box {
+                size: [1.0, 1.0, 1.0],
+            },
+            ..prop.clone()
+        };
+        let corners: Vec<Vec3> = prop_corners(&prop).collect();
+        assert_eq!(corners, prop_corners(&boxed).collect::<Vec<_>>());
+    }
+}
