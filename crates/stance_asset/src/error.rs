@@ -96,6 +96,9 @@ pub enum AssetError {
         /// What is wrong, naming the channel where there is one.
         reason: String,
     },
+    /// A prop's file has no triangles in its default scene.
+    #[error("the file has no triangles in its default scene (a prop is a triangle mesh)")]
+    NoTriangles,
     /// Writing failed.
     #[error("export: {0}")]
     Export(String),

@@ -29,8 +29,8 @@ pub enum SceneContent<'a> {
     /// An avatar in its current pose (its nodes' `pose`), its file's space put in the H-Anim
     /// frame by `hanim_from_file`.
     Avatar(&'a Avatar),
-    /// A static mesh.
-    Mesh(&'a StaticMesh),
+    /// A static mesh: its parts, one primitive each (each its own colour).
+    Mesh(&'a [StaticMesh]),
 }
 
 /// One node of an exported scene: a character or a prop.
@@ -110,22 +110,25 @@ fn gathered(nodes: &[SceneNode<'_>]) -> Avatar {
                 let children = append(&mut scene, avatar, root + 1);
                 scene.nodes[root + 1].children = children;
             }
-            SceneContent::Mesh(mesh) => {
-                let material = scene.materials.len();
-                scene.materials.push(Material {
-                    name: entry.name.clone(),
-                    base_color_factor: mesh.color_linear,
-                    ..Material::default()
-                });
+            SceneContent::Mesh(parts) => {
+                let mut primitives = Vec::with_capacity(parts.len());
+                for part in parts {
+                    primitives.push(Primitive {
+                        positions: part.positions.clone(),
+                        normals: part.normals.clone(),
+                        indices: part.indices.clone(),
+                        material: Some(scene.materials.len()),
+                        ..Primitive::default()
+                    });
+                    scene.materials.push(Material {
+                        name: entry.name.clone(),
+                        base_color_factor: part.color_linear,
+                        ..Material::default()
+                    });
+                }
                 scene.meshes.push(Mesh {
                     name: entry.name.clone(),
-                    primitives: vec![Primitive {
-                        positions: mesh.positions.clone(),
-                        normals: mesh.normals.clone(),
-                        indices: mesh.indices.clone(),
-                        material: Some(material),
-                        ..Primitive::default()
-                    }],
+                    primitives,
                 });
                 let place = trs(entry.scene_from_node);
                 scene.nodes.push(Node {

@@ -28,6 +28,10 @@
 //! [`Avatar::current_posture`] gives the posture back. [`export_glb_animation`] writes the
 //! avatar with a sequence of postures as one glTF animation. [`export_scene_glb`] writes a
 //! scene: several posed avatars and static meshes, each under a named, placed node.
+//!
+//! # Props
+//! [`load_prop_mesh`] reads a static glTF/GLB file as a prop's triangles ([`PropMesh`]): the
+//! default scene's primitives with their node transforms baked, by the same importer.
 
 #![warn(missing_docs)]
 
@@ -43,6 +47,7 @@ mod import;
 mod meshopt;
 mod model;
 mod normalize;
+mod prop_mesh;
 mod resources;
 mod transfer;
 
@@ -65,6 +70,7 @@ pub use model::{
     AlphaMode, Avatar, Material, Mesh, Node, Primitive, Skin, SourceFormat, Texture, Trs,
     VrmExtension, Wrap,
 };
+pub use prop_mesh::{MAX_PROP_VERTICES, PropMesh, load_prop_mesh};
 pub use resources::{find_resource, relative_path};
 pub use transfer::AvatarTransfer;
 

@@ -14,6 +14,7 @@ mod formats;
 mod fuzz_seeds;
 mod hostile_sizes;
 mod malformed;
+mod prop_mesh;
 mod shared_avatar;
 mod standard_pose;
 mod vrm;

@@ -9,12 +9,13 @@
 //! keypoints as OpenPose JSON), or the figure's depth, normals, mask or line art (rendered
 //! like the picture, unlit, on black). See docs/control-maps.md.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow, bail};
 use glam::{DVec3, Vec3};
-use stance_asset::{LoadOptions, make_default_avatar};
+use stance_asset::{LoadOptions, PropMesh, load_prop_mesh, make_default_avatar};
 use stance_document::{AvatarReference, Document, Placement, PostureRest, Prop, SceneCharacter};
 use stance_hanim::keypoints::KeypointFinder;
 use stance_hanim::{HumanoidSkeleton, LevelOfArticulation, SkeletonOptions, default_skeleton};
@@ -22,8 +23,8 @@ use stance_ik::{Frames, Posture};
 use stance_render::{
     Capsule, GOAL_COLOR_LINEAR, HiddenKeypoints, ImageOptions, KeypointUnits, OpenPose,
     OrbitCamera, Pixels, Scene, SceneRenderer, Shading, ViewPreset, avatar_model, character_shadow,
-    encode_png, headless_gpu, line_art, placed_capsule, placed_keypoints, placed_palettes,
-    posed_mannequin_bones, prop_corners, prop_instance, prop_shadow, render_image,
+    encode_png, headless_gpu, line_art, mesh_prop_instance, placed_capsule, placed_keypoints,
+    placed_palettes, posed_mannequin_bones, prop_corners, prop_instance, prop_shadow, render_image,
     scene_from_character,
 };
 
@@ -81,6 +82,10 @@ pub struct RenderArgs {
     /// (default: keep).
     #[arg(long, value_enum)]
     pub hidden: Option<Hidden>,
+    /// The folder a scene's mesh props' files (`"file": "chair.glb"`) are read from (default:
+    /// the document's folder); a file not found there is drawn as its box, with a warning.
+    #[arg(long)]
+    pub assets: Option<PathBuf>,
 }
 
 /// The control maps.
@@ -288,12 +293,66 @@ struct PosedCharacter {
     capsules: Vec<Capsule>,
 }
 
-/// The scene's characters posed on their body, its props, and the camera that sees them.
+/// The scene's characters posed on their body, its props (each mesh prop's file's
+/// triangles when found), and the camera that sees them.
 struct Posed {
     figure: Figure,
     characters: Vec<PosedCharacter>,
     props: Vec<Prop>,
+    prop_meshes: Vec<Option<Arc<PropMesh>>>,
     camera: OrbitCamera,
+}
+
+/// The triangles of each of `props` that is a mesh prop whose file is in `args.assets` (or
+/// the document's folder); `None` for the others. A file not found is drawn as its box (with
+/// a warning); one that is not a static mesh is an error naming it.
+fn prop_meshes(args: &RenderArgs, props: &[Prop]) -> Result<Vec<Option<Arc<PropMesh>>>> {
+    let folder = match &args.assets {
+        Some(folder) => folder.clone(),
+        None => args
+            .document
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_default(),
+    };
+    let mut read: Vec<(String, Option<Arc<PropMesh>>)> = Vec::new();
+    let mut meshes = Vec::with_capacity(props.len());
+    for prop in props {
+        let Some(file) = prop.shape.file() else {
+            meshes.push(None);
+            continue;
+        };
+        if let Some((_, mesh)) = read.iter().find(|(name, _)| name == file) {
+            meshes.push(mesh.clone());
+            continue;
+        }
+        let path = folder.join(file);
+        let mesh = match std::fs::read(&path) {
+            Ok(bytes) => {
+                let mesh = load_prop_mesh(&bytes, &mut avatar::resolver_next_to(&path))
+                    .map_err(|e| anyhow!("prop {} ({}): {e}", prop.name, path.display()))?;
+                Some(Arc::new(mesh))
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                eprintln!(
+                    "warning: prop {}: {} not found (--assets DIR): drawn as its box",
+                    prop.name,
+                    path.display()
+                );
+                None
+            }
+            Err(e) => {
+                return Err(anyhow!(
+                    "prop {}: cannot read {}: {e}",
+                    prop.name,
+                    path.display()
+                ));
+            }
+        };
+        read.push((file.to_owned(), mesh.clone()));
+        meshes.push(mesh);
+    }
+    Ok(meshes)
 }
 
 impl Posed {
@@ -336,6 +395,7 @@ impl Posed {
         Ok(Posed {
             figure,
             characters,
+            prop_meshes: prop_meshes(args, &scene.props)?,
             props: scene.props,
             camera,
         })
@@ -581,6 +641,7 @@ fn render_picture(
         figure,
         characters,
         props,
+        prop_meshes,
         camera,
     } = posed;
     let skeleton = &figure.humanoid.skeleton;
@@ -643,7 +704,17 @@ fn render_picture(
         show_avatar: figure.mesh.is_some(),
         avatar_palettes,
         more_avatar_poses,
-        props: props.iter().map(prop_instance).collect(),
+        props: props
+            .iter()
+            .zip(&prop_meshes)
+            .filter(|(_, mesh)| mesh.is_none())
+            .map(|(prop, _)| prop_instance(prop))
+            .collect(),
+        mesh_props: props
+            .iter()
+            .zip(&prop_meshes)
+            .filter_map(|(prop, mesh)| Some(mesh_prop_instance(prop, mesh.as_ref()?)))
+            .collect(),
         shadows,
         markers,
         transparent_background: false,

@@ -41,9 +41,10 @@ use crate::scene::{Prop, PropShape, Scene};
 /// keys were made over (its file name, size and content hash; never the file), 7 the
 /// point-on-a-line and point-on-a-plane tasks, 8 the collision task (its margin and whether it
 /// holds the body and the floor), 9 a scene of several characters and props
-/// ([`encode_scene`]), 10 a scene with tasks between its characters ([`BETWEEN_FORMAT`]). A
-/// document is written in the oldest format that holds it.
-pub const LINK_FORMAT: u8 = 10;
+/// ([`encode_scene`]), 10 a scene with tasks between its characters ([`BETWEEN_FORMAT`]), 11
+/// a scene with mesh props ([`MESH_FORMAT`]). A document is written in the oldest format that
+/// holds it.
+pub const LINK_FORMAT: u8 = 11;
 /// The format of a scene's link ([`encode_scene`]): several characters (or one with a name or
 /// a placement) and the props, each character its name, placement and document payload in the
 /// oldest format that holds it.
@@ -53,6 +54,10 @@ pub const SCENE_FORMAT: u8 = 9;
 /// level, weight, flags, axes and two points: the character, the joint's name, the point),
 /// then the attached tasks (count; each the character, the task's index, the prop's name).
 pub const BETWEEN_FORMAT: u8 = 10;
+/// The format of a scene's link with mesh props: [`BETWEEN_FORMAT`]'s payload, where a prop's
+/// shape may also be a mesh (shape 4), written as its file's name (length, UTF-8; never the
+/// file) before its three sizes.
+pub const MESH_FORMAT: u8 = 11;
 /// Quantisation step of a character's turn on the floor: 0.005 degrees in radians.
 const YAW_STEP_RAD: f64 = ROTATION_STEP_RAD;
 /// Longest link [`encode_for_sharing`] makes with the timeline in it, in characters: beyond,
@@ -236,6 +241,10 @@ pub fn encode_scene(scene: &Scene) -> String {
             .position(|word| *word == prop.shape.name())
             .unwrap_or(0);
         payload.push(shape as u8);
+        if let Some(file) = prop.shape.file() {
+            write_leb128(&mut payload, file.len() as u64);
+            payload.extend_from_slice(file.as_bytes());
+        }
         for value in prop.shape.dimensions().into_iter().chain(prop.position) {
             write_zigzag(&mut payload, models::quantise(value, POSITION_STEP_M));
         }
@@ -256,7 +265,8 @@ pub fn encode_scene(scene: &Scene) -> String {
                 .filter_map(move |(t, task)| task.on.as_deref().map(|on| (c, t, on)))
         })
         .collect();
-    if scene.between.is_empty() && attached.is_empty() {
+    let meshes = scene.props.iter().any(|p| p.shape.file().is_some());
+    if scene.between.is_empty() && attached.is_empty() && !meshes {
         return frame(SCENE_FORMAT, &payload);
     }
     write_leb128(&mut payload, scene.between.len() as u64);
@@ -286,7 +296,7 @@ pub fn encode_scene(scene: &Scene) -> String {
         write_leb128(&mut payload, on.len() as u64);
         payload.extend_from_slice(on.as_bytes());
     }
-    frame(BETWEEN_FORMAT, &payload)
+    frame(if meshes { MESH_FORMAT } else { BETWEEN_FORMAT }, &payload)
 }
 
 /// [`encode_scene`]'s link to share: with every character's timeline when the link stays
@@ -398,10 +408,23 @@ fn decode_scene_payload(bytes: &[u8], format: u8) -> Result<Scene, String> {
         let word = bytes
             .get(at)
             .and_then(|&b| PropShape::WORDS.get(usize::from(b)))
+            .filter(|&&word| word != "mesh" || format >= MESH_FORMAT)
             .ok_or_else(|| format!("prop {i}'s shape is unknown"))?;
         at += 1;
+        let file = if *word == "mesh" {
+            let length = usize::try_from(leb(&mut at, "prop file")?).unwrap_or(usize::MAX);
+            let file = bytes
+                .get(at..at.saturating_add(length))
+                .ok_or_else(|| format!("prop {i}'s file name is cut"))?;
+            at += length;
+            let file = std::str::from_utf8(file)
+                .map_err(|_| format!("prop {i}'s file name is not UTF-8"))?;
+            Some(file.to_owned())
+        } else {
+            None
+        };
         let dimensions = match *word {
-            "box" => 3,
+            "box" | "mesh" => 3,
             "sphere" => 1,
             _ => 2,
         };
@@ -412,8 +435,15 @@ fn decode_scene_payload(bytes: &[u8], format: u8) -> Result<Scene, String> {
                 POSITION_STEP_M,
             ));
         }
-        let shape = PropShape::from_dimensions(word, &values[..dimensions])
-            .ok_or_else(|| format!("prop {i}'s shape is unknown"))?;
+        let shape = match file {
+            Some(file) => PropShape::Mesh {
+                file,
+                size: [0.0; 3],
+            }
+            .with_dimensions(&values[..dimensions]),
+            None => PropShape::from_dimensions(word, &values[..dimensions]),
+        }
+        .ok_or_else(|| format!("prop {i}'s shape is unknown"))?;
         let mut rotation = [0.0; 4];
         for value in &mut rotation {
             *value = models::dequantise(read_zigzag(leb(&mut at, "prop")?)?, DIRECTION_STEP);

@@ -120,10 +120,15 @@ pub const MAX_PROP_SIZE_M: f64 = 100.0;
 /// How deep a plane prop is as an obstacle, under its surface (m).
 pub const PLANE_DEPTH: f64 = 0.1;
 
+/// The longest file name a mesh prop names (characters).
+pub const MAX_FILE_NAME_CHARS: usize = 255;
+
 /// A prop's shape, centred on its origin, in metres. A cylinder stands along its own +Y (a
 /// vertical bar); a plane is a rectangle in its own XZ plane facing +Y (a floor patch, a
-/// table top), drawn as a thin slab.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// table top), drawn as a thin slab; a mesh is a static glTF/GLB file's triangles, named by
+/// the file (a document never carries the file), scaled to fill `size` (its bounding box,
+/// centred on the prop's origin), so that a document without the file still knows the box.
+#[derive(Debug, Clone, PartialEq)]
 pub enum PropShape {
     /// `size`: width (X), height (Y), depth (Z).
     Box {
@@ -147,6 +152,14 @@ pub enum PropShape {
         /// Extents along X and Z (m).
         size: [f64; 2],
     },
+    /// A static mesh from a glTF/GLB file.
+    Mesh {
+        /// The file's name (`chair.glb`): the editor's imported prop files and `stance
+        /// render` resolve it.
+        file: String,
+        /// The mesh's bounding extents after the prop's scale (m).
+        size: [f64; 3],
+    },
 }
 
 impl PropShape {
@@ -157,6 +170,7 @@ impl PropShape {
             PropShape::Sphere { .. } => "sphere",
             PropShape::Cylinder { .. } => "cylinder",
             PropShape::Plane { .. } => "plane",
+            PropShape::Mesh { .. } => "mesh",
         }
     }
 
@@ -167,6 +181,7 @@ impl PropShape {
             PropShape::Sphere { radius } => [2.0 * radius; 3],
             PropShape::Cylinder { radius, height } => [2.0 * radius, height, 2.0 * radius],
             PropShape::Plane { size } => [size[0], 0.0, size[1]],
+            PropShape::Mesh { size, .. } => size,
         }
     }
 
@@ -177,10 +192,33 @@ impl PropShape {
             PropShape::Sphere { radius } => vec![radius],
             PropShape::Cylinder { radius, height } => vec![radius, height],
             PropShape::Plane { size } => size.to_vec(),
+            PropShape::Mesh { size, .. } => size.to_vec(),
         }
     }
 
-    /// The shape named `word` with `dimensions` in [`Self::dimensions`]' order.
+    /// The mesh file it names, if it is a mesh.
+    pub fn file(&self) -> Option<&str> {
+        match self {
+            PropShape::Mesh { file, .. } => Some(file),
+            _ => None,
+        }
+    }
+
+    /// The same shape (a mesh: the same file) with `dimensions` in [`Self::dimensions`]'
+    /// order; `None` when their count does not fit.
+    pub fn with_dimensions(&self, dimensions: &[f64]) -> Option<Self> {
+        match (self, dimensions) {
+            (PropShape::Mesh { file, .. }, [x, y, z]) => Some(PropShape::Mesh {
+                file: file.clone(),
+                size: [*x, *y, *z],
+            }),
+            (PropShape::Mesh { .. }, _) => None,
+            _ => Self::from_dimensions(self.name(), dimensions),
+        }
+    }
+
+    /// The shape named `word` with `dimensions` in [`Self::dimensions`]' order (a mesh,
+    /// which needs its file, is made by [`Self::with_dimensions`]).
     pub fn from_dimensions(word: &str, dimensions: &[f64]) -> Option<Self> {
         match (word, dimensions) {
             ("box", [x, y, z]) => Some(PropShape::Box { size: [*x, *y, *z] }),
@@ -195,7 +233,7 @@ impl PropShape {
     }
 
     /// The shape words, in the link's order.
-    pub const WORDS: [&'static str; 4] = ["box", "sphere", "cylinder", "plane"];
+    pub const WORDS: [&'static str; 5] = ["box", "sphere", "cylinder", "plane", "mesh"];
 
     fn validate_at(&self, at: &str) -> Result<(), DocumentError> {
         for value in self.dimensions() {
@@ -210,7 +248,31 @@ impl PropShape {
     }
 }
 
-/// A static object of the scene: a primitive placed and turned.
+/// Checks a mesh prop's file name: not empty, at most [`MAX_FILE_NAME_CHARS`], no control
+/// characters, a name and not a path (no `/` nor `\\`).
+fn check_file_name(file: &str, at: &str) -> Result<(), DocumentError> {
+    if file.trim().is_empty() {
+        return Err(DocumentError::field(at, "a mesh prop names its file"));
+    }
+    if file.chars().count() > MAX_FILE_NAME_CHARS {
+        return Err(DocumentError::field(
+            at,
+            format!("a file name of at most {MAX_FILE_NAME_CHARS} characters"),
+        ));
+    }
+    if file
+        .chars()
+        .any(|c| c.is_control() || c == '/' || c == '\\')
+    {
+        return Err(DocumentError::field(
+            at,
+            format!("`{file}`: a file's name, without a folder or control characters"),
+        ));
+    }
+    Ok(())
+}
+
+/// A static object of the scene: a primitive or a mesh, placed and turned.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Prop {
     /// Its name in the *Scene* panel.
@@ -252,7 +314,8 @@ impl Prop {
                 frame_from_prop.transform_point3(DVec3::new(0.0, -PLANE_DEPTH / 2.0, 0.0));
         }
         let shape = match self.shape {
-            PropShape::Box { size } => ObstacleShape::Box {
+            // A mesh is its bounding box, turned with it.
+            PropShape::Box { size } | PropShape::Mesh { size, .. } => ObstacleShape::Box {
                 half: DVec3::from_array(size) / 2.0,
             },
             PropShape::Sphere { radius } => ObstacleShape::Sphere { radius },
@@ -276,6 +339,9 @@ impl Prop {
     pub fn validate_at(&self, at: &str) -> Result<(), DocumentError> {
         self.shape
             .validate_at(&format!("{at}.{}", self.shape.name()))?;
+        if let Some(file) = self.shape.file() {
+            check_file_name(file, &format!("{at}.file"))?;
+        }
         if self.position.iter().any(|v| !v.is_finite()) {
             return Err(DocumentError::field(
                 format!("{at}.position"),
@@ -330,6 +396,14 @@ impl Prop {
                 let s = pair_or_triple("size", 2)?;
                 PropShape::Plane { size: [s[0], s[1]] }
             }
+            "mesh" => {
+                let file = string(o.get("file").unwrap_or(&Value::Null), &format!("{at}.file"))?;
+                let s = pair_or_triple("size", 3)?;
+                PropShape::Mesh {
+                    file: file.to_owned(),
+                    size: [s[0], s[1], s[2]],
+                }
+            }
             other => {
                 return Err(DocumentError::field(
                     format!("{at}.shape"),
@@ -341,9 +415,9 @@ impl Prop {
             }
         };
         let name = match o.get("name") {
-            None | Some(Value::Null) => default_prop_name(shape, index + 1),
+            None | Some(Value::Null) => default_prop_name(&shape, index + 1),
             Some(n) => clean_name(string(n, &format!("{at}.name"))?)
-                .unwrap_or_else(|| default_prop_name(shape, index + 1)),
+                .unwrap_or_else(|| default_prop_name(&shape, index + 1)),
         };
         let position = match o.get("position") {
             None | Some(Value::Null) => [0.0; 3],
@@ -373,8 +447,12 @@ impl Prop {
         let mut fields = Map::new();
         fields.insert("name".into(), Value::String(self.name.clone()));
         fields.insert("shape".into(), Value::String(self.shape.name().into()));
-        match self.shape {
+        match &self.shape {
             PropShape::Box { size } => {
+                fields.insert("size".into(), serde_json::json!(size));
+            }
+            PropShape::Mesh { file, size } => {
+                fields.insert("file".into(), Value::String(file.clone()));
                 fields.insert("size".into(), serde_json::json!(size));
             }
             PropShape::Sphere { radius } => {
@@ -395,7 +473,7 @@ impl Prop {
 }
 
 /// The name of the `n`th prop (from 1) of `shape` when it is not named: "Box 2".
-pub fn default_prop_name(shape: PropShape, n: usize) -> String {
+pub fn default_prop_name(shape: &PropShape, n: usize) -> String {
     let word = shape.name();
     let mut chars = word.chars();
     let capital: String = chars

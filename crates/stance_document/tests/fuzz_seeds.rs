@@ -36,6 +36,15 @@ const SCENE_BETWEEN: &str = r#"{"characters": [
   "b": {"character": 1, "joint": "l_radiocarpal", "point": [0, -0.05, 0]}, "axes": "xz", "level": 3}],
 "selected": 0}"#;
 
+/// [`SCENE_BETWEEN`] with a chair from a glTF file beside the bar (format 11).
+const SCENE_MESH: &str = r#"{"characters": [
+  {"name": "Ann", "tasks": [{"level": 2, "kind": "line", "joint": "r_radiocarpal", "origin": [-0.4, 1, 0.3], "direction": [0, 1, 0], "on": "Bar"}]},
+  {"name": "Bo", "placement": {"position": [0.8, 0, -0.2], "yaw": 90}}
+], "props": [{"name": "Bar", "shape": "cylinder", "radius": 0.02, "height": 2.0, "position": [-0.4, 1, 0.3]},
+  {"name": "Chair", "shape": "mesh", "file": "chair.glb", "size": [0.45, 0.9, 0.5], "position": [0.2, 0.45, 0.7],
+   "rotation": [0, 0.2955202, 0, 0.9553365]}],
+"selected": 0}"#;
+
 /// A document with every kind of task, a timeline, a camera and joint stiffness.
 const EVERYTHING: &str = r#"{
   "version": 1,
@@ -234,6 +243,8 @@ fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
             link::encode_scene(&Scene::from_json(SCENE).unwrap())
         } else if format == link::BETWEEN_FORMAT {
             link::encode_scene(&Scene::from_json(SCENE_BETWEEN).unwrap())
+        } else if format == link::MESH_FORMAT {
+            link::encode_scene(&Scene::from_json(SCENE_MESH).unwrap())
         } else {
             link::encode(&document(format))
         };
@@ -270,6 +281,7 @@ fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
         "scene-between.json".into(),
         SCENE_BETWEEN.into(),
     ));
+    out.push(("document", "scene-mesh.json".into(), SCENE_MESH.into()));
     out.push(("problem", "arm.json".into(), ARM.into()));
     out.push(("problem", "loa1.json".into(), loa1_problem().into_bytes()));
     out

@@ -356,7 +356,7 @@ fn broken_links_give_distinct_clear_errors() {
     );
     assert_eq!(
         e.to_string(),
-        "this link was made by a newer version of Stance (format 11); this version reads format 10"
+        "this link was made by a newer version of Stance (format 12); this version reads format 11"
     );
     // Valid checksum, nonsense inside.
     let e = link::decode(&reframe(vec![1, 3, 0xFF, 0xFF, 0xFF])).unwrap_err();

@@ -230,3 +230,107 @@ fn a_cut_or_damaged_scene_link_is_refused_with_a_reason() {
         .to_string();
     assert!(error.contains("40 characters"), "{error}");
 }
+
+/// A scene of one character and a chair from `chair.glb`, scaled and turned.
+fn with_a_chair() -> Scene {
+    let mut scene = two_characters();
+    scene.props.push(Prop {
+        rotation: [0.0, (0.3f64).sin(), 0.0, (0.3f64).cos()],
+        ..Prop::new(
+            "Chair".into(),
+            PropShape::Mesh {
+                file: "chair.glb".into(),
+                size: [0.45, 0.9, 0.5],
+            },
+            [0.2, 0.45, 0.7],
+        )
+    });
+    scene
+}
+
+#[test]
+fn a_mesh_prop_is_named_by_its_file_and_keeps_its_box_in_the_json() {
+    let scene = with_a_chair();
+    let value = scene.to_json_value();
+    let chair = &value["props"][4];
+    assert_eq!(chair["shape"], "mesh");
+    assert_eq!(chair["file"], "chair.glb");
+    assert_eq!(chair["size"], serde_json::json!([0.45, 0.9, 0.5]));
+    assert_eq!(
+        Scene::from_json(&scene.to_json(false)).expect("reads"),
+        scene
+    );
+    // As an obstacle it is its box, turned with it: a point 1 cm out from the middle of its
+    // +X face (x = 0.45 / 2 in the prop's frame) is 1 cm away.
+    let prop = &scene.props[4];
+    let obstacle = prop.obstacle(glam::DAffine3::IDENTITY);
+    let out = prop
+        .scene_from_prop()
+        .transform_point3(DVec3::new(0.225 + 0.01, 0.0, 0.0));
+    let (distance, _) = obstacle.signed_distance(out);
+    assert!((distance - 0.01).abs() < 1e-9, "{distance}");
+}
+
+#[test]
+fn mesh_prop_errors_name_the_field() {
+    let cases = [
+        (
+            r#"{"characters": [{}], "props": [{"shape": "mesh", "size": [1, 1, 1]}]}"#,
+            "props[0].file",
+        ),
+        (
+            r#"{"characters": [{}], "props": [{"shape": "mesh", "file": "../chair.glb", "size": [1, 1, 1]}]}"#,
+            "props[0].file",
+        ),
+        (
+            r#"{"characters": [{}], "props": [{"shape": "mesh", "file": " ", "size": [1, 1, 1]}]}"#,
+            "props[0].file",
+        ),
+        (
+            r#"{"characters": [{}], "props": [{"shape": "mesh", "file": "a.glb", "size": [1, 1]}]}"#,
+            "props[0].size",
+        ),
+        (
+            r#"{"characters": [{}], "props": [{"shape": "mesh", "file": "a.glb", "size": [1, 0, 1]}]}"#,
+            "props[0].mesh",
+        ),
+    ];
+    for (text, field) in cases {
+        let error = Scene::from_json(text).expect_err(text).to_string();
+        assert!(error.contains(field), "{text}: {error}");
+    }
+}
+
+#[test]
+fn a_mesh_prop_takes_link_format_11_and_others_keep_the_older_formats() {
+    use base64::Engine as _;
+    use base64::engine::general_purpose::URL_SAFE_NO_PAD;
+    use stance_document::link;
+    let first_byte = |fragment: &str| URL_SAFE_NO_PAD.decode(fragment).unwrap()[0];
+    // Without a mesh, the format older readers read.
+    assert_eq!(
+        first_byte(&link::encode_scene(&two_characters())),
+        link::SCENE_FORMAT
+    );
+    let scene = with_a_chair();
+    let fragment = link::encode_scene(&scene);
+    assert_eq!(first_byte(&fragment), link::MESH_FORMAT);
+    assert_eq!(link::MESH_FORMAT, 11);
+    let back = link::decode_scene(&fragment).expect("opens");
+    let chair = &back.props[4];
+    assert_eq!(chair.shape.file(), Some("chair.glb"));
+    for (x, y) in chair.shape.dimensions().iter().zip([0.45, 0.9, 0.5]) {
+        assert!((x - y).abs() <= link::POSITION_STEP_M / 2.0, "{x} {y}");
+    }
+    assert_eq!(link::encode_scene(&back), fragment);
+    // The same payload framed as format 10 is refused: shape 4 is no shape there.
+    let mut frame = URL_SAFE_NO_PAD.decode(&fragment).unwrap();
+    frame[0] = link::BETWEEN_FORMAT;
+    let n = frame.len() - 4;
+    let crc = crc32fast::hash(&frame[..n]);
+    frame[n..].copy_from_slice(&crc.to_le_bytes());
+    let error = link::decode_scene(&URL_SAFE_NO_PAD.encode(&frame))
+        .expect_err("no meshes before format 11")
+        .to_string();
+    assert!(error.contains("prop 4's shape is unknown"), "{error}");
+}

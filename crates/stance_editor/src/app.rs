@@ -294,6 +294,13 @@ impl StanceApp {
                 crate::model::KeypointsCommand::PickPhoto,
             ));
         }
+        let prop = ui.button("Import prop…").on_hover_text(
+            "a static glTF/GLB mesh (a chair, a table) placed in front of the character",
+        );
+        self.button_rects.push(("import_prop", prop.rect));
+        if prop.clicked() {
+            command = Some(Command::File(FileCommand::PickProp));
+        }
         if ui.button("Export pose library (JSON)…").clicked() {
             command = Some(Command::Library(LibraryCommand::Export));
         }

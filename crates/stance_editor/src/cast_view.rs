@@ -6,7 +6,8 @@
 
 use glam::{Mat4, Vec3};
 use stance_render::{
-    Capsule, ContactShadow, PropInstance, character_shadow, prop_instance, prop_shadow,
+    Capsule, ContactShadow, MeshPropInstance, PropInstance, character_shadow, mesh_prop_instance,
+    prop_instance, prop_shadow,
 };
 pub(crate) use stance_render::{placed_capsule, placed_palettes};
 
@@ -16,9 +17,24 @@ use crate::model::{Character, EditorModel};
 /// The colour of the characters that are not selected (linear RGB): the body's, greyer.
 pub(crate) const OTHER_COLOR_LINEAR: [f32; 4] = [0.42, 0.42, 0.45, 1.0];
 
-/// Every prop of the scene as the renderer draws it.
+/// Every prop of the scene drawn as a unit shape (a mesh prop whose file is not loaded: its
+/// box).
 pub(crate) fn prop_instances(model: &EditorModel) -> Vec<PropInstance> {
-    model.props().iter().map(prop_instance).collect()
+    model
+        .props()
+        .iter()
+        .filter(|prop| model.prop_mesh(prop).is_none())
+        .map(prop_instance)
+        .collect()
+}
+
+/// Every mesh prop of the scene whose file is loaded, drawn with its triangles.
+pub(crate) fn mesh_prop_instances(model: &EditorModel) -> Vec<MeshPropInstance> {
+    model
+        .props()
+        .iter()
+        .filter_map(|prop| Some(mesh_prop_instance(prop, model.prop_mesh(prop)?)))
+        .collect()
 }
 
 /// The contact shadows of the scene: one under each character (its bones, placed) and one

@@ -278,6 +278,7 @@ fn image_scene(model: &EditorModel, avatar_uploaded: bool) -> Scene {
     Scene {
         capsules,
         props: crate::cast_view::prop_instances(model),
+        mesh_props: crate::cast_view::mesh_prop_instances(model),
         shadows: crate::cast_view::contact_shadows(model),
         show_floor: true,
         show_avatar,

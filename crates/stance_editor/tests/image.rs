@@ -383,3 +383,61 @@ fn characters_on_the_mannequin_are_all_drawn_as_its_figure() {
     let grey = |p: [u8; 4]| p[0].abs_diff(p[2]) < 12 && p[0].abs_diff(p[1]) < 12;
     assert!(!grey(first) && !grey(placed), "{first:?} {placed:?}");
 }
+
+#[test]
+fn a_mesh_prop_is_drawn_with_its_own_triangles_where_it_stands() {
+    // Catches: a mesh prop drawn as its box (the props' wood colour) or not at all, its
+    // placement or size ignored. The file is a green box written by the scene exporter.
+    use stance_asset::{SceneContent, SceneNode, StaticMesh, export_scene_glb};
+    use stance_document::{Prop, PropShape};
+    use stance_editor::Command;
+    use stance_editor::model::SceneCommand;
+    let unit = Prop::new(
+        "crate".into(),
+        PropShape::Box {
+            size: [1.0, 1.0, 1.0],
+        },
+        [0.0; 3],
+    );
+    let green = StaticMesh {
+        color_linear: [0.05, 0.6, 0.05, 1.0],
+        ..stance_render::prop_static_mesh(&unit)
+    };
+    let glb = export_scene_glb(&[SceneNode {
+        name: "crate".into(),
+        scene_from_node: glam::DAffine3::IDENTITY,
+        content: SceneContent::Mesh(std::slice::from_ref(&green)),
+    }])
+    .unwrap();
+    let host = MemoryHost::default();
+    let (mut editor, _) = two_characters(&host);
+    editor.apply(Command::Scene(SceneCommand::AddMeshProp {
+        file: "crate.glb".into(),
+        bytes: glb,
+    }));
+    let mut prop = editor.model.props()[0].clone();
+    prop.position = [0.7, 0.15, 0.0];
+    prop.shape = prop.shape.with_dimensions(&[0.3, 0.3, 0.3]).unwrap();
+    editor.apply(Command::Scene(SceneCommand::EditProp(0, prop)));
+    editor.settle();
+    let png = save_image(
+        &mut editor,
+        &host,
+        ImageOptions {
+            size_px: [320, 240],
+            transparent: true,
+            overlays: false,
+        },
+    );
+    let pixel = seen_at(&png, "STANCE_MESH_PROP_PNG");
+    // Its front face: opaque and green.
+    let front = pixel(glam::Vec3::new(0.7, 0.15, 0.15));
+    assert_eq!(front[3], 255, "{front:?}");
+    assert!(
+        front[1] > front[0] + 20 && front[1] > front[2] + 20,
+        "{front:?}"
+    );
+    // Above it (0.3 m wide, 0.3 m high from the floor): not green.
+    let above = pixel(glam::Vec3::new(0.7, 0.45, 0.15));
+    assert!(above[3] == 0 || above[1] <= above[0] + 20, "{above:?}");
+}

@@ -24,6 +24,7 @@ mod mapping;
 mod motion;
 mod opening;
 pub mod photo;
+mod prop_files;
 mod storage;
 mod tasks;
 
@@ -54,6 +55,7 @@ pub use self::mapping::{Correction, carry_posture};
 pub use self::motion::{
     IntervalEdge, MotionCommand, SPEED_RANGE, TRAJECTORY_FRAMES_PER_STEP, Timeline,
 };
+pub use self::prop_files::{PropFile, PropFiles};
 pub use self::tasks::{NewTask, make_task, table1_example};
 use crate::avatar::LoadedAvatar;
 use crate::history::{EditKind, History, Pending, Step};
@@ -127,6 +129,8 @@ pub struct EditorModel {
     photo_shown: bool,
     /// Counts the photos opened.
     next_photo: u64,
+    /// The imported prop files (*File > Import prop...*), by name.
+    prop_files: PropFiles,
 }
 
 impl std::fmt::Debug for EditorModel {
@@ -173,6 +177,7 @@ impl EditorModel {
             lifting: None,
             next_lift: 0,
             photo: None,
+            prop_files: PropFiles::default(),
             photo_shown: false,
             next_photo: 0,
         };

@@ -11,6 +11,7 @@ mod collision;
 mod hands;
 mod kept_clips;
 mod keypoints;
+mod mesh_props;
 mod model;
 mod motion;
 mod photo;

@@ -53,11 +53,11 @@ pub use openpose_draw::{
 };
 pub use pick::{CapsuleHit, pick_capsule};
 pub use placed::{
-    PLANE_THICKNESS_M, PROP_COLOR_LINEAR, character_shadow, placed_capsule, placed_keypoints,
-    placed_palettes, prop_corners, prop_instance, prop_shadow, prop_static_mesh, prop_template,
-    scene_from_character,
+    PLANE_THICKNESS_M, PROP_COLOR_LINEAR, character_shadow, mesh_prop_instance, placed_capsule,
+    placed_keypoints, placed_palettes, prop_corners, prop_instance, prop_shadow, prop_static_mesh,
+    prop_template, scene_from_character,
 };
-pub use props::{PropInstance, PropMesh, PropTemplate, normal_matrix, prop_mesh};
+pub use props::{MeshPropInstance, PropInstance, PropMesh, PropTemplate, normal_matrix, prop_mesh};
 #[cfg(feature = "gpu")]
 pub use renderer::{COLOR_FORMAT, DEPTH_FORMAT, RenderTarget, SceneRenderer};
 pub use skinned::{
@@ -203,6 +203,8 @@ pub struct Scene {
     pub more_avatar_poses: Vec<Vec<Vec<glam::Mat4>>>,
     /// The scene's props (boxes, spheres, cylinders), shaded like the bodies.
     pub props: Vec<PropInstance>,
+    /// The scene's mesh props drawn with their files' triangles, shaded like the bodies.
+    pub mesh_props: Vec<MeshPropInstance>,
     /// Soft shadows on the floor under the characters and props (at most
     /// [`MAX_CONTACT_SHADOWS`] are drawn), so that heights read at a glance.
     pub shadows: Vec<ContactShadow>,

@@ -8,7 +8,7 @@
 use glam::{DMat4, DVec3, Mat4, Vec3};
 use stance_document::{Placement, Prop, PropShape};
 
-use crate::{Capsule, ContactShadow, PropInstance, PropTemplate};
+use crate::{Capsule, ContactShadow, MeshPropInstance, PropInstance, PropTemplate};
 
 /// The colour of the props (linear RGB): a light wood.
 pub const PROP_COLOR_LINEAR: [f32; 4] = [0.52, 0.40, 0.28, 1.0];
@@ -19,7 +19,10 @@ pub const PLANE_THICKNESS_M: f64 = 0.01;
 /// that makes the unit shape the prop, before its turn and place).
 pub fn prop_template(prop: &Prop) -> (PropTemplate, DVec3) {
     match prop.shape {
-        PropShape::Box { size } => (PropTemplate::Box, DVec3::from_array(size)),
+        // A mesh not drawn as its own triangles (its file not loaded) is its box.
+        PropShape::Box { size } | PropShape::Mesh { size, .. } => {
+            (PropTemplate::Box, DVec3::from_array(size))
+        }
         PropShape::Sphere { radius } => (PropTemplate::Sphere, DVec3::splat(radius)),
         PropShape::Cylinder { radius, height } => {
             (PropTemplate::Cylinder, DVec3::new(radius, height, radius))
@@ -39,6 +42,19 @@ pub fn prop_instance(prop: &Prop) -> PropInstance {
         template,
         world_from_unit: world_from_unit.as_mat4(),
         color_linear: PROP_COLOR_LINEAR,
+    }
+}
+
+/// How the renderer draws `prop` with `mesh`, its file's triangles: fitted to its box, turned
+/// and placed.
+pub fn mesh_prop_instance(
+    prop: &Prop,
+    mesh: &std::sync::Arc<stance_asset::PropMesh>,
+) -> MeshPropInstance {
+    let world_from_mesh = prop.scene_from_prop() * mesh.prop_from_mesh(prop.shape.extents());
+    MeshPropInstance {
+        mesh: mesh.clone(),
+        world_from_mesh: DMat4::from(world_from_mesh).as_mat4(),
     }
 }
 
@@ -136,5 +152,59 @@ pub fn prop_static_mesh(prop: &Prop) -> stance_asset::StaticMesh {
             .collect(),
         indices: unit.indices.iter().map(|&i| u32::from(i)).collect(),
         color_linear: PROP_COLOR_LINEAR,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A mesh whose box runs from (1, 2, 3) to (3, 6, 4) fitted to a 1 m cube at (10, 0, 0),
+    /// turned a quarter about +Y, by hand: the box's centre (2, 4, 3.5) goes to the prop's
+    /// centre; its least corner, (-0.5, -0.5, -0.5) once centred and scaled by (1/2, 1/4, 1),
+    /// turns to (-0.5, -0.5, 0.5) (x to -z, z to x), then moves to (9.5, -0.5, 0.5).
+    #[test]
+    fn a_mesh_prop_is_fitted_to_its_box_turned_and_placed() {
+        let part = stance_asset::StaticMesh {
+            positions: vec![[1.0, 2.0, 3.0], [3.0, 2.0, 3.0], [1.0, 6.0, 4.0]],
+            normals: vec![[0.0, 0.0, 1.0]; 3],
+            indices: vec![0, 1, 2],
+            color_linear: [1.0; 4],
+        };
+        let mesh = std::sync::Arc::new(stance_asset::PropMesh {
+            parts: vec![part],
+            min: DVec3::new(1.0, 2.0, 3.0),
+            max: DVec3::new(3.0, 6.0, 4.0),
+        });
+        let mut prop = Prop::new(
+            "Crate".into(),
+            PropShape::Mesh {
+                file: "crate.glb".into(),
+                size: [1.0, 1.0, 1.0],
+            },
+            [10.0, 0.0, 0.0],
+        );
+        prop.rotation = glam::DQuat::from_rotation_y(std::f64::consts::FRAC_PI_2).to_array();
+        let instance = mesh_prop_instance(&prop, &mesh);
+        let at = |p: [f32; 3]| {
+            instance
+                .world_from_mesh
+                .transform_point3(Vec3::from_array(p))
+        };
+        assert!((at([2.0, 4.0, 3.5]) - Vec3::new(10.0, 0.0, 0.0)).length() < 1e-5);
+        let corner = at([1.0, 2.0, 3.0]);
+        assert!(
+            (corner - Vec3::new(9.5, -0.5, 0.5)).length() < 1e-5,
+            "{corner}"
+        );
+        // Its shadow and framing use its box: the same corners as a box prop of that size.
+        let boxed = Prop {
+            shape: PropShape::Box {
+                size: [1.0, 1.0, 1.0],
+            },
+            ..prop.clone()
+        };
+        let corners: Vec<Vec3> = prop_corners(&prop).collect();
+        assert_eq!(corners, prop_corners(&boxed).collect::<Vec<_>>());
     }
 }

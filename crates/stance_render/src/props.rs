@@ -31,6 +31,24 @@ pub struct PropInstance {
     pub color_linear: [f32; 4],
 }
 
+/// A prop drawn with its own triangles: a mesh prop whose file is loaded. Two are equal when
+/// they draw the same mesh (the same `Arc`, not a copy) at the same place.
+#[derive(Debug, Clone)]
+pub struct MeshPropInstance {
+    /// The file's triangles (the renderer keeps them on the GPU while a frame draws them).
+    pub mesh: std::sync::Arc<stance_asset::PropMesh>,
+    /// The file's scene space to the world: the prop's place and turn times
+    /// [`stance_asset::PropMesh::prop_from_mesh`].
+    pub world_from_mesh: Mat4,
+}
+
+impl PartialEq for MeshPropInstance {
+    fn eq(&self, other: &Self) -> bool {
+        std::sync::Arc::ptr_eq(&self.mesh, &other.mesh)
+            && self.world_from_mesh == other.world_from_mesh
+    }
+}
+
 /// A unit shape's mesh: points, outward normals, triangles counter-clockwise seen from
 /// outside.
 #[derive(Debug, Clone, Default, PartialEq)]

@@ -4,7 +4,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec2;
 use wgpu::util::DeviceExt;
 
-use crate::props::{PropInstance, PropTemplate, normal_matrix, prop_mesh};
+use crate::props::{MeshPropInstance, PropInstance, PropTemplate, normal_matrix, prop_mesh};
 use crate::skinned::SkinnedModel;
 use crate::skinned_gpu::{AvatarGpu, AvatarUpload, SkinnedPipeline};
 use crate::{MAX_CONTACT_SHADOWS, OrbitCamera, SHADERS, Scene};
@@ -53,7 +53,68 @@ struct PropGpuInstance {
     color: [f32; 4],
 }
 
-/// The props' pipeline, the unit shapes' combined mesh and the instances' buffer.
+/// A mesh prop's triangles on the GPU: its parts' points in one vertex buffer and their
+/// triangles in one index buffer, each part's indices pointing into the whole vertex buffer
+/// (drawn from base vertex 0, as WebGL2 needs: see [`PropPipeline::ranges`]).
+#[derive(Debug)]
+struct GpuPropMesh {
+    /// The mesh it was made from (kept: the cache is keyed by this pointer).
+    source: std::sync::Arc<stance_asset::PropMesh>,
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    /// Per part: its index range.
+    parts: Vec<std::ops::Range<u32>>,
+}
+
+impl GpuPropMesh {
+    fn new(device: &wgpu::Device, mesh: &std::sync::Arc<stance_asset::PropMesh>) -> Self {
+        let mut vertices = Vec::new();
+        let mut indices: Vec<u32> = Vec::new();
+        let mut parts = Vec::with_capacity(mesh.parts.len());
+        for part in &mesh.parts {
+            let first_vertex = u32::try_from(vertices.len()).unwrap_or(0);
+            let first_index = u32::try_from(indices.len()).unwrap_or(0);
+            vertices.extend(
+                part.positions
+                    .iter()
+                    .zip(&part.normals)
+                    .map(|(p, n)| PropVertex {
+                        position: [p[0], p[1], p[2], 1.0],
+                        normal: [n[0], n[1], n[2], 0.0],
+                    }),
+            );
+            indices.extend(part.indices.iter().map(|&i| first_vertex + i));
+            parts.push(first_index..u32::try_from(indices.len()).unwrap_or(0));
+        }
+        let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("stance mesh prop vertices"),
+            contents: bytemuck::cast_slice(&vertices),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("stance mesh prop indices"),
+            contents: bytemuck::cast_slice(&indices),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        Self {
+            source: mesh.clone(),
+            vertices,
+            indices,
+            parts,
+        }
+    }
+}
+
+/// What a frame draws of the props: each template's instance range, and each mesh prop
+/// part's (its GPU mesh, its index range, its instance).
+#[derive(Debug, Default)]
+struct PropDraws {
+    groups: Vec<std::ops::Range<u32>>,
+    meshes: Vec<(usize, std::ops::Range<u32>, u32)>,
+}
+
+/// The props' pipeline, the unit shapes' combined mesh, the mesh props' meshes and the
+/// instances' buffer.
 #[derive(Debug)]
 struct PropPipeline {
     pipeline: wgpu::RenderPipeline,
@@ -65,6 +126,8 @@ struct PropPipeline {
     ranges: Vec<std::ops::Range<u32>>,
     instances: wgpu::Buffer,
     capacity: usize,
+    /// The mesh props' triangles drawn last frame (dropped when no prop draws them).
+    meshes: Vec<GpuPropMesh>,
 }
 
 impl PropPipeline {
@@ -152,6 +215,7 @@ impl PropPipeline {
             ranges,
             instances: Self::instance_buffer(device, capacity),
             capacity,
+            meshes: Vec::new(),
         }
     }
 
@@ -164,13 +228,15 @@ impl PropPipeline {
         })
     }
 
-    /// Writes `props`' instances, grouped by template; returns each template's instance range.
+    /// Writes `props`' instances, grouped by template, then one per part of each of
+    /// `mesh_props` (their meshes put on the GPU when new); returns what to draw.
     fn write(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         props: &[PropInstance],
-    ) -> Vec<std::ops::Range<u32>> {
+        mesh_props: &[MeshPropInstance],
+    ) -> PropDraws {
         let mut instances = Vec::with_capacity(props.len());
         let mut groups = Vec::with_capacity(PropTemplate::ALL.len());
         for template in PropTemplate::ALL {
@@ -191,6 +257,40 @@ impl PropPipeline {
             );
             groups.push(start..u32::try_from(instances.len()).unwrap_or(u32::MAX));
         }
+        self.meshes.retain(|gpu| {
+            mesh_props
+                .iter()
+                .any(|prop| std::sync::Arc::ptr_eq(&prop.mesh, &gpu.source))
+        });
+        let mut meshes = Vec::new();
+        for prop in mesh_props
+            .iter()
+            .filter(|prop| prop.world_from_mesh.is_finite())
+        {
+            let found = self
+                .meshes
+                .iter()
+                .position(|gpu| std::sync::Arc::ptr_eq(&prop.mesh, &gpu.source));
+            let at = found.unwrap_or_else(|| {
+                self.meshes.push(GpuPropMesh::new(device, &prop.mesh));
+                self.meshes.len() - 1
+            });
+            let normals = normal_matrix(prop.world_from_mesh);
+            let ranges = self.meshes.get(at).map(|gpu| gpu.parts.clone());
+            for (range, part) in ranges.into_iter().flatten().zip(&prop.mesh.parts) {
+                meshes.push((
+                    at,
+                    range,
+                    u32::try_from(instances.len()).unwrap_or(u32::MAX),
+                ));
+                instances.push(PropGpuInstance {
+                    world_from_unit: prop.world_from_mesh.to_cols_array_2d(),
+                    normals: [normals.x_axis, normals.y_axis, normals.z_axis]
+                        .map(|c| c.extend(0.0).to_array()),
+                    color: part.color_linear,
+                });
+            }
+        }
         if instances.len() > self.capacity {
             self.capacity = instances.len().next_power_of_two();
             self.instances = Self::instance_buffer(device, self.capacity);
@@ -198,11 +298,12 @@ impl PropPipeline {
         if !instances.is_empty() {
             queue.write_buffer(&self.instances, 0, bytemuck::cast_slice(&instances));
         }
-        groups
+        PropDraws { groups, meshes }
     }
 
-    fn draw(&self, pass: &mut wgpu::RenderPass<'_>, groups: &[std::ops::Range<u32>]) {
-        if groups.iter().all(std::ops::Range::is_empty) {
+    fn draw(&self, pass: &mut wgpu::RenderPass<'_>, draws: &PropDraws) {
+        let groups = &draws.groups;
+        if groups.iter().all(std::ops::Range::is_empty) && draws.meshes.is_empty() {
             return;
         }
         pass.set_pipeline(&self.pipeline);
@@ -212,6 +313,13 @@ impl PropPipeline {
         for (indices, instances) in self.ranges.iter().zip(groups) {
             if !instances.is_empty() {
                 pass.draw_indexed(indices.clone(), 0, instances.clone());
+            }
+        }
+        for (at, indices, instance) in &draws.meshes {
+            if let Some(gpu) = self.meshes.get(*at) {
+                pass.set_vertex_buffer(0, gpu.vertices.slice(..));
+                pass.set_index_buffer(gpu.indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(indices.clone(), 0, *instance..instance.saturating_add(1));
             }
         }
     }
@@ -671,7 +779,9 @@ impl SceneRenderer {
             queue.write_buffer(&self.instances, 0, bytemuck::cast_slice(&instances));
         }
 
-        let prop_groups = self.props.write(device, queue, &scene.props);
+        let prop_draws = self
+            .props
+            .write(device, queue, &scene.props, &scene.mesh_props);
 
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("stance frame"),
@@ -716,7 +826,7 @@ impl SceneRenderer {
                 let instance_count = u32::try_from(instances.len()).unwrap_or(u32::MAX);
                 pass.draw_indexed(0..self.template_index_count, 0, 0..instance_count);
             }
-            self.props.draw(&mut pass, &prop_groups);
+            self.props.draw(&mut pass, &prop_draws);
             if scene.show_floor {
                 pass.set_pipeline(&self.floor_pipeline);
                 pass.draw(0..6, 0..1);

@@ -7,6 +7,9 @@
 //! (`HostImages::to_follow`, filled before the transfer as the page does). What loads is also built into a solver skeleton,
 //! posed at rest, exported and imported again (a VRM stays a VRM), and handed through the
 //! import worker's transfer bytes (it comes back equal); its short animations become clips.
+//! A file loaded without requiring a humanoid is also read as a prop's static mesh
+//! (`load_prop_mesh`): its parts whole (every corner a vertex, a normal per vertex) inside
+//! its bounds, or an error that says something.
 //!
 //! Seeds: `fuzz/seeds/import/`, small valid files prefixed with their selector byte (a skinned
 //! LOA2 GLB, textured, a `.gltf` with data URIs, a `.gltf` with its `.bin` in the multi-file
@@ -19,7 +22,7 @@
 use libfuzzer_sys::fuzz_target;
 use stance_asset::{
     AvatarTransfer, DecodedImage, HostImages, Limits, LoadOptions, clip_from_animation,
-    export_glb, find_resource, load_avatar, load_avatar_with_images,
+    export_glb, find_resource, load_avatar, load_avatar_with_images, load_prop_mesh,
 };
 
 fuzz_target!(|data: &[u8]| {
@@ -79,6 +82,19 @@ fuzz_target!(|data: &[u8]| {
             return;
         }
     };
+    if !options.require_humanoid {
+        match load_prop_mesh(file, &mut resolve) {
+            Ok(mesh) => {
+                assert!(mesh.min.cmple(mesh.max).all(), "bounds {mesh:?}");
+                for part in &mesh.parts {
+                    let count = part.positions.len();
+                    assert_eq!(part.normals.len(), count, "a normal per vertex");
+                    assert!(part.indices.iter().all(|&i| (i as usize) < count));
+                }
+            }
+            Err(e) => assert!(!e.to_string().trim().is_empty(), "empty error: {e:?}"),
+        }
+    }
     // The pixels that follow, given as the page gives the browser's (of the header's size).
     for texture in &mut avatar.textures {
         if texture.rgba8.is_empty() {

@@ -241,7 +241,7 @@ impl PropGizmo {
                 };
                 let factor =
                     ((at - centre).length() / start_distance).clamp(SCALE_RANGE.0, SCALE_RANGE.1);
-                prop.shape = scaled(drag.start.shape, factor);
+                prop.shape = scaled(&drag.start.shape, factor);
             }
         }
         outbox.send(Command::Scene(SceneCommand::EditProp(drag.index, prop)));
@@ -261,14 +261,17 @@ impl PropGizmo {
     }
 }
 
-/// `shape` grown by `factor` in every dimension, each kept within the sizes a prop may have.
-fn scaled(shape: PropShape, factor: f64) -> PropShape {
+/// `shape` grown by `factor` in every dimension, each kept within the sizes a prop may have (a
+/// mesh keeps its file).
+fn scaled(shape: &PropShape, factor: f64) -> PropShape {
     let dimensions: Vec<f64> = shape
         .dimensions()
         .iter()
         .map(|d| (d * factor).clamp(0.005, stance_document::scene::MAX_PROP_SIZE_M))
         .collect();
-    PropShape::from_dimensions(shape.name(), &dimensions).unwrap_or(shape)
+    shape
+        .with_dimensions(&dimensions)
+        .unwrap_or_else(|| shape.clone())
 }
 
 /// Whether `pointer` is within [`GRAB_PX`] of the polyline through `points`.
@@ -316,15 +319,27 @@ mod tests {
             height: 2.0,
         };
         assert_eq!(
-            scaled(bar, 1.5),
+            scaled(&bar, 1.5),
             PropShape::Cylinder {
                 radius: 0.03,
                 height: 3.0
             }
         );
-        let PropShape::Cylinder { radius, .. } = scaled(bar, 0.01) else {
+        let PropShape::Cylinder { radius, .. } = scaled(&bar, 0.01) else {
             panic!("a cylinder")
         };
         assert!((radius - 0.005).abs() < 1e-12);
+        // A mesh keeps its file; its box grows.
+        let chair = PropShape::Mesh {
+            file: "chair.glb".into(),
+            size: [0.4, 0.8, 0.5],
+        };
+        assert_eq!(
+            scaled(&chair, 2.0),
+            PropShape::Mesh {
+                file: "chair.glb".into(),
+                size: [0.8, 1.6, 1.0]
+            }
+        );
     }
 }

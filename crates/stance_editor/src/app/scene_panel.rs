@@ -7,7 +7,7 @@ use egui::RichText;
 use stance_document::{Prop, PropShape};
 
 use super::ButtonRects;
-use crate::model::{Command, EditorModel, KeypointsCommand, Outbox, SceneCommand};
+use crate::model::{Command, EditorModel, FileCommand, KeypointsCommand, Outbox, SceneCommand};
 
 /// The names the page's tests find the scene panel's buttons by.
 const CHARACTER_BUTTONS: [&str; 8] = [
@@ -242,12 +242,26 @@ fn props_section(
                 outbox.send(Command::Scene(SceneCommand::AddProp(shape)));
             }
         }
+        let mesh = ui
+            .button("Mesh…")
+            .on_hover_text("a static glTF/GLB file (File > Import prop…)");
+        buttons.push(("add_mesh", mesh.rect));
+        if mesh.clicked() {
+            outbox.send(Command::File(FileCommand::PickProp));
+        }
     });
     for (index, prop) in model.props().iter().enumerate() {
         egui::CollapsingHeader::new(&prop.name)
             .id_salt(("prop", index))
             .show(ui, |ui| {
                 let mut edited = prop.clone();
+                if let Some(file) = prop.shape.file() {
+                    ui.label(if model.prop_mesh(prop).is_some() {
+                        format!("Mesh from {file}")
+                    } else {
+                        format!("Load {file} to show this prop (File > Import prop…): drawn as its box until then")
+                    });
+                }
                 size_row(ui, &mut edited.shape);
                 position_row(ui, &mut edited);
                 if ui.button(format!("Remove {}", prop.name)).clicked() {
@@ -271,7 +285,7 @@ fn size_row(ui: &mut egui::Ui, shape: &mut PropShape) {
         );
     };
     ui.horizontal_wrapped(|ui| match shape {
-        PropShape::Box { size } => {
+        PropShape::Box { size } | PropShape::Mesh { size, .. } => {
             field(ui, &mut size[0], "width");
             field(ui, &mut size[1], "height");
             field(ui, &mut size[2], "depth");

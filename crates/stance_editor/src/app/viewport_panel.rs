@@ -14,8 +14,8 @@ use super::lens::Lens;
 use super::overlay::Overlay;
 use super::prop_gizmo::{PropGizmo, pick_prop};
 use crate::cast_view::{
-    Uploaded, other_figures, pick_other, placed_capsule, placed_palettes, prop_instances,
-    scene_from_character,
+    Uploaded, mesh_prop_instances, other_figures, pick_other, placed_capsule, placed_palettes,
+    prop_instances, scene_from_character,
 };
 use crate::figure::MannequinFigure;
 use crate::image::ImageExport;
@@ -736,6 +736,7 @@ impl ViewportPanel {
         let photo = model.photo_shown();
         Scene {
             props: prop_instances(model),
+            mesh_props: mesh_prop_instances(model),
             shadows: if photo {
                 Vec::new()
             } else {

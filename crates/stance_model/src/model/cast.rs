@@ -192,6 +192,16 @@ pub enum SceneCommand {
     Place(u64, Placement),
     /// A new prop of this shape in front of the selected character.
     AddProp(PropShape),
+    /// A static glTF/GLB file (its name, its bytes) imported as a prop: kept by its name among
+    /// the prop files; a new mesh prop on the floor in front of the selected character, sized
+    /// from its bounds; or, when props of the scene name that file and wait for it, those
+    /// drawn with it (no new prop).
+    AddMeshProp {
+        /// The file's name (`chair.glb`).
+        file: String,
+        /// Its contents.
+        bytes: Vec<u8>,
+    },
     /// Removes the prop at this index.
     RemoveProp(usize),
     /// Sets the prop at this index (its name, size, place, turn), as one edit over frames.
@@ -275,6 +285,7 @@ impl EditorModel {
             SceneCommand::Select(id) => self.select_character(id),
             SceneCommand::Place(id, placement) => self.place_character(id, placement),
             SceneCommand::AddProp(shape) => self.add_prop(shape),
+            SceneCommand::AddMeshProp { file, bytes } => self.add_mesh_prop(&file, bytes),
             SceneCommand::RemoveProp(index) => self.remove_prop(index),
             SceneCommand::EditProp(index, prop) => self.edit_prop(index, prop),
             SceneCommand::AddBetween(new) => self.add_between(new),
@@ -317,7 +328,7 @@ impl EditorModel {
             .cast
             .props
             .iter()
-            .map(stance_render::prop_static_mesh)
+            .map(|prop| self.prop_static_meshes(prop))
             .collect();
         let characters = self
             .characters()
@@ -335,7 +346,7 @@ impl EditorModel {
             .map(|(prop, mesh)| SceneNode {
                 name: prop.name.clone(),
                 scene_from_node: prop.scene_from_prop(),
-                content: SceneContent::Mesh(mesh),
+                content: SceneContent::Mesh(mesh.as_slice()),
             });
         let nodes: Vec<SceneNode<'_>> = characters.chain(props).collect();
         export_scene_glb(&nodes).map_err(|error| error.to_string())
@@ -366,31 +377,37 @@ impl EditorModel {
     }
 
     fn add_prop(&mut self, shape: PropShape) -> super::Change {
-        if self.cast.props.len() >= MAX_PROPS {
-            self.warn(format!("A scene holds at most {MAX_PROPS} props."));
-            return super::Change::Nothing;
-        }
         let n = 1 + self
             .cast
             .props
             .iter()
             .filter(|p| p.shape.name() == shape.name())
             .count();
-        let name = default_prop_name(shape, n);
+        let name = default_prop_name(&shape, n);
         // In front of the selected character, resting on the floor (a plane at table height, a
         // ball at chest height, a bar standing beside it).
         let scene_from_character = self.character.placement.scene_from_character();
         let (ahead, height) = match shape {
-            PropShape::Box { size } => (0.5, size[1] / 2.0),
+            PropShape::Box { size } | PropShape::Mesh { size, .. } => (0.5, size[1] / 2.0),
             PropShape::Sphere { .. } => (0.4, 1.0),
             PropShape::Cylinder { height, .. } => (0.45, height / 2.0),
             PropShape::Plane { .. } => (0.6, 0.75),
         };
         let centre = scene_from_character.transform_point3(glam::DVec3::new(0.0, height, ahead));
-        let mut prop = Prop::new(name.clone(), shape, centre.to_array());
+        self.push_prop(Prop::new(name, shape, centre.to_array()))
+    }
+
+    /// Adds `prop` turned as the selected character is (one undo step); refused when the
+    /// scene holds [`MAX_PROPS`].
+    pub(super) fn push_prop(&mut self, mut prop: Prop) -> super::Change {
+        if self.cast.props.len() >= MAX_PROPS {
+            self.warn(format!("A scene holds at most {MAX_PROPS} props."));
+            return super::Change::Nothing;
+        }
         prop.rotation =
             glam::DQuat::from_rotation_y(self.character.placement.yaw_degrees.to_radians())
                 .to_array();
+        let name = prop.name.clone();
         let before = self.cast_snapshot();
         self.cast.props.push(prop);
         self.history.record_cast(before, false, self.now_secs);
@@ -953,14 +970,14 @@ impl EditorModel {
             self.fetch_avatar(&url);
         }
         self.view_requests += u64::from(self.character.session.camera().is_some());
-        Ok(if on_mannequin.is_empty() {
-            String::new()
-        } else {
-            format!(
+        let mut words = self.missing_prop_files_words();
+        if !on_mannequin.is_empty() {
+            words.push_str(&format!(
                 " Posed on the mannequin until their avatar is loaded: {}.",
                 on_mannequin.join(", ")
-            )
-        })
+            ));
+        }
+        Ok(words)
     }
 
     /// A character made from a scene's `entry` at `loa` (its id not given yet): on the

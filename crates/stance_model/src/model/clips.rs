@@ -64,6 +64,8 @@ pub enum PickPurpose {
     Clip,
     /// OpenPose keypoints to lift (*File > Open keypoints*).
     Keypoints,
+    /// A static glTF/GLB mesh to import as a prop (*File > Import prop...*).
+    Prop,
 }
 
 /// How a baked animation is written.

@@ -352,6 +352,8 @@ pub enum FileCommand {
     PickRecording,
     /// Ask the page for a motion clip (BVH, or a glTF file's animation).
     PickClip,
+    /// Ask the page for a static glTF/GLB mesh to import as a prop.
+    PickProp,
     /// Offer the document as a JSON download.
     ExportDocument,
     /// Offer the timeline (clip, keys and timed tasks, baked) as a download.

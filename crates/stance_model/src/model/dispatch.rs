@@ -335,6 +335,7 @@ impl EditorModel {
             }
             FileCommand::PickRecording => self.pick(PickPurpose::Recording, "Sensors"),
             FileCommand::PickClip => self.pick(PickPurpose::Clip, "Motion"),
+            FileCommand::PickProp => self.pick(PickPurpose::Prop, "Import prop"),
             FileCommand::ExportDocument => self.export_document(),
             FileCommand::ExportAnimation(format) => self.export_animation(format),
             FileCommand::SaveImage { png, width, height } => self.save_image(&png, width, height),

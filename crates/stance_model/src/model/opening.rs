@@ -164,6 +164,11 @@ impl EditorModel {
                 self.open_clip_file(name, &bytes);
                 return;
             }
+            Some(PickPurpose::Prop) => {
+                let file = name.to_owned();
+                self.apply(Command::Scene(SceneCommand::AddMeshProp { file, bytes }));
+                return;
+            }
             Some(PickPurpose::Keypoints) => {
                 let name = name.to_owned();
                 self.apply(Command::Keypoints(KeypointsCommand::Open { name, bytes }));

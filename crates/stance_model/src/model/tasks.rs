@@ -209,7 +209,7 @@ pub fn task_on_prop(
             origin: centre.to_array(),
             direction: up.to_array(),
         },
-        PropShape::Box { size } => TaskKindSpec::Plane {
+        PropShape::Box { size } | PropShape::Mesh { size, .. } => TaskKindSpec::Plane {
             joint: name,
             point: [0.0; 3],
             origin: (centre + up * (size[1] / 2.0)).to_array(),
