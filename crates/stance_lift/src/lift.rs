@@ -140,16 +140,26 @@ pub fn lift(
     if worst > LOST_PX {
         // The placed start led astray (the torso's solve can run off along the rays from a
         // start turned the wrong way): the plain start solved as the lift did before its
-        // stages (the whole problem, the solver's restarts), where it does better.
-        let (plain, plain_report) = crate::stages::solve_whole_with(
-            skeleton,
-            &document,
-            &start,
-            POSE_ITERATIONS,
-            LIFT_TOLERANCE_M,
-            true,
-        )?;
-        let plain_worst = off(&plain, None);
+        // stages (the whole problem, the solver's restarts), where it does better. First the
+        // plain start in stages (tens of milliseconds); the whole problem with restarts (up to
+        // seconds) only when that is lost too.
+        let (mut plain, mut plain_report) =
+            solve_pose(skeleton, &document, &start, POSE_ITERATIONS)?;
+        let mut plain_worst = off(&plain, None);
+        if plain_worst > LOST_PX {
+            let (whole, whole_report) = crate::stages::solve_whole_with(
+                skeleton,
+                &document,
+                &start,
+                POSE_ITERATIONS,
+                LIFT_TOLERANCE_M,
+                true,
+            )?;
+            let whole_worst = off(&whole, None);
+            if whole_worst < plain_worst {
+                (plain, plain_report, plain_worst) = (whole, whole_report, whole_worst);
+            }
+        }
         if plain_worst < worst {
             (posture, report, worst) = (plain, plain_report, plain_worst);
         }
