@@ -137,29 +137,15 @@ pub fn lift(
     let (mut posture, mut report) = solve_pose(skeleton, &document, &placed, POSE_ITERATIONS)?;
     let mut flips = Vec::new();
     let mut worst = off(&posture, None);
-    if worst > LOST_PX {
+    let lost = worst > LOST_PX;
+    if lost {
         // The placed start led astray (the torso's solve can run off along the rays from a
         // start turned the wrong way): the plain start solved as the lift did before its
-        // stages (the whole problem, the solver's restarts), where it does better. First the
-        // plain start in stages (tens of milliseconds); the whole problem with restarts (up to
-        // seconds) only when that is lost too.
-        let (mut plain, mut plain_report) =
-            solve_pose(skeleton, &document, &start, POSE_ITERATIONS)?;
-        let mut plain_worst = off(&plain, None);
-        if plain_worst > LOST_PX {
-            let (whole, whole_report) = crate::stages::solve_whole_with(
-                skeleton,
-                &document,
-                &start,
-                POSE_ITERATIONS,
-                LIFT_TOLERANCE_M,
-                true,
-            )?;
-            let whole_worst = off(&whole, None);
-            if whole_worst < plain_worst {
-                (plain, plain_report, plain_worst) = (whole, whole_report, whole_worst);
-            }
-        }
+        // stages, the solver's restarts), where it does better: first in stages (tens of
+        // milliseconds); the whole problem with restarts (up to seconds) only when neither
+        // this nor the depth flips below find the keypoints.
+        let (plain, plain_report) = solve_pose(skeleton, &document, &start, POSE_ITERATIONS)?;
+        let plain_worst = off(&plain, None);
         if plain_worst < worst {
             (posture, report, worst) = (plain, plain_report, plain_worst);
         }
@@ -198,6 +184,22 @@ pub fn lift(
         flips.extend(joints);
         (posture, report, worst) = (flipped, flipped_report, flipped_worst);
     }
+    // Still far off (more than a fitted camera's misfit) after a start that led astray.
+    if lost && worst > FITTED_OFF_PX {
+        let (plain, plain_report) = crate::stages::solve_whole_with(
+            skeleton,
+            &document,
+            &start,
+            POSE_ITERATIONS,
+            LIFT_TOLERANCE_M,
+            true,
+        )?;
+        let plain_worst = off(&plain, None);
+        if plain_worst < worst {
+            (posture, report, worst) = (plain, plain_report, plain_worst);
+            flips.clear();
+        }
+    }
     // Comfort last, once, from the posture the image, the floor and balance chose.
     let (posture, report) = settle_comfort(skeleton, &document, &posture, report)?;
     document.posture = PostureValues::from_posture(skeleton, &posture);
@@ -214,7 +216,9 @@ pub fn lift(
 }
 
 /// A lift from the placed start leaving a keypoint this far off its pixel (px) is solved again
-/// from the plain start (the rest body turned and placed).
+/// from the plain start (the rest body turned and placed): in stages first, and as the whole
+/// problem with the solver's restarts if a keypoint is still over [`FITTED_OFF_PX`] off after
+/// the whole problem's iterations and the flips.
 const LOST_PX: f64 = 20.0;
 
 /// Iterations of the whole problem after the stages when a keypoint is left off its pixel

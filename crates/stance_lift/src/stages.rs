@@ -26,10 +26,13 @@ use crate::LiftError;
 
 /// A stage stops when this many iterations in a row bring no meaningful improvement: from the
 /// placed start a stage that will meet its levels does so in a few iterations, and one that
-/// cannot (a fitted camera, balance against the feet) no longer spends the default 40 finding
-/// that out. No restarts either: the lift's own start is the better start (module docs of
-/// `lift`).
-const STALL_WINDOW: usize = 10;
+/// cannot (a fitted camera, balance against the feet, a hand whose arm is at the wrong depth)
+/// no longer spends the default 40 finding that out. Every stalled stage spends the window
+/// (three stages a solve, a solve per flip candidate): 5 against 10 cut the lift's time on
+/// the CPU by a fifth on the tuned postures and by a third on the random family
+/// (`examples/lift_bench`), the keypoints left over 2 px as many. No restarts either: the
+/// lift's own start is the better start (module docs of `lift`).
+const STALL_WINDOW: usize = 5;
 
 /// The joints whose subtree is a hand: the wrists (`*_radiocarpal`) where fingers hang below.
 fn hand_roots(skeleton: &Skeleton) -> Vec<usize> {
