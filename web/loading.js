@@ -242,6 +242,13 @@ function lane(kind) {
   return it;
 }
 
+// Starts the worker of the jobs of `kind` if none is, so that a job asked for later does not
+// wait for it to load and instantiate the editor's module (a photo's lift: started while the
+// detector looks at the photo).
+export function warmJobs(kind) {
+  if (editorModule && !workersFailed) lane(kind);
+}
+
 // stanceHost.runJob: the editor asks for the job `job` (stance_model::HostJob as bytes: a clip
 // file with the body and the settings, or keypoints to lift) of kind `kind` to run off the
 // main thread, as its request `id`. The progress goes to the editor as it comes; the result
@@ -279,7 +286,9 @@ export function runJob(handle, kind, id, job) {
             if (it.request !== id) return dropped();
             timed(`stance:${kind}-part`, () => handle.job_part(id, part));
           }
-          await nextTask();
+          // A result in one part (a lift) is done at once: a task's wait here is an editor's
+          // frame (hundreds of ms in software GL).
+          if (parts.length > 0) await nextTask();
           if (it.request !== id) return dropped();
           it.request = null;
           timed(`stance:${kind}-opened`, () => handle.job_done(id));
