@@ -195,9 +195,8 @@ pub fn lift(
             POSE_ITERATIONS,
             LIFT_TOLERANCE_M,
         )?;
-        let plain_worst = off(&plain, None);
-        if plain_worst < worst {
-            (posture, report, worst) = (plain, plain_report, plain_worst);
+        if off(&plain, None) < worst {
+            (posture, report) = (plain, plain_report);
             flips.clear();
         }
     }
