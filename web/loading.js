@@ -265,6 +265,9 @@ export function runJob(handle, kind, id, job) {
   if (!it.worker) return false;
   it.request = id;
   performance.mark(`stance:${kind}-requested`);
+  // A lift's busy bar is the page's (the editor's strip has no spinner: its animation would
+  // keep the editor drawing, and the reply would wait for its frames).
+  if (kind === "lift") progress("Lifting the keypoints…");
   // A copy: `job` is a view of the editor's memory.
   const bytes = job.slice();
   it.worker.request({ type: "job", job: bytes }, [bytes.buffer], (fraction) => {
@@ -273,7 +276,11 @@ export function runJob(handle, kind, id, job) {
     // (The end-to-end tests time the clip's trip by these marks.)
     performance.mark(kind === "clip" ? "stance:clip-retargeted" : `stance:${kind}-done`);
     delivery = delivery.then(async () => {
-      if (it.request !== id) return;
+      if (it.request !== id) {
+        // Cancelled, no other lift asked for since: its busy bar goes.
+        if (kind === "lift" && it.request === null) done();
+        return;
+      }
       try {
         if (reply?.parts) {
           const [head, ...parts] = reply.parts;
@@ -300,6 +307,8 @@ export function runJob(handle, kind, id, job) {
       } catch (error) {
         it.request = null;
         handle.job_failed(id, describe(error));
+      } finally {
+        if (kind === "lift") done();
       }
     });
   });
