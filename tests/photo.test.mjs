@@ -64,6 +64,12 @@ async function openPhoto(page, file, until, what) {
 describe("File > Open photo", () => {
   test("the detector finds the annotated keypoints and the lift lies on the detections", async () => {
     const { page, errors } = await openEditor(context, served.url);
+    // The loading worker's own time for the lift (its log line).
+    let workerLift = "not logged";
+    page.on("console", (message) => {
+      const words = message.text().match(/^lift job \d+ done in the worker in (\d+) ms/);
+      if (words) workerLift = `${words[1]} ms`;
+    });
     const detectorFiles = () => requests.filter((url) => /mediapipe|photo-worker/.test(url));
     assert.deepEqual(detectorFiles(), [], "nothing of the detector loads with the page");
 
@@ -78,6 +84,24 @@ describe("File > Open photo", () => {
     assert.equal(state.characters.length, 1);
     console.log(`photo to posture in the page: ${ms} ms (detection ${state.photo.detect_ms.toFixed(0)} ms, `
       + `the first photo's detector start included; lift ${state.photo.lift_ms.toFixed(0)} ms, in the loading worker)`);
+    // Where the time between the detections and the scene goes, by the page's marks (ms
+    // after the photo was picked): the detections handed to the editor, the lift asked of
+    // the loading worker, its reply back, the scene opened in the editor.
+    const marks = await page.evaluate(() => {
+      const at = (name) => performance.getEntriesByName(name).at(-1);
+      const picked = at("stance:photo-picked")?.startTime ?? 0;
+      const since = (entry, end = false) => (entry ? (end ? entry.startTime + entry.duration : entry.startTime) - picked : NaN);
+      return {
+        detected: since(at("stance:photo-detected")),
+        requested: since(at("stance:lift-requested")),
+        done: since(at("stance:lift-done")),
+        opened: since(at("stance:lift-opened"), true),
+        openedMs: at("stance:lift-opened")?.duration ?? NaN,
+      };
+    });
+    console.log(`photo marks (ms after the pick): detected ${marks.detected.toFixed(0)}, lift asked `
+      + `${marks.requested.toFixed(0)}, lift back ${marks.done.toFixed(0)}, scene opened ${marks.opened.toFixed(0)} `
+      + `(its opening ${marks.openedMs.toFixed(0)} ms); state seen ${ms}; the lift in the worker ${workerLift}`);
 
     // The detections against the annotation (every keypoint of this person is annotated
     // visible). Torso size: the mean of the two shoulder-to-opposite-hip diagonals (the torso

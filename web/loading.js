@@ -242,6 +242,13 @@ function lane(kind) {
   return it;
 }
 
+// Starts the worker of the jobs of `kind` if none is, so that a job asked for later does not
+// wait for it to load and instantiate the editor's module (a photo's lift: started while the
+// detector looks at the photo).
+export function warmJobs(kind) {
+  if (editorModule && !workersFailed) lane(kind);
+}
+
 // stanceHost.runJob: the editor asks for the job `job` (stance_model::HostJob as bytes: a clip
 // file with the body and the settings, or keypoints to lift) of kind `kind` to run off the
 // main thread, as its request `id`. The progress goes to the editor as it comes; the result
@@ -258,6 +265,9 @@ export function runJob(handle, kind, id, job) {
   if (!it.worker) return false;
   it.request = id;
   performance.mark(`stance:${kind}-requested`);
+  // A lift's busy bar is the page's (the editor's strip has no spinner: its animation would
+  // keep the editor drawing, and the reply would wait for its frames).
+  if (kind === "lift") progress("Lifting the keypoints…");
   // A copy: `job` is a view of the editor's memory.
   const bytes = job.slice();
   it.worker.request({ type: "job", job: bytes }, [bytes.buffer], (fraction) => {
@@ -266,7 +276,11 @@ export function runJob(handle, kind, id, job) {
     // (The end-to-end tests time the clip's trip by these marks.)
     performance.mark(kind === "clip" ? "stance:clip-retargeted" : `stance:${kind}-done`);
     delivery = delivery.then(async () => {
-      if (it.request !== id) return;
+      if (it.request !== id) {
+        // Cancelled, no other lift asked for since: its busy bar goes.
+        if (kind === "lift" && it.request === null) done();
+        return;
+      }
       try {
         if (reply?.parts) {
           const [head, ...parts] = reply.parts;
@@ -279,7 +293,9 @@ export function runJob(handle, kind, id, job) {
             if (it.request !== id) return dropped();
             timed(`stance:${kind}-part`, () => handle.job_part(id, part));
           }
-          await nextTask();
+          // A result in one part (a lift) is done at once: a task's wait here is an editor's
+          // frame (hundreds of ms in software GL).
+          if (parts.length > 0) await nextTask();
           if (it.request !== id) return dropped();
           it.request = null;
           timed(`stance:${kind}-opened`, () => handle.job_done(id));
@@ -291,6 +307,8 @@ export function runJob(handle, kind, id, job) {
       } catch (error) {
         it.request = null;
         handle.job_failed(id, describe(error));
+      } finally {
+        if (kind === "lift") done();
       }
     });
   });

@@ -8,7 +8,7 @@
 // opened (its scripts, WebAssembly and model, about 16 MB, then come from the browser's cache).
 
 import { describe } from "./common.js";
-import { showProgress, hideProgress } from "./loading.js";
+import { showProgress, hideProgress, warmJobs } from "./loading.js";
 
 // The photo behind the viewport is scaled down to fit a texture the viewport can take
 // (WebGL2's smallest guaranteed limit).
@@ -65,6 +65,8 @@ export async function openPhoto(handle, file) {
   const started = performance.now();
   performance.mark("stance:photo-picked");
   showProgress(`Finding the person in ${name}…`);
+  // The lift's worker starts meanwhile: the first photo's lift does not wait for it.
+  warmJobs("lift");
   try {
     let bitmap;
     try {

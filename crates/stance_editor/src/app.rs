@@ -591,6 +591,9 @@ impl StanceApp {
     }
 
     /// While the host lifts keypoints (off the editor's thread): a busy notice and *Cancel*.
+    /// No spinner: its animation redraws the editor every frame, and in the page the lift's
+    /// reply then waits for the frame under way (0.7 s in software GL); the page's own busy
+    /// bar moves instead (web/loading.js).
     fn lifting_strip(&mut self, ui: &mut egui::Ui) {
         let Some(words) = self.model.lifting().map(crate::model::Lifting::words) else {
             return;
@@ -598,7 +601,6 @@ impl StanceApp {
         let cancel = Command::Keypoints(crate::model::KeypointsCommand::Cancel);
         let hover = "stop the lift: the scene stays as it is";
         self.job_strip(ui, ("cancel_lift", hover, cancel), |ui| {
-            ui.spinner();
             ui.label(words);
         });
     }

@@ -137,18 +137,14 @@ pub fn lift(
     let (mut posture, mut report) = solve_pose(skeleton, &document, &placed, POSE_ITERATIONS)?;
     let mut flips = Vec::new();
     let mut worst = off(&posture, None);
-    if worst > LOST_PX {
+    let lost = worst > LOST_PX;
+    if lost {
         // The placed start led astray (the torso's solve can run off along the rays from a
         // start turned the wrong way): the plain start solved as the lift did before its
-        // stages (the whole problem, the solver's restarts), where it does better.
-        let (plain, plain_report) = crate::stages::solve_whole_with(
-            skeleton,
-            &document,
-            &start,
-            POSE_ITERATIONS,
-            LIFT_TOLERANCE_M,
-            true,
-        )?;
+        // stages, the solver's restarts), where it does better: first in stages (tens of
+        // milliseconds); the whole problem with restarts (up to seconds) only when neither
+        // this nor the depth flips below find the keypoints.
+        let (plain, plain_report) = solve_pose(skeleton, &document, &start, POSE_ITERATIONS)?;
         let plain_worst = off(&plain, None);
         if plain_worst < worst {
             (posture, report, worst) = (plain, plain_report, plain_worst);
@@ -162,18 +158,20 @@ pub fn lift(
         ON_PIXEL_PX
     };
     if worst > on_pixel {
-        // What the stages leave off: a few iterations of the whole problem (the body's turn
-        // and the hands' weighed together) before any flip is tried.
-        let (polished, polished_report) = crate::stages::solve_whole(
+        // What the stages leave off where a hand needs its elbow moved (the hand's stage holds
+        // the hinge): each arm with its hand solved alone before any flip is tried. (The whole
+        // problem's iterations here before took 3 to 8 times as long for no better keypoints
+        // on the random family of `examples/lift_bench`.)
+        let (arms, arms_report) = crate::stages::solve_arms(
             skeleton,
             &document,
             &posture,
-            WHOLE_ITERATIONS,
+            ARM_ITERATIONS,
             LIFT_TOLERANCE_M,
         )?;
-        let polished_worst = off(&polished, None);
-        if polished_worst < worst {
-            (posture, report, worst) = (polished, polished_report, polished_worst);
+        let arms_worst = off(&arms, None);
+        if arms_worst < worst {
+            (posture, report, worst) = (arms, arms_report, arms_worst);
         }
     }
     for _ in 0..MAX_FLIPS {
@@ -187,6 +185,20 @@ pub fn lift(
         };
         flips.extend(joints);
         (posture, report, worst) = (flipped, flipped_report, flipped_worst);
+    }
+    // Still far off (more than a fitted camera's misfit) after a start that led astray.
+    if lost && worst > FITTED_OFF_PX {
+        let (plain, plain_report) = crate::stages::solve_whole(
+            skeleton,
+            &document,
+            &start,
+            POSE_ITERATIONS,
+            LIFT_TOLERANCE_M,
+        )?;
+        if off(&plain, None) < worst {
+            (posture, report) = (plain, plain_report);
+            flips.clear();
+        }
     }
     // Comfort last, once, from the posture the image, the floor and balance chose.
     let (posture, report) = settle_comfort(skeleton, &document, &posture, report)?;
@@ -204,12 +216,14 @@ pub fn lift(
 }
 
 /// A lift from the placed start leaving a keypoint this far off its pixel (px) is solved again
-/// from the plain start (the rest body turned and placed).
+/// from the plain start (the rest body turned and placed): in stages first, and as the whole
+/// problem with the solver's restarts if a keypoint is still over [`FITTED_OFF_PX`] off after
+/// the whole problem's iterations and the flips.
 const LOST_PX: f64 = 20.0;
 
-/// Iterations of the whole problem after the stages when a keypoint is left off its pixel
-/// (about 2.5 ms each on the LOA 2 body with hands, against 0.1-0.2 ms for a stage's).
-const WHOLE_ITERATIONS: usize = 5;
+/// Iterations of each arm's solve (with its hand) after the stages when a keypoint is left off
+/// its pixel.
+const ARM_ITERATIONS: usize = 30;
 
 /// At most this many limbs are flipped in depth to meet the image level.
 const MAX_FLIPS: usize = 3;

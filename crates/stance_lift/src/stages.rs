@@ -27,10 +27,13 @@ use crate::LiftError;
 
 /// A stage stops when this many iterations in a row bring no meaningful improvement: from the
 /// placed start a stage that will meet its levels does so in a few iterations, and one that
-/// cannot (a fitted camera, balance against the feet) no longer spends the default 40 finding
-/// that out. No restarts either: the lift's own start is the better start (module docs of
-/// `lift`).
-const STALL_WINDOW: usize = 10;
+/// cannot (a fitted camera, balance against the feet, a hand whose arm is at the wrong depth)
+/// no longer spends the default 40 finding that out. Every stalled stage spends the window
+/// (three stages a solve, a solve per flip candidate): 5 against 10 cut the lift's time on
+/// the CPU by a fifth on the tuned postures and by a third on the random family
+/// (`examples/lift_bench`), the keypoints left over 2 px as many. No restarts either: the
+/// lift's own start is the better start (module docs of `lift`).
+const STALL_WINDOW: usize = 5;
 
 /// The joints whose subtree is a hand: the wrists (`*_radiocarpal`) where fingers hang below.
 fn hand_roots(skeleton: &Skeleton) -> Vec<usize> {
@@ -201,23 +204,101 @@ pub(crate) fn solve_staged(
             status = report.status;
         }
     }
-    // The whole problem's levels at the result, without a step.
-    let mut whole = solver(&[], 0)?;
+    let report = report_at(solver(&[], 0)?, body, &tasks, &posture, iterations, status)?;
+    Ok((posture, report))
+}
+
+/// The whole problem's levels at `posture`, without a step (`whole`: a solver of no
+/// iterations), as one solve of `iterations` ending with `status` would report them.
+fn report_at(
+    mut whole: stance_ik::Solver,
+    body: &Skeleton,
+    tasks: &[Task],
+    posture: &Posture,
+    iterations: usize,
+    status: SolveStatus,
+) -> Result<SolveReport, LiftError> {
     let mut at_end = posture.clone();
     let mut report = whole
-        .solve(body, &tasks, &mut at_end)
+        .solve(body, tasks, &mut at_end)
         .map_err(|e| LiftError::Problem(e.to_string()))?;
     report.iterations = iterations;
     if report.status != SolveStatus::Converged {
         report.status = status;
     }
+    Ok(report)
+}
+
+/// Each arm with a hand solved alone from `start`: the keypoints from the shoulder down (the
+/// elbow's, the wrist's, the hand's) on the shoulder's, the elbow's, the wrist's and the
+/// fingers' DOF, everything else held, at most `max_iterations` each. What the stages leave
+/// off when a hand's keypoints need the elbow moved (the hand stage holds its hinge), at a
+/// fraction of the whole problem's cost (about 45 rows on 30 DOF against 118 on 132).
+pub(crate) fn solve_arms(
+    skeleton: &Skeleton,
+    document: &Document,
+    start: &Posture,
+    max_iterations: usize,
+    tolerance: f64,
+) -> Result<(Posture, SolveReport), LiftError> {
+    let problem = problem_from(skeleton, document, start)?;
+    let body = &problem.skeleton;
+    let settings = SolverSettings {
+        max_iterations,
+        tolerance,
+        restarts: false,
+        stall_window: STALL_WINDOW,
+        ..problem.settings
+    };
+    let tasks: Vec<Task> = problem
+        .tasks
+        .iter()
+        .filter(|t| !is_comfort(t))
+        .cloned()
+        .collect();
+    let mut posture = start.clone();
+    let (mut iterations, mut status) = (0, SolveStatus::Converged);
+    for hand in hand_roots(body) {
+        let wrist = body.joints().get(hand).map(|j| j.name.as_str());
+        let Some(shoulder) = crate::place::LIMBS
+            .iter()
+            .find(|limb| Some(limb.joints[2]) == wrist)
+            .and_then(|limb| body.joint_index(limb.joints[0]))
+        else {
+            continue;
+        };
+        let on_arm = |j: usize| descends_from(body, j, shoulder);
+        let arm_tasks: Vec<Task> = tasks
+            .iter()
+            .filter(|t| task_joint(t).is_some_and(on_arm))
+            .cloned()
+            .collect();
+        let mut solver = problem
+            .solver(settings)
+            .map_err(|e| LiftError::Problem(e.to_string()))?;
+        solver.set_locked_dofs(&dofs_where(body, on_arm));
+        let report = solver
+            .solve(body, &arm_tasks, &mut posture)
+            .map_err(|e| LiftError::Problem(e.to_string()))?;
+        iterations += report.iterations;
+        if status == SolveStatus::Converged {
+            status = report.status;
+        }
+    }
+    let whole = problem
+        .solver(SolverSettings {
+            max_iterations: 0,
+            ..settings
+        })
+        .map_err(|e| LiftError::Problem(e.to_string()))?;
+    let report = report_at(whole, body, &tasks, &posture, iterations, status)?;
     Ok((posture, report))
 }
 
 /// `document`'s tasks but comfort solved from `start` as one problem (every DOF, every
-/// keypoint together) for at most `max_iterations`: what the stages cannot do, the body's
-/// turn and the hands' weighed against each other, at the cost of the whole problem's
-/// iterations.
+/// keypoint together) for at most `max_iterations`, as the solver's defaults have it: its
+/// restarts of a stalled solve and its longer stall window (the lift before the stages; slow,
+/// the last resort for a start that led astray).
 pub(crate) fn solve_whole(
     skeleton: &Skeleton,
     document: &Document,
@@ -225,36 +306,12 @@ pub(crate) fn solve_whole(
     max_iterations: usize,
     tolerance: f64,
 ) -> Result<(Posture, SolveReport), LiftError> {
-    solve_whole_with(skeleton, document, start, max_iterations, tolerance, false)
-}
-
-/// [`solve_whole`], with `patient` as the solver's defaults have it: its restarts of a stalled
-/// solve and its longer stall window (the lift before the stages; slow, for a start that led
-/// astray).
-pub(crate) fn solve_whole_with(
-    skeleton: &Skeleton,
-    document: &Document,
-    start: &Posture,
-    max_iterations: usize,
-    tolerance: f64,
-    patient: bool,
-) -> Result<(Posture, SolveReport), LiftError> {
     let problem = problem_from(skeleton, document, start)?;
     let mut solver = problem
-        .solver(if patient {
-            SolverSettings {
-                max_iterations,
-                tolerance,
-                ..problem.settings
-            }
-        } else {
-            SolverSettings {
-                max_iterations,
-                tolerance,
-                restarts: false,
-                stall_window: STALL_WINDOW,
-                ..problem.settings
-            }
+        .solver(SolverSettings {
+            max_iterations,
+            tolerance,
+            ..problem.settings
         })
         .map_err(|e| LiftError::Problem(e.to_string()))?;
     let tasks: Vec<Task> = problem
