@@ -652,8 +652,9 @@ fn support_points(
     Ok(points)
 }
 
-/// Every solver task of `specs` (one problem's tasks) on `skeleton`, in order; errors at
-/// `tasks[i].<field>`.
+/// Every solver task of `specs` (one problem's tasks) on `skeleton`, in order (the collision
+/// tasks leaving off the parts placed on a surface: [`stance_ik::with_placed_parts`]); errors
+/// at `tasks[i].<field>`.
 pub fn solver_tasks(skeleton: &Skeleton, specs: &[TaskSpec]) -> Result<Vec<Task>, DocumentError> {
     let mut out = Vec::with_capacity(specs.len());
     for (i, t) in specs.iter().enumerate() {
@@ -662,6 +663,7 @@ pub fn solver_tasks(skeleton: &Skeleton, specs: &[TaskSpec]) -> Result<Vec<Task>
                 .map_err(|e| e.within(&format!("tasks[{i}]")))?,
         );
     }
+    stance_ik::with_placed_parts(skeleton, &mut out);
     Ok(out)
 }
 

@@ -56,7 +56,9 @@ pub fn level_below_hard_tasks(specs: &[TaskSpec]) -> u32 {
 impl FrameProblem<'_> {
     /// The solver tasks on `skeleton` (on a built `body` when given: its comfort tasks read its
     /// own anatomical axes): every task that converts (one that does not is left out; its
-    /// status says why), the held joint at level 1, the pull one level below every hard task.
+    /// status says why), the held joint at level 1, the pull one level below every hard task;
+    /// the collision tasks leave off the parts placed on a surface
+    /// ([`stance_ik::with_placed_parts`]).
     pub fn tasks(&self, skeleton: &Skeleton, body: Option<&HumanoidSkeleton>) -> Vec<Task> {
         let mut tasks = Vec::with_capacity(self.specs.len() + 2);
         for spec in self.specs {
@@ -84,6 +86,8 @@ impl FrameProblem<'_> {
                 }));
             }
         }
+        // The document's tasks place parts; the held joint and the pull do not.
+        stance_ik::with_placed_parts(skeleton, &mut tasks);
         if let Some((joint, position)) = self.held {
             tasks.push(Task::position(joint, DVec3::ZERO, position).at_level(1));
         }

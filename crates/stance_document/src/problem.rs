@@ -166,6 +166,7 @@ impl Problem {
                 task.kind = TaskKind::Collision(body.collision(&self.skeleton));
             }
         }
+        stance_ik::with_placed_parts(&self.skeleton, &mut self.tasks);
     }
 
     /// Holds the body's capsules off these fixed solids in every collision task (a problem
@@ -176,6 +177,8 @@ impl Problem {
                 task.kind = TaskKind::Collision(c.clone().with_obstacles(obstacles.to_vec()));
             }
         }
+        // The parts placed on the solids now there.
+        stance_ik::with_placed_parts(&self.skeleton, &mut self.tasks);
     }
 
     /// The solver of this problem with `settings` (usually [`Problem::settings`]): its

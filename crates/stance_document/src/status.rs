@@ -5,8 +5,10 @@
 use serde::Serialize;
 use serde_json::{Value, json};
 use stance_hanim::HumanoidSkeleton;
+use stance_hanim::anatomy::{JointClass, segment_of};
+use stance_hanim::{Side, readable_name};
 use stance_ik::conflict::{Unmet, diagnose};
-use stance_ik::{Frames, Posture, Skeleton, Task};
+use stance_ik::{Frames, Posture, Skeleton, Task, TaskKind};
 
 use crate::TaskSpec;
 
@@ -115,6 +117,14 @@ fn why_unmet(
     let solver_tasks: Vec<Task> = higher.iter().map(|(_, task)| task.clone()).collect();
     match diagnose(skeleton, posture, &task, &solver_tasks) {
         Unmet::Conflicts(indices) => {
+            // A collision task in the way: the contact that stops the task's part.
+            if let Some(words) = indices
+                .iter()
+                .filter_map(|&index| higher.get(index))
+                .find_map(|(_, other)| stopped_by(skeleton, posture, &task, other))
+            {
+                return format!("gives way to collision: {words}");
+            }
             let names: Vec<String> = indices
                 .iter()
                 .filter_map(|&index| higher.get(index))
@@ -125,4 +135,61 @@ fn why_unmet(
         Unmet::JointLimits => "limited by joint limits".to_owned(),
         Unmet::OutOfReach => "out of reach".to_owned(),
     }
+}
+
+/// The contact of the collision task `collision` (none for another kind) that stops `task`'s
+/// part at `posture`, in words ("right forearm against middle trunk"): the nearest one whose
+/// parts `task` moves, the part it moves named first.
+fn stopped_by(
+    skeleton: &Skeleton,
+    posture: &Posture,
+    task: &Task,
+    collision: &Task,
+) -> Option<String> {
+    let TaskKind::Collision(c) = &collision.kind else {
+        return None;
+    };
+    let moved = task.support(skeleton);
+    let joints = skeleton.joints();
+    let moves = |joint: usize| {
+        joints
+            .get(joint)
+            .is_some_and(|j| j.dof_range().any(|d| moved.contains(&d)))
+    };
+    let contact = c
+        .contacts(&Frames::new(skeleton, posture))
+        .into_iter()
+        .find(|contact| moves(contact.joints.0) || contact.joints.1.is_some_and(moves))?;
+    let part = |joint: usize| {
+        let Some(name) = joints.get(joint).map(|j| j.name.as_str()) else {
+            return "a part".to_owned();
+        };
+        let side = match Side::split(name).0 {
+            Side::Left => "left ",
+            Side::Right => "right ",
+            Side::Centre => "",
+        };
+        segment_of(JointClass::of(name)).map_or_else(
+            || readable_name(name),
+            |segment| format!("{side}{}", segment.name),
+        )
+    };
+    let first = part(contact.joints.0);
+    let other = match contact.joints.1 {
+        Some(joint) => part(joint),
+        // The floor holds its point at height 0.
+        None if contact.points.1.y.abs() < 1e-9 => "the floor".to_owned(),
+        None => "a prop".to_owned(),
+    };
+    // The part the task moves first; of two, the one further down the tree (joints come
+    // parents first): the limb, not the trunk that carries it too.
+    let first_moved = match contact.joints.1 {
+        Some(second) if moves(second) => moves(contact.joints.0) && contact.joints.0 > second,
+        _ => true,
+    };
+    Some(if first_moved {
+        format!("{first} against {other}")
+    } else {
+        format!("{other} against {first}")
+    })
 }

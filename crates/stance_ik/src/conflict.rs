@@ -9,11 +9,12 @@
 //! what the unmet task could do. Higher tasks that only block together (both feet holding the
 //! pelvis up) are named when releasing one of them gives progress back. When no progress is
 //! possible to begin with, or nothing above takes it away, the goal is out of reach (or the
-//! joint limits stop the task).
+//! joint limits stop the task). A collision task above holds the contacts it keeps at the
+//! posture (a hand stopped against the chest gives way to it).
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::{Posture, Skeleton, Solver, Task};
+use crate::{Frames, Posture, Skeleton, Solver, Task, TaskKind};
 
 /// A higher task is named when holding it takes away at least this fraction of the progress
 /// the unmet task could make.
@@ -47,6 +48,24 @@ struct Linear {
 }
 
 fn linearise(skeleton: &Skeleton, posture: &Posture, task: &Task) -> Option<Linear> {
+    if let TaskKind::Collision(c) = &task.kind {
+        // The contacts it holds at the posture (within the margin and the band), a row each:
+        // the solver's level stops their surfaces meeting, which holding them here stands for
+        // (at a settled posture the level itself has rows only for the pairs inside the
+        // margin). What a higher task asks for is not used.
+        let frames = Frames::new(skeleton, posture);
+        let held = c.contacts(&frames).len();
+        let n = skeleton.dof_count();
+        let mut jt = vec![0.0; n * task.rows()];
+        let support = task.support(skeleton);
+        task.jacobian_t(skeleton, &frames, posture.values(), &support, &mut jt, n);
+        jt.truncate(held * n);
+        return Some(Linear {
+            rows: DMatrix::from_vec(n, held, jt).transpose(),
+            desired: DVector::zeros(held),
+            support,
+        });
+    }
     let mut single = task.clone();
     single.level = 1;
     single.weight = 1.0;

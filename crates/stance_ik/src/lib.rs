@@ -57,7 +57,7 @@ pub use solver::{
     WHOLE_SOLVE_DAMPING,
 };
 pub use task::{
-    Axes, BALANCE_BAND, COLLISION_BAND, Capsule, Collision, Contact, Effector, Obstacle,
-    ObstacleShape, PLANE_BAND, Task, TaskFeature, TaskKind, closest_points, collision_pairs,
-    floor_capsules,
+    Axes, BALANCE_BAND, COLLISION_AIM, COLLISION_BAND, COLLISION_LOOKAHEAD, CONTACT_REACH, Capsule,
+    Collision, Contact, Effector, Obstacle, ObstacleShape, PLANE_BAND, Task, TaskFeature, TaskKind,
+    closest_points, collision_pairs, floor_capsules, with_placed_parts,
 };

@@ -2,9 +2,11 @@
 //! limits, repeat until converged, stalled or out of budget; report per-level residuals.
 //!
 //! The settings live in the submodule `settings`, the report types in `report`, the
-//! multi-start's later runs and the hybrid's limb restart in `restart`, and a comfort level's
-//! share of a step kept inside the joint limits in `comfort_step`.
+//! multi-start's later runs and the hybrid's limb restart in `restart`, a comfort level's
+//! share of a step kept inside the joint limits in `comfort_step`, and an inequality's rows
+//! added where a step would carry it past its bound in `active_set`.
 
+mod active_set;
 mod comfort_step;
 mod report;
 mod restart;
@@ -29,6 +31,7 @@ use crate::posture::clamp_and_wrap;
 use crate::priority::{Damping, LevelSystem, StepWorkspace, prioritized_step_nalgebra};
 use crate::task::StepLimits;
 use crate::{Frames, IkError, Posture, Skeleton, Task};
+use active_set::Candidates;
 use comfort_step::StepLimitsAt;
 
 /// Relative decrease below which an unmet level counts as not progressing.
@@ -89,6 +92,8 @@ pub struct Solver {
     layout: Vec<LevelLayout>,
     supports: Vec<Vec<usize>>,
     systems: Vec<LevelSystem>,
+    /// Each level's inequality rows not yet held (see `active_set`).
+    candidates: Vec<Candidates>,
     residual_sq: Vec<f64>,
     workspace: StepWorkspace,
     fixed: DVector<f64>,
@@ -497,6 +502,8 @@ impl Solver {
                 sys.dx = DVector::zeros(l.rows);
             }
         }
+        self.candidates
+            .resize_with(self.layout.len(), Candidates::default);
         self.residual_sq = vec![0.0; self.layout.len()];
         self.weighted_sq = vec![0.0; self.layout.len()];
         self.comfort_gain = 1.0;
@@ -525,13 +532,15 @@ impl Solver {
         let tol2 = self.settings.tolerance * self.settings.tolerance;
         let mut above_met = true;
         let mut comfort_stepping = false;
-        for (((layout, sys), res), wres) in self
+        for ((((layout, sys), res), wres), candidates) in self
             .layout
             .iter()
             .zip(self.systems.iter_mut())
             .zip(self.residual_sq.iter_mut())
             .zip(self.weighted_sq.iter_mut())
+            .zip(self.candidates.iter_mut())
         {
+            candidates.clear();
             if layout.comfort && !above_met && self.comfort_known {
                 // A comfort level waiting for the levels above it (see below) keeps the cost
                 // it had when last weighed: a zero step, which the kernel skips. The levels
@@ -567,7 +576,7 @@ impl Solver {
                 let at_once = if waiting {
                     err.fill(0.0);
                     task.comfort_cost(skeleton, &self.frames, values)
-                        .map(|cost| (cost, rows))
+                        .map(|cost| (cost, rows, rows))
                 } else {
                     task.system_at_once(
                         skeleton,
@@ -578,12 +587,12 @@ impl Solver {
                         Some(limits),
                     )
                 };
-                let (r, used) = match at_once {
+                let (r, used, held) = match at_once {
                     Some(r) => r,
                     None => {
                         let r = task.error(skeleton, &self.frames, values, err, Some(limits));
                         task.jacobian_t(skeleton, &self.frames, values, support, jt, n);
-                        (r, rows)
+                        (r, rows, rows)
                     }
                 };
                 *res += r * r;
@@ -593,7 +602,14 @@ impl Solver {
                     err[..used].iter_mut().for_each(|v| *v *= w);
                     jt[..used * n].iter_mut().for_each(|v| *v *= w);
                 }
-                row += used;
+                // An inequality's rows past those held wait as candidates (`active_set`);
+                // their space is the next task's, zeroed.
+                for k in held..used {
+                    candidates.push(&jt[k * n..(k + 1) * n], err[k]);
+                }
+                jt[held * n..used * n].fill(0.0);
+                err[held..used].fill(0.0);
+                row += held;
             }
             dx_all.truncate(row);
             jt_all.truncate(row * n);
@@ -605,6 +621,7 @@ impl Solver {
                 sys.support
                     .extend((0..n).filter(|&d| (0..row).any(|c| sys.jacobian_t[(d, c)] != 0.0)));
             }
+            candidates.linearised(sys);
             if layout.comfort {
                 if above_met {
                     // The adaptive gain of the comfort's gradient step (see `run`).
@@ -857,7 +874,7 @@ impl Solver {
 
     /// Prioritized step with the joint-limit clamping loop. Returns (step, clamped DOF count);
     /// `values + step` is inside the limits.
-    fn compute_step(
+    fn step_within_limits(
         &mut self,
         skeleton: &Skeleton,
         values: &[f64],

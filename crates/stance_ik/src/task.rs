@@ -15,7 +15,8 @@ use glam::{DQuat, DVec3};
 
 pub use balance::BALANCE_BAND;
 pub use collision::{
-    COLLISION_BAND, Capsule, Collision, Contact, closest_points, collision_pairs, floor_capsules,
+    COLLISION_AIM, COLLISION_BAND, COLLISION_LOOKAHEAD, CONTACT_REACH, Capsule, Collision, Contact,
+    closest_points, collision_pairs, floor_capsules,
 };
 pub use locus::PLANE_BAND;
 pub use obstacle::{Obstacle, ObstacleShape};
@@ -175,8 +176,10 @@ pub enum TaskKind {
     /// (and some capsules and the floor `y = 0`) keep at least a margin apart. Up to
     /// [`Collision::rows`] rows, one per constraint along its line of closest approach, the
     /// nearest first: an error where two surfaces are closer than the margin, a zero error
-    /// within [`COLLISION_BAND`] beyond it (they may slide along each other but not come
-    /// closer). The solver's level has rows only for the constraints found (see
+    /// within [`COLLISION_BAND`] beyond it. The solver's level has rows only for the
+    /// constraints under the margin, and those within [`COLLISION_LOOKAHEAD`] beyond it where
+    /// a step would bring them inside it (they may slide along each other or part, not come
+    /// closer; see
     /// [`Task::rows_vary`]); [`Task::error_vector`] and [`Task::feature`] keep all of them,
     /// the others empty.
     Collision(Collision),
@@ -625,6 +628,46 @@ impl Task {
                 d.dedup();
                 d
             }
+        }
+    }
+}
+
+/// `tasks` with their collision tasks leaving off the parts the others place on a solid or
+/// the floor (see [`Collision::with_contacts`]): an active point-on-plane task that keeps its
+/// point on the plane (not `above` it) places its joint on the solid whose surface holds the
+/// plane's origin (a hand on a table top); a point-on-line task, on the solid that holds the
+/// line's origin (a hand on a bar, round its axis); a position task on every axis, on the
+/// solid or the floor whose surface holds its target (a hand on a ball, on the floor; not a
+/// target inside a solid, which the collision task keeps the part out of).
+/// Problem files, documents and the editor's frames alike.
+pub fn with_placed_parts(skeleton: &Skeleton, tasks: &mut [Task]) {
+    let placed: Vec<(usize, DVec3, bool)> = tasks
+        .iter()
+        .filter(|t| t.active)
+        .filter_map(|t| match &t.kind {
+            TaskKind::PointOnPlane {
+                effector,
+                origin,
+                above: false,
+                ..
+            } => Some((effector.joint, *origin, false)),
+            TaskKind::PointOnLine {
+                effector, origin, ..
+            } => Some((effector.joint, *origin, true)),
+            TaskKind::Position {
+                effector,
+                axes,
+                target,
+            } if *axes == Axes::XYZ => Some((effector.joint, *target, false)),
+            _ => None,
+        })
+        .collect();
+    if placed.is_empty() {
+        return;
+    }
+    for task in tasks.iter_mut() {
+        if let TaskKind::Collision(c) = &task.kind {
+            task.kind = TaskKind::Collision(c.clone().with_contacts(skeleton, &placed));
         }
     }
 }

@@ -795,5 +795,26 @@ pub fn joint_rotation(frames: &Frames, joint: usize) -> DQuat {
     }
 }
 
+/// `tasks` with collision avoidance on (every collision task active; the body's own, just
+/// below the pins, added where there is none) or off (every collision task inactive).
+pub(crate) fn collision_switched(tasks: &mut Vec<TaskSpec>, on: bool) {
+    let mut found = false;
+    for task in tasks
+        .iter_mut()
+        .filter(|task| matches!(task.kind, TaskKindSpec::Collision { .. }))
+    {
+        task.active = on;
+        found = true;
+    }
+    if on && !found {
+        // After the tasks above it, so that the list reads in priority order.
+        let at = tasks
+            .iter()
+            .position(|task| task.level >= stance_document::COLLISION_LEVEL)
+            .unwrap_or(tasks.len());
+        tasks.insert(at, TaskSpec::collision());
+    }
+}
+
 #[cfg(test)]
 mod tests;

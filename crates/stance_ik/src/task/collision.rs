@@ -2,11 +2,13 @@
 //! `margin` between their surfaces, above the floor (`y = 0`) and off fixed solids (a scene's
 //! props: [`Obstacle`]). Each row is one
 //! constraint along its line of closest approach: the distance between the surfaces, with an
-//! error where it is under the margin, a zero error within [`COLLISION_BAND`] over it (the
-//! surfaces may slide along each other but not come closer), nothing further out. The
-//! nearest constraints fill the task's rows, nearest first, up to their number; the level
-//! has rows only for the constraints found (none while the body is clear: the level then
-//! costs its search alone), each on the DOF that move one point against the other.
+//! error where it is under the margin. The constraints within [`COLLISION_LOOKAHEAD`] over
+//! the margin are the solver's candidates: a step that would bring one inside the margin is
+//! taken again with its row at the margin (the surfaces may slide along each other or part,
+//! not come closer; the solver's active set). The nearest constraints fill the task's rows,
+//! nearest first, up to their number; the level has rows only for the constraints under the
+//! margin (none while the body is clear: the level then costs its search alone), each on the
+//! DOF that move one point against the other.
 
 use std::sync::Arc;
 
@@ -15,16 +17,25 @@ use glam::DVec3;
 use super::obstacle::Obstacle;
 use crate::{Frames, Posture, Skeleton};
 
-/// How far past the margin a constraint still holds (with a zero error): the lower levels may
-/// not pull the surfaces back together (m).
+/// How far past the margin a constraint still counts as a contact (drawn in the editor;
+/// the pairs touching at rest closer than the margin and this are left out) (m).
 pub const COLLISION_BAND: f64 = 0.002;
+
+/// How far past the margin a row of the solver's level aims (m): a row pushing its surfaces
+/// apart, or stopping them, aims there, so that a step's second-order motion does not leave
+/// them just inside the margin (half [`COLLISION_BAND`]).
+pub const COLLISION_AIM: f64 = 0.5 * COLLISION_BAND;
+
+/// How far past the margin the solver looks for constraints a step may bring inside it (its
+/// active set's candidates, see the module's note) (m).
+pub const COLLISION_LOOKAHEAD: f64 = 0.05;
 
 /// A collision task's data: the surfaces of the `pairs` of `capsules` (and of the `floor`
 /// capsules and the floor `y = 0`) keep at least `margin` apart, `rows` constraints at most.
 /// One row per constraint along its line of closest approach, the nearest first: an error
-/// where two surfaces are closer than the margin, a zero error within [`COLLISION_BAND`]
-/// beyond it (they may slide along each other but not come closer); the level has no row
-/// for the rest.
+/// where two surfaces are closer than the margin; those within [`COLLISION_LOOKAHEAD`]
+/// beyond it join the level only where a step would bring them inside it (they may slide
+/// along each other or part, not come closer); the level has no row for the rest.
 ///
 /// The search for the constraints (once per linearisation) is a broad phase on boxes: the
 /// capsules are grouped by branch of the skeleton (a leg, an arm, a finger, the spine...;
@@ -44,7 +55,20 @@ pub struct Collision {
     /// The capsules held off the obstacles: those clear of the floor at rest (the feet, which
     /// stand on things, are left to the tasks that place them).
     against: Arc<[usize]>,
+    /// Capsules left off one solid: a hand or foot placed on it (see
+    /// [`Collision::with_contacts`]): the obstacle's index (`None`: the floor), the capsule's.
+    exempt: Arc<[(Option<usize>, usize)]>,
 }
+
+/// How near (m) a placing task's point of a surface must be to a solid's surface (or the
+/// floor) for the solid to be the one the part is placed on.
+pub const CONTACT_REACH: f64 = 1e-3;
+
+/// Above this cosine between two capsules' axes each end of either axis against the other
+/// is a constraint of its own (see [`Collision::constraints_within`]).
+const PARALLEL_ENDS: f64 = 0.9;
+/// An end's constraint only where the end is this far from the closest point (m).
+const ENDS_APART: f64 = 0.01;
 
 /// Joints of a branch in one group of the broad phase.
 const BRANCH_PIECE: usize = 2;
@@ -183,7 +207,67 @@ impl Collision {
             broad: Arc::new(broad),
             obstacles: Arc::from(Vec::new()),
             against: Arc::from(against),
+            exempt: Arc::from(Vec::new()),
         }
+    }
+
+    /// The same task with the parts placed on a surface left off that surface's solid: for
+    /// each `(joint, point, inside)` of `contacts` (a hand or foot put on a prop or the floor
+    /// by a point-on-plane task, its point of the plane; `inside`: a point that may be inside
+    /// the solid, a bar's axis), the capsules of the joint, of the joints below it and the bone
+    /// that ends at it (the forearm of a hand, the shank of a foot) are not held off the
+    /// obstacles whose surface passes within [`CONTACT_REACH`] of the point (or, `inside`, that
+    /// hold it), nor off the floor where the point is on it: the placing
+    /// task puts the joint's centre on the surface, which the capsules round it would
+    /// otherwise hold off by their radius and the margin. The rest of the body keeps off.
+    pub fn with_contacts(mut self, skeleton: &Skeleton, contacts: &[(usize, DVec3, bool)]) -> Self {
+        let joints = skeleton.joints();
+        let mut exempt = Vec::new();
+        for &(joint, at, inside) in contacts {
+            // The joint, the joints below it (parents come first) and its parent, whose
+            // capsule is the bone ending at it.
+            let mut placed = vec![false; joints.len()];
+            for (j, def) in joints.iter().enumerate() {
+                let below = def.parent.and_then(|p| placed.get(p).copied());
+                if let Some(slot) = placed.get_mut(j) {
+                    *slot = j == joint || below == Some(true);
+                }
+            }
+            let parent = joints.get(joint).and_then(|def| def.parent);
+            let carried = |c: &Capsule| {
+                placed.get(c.joint).copied().unwrap_or(false)
+                    || (Some(c.joint) == parent
+                        && joints.get(joint).is_some_and(|def| {
+                            (c.end - def.offset).length() < 1e-6
+                                || (c.start - def.offset).length() < 1e-6
+                        }))
+            };
+            let mut solids: Vec<Option<usize>> = self
+                .obstacles
+                .iter()
+                .enumerate()
+                .filter(|(_, o)| {
+                    let d = o.signed_distance(at).0;
+                    d < CONTACT_REACH && (inside || d > -CONTACT_REACH)
+                })
+                .map(|(k, _)| Some(k))
+                .collect();
+            if at.y.abs() < CONTACT_REACH {
+                solids.push(None);
+            }
+            for (i, c) in self.capsules.iter().enumerate() {
+                if carried(c) {
+                    exempt.extend(solids.iter().map(|&solid| (solid, i)));
+                }
+            }
+        }
+        self.exempt = Arc::from(exempt);
+        self
+    }
+
+    /// Whether capsule `i` is held off `solid` (an obstacle's index; `None`: the floor).
+    fn holds(&self, solid: Option<usize>, i: usize) -> bool {
+        !self.exempt.contains(&(solid, i))
     }
 
     /// The same task with the body's capsules (those clear of the floor at rest: not the
@@ -294,7 +378,12 @@ impl Collision {
     /// The constraints at `frames`: every pair and every floor capsule within the margin plus
     /// the band, nearest first, at most `rows`.
     pub(super) fn constraints(&self, frames: &Frames) -> Vec<Constraint> {
-        let reach = self.margin + COLLISION_BAND;
+        self.constraints_within(frames, self.margin + COLLISION_BAND)
+    }
+
+    /// The constraints at `frames` whose distance is under `reach`, nearest first, at most
+    /// `rows`.
+    pub(super) fn constraints_within(&self, frames: &Frames, reach: f64) -> Vec<Constraint> {
         let capsules = &self.capsules;
         let broad = &self.broad;
         // Each capsule's ends in the world and its box, once; each group's box.
@@ -336,20 +425,43 @@ impl Collision {
                     continue;
                 }
                 let (distance, pa, pb) = surface_distance(a, ends[i], b, ends[j]);
-                let gap = pa - pb;
-                if distance < reach && gap.length() > 1e-9 {
-                    let normal = gap.normalize();
-                    found.push(Constraint {
-                        distance,
-                        a: (a.joint, pa),
-                        b: Some((b.joint, pb)),
-                        normal,
-                        surface: (pa - normal * a.radius, pb + normal * b.radius),
-                    });
+                let mut push = |distance: f64, pa: DVec3, pb: DVec3| {
+                    let gap = pa - pb;
+                    if distance < reach && gap.length() > 1e-9 {
+                        let normal = gap.normalize();
+                        found.push(Constraint {
+                            distance,
+                            a: (a.joint, pa),
+                            b: Some((b.joint, pb)),
+                            normal,
+                            surface: (pa - normal * a.radius, pb + normal * b.radius),
+                        });
+                    }
+                };
+                push(distance, pa, pb);
+                // Nearly parallel axes (an arm hanging by the thigh): the closest points
+                // jump from one end to the other as the axes tilt, so each end of either
+                // axis against the other is a constraint too (`PARALLEL_ENDS`).
+                let ((a0, a1), (b0, b1)) = (ends[i], ends[j]);
+                let (u, v) = ((a1 - a0).normalize_or_zero(), (b1 - b0).normalize_or_zero());
+                if u.dot(v).abs() > PARALLEL_ENDS {
+                    let radii = a.radius + b.radius;
+                    for end in [a0, a1] {
+                        let (_, q) = closest_points(end, end, b0, b1);
+                        if (end - pa).length() > ENDS_APART {
+                            push((end - q).length() - radii, end, q);
+                        }
+                    }
+                    for end in [b0, b1] {
+                        let (q, _) = closest_points(a0, a1, end, end);
+                        if (end - pb).length() > ENDS_APART {
+                            push((q - end).length() - radii, q, end);
+                        }
+                    }
                 }
             }
         }
-        for &i in self.floor.iter() {
+        for &i in self.floor.iter().filter(|&&i| self.holds(None, i)) {
             let (Some(c), Some(&(p0, p1))) = (capsules.get(i), ends.get(i)) else {
                 continue;
             };
@@ -365,9 +477,9 @@ impl Collision {
                 });
             }
         }
-        for obstacle in self.obstacles.iter() {
+        for (k, obstacle) in self.obstacles.iter().enumerate() {
             let (centre, bound) = (obstacle.position, obstacle.bounding_radius());
-            for &i in self.against.iter() {
+            for &i in self.against.iter().filter(|&&i| self.holds(Some(k), i)) {
                 let (Some(c), Some(&(p0, p1)), Some(&(sc, sr))) =
                     (capsules.get(i), ends.get(i), spheres.get(i))
                 else {

@@ -8,7 +8,8 @@ use super::collision;
 use super::gaze::{GazeGeometry, direction_error};
 use super::locus::{line_basis, line_offset, plane_active, plane_distance, plane_error};
 use super::{
-    Axes, BALANCE_BAND, COLLISION_BAND, PLANE_BAND, StepLimits, Task, TaskFeature, TaskKind,
+    Axes, BALANCE_BAND, COLLISION_AIM, COLLISION_BAND, COLLISION_LOOKAHEAD, PLANE_BAND, StepLimits,
+    Task, TaskFeature, TaskKind,
 };
 use crate::comfort::ComfortModel;
 use crate::{Frames, Skeleton};
@@ -493,12 +494,16 @@ impl Task {
         Some(model.terms(skeleton, frames, values).total)
     }
 
-    /// The rows and errors at once for the kinds that find both together, as
-    /// [`Task::error`] and [`Task::jacobian_t`] write them (`jac_t` zero on entry, `n` DOF),
-    /// and how many rows are in use: comfort (one gradient; returns the cost, one row) and
-    /// collision (one search for its constraints; returns the error's norm and one row per
-    /// constraint found, the first rows: the others stay empty and the solver leaves them
-    /// out of the level). `None` for other kinds.
+    /// The rows and errors at once for the kinds that find both together (`jac_t` zero on
+    /// entry, `n` DOF), how many rows are written and how many of them are held: comfort (one
+    /// gradient, as [`Task::error`] and [`Task::jacobian_t`] write it; returns the cost, one
+    /// row, held) and collision (one search for its constraints within
+    /// [`COLLISION_LOOKAHEAD`] of the margin, nearest first; returns the error's norm, one row
+    /// per constraint found and how many of them are under the margin: those rows hold their
+    /// error, the margin less the distance; the others, the candidates of the solver's active
+    /// set, hold the margin less the distance, negative: the change that brings them to the
+    /// margin; the rows past those found stay empty and the solver leaves them out of the
+    /// level). `None` for other kinds.
     pub(crate) fn system_at_once(
         &self,
         skeleton: &Skeleton,
@@ -507,25 +512,32 @@ impl Task {
         support: &[usize],
         (err, jac_t, n): (&mut [f64], &mut [f64], usize),
         limits: Option<StepLimits>,
-    ) -> Option<(f64, usize)> {
+    ) -> Option<(f64, usize, usize)> {
         match &self.kind {
             TaskKind::Comfort { model } => {
                 let (cost, gradient) = comfort_gradient(model, skeleton, frames, values);
                 err[0] = comfort_step(&gradient, limits);
                 unit_gradient_row(&gradient, support, jac_t);
-                Some((cost, 1))
+                Some((cost, 1, 1))
             }
             TaskKind::Collision(c) => {
-                let found = c.constraints(frames);
-                let norm = collision::errors(&found, c.margin(), err);
+                let found = c.constraints_within(frames, c.margin() + COLLISION_LOOKAHEAD);
+                let held = found.partition_point(|f| f.distance < c.margin());
+                let norm = collision::errors(&found[..held], c.margin(), err);
+                // Each row aims a little past the margin (the steps' second-order motion).
+                let aim = c.margin() + COLLISION_AIM;
+                for (e, f) in err.iter_mut().zip(&found) {
+                    *e = aim - f.distance;
+                }
+                let aimed = err[..held].iter().map(|e| e * e).sum::<f64>().sqrt();
                 if let Some(l) = limits
-                    && norm > l.linear
+                    && aimed > l.linear
                 {
-                    let s = l.linear / norm;
-                    err.iter_mut().for_each(|v| *v *= s);
+                    let s = l.linear / aimed;
+                    err[..held].iter_mut().for_each(|v| *v *= s);
                 }
                 collision::write_rows(skeleton, frames, &found, jac_t, n);
-                Some((norm, found.len()))
+                Some((norm, found.len(), held))
             }
             _ => None,
         }

@@ -3,7 +3,7 @@
 //! carried out), and each says what it changed ([`Change`]): a posture edit becomes a key of a
 //! paused timeline.
 
-use stance_document::{TaskKindSpec, TaskSpec};
+use stance_document::TaskSpec;
 
 use super::command::{
     AvatarCommand, Change, Command, FileCommand, Gesture, GestureCommand, HistoryCommand,
@@ -231,7 +231,7 @@ impl EditorModel {
                 EditKind::Command
             }
             TaskCommand::SetCollision(on) => {
-                collision_switched(&mut tasks, on);
+                crate::posing::collision_switched(&mut tasks, on);
                 EditKind::Command
             }
             TaskCommand::Remove(index) => {
@@ -454,26 +454,5 @@ fn move_level(tasks: &mut [TaskSpec], from: u32, onto: Option<u32>) {
         {
             task.level = number;
         }
-    }
-}
-
-/// `tasks` with collision avoidance on (every collision task active; the body's own, just
-/// below the pins, added where there is none) or off (every collision task inactive).
-fn collision_switched(tasks: &mut Vec<TaskSpec>, on: bool) {
-    let mut found = false;
-    for task in tasks
-        .iter_mut()
-        .filter(|task| matches!(task.kind, TaskKindSpec::Collision { .. }))
-    {
-        task.active = on;
-        found = true;
-    }
-    if on && !found {
-        // After the tasks above it, so that the list reads in priority order.
-        let at = tasks
-            .iter()
-            .position(|task| task.level >= stance_document::COLLISION_LEVEL)
-            .unwrap_or(tasks.len());
-        tasks.insert(at, TaskSpec::collision());
     }
 }

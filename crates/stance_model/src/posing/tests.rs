@@ -177,7 +177,12 @@ fn reason_for_pull(session: &mut PosingSession, joint: &str, offset: DVec3, leve
     session.set_tasks(tasks);
     settle(session);
     let status = session.statuses().last().unwrap();
-    assert!(status.residual.unwrap() > 0.05, "the goal is not met");
+    assert!(
+        status.residual.unwrap() > 0.05,
+        "the goal is not met: {:?} {:?}",
+        status,
+        session.contacts()
+    );
     status.gave_way.clone().unwrap_or_default()
 }
 
@@ -202,6 +207,39 @@ fn a_hand_reaching_beyond_the_arm_is_out_of_reach_not_held_by_the_feet() {
             assert!(status.gave_way.is_none(), "{status:?}");
         }
     }
+}
+
+/// Catches a task stopped by the body's collision task reported "out of reach" (what it said
+/// before: the solver's collision level has no row at a settled posture, where every pair is
+/// clear of the margin): the right wrist pinned inside the chest (on the axis of the
+/// collarbones' bar, between them) under the default tasks, the chest pinned and collision,
+/// stops on the torso and gives way to collision, naming the right arm's part the pin moves and what it is
+/// against.
+#[test]
+fn a_hand_pinned_inside_the_chest_gives_way_to_collision() {
+    let mut session = session();
+    // Collision on, and the chest held where it stands (it cannot lean away from the hand).
+    let mut tasks = session.tasks().to_vec();
+    crate::posing::collision_switched(&mut tasks, true);
+    let skeleton = session.skeleton();
+    let collarbone = skeleton.joint_index("l_sternoclavicular").unwrap();
+    let chest_joint = skeleton.joints()[collarbone].parent.unwrap();
+    let chest_name = skeleton.joints()[chest_joint].name.clone();
+    let held = session.frames().joint_position[chest_joint];
+    tasks.insert(0, TaskSpec::pin(&chest_name, held.to_array()));
+    session.set_tasks(tasks);
+    assert!(session.collision_on());
+    let chest = session
+        .joint_position("l_sternoclavicular")
+        .unwrap()
+        .lerp(session.joint_position("r_sternoclavicular").unwrap(), 0.5);
+    let wrist = session.joint_position("r_radiocarpal").unwrap();
+    let reason = reason_for_pull(&mut session, "r_radiocarpal", chest - wrist, 3);
+    println!("the wrist pinned inside the chest: {reason}");
+    assert!(
+        reason.starts_with("gives way to collision: right ") && reason.contains(" against "),
+        "{reason}"
+    );
 }
 
 #[test]
@@ -367,7 +405,10 @@ fn a_hand_pulled_up_and_let_go_stays_up_under_the_default_comfort() {
     let released = session.frames().joint_position[wrist];
     assert!(
         (released - goal).length() < 0.02,
-        "the hand followed the pull"
+        "the hand followed the pull: {} m short; {:?}; contacts {:?}",
+        (released - goal).length(),
+        session.report(),
+        session.contacts()
     );
     session.end_grab();
     settle(&mut session);
