@@ -118,6 +118,17 @@ fn problem_from(
     Ok(problem)
 }
 
+/// The settings of one stage's solve: no restarts, the stages' stall window.
+fn stage_settings(problem: &Problem, max_iterations: usize, tolerance: f64) -> SolverSettings {
+    SolverSettings {
+        max_iterations,
+        tolerance,
+        restarts: false,
+        stall_window: STALL_WINDOW,
+        ..problem.settings
+    }
+}
+
 /// Solves `document`'s tasks from `start` in the stages of the module's docs (the comfort
 /// task only with `comfort`), at most `max_iterations` each, a level met within `tolerance`.
 pub(crate) fn solve_staged(
@@ -130,13 +141,7 @@ pub(crate) fn solve_staged(
 ) -> Result<(Posture, SolveReport), LiftError> {
     let problem = problem_from(skeleton, document, start)?;
     let body = &problem.skeleton;
-    let settings = SolverSettings {
-        max_iterations,
-        tolerance,
-        restarts: false,
-        stall_window: STALL_WINDOW,
-        ..problem.settings
-    };
+    let settings = stage_settings(&problem, max_iterations, tolerance);
     let solver = |locked: &[usize], iterations: usize| {
         let mut solver = problem
             .solver(SolverSettings {
@@ -243,13 +248,7 @@ pub(crate) fn solve_arms(
 ) -> Result<(Posture, SolveReport), LiftError> {
     let problem = problem_from(skeleton, document, start)?;
     let body = &problem.skeleton;
-    let settings = SolverSettings {
-        max_iterations,
-        tolerance,
-        restarts: false,
-        stall_window: STALL_WINDOW,
-        ..problem.settings
-    };
+    let settings = stage_settings(&problem, max_iterations, tolerance);
     let tasks: Vec<Task> = problem
         .tasks
         .iter()

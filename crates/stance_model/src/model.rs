@@ -25,6 +25,7 @@ mod motion;
 mod opening;
 pub mod photo;
 mod prop_files;
+mod props;
 mod storage;
 mod tasks;
 
