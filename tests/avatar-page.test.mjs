@@ -12,10 +12,12 @@ import zlib from "node:zlib";
 import {
   CONFIGURATIONS, assertDrawnAtJoints, assertNotDrawnAt, clickButton, decodePng, describeLongTasks,
   isAvatarPixel, isFigureColour, launch, longTasks, openEditor, pointsAwayFromFigure,
-  pressKeys, saveArtifact, freshStoragePerTab, serve, viewportRect, waitForSettled, waitForState,
+  pressKeys, saveArtifact, freshStoragePerTab, serve, shareNear, viewportRect, waitForSettled,
+  waitForState,
 } from "./browser.mjs";
 
 const SHARED_AVATAR = fileURLToPath(new URL("./fixtures/avatars/Black_F_2_Casual.glb", import.meta.url));
+const BOX_GLTF = fileURLToPath(new URL("../crates/stance_asset/tests/fixtures/Box.gltf", import.meta.url));
 
 let site;
 let context;
@@ -317,6 +319,50 @@ describe("avatars in the page", () => {
     await clickButton(opened, "copy_link");
     await opened.waitForFunction(() => window.location.hash.length > 1);
     assert.equal(opened.url(), link, "the link shared again is the one opened");
+    await opened.close();
+  });
+
+  test("a glTF prop imported from the File menu is drawn where it stands, and its link names the file", async () => {
+    // Catches: File > Import prop… not reaching the model, the mesh not drawn in the page (or
+    // drawn as its wood-coloured box), a link that drops the prop or its file's name, a link
+    // naming a file the page does not have failing instead of keeping the box and naming it.
+    // The file is the Khronos sample Box (CC BY 4.0): a red unit cube.
+    const page = await context.newPage();
+    const { errors } = await openEditor(context, site.url, page);
+    await waitForSettled(page, { timeout: 30_000 });
+    await clickButton(page, "file_menu", { until: (s) => Boolean(s.buttons?.import_prop) });
+    const chooser = page.waitForEvent("filechooser", { timeout: 20_000 });
+    await clickButton(page, "import_prop");
+    await (await chooser).setFiles(BOX_GLTF);
+    const placed = await waitForState(page, (s) => s.props?.length === 1 && s.props[0].screen,
+      { timeout: 30_000, what: "the imported prop" });
+    const [prop] = placed.props;
+    assert.equal(prop.shape, "mesh");
+    assert.equal(prop.file, "Box.gltf");
+    prop.dimensions.slice(0, 3).forEach((d) => assert.ok(Math.abs(d - 1) < 1e-6, `size ${prop.dimensions}`));
+    assert.ok(Math.abs(prop.position[1] - 0.5) < 1e-6, `a unit cube stands on the floor: ${prop.position}`);
+    await waitForSettled(page, { timeout: 30_000, still: true });
+    const image = decodePng(await page.screenshot());
+    const red = ([r, g, b]) => r > 60 && r > 1.8 * g && r > 1.8 * b;
+    const share = shareNear(image, prop.screen, red, 6);
+    console.log(`[prop] Box.gltf at ${prop.position.map((v) => v.toFixed(2))}: ${(share * 100).toFixed(0)} % red pixels around its centre`);
+    assert.ok(share > 0.8, `the box's red drawn at its centre: ${(share * 100).toFixed(0)} %`);
+    await clickButton(page, "copy_link");
+    await page.waitForFunction(() => window.location.hash.length > 1);
+    const link = page.url();
+    assert.deepEqual(errors, [], `console errors: ${errors.join(" / ")}`);
+    await page.close();
+
+    // A fresh page has no Box.gltf: the prop stays as its box and the file is named.
+    const opened = await context.newPage();
+    await openEditor(context, link, opened);
+    const again = await waitForState(opened, (s) => s.props?.length === 1,
+      { timeout: 60_000, what: "the prop from the link" });
+    assert.equal(again.props[0].file, "Box.gltf");
+    assert.deepEqual(again.props[0].position, prop.position);
+    const named = await waitForState(opened, (s) => /Load Box\.gltf/.test(s.notice?.text ?? ""),
+      { timeout: 20_000, what: "the notice naming the missing file" });
+    console.log(`[prop] opened without the file: ${named.notice.text}`);
     await opened.close();
   });
 

@@ -598,7 +598,7 @@ fn rest_frames(s: &Skeleton) -> Frames {
 /// axes. With the collision tasks leaving the placed hand and forearm off that box
 /// (`with_placed_parts`), the wrist lies on the top (the box's centre plus its half height,
 /// by hand) within a millimetre at both points and reaches each; the rest of the body keeps
-/// off the box. Without it, the wrist stays above the top.
+/// off the box. Without it, the hand cannot rest on the box at its goals.
 #[test]
 fn a_hand_put_on_a_box_stays_on_its_top_and_slides() {
     use stance_hanim::capsules::BodyCollision;
@@ -670,10 +670,11 @@ fn a_hand_put_on_a_box_stays_on_its_top_and_slides() {
     for (k, (height, off, _)) in placed.iter().enumerate() {
         println!(
             "placed hand, goal {k}: the wrist {:.2} mm over the top, {:.2} mm from its goal \
-             (held off: {:.1} mm over)",
+             (held off: {:.1} mm over, {:.1} mm from its goal)",
             height * 1e3,
             off * 1e3,
-            held_off[k].0 * 1e3
+            held_off[k].0 * 1e3,
+            held_off[k].1 * 1e3
         );
         assert!(
             height.abs() < 1e-3,
@@ -681,10 +682,15 @@ fn a_hand_put_on_a_box_stays_on_its_top_and_slides() {
         );
         assert!(*off < 1e-3, "goal {k}: the wrist {off} m from its goal");
     }
+    // Without the exemption the hand cannot rest on the box at its goal: the collision level
+    // holds it over the top (the constant damping's path: 49 mm) or the plane task puts it on
+    // the top's plane beside the box, the goal across given up (the falling damping's path).
     assert!(
-        held_off.iter().any(|(height, _, _)| *height > 0.01),
-        "without the placed hand's exemption the wrist is held over the top: {:?}",
-        held_off.iter().map(|h| h.0).collect::<Vec<_>>()
+        held_off
+            .iter()
+            .any(|(height, off, _)| *height > 0.01 || *off > 0.01),
+        "without the placed hand's exemption the wrist rests on the box at its goals: {:?}",
+        held_off.iter().map(|h| (h.0, h.1)).collect::<Vec<_>>()
     );
     // Every capsule held off the box but the right hand's and forearm's stays out of it,
     // by sampling along each capsule.

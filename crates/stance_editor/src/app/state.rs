@@ -129,6 +129,8 @@ impl PageState<'_> {
                 let centre = glam::DVec3::from_array(prop.position);
                 json!({
                     "name": prop.name,
+                    "shape": prop.shape.name(),
+                    "file": prop.shape.file(),
                     "position": prop.position,
                     "rotation": prop.rotation,
                     "dimensions": prop.shape.dimensions(),
