@@ -216,7 +216,7 @@ describe("stance-ik", () => {
     skeleton.free();
   });
 
-  test("each module that ships went through wasm-opt; the solver's is 310 KiB or less gzipped", () => {
+  test("each module that ships went through wasm-opt; the solver's is 316 KiB or less gzipped", () => {
     // Catches: the package built without wasm-opt (its step in scripts/build-package.sh skipped or failing
     // quietly: wasm-pack's output keeps a 116 KiB name section, checked below), or a
     // dependency that makes the download grow. One module held solver and retargeting until
@@ -227,8 +227,9 @@ describe("stance-ik", () => {
     // what a page that retargets adds. stance_hanim at "z" would save 14 KiB, but Table 1
     // solves 1.5x slower. 2026-11-28: 297 -> 308 KiB (Node's gzip -9) with props as collision
     // obstacles, the meet task and one body's centre of mass among several; the guard went
-    // from 300 to 310. The next saving to look at: about ten stable-sort instantiations
-    // (45 KiB of code before wasm-opt).
+    // from 300 to 310. 2026-11-28 (later): 313 KiB with the collision level as an active set
+    // and contacts as goals (issue 32); the guard went to 316. The next saving to look at:
+    // about ten stable-sort instantiations (45 KiB of code before wasm-opt).
     const customSections = (bytes) => {
       const names = [];
       let at = 8;
@@ -249,7 +250,7 @@ describe("stance-ik", () => {
       }
       return names;
     };
-    for (const [name, limit] of [["stance_ik", 310], ["stance_ik_motion", 290]]) {
+    for (const [name, limit] of [["stance_ik", 316], ["stance_ik_motion", 290]]) {
       const wasm = readFileSync(join(packageDir, "pkg", `${name}_bg.wasm`));
       const gzipped = gzipSync(wasm, { level: 9 }).length;
       console.log(`[package] ${name} wasm ${(wasm.length / 1024).toFixed(0)} KiB, ${(gzipped / 1024).toFixed(0)} KiB gzipped`);
