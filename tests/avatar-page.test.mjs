@@ -140,14 +140,15 @@ describe("avatars in the page", () => {
 
     // Pull the right forearm up and out to the side (screen left: the avatar faces the
     // camera), away from the body, which stands with its arms at its sides; the feet hold.
-    const [wx, wy] = shown.screen.r_radiocarpal;
-    const [ex, ey] = shown.screen.r_elbow;
-    // Three quarters of the way to the wrist: at the middle, the forearm hanging by the
-    // thigh, a click can land on the hip's ring first (2026-11-28: the right hip selected).
-    const grabX = ex + (wx - ex) * 0.75;
-    const grabY = ey + (wy - ey) * 0.75;
-    const handBefore = shown.joints.r_radiocarpal;
-    const footBefore = shown.joints.l_talocrural;
+    // Where the forearm is once the comfort level has settled the posture (the first frame's
+    // arms may still move: 2026-11-28 the grab at the first frame's forearm missed it).
+    const still = await waitForSettled(page, { timeout: 30_000, still: true });
+    const [wx, wy] = still.screen.r_radiocarpal;
+    const [ex, ey] = still.screen.r_elbow;
+    const grabX = ex + (wx - ex) * 0.5;
+    const grabY = ey + (wy - ey) * 0.5;
+    const handBefore = still.joints.r_radiocarpal;
+    const footBefore = still.joints.l_talocrural;
     const memoryBefore = (await state(page)).wasm_memory_bytes;
     await page.mouse.move(grabX, grabY);
     await page.mouse.down();
