@@ -118,6 +118,16 @@ fn problem_from(
     Ok(problem)
 }
 
+/// The problem's tasks but its comfort task.
+fn without_comfort(problem: &Problem) -> Vec<Task> {
+    problem
+        .tasks
+        .iter()
+        .filter(|t| !is_comfort(t))
+        .cloned()
+        .collect()
+}
+
 /// The settings of one stage's solve: no restarts, the stages' stall window.
 fn stage_settings(problem: &Problem, max_iterations: usize, tolerance: f64) -> SolverSettings {
     SolverSettings {
@@ -249,12 +259,7 @@ pub(crate) fn solve_arms(
     let problem = problem_from(skeleton, document, start)?;
     let body = &problem.skeleton;
     let settings = stage_settings(&problem, max_iterations, tolerance);
-    let tasks: Vec<Task> = problem
-        .tasks
-        .iter()
-        .filter(|t| !is_comfort(t))
-        .cloned()
-        .collect();
+    let tasks = without_comfort(&problem);
     let mut posture = start.clone();
     let (mut iterations, mut status) = (0, SolveStatus::Converged);
     for hand in hand_roots(body) {
@@ -313,12 +318,7 @@ pub(crate) fn solve_whole(
             ..problem.settings
         })
         .map_err(|e| LiftError::Problem(e.to_string()))?;
-    let tasks: Vec<Task> = problem
-        .tasks
-        .iter()
-        .filter(|t| !is_comfort(t))
-        .cloned()
-        .collect();
+    let tasks = without_comfort(&problem);
     let mut posture = start.clone();
     let report = solver
         .solve(&problem.skeleton, &tasks, &mut posture)
