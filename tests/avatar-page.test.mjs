@@ -325,10 +325,7 @@ describe("avatars in the page", () => {
     await opened.close();
   });
 
-  // TODO (issue 31): fails in the page as of 2026-11-28: the picked Box.gltf adds no prop
-  // (no notice, nothing importing) although the model's own tests import it by the same
-  // command; marked todo so that CI shows it without failing, until the page's path is found.
-  test("a glTF prop imported from the File menu is drawn where it stands, and its link names the file", { todo: true }, async () => {
+  test("a glTF prop imported from the File menu is drawn where it stands, and its link names the file", async () => {
     // Catches: File > Import prop… not reaching the model, the mesh not drawn in the page (or
     // drawn as its wood-coloured box), a link that drops the prop or its file's name, a link
     // naming a file the page does not have failing instead of keeping the box and naming it.
@@ -340,9 +337,9 @@ describe("avatars in the page", () => {
     const chooser = page.waitForEvent("filechooser", { timeout: 20_000 });
     await clickButton(page, "import_prop");
     await (await chooser).setFiles(BOX_GLTF);
-    const placed = await waitForState(page, (s) => s.props?.length === 1 && s.props[0].screen,
+    const placed = await waitForState(page, (s) => s.props?.list?.length === 1 && s.props.list[0].screen,
       { timeout: 30_000, what: "the imported prop" });
-    const [prop] = placed.props;
+    const [prop] = placed.props.list;
     assert.equal(prop.shape, "mesh");
     assert.equal(prop.file, "Box.gltf");
     prop.dimensions.slice(0, 3).forEach((d) => assert.ok(Math.abs(d - 1) < 1e-6, `size ${prop.dimensions}`));
@@ -362,10 +359,10 @@ describe("avatars in the page", () => {
     // A fresh page has no Box.gltf: the prop stays as its box and the file is named.
     const opened = await context.newPage();
     await openEditor(context, link, opened);
-    const again = await waitForState(opened, (s) => s.props?.length === 1,
+    const again = await waitForState(opened, (s) => s.props?.list?.length === 1,
       { timeout: 60_000, what: "the prop from the link" });
-    assert.equal(again.props[0].file, "Box.gltf");
-    assert.deepEqual(again.props[0].position, prop.position);
+    assert.equal(again.props.list[0].file, "Box.gltf");
+    assert.deepEqual(again.props.list[0].position, prop.position);
     const named = await waitForState(opened, (s) => /Load Box\.gltf/.test(s.notice?.text ?? ""),
       { timeout: 20_000, what: "the notice naming the missing file" });
     console.log(`[prop] opened without the file: ${named.notice.text}`);

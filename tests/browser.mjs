@@ -175,15 +175,33 @@ export async function pressKeys(page, keys, { until, started = until, timeout = 
 const sameScreen = (a, b) => Object.entries(a.screen).every(([joint, [x, y]]) => b.screen[joint]
   && Math.abs(b.screen[joint][0] - x) < 0.01 && Math.abs(b.screen[joint][1] - y) < 0.01);
 
+/** How long the joints must stay where they are on screen for the view to count as still:
+ * longer than two frames of software GL in headless Chromium on a loaded 2-core machine
+ * (550-650 ms a frame), so that a view still moving (egui's smooth zoom, a camera easing
+ * toward the selected character) is not taken for a still one between two of its frames. */
+const STILL_MS = 1_500;
+
 /**
  * Waits until the solver has settled (the state's `settled`) and, with `still`, the view
- * too (the joints on screen where they were at the read before); fails with a message
- * naming what did not settle otherwise.
+ * too (the joints on screen where they were for `STILL_MS`); fails with a message naming
+ * what did not settle otherwise.
  */
 export function waitForSettled(page, { timeout = 20_000, still = false, what = "the posture settles" } = {}) {
-  return waitForState(page, (state, previous) => state.settled
-    && (!still || (previous?.settled && sameScreen(previous, state))),
-  { timeout, what: still ? `${what} and the view stops moving` : what });
+  let since = 0;
+  let first = null;
+  return waitForState(page, (state) => {
+    if (!state.settled) {
+      first = null;
+      return false;
+    }
+    if (!still) return true;
+    if (!first || !sameScreen(first, state)) {
+      first = state;
+      since = Date.now();
+      return false;
+    }
+    return Date.now() - since >= STILL_MS;
+  }, { timeout, what: still ? `${what} and the view stops moving` : what });
 }
 
 export function decodePng(buffer) {

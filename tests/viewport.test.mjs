@@ -115,7 +115,7 @@ for (const [name, configuration] of Object.entries(CONFIGURATIONS)) {
 }
 
 describe("the site as served", () => {
-  test("the wasm comes precompressed (brotli, gzip), 2.65 MiB or less gzipped", async () => {
+  test("the wasm comes precompressed (brotli, gzip), 2.7 MiB or less gzipped", async () => {
     const wasm = `${site.url}pkg/stance_web_bg.wasm`;
     const size = async (encoding) => {
       const response = await fetch(wasm, { headers: { "Accept-Encoding": encoding } });
@@ -137,8 +137,11 @@ describe("the site as served", () => {
       + `${(brBytes / 1024).toFixed(0)} KiB brotli`);
     assert.equal((await br.arrayBuffer()).byteLength, plain.bytes, "the brotli copy decodes to the wasm");
     // 2.6 MiB until the keypoint lift (File > Open keypoints, in the loading worker) came
-    // into the page's module: 2,638 -> 2,674 KiB with the lift's crate at opt-level z.
-    assert.ok(gzBytes <= 2.65 * 1024 * 1024, `${gzBytes} bytes gzipped`);
+    // into the page's module: 2,638 -> 2,674 KiB with the lift's crate at opt-level z. 2.65
+    // MiB until mesh props (their reader, drawing and export), collision's active set and
+    // the lift's staged solves came in: 2,706 -> 2,728 KiB (2026-11-28; brotli, what
+    // browsers take, 2,261 KiB).
+    assert.ok(gzBytes <= 2.7 * 1024 * 1024, `${gzBytes} bytes gzipped`);
   });
 });
 

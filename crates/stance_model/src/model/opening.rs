@@ -80,10 +80,8 @@ impl EditorModel {
             Ok(scene) if !scene.is_plain_document() => {
                 return match self.open_scene(&scene) {
                     Ok(words) => {
-                        self.inform(format!(
-                            "Opened the scene link: {} characters.{words}",
-                            scene.characters.len()
-                        ));
+                        let what = scene_words(scene.characters.len(), scene.props.len());
+                        self.inform(format!("Opened the scene link: {what}.{words}"));
                         true
                     }
                     Err(error) => {
@@ -230,5 +228,27 @@ impl EditorModel {
             }
             Err(error) => self.warn(format!("{name} does not fit the humanoid: {error}")),
         }
+    }
+}
+
+/// "2 characters and 1 prop": what a scene holds, in words.
+fn scene_words(characters: usize, props: usize) -> String {
+    let counted = |n: usize, what: &str| format!("{n} {what}{}", if n == 1 { "" } else { "s" });
+    let characters = counted(characters, "character");
+    match props {
+        0 => characters,
+        n => format!("{characters} and {}", counted(n, "prop")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::scene_words;
+
+    #[test]
+    fn a_scene_in_words_counts_its_characters_and_props() {
+        assert_eq!(scene_words(1, 0), "1 character");
+        assert_eq!(scene_words(3, 1), "3 characters and 1 prop");
+        assert_eq!(scene_words(2, 2), "2 characters and 2 props");
     }
 }
