@@ -9,15 +9,16 @@
 //! Boulic): with `P_0 = I` and `dq_0 = 0`, for each level `k` in priority order,
 //! `dq_k = dq_{k-1} + (J_k P_{k-1})^+ (e_k - J_k dq_{k-1})` and
 //! `P_k = P_{k-1} - (J_k P_{k-1})^+ (J_k P_{k-1})`, the pseudo-inverses by singular value
-//! decomposition (nalgebra, dynamic matrices), damped by a small constant in the step and
-//! exact in the projector; each task's error clamped to the textbook's 0.1 m / 0.3 rad (Buss
+//! decomposition (one-sided Jacobi on nalgebra's dynamic matrices), damped by a small constant in the step and
+//! exact in the projector (singular values under 1e-9 of the norm of `J_k` count as zero);
+//! each task's error clamped to the textbook's 0.1 m / 0.3 rad (Buss
 //! & Kim); the joint values clamped into their limits after the step. The Jacobians are
 //! analytic; the tests check them against central differences of the forward kinematics.
 
 mod balance;
 mod read;
 
-use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, SVD, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, Vector3};
 use serde_json::Value;
 
 /// What makes a problem file unreadable here.
@@ -732,24 +733,25 @@ impl Problem {
                 continue;
             }
             let projected = j * &projector;
-            // A bounded number of sweeps: a matrix with non-finite entries never converges.
-            let Some(svd) = SVD::try_new(projected, true, true, f64::EPSILON, 1000) else {
+            let Some((sigma, u, v)) = jacobi_svd(&projected) else {
                 break;
             };
-            let (Some(u), Some(v_t)) = (svd.u.as_ref(), svd.v_t.as_ref()) else {
-                break;
-            };
-            let largest = svd.singular_values.iter().copied().fold(0.0, f64::max);
-            let cut = (largest * 1e-9).max(1e-12);
+            // The numerical rank of `J P` is judged against the level's own scale (the
+            // Frobenius norm of `J`), not against the largest singular value of `J P`: a level
+            // the levels above already decide leaves `J P` at the projector's rounding
+            // (1e-12 to 1e-11 after a few levels), and a cut relative to that noise kept one
+            // of its directions and took it out of every lower level's freedom (issue 29:
+            // `wide-0088`'s first step 1.24 rad off on one DOF).
+            let cut = j.norm() * 1e-9;
             let residual = e - j * &dq;
             let along = u.transpose() * residual;
-            for (k, &s) in svd.singular_values.iter().enumerate() {
+            for (k, &s) in sigma.iter().enumerate() {
                 if s <= cut {
                     continue;
                 }
-                let v = v_t.row(k).transpose();
-                dq += &v * (along[k] * s / (s * s + settings.lambda * settings.lambda));
-                projector -= &v * v.transpose();
+                let v = v.column(k);
+                dq += v * (along[k] * s / (s * s + settings.lambda * settings.lambda));
+                projector -= v * v.transpose();
             }
         }
         dq
@@ -824,4 +826,135 @@ pub fn better(a: &[f64], b: &[f64], tolerance: f64) -> bool {
         }
     }
     false
+}
+
+/// A singular value decomposition `a = U S V^T` of an `m x n` matrix by one-sided Jacobi
+/// rotations (Hestenes; Demmel & Veselic) on the columns of `a^T`: rotations of pairs of
+/// columns until every pair is orthogonal to machine precision; then the columns' norms are
+/// the singular values and, divided by them, the right singular vectors, and the rotations
+/// make `U`. Returns (`S` as `m` values, `U` as `m x m`, `V` as `n x m`). Not nalgebra's SVD:
+/// its implicit-shift iteration (0.35) can return a decomposition 1e-9 to 1e-4 off on the
+/// rank-deficient `J P` of a level (dimforge/nalgebra#1172), which moved a first step by
+/// 4.6e-2 rad (`partial-0008`); Jacobi keeps small singular values accurate to their own
+/// size. `None` when the sweeps do not settle (non-finite entries).
+fn jacobi_svd(a: &DMatrix<f64>) -> Option<(Vec<f64>, DMatrix<f64>, DMatrix<f64>)> {
+    let mut b = a.transpose();
+    let m = b.ncols();
+    let mut u = DMatrix::<f64>::identity(m, m);
+    // A column at rounding size (a row of `J P` the levels above decided) is left as it is:
+    // its singular value is noise the rank cut drops, and rotating it against others only
+    // chases rounding.
+    let negligible = (f64::EPSILON * b.norm()).powi(2);
+    for _ in 0..80 {
+        let mut rotated = false;
+        for p in 0..m {
+            for q in p + 1..m {
+                let alpha = b.column(p).norm_squared();
+                let beta = b.column(q).norm_squared();
+                let gamma = b.column(p).dot(&b.column(q));
+                if alpha <= negligible
+                    || beta <= negligible
+                    || gamma.abs() <= f64::EPSILON * (alpha * beta).sqrt()
+                {
+                    continue;
+                }
+                rotated = true;
+                let zeta = (beta - alpha) / (2.0 * gamma);
+                let t = zeta.signum() / (zeta.abs() + (1.0 + zeta * zeta).sqrt());
+                let c = 1.0 / (1.0 + t * t).sqrt();
+                let s = c * t;
+                for matrix in [&mut b, &mut u] {
+                    for r in 0..matrix.nrows() {
+                        let (x, y) = (matrix[(r, p)], matrix[(r, q)]);
+                        matrix[(r, p)] = c * x - s * y;
+                        matrix[(r, q)] = s * x + c * y;
+                    }
+                }
+            }
+        }
+        if !rotated {
+            let sigma: Vec<f64> = (0..m).map(|k| b.column(k).norm()).collect();
+            for (k, &s) in sigma.iter().enumerate() {
+                if s > 0.0 {
+                    b.column_mut(k).unscale_mut(s);
+                }
+            }
+            return Some((sigma, u, b));
+        }
+        if b.iter().any(|x| !x.is_finite()) {
+            return None;
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `U S V^T` against `a`, and `U`, `V` orthonormal where `S` is not zero.
+    fn check(a: &DMatrix<f64>) -> Vec<f64> {
+        let (sigma, u, v) = jacobi_svd(a).unwrap();
+        let s = DMatrix::from_diagonal(&DVector::from_vec(sigma.clone()));
+        let back = &u * s * v.transpose();
+        assert!(
+            (back - a).amax() < 1e-14 * a.amax().max(1.0),
+            "U S V^T is not a"
+        );
+        assert!((u.transpose() * &u - DMatrix::identity(u.ncols(), u.ncols())).amax() < 1e-14);
+        for (k, &s) in sigma.iter().enumerate() {
+            for (l, &t) in sigma.iter().enumerate() {
+                if s > 1e-12 && t > 1e-12 {
+                    let d = v.column(k).dot(&v.column(l));
+                    assert!((d - f64::from(u8::from(k == l))).abs() < 1e-13);
+                }
+            }
+        }
+        let mut sorted = sigma;
+        sorted.sort_by(|a, b| b.total_cmp(a));
+        sorted
+    }
+
+    // Catches a decomposition that does not give the matrix back or a wrong singular value:
+    // a hand case (rows (3, 0, 0, 4) and (0, 5, 0, 0): singular values 5 and 5, orthogonal
+    // rows), and a rank-deficient one with a repeated row, like a level whose task repeats
+    // one above it (nalgebra 0.35's SVD with a tolerance of one epsilon gave matrices of this
+    // kind back 4e-5 off).
+    #[test]
+    fn jacobi_svd_gives_the_matrix_back_with_its_singular_values() {
+        let a = DMatrix::from_row_slice(2, 4, &[3.0, 0.0, 0.0, 4.0, 0.0, 5.0, 0.0, 0.0]);
+        let s = check(&a);
+        assert!((s[0] - 5.0).abs() < 1e-14 && (s[1] - 5.0).abs() < 1e-14);
+        // Rows r1, r2, r1 again, and r1 + 1e-7 r3: rank 3 with a small singular value.
+        let r1 = [0.3, -1.2, 0.8, 0.05, 2.0, -0.7];
+        let r2 = [1.1, 0.4, -0.2, 0.9, -0.3, 0.6];
+        let r3 = [0.2, 0.2, 1.5, -1.0, 0.1, 0.4];
+        let mut rows = Vec::new();
+        rows.extend(r1);
+        rows.extend(r2);
+        rows.extend(r1);
+        rows.extend(r1.iter().zip(r3).map(|(a, b)| a + 1e-7 * b));
+        let a = DMatrix::from_row_slice(4, 6, &rows);
+        let s = check(&a);
+        assert!(s[3] < 1e-14, "the repeated row's singular value {}", s[3]);
+        assert!(
+            s[2] > 1e-8 && s[2] < 1e-6,
+            "the small singular value kept: {}",
+            s[2]
+        );
+        // The largest against the Gram matrix's eigenvalues (an independent route).
+        let gram = (&a * a.transpose()).symmetric_eigen();
+        let largest = gram.eigenvalues.max().sqrt();
+        assert!((s[0] - largest).abs() < 1e-12);
+    }
+
+    #[test]
+    fn jacobi_svd_of_zero_and_of_non_finite_matrices() {
+        let (sigma, _, _) = jacobi_svd(&DMatrix::zeros(3, 5)).unwrap();
+        assert!(sigma.iter().all(|&s| s == 0.0));
+        let mut a = DMatrix::from_element(2, 3, 1.0);
+        a[(0, 1)] = f64::NAN;
+        a[(1, 2)] = 2.0;
+        assert!(jacobi_svd(&a).is_none());
+    }
 }
