@@ -1,8 +1,10 @@
-//! `stance render DOC.json --out IMAGE.png`: the document's posture on the default H-Anim body
-//! (the mannequin) or on an avatar (its skinned mesh), drawn natively with wgpu on any adapter
-//! (lavapipe will do) through the same image path as the editor's *File > Save image*. A scene
-//! (`stance_document::Scene`) draws every character at its `Placement` and its props, placed
-//! by `stance_render::placed` as the editor places them.
+//! `stance render DOC.json --out IMAGE.png`: the document's posture on its body, drawn natively
+//! with wgpu on any adapter (lavapipe will do) through the same image path as the editor's
+//! *File > Save image*. A scene (`stance_document::Scene`) draws every character at its
+//! `Placement` and its props, placed by `stance_render::placed` as the editor places them.
+//! Each character is on its own body (`bodies`): the avatar file its document names (found
+//! by file name next to the document or in `--assets`, as a mesh prop's file is), else the
+//! mannequin; `--avatar FILE` poses every character on that file instead.
 //!
 //! `--map openpose|depth|normal|mask` writes a control map for image generation instead, seen
 //! by the same camera: the OpenPose skeleton (drawn on the CPU; with `--keypoints-out` its
@@ -14,15 +16,14 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow, bail};
-use glam::{DVec3, Vec3};
-use stance_asset::{LoadOptions, PropMesh, load_prop_mesh, make_default_avatar};
-use stance_document::{AvatarReference, Document, Placement, PostureRest, Prop, SceneCharacter};
+use glam::{DVec3, Mat4, Vec3};
+use stance_asset::{PropMesh, load_prop_mesh};
+use stance_document::{Document, Placement, PostureRest, Prop, SceneCharacter};
 use stance_hanim::keypoints::KeypointFinder;
-use stance_hanim::{HumanoidSkeleton, LevelOfArticulation, SkeletonOptions, default_skeleton};
 use stance_ik::{Frames, Posture};
 use stance_render::{
-    Capsule, GOAL_COLOR_LINEAR, HiddenKeypoints, ImageOptions, KeypointUnits, OpenPose,
-    OrbitCamera, Pixels, Scene, SceneRenderer, Shading, ViewPreset, avatar_model, character_shadow,
+    Capsule, CastPose, GOAL_COLOR_LINEAR, HiddenKeypoints, ImageOptions, KeypointUnits, OpenPose,
+    OrbitCamera, Pixels, Scene, SceneRenderer, Shading, SkinnedModel, ViewPreset, character_shadow,
     encode_png, headless_gpu, line_art, mesh_prop_instance, placed_capsule, placed_keypoints,
     placed_palettes, posed_mannequin_bones, prop_corners, prop_instance, prop_shadow, render_image,
     scene_from_character,
@@ -30,19 +31,26 @@ use stance_render::{
 
 use crate::avatar;
 
+mod bodies;
+
+use bodies::{Bodies, Body, MeshFigure};
+
 /// `stance render DOC.json --out IMAGE.png [--avatar FILE] [--view VIEW] [--size WxH]
 /// [--map openpose [--keypoints-out K.json] [--normalized] [--hidden keep|missing]]
-/// [--map depth|normal|mask|lines]`.
+/// [--map depth|normal|mask|lines] [--assets DIR]`.
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
     /// The document or scene (JSON, as the editor exports it): a scene's characters are all
-    /// drawn at their placements on the same body, with its props, one OpenPose person each.
+    /// drawn at their placements, each on its own avatar, with its props, one OpenPose person
+    /// each.
     pub document: PathBuf,
     /// The PNG to write.
     #[arg(long)]
     pub out: PathBuf,
-    /// An avatar (.glb, .gltf, .vrm) to pose instead of the default body (every character of
-    /// a scene; a document's own avatar URL is not loaded).
+    /// An avatar (.glb, .gltf, .vrm) to pose every character on, overriding each document's
+    /// own. Without it each character is drawn on the avatar its document names (the file of
+    /// its URL's name, in the document's folder, then in --assets), or on the mannequin: the
+    /// default body, and where that file is missing or fails to load (with a warning).
     #[arg(long)]
     pub avatar: Option<PathBuf>,
     /// A standard view framed on the body; without it the document's saved camera (or the
@@ -61,8 +69,8 @@ pub struct RenderArgs {
     /// Level of articulation of the body (1-4; an avatar: 1 or 2).
     #[arg(long, default_value_t = 2)]
     pub loa: u8,
-    /// Draw the mannequin as capsules (the editor's capsule view) instead of its skinned
-    /// figure; no effect with --avatar.
+    /// Draw the characters on the mannequin as capsules (the editor's capsule view) instead of
+    /// its skinned figure; those on an avatar file keep its mesh.
     #[arg(long)]
     pub capsules: bool,
     /// Write a control map for image generation instead of the picture: `openpose`, the
@@ -84,6 +92,7 @@ pub struct RenderArgs {
     pub hidden: Option<Hidden>,
     /// The folder a scene's mesh props' files (`"file": "chair.glb"`) are read from (default:
     /// the document's folder); a file not found there is drawn as its box, with a warning.
+    /// Also where a character's avatar file is looked for when it is not next to the document.
     #[arg(long)]
     pub assets: Option<PathBuf>,
 }
@@ -191,77 +200,6 @@ pub fn parse_size(text: &str) -> Result<[u32; 2]> {
     Ok(size_px)
 }
 
-/// The body the document poses, and the skinned mesh drawn for it (none: capsules).
-struct Figure {
-    /// The skeleton the document's posture is read on.
-    humanoid: HumanoidSkeleton,
-    mesh: Option<MeshFigure>,
-}
-
-/// A skinned mesh, posed on its own H-Anim skeleton.
-struct MeshFigure {
-    avatar: stance_asset::Avatar,
-    palettes: stance_render::AvatarPalettes,
-    model: stance_render::SkinnedModel,
-    /// The mesh's skeleton: the avatar's (`--avatar`), or the generated mannequin figure's,
-    /// which the mannequin's posture is carried onto joint by joint, as the editor draws it.
-    skeleton: HumanoidSkeleton,
-}
-
-impl MeshFigure {
-    fn new(avatar: stance_asset::Avatar, skeleton: HumanoidSkeleton, what: &str) -> Result<Self> {
-        let (model, palettes, warnings) = avatar_model(&avatar);
-        for warning in warnings.iter().chain(&avatar.warnings) {
-            eprintln!("warning: {warning}");
-        }
-        if model.primitives.is_empty() {
-            bail!("{what}: the file has no mesh to draw");
-        }
-        Ok(Self {
-            avatar,
-            palettes,
-            model,
-            skeleton,
-        })
-    }
-}
-
-fn figure(args: &RenderArgs) -> Result<Figure> {
-    let loa = LevelOfArticulation::from_number(args.loa)
-        .ok_or_else(|| anyhow!("--loa {}: expected 1, 2, 3 or 4", args.loa))?;
-    let options = SkeletonOptions {
-        loa,
-        ..SkeletonOptions::default()
-    };
-    let Some(path) = &args.avatar else {
-        let humanoid = default_skeleton(&options)?;
-        if args.capsules {
-            return Ok(Figure {
-                humanoid,
-                mesh: None,
-            });
-        }
-        // The editor's figure: the generated default avatar (its skeleton at LOA 2 where
-        // the mesh has no joints of a higher level).
-        let avatar = make_default_avatar()?;
-        let skeleton = avatar.skeleton_or_loa2(&options)?;
-        let mesh = MeshFigure::new(avatar, skeleton, "the default figure")?;
-        return Ok(Figure {
-            humanoid,
-            mesh: Some(mesh),
-        });
-    };
-    let loaded = avatar::load(path, &LoadOptions::default())?;
-    let humanoid = loaded
-        .skeleton(&options)
-        .with_context(|| format!("{}: no H-Anim skeleton", path.display()))?;
-    let mesh = MeshFigure::new(loaded, humanoid.clone(), &path.display().to_string())?;
-    Ok(Figure {
-        humanoid,
-        mesh: Some(mesh),
-    })
-}
-
 /// The bodies' extent: each capsule's ends widened by its radius.
 fn extent_points<'a>(capsules: impl IntoIterator<Item = &'a Capsule>) -> Vec<Vec3> {
     capsules
@@ -280,10 +218,12 @@ fn extent_points<'a>(capsules: impl IntoIterator<Item = &'a Capsule>) -> Vec<Vec
         .collect()
 }
 
-/// One character of the scene posed on the figure.
+/// One character of the scene posed on its body.
 struct PosedCharacter {
     /// Its name (the outliner's): what notes and errors call it.
     name: String,
+    /// Its body's index in [`Posed::bodies`].
+    body: usize,
     placement: Placement,
     document: Document,
     posture: Posture,
@@ -293,10 +233,10 @@ struct PosedCharacter {
     capsules: Vec<Capsule>,
 }
 
-/// The scene's characters posed on their body, its props (each mesh prop's file's
+/// The scene's characters posed on their bodies, its props (each mesh prop's file's
 /// triangles when found), and the camera that sees them.
 struct Posed {
-    figure: Figure,
+    bodies: Vec<Body>,
     characters: Vec<PosedCharacter>,
     props: Vec<Prop>,
     prop_meshes: Vec<Option<Arc<PropMesh>>>,
@@ -363,20 +303,27 @@ impl Posed {
         // A plain document is a scene of one character at the origin.
         let scene = stance_document::Scene::from_json(&text)
             .map_err(|e| anyhow!("invalid document {path}: {e}"))?;
-        let figure = figure(args)?;
+        let Bodies {
+            bodies,
+            of_character,
+        } = bodies::bodies(args, &scene.characters)?;
         let several = scene.characters.len() > 1;
         let characters = scene
             .characters
             .into_iter()
+            .zip(of_character)
             .enumerate()
-            .map(|(index, character)| {
+            .map(|(index, (character, body))| {
                 // A scene's error names the character (its index and name in the outliner).
                 let which = if several {
                     format!("character {index} ({})", character.name)
                 } else {
                     String::new()
                 };
-                pose_character(args, &figure, character).map_err(|e| {
+                let on = bodies
+                    .get(body)
+                    .ok_or_else(|| anyhow!("{path}: no body for {}", character.name))?;
+                pose_character(on, body, character).map_err(|e| {
                     if several {
                         anyhow!("{path}: {which}: {e:#}")
                     } else {
@@ -393,12 +340,19 @@ impl Posed {
         extent.extend(scene.props.iter().flat_map(prop_corners));
         let camera = camera(args.view, &selected.document, &extent, size_px);
         Ok(Posed {
-            figure,
+            bodies,
             characters,
             prop_meshes: prop_meshes(args, &scene.props)?,
             props: scene.props,
             camera,
         })
+    }
+
+    /// The body `character` is posed on.
+    fn body(&self, character: &PosedCharacter) -> Result<&Body> {
+        self.bodies
+            .get(character.body)
+            .ok_or_else(|| anyhow!("{}: no body", character.name))
     }
 
     /// Every character's capsules, in the scene.
@@ -410,10 +364,11 @@ impl Posed {
     }
 }
 
-/// `character`'s document posed on `figure`, its capsules placed in the scene.
+/// `character`'s document posed on `body` (index `body_index`), its capsules placed in the
+/// scene.
 fn pose_character(
-    args: &RenderArgs,
-    figure: &Figure,
+    body: &Body,
+    body_index: usize,
     character: SceneCharacter,
 ) -> Result<PosedCharacter> {
     let SceneCharacter {
@@ -421,23 +376,18 @@ fn pose_character(
         placement,
         document,
     } = character;
-    if let (None, AvatarReference::Url(url)) = (&args.avatar, &document.avatar) {
-        // The CLI loads avatars from --avatar alone: a document's URL is the browser's.
-        eprintln!(
-            "note: {name} names the avatar {url}; drawn on the mannequin (--avatar poses every character on a file)"
-        );
-    }
     // Made on an avatar before a posture meant the same pose on every body: relative to
-    // that avatar's own rest, taken to be the one drawn (as `export-posed` takes it).
-    let document = if args.avatar.is_some() && document.rest == PostureRest::Avatar {
+    // that avatar's own rest, taken to be the one drawn (as `export-posed` takes it, and as
+    // the editor opens a document on the avatar it names).
+    let document = if body.file.is_some() && document.rest == PostureRest::Avatar {
         eprintln!(
             "note: {name}: the document's values are relative to the avatar's own rest (made before a posture meant the same pose on every body); converted to the H-Anim standard pose"
         );
-        document.in_standard_rest(&figure.humanoid)
+        document.in_standard_rest(&body.humanoid)
     } else {
         document
     };
-    let skeleton = &figure.humanoid.skeleton;
+    let skeleton = &body.humanoid.skeleton;
     let posture = document.to_posture(skeleton)?;
     let frames = Frames::new(skeleton, &posture);
     let place = scene_from_character(&placement);
@@ -447,6 +397,7 @@ fn pose_character(
         .collect();
     Ok(PosedCharacter {
         name,
+        body: body_index,
         placement,
         document,
         posture,
@@ -495,7 +446,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         Some(ControlMap::Openpose) => write_openpose(&args, &posed, size_px, started),
         None
         | Some(ControlMap::Depth | ControlMap::Normal | ControlMap::Mask | ControlMap::Lines) => {
-            render_picture(&args, posed, size_px, started)
+            render_picture(&args, &posed, size_px, started)
         }
     }
 }
@@ -574,20 +525,28 @@ fn write_openpose(
     size_px: [u32; 2],
     started: Instant,
 ) -> Result<()> {
-    let skeleton = &posed.figure.humanoid.skeleton;
-    let finder = KeypointFinder::new(skeleton);
+    // Each character's keypoints found on its own body's skeleton, the one it is drawn on.
+    let finders: Vec<KeypointFinder> = posed
+        .bodies
+        .iter()
+        .map(|body| KeypointFinder::new(&body.humanoid.skeleton))
+        .collect();
     let bodies = posed.capsules();
     let hidden = args.hidden.unwrap_or(Hidden::Keep).keypoints();
-    let people: Vec<_> = posed
+    let people = posed
         .characters
         .iter()
         .map(|character| {
-            placed_keypoints(
+            let skeleton = &posed.body(character)?.humanoid.skeleton;
+            let finder = finders
+                .get(character.body)
+                .ok_or_else(|| anyhow!("{}: no body", character.name))?;
+            Ok(placed_keypoints(
                 &finder.find(skeleton, &character.frames),
                 &character.placement,
-            )
+            ))
         })
-        .collect();
+        .collect::<Result<Vec<_>>>()?;
     let pose = OpenPose::of_scene(&people, &posed.camera, size_px, &bodies, hidden);
     let png = encode_png(&Pixels {
         width: size_px[0],
@@ -629,48 +588,27 @@ fn write_openpose(
     Ok(())
 }
 
-/// The picture itself, or a depth, normal or mask map, rendered with wgpu.
-fn render_picture(
-    args: &RenderArgs,
-    posed: Posed,
-    size_px: [u32; 2],
-    started: Instant,
-) -> Result<()> {
-    let capsules = posed.capsules();
-    let Posed {
-        figure,
-        characters,
-        props,
-        prop_meshes,
-        camera,
-    } = posed;
-    let skeleton = &figure.humanoid.skeleton;
-    // Every character on the one uploaded mesh: the first's poses as the avatar's, the others'
-    // as more poses of it (the renderer holds one skinned model).
-    let mut poses = Vec::with_capacity(characters.len());
-    if let Some(mesh) = &figure.mesh {
-        for character in &characters {
-            let carried =
-                Posture::carried_over(&mesh.skeleton.skeleton, skeleton, &character.posture);
-            let palettes = mesh
-                .palettes
-                .pose(&mesh.avatar, &mesh.skeleton, &carried)
-                .ok_or_else(|| {
-                    anyhow!(
-                        "{}: the posture does not fit the avatar's skeleton",
-                        character.name
-                    )
-                })?;
-            poses.push(placed_palettes(
-                palettes,
-                scene_from_character(&character.placement),
-            ));
-        }
-    }
-    let mut poses = poses.into_iter();
-    let avatar_palettes = poses.next().unwrap_or_default();
-    let more_avatar_poses = poses.collect();
-    let markers = characters
+/// The palettes of `character`'s posture on its body's mesh (carried over joint by joint onto
+/// the mesh's skeleton: the mannequin's figure has its own), in the character's frame.
+fn mesh_pose(body: &Body, mesh: &MeshFigure, character: &PosedCharacter) -> Result<Vec<Vec<Mat4>>> {
+    let carried = Posture::carried_over(
+        &mesh.skeleton.skeleton,
+        &body.humanoid.skeleton,
+        &character.posture,
+    );
+    mesh.palettes
+        .pose(&mesh.avatar, &mesh.skeleton, &carried)
+        .ok_or_else(|| {
+            anyhow!(
+                "{}: the posture does not fit the avatar's skeleton",
+                character.name
+            )
+        })
+}
+
+/// The task goals of every character, as markers placed in the scene.
+fn goal_markers(characters: &[PosedCharacter]) -> Vec<Capsule> {
+    characters
         .iter()
         .flat_map(|character| {
             let place = scene_from_character(&character.placement);
@@ -686,40 +624,78 @@ fn render_picture(
                     )
                 })
         })
+        .collect()
+}
+
+/// The picture's scene: each character on its body's mesh (a pose of that body's model among
+/// the cast's) or as its capsules (the mannequin with `--capsules`), the props, the goals and
+/// the contact shadows; and the cast's models, in the order [`CastPose::model`] counts them.
+fn picture_scene<'a>(
+    args: &RenderArgs,
+    posed: &'a Posed,
+) -> Result<(Scene, Vec<&'a SkinnedModel>)> {
+    let mut models = Vec::new();
+    let model_of: Vec<Option<usize>> = posed
+        .bodies
+        .iter()
+        .map(|body| {
+            let mesh = body.mesh.as_ref()?;
+            models.push(&mesh.model);
+            Some(models.len() - 1)
+        })
         .collect();
+    let mut cast_poses = Vec::new();
+    let mut capsules = Vec::new();
+    for character in &posed.characters {
+        let body = posed.body(character)?;
+        match (&body.mesh, model_of.get(character.body).copied().flatten()) {
+            (Some(mesh), Some(model)) => cast_poses.push(CastPose {
+                model,
+                palettes: placed_palettes(
+                    mesh_pose(body, mesh, character)?,
+                    scene_from_character(&character.placement),
+                ),
+            }),
+            _ => capsules.extend(character.capsules.iter().copied()),
+        }
+    }
     // The contact shadows as the editor draws them: one under each character, one under
     // each prop.
-    let shadows = characters
+    let shadows = posed
+        .characters
         .iter()
         .filter_map(|character| character_shadow(&character.capsules))
-        .chain(props.iter().filter_map(prop_shadow))
+        .chain(posed.props.iter().filter_map(prop_shadow))
         .collect();
+    let props = || posed.props.iter().zip(&posed.prop_meshes);
     let scene = Scene {
-        capsules: if figure.mesh.is_some() {
-            Vec::new()
-        } else {
-            capsules.clone()
-        },
+        capsules,
         show_floor: true,
-        show_avatar: figure.mesh.is_some(),
-        avatar_palettes,
-        more_avatar_poses,
-        props: props
-            .iter()
-            .zip(&prop_meshes)
+        cast_poses,
+        props: props()
             .filter(|(_, mesh)| mesh.is_none())
             .map(|(prop, _)| prop_instance(prop))
             .collect(),
-        mesh_props: props
-            .iter()
-            .zip(&prop_meshes)
+        mesh_props: props()
             .filter_map(|(prop, mesh)| Some(mesh_prop_instance(prop, mesh.as_ref()?)))
             .collect(),
         shadows,
-        markers,
-        transparent_background: false,
-        shading: shading(args.map, &camera, &capsules),
+        markers: goal_markers(&posed.characters),
+        shading: shading(args.map, &posed.camera, &posed.capsules()),
+        ..Scene::default()
     };
+    Ok((scene, models))
+}
+
+/// The picture itself, or a depth, normal or mask map, rendered with wgpu.
+fn render_picture(
+    args: &RenderArgs,
+    posed: &Posed,
+    size_px: [u32; 2],
+    started: Instant,
+) -> Result<()> {
+    let (scene, models) = picture_scene(args, posed)?;
+    let camera = &posed.camera;
     let options = ImageOptions {
         size_px,
         transparent: args.transparent,
@@ -727,17 +703,13 @@ fn render_picture(
     };
     let gpu = headless_gpu()?;
     let mut renderer = SceneRenderer::new(&gpu.device);
-    renderer.set_avatar(
-        &gpu.device,
-        &gpu.queue,
-        figure.mesh.as_ref().map(|mesh| &mesh.model),
-    );
+    renderer.set_cast_models(&gpu.device, &gpu.queue, &models);
     let mut render = |scene: &Scene| {
         render_image(
             &gpu.device,
             &gpu.queue,
             &mut renderer,
-            &camera,
+            camera,
             scene,
             &options,
         )?
@@ -746,7 +718,7 @@ fn render_picture(
     let pixels = if args.map == Some(ControlMap::Lines) {
         // Line art: from the depth and normal maps of the same view.
         let depth = render(&Scene {
-            shading: Shading::depth_seen_by(&camera, &capsules),
+            shading: Shading::depth_seen_by(camera, &posed.capsules()),
             ..scene.clone()
         })?;
         let normal = render(&Scene {

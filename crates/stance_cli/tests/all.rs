@@ -7,4 +7,5 @@ mod cli;
 mod limb_cli;
 mod link_cli;
 mod mocap_cli;
+mod render_avatars_cli;
 mod render_cli;

@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 use std::process::Command;
 
-fn stance(args: &[&str]) -> (bool, String) {
+pub(crate) fn stance(args: &[&str]) -> (bool, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_stance"))
         .args(args)
         .output()
@@ -17,27 +17,27 @@ fn stance(args: &[&str]) -> (bool, String) {
     )
 }
 
-fn temp(name: &str) -> PathBuf {
+pub(crate) fn temp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("stance-render-cli-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir.join(name)
 }
 
-fn write(name: &str, text: &str) -> String {
+pub(crate) fn write(name: &str, text: &str) -> String {
     let path = temp(name);
     std::fs::write(&path, text).unwrap();
     path.to_string_lossy().into_owned()
 }
 
 /// A decoded PNG: width, height, RGBA rows.
-struct Image {
-    width: u32,
-    height: u32,
-    rgba: Vec<u8>,
+pub(crate) struct Image {
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) rgba: Vec<u8>,
 }
 
 impl Image {
-    fn alpha(&self, x: u32, y: u32) -> u8 {
+    pub(crate) fn alpha(&self, x: u32, y: u32) -> u8 {
         self.rgba[((y * self.width + x) * 4 + 3) as usize]
     }
 
@@ -65,7 +65,7 @@ impl Image {
     }
 }
 
-fn decode(path: &PathBuf) -> Image {
+pub(crate) fn decode(path: &PathBuf) -> Image {
     let bytes = std::fs::read(path).unwrap();
     let mut reader = png::Decoder::new(std::io::Cursor::new(bytes))
         .read_info()
@@ -81,7 +81,7 @@ fn decode(path: &PathBuf) -> Image {
 }
 
 /// Renders `document` with `args` into a new PNG and decodes it.
-fn render(document: &str, name: &str, args: &[&str]) -> Image {
+pub(crate) fn render(document: &str, name: &str, args: &[&str]) -> Image {
     let out = temp(name);
     let out_text = out.to_string_lossy().into_owned();
     let mut all = vec!["render", document, "--out", &out_text];
@@ -329,7 +329,7 @@ fn bad_documents_sizes_and_outputs_fail_with_a_reason_and_write_nothing() {
 
 /// Runs `stance render DOC --map openpose` with `args`: the decoded skeleton image and the
 /// keypoints' JSON.
-fn openpose(document: &str, name: &str, args: &[&str]) -> (Image, serde_json::Value) {
+pub(crate) fn openpose(document: &str, name: &str, args: &[&str]) -> (Image, serde_json::Value) {
     let keypoints = temp(&format!("{name}.json"));
     let keypoints_text = keypoints.to_string_lossy().into_owned();
     let mut all = vec!["--map", "openpose", "--keypoints-out", &keypoints_text];
@@ -339,7 +339,7 @@ fn openpose(document: &str, name: &str, args: &[&str]) -> (Image, serde_json::Va
     (image, json)
 }
 
-fn numbers(value: &serde_json::Value) -> Vec<f64> {
+pub(crate) fn numbers(value: &serde_json::Value) -> Vec<f64> {
     value
         .as_array()
         .unwrap()

@@ -187,6 +187,17 @@ impl ContactShadow {
     }
 }
 
+/// A pose of one of the cast's models (`SceneRenderer::set_cast_models`): a character drawn on
+/// an avatar of its own, beside others on other avatars.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct CastPose {
+    /// Which model: its index among those given to `SceneRenderer::set_cast_models`.
+    pub model: usize,
+    /// The pose's matrix palettes (mesh space -> world), one per palette of the model, as
+    /// [`Scene::avatar_palettes`].
+    pub palettes: Vec<Vec<glam::Mat4>>,
+}
+
 /// What one frame shows.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Scene {
@@ -201,6 +212,10 @@ pub struct Scene {
     /// More poses of the same uploaded avatar, drawn beside the first (other characters on the
     /// same model), each its palettes as `avatar_palettes`.
     pub more_avatar_poses: Vec<Vec<Vec<glam::Mat4>>>,
+    /// Characters each on a model of its own among the cast's (`SceneRenderer::set_cast_models`:
+    /// several avatars in one frame), drawn whatever `show_avatar` says; a pose of a model not
+    /// uploaded is left out.
+    pub cast_poses: Vec<CastPose>,
     /// The scene's props (boxes, spheres, cylinders), shaded like the bodies.
     pub props: Vec<PropInstance>,
     /// The scene's mesh props drawn with their files' triangles, shaded like the bodies.

@@ -7,7 +7,7 @@ use wgpu::util::DeviceExt;
 use crate::props::{MeshPropInstance, PropInstance, PropTemplate, normal_matrix, prop_mesh};
 use crate::skinned::SkinnedModel;
 use crate::skinned_gpu::{AvatarGpu, AvatarUpload, SkinnedPipeline};
-use crate::{MAX_CONTACT_SHADOWS, OrbitCamera, SHADERS, Scene};
+use crate::{CastPose, MAX_CONTACT_SHADOWS, OrbitCamera, SHADERS, Scene};
 
 /// Colour format of the render target: what egui can show as a native texture. The shaders
 /// write sRGB-encoded values into it.
@@ -408,6 +408,8 @@ pub struct SceneRenderer {
     capsule_pipeline: wgpu::RenderPipeline,
     skinned_pipeline: SkinnedPipeline,
     avatar: Option<AvatarGpu>,
+    /// The cast's models: characters on avatars of their own ([`Scene::cast_poses`]).
+    cast: Vec<AvatarGpu>,
     /// An avatar being uploaded over frames, drawn once complete.
     upload: Option<AvatarUpload>,
     floor_pipeline: wgpu::RenderPipeline,
@@ -637,6 +639,7 @@ impl SceneRenderer {
             capsule_pipeline,
             skinned_pipeline,
             avatar: None,
+            cast: Vec::new(),
             upload: None,
             floor_pipeline,
             frame_uniforms,
@@ -670,6 +673,64 @@ impl SceneRenderer {
         self.upload = None;
         self.avatar =
             model.map(|model| AvatarGpu::new(device, queue, &self.skinned_pipeline, model));
+    }
+
+    /// Uploads the models of a cast whose characters are each on an avatar of their own
+    /// (replacing those uploaded before; none: dropped), drawn in [`Scene::cast_poses`].
+    pub fn set_cast_models(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        models: &[&SkinnedModel],
+    ) {
+        self.cast = models
+            .iter()
+            .map(|model| AvatarGpu::new(device, queue, &self.skinned_pipeline, model))
+            .collect();
+    }
+
+    /// Writes `poses`' palettes, each into the next pose of its model; returns how many poses
+    /// of each model to draw.
+    fn write_cast_poses(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        poses: &[CastPose],
+    ) -> Vec<usize> {
+        let mut counts = vec![0; self.cast.len()];
+        for pose in poses {
+            if let Some(count) = counts.get_mut(pose.model) {
+                *count += 1;
+            }
+        }
+        for (model, count) in self.cast.iter_mut().zip(&counts) {
+            model.ensure_poses(device, &self.skinned_pipeline, *count);
+        }
+        let mut next = vec![0; self.cast.len()];
+        for pose in poses {
+            if let (Some(model), Some(slot)) = (self.cast.get(pose.model), next.get_mut(pose.model))
+            {
+                model.write_palettes(queue, *slot, &pose.palettes);
+                *slot += 1;
+            }
+        }
+        counts
+    }
+
+    /// Draws the uploaded avatar's `poses` (none: `0`) and the cast's (`cast_poses`: how many
+    /// of each model), then sets the frame's bind group back for the other pipelines.
+    fn draw_skinned(&self, pass: &mut wgpu::RenderPass<'_>, poses: usize, cast_poses: &[usize]) {
+        if let Some(avatar) = self.avatar.as_ref().filter(|_| poses > 0) {
+            for pose in 0..poses {
+                avatar.draw(pass, &self.skinned_pipeline, pose);
+            }
+        }
+        for (model, &count) in self.cast.iter().zip(cast_poses) {
+            for pose in 0..count {
+                model.draw(pass, &self.skinned_pipeline, pose);
+            }
+        }
+        pass.set_bind_group(0, &self.frame_bind_group, &[]);
     }
 
     /// Starts uploading `model` over the next frames ([`SceneRenderer::continue_avatar_upload`],
@@ -718,67 +779,10 @@ impl SceneRenderer {
         camera: &OrbitCamera,
         scene: &Scene,
     ) {
-        let [width, height] = target.size_px;
-        let aspect = Vec2::new(width as f32, height as f32);
-        let uniforms = FrameUniforms {
-            clip_from_world: camera
-                .clip_from_world(aspect.x / aspect.y)
-                .to_cols_array_2d(),
-            camera_position_world: camera.eye_world().extend(1.0).to_array(),
-            light_direction_world: LIGHT_DIRECTION_WORLD,
-            background: scene.background_srgb(),
-            view_from_world: camera.view_from_world().to_cols_array_2d(),
-            control_map: scene.shading.uniform(),
-        };
-        queue.write_buffer(&self.frame_uniforms, 0, bytemuck::bytes_of(&uniforms));
-        let mut shadows = [[0.0f32; 4]; MAX_CONTACT_SHADOWS];
-        for (slot, shadow) in shadows.iter_mut().zip(
-            scene
-                .shadows
-                .iter()
-                .filter(|s| s.centre_xz.iter().all(|v| v.is_finite()) && s.radius_m > 0.0),
-        ) {
-            *slot = [
-                shadow.centre_xz[0],
-                shadow.centre_xz[1],
-                shadow.radius_m,
-                shadow.strength.clamp(0.0, 1.0),
-            ];
-        }
-        queue.write_buffer(&self.shadow_uniforms, 0, bytemuck::cast_slice(&shadows));
-        let draw_avatar = scene.show_avatar && self.avatar.is_some();
-        let poses = 1 + scene.more_avatar_poses.len();
-        if draw_avatar && let Some(avatar) = &mut self.avatar {
-            avatar.ensure_poses(device, &self.skinned_pipeline, poses);
-            avatar.write_palettes(queue, 0, &scene.avatar_palettes);
-            for (pose, palettes) in scene.more_avatar_poses.iter().enumerate() {
-                avatar.write_palettes(queue, pose + 1, palettes);
-            }
-        }
-
-        let instances: Vec<CapsuleInstance> = scene
-            .capsules
-            .iter()
-            .chain(&scene.markers)
-            .filter(|capsule| {
-                capsule.start_world.is_finite()
-                    && capsule.end_world.is_finite()
-                    && capsule.radius_m.is_finite()
-            })
-            .map(|capsule| CapsuleInstance {
-                start_and_radius: capsule.start_world.extend(capsule.radius_m).to_array(),
-                end_world: capsule.end_world.extend(1.0).to_array(),
-                color: capsule.color_linear,
-            })
-            .collect();
-        if instances.len() > self.instance_capacity {
-            self.instance_capacity = instances.len().next_power_of_two();
-            self.instances = Self::instance_buffer(device, self.instance_capacity);
-        }
-        if !instances.is_empty() {
-            queue.write_buffer(&self.instances, 0, bytemuck::cast_slice(&instances));
-        }
-
+        self.write_frame(queue, target, camera, scene);
+        let avatar_poses = self.write_avatar_poses(device, queue, scene);
+        let cast_poses = self.write_cast_poses(device, queue, &scene.cast_poses);
+        let instance_count = self.write_capsules(device, queue, scene);
         let prop_draws = self
             .props
             .write(device, queue, &scene.props, &scene.mesh_props);
@@ -812,18 +816,12 @@ impl SceneRenderer {
                 multiview_mask: None,
             });
             pass.set_bind_group(0, &self.frame_bind_group, &[]);
-            if draw_avatar && let Some(avatar) = &self.avatar {
-                for pose in 0..poses {
-                    avatar.draw(&mut pass, &self.skinned_pipeline, pose);
-                }
-                pass.set_bind_group(0, &self.frame_bind_group, &[]);
-            }
-            if !instances.is_empty() {
+            self.draw_skinned(&mut pass, avatar_poses, &cast_poses);
+            if instance_count > 0 {
                 pass.set_pipeline(&self.capsule_pipeline);
                 pass.set_vertex_buffer(0, self.template_vertices.slice(..));
                 pass.set_vertex_buffer(1, self.instances.slice(..));
                 pass.set_index_buffer(self.template_indices.slice(..), wgpu::IndexFormat::Uint16);
-                let instance_count = u32::try_from(instances.len()).unwrap_or(u32::MAX);
                 pass.draw_indexed(0..self.template_index_count, 0, 0..instance_count);
             }
             self.props.draw(&mut pass, &prop_draws);
@@ -833,5 +831,91 @@ impl SceneRenderer {
             }
         }
         queue.submit([encoder.finish()]);
+    }
+
+    /// Writes the frame's uniforms (camera, light, background, control map) and contact
+    /// shadows.
+    fn write_frame(
+        &self,
+        queue: &wgpu::Queue,
+        target: &RenderTarget,
+        camera: &OrbitCamera,
+        scene: &Scene,
+    ) {
+        let [width, height] = target.size_px;
+        let aspect = Vec2::new(width as f32, height as f32);
+        let uniforms = FrameUniforms {
+            clip_from_world: camera
+                .clip_from_world(aspect.x / aspect.y)
+                .to_cols_array_2d(),
+            camera_position_world: camera.eye_world().extend(1.0).to_array(),
+            light_direction_world: LIGHT_DIRECTION_WORLD,
+            background: scene.background_srgb(),
+            view_from_world: camera.view_from_world().to_cols_array_2d(),
+            control_map: scene.shading.uniform(),
+        };
+        queue.write_buffer(&self.frame_uniforms, 0, bytemuck::bytes_of(&uniforms));
+        let mut shadows = [[0.0f32; 4]; MAX_CONTACT_SHADOWS];
+        for (slot, shadow) in shadows.iter_mut().zip(
+            scene
+                .shadows
+                .iter()
+                .filter(|s| s.centre_xz.iter().all(|v| v.is_finite()) && s.radius_m > 0.0),
+        ) {
+            *slot = [
+                shadow.centre_xz[0],
+                shadow.centre_xz[1],
+                shadow.radius_m,
+                shadow.strength.clamp(0.0, 1.0),
+            ];
+        }
+        queue.write_buffer(&self.shadow_uniforms, 0, bytemuck::cast_slice(&shadows));
+    }
+
+    /// Writes the uploaded avatar's poses when the scene shows it; returns how many to draw
+    /// (0: none).
+    fn write_avatar_poses(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &Scene,
+    ) -> usize {
+        let Some(avatar) = self.avatar.as_mut().filter(|_| scene.show_avatar) else {
+            return 0;
+        };
+        let poses = 1 + scene.more_avatar_poses.len();
+        avatar.ensure_poses(device, &self.skinned_pipeline, poses);
+        avatar.write_palettes(queue, 0, &scene.avatar_palettes);
+        for (pose, palettes) in scene.more_avatar_poses.iter().enumerate() {
+            avatar.write_palettes(queue, pose + 1, palettes);
+        }
+        poses
+    }
+
+    /// Writes the instances of the scene's capsules and markers; returns how many.
+    fn write_capsules(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> u32 {
+        let instances: Vec<CapsuleInstance> = scene
+            .capsules
+            .iter()
+            .chain(&scene.markers)
+            .filter(|capsule| {
+                capsule.start_world.is_finite()
+                    && capsule.end_world.is_finite()
+                    && capsule.radius_m.is_finite()
+            })
+            .map(|capsule| CapsuleInstance {
+                start_and_radius: capsule.start_world.extend(capsule.radius_m).to_array(),
+                end_world: capsule.end_world.extend(1.0).to_array(),
+                color: capsule.color_linear,
+            })
+            .collect();
+        if instances.len() > self.instance_capacity {
+            self.instance_capacity = instances.len().next_power_of_two();
+            self.instances = Self::instance_buffer(device, self.instance_capacity);
+        }
+        if !instances.is_empty() {
+            queue.write_buffer(&self.instances, 0, bytemuck::cast_slice(&instances));
+        }
+        u32::try_from(instances.len()).unwrap_or(u32::MAX)
     }
 }

@@ -7,7 +7,8 @@
 use glam::{Vec2, Vec3};
 use stance_hanim::LevelOfArticulation;
 use stance_render::{
-    BACKGROUND_SRGB, OrbitCamera, Pixels, RenderTarget, Scene, SceneRenderer, read_pixels,
+    BACKGROUND_SRGB, CastPose, OrbitCamera, Pixels, RenderTarget, Scene, SceneRenderer,
+    SkinnedMaterial, SkinnedModel, SkinnedPrimitive, SkinnedVertex, read_pixels,
     rest_pose_capsules,
 };
 
@@ -142,4 +143,85 @@ fn the_floor_grid_shows_below_the_feet_and_orbiting_changes_the_picture() {
         differing > 500,
         "only {differing} pixels changed after orbiting"
     );
+}
+
+/// A skinned model of one unlit square, 0.4 m a side, facing +Z about its origin, all its
+/// vertices on the palette's first matrix, of colour `color` (linear).
+fn square(color: [f32; 3]) -> SkinnedModel {
+    let vertex = |x: f32, y: f32| SkinnedVertex {
+        position: [x, y, 0.0],
+        normal: [0.0, 0.0, 1.0],
+        uv: [0.0, 0.0],
+        joints: [0; 4],
+        weights: [1.0, 0.0, 0.0, 0.0],
+    };
+    SkinnedModel {
+        primitives: vec![SkinnedPrimitive {
+            vertices: vec![
+                vertex(-0.2, -0.2),
+                vertex(0.2, -0.2),
+                vertex(0.2, 0.2),
+                vertex(-0.2, 0.2),
+            ],
+            indices: vec![0, 1, 2, 0, 2, 3],
+            material: 0,
+            palette: 0,
+        }],
+        materials: vec![SkinnedMaterial {
+            base_color_factor: [color[0], color[1], color[2], 1.0],
+            texture: None,
+            unlit: true,
+            alpha_cutoff: None,
+        }],
+        textures: Vec::new(),
+        palette_sizes: vec![1],
+    }
+}
+
+#[test]
+fn the_casts_poses_are_each_drawn_on_their_own_model() {
+    // Catches: every pose drawn on one model, a model's second pose overwriting its first,
+    // poses of a frame before drawn again in the next.
+    let (device, queue, _) = device();
+    let mut renderer = SceneRenderer::new(&device);
+    let size = [240u32, 160u32];
+    let target = RenderTarget::new(&device, size);
+    let camera = OrbitCamera::saved([0.0, 1.0, 0.0], 0.0, 0.0, 4.0, false);
+    let (red, green) = (square([1.0, 0.0, 0.0]), square([0.0, 1.0, 0.0]));
+    renderer.set_cast_models(&device, &queue, &[&red, &green]);
+    let at = |model: usize, x: f32, y: f32| CastPose {
+        model,
+        palettes: vec![vec![glam::Mat4::from_translation(Vec3::new(x, y, 0.0))]],
+    };
+    let left = at(0, -0.8, 1.0);
+    let right = at(1, 0.8, 1.0);
+    let above = at(0, 0.0, 1.6);
+    let mut draw = |poses: Vec<CastPose>| {
+        let scene = Scene {
+            cast_poses: poses,
+            ..Scene::default()
+        };
+        renderer.render(&device, &queue, &target, &camera, &scene);
+        let pixels = read_pixels(&device, &queue, &target).expect("read back");
+        move |x: f32, y: f32| {
+            let at = camera
+                .project(
+                    Vec3::new(x, y, 0.0),
+                    Vec2::new(size[0] as f32, size[1] as f32),
+                )
+                .unwrap();
+            let offset = ((at.y as u32 * pixels.width + at.x as u32) * 4) as usize;
+            <[u8; 3]>::try_from(&pixels.rgba[offset..offset + 3]).unwrap()
+        }
+    };
+    let pixel = draw(vec![left, right, above.clone()]);
+    assert_eq!(pixel(-0.8, 1.0), [255, 0, 0]);
+    assert_eq!(pixel(0.8, 1.0), [0, 255, 0]);
+    assert_eq!(pixel(0.0, 1.6), [255, 0, 0], "the red model's second pose");
+    assert_eq!(pixel(0.0, 1.0), background());
+    // The next frame draws its own poses alone.
+    let pixel = draw(vec![above, at(1, -0.8, 1.0)]);
+    assert_eq!(pixel(-0.8, 1.0), [0, 255, 0]);
+    assert_eq!(pixel(0.8, 1.0), background());
+    assert_eq!(pixel(0.0, 1.6), [255, 0, 0]);
 }
