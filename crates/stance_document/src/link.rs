@@ -478,8 +478,7 @@ fn decode_scene_payload(bytes: &[u8], format: u8) -> Result<Scene, String> {
         characters,
         selected: usize::try_from(selected).unwrap_or(usize::MAX),
         between,
-        // A link names a mesh prop's file, never carries it.
-        files: Vec::new(),
+        files: Vec::new(), // A link names a mesh prop's file, never carries it.
     })
 }
 

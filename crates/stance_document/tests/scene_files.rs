@@ -5,6 +5,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use serde_json::Value;
+use stance_document::scene::MAX_PROP_FILE_BYTES;
 use stance_document::{FileReference, Prop, PropShape, Scene, content_hash, link};
 #[cfg(target_arch = "wasm32")]
 use wasm_bindgen_test::wasm_bindgen_test as test;
@@ -73,9 +74,11 @@ fn two_mesh_props_sharing_one_file_round_trip_with_it_listed_once() {
     );
     let deflate = files[0]["deflate"].as_str().unwrap();
     println!(
-        "[scene_files] Box.gltf: {} bytes, embedded in {} characters",
+        "[scene_files] Box.gltf: {} bytes, hash {}, embedded in {} characters ({}...)",
         BOX_GLTF.len(),
-        deflate.len()
+        files[0]["hash"],
+        deflate.len(),
+        &deflate[..24]
     );
     let back = Scene::from_json(&text).unwrap();
     assert_eq!(back, scene);
@@ -157,7 +160,8 @@ fn a_file_no_prop_names_is_ignored_and_an_unlisted_file_leaves_its_prop_named() 
     assert_eq!(back.files.len(), 1);
     assert_eq!(back.files[0].name, "Box.gltf");
     assert_eq!(back.props, scene.props);
-    // More entries than props, a file listed twice, an entry that carries no file.
+    // More entries than props, a file listed twice, an entry that carries no file, a file
+    // too large.
     let mut more = value.clone();
     let extra: Vec<Value> = (0..5).map(|_| value["files"][0].clone()).collect();
     more["files"] = Value::from(extra);
@@ -181,4 +185,12 @@ fn a_file_no_prop_names_is_ignored_and_an_unlisted_file_leaves_its_prop_named() 
         .unwrap_err()
         .to_string();
     assert!(error.starts_with("files[0].deflate: missing"), "{error}");
+    // A file past a prop file's limit (64 MiB), refused by its entry.
+    let mut huge: Value = serde_json::from_str(&text).unwrap();
+    huge["files"][0]["size"] = Value::from(MAX_PROP_FILE_BYTES + 1);
+    let error = Scene::from_json(&huge.to_string()).unwrap_err().to_string();
+    assert!(
+        error.starts_with("files[0].size: expected an integer"),
+        "{error}"
+    );
 }

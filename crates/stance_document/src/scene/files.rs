@@ -113,8 +113,9 @@ pub(super) fn files_from_json(
             &format!("{at}.file"),
         )?;
         if named(props, name) {
+            // A size past a file's own limit is refused with the entry, below.
             let size = fields.get("size").and_then(Value::as_f64).unwrap_or(0.0);
-            used.push((i, size.max(0.0) as u64));
+            used.push((i, size.clamp(0.0, MAX_PROP_FILE_BYTES as f64) as u64));
         }
     }
     check_total(used.iter().map(|(_, size)| *size))?;
