@@ -18,7 +18,7 @@ use super::{Change, EditorModel};
 
 /// The most bytes of prop files the autosave carries, all of them together (as
 /// `AUTOSAVE_CLIP_BYTES` for the clip: the browser's storage holds a few megabytes, and a
-/// mesh compresses less than a BVH, about 1.1 characters a byte at worst); the files beyond,
+/// mesh compresses less than a BVH, at worst about 1.34 characters a byte); the files beyond,
 /// in the props' order, are named only, and the restored work asks for them.
 pub const AUTOSAVE_PROP_FILE_BYTES: u64 = 2 << 20;
 
