@@ -11,7 +11,7 @@ use stance_ik::{Axes, Dof};
 
 use crate::DocumentError;
 use crate::camera::CameraSpec;
-use crate::clip::ClipReference;
+use crate::clip::{CLIP_FILE, ClipReference};
 use crate::json::{field, number, obj, string};
 use crate::motion::{MotionSection, TaskInterval};
 use crate::stiffness::{StiffnessValues, validate_stiffness};
@@ -590,7 +590,7 @@ impl Document {
         }
         validate_stiffness(&self.stiffness, "stiffness")?;
         if let Some(clip) = &self.clip {
-            clip.validate()?;
+            clip.validate_at("clip", &CLIP_FILE)?;
         }
         Ok(())
     }
@@ -686,7 +686,7 @@ impl Document {
         };
         let clip = match o.get("clip") {
             None | Some(Value::Null) => None,
-            Some(c) => Some(ClipReference::from_json_value(c)?),
+            Some(c) => Some(ClipReference::from_json_value(c, "clip", &CLIP_FILE)?),
         };
         let doc = Document {
             avatar,

@@ -6,8 +6,9 @@
 //!   with the field names of the `stance solve` problem format.
 //! - [`TaskSpec::to_task`], [`PostureValues::to_posture`], [`PostureValues::from_posture`]:
 //!   to and from the solver's types; errors name the field (`tasks[2].joint: unknown joint ...`).
-//! - [`ClipReference`]: the motion clip the keys were made over, named by content hash and,
-//!   in a saved document, embedded (compressed).
+//! - [`FileReference`]: a file a document names by content hash and, saved, embeds
+//!   (compressed): the motion clip the keys were made over ([`ClipReference`]) and the mesh
+//!   props' files of a scene.
 //! - [`Scene`]: several characters, each a document with a name and a placement.
 //! - [`link`]: the compact, versioned, checksummed URL-fragment form of a document.
 //! - [`Problem`]: the one way from tasks to a solver problem (tasks by level, closed-form limb
@@ -24,6 +25,7 @@ pub mod comfort;
 mod convert;
 mod document;
 mod error;
+pub mod file;
 mod frame;
 mod json;
 pub mod link;
@@ -41,7 +43,7 @@ pub use between::{
     joined_groups_of, joined_tasks,
 };
 pub use camera::CameraSpec;
-pub use clip::{ClipReference, EmbeddedClip, content_hash};
+pub use clip::{ClipReference, EmbeddedClip};
 pub use convert::{
     LimbStartSpec, limb_joint_indices, pinned_contacts, resolve_joint, solver_tasks,
 };
@@ -50,6 +52,7 @@ pub use document::{
     Document, DofValues, LimbName, PostureRest, PostureValues, TaskKindSpec, TaskSpec,
 };
 pub use error::DocumentError;
+pub use file::{EmbeddedFile, FileKind, FileReference, content_hash};
 pub use frame::{FrameProblem, Grab, level_below_hard_tasks};
 pub use link::LinkError;
 pub use motion::{MotionKey, MotionSection, TaskInterval};

@@ -478,6 +478,7 @@ fn decode_scene_payload(bytes: &[u8], format: u8) -> Result<Scene, String> {
         characters,
         selected: usize::try_from(selected).unwrap_or(usize::MAX),
         between,
+        files: Vec::new(), // A link names a mesh prop's file, never carries it.
     })
 }
 

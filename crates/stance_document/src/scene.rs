@@ -16,7 +16,12 @@ use stance_ik::{Obstacle, ObstacleShape};
 use crate::between::{BetweenTask, MAX_BETWEEN_TASKS, between_from_json};
 use crate::document::Document;
 use crate::error::DocumentError;
+use crate::file::FileReference;
 use crate::json::{number, numbers, obj, string};
+
+mod files;
+
+pub use files::{MAX_PROP_FILE_BYTES, MAX_PROP_FILES_BYTES, PROP_FILE};
 
 /// The longest character name kept (characters; longer names are cut).
 pub const MAX_NAME_CHARS: usize = 64;
@@ -126,8 +131,9 @@ pub const MAX_FILE_NAME_CHARS: usize = 255;
 /// A prop's shape, centred on its origin, in metres. A cylinder stands along its own +Y (a
 /// vertical bar); a plane is a rectangle in its own XZ plane facing +Y (a floor patch, a
 /// table top), drawn as a thin slab; a mesh is a static glTF/GLB file's triangles, named by
-/// the file (a document never carries the file), scaled to fill `size` (its bounding box,
-/// centred on the prop's origin), so that a document without the file still knows the box.
+/// the file (the prop never carries it: a saved scene's [`Scene::files`] do, a link never),
+/// scaled to fill `size` (its bounding box, centred on the prop's origin), so that a
+/// document without the file still knows the box.
 #[derive(Debug, Clone, PartialEq)]
 pub enum PropShape {
     /// `size`: width (X), height (Y), depth (Z).
@@ -497,6 +503,9 @@ pub struct Scene {
     /// Tasks between characters (a hand in another's hand): the characters they join are
     /// solved together ([`crate::between::JoinedProblem`]).
     pub between: Vec<BetweenTask>,
+    /// The mesh props' files a saved document carries (embedded, each once; a link never
+    /// carries them): read, only those a prop names; written, only those a prop names.
+    pub files: Vec<FileReference>,
 }
 
 impl Default for Scene {
@@ -522,6 +531,7 @@ impl Scene {
             props: Vec::new(),
             selected: 0,
             between: Vec::new(),
+            files: Vec::new(),
         }
     }
 
@@ -560,6 +570,7 @@ impl Scene {
         for (i, prop) in self.props.iter().enumerate() {
             prop.validate_at(&format!("props[{i}]"))?;
         }
+        files::validate_files(&self.files, &self.props)?;
         for (i, character) in self.characters.iter().enumerate() {
             let at = format!("characters[{i}]");
             character
@@ -607,8 +618,8 @@ impl Scene {
     }
 
     /// Parses and validates a scene from a JSON value: `{"characters": [...], "props": [...],
-    /// "selected": i}`, each character a document with `"name"` and `"placement"`; any other
-    /// object is read as a document, a scene of one character.
+    /// "files": [...], "selected": i}`, each character a document with `"name"` and
+    /// `"placement"`; any other object is read as a document, a scene of one character.
     pub fn from_json_value(v: &Value) -> Result<Self, DocumentError> {
         let o = obj(v, "the document")?;
         let Some(list) = o.get("characters") else {
@@ -678,11 +689,13 @@ impl Scene {
                 n as usize
             }
         };
+        let files = files::files_from_json(o, &props)?;
         let scene = Self {
             characters,
             props,
             selected,
             between: between_from_json(o)?,
+            files,
         };
         scene.validate()?;
         Ok(scene)
@@ -714,6 +727,9 @@ impl Scene {
         o.insert("characters".into(), Value::Array(characters));
         if !props.is_empty() {
             o.insert("props".into(), Value::Array(props));
+        }
+        if let Some(files) = files::files_to_json(&self.files, &self.props) {
+            o.insert("files".into(), files);
         }
         if !self.between.is_empty() {
             let between = self

@@ -14,4 +14,5 @@ mod fuzz_seeds;
 mod link;
 mod problem;
 mod scene;
+mod scene_files;
 mod stiffness;

@@ -98,6 +98,7 @@ fn hand_in_hand(gap: f64) -> Scene {
             point(1, "l_radiocarpal"),
             3,
         )],
+        files: Vec::new(),
     }
 }
 

@@ -45,6 +45,17 @@ const SCENE_MESH: &str = r#"{"characters": [
    "rotation": [0, 0.2955202, 0, 0.9553365]}],
 "selected": 0}"#;
 
+/// [`SCENE_MESH`] carrying its chair's file (a few bytes standing in for a GLB: the reader
+/// checks the file's size and hash, not its content).
+fn scene_files() -> Vec<u8> {
+    let mut scene = Scene::from_json(SCENE_MESH).unwrap();
+    scene.files = vec![stance_document::FileReference::embed(
+        "chair.glb",
+        b"glTF: a stand-in for chair.glb, chair.glb, chair.glb",
+    )];
+    scene.to_json(false).into_bytes()
+}
+
 /// A document with every kind of task, a timeline, a camera and joint stiffness.
 const EVERYTHING: &str = r#"{
   "version": 1,
@@ -282,6 +293,7 @@ fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
         SCENE_BETWEEN.into(),
     ));
     out.push(("document", "scene-mesh.json".into(), SCENE_MESH.into()));
+    out.push(("document", "scene-files.json".into(), scene_files()));
     out.push(("problem", "arm.json".into(), ARM.into()));
     out.push(("problem", "loa1.json".into(), loa1_problem().into_bytes()));
     out

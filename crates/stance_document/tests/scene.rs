@@ -60,6 +60,7 @@ fn two_characters() -> Scene {
         ],
         selected: 1,
         between: Vec::new(),
+        files: Vec::new(),
     }
 }
 

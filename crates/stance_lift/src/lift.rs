@@ -975,5 +975,6 @@ pub fn lifted_scene(people: &[Lifted]) -> stance_document::Scene {
         props: Vec::new(),
         selected: 0,
         between: Vec::new(),
+        files: Vec::new(),
     }
 }

@@ -10,6 +10,7 @@ mod clocked;
 mod collision;
 mod hands;
 mod kept_clips;
+mod kept_prop_files;
 mod keypoints;
 mod mesh_props;
 mod model;

@@ -242,12 +242,13 @@ impl EditorModel {
     }
 
     /// The whole scene as a document: every character's document (its clip embedded), name and
-    /// placement, and the props.
+    /// placement, the props and their files.
     pub fn scene(&self) -> Scene {
         self.scene_of(false)
     }
 
-    /// The scene; `for_autosave`: each character's clip file kept only when small.
+    /// The scene; `for_autosave`: each character's clip file kept only when small, the prop
+    /// files up to the autosave's total.
     pub(super) fn scene_of(&self, for_autosave: bool) -> Scene {
         let characters = self
             .characters()
@@ -272,6 +273,7 @@ impl EditorModel {
             props: self.cast.props.clone(),
             selected: self.cast.selected_at,
             between: self.cast.between.clone(),
+            files: self.carried_prop_files(for_autosave),
         }
     }
 
@@ -708,8 +710,9 @@ impl EditorModel {
     /// anything changes: one that does not fit leaves the scene as it was and names it.
     /// Characters are posed on the mannequin at the current level of articulation, or on the
     /// selected character's avatar when their document names it; the selected one's avatar
-    /// named by URL is fetched (its document waits for it). Returns what to tell the user
-    /// after "Opened NAME" (avatars left on the mannequin).
+    /// named by URL is fetched (its document waits for it); the prop files it carries are
+    /// taken as *Import prop* takes a file. Returns what to tell the user after "Opened NAME"
+    /// (avatars left on the mannequin, prop files missing or not meshes).
     pub(super) fn open_scene(&mut self, scene: &Scene) -> Result<String, String> {
         let loa = self.character.session.level_of_articulation();
         let current_url = self.character.avatar_url.clone();
@@ -755,7 +758,9 @@ impl EditorModel {
             self.fetch_avatar(&url);
         }
         self.view_requests += u64::from(self.character.session.camera().is_some());
-        let mut words = self.missing_prop_files_words();
+        // The files are not part of the history: undo leaves them held, as after an import.
+        let mut words = self.take_prop_files(&scene.files);
+        words.push_str(&self.missing_prop_files_words());
         if !on_mannequin.is_empty() {
             words.push_str(&format!(
                 " Posed on the mannequin until their avatar is loaded: {}.",

@@ -1,5 +1,7 @@
 //! The prop files: static glTF/GLB meshes imported as props (*File > Import prop...*), kept by
-//! their file's name so that documents and links name them and never carry them. A mesh prop
+//! their file's name so that documents and links name them. A saved document carries them
+//! (`Scene::files`), the autosave those that fit [`AUTOSAVE_PROP_FILE_BYTES`], a link never;
+//! opening a document that carries them takes them as importing them would. A mesh prop
 //! whose file is not loaded is drawn, posed against and exported as its box, and the notice
 //! says which file to load; loading it later draws them all with it.
 
@@ -7,10 +9,18 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use stance_asset::PropMesh;
-use stance_document::scene::{MAX_FILE_NAME_CHARS, MAX_PROP_SIZE_M};
-use stance_document::{Prop, PropShape};
+use stance_document::scene::{
+    MAX_FILE_NAME_CHARS, MAX_PROP_FILE_BYTES, MAX_PROP_FILES_BYTES, MAX_PROP_SIZE_M,
+};
+use stance_document::{FileReference, Prop, PropShape};
 
 use super::{Change, EditorModel};
+
+/// The most bytes of prop files the autosave carries, all of them together (as
+/// `AUTOSAVE_CLIP_BYTES` for the clip: the browser's storage holds a few megabytes, and a
+/// mesh compresses less than a BVH, at worst about 1.34 characters a byte); the files beyond,
+/// in the props' order, are named only, and the restored work asks for them.
+pub const AUTOSAVE_PROP_FILE_BYTES: u64 = 2 << 20;
 
 /// The smallest size a mesh prop is given along an axis (m): a flat mesh (a floor patch) is
 /// given a thin box.
@@ -23,6 +33,9 @@ const MESH_PROP_GAP_M: f64 = 0.3;
 pub struct PropFile {
     /// The file as it was imported.
     pub bytes: Arc<[u8]>,
+    /// The same bytes with their name, size and hash, as a saved document carries them
+    /// (compressed once, when first written).
+    pub source: FileReference,
     /// Its triangles and bounds.
     pub mesh: Arc<PropMesh>,
 }
@@ -135,6 +148,80 @@ impl EditorModel {
             .collect()
     }
 
+    /// Reads `source` (embedded) as a prop's mesh and keeps it by its name, in place of a
+    /// file of that name: the one way a prop file comes in, imported or carried by a
+    /// document. Returns whether props that name it were drawn as their boxes until now, and
+    /// the mesh's extents; a file that is not a static mesh, why.
+    fn keep_prop_file(
+        &mut self,
+        source: FileReference,
+    ) -> Result<(bool, glam::DVec3), stance_asset::AssetError> {
+        let bytes = match &source.embedded {
+            Some(embedded) => embedded.shared_bytes(),
+            None => Arc::from([]),
+        };
+        let mesh = stance_asset::load_prop_mesh(&bytes, &mut |_| None)?;
+        let name = source.name.clone();
+        let waiting = self.prop_files.get(&name).is_none()
+            && self.props().iter().any(|p| p.shape.file() == Some(&name));
+        let extents = mesh.extents();
+        let file = PropFile {
+            bytes,
+            source,
+            mesh: Arc::new(mesh),
+        };
+        self.prop_files.files.insert(name, file);
+        Ok((waiting, extents))
+    }
+
+    /// The files a document carries, taken as importing them would (one that is the file
+    /// already held is left as it is). Returns what to add to the notice: the files that
+    /// are not static meshes (their props stay boxes).
+    pub(super) fn take_prop_files(&mut self, files: &[FileReference]) -> String {
+        let mut words = String::new();
+        for file in files {
+            let held = self.prop_files.get(&file.name);
+            if held.is_some_and(|held| held.source.is_same_file(file)) {
+                continue;
+            }
+            if let Err(error) = self.keep_prop_file(file.clone()) {
+                words.push_str(&format!(
+                    " Its prop file {} could not be read as a mesh: {error}.",
+                    file.name
+                ));
+            }
+        }
+        words
+    }
+
+    /// The files of the scene's mesh props that are held, each once, in the props' order, as
+    /// a saved document carries them: those within the document's limits
+    /// (`MAX_PROP_FILE_BYTES` each, `MAX_PROP_FILES_BYTES` in all) and, `for_autosave`, within
+    /// [`AUTOSAVE_PROP_FILE_BYTES`] in all; the others named only by their props.
+    pub(super) fn carried_prop_files(&self, for_autosave: bool) -> Vec<FileReference> {
+        let budget = if for_autosave {
+            AUTOSAVE_PROP_FILE_BYTES
+        } else {
+            MAX_PROP_FILES_BYTES
+        };
+        let mut total = 0u64;
+        let mut files: Vec<FileReference> = Vec::new();
+        for name in self.props().iter().filter_map(|p| p.shape.file()) {
+            if files.iter().any(|f| f.name == name) {
+                continue;
+            }
+            let Some(held) = self.prop_files.get(name) else {
+                continue;
+            };
+            let size = held.source.size;
+            if size <= MAX_PROP_FILE_BYTES && total.saturating_add(size) <= budget {
+                total += size;
+                files.push(held.source.clone());
+            }
+        }
+        files
+    }
+
     /// [`super::SceneCommand::AddMeshProp`]: reads the file; one that is not a static mesh
     /// says why and nothing changes.
     pub(super) fn add_mesh_prop(&mut self, name: &str, bytes: Vec<u8>) -> Change {
@@ -143,24 +230,14 @@ impl EditorModel {
             self.warn("A prop file needs a name.");
             return Change::Nothing;
         }
-        let mesh = match stance_asset::load_prop_mesh(&bytes, &mut |_| None) {
-            Ok(mesh) => mesh,
-            Err(error) => {
-                self.warn(format!("{file} could not be imported as a prop: {error}"));
-                return Change::Nothing;
-            }
-        };
-        // Props that name the file and were drawn as their boxes until now.
-        let waiting = self.prop_files.get(&file).is_none()
-            && self.props().iter().any(|p| p.shape.file() == Some(&file));
-        let extents = mesh.extents();
-        self.prop_files.files.insert(
-            file.clone(),
-            PropFile {
-                bytes: bytes.into(),
-                mesh: Arc::new(mesh),
-            },
-        );
+        let (waiting, extents) =
+            match self.keep_prop_file(FileReference::embed_shared(&file, bytes.into())) {
+                Ok(kept) => kept,
+                Err(error) => {
+                    self.warn(format!("{file} could not be imported as a prop: {error}"));
+                    return Change::Nothing;
+                }
+            };
         if waiting {
             self.inform(format!("Loaded {file}: its props are drawn with it."));
             return Change::Document;

@@ -1,0 +1,177 @@
+//! Prop files kept with the document: the Khronos Box imported as a prop, the document
+//! exported and opened in a fresh editor draws the prop with its mesh and asks for no file;
+//! the autosave likewise, up to its total (a larger file is named only and asked for after
+//! the reload); a damaged embedded file is refused by name and the open scene stays.
+
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use stance_model::model::{AUTOSAVE_PROP_FILE_BYTES, SceneCommand};
+use stance_model::model::{FileCommand, HistoryCommand};
+use stance_model::{Command, EditorModel, MemoryHost};
+
+use crate::clocked::{editor_on, open};
+
+/// The Khronos sample box: a `.gltf` with its buffer embedded, 24 vertices, 12 triangles.
+const BOX_GLTF: &[u8] = include_bytes!("../../stance_asset/tests/fixtures/Box.gltf");
+
+/// Imports `bytes` as the prop file `name`, as *File > Import prop...* does.
+fn import_prop(model: &mut EditorModel, name: &str, bytes: &[u8]) {
+    model.apply(Command::File(FileCommand::PickProp));
+    open(model, name, bytes);
+}
+
+fn notice(model: &EditorModel) -> String {
+    model.notice().map(|n| n.text.clone()).unwrap_or_default()
+}
+
+/// An editor with the Box imported as a prop, and its host.
+fn with_the_box(bytes: &[u8]) -> (MemoryHost, EditorModel) {
+    let host = MemoryHost::default();
+    let mut model = editor_on(&host);
+    import_prop(&mut model, "Box.gltf", bytes);
+    assert_eq!(model.props().len(), 1, "{}", notice(&model));
+    (host, model)
+}
+
+/// The prop is drawn with the Box's own mesh, and no file is asked for.
+fn assert_drawn_with_the_box(model: &EditorModel, how: &str) {
+    let props = model.props();
+    assert_eq!(props.len(), 1, "{how}: {}", notice(model));
+    assert_eq!(props[0].shape.file(), Some("Box.gltf"), "{how}");
+    let mesh = model
+        .prop_mesh(&props[0])
+        .unwrap_or_else(|| panic!("{how}: drawn as its box: {}", notice(model)));
+    assert_eq!(
+        (mesh.vertex_count(), mesh.triangle_count()),
+        (24, 12),
+        "{how}"
+    );
+    assert!(model.missing_prop_files().is_empty(), "{how}");
+    let text = notice(model);
+    assert!(!text.contains("Load Box.gltf"), "{how}: {text}");
+}
+
+// Catches a saved document that reopened elsewhere with its mesh prop as a box and "Load
+// Box.gltf" (the file was named, never carried), and an undo that dropped the file.
+#[test]
+fn an_exported_document_reopens_in_a_fresh_editor_with_its_mesh_prop() {
+    let (host, mut model) = with_the_box(BOX_GLTF);
+    model.apply(Command::File(FileCommand::ExportDocument));
+    let (name, text) = host.inner.borrow().downloads.last().cloned().unwrap();
+    assert_eq!(name, "stance-pose.json");
+    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let files = json["files"]
+        .as_array()
+        .expect("the document carries its files");
+    assert_eq!(files.len(), 1);
+    assert_eq!(files[0]["file"], "Box.gltf");
+    assert_eq!(files[0]["size"], BOX_GLTF.len());
+    println!(
+        "[kept_prop_files] Box.gltf: {} bytes, embedded in {} characters",
+        BOX_GLTF.len(),
+        files[0]["deflate"].as_str().unwrap().len()
+    );
+    // A link names the file only.
+    assert!(
+        !model
+            .share_link()
+            .url
+            .contains(&files[0]["hash"].to_string())
+    );
+
+    let mut fresh = editor_on(&MemoryHost::default());
+    open(&mut fresh, "stance-pose.json", text.as_bytes());
+    assert!(!fresh.notice().unwrap().is_error, "{}", notice(&fresh));
+    assert_drawn_with_the_box(&fresh, "opened");
+    // Undo takes the opened scene away, the file stays held: redo draws it with its mesh.
+    fresh.apply(Command::History(HistoryCommand::Undo));
+    assert!(fresh.props().is_empty());
+    assert!(fresh.prop_files().get("Box.gltf").is_some());
+    fresh.apply(Command::History(HistoryCommand::Redo));
+    assert!(fresh.prop_mesh(&fresh.props()[0]).is_some());
+    // Saved again, it carries the same file.
+    let again = fresh.scene().to_json(false);
+    assert!(again.contains(files[0]["deflate"].as_str().unwrap()));
+}
+
+// Catches an autosave that named the prop file only: a reload brought the prop back as its
+// box, asking for the file the user had imported.
+#[test]
+fn the_autosave_brings_the_mesh_prop_back_with_its_file() {
+    let (host, mut model) = with_the_box(BOX_GLTF);
+    model.step(5.0, None);
+    let saved = host
+        .inner
+        .borrow()
+        .storage
+        .values()
+        .cloned()
+        .collect::<Vec<_>>();
+    assert!(
+        saved
+            .iter()
+            .any(|text| text.contains("\"files\"") && text.contains("Box.gltf")),
+        "{saved:?}"
+    );
+    // The page opens the startup document before its first frame.
+    let mut reloaded = EditorModel::new(Box::new(host.clone())).unwrap();
+    reloaded.open_startup(None);
+    reloaded.step(0.0, None);
+    assert_drawn_with_the_box(&reloaded, "restored");
+}
+
+// Catches an autosave that embedded a file past its total (the browser's storage overflows
+// and nothing is saved) or that lost the prop with it: the prop comes back named, as its
+// box, and the notice asks for the file. A saved document still carries it.
+#[test]
+fn a_prop_file_over_the_autosave_total_is_named_only_and_asked_for_after_the_reload() {
+    // The Box with blanks after its JSON: still the same glTF, over the autosave's total.
+    let mut padded = BOX_GLTF.to_vec();
+    padded.resize(usize::try_from(AUTOSAVE_PROP_FILE_BYTES).unwrap() + 1, b' ');
+    let (host, mut model) = with_the_box(&padded);
+    model.step(5.0, None);
+    let saved = host
+        .inner
+        .borrow()
+        .storage
+        .values()
+        .cloned()
+        .collect::<Vec<_>>();
+    let scene = saved.iter().find(|text| text.contains("Box.gltf")).unwrap();
+    assert!(!scene.contains("\"files\""), "{} characters", scene.len());
+    assert!(model.scene().to_json(false).contains("\"files\""));
+
+    let mut reloaded = EditorModel::new(Box::new(host.clone())).unwrap();
+    reloaded.open_startup(None);
+    reloaded.step(0.0, None);
+    assert_eq!(reloaded.props().len(), 1, "{}", notice(&reloaded));
+    assert!(reloaded.prop_mesh(&reloaded.props()[0]).is_none());
+    assert_eq!(reloaded.missing_prop_files(), ["Box.gltf"]);
+    let text = notice(&reloaded);
+    assert!(
+        text.contains("Load Box.gltf to show this prop (Box)"),
+        "{text}"
+    );
+}
+
+// Catches a damaged embedded prop file that opened (garbage, or the prop as a box without a
+// word) or replaced the open scene.
+#[test]
+fn a_damaged_embedded_prop_file_is_named_and_the_open_scene_stays() {
+    let (_, model) = with_the_box(BOX_GLTF);
+    let text = model.scene().to_json(false);
+    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let data = json["files"][0]["deflate"].as_str().unwrap().to_owned();
+    let mut other = editor_on(&MemoryHost::default());
+    other.apply(Command::Scene(SceneCommand::Add));
+    let before = other.scene();
+    let cut = text.replace(&data, &data[..(data.len() / 2) & !3]);
+    open(&mut other, "saved.json", cut.as_bytes());
+    let notice = other.notice().unwrap().clone();
+    assert!(notice.is_error, "{}", notice.text);
+    for words in ["saved.json", "files[0].deflate", "Box.gltf", "damaged"] {
+        assert!(notice.text.contains(words), "{words}: {}", notice.text);
+    }
+    assert_eq!(other.scene(), before, "the open scene stays");
+    assert!(other.prop_files().get("Box.gltf").is_none());
+}
