@@ -3,15 +3,17 @@
 //! *File > Save image*. A scene (`stance_document::Scene`) draws every character at its
 //! `Placement` and its props, placed by `stance_render::placed` as the editor places them.
 //! Each character is on its own body (`bodies`): the avatar file its document names (found
-//! by file name next to the document or in `--assets`, as a mesh prop's file is), else the
-//! mannequin; `--avatar FILE` poses every character on that file instead.
+//! by file name next to the document, then in `--assets`), else the mannequin; `--avatar
+//! FILE` poses every character on that file instead. A mesh prop is drawn with its file: the
+//! one the document carries (`Scene::files`), else the one of its name found as an avatar
+//! file is (`files`: the one resolver of both).
 //!
 //! `--map openpose|depth|normal|mask` writes a control map for image generation instead, seen
 //! by the same camera: the OpenPose skeleton (drawn on the CPU; with `--keypoints-out` its
 //! keypoints as OpenPose JSON), or the figure's depth, normals, mask or line art (rendered
 //! like the picture, unlit, on black). See docs/control-maps.md.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -32,8 +34,10 @@ use stance_render::{
 use crate::avatar;
 
 mod bodies;
+mod files;
 
 use bodies::{Bodies, Body, MeshFigure};
+use files::{Found, SceneFiles};
 
 /// `stance render DOC.json --out IMAGE.png [--avatar FILE] [--view VIEW] [--size WxH]
 /// [--map openpose [--keypoints-out K.json] [--normalized] [--hidden keep|missing]]
@@ -90,9 +94,10 @@ pub struct RenderArgs {
     /// (default: keep).
     #[arg(long, value_enum)]
     pub hidden: Option<Hidden>,
-    /// The folder a scene's mesh props' files (`"file": "chair.glb"`) are read from (default:
-    /// the document's folder); a file not found there is drawn as its box, with a warning.
-    /// Also where a character's avatar file is looked for when it is not next to the document.
+    /// A folder the scene's files are looked for in after the document's own: a character's
+    /// avatar file, and a mesh prop's file (`"file": "chair.glb"`) that the document does not
+    /// carry (a saved document carries them, `"files"`, and its own file is drawn first); a
+    /// prop's file found nowhere is drawn as its box, with a warning.
     #[arg(long)]
     pub assets: Option<PathBuf>,
 }
@@ -243,56 +248,54 @@ struct Posed {
     camera: OrbitCamera,
 }
 
-/// The triangles of each of `props` that is a mesh prop whose file is in `args.assets` (or
-/// the document's folder); `None` for the others. A file not found is drawn as its box (with
-/// a warning); one that is not a static mesh is an error naming it.
-fn prop_meshes(args: &RenderArgs, props: &[Prop]) -> Result<Vec<Option<Arc<PropMesh>>>> {
-    let folder = match &args.assets {
-        Some(folder) => folder.clone(),
-        None => args
-            .document
-            .parent()
-            .map(Path::to_path_buf)
-            .unwrap_or_default(),
-    };
-    let mut read: Vec<(String, Option<Arc<PropMesh>>)> = Vec::new();
+/// The triangles of each of `props` that is a mesh prop whose file is found (`files`: the
+/// document's own, else on disk); `None` for the others. Each file is read once. A file not
+/// found is drawn as its box (with a warning); one that is not a static mesh is an error
+/// naming it.
+fn prop_meshes(files: &SceneFiles, props: &[Prop]) -> Result<Vec<Option<Arc<PropMesh>>>> {
+    let mut read: Vec<(&str, Option<Arc<PropMesh>>)> = Vec::new();
     let mut meshes = Vec::with_capacity(props.len());
     for prop in props {
         let Some(file) = prop.shape.file() else {
             meshes.push(None);
             continue;
         };
-        if let Some((_, mesh)) = read.iter().find(|(name, _)| name == file) {
-            meshes.push(mesh.clone());
-            continue;
-        }
-        let path = folder.join(file);
-        let mesh = match std::fs::read(&path) {
-            Ok(bytes) => {
-                let mesh = load_prop_mesh(&bytes, &mut avatar::resolver_next_to(&path))
-                    .map_err(|e| anyhow!("prop {} ({}): {e}", prop.name, path.display()))?;
-                Some(Arc::new(mesh))
-            }
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-                eprintln!(
-                    "warning: prop {}: {} not found (--assets DIR): drawn as its box",
-                    prop.name,
-                    path.display()
-                );
-                None
-            }
-            Err(e) => {
-                return Err(anyhow!(
-                    "prop {}: cannot read {}: {e}",
-                    prop.name,
-                    path.display()
-                ));
+        let mesh = match read.iter().find(|(name, _)| *name == file) {
+            Some((_, mesh)) => mesh.clone(),
+            None => {
+                let mesh = prop_mesh(files, prop, file)?;
+                read.push((file, mesh.clone()));
+                mesh
             }
         };
-        read.push((file.to_owned(), mesh.clone()));
         meshes.push(mesh);
     }
     Ok(meshes)
+}
+
+/// The triangles of `file`, the mesh `prop` names, as `files` finds it; `None` (with a
+/// warning) when it is nowhere.
+fn prop_mesh(files: &SceneFiles, prop: &Prop, file: &str) -> Result<Option<Arc<PropMesh>>> {
+    let mesh = match files.find(file) {
+        // As the editor reads a file a document carries: on its own, without files beside it.
+        Found::Carried(bytes) => load_prop_mesh(&bytes, &mut |_| None)
+            .map_err(|e| anyhow!("prop {} ({file}, carried by the document): {e}", prop.name))?,
+        Found::OnDisk(path) => {
+            let bytes = std::fs::read(&path)
+                .with_context(|| format!("prop {}: cannot read {}", prop.name, path.display()))?;
+            load_prop_mesh(&bytes, &mut avatar::resolver_next_to(&path))
+                .map_err(|e| anyhow!("prop {} ({}): {e}", prop.name, path.display()))?
+        }
+        Found::Missing => {
+            eprintln!(
+                "warning: prop {}: {file} not found in {} (--assets DIR): drawn as its box",
+                prop.name,
+                files.folders_text()
+            );
+            return Ok(None);
+        }
+    };
+    Ok(Some(Arc::new(mesh)))
 }
 
 impl Posed {
@@ -301,12 +304,13 @@ impl Posed {
         let text = std::fs::read_to_string(&args.document)
             .with_context(|| format!("cannot read {path}"))?;
         // A plain document is a scene of one character at the origin.
-        let scene = stance_document::Scene::from_json(&text)
+        let mut scene = stance_document::Scene::from_json(&text)
             .map_err(|e| anyhow!("invalid document {path}: {e}"))?;
+        let files = SceneFiles::new(args, std::mem::take(&mut scene.files));
         let Bodies {
             bodies,
             of_character,
-        } = bodies::bodies(args, &scene.characters)?;
+        } = bodies::bodies(args, &files, &scene.characters)?;
         let several = scene.characters.len() > 1;
         let characters = scene
             .characters
@@ -342,7 +346,7 @@ impl Posed {
         Ok(Posed {
             bodies,
             characters,
-            prop_meshes: prop_meshes(args, &scene.props)?,
+            prop_meshes: prop_meshes(&files, &scene.props)?,
             props: scene.props,
             camera,
         })

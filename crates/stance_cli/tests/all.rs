@@ -9,3 +9,4 @@ mod link_cli;
 mod mocap_cli;
 mod render_avatars_cli;
 mod render_cli;
+mod render_props_cli;

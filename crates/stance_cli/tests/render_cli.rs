@@ -491,7 +491,11 @@ fn control_map_options_out_of_place_fail_with_a_reason_and_write_nothing() {
 }
 
 /// The pixel of `image` at `point_world` seen by `camera`.
-fn pixel_at(image: &Image, camera: &stance_render::OrbitCamera, point_world: [f32; 3]) -> [u8; 4] {
+pub(crate) fn pixel_at(
+    image: &Image,
+    camera: &stance_render::OrbitCamera,
+    point_world: [f32; 3],
+) -> [u8; 4] {
     let size = glam::Vec2::new(image.width as f32, image.height as f32);
     let at = camera
         .project(glam::Vec3::from_array(point_world), size)
@@ -637,7 +641,7 @@ fn two_character_scene(name: &str, camera: &str) -> String {
     )
 }
 
-const SCENE_CAMERA: &str =
+pub(crate) const SCENE_CAMERA: &str =
     r#", "camera": {"target": [0, 1.0, 0], "yaw": 0, "pitch": 0, "distance": 6.0}"#;
 
 #[test]
@@ -778,67 +782,4 @@ fn a_scene_with_a_bad_character_says_which() {
     let (ok, err) = stance(&["render", &malformed, "--out", &out.to_string_lossy()]);
     assert!(!ok && !out.exists());
     assert!(err.contains("characters[1]"), "{err}");
-}
-
-#[test]
-fn a_mesh_prop_is_drawn_from_its_file_next_to_the_scene_or_as_its_box() {
-    // Catches: a mesh prop's file not looked for next to the document (or in --assets), its
-    // triangles drawn off its place, a missing file failing the render instead of drawing
-    // the box. The file is a green unit box written by the scene exporter.
-    use stance_asset::{SceneContent, SceneNode, StaticMesh, export_scene_glb};
-    use stance_document::{Prop, PropShape};
-    let unit = Prop::new(
-        "unit".into(),
-        PropShape::Box {
-            size: [1.0, 1.0, 1.0],
-        },
-        [0.0; 3],
-    );
-    let green = StaticMesh {
-        color_linear: [0.05, 0.6, 0.05, 1.0],
-        ..stance_render::prop_static_mesh(&unit)
-    };
-    let glb = export_scene_glb(&[SceneNode {
-        name: "crate".into(),
-        scene_from_node: glam::DAffine3::from_translation(glam::DVec3::new(3.0, 1.0, 0.0)),
-        content: SceneContent::Mesh(std::slice::from_ref(&green)),
-    }])
-    .unwrap();
-    std::fs::write(temp("green-crate.glb"), glb).unwrap();
-    let scene = |name: &str| {
-        write(
-            name,
-            &format!(
-                r#"{{"characters": [{{"name": "Ann", "placement": {{"position": [1.0, 0, 0]}}, "version": 1 {SCENE_CAMERA}}}],
-                "props": [{{"name": "Crate", "shape": "mesh", "file": "green-crate.glb", "size": [0.3, 0.3, 0.3], "position": [0, 0.15, 0.6]}}],
-                "selected": 0}}"#
-            ),
-        )
-    };
-    let camera = stance_render::OrbitCamera::saved([0.0, 1.0, 0.0], 0.0, 0.0, 6.0, false);
-    let front = [0.0, 0.15, 0.75];
-    let picture = render(
-        &scene("mesh-scene.json"),
-        "mesh-scene.png",
-        &["--size", "400x300"],
-    );
-    let [r, g, b, _] = pixel_at(&picture, &camera, front);
-    assert!(g > r + 20 && g > b + 20, "not the green mesh: {r} {g} {b}");
-    // Elsewhere without the file: drawn as its box (the props' wood), with a warning.
-    let empty = temp("no-assets");
-    std::fs::create_dir_all(&empty).unwrap();
-    let empty = empty.to_string_lossy().into_owned();
-    let document = scene("mesh-scene-boxed.json");
-    let out = temp("mesh-scene-boxed.png").to_string_lossy().into_owned();
-    let (ok, err) = stance(&[
-        "render", &document, "--out", &out, "--size", "400x300", "--assets", &empty,
-    ]);
-    assert!(ok, "{err}");
-    assert!(
-        err.contains("green-crate.glb not found") && err.contains("drawn as its box"),
-        "{err}"
-    );
-    let boxed = decode(&PathBuf::from(&out));
-    let [r, g, b, _] = pixel_at(&boxed, &camera, front);
-    assert!(r > b + 20 && g <= r, "not the wood box: {r} {g} {b}");
 }

@@ -1,9 +1,10 @@
 //! The bodies `stance render` poses a scene's characters on: with `--avatar FILE`, that file for
 //! every character; else each character's own avatar (`AvatarReference::Url`: the file its
-//! URL names, by file name, in the document's folder, then in `--assets`), or the generated
-//! mannequin (`AvatarReference::Default`, and an avatar file missing or failing to load, with
-//! a warning naming the character and the file). Each file is loaded once, its body shared by
-//! the characters on it.
+//! URL names, by file name, in the document's folder, then in `--assets`, as
+//! `super::files::SceneFiles` finds it), or the generated mannequin
+//! (`AvatarReference::Default`, and an avatar file missing or failing to load, with a warning
+//! naming the character and the file). Each file is loaded once, its body shared by the
+//! characters on it.
 
 use std::path::{Path, PathBuf};
 
@@ -14,6 +15,7 @@ use stance_hanim::{HumanoidSkeleton, LevelOfArticulation, SkeletonOptions, defau
 use stance_render::avatar_model;
 
 use super::RenderArgs;
+use super::files::SceneFiles;
 use crate::avatar;
 
 /// A body characters are posed on: the skeleton their documents' postures are read on, and
@@ -114,36 +116,13 @@ pub(super) fn avatar_file_name(url: &str) -> Option<String> {
     stance_asset::relative_path(last)
 }
 
-/// The folders an avatar file is looked for in, in order: the document's, then `--assets`.
-fn avatar_folders(args: &RenderArgs) -> Vec<PathBuf> {
-    let document_folder = args
-        .document
-        .parent()
-        .map(Path::to_path_buf)
-        .unwrap_or_default();
-    std::iter::once(document_folder)
-        .chain(args.assets.clone())
-        .collect()
-}
-
-/// The folders as a warning names them (the document's folder "." when it is the current).
-fn folders_text(folders: &[PathBuf]) -> String {
-    let names: Vec<String> = folders
-        .iter()
-        .map(|folder| match folder.as_os_str().is_empty() {
-            true => ".".to_owned(),
-            false => folder.display().to_string(),
-        })
-        .collect();
-    names.join(" or ")
-}
-
 /// The avatar files read so far, by the file name characters named (each loaded once), and
 /// what came of each: its body's index, or why it is drawn on the mannequin.
 struct Loaded<'a> {
     args: &'a RenderArgs,
     options: SkeletonOptions,
-    folders: Vec<PathBuf>,
+    /// Where the files are found (an avatar file on disk alone).
+    scene_files: &'a SceneFiles,
     files: Vec<(String, Result<usize, String>)>,
     bodies: Vec<Body>,
     mannequin: Option<usize>,
@@ -156,15 +135,10 @@ impl Loaded<'_> {
         if let Some((_, result)) = self.files.iter().find(|(name, _)| name == file) {
             return result.clone();
         }
-        let found = self
-            .folders
-            .iter()
-            .map(|folder| folder.join(file))
-            .find(|path| path.is_file());
-        let result = match found {
+        let result = match self.scene_files.on_disk(file) {
             None => Err(format!(
                 "{file} not found in {} (--assets DIR)",
-                folders_text(&self.folders)
+                self.scene_files.folders_text()
             )),
             Some(path) => match avatar_body(&path, &self.options) {
                 Ok(body) => {
@@ -213,8 +187,13 @@ impl Loaded<'_> {
     }
 }
 
-/// The bodies of `characters`: `--avatar` for every one, else each one's own (see the module).
-pub(super) fn bodies(args: &RenderArgs, characters: &[SceneCharacter]) -> Result<Bodies> {
+/// The bodies of `characters`: `--avatar` for every one, else each one's own (see the module),
+/// their files found by `scene_files`.
+pub(super) fn bodies(
+    args: &RenderArgs,
+    scene_files: &SceneFiles,
+    characters: &[SceneCharacter],
+) -> Result<Bodies> {
     let options = skeleton_options(args)?;
     if let Some(path) = &args.avatar {
         return Ok(Bodies {
@@ -225,7 +204,7 @@ pub(super) fn bodies(args: &RenderArgs, characters: &[SceneCharacter]) -> Result
     let mut loaded = Loaded {
         args,
         options,
-        folders: avatar_folders(args),
+        scene_files,
         files: Vec::new(),
         bodies: Vec::new(),
         mannequin: None,
