@@ -56,7 +56,10 @@ pub use self::mapping::{Correction, carry_posture};
 pub use self::motion::{
     IntervalEdge, MotionCommand, SPEED_RANGE, TRAJECTORY_FRAMES_PER_STEP, Timeline,
 };
-pub use self::prop_files::{AUTOSAVE_PROP_FILE_BYTES, PropFile, PropFiles};
+pub use self::prop_files::{
+    AUTOSAVE_PROP_FILE_BYTES, LeftOutFile, NotCarried, PropFile, PropFiles, left_out_words,
+    size_words,
+};
 pub use self::tasks::{NewTask, make_task, table1_example};
 use crate::avatar::LoadedAvatar;
 use crate::history::{EditKind, History, Pending, Step};

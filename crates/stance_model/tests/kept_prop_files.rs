@@ -5,6 +5,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+use stance_document::scene::{MAX_PROP_FILE_BYTES, MAX_PROP_FILES_BYTES};
 use stance_model::model::{AUTOSAVE_PROP_FILE_BYTES, SceneCommand};
 use stance_model::model::{FileCommand, HistoryCommand};
 use stance_model::{Command, EditorModel, MemoryHost};
@@ -174,4 +175,98 @@ fn a_damaged_embedded_prop_file_is_named_and_the_open_scene_stays() {
     }
     assert_eq!(other.scene(), before, "the open scene stays");
     assert!(other.prop_files().get("Box.gltf").is_none());
+}
+
+/// The Box as a GLB of `total` bytes (a multiple of 4): its JSON chunk (the `.gltf`, its buffer
+/// embedded), then a chunk of a kind glTF does not define, zeros, filling the rest.
+fn box_glb_of(total: usize) -> Vec<u8> {
+    let mut json = BOX_GLTF.to_vec();
+    json.resize(json.len().div_ceil(4) * 4, b' ');
+    let filler = total - 12 - 8 - json.len() - 8;
+    let word = |n: usize| u32::try_from(n).unwrap().to_le_bytes();
+    let mut glb = Vec::with_capacity(total);
+    glb.extend_from_slice(b"glTF");
+    glb.extend_from_slice(&2u32.to_le_bytes());
+    glb.extend_from_slice(&word(total));
+    glb.extend_from_slice(&word(json.len()));
+    glb.extend_from_slice(b"JSON");
+    glb.extend_from_slice(&json);
+    glb.extend_from_slice(&word(filler));
+    glb.extend_from_slice(b"PAD\0");
+    glb.resize(total, 0);
+    glb
+}
+
+// Catches an export that dropped a file over the 64 MiB a document carries without a word (the
+// document reopens elsewhere with a box and the user never learns why), and an export that
+// carries every file but says something more than before.
+#[test]
+fn an_export_that_names_a_prop_file_only_says_which_and_why() {
+    let (host, mut model) = with_the_box(BOX_GLTF);
+    let before = model.notice().cloned();
+    model.apply(Command::File(FileCommand::ExportDocument));
+    assert_eq!(
+        model.notice().cloned(),
+        before,
+        "the Box is carried: nothing more to say"
+    );
+
+    // The Box as a GLB with a chunk of no known kind after it (ignored by readers): the same
+    // mesh, 4 bytes over what a document carries (the importer takes no JSON that large).
+    let glb = box_glb_of(usize::try_from(MAX_PROP_FILE_BYTES).unwrap() + 4);
+    let (host_big, mut big) = with_the_box(&glb);
+    drop(host);
+    big.apply(Command::File(FileCommand::ExportDocument));
+    let (_, text) = host_big.inner.borrow().downloads.last().cloned().unwrap();
+    assert!(!text.contains("\"files\""), "the file is named only");
+    assert!(text.contains("\"Box.gltf\""), "the prop names it");
+    let notice = big.notice().unwrap();
+    assert!(!notice.is_error, "{}", notice.text);
+    assert_eq!(
+        notice.text,
+        "Box.gltf (64.1 MiB) is named, not carried: over the 64 MiB a document carries. \
+         Opened elsewhere, its props are boxes until the file is loaded."
+    );
+}
+
+// Catches words that name the limit wrongly or read a file just over a limit as the limit:
+// the notice's words for a file past the total (the total is not reached cheaply here: 256
+// MiB of files) and for several files.
+#[test]
+fn the_words_of_files_left_out_name_each_file_its_size_and_the_limit() {
+    use stance_document::FileReference;
+    use stance_model::model::{LeftOutFile, NotCarried, left_out_words, size_words};
+    assert_eq!(size_words(912), "912 bytes");
+    assert_eq!(size_words(4160), "4.1 KiB");
+    assert_eq!(size_words(80 << 20), "80 MiB");
+    assert_eq!(size_words((64 << 20) + 1), "64.1 MiB");
+    assert_eq!(left_out_words(&[]), "");
+    let named = |name: &str, size: u64, why| LeftOutFile {
+        file: FileReference {
+            name: name.into(),
+            size,
+            hash: 0,
+            embedded: None,
+        },
+        why,
+    };
+    let words = left_out_words(&[
+        named(
+            "chair.glb",
+            80 << 20,
+            NotCarried::OverOne(MAX_PROP_FILE_BYTES),
+        ),
+        named(
+            "table.glb",
+            3 << 19,
+            NotCarried::PastAll(MAX_PROP_FILES_BYTES),
+        ),
+    ]);
+    assert_eq!(
+        words,
+        "chair.glb (80 MiB) is named, not carried: over the 64 MiB a document carries. \
+         table.glb (1.5 MiB) is named, not carried: with the files before it, past the 256 MiB \
+         of files a document carries in all. \
+         Opened elsewhere, their props are boxes until the files are loaded."
+    );
 }

@@ -28,6 +28,78 @@ const MIN_MESH_PROP_SIZE_M: f64 = 0.005;
 /// How far in front of the selected character a new mesh prop's box begins (m).
 const MESH_PROP_GAP_M: f64 = 0.3;
 
+/// A held prop file that a saved document names only (its props name it; it is not carried).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LeftOutFile {
+    /// The file's name, size and hash (without the file).
+    pub file: FileReference,
+    /// Why it is not carried.
+    pub why: NotCarried,
+}
+
+/// Why a saved document does not carry a held prop file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NotCarried {
+    /// Larger than the most bytes a document carries of one file (the limit).
+    OverOne(u64),
+    /// With the files carried before it, past the most bytes of files a document carries in
+    /// all (the limit).
+    PastAll(u64),
+}
+
+/// `bytes` in words: "912 bytes", "3.1 KiB", "80 MiB" (rounded up to a tenth, so that a file
+/// over a limit never reads as the limit).
+pub fn size_words(bytes: u64) -> String {
+    const KIB: u64 = 1 << 10;
+    const MIB: u64 = 1 << 20;
+    let (unit, name) = match bytes {
+        b if b < KIB => return format!("{b} bytes"),
+        b if b < MIB => (KIB, "KiB"),
+        _ => (MIB, "MiB"),
+    };
+    let tenths = bytes.saturating_mul(10).div_ceil(unit);
+    match tenths % 10 {
+        0 => format!("{} {name}", tenths / 10),
+        tenth => format!("{}.{tenth} {name}", tenths / 10),
+    }
+}
+
+/// What the notice says of the files a saved document names only: "chair.glb (80 MiB) is
+/// named, not carried: over the 64 MiB a document carries." for each, and what becomes of
+/// their props; nothing when there are none.
+pub fn left_out_words(left_out: &[LeftOutFile]) -> String {
+    if left_out.is_empty() {
+        return String::new();
+    }
+    let mut words: Vec<String> = left_out
+        .iter()
+        .map(|LeftOutFile { file, why }| {
+            let over = match why {
+                NotCarried::OverOne(limit) => {
+                    format!("over the {} a document carries", size_words(*limit))
+                }
+                NotCarried::PastAll(limit) => format!(
+                    "with the files before it, past the {} of files a document carries in all",
+                    size_words(*limit)
+                ),
+            };
+            format!(
+                "{} ({}) is named, not carried: {over}.",
+                file.name,
+                size_words(file.size)
+            )
+        })
+        .collect();
+    words.push(
+        match left_out.len() {
+            1 => "Opened elsewhere, its props are boxes until the file is loaded.",
+            _ => "Opened elsewhere, their props are boxes until the files are loaded.",
+        }
+        .to_owned(),
+    );
+    words.join(" ")
+}
+
 /// One imported prop file.
 #[derive(Debug, Clone)]
 pub struct PropFile {
@@ -199,6 +271,17 @@ impl EditorModel {
     /// (`MAX_PROP_FILE_BYTES` each, `MAX_PROP_FILES_BYTES` in all) and, `for_autosave`, within
     /// [`AUTOSAVE_PROP_FILE_BYTES`] in all; the others named only by their props.
     pub(super) fn carried_prop_files(&self, for_autosave: bool) -> Vec<FileReference> {
+        self.prop_files_to_save(for_autosave).0
+    }
+
+    /// The held files of the scene's mesh props that a saved document (`for_autosave`: the
+    /// autosave) names only, and why, in the props' order.
+    pub(super) fn left_out_prop_files(&self, for_autosave: bool) -> Vec<LeftOutFile> {
+        self.prop_files_to_save(for_autosave).1
+    }
+
+    /// The files [`Self::carried_prop_files`] carries, and those it leaves out.
+    fn prop_files_to_save(&self, for_autosave: bool) -> (Vec<FileReference>, Vec<LeftOutFile>) {
         let budget = if for_autosave {
             AUTOSAVE_PROP_FILE_BYTES
         } else {
@@ -206,8 +289,13 @@ impl EditorModel {
         };
         let mut total = 0u64;
         let mut files: Vec<FileReference> = Vec::new();
+        let mut left_out: Vec<LeftOutFile> = Vec::new();
         for name in self.props().iter().filter_map(|p| p.shape.file()) {
-            if files.iter().any(|f| f.name == name) {
+            if files
+                .iter()
+                .chain(left_out.iter().map(|l| &l.file))
+                .any(|f| f.name == name)
+            {
                 continue;
             }
             let Some(held) = self.prop_files.get(name) else {
@@ -217,9 +305,19 @@ impl EditorModel {
             if size <= MAX_PROP_FILE_BYTES && total.saturating_add(size) <= budget {
                 total += size;
                 files.push(held.source.clone());
+                continue;
             }
+            let why = if size > MAX_PROP_FILE_BYTES {
+                NotCarried::OverOne(MAX_PROP_FILE_BYTES)
+            } else {
+                NotCarried::PastAll(budget)
+            };
+            left_out.push(LeftOutFile {
+                file: held.source.without_file(),
+                why,
+            });
         }
-        files
+        (files, left_out)
     }
 
     /// [`super::SceneCommand::AddMeshProp`]: reads the file; one that is not a static mesh

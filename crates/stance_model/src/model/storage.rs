@@ -6,10 +6,20 @@ use super::EditorModel;
 use crate::library::PoseLibrary;
 
 impl EditorModel {
+    /// *File > Export document*: the scene with its prop files; the notice names the files
+    /// it names only (over the limits of what a document carries), and says nothing when it
+    /// carries them all.
     pub(super) fn export_document(&mut self) {
         let text = self.scene().to_json(true);
-        let result = self.hooks.download("stance-pose.json", &text);
-        self.host_result(result, "Could not export the pose");
+        match self.hooks.download("stance-pose.json", &text) {
+            Ok(()) => {
+                let words = super::left_out_words(&self.left_out_prop_files(false));
+                if !words.is_empty() {
+                    self.inform(words);
+                }
+            }
+            Err(error) => self.warn(format!("Could not export the pose: {error}")),
+        }
     }
 
     pub(super) fn export_library(&mut self) {
