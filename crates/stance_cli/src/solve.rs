@@ -78,53 +78,11 @@ fn solve_scene(args: &SolveArgs, text: &str) -> Result<Value> {
         ..SkeletonOptions::default()
     })?
     .skeleton;
-    let mut problems = Vec::with_capacity(scene.characters.len());
-    for (i, character) in scene.characters.iter().enumerate() {
-        let mut problem = Problem::from_document(&character.document, body.clone())
-            .map_err(|e| anyhow!("character {i} ({}): {e}", character.name))?;
-        // Its collision tasks hold it off the scene's props, in its own frame.
-        let character_from_scene = character.placement.scene_from_character().inverse();
-        let props: Vec<_> = scene
-            .props
-            .iter()
-            .map(|prop| prop.obstacle(character_from_scene))
-            .collect();
-        problem.set_obstacles(&props);
-        problems.push(problem);
-    }
+    let problems = character_problems(&scene, &body)?;
     let mut solved: Vec<Value> = vec![Value::Null; scene.characters.len()];
     let mut postures: Vec<Option<Posture>> = vec![None; scene.characters.len()];
     for group in joined_groups(&scene) {
-        let named = |e: &dyn std::fmt::Display| {
-            let names: Vec<String> = group
-                .iter()
-                .map(|&i| format!("character {i} ({})", scene.characters[i].name))
-                .collect();
-            anyhow!("{}: {e}", names.join(" and "))
-        };
-        let results: Vec<(usize, Posture, SolveReport, Vec<String>)> = if let [only] = group[..] {
-            let (posture, report) = problems[only].solve().map_err(|e| named(&e))?;
-            vec![(only, posture, report, Vec::new())]
-        } else {
-            let members: Vec<Problem> = group.iter().map(|&i| problems[i].clone()).collect();
-            let joined = JoinedProblem::new(&scene, &group, &members).map_err(|e| named(&e))?;
-            let (each, report) = joined.solve().map_err(|e| named(&e))?;
-            group
-                .iter()
-                .zip(each)
-                .map(|(&i, posture)| {
-                    let prefix = format!("character {i} (");
-                    let left: Vec<String> = joined
-                        .left_out
-                        .iter()
-                        .filter(|m| m.starts_with(&prefix))
-                        .cloned()
-                        .collect();
-                    (i, posture, report.clone(), left)
-                })
-                .collect()
-        };
-        for (i, posture, report, left_out) in results {
+        for (i, posture, report, left_out) in solve_group(&scene, &problems, &group)? {
             let character = &scene.characters[i];
             let mut out = problems[i].solution_json(&posture, &report);
             if let Some(o) = out.as_object_mut() {
@@ -150,6 +108,7 @@ fn solve_scene(args: &SolveArgs, text: &str) -> Result<Value> {
             character.document.posture = PostureValues::from_posture(&problem.skeleton, posture);
         }
     }
+    // Written back whole: its props' files too (`files`), as they came.
     if let Some(path) = &args.out {
         std::fs::write(path, scene.to_json(true))
             .with_context(|| format!("cannot write {}", path.display()))?;
@@ -161,6 +120,73 @@ fn solve_scene(args: &SolveArgs, text: &str) -> Result<Value> {
         o.insert("between".into(), json!(between));
     }
     Ok(out)
+}
+
+/// Each character's problem on `body` from its document, its collision tasks holding it off
+/// the scene's props (in its own frame).
+fn character_problems(scene: &Scene, body: &stance_ik::Skeleton) -> Result<Vec<Problem>> {
+    let mut problems = Vec::with_capacity(scene.characters.len());
+    for (i, character) in scene.characters.iter().enumerate() {
+        let mut problem = Problem::from_document(&character.document, body.clone())
+            .map_err(|e| anyhow!("character {i} ({}): {e}", character.name))?;
+        let character_from_scene = character.placement.scene_from_character().inverse();
+        let props: Vec<_> = scene
+            .props
+            .iter()
+            .map(|prop| prop.obstacle(character_from_scene))
+            .collect();
+        problem.set_obstacles(&props);
+        problems.push(problem);
+    }
+    Ok(problems)
+}
+
+/// A character solved: its index in the scene, its posture, the solve's report, and which of
+/// its tasks a joined solve left out.
+type Solved = (usize, Posture, SolveReport, Vec<String>);
+
+/// The characters of `group` (indices into the scene) solved: one alone, several joined as
+/// one problem.
+fn solve_group(scene: &Scene, problems: &[Problem], group: &[usize]) -> Result<Vec<Solved>> {
+    let named = |e: &dyn std::fmt::Display| {
+        let names: Vec<String> = group
+            .iter()
+            .map(|&i| {
+                let name = scene.characters.get(i).map_or("?", |c| c.name.as_str());
+                format!("character {i} ({name})")
+            })
+            .collect();
+        anyhow!("{}: {e}", names.join(" and "))
+    };
+    let problem = |i: usize| {
+        problems
+            .get(i)
+            .ok_or_else(|| named(&format_args!("no character {i}")))
+    };
+    if let [only] = group[..] {
+        let (posture, report) = problem(only)?.solve().map_err(|e| named(&e))?;
+        return Ok(vec![(only, posture, report, Vec::new())]);
+    }
+    let members: Vec<Problem> = group
+        .iter()
+        .map(|&i| problem(i).cloned())
+        .collect::<Result<_>>()?;
+    let joined = JoinedProblem::new(scene, group, &members).map_err(|e| named(&e))?;
+    let (each, report) = joined.solve().map_err(|e| named(&e))?;
+    Ok(group
+        .iter()
+        .zip(each)
+        .map(|(&i, posture)| {
+            let prefix = format!("character {i} (");
+            let left: Vec<String> = joined
+                .left_out
+                .iter()
+                .filter(|m| m.starts_with(&prefix))
+                .cloned()
+                .collect();
+            (i, posture, report.clone(), left)
+        })
+        .collect())
 }
 
 /// How far apart each task between characters left its two points (m, in the scene), each

@@ -506,6 +506,57 @@ fn solve_reads_a_scene_and_solves_every_character_in_its_own_frame() {
     assert!(stderr.contains("problem file"), "{stderr}");
 }
 
+#[test]
+fn solve_reads_a_scene_that_carries_its_prop_files_and_writes_them_back() {
+    // Catches: a scene with `files` refused, or written back by --out without its mesh props'
+    // files (a solved scene would reopen with its props as boxes).
+    const BOX_GLTF: &[u8] = include_bytes!("../../stance_asset/tests/fixtures/Box.gltf");
+    let carried = stance_document::FileReference::embed("Box.gltf", BOX_GLTF);
+    let files = serde_json::to_value([&carried]).unwrap();
+    let scene = serde_json::json!({
+        "characters": [{"name": "Ann", "tasks": [
+            {"level": 1, "kind": "position", "joint": "l_radiocarpal", "target": [0.3, 1.0, 0.3]}]}],
+        "props": [{"name": "Box", "shape": "mesh", "file": "Box.gltf", "size": [0.3, 0.3, 0.3],
+            "position": [2.0, 0.15, 0.0]}],
+        "files": files,
+    });
+    let path = write_temp("scene-files.json", &scene.to_string());
+    let out = path.with_file_name("scene-files-solved.json");
+    let (ok, stdout, stderr) = stance(&[
+        "solve",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    let v: Value = serde_json::from_str(&stdout).unwrap();
+    let wrist = v["characters"][0]["joints"]["l_radiocarpal"]
+        .as_array()
+        .unwrap();
+    let wrist: Vec<f64> = wrist.iter().map(|x| x.as_f64().unwrap()).collect();
+    assert!(
+        wrist
+            .iter()
+            .zip([0.3, 1.0, 0.3])
+            .all(|(a, b)| (a - b).abs() < 1e-3),
+        "solved: {wrist:?}"
+    );
+    let text = std::fs::read_to_string(&out).unwrap();
+    let written: Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(
+        written["files"], scene["files"],
+        "the props' files, as they came"
+    );
+    assert_ne!(
+        written["characters"][0]["posture"],
+        Value::Null,
+        "the solved posture"
+    );
+    let solved = stance_document::Scene::from_json(&text).unwrap();
+    assert_eq!(solved.files.len(), 1);
+    assert!(solved.files[0].is_file(BOX_GLTF));
+}
+
 /// Two characters facing each other 0.7 m apart with their feet pinned, the first's right
 /// wrist in the second's left (a task between characters, level 3).
 const HAND_IN_HAND: &str = r#"{"characters": [
