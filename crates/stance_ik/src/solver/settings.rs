@@ -45,7 +45,7 @@ impl Clock for SystemClock {
 /// Plain, documented solver settings with defaults.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SolverSettings {
-    /// Iteration budget (default 200).
+    /// Iteration budget, shared by the multi-start's runs (default 300).
     pub max_iterations: usize,
     /// A level is met when the norm of its residuals is at most this (m / rad; default 1e-6).
     pub tolerance: f64,
@@ -138,7 +138,7 @@ pub enum Backend {
 impl Default for SolverSettings {
     fn default() -> Self {
         Self {
-            max_iterations: 200,
+            max_iterations: 300,
             tolerance: 1e-6,
             stall_step: 1e-10,
             stall_improvement: 1e-10,
