@@ -254,6 +254,13 @@ pub struct MemoryHost {
     pub inner: Rc<RefCell<MemoryHostState>>,
 }
 
+impl MemoryHost {
+    /// The durable texts the editor stored (the autosave, the library), in key order.
+    pub fn stored_texts(&self) -> Vec<String> {
+        self.inner.borrow().storage.values().cloned().collect()
+    }
+}
+
 /// The contents of a [`MemoryHost`].
 #[derive(Debug, Default)]
 pub struct MemoryHostState {

@@ -215,13 +215,7 @@ fn the_autosave_brings_the_clip_back() {
     let mut model = editor_on(&host);
     walk_with_keys(&mut model);
     model.step(5.0, None);
-    assert!(
-        host.inner
-            .borrow()
-            .storage
-            .values()
-            .any(|v| v.contains("walk.bvh"))
-    );
+    assert!(host.stored_texts().iter().any(|v| v.contains("walk.bvh")));
     // The page opens the startup document before its first frame.
     let mut reloaded = EditorModel::new(Box::new(host.clone())).unwrap();
     reloaded.open_startup(None);
@@ -312,13 +306,7 @@ fn a_clip_too_large_for_the_autosave_is_named_and_asked_for() {
     open(&mut model, "long.bvh", long.as_bytes());
     assert_eq!(model.frame_count(), 3200);
     model.step(5.0, None);
-    let saved = host
-        .inner
-        .borrow()
-        .storage
-        .values()
-        .cloned()
-        .collect::<Vec<_>>();
+    let saved = host.stored_texts();
     assert!(
         saved.iter().all(|v| v.len() < 64 * 1024),
         "the clip is named, not carried: {:?}",

@@ -101,13 +101,7 @@ fn an_exported_document_reopens_in_a_fresh_editor_with_its_mesh_prop() {
 fn the_autosave_brings_the_mesh_prop_back_with_its_file() {
     let (host, mut model) = with_the_box(BOX_GLTF);
     model.step(5.0, None);
-    let saved = host
-        .inner
-        .borrow()
-        .storage
-        .values()
-        .cloned()
-        .collect::<Vec<_>>();
+    let saved = host.stored_texts();
     assert!(
         saved
             .iter()
@@ -131,13 +125,7 @@ fn a_prop_file_over_the_autosave_total_is_named_only_and_asked_for_after_the_rel
     padded.resize(usize::try_from(AUTOSAVE_PROP_FILE_BYTES).unwrap() + 1, b' ');
     let (host, mut model) = with_the_box(&padded);
     model.step(5.0, None);
-    let saved = host
-        .inner
-        .borrow()
-        .storage
-        .values()
-        .cloned()
-        .collect::<Vec<_>>();
+    let saved = host.stored_texts();
     let scene = saved.iter().find(|text| text.contains("Box.gltf")).unwrap();
     assert!(!scene.contains("\"files\""), "{} characters", scene.len());
     assert!(model.scene().to_json(false).contains("\"files\""));

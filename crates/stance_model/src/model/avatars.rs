@@ -122,18 +122,7 @@ impl EditorModel {
                 return;
             }
         };
-        let (mapped, unmapped) = avatar.mapping_summary();
-        let mut text = format!(
-            "Loaded {name}: {} vertices, {mapped} joints mapped onto H-Anim ({unmapped} left unmapped); posed at LOA {}.",
-            avatar.vertex_count,
-            loa.number()
-        );
-        if !avatar.warnings.is_empty() {
-            text.push_str(&format!(" Notes: {}", avatar.warnings.join("; ")));
-        }
-        if let Some(note) = mapping_note {
-            text.push_str(&format!(" {note}"));
-        }
+        let mut text = loaded_words(name, &avatar, loa, mapping_note);
         if swap {
             text.push_str(&format!(
                 " The posture and {} task(s) carried over (undo brings the previous body back).",
@@ -319,4 +308,27 @@ fn resource_uris(gltf: &[u8]) -> Vec<String> {
         .filter(|uri| !uri.starts_with("data:"))
         .map(str::to_owned)
         .collect()
+}
+
+/// What the notice says of an avatar just loaded: its size, the joints mapped, the LOA it is
+/// posed at, the importer's notes and the mapping corrections applied again.
+fn loaded_words(
+    name: &str,
+    avatar: &LoadedAvatar,
+    loa: stance_hanim::LevelOfArticulation,
+    mapping_note: Option<String>,
+) -> String {
+    let (mapped, unmapped) = avatar.mapping_summary();
+    let mut text = format!(
+        "Loaded {name}: {} vertices, {mapped} joints mapped onto H-Anim ({unmapped} left unmapped); posed at LOA {}.",
+        avatar.vertex_count,
+        loa.number()
+    );
+    if !avatar.warnings.is_empty() {
+        text.push_str(&format!(" Notes: {}", avatar.warnings.join("; ")));
+    }
+    if let Some(note) = mapping_note {
+        text.push_str(&format!(" {note}"));
+    }
+    text
 }
