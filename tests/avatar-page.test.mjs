@@ -152,13 +152,19 @@ describe("avatars in the page", () => {
     const still = await waitForSettled(page, { timeout: 30_000, still: true });
     const [wx, wy] = still.screen.r_radiocarpal;
     const [ex, ey] = still.screen.r_elbow;
-    // The hanging forearm passes beside the thigh: where they overlap on screen the click
-    // picks the thigh (CI, 2026-11-28: the right hip selected twice). The grab is the point
-    // of the forearm farthest on screen from the thigh's bone (hip to knee).
+    // The hanging forearm passes beside the thigh and the pelvis: where they overlap on
+    // screen the click picks them (CI, 2026-11-28: the right hip, then the sacroiliac). The
+    // grab is the point of the forearm farthest on screen from the thigh's bone and from
+    // every joint that is not the right arm's or hand's.
     const thigh = [still.screen.r_hip, still.screen.r_knee];
+    const others = Object.entries(still.screen)
+      .filter(([name]) => !/^r_(elbow|radiocarpal|midcarpal|carpometacarpal|metacarpophalangeal|carpal)/.test(name))
+      .map(([, point]) => point);
+    const clearance = (p) => Math.min(distanceToSegment(p, thigh),
+      ...others.map(([x, y]) => Math.hypot(p[0] - x, p[1] - y)));
     const [grabX, grabY] = [0.3, 0.4, 0.5, 0.6, 0.7, 0.8]
       .map((t) => [ex + (wx - ex) * t, ey + (wy - ey) * t])
-      .reduce((best, p) => (distanceToSegment(p, thigh) > distanceToSegment(best, thigh) ? p : best));
+      .reduce((best, p) => (clearance(p) > clearance(best) ? p : best));
     const handBefore = still.joints.r_radiocarpal;
     const footBefore = still.joints.l_talocrural;
     const memoryBefore = (await state(page)).wasm_memory_bytes;
