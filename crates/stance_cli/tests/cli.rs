@@ -40,6 +40,18 @@ fn stance(args: &[&str]) -> (bool, String, String) {
     )
 }
 
+/// `stance solve PATH --out OUT`: its report (stdout) as JSON; fails the test on an error.
+fn solve_into(path: &std::path::Path, out: &std::path::Path) -> Value {
+    let (ok, stdout, stderr) = stance(&[
+        "solve",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    serde_json::from_str(&stdout).expect("one JSON object")
+}
+
 fn write_temp(name: &str, text: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("stance-cli-test-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
@@ -446,14 +458,7 @@ fn solve_reads_a_scene_and_solves_every_character_in_its_own_frame() {
     // scene's frame instead of the character's, a solved scene not written back.
     let path = write_temp("scene.json", SCENE);
     let out = path.with_file_name("scene-solved.json");
-    let (ok, stdout, stderr) = stance(&[
-        "solve",
-        path.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(ok, "{stderr}");
-    let v: Value = serde_json::from_str(&stdout).expect("one JSON object");
+    let v = solve_into(&path, &out);
     let characters = v["characters"].as_array().expect("one entry per character");
     assert_eq!(characters.len(), 2);
     let near = |c: &Value, joint: &str, target: [f64; 3]| {
@@ -522,14 +527,7 @@ fn solve_reads_a_scene_that_carries_its_prop_files_and_writes_them_back() {
     });
     let path = write_temp("scene-files.json", &scene.to_string());
     let out = path.with_file_name("scene-files-solved.json");
-    let (ok, stdout, stderr) = stance(&[
-        "solve",
-        path.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(ok, "{stderr}");
-    let v: Value = serde_json::from_str(&stdout).unwrap();
+    let v = solve_into(&path, &out);
     let wrist = v["characters"][0]["joints"]["l_radiocarpal"]
         .as_array()
         .unwrap();
@@ -579,14 +577,7 @@ fn solve_joins_the_characters_a_task_between_them_joins() {
     // hands, the solved scene written without the task.
     let path = write_temp("hand-in-hand.json", HAND_IN_HAND);
     let out = path.with_file_name("hand-in-hand-solved.json");
-    let (ok, stdout, stderr) = stance(&[
-        "solve",
-        path.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(ok, "{stderr}");
-    let v: Value = serde_json::from_str(&stdout).expect("one JSON object");
+    let v = solve_into(&path, &out);
     let c = v["characters"].as_array().unwrap();
     let joint = |c: &Value, name: &str| -> [f64; 3] {
         let p = c["joints"][name].as_array().expect("the joint's position");
