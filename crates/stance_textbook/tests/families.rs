@@ -53,61 +53,98 @@ fn stance_solution(text: &str, oracle: &Problem, restarts: bool) -> Vec<f64> {
         .unwrap()
 }
 
+/// Every family has its stated counts here (a family added without them fails).
 #[test]
-fn stance_meets_every_level_wherever_the_textbook_oracle_does_on_every_family() {
+fn every_family_has_its_stated_counts() {
+    let names: Vec<String> = all_families()
+        .into_iter()
+        .map(|f| f.name.to_string())
+        .collect();
+    let stated: Vec<&str> = STATED.iter().map(|s| s.0).collect();
+    assert_eq!(names, stated, "STATED lists the families in their order");
+}
+
+/// One test per family (libtest runs them side by side: the families are independent and
+/// each takes seconds).
+macro_rules! family_tests {
+    ($($test:ident => $name:literal,)*) => {
+        $(
+            #[test]
+            fn $test() {
+                stance_meets_every_level_wherever_the_textbook_oracle_does($name);
+            }
+        )*
+    };
+}
+
+family_tests! {
+    reach_family_meets_the_oracle => "reach",
+    partial_family_meets_the_oracle => "partial",
+    mixed_family_meets_the_oracle => "mixed",
+    loa1_family_meets_the_oracle => "loa1",
+    loa2_family_meets_the_oracle => "loa2",
+    limits_family_meets_the_oracle => "limits",
+    stand_family_meets_the_oracle => "stand",
+    wide_family_meets_the_oracle => "wide",
+    aim_family_meets_the_oracle => "aim",
+    com_family_meets_the_oracle => "com",
+    poise_family_meets_the_oracle => "poise",
+    far_family_meets_the_oracle => "far",
+    lean_family_meets_the_oracle => "lean",
+    point_family_meets_the_oracle => "point",
+}
+
+fn stance_meets_every_level_wherever_the_textbook_oracle_does(name: &str) {
+    let family = all_families()
+        .into_iter()
+        .find(|f| f.name == name)
+        .unwrap_or_else(|| panic!("no family {name}"));
     let mut failures = Vec::new();
-    for family in all_families() {
-        let mut met = [0usize; 2];
-        let mut oracle_met = 0;
-        let mut missed_where_oracle_met = [0usize; 2];
-        for (oracle, text, _) in problems(&family, CASES) {
-            let tolerance = oracle.tolerance * (1.0 + 1e-6);
-            let meets = |q: &[f64]| oracle.level_residuals(q).iter().all(|&r| r <= tolerance);
-            let textbook = oracle.solve(&Settings::default());
-            // The oracle's own verdict on its own solve, from its residuals.
-            assert_eq!(textbook.met_every_level, meets(&textbook.posture));
-            oracle_met += usize::from(textbook.met_every_level);
-            for (k, restarts) in [true, false].into_iter().enumerate() {
-                let ours = meets(&stance_solution(&text, &oracle, restarts));
-                met[k] += usize::from(ours);
-                if textbook.met_every_level && !ours {
-                    missed_where_oracle_met[k] += 1;
-                }
+    let mut met = [0usize; 2];
+    let mut oracle_met = 0;
+    let mut missed_where_oracle_met = [0usize; 2];
+    for (oracle, text, _) in problems(&family, CASES) {
+        let tolerance = oracle.tolerance * (1.0 + 1e-6);
+        let meets = |q: &[f64]| oracle.level_residuals(q).iter().all(|&r| r <= tolerance);
+        let textbook = oracle.solve(&Settings::default());
+        // The oracle's own verdict on its own solve, from its residuals.
+        assert_eq!(textbook.met_every_level, meets(&textbook.posture));
+        oracle_met += usize::from(textbook.met_every_level);
+        for (k, restarts) in [true, false].into_iter().enumerate() {
+            let ours = meets(&stance_solution(&text, &oracle, restarts));
+            met[k] += usize::from(ours);
+            if textbook.met_every_level && !ours {
+                missed_where_oracle_met[k] += 1;
             }
-        }
-        let tuned = if family.tuned { "tuned" } else { "held out" };
-        println!(
-            "{:<8} ({tuned}): Stance meets every level in {}/{CASES} (without restarts {}/{CASES}), \
-             the textbook oracle in {oracle_met}/{CASES}; Stance misses {} (without restarts {}) \
-             of the oracle's",
-            family.name, met[0], met[1], missed_where_oracle_met[0], missed_where_oracle_met[1]
-        );
-        if met[0] < oracle_met {
-            failures.push(format!(
-                "{}: Stance {} < oracle {oracle_met}",
-                family.name, met[0]
-            ));
-        }
-        let stated = STATED.iter().find(|s| s.0 == family.name);
-        match stated {
-            Some(&(_, with, without, misses)) => {
-                if met[0].abs_diff(with) > 1 || met[1].abs_diff(without) > 1 {
-                    failures.push(format!(
-                        "{}: met {}/{} (restarts / none), the docs state {with}/{without}",
-                        family.name, met[0], met[1]
-                    ));
-                }
-                if missed_where_oracle_met[0] > misses {
-                    failures.push(format!(
-                        "{}: misses {} of the oracle's cases, the docs state {misses}",
-                        family.name, missed_where_oracle_met[0]
-                    ));
-                }
-            }
-            None => failures.push(format!("{}: no stated count", family.name)),
         }
     }
-    assert!(failures.is_empty(), "{failures:#?}");
+    let tuned = if family.tuned { "tuned" } else { "held out" };
+    println!(
+        "{:<8} ({tuned}): Stance meets every level in {}/{CASES} (without restarts {}/{CASES}), \
+         the textbook oracle in {oracle_met}/{CASES}; Stance misses {} (without restarts {}) \
+         of the oracle's",
+        family.name, met[0], met[1], missed_where_oracle_met[0], missed_where_oracle_met[1]
+    );
+    if met[0] < oracle_met {
+        failures.push(format!("Stance {} < oracle {oracle_met}", met[0]));
+    }
+    let &(_, with, without, misses) = STATED
+        .iter()
+        .find(|s| s.0 == family.name)
+        .unwrap_or_else(|| panic!("{name}: no stated count"));
+    if met[0].abs_diff(with) > 1 || met[1].abs_diff(without) > 1 {
+        failures.push(format!(
+            "met {}/{} (restarts / none), the docs state {with}/{without}",
+            met[0], met[1]
+        ));
+    }
+    if missed_where_oracle_met[0] > misses {
+        failures.push(format!(
+            "misses {} of the oracle's cases, the docs state {misses}",
+            missed_where_oracle_met[0]
+        ));
+    }
+    assert!(failures.is_empty(), "{name}: {failures:#?}");
 }
 
 /// Catches two faults the oracle had (issue 29), and Stance's textbook iteration parting from
