@@ -10,6 +10,8 @@
 //! [`stance_ik::Skeleton::new`] accepts, frames that fit the clip's joints and postures the
 //! body's DOF) and returns an [`AssetError::Transfer`] naming the problem; it never panics.
 
+use std::sync::Arc;
+
 use glam::{DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 use stance_hanim::{AnatomicalAxis, BuiltJoint, HumanoidSkeleton, LevelOfArticulation, Mapping};
@@ -34,8 +36,9 @@ pub const FRAMES_PER_PART: usize = 1000;
 pub struct ClipJob {
     /// The file's name (its extension says how to read it).
     pub name: String,
-    /// The file's contents (BVH, or a glTF file's first animation).
-    pub bytes: Vec<u8>,
+    /// The file's contents (BVH, or a glTF file's first animation), shared with the editor's
+    /// copy (a long clip is megabytes: the main thread copies it once, into the trip).
+    pub bytes: Arc<[u8]>,
     /// The body to put it on.
     pub body: HumanoidSkeleton,
     /// How.
@@ -86,27 +89,40 @@ impl ClipJob {
         Ok(OpenedClip { clip, retargeted })
     }
 
-    /// The job as bytes for the trip.
+    /// The job as bytes for the trip: the head (name, body, settings, mapping and the file's
+    /// length) in postcard's layout, then the file's bytes as they are (one copy).
     pub fn to_bytes(&self) -> Result<Vec<u8>, AssetError> {
-        let wire = JobWire {
+        let head = JobHead {
             name: self.name.clone(),
-            bytes: self.bytes.clone(),
+            file_bytes: self.bytes.len() as u64,
             body: BodyWire::of(&self.body),
             options: OptionsWire::of(&self.options),
             mapping: self.mapping.clone(),
         };
-        postcard::to_allocvec(&wire).map_err(|error| AssetError::Transfer(error.to_string()))
+        let mut out = postcard::to_allocvec(&head)
+            .map_err(|error| AssetError::Transfer(error.to_string()))?;
+        out.reserve_exact(self.bytes.len());
+        out.extend_from_slice(&self.bytes);
+        Ok(out)
     }
 
     /// The job again.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, AssetError> {
-        let wire: JobWire = whole(bytes, "job")?;
+        let (head, file) = postcard::take_from_bytes::<JobHead>(bytes)
+            .map_err(|error| AssetError::Transfer(format!("the job: {error}")))?;
+        if file.len() as u64 != head.file_bytes {
+            return Err(AssetError::Transfer(format!(
+                "the job's file has {} bytes, its head says {}",
+                file.len(),
+                head.file_bytes
+            )));
+        }
         Ok(Self {
-            name: wire.name,
-            bytes: wire.bytes,
-            body: wire.body.into_body()?,
-            options: wire.options.into_options()?,
-            mapping: wire.mapping,
+            name: head.name,
+            bytes: file.into(),
+            body: head.body.into_body()?,
+            options: head.options.into_options()?,
+            mapping: head.mapping,
         })
     }
 }
@@ -330,11 +346,12 @@ fn whole<T: for<'de> Deserialize<'de>>(bytes: &[u8], what: &str) -> Result<T, As
     }
 }
 
+/// A [`ClipJob`] but its file, which follows it on the trip.
 #[derive(Serialize, Deserialize)]
-struct JobWire {
+struct JobHead {
     name: String,
-    #[serde(with = "pod_vec")]
-    bytes: Vec<u8>,
+    /// The file's length (what follows the head).
+    file_bytes: u64,
     body: BodyWire,
     options: OptionsWire,
     mapping: Option<Mapping>,

@@ -32,7 +32,7 @@ fn the_job_crosses_with_the_same_body_and_settings() {
     for body in [mannequin(), on_avatar] {
         let job = ClipJob {
             name: "walk.bvh".into(),
-            bytes: WALK.to_vec(),
+            bytes: WALK.into(),
             body,
             options: RetargetOptions::default().with_arm_lift(12.0),
             mapping: None,
@@ -53,7 +53,7 @@ fn a_corrected_mapping_crosses_and_is_applied() {
     assert!(mapping.remove("l_elbow"), "the walk maps an elbow");
     let job = ClipJob {
         name: "walk.bvh".into(),
-        bytes: WALK.to_vec(),
+        bytes: WALK.into(),
         body: mannequin(),
         options: RetargetOptions::default(),
         mapping: Some(mapping.clone()),
@@ -84,7 +84,7 @@ fn the_opened_clip_crosses_in_parts_and_is_the_one_shot_retargeting() {
     };
     let job = ClipJob {
         name: "long.bvh".into(),
-        bytes: bytes.clone(),
+        bytes: bytes.clone().into(),
         body: mannequin(),
         options: options.clone(),
         mapping: None,
@@ -119,7 +119,7 @@ fn the_opened_clip_crosses_in_parts_and_is_the_one_shot_retargeting() {
 fn damaged_transfers_are_refused_by_name() {
     let job = ClipJob {
         name: "walk.bvh".into(),
-        bytes: WALK.to_vec(),
+        bytes: WALK.into(),
         body: mannequin(),
         options: RetargetOptions {
             contacts: None,
@@ -160,7 +160,7 @@ fn damaged_transfers_are_refused_by_name() {
 fn a_file_that_is_not_a_clip_says_why() {
     let job = ClipJob {
         name: "broken.bvh".into(),
-        bytes: b"HIERARCHY\nROOT hips\n{".to_vec(),
+        bytes: b"HIERARCHY\nROOT hips\n{".as_slice().into(),
         body: mannequin(),
         options: RetargetOptions::default(),
         mapping: None,
@@ -182,7 +182,7 @@ fn write_clip_transfer_seeds() {
     std::fs::create_dir_all(&dir).unwrap();
     let job = ClipJob {
         name: "walk.bvh".into(),
-        bytes: long_walk(10),
+        bytes: long_walk(10).into(),
         body: mannequin(),
         options: RetargetOptions::default(),
         mapping: None,

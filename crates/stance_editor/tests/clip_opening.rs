@@ -58,7 +58,7 @@ fn a_clip_opened_by_the_host_shows_its_progress_then_is_the_editors_own() {
     open(&mut model, "walk.bvh", WALK);
     let request = last_request(&host);
     assert_eq!(clip(&request).name, "walk.bvh");
-    assert_eq!(clip(&request).bytes, WALK);
+    assert_eq!(&clip(&request).bytes[..], WALK);
     assert_eq!(&clip(&request).body, model.session().humanoid());
     assert_eq!(model.timeline().opening(), Some(("walk.bvh", 0.0)));
     assert!(!model.timeline().has_clip());
@@ -286,7 +286,7 @@ fn a_change_of_body_puts_the_open_clip_on_it_again_through_the_host() {
     )));
     assert_eq!(host.inner.borrow().jobs.len(), requests + 1);
     let request = last_request(&host);
-    assert_eq!(clip(&request).bytes, WALK);
+    assert_eq!(&clip(&request).bytes[..], WALK);
     assert_eq!(&clip(&request).body, model.session().humanoid());
     assert_eq!(
         clip(&request).mapping.as_ref(),
@@ -392,7 +392,7 @@ fn the_open_clip_asked_for_again_survives_another_clip_a_new_mapping_and_close()
     model.apply(Command::Motion(MotionCommand::CancelOpening));
     let asked = last_request(&host);
     assert_ne!(asked.id, run.id, "the walk is asked for again");
-    assert_eq!(clip(&asked).bytes, WALK);
+    assert_eq!(&clip(&asked).bytes[..], WALK);
     assert_eq!(&clip(&asked).body, model.session().humanoid());
     model.receive(answer(walk_again));
     assert!(

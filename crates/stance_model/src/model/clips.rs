@@ -4,6 +4,8 @@
 //! thresholds), the timeline baked out as a glTF animation on the avatar or as BVH, and the
 //! clip kept with the document (embedded in a saved file, named by content hash in a link).
 
+use std::sync::Arc;
+
 use stance_asset::{
     ANIMATION_SAMPLE_FPS, ClipJob, OpenedClip, clip_from_animation, export_glb_animation,
     is_bvh_file,
@@ -42,8 +44,9 @@ pub(super) struct Opening {
     pub(super) name: String,
     /// How far it has got (0 to 1).
     pub(super) progress: f64,
-    /// The file, asked for again when the body or the settings change meanwhile.
-    bytes: Vec<u8>,
+    /// The file, asked for again when the body or the settings change meanwhile (shared
+    /// with the job and the document's reference: a long clip is megabytes).
+    bytes: Arc<[u8]>,
     /// The file as the document keeps it; `None`: the clip written as BVH (not a BVH file:
     /// the whole glTF file would be kept).
     source: Option<ClipReference>,
@@ -81,11 +84,12 @@ impl EditorModel {
     /// Opens a picked or dropped clip file; a file that cannot be read says why and the
     /// timeline stays as it was. Read and retargeted by the host where it can (off the
     /// editor's thread, the timeline shows the progress and *Cancel*), else here.
-    pub(super) fn open_clip_file(&mut self, name: &str, bytes: &[u8]) {
-        let source = is_bvh_file(name).then(|| ClipReference::embed(name, bytes));
+    pub(super) fn open_clip_file(&mut self, name: &str, bytes: Vec<u8>) {
+        let bytes: Arc<[u8]> = bytes.into();
+        let source = is_bvh_file(name).then(|| ClipReference::embed_shared(name, bytes.clone()));
         // (An open clip hidden while it was asked for again waits for this one: asked for
         // again if this one fails or is cancelled.)
-        if let Some(result) = self.start_opening(name, bytes.to_vec(), source, false, None) {
+        if let Some(result) = self.start_opening(name, bytes, source, false, None) {
             self.report_opening(false, false, result);
         }
     }
@@ -98,7 +102,7 @@ impl EditorModel {
     pub(super) fn start_opening(
         &mut self,
         name: &str,
-        bytes: Vec<u8>,
+        bytes: Arc<[u8]>,
         source: Option<ClipReference>,
         from_document: bool,
         again: Option<Mapping>,
@@ -356,7 +360,7 @@ impl EditorModel {
         self.character.timeline.wanted = Some(reference.without_file());
         if let Some(embedded) = &reference.embedded {
             let name = reference.name.clone();
-            let bytes = embedded.bytes().to_vec();
+            let bytes = embedded.shared_bytes();
             return match self.start_opening(&name, bytes, Some(reference.clone()), true, None) {
                 None => (
                     format!(" Its clip {name} is being read and put on the body…"),

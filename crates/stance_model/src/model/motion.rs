@@ -12,6 +12,8 @@
 mod layer;
 mod timeline;
 
+use std::sync::Arc;
+
 use glam::DVec3;
 use stance_document::motion::{DEFAULT_FRAME_COUNT, DEFAULT_FRAME_TIME};
 use stance_document::{ClipReference, MotionKey, MotionSection, PostureValues, TaskInterval};
@@ -196,7 +198,7 @@ pub struct Timeline {
     /// The file the open clip was read from (name, contents): after a change of body or
     /// settings it goes back to the host to be put on the body again off the editor's
     /// thread. `None` for a recording or an avatar's animation (put on the body here).
-    pub(super) file: Option<(String, Vec<u8>)>,
+    pub(super) file: Option<(String, Arc<[u8]>)>,
     /// The id of the next clip request to the host.
     pub(super) next_request: u64,
 }
@@ -389,7 +391,7 @@ impl EditorModel {
         clip: Box<Clip>,
         retargeted: Retargeted,
         source: ClipReference,
-        file: Option<(String, Vec<u8>)>,
+        file: Option<(String, Arc<[u8]>)>,
         set_aside: bool,
     ) -> String {
         let (frames, fps) = (retargeted.postures.len(), 1.0 / retargeted.frame_time);
@@ -591,7 +593,7 @@ impl EditorModel {
         clip: Box<Clip>,
         retargeted: Retargeted,
         source: ClipReference,
-        file: Option<(String, Vec<u8>)>,
+        file: Option<(String, Arc<[u8]>)>,
     ) {
         self.character.timeline.clip = Some(clip);
         self.character.timeline.retargeted = Some(retargeted);

@@ -159,7 +159,7 @@ impl EditorModel {
                 return;
             }
             Some(PickPurpose::Clip) => {
-                self.open_clip_file(name, &bytes);
+                self.open_clip_file(name, bytes);
                 return;
             }
             Some(PickPurpose::Prop) => {
@@ -173,7 +173,7 @@ impl EditorModel {
                 return;
             }
             None if stance_asset::is_bvh_file(name) => {
-                self.open_clip_file(name, &bytes);
+                self.open_clip_file(name, bytes);
                 return;
             }
             None => {}
