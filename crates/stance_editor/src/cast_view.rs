@@ -1,8 +1,9 @@
 //! The scene's characters as the renderer draws them: each character's capsules and skinning
 //! palettes are in its own frame, put in the scene by its placement
 //! ([`stance_document::Placement::scene_from_character`]; `stance_render::placed` does the
-//! placing, as `stance render` does). The characters that are not selected are drawn as their
-//! mannequin capsules in a quieter colour.
+//! placing, as `stance render` does). The characters that are not selected are drawn skinned on
+//! their own models as the selected one is (`crate::cast_models`), or as their capsules in a
+//! quieter colour while the capsules are shown or their model is on its way to the GPU.
 
 use glam::{Mat4, Vec3};
 use stance_render::{
@@ -11,11 +12,11 @@ use stance_render::{
 };
 pub(crate) use stance_render::{placed_capsule, placed_palettes};
 
-use crate::figure::MannequinFigure;
 use crate::model::{Character, EditorModel};
 
-/// The colour of the characters that are not selected (linear RGB): the body's, greyer.
-pub(crate) const OTHER_COLOR_LINEAR: [f32; 4] = [0.42, 0.42, 0.45, 1.0];
+/// The colour of the characters that are not selected when drawn as capsules (linear RGB): the
+/// body's, greyer.
+pub const OTHER_COLOR_LINEAR: [f32; 4] = [0.42, 0.42, 0.45, 1.0];
 
 /// Every prop of the scene drawn as a unit shape (a mesh prop whose file is not loaded: its
 /// box).
@@ -58,55 +59,25 @@ pub(crate) fn scene_from_character(character: &Character) -> Mat4 {
     stance_render::scene_from_character(&character.placement())
 }
 
-/// The model on the GPU this frame, which characters other than the selected one are drawn
-/// with when it is theirs too.
-#[derive(Clone, Copy)]
-pub(crate) enum Uploaded<'a> {
-    /// The mannequin's figure: every character on the mannequin.
-    Figure(&'a MannequinFigure),
-    /// The selected character's avatar: the characters on the same avatar file.
-    Avatar,
-    /// Nothing (or the capsules are shown): the others are capsules.
-    None,
-}
-
-/// How the characters other than the selected one are drawn: skinned with the uploaded model
-/// where it is theirs (their poses, placed: `more_avatar_poses`), else as their capsules in
-/// [`OTHER_COLOR_LINEAR`].
-pub(crate) fn other_figures(
-    model: &EditorModel,
-    uploaded: Uploaded<'_>,
-) -> (Vec<Capsule>, Vec<Vec<Vec<Mat4>>>) {
-    let selected_avatar = model.avatar().map(|avatar| avatar.name.as_str());
-    let mut capsules = Vec::new();
-    let mut poses = Vec::new();
-    for character in model.other_characters() {
-        let place = scene_from_character(character);
-        let session = character.session();
-        let palettes = match (uploaded, character.avatar()) {
-            (Uploaded::Figure(figure), None) => {
-                figure.palettes(session.skeleton(), session.posture())
-            }
-            (Uploaded::Avatar, Some(avatar)) if Some(avatar.name.as_str()) == selected_avatar => {
-                avatar.palettes(session.humanoid(), session.posture())
-            }
-            _ => None,
-        };
-        match palettes {
-            Some(palettes) => poses.push(placed_palettes(palettes, place)),
-            None => capsules.extend(character.bones().iter().map(|bone| Capsule {
-                color_linear: OTHER_COLOR_LINEAR,
-                ..placed_capsule(bone.capsule, place)
-            })),
-        }
-    }
-    (capsules, poses)
+/// `character`'s capsules, placed in the scene, in [`OTHER_COLOR_LINEAR`]: a character other
+/// than the selected one drawn as capsules (the capsules view, or its model not on the GPU
+/// yet; `crate::cast_models::CastModels::others`).
+pub(crate) fn other_capsules_of(character: &Character) -> impl Iterator<Item = Capsule> + '_ {
+    let place = scene_from_character(character);
+    character.bones().iter().map(move |bone| Capsule {
+        color_linear: OTHER_COLOR_LINEAR,
+        ..placed_capsule(bone.capsule, place)
+    })
 }
 
 /// The capsules of every character but the selected one, in the scene (their bodies as
 /// shapes: the depth range of a control map).
 pub(crate) fn other_capsules(model: &EditorModel) -> Vec<Capsule> {
-    other_figures(model, Uploaded::None).0
+    model
+        .other_characters()
+        .iter()
+        .flat_map(other_capsules_of)
+        .collect()
 }
 
 /// The character whose body the scene ray `origin + t direction` meets first among those not

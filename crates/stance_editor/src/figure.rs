@@ -46,6 +46,12 @@ impl MannequinFigure {
         self.avatar.take_mesh()
     }
 
+    /// The mesh for the GPU, kept (the figure's is small): the same at every level of
+    /// articulation. `None` once taken.
+    pub fn model(&self) -> Option<Arc<SkinnedModel>> {
+        self.avatar.mesh().cloned()
+    }
+
     /// The skinning palettes that show `posture` of the mannequin `skeleton`: each DOF of
     /// the figure's skeleton takes the value of the same joint's same DOF.
     pub fn palettes(&self, skeleton: &Skeleton, posture: &Posture) -> Option<Vec<Vec<Mat4>>> {

@@ -8,9 +8,8 @@
 //! its depth, normal and mask maps the same way, one after another
 //! ([`FileCommand::SaveControlMap`]).
 
-use crate::cast_view::{
-    Uploaded, other_capsules, other_figures, placed_capsule, placed_palettes, scene_from_character,
-};
+use crate::cast_models::CastModels;
+use crate::cast_view::{other_capsules, placed_capsule, placed_palettes, scene_from_character};
 use crate::model::Outbox;
 use crate::model::{FileCommand, NoticeCommand};
 use glam::DVec3;
@@ -19,7 +18,6 @@ use stance_render::{
     PendingImage, Pixels, Scene, SceneRenderer, Shading, encode_png, line_art, render_image,
 };
 
-use crate::figure::MannequinFigure;
 use crate::model::{Command, EditorModel, RenderedMap};
 
 pub use crate::model::IMAGE_FILE_NAME;
@@ -72,9 +70,9 @@ impl ImageExport {
     /// Moves *Save image* along with the viewport's GPU: renders an asked image of `model`,
     /// and sends a finished one to the model, which hands it to the host as
     /// `stance-posture.png` (a control map under its own name). Never blocks; returns whether
-    /// an image is still on its way (call again next frame). `renderer` draws the avatar it
-    /// holds, or the mannequin's `figure` when it holds its mesh (else the mannequin's
-    /// capsules).
+    /// an image is still on its way (call again next frame). `renderer` draws each character
+    /// on its model where it holds it, as `cast` says (the viewport's: which model is where),
+    /// else as its capsules.
     pub fn advance(
         &mut self,
         model: &EditorModel,
@@ -82,12 +80,12 @@ impl ImageExport {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         renderer: &mut SceneRenderer,
-        figure: Option<&MannequinFigure>,
+        cast: &CastModels,
     ) -> bool {
         if self.pending.is_none()
             && let Some(request) = self.asked.pop_front()
         {
-            self.start(request, model, outbox, (device, queue, renderer), figure);
+            self.start(request, model, outbox, (device, queue, renderer), cast);
         }
         let Some((result, map)) = self
             .pending
@@ -153,21 +151,9 @@ impl ImageExport {
         model: &EditorModel,
         outbox: &mut Outbox,
         (device, queue, renderer): (&wgpu::Device, &wgpu::Queue, &mut SceneRenderer),
-        figure: Option<&MannequinFigure>,
+        cast: &CastModels,
     ) {
-        let mut scene = image_scene(model, renderer.avatar().is_some());
-        let session = model.session();
-        if let Some(figure) = figure.filter(|_| model.avatar().is_none())
-            && let Some(palettes) = figure.palettes(session.skeleton(), session.posture())
-        {
-            // The selected character is the figure, and so are the others on the mannequin.
-            let (others, more_poses) = other_figures(model, Uploaded::Figure(figure));
-            scene.capsules = others;
-            scene.more_avatar_poses = more_poses;
-            scene.show_avatar = true;
-            scene.avatar_palettes =
-                placed_palettes(palettes, scene_from_character(model.character()));
-        }
+        let mut scene = image_scene(model, renderer, cast);
         let camera = &request.camera;
         let mut options = request.options;
         let first_pass = self.lines_depth.is_none();
@@ -220,13 +206,23 @@ fn shading(
     }
 }
 
-/// What an image of `model` shows: the body in its plain colour (the avatar when
-/// `avatar_uploaded`), the floor, and each task's goal as a marker coloured by its status
-/// (met, gave way, inactive); [`ImageOptions::scene`] drops the last two without overlays.
-fn image_scene(model: &EditorModel, avatar_uploaded: bool) -> Scene {
+/// What an image of `model` shows: each character on its model where `renderer` holds it (as
+/// `cast` says), else as its capsules (the selected one's in its plain colour), the floor, and
+/// each task's goal as a marker coloured by its status (met, gave way, inactive);
+/// [`ImageOptions::scene`] drops the last two without overlays.
+fn image_scene(model: &EditorModel, renderer: &SceneRenderer, cast: &CastModels) -> Scene {
     let session = model.session();
-    let show_avatar = avatar_uploaded && model.avatar().is_some();
-    let capsules = if show_avatar {
+    let palettes = match model.avatar() {
+        Some(avatar) if cast.avatar_in_place(avatar, renderer) => {
+            avatar.palettes(session.humanoid(), session.posture())
+        }
+        None if cast.selected_as_figure(model, renderer) => cast
+            .figure(session.level_of_articulation())
+            .and_then(|figure| figure.palettes(session.skeleton(), session.posture())),
+        _ => None,
+    };
+    let place = scene_from_character(model.character());
+    let mut capsules: Vec<Capsule> = if palettes.is_some() {
         Vec::new()
     } else {
         model
@@ -234,29 +230,35 @@ fn image_scene(model: &EditorModel, avatar_uploaded: bool) -> Scene {
             .iter()
             .map(|bone| Capsule {
                 color_linear: BODY_COLOR_LINEAR,
-                ..bone.capsule
+                ..placed_capsule(bone.capsule, place)
             })
             .collect()
     };
-    let place = scene_from_character(model.character());
-    let mut capsules: Vec<Capsule> = capsules
-        .into_iter()
-        .map(|capsule| placed_capsule(capsule, place))
-        .collect();
-    let uploaded = if show_avatar {
-        Uploaded::Avatar
-    } else {
-        Uploaded::None
-    };
-    let (others, more_avatar_poses) = other_figures(model, uploaded);
-    capsules.extend(others);
-    let avatar_palettes = model
-        .avatar()
-        .filter(|_| show_avatar)
-        .and_then(|avatar| avatar.palettes(session.humanoid(), session.posture()))
+    let others = cast.others(model, Some(renderer));
+    capsules.extend(others.capsules);
+    let avatar_palettes = palettes
         .map(|palettes| placed_palettes(palettes, place))
         .unwrap_or_default();
-    let markers = session
+    Scene {
+        capsules,
+        props: crate::cast_view::prop_instances(model),
+        mesh_props: crate::cast_view::mesh_prop_instances(model),
+        shadows: crate::cast_view::contact_shadows(model),
+        show_floor: true,
+        show_avatar: !avatar_palettes.is_empty() || !others.more_avatar_poses.is_empty(),
+        avatar_palettes,
+        more_avatar_poses: others.more_avatar_poses,
+        cast_poses: others.cast_poses,
+        markers: goal_markers(model),
+        ..Scene::default()
+    }
+}
+
+/// Each task's goal as a marker, placed, coloured by its status (met, gave way, inactive).
+fn goal_markers(model: &EditorModel) -> Vec<Capsule> {
+    let session = model.session();
+    let place = scene_from_character(model.character());
+    session
         .tasks()
         .iter()
         .zip(session.statuses())
@@ -274,17 +276,5 @@ fn image_scene(model: &EditorModel, avatar_uploaded: bool) -> Scene {
                 place,
             ))
         })
-        .collect();
-    Scene {
-        capsules,
-        props: crate::cast_view::prop_instances(model),
-        mesh_props: crate::cast_view::mesh_prop_instances(model),
-        shadows: crate::cast_view::contact_shadows(model),
-        show_floor: true,
-        show_avatar,
-        avatar_palettes,
-        more_avatar_poses,
-        markers,
-        ..Scene::default()
-    }
+        .collect()
 }

@@ -7,6 +7,7 @@
 #![warn(clippy::too_many_lines)]
 
 mod app;
+pub mod cast_models;
 mod cast_view;
 pub mod figure;
 pub mod fonts;
@@ -14,6 +15,7 @@ pub mod image;
 mod viewport;
 
 pub use app::StanceApp;
+pub use cast_view::OTHER_COLOR_LINEAR;
 pub use stance_model::{
     AvatarImport, BackendSummary, Command, EditorModel, Gesture, HostHooks, HostJob, HostMessage,
     ImportedAvatar, JobHead, JobOutput, JobRequest, MemoryHost, MemoryHostState, NoHostHooks,

@@ -148,38 +148,20 @@ impl ViewportRenderer {
         }
     }
 
-    /// The scene renderer (images are drawn with it: it holds the avatar's mesh).
+    /// The scene renderer (images are drawn with it: it holds the characters' models).
     pub(crate) fn scene_renderer_mut(&mut self) -> &mut SceneRenderer {
         &mut self.scene_renderer
     }
 
-    /// Uploads (or drops) the avatar's GPU model.
-    pub(crate) fn set_avatar(
-        &mut self,
-        render_state: &egui_wgpu::RenderState,
-        model: Option<&stance_render::SkinnedModel>,
-    ) {
-        self.scene_renderer
-            .set_avatar(&render_state.device, &render_state.queue, model);
-    }
-
-    /// Starts uploading the avatar's GPU model over the next frames.
-    pub(crate) fn begin_avatar_upload(
-        &mut self,
-        model: std::sync::Arc<stance_render::SkinnedModel>,
-    ) {
-        self.scene_renderer.begin_avatar_upload(model);
+    /// The scene renderer, to read which models it holds.
+    pub(crate) fn scene_renderer(&self) -> &SceneRenderer {
+        &self.scene_renderer
     }
 
     /// One step of the avatar's upload: true once it is complete.
     pub(crate) fn continue_avatar_upload(&mut self, render_state: &egui_wgpu::RenderState) -> bool {
         self.scene_renderer
             .continue_avatar_upload(&render_state.device, &render_state.queue)
-    }
-
-    /// Drops an avatar upload under way.
-    pub(crate) fn cancel_avatar_upload(&mut self) {
-        self.scene_renderer.cancel_avatar_upload();
     }
 
     /// Whether an avatar upload is under way.

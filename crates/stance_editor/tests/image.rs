@@ -7,10 +7,10 @@
 use crate::clocked;
 use clocked::Clocked;
 
-use stance_editor::MemoryHost;
-use stance_editor::figure::MannequinFigure;
+use stance_editor::cast_models::CastModels;
 use stance_editor::image::{IMAGE_FILE_NAME, ImageExport, ImageRequest};
 use stance_editor::model::Outbox;
+use stance_editor::{MemoryHost, OTHER_COLOR_LINEAR};
 use stance_render::{ImageOptions, OrbitCamera, SceneRenderer, headless_gpu};
 
 /// A decoded PNG: width, height, RGBA.
@@ -30,7 +30,7 @@ fn run(
     editor: &Clocked,
     gpu: &stance_render::HeadlessGpu,
     renderer: &mut SceneRenderer,
-    figure: Option<&MannequinFigure>,
+    cast: &CastModels,
 ) -> Outbox {
     let mut outbox = Outbox::default();
     let mut frames = 0;
@@ -40,7 +40,7 @@ fn run(
         &gpu.device,
         &gpu.queue,
         renderer,
-        figure,
+        cast,
     ) {
         frames += 1;
         assert!(frames < 4000, "the export never came back");
@@ -55,6 +55,21 @@ fn save_image(editor: &mut Clocked, host: &MemoryHost, options: ImageOptions) ->
     save_image_with(editor, host, options, false)
 }
 
+/// The models the characters of `editor` are drawn on, on the GPU as the viewport puts them
+/// there (the mannequin's figure when `figure`, else capsules; the characters' avatars), every
+/// upload stepped to its end.
+fn models_up(
+    editor: &Clocked,
+    gpu: &stance_render::HeadlessGpu,
+    renderer: &mut SceneRenderer,
+    cast: &mut CastModels,
+    figure: bool,
+) {
+    cast.update(&editor.model, renderer, &gpu.device, &gpu.queue, figure)
+        .expect("the figure");
+    while cast.upload_share(renderer, &gpu.device, &gpu.queue, usize::MAX, f64::INFINITY) {}
+}
+
 /// [`save_image`], with the mannequin drawn as its figure (uploaded as the viewport does) when
 /// `figure`.
 fn save_image_with(
@@ -65,11 +80,18 @@ fn save_image_with(
 ) -> Vec<u8> {
     let gpu = headless_gpu().expect("an adapter (lavapipe)");
     let mut renderer = SceneRenderer::new(&gpu.device);
-    let loa = editor.model.session().level_of_articulation();
-    let mut figure = figure.then(|| MannequinFigure::new(loa).expect("the figure"));
-    if let Some(figure) = &mut figure {
-        renderer.set_avatar(&gpu.device, &gpu.queue, figure.take_model().as_deref());
-    }
+    let mut cast = CastModels::default();
+    models_up(editor, &gpu, &mut renderer, &mut cast, figure);
+    save_image_on(editor, host, options, (&gpu, &mut renderer, &cast))
+}
+
+/// [`save_image`] on `renderer`, whose models `cast` says.
+fn save_image_on(
+    editor: &mut Clocked,
+    host: &MemoryHost,
+    options: ImageOptions,
+    (gpu, renderer, cast): (&stance_render::HeadlessGpu, &mut SceneRenderer, &CastModels),
+) -> Vec<u8> {
     let before = host.inner.borrow().binary_downloads.len();
     let mut image = ImageExport::default();
     image.request(ImageRequest {
@@ -77,7 +99,7 @@ fn save_image_with(
         camera: OrbitCamera::default(),
         map: None,
     });
-    let mut outbox = run(&mut image, editor, &gpu, &mut renderer, figure.as_ref());
+    let mut outbox = run(&mut image, editor, gpu, renderer, cast);
     editor.model.apply_outbox(&mut outbox);
     let downloads = &host.inner.borrow().binary_downloads;
     assert_eq!(downloads.len(), before + 1, "{:?}", editor.model.notice());
@@ -166,7 +188,7 @@ fn an_impossible_size_is_refused_with_a_notice_and_nothing_downloads() {
         &gpu.device,
         &gpu.queue,
         &mut renderer,
-        None
+        &CastModels::default()
     ));
     editor.model.apply_outbox(&mut outbox);
     assert!(host.inner.borrow().binary_downloads.is_empty());
@@ -234,7 +256,13 @@ fn the_rendered_control_maps_come_one_after_another_as_their_own_downloads() {
             })
             .collect(),
     );
-    let mut outbox = run(&mut image, &editor, &gpu, &mut renderer, None);
+    let mut outbox = run(
+        &mut image,
+        &editor,
+        &gpu,
+        &mut renderer,
+        &CastModels::default(),
+    );
     eprintln!(
         "depth, normal, mask and line-art maps at 1024x1024 in {:.2} s on {}",
         started.elapsed().as_secs_f64(),
@@ -440,4 +468,222 @@ fn a_mesh_prop_is_drawn_with_its_own_triangles_where_it_stands() {
     // Above it (0.3 m wide, 0.3 m high from the floor): not green.
     let above = pixel(glam::Vec3::new(0.7, 0.45, 0.15));
     assert!(above[3] == 0 || above[1] <= above[0] + 20, "{above:?}");
+}
+
+const SHARED_AVATAR: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../tests/fixtures/avatars/Black_F_2_Casual.glb"
+);
+
+/// The editor with a character on the shared avatar at the origin and, selected, one on the
+/// mannequin placed 0.7 m to its right (-X); the first one's id.
+fn avatar_beside_the_mannequin(host: &MemoryHost) -> (Clocked, u64) {
+    use stance_editor::Command;
+    use stance_editor::model::SceneCommand;
+    let mut editor = Clocked::with_host(host.clone());
+    let bytes = std::fs::read(SHARED_AVATAR).expect("the avatar is in tests/fixtures/avatars");
+    crate::clocked::open(&mut editor.model, "Black_F_2_Casual.glb", &bytes);
+    assert!(
+        editor.model.avatar().is_some(),
+        "{:?}",
+        editor.model.notice()
+    );
+    let on_avatar = editor.model.character().id();
+    editor.apply(Command::Scene(SceneCommand::Add));
+    let mannequin = editor.model.character().id();
+    let placement = stance_document::Placement::at([-0.7, 0.0, 0.0]);
+    editor.apply(Command::Scene(SceneCommand::Place(mannequin, placement)));
+    editor.settle();
+    assert!(editor.model.avatar().is_none(), "the mannequin is selected");
+    (editor, on_avatar)
+}
+
+/// Whether an image's pixel has the hue of the other characters' capsules
+/// ([`OTHER_COLOR_LINEAR`], lit: its channels in the same ratios, a highlight nearer white).
+fn capsule_grey(pixel: [u8; 4]) -> bool {
+    let linear = |c: u8| {
+        let c = f32::from(c) / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let [r, g, b] = [pixel[0], pixel[1], pixel[2]].map(linear);
+    let [r0, g0, b0, _] = OTHER_COLOR_LINEAR;
+    r > 0.005 && (g / r - g0 / r0).abs() < 0.05 && (0.98..b0 / r0 + 0.05).contains(&(b / r))
+}
+
+/// What an image shows of a character: of its opaque pixels, how many have the capsules' hue
+/// and how many the shared avatar's skin (brown: red over green over blue) and jeans (blue
+/// over red), which no capsule or figure has.
+#[derive(Debug, Default)]
+struct Seen {
+    opaque: usize,
+    grey: usize,
+    skin: usize,
+    jeans: usize,
+}
+
+/// [`Seen`] in an image of `size_px` seen by the default camera, over the character not
+/// selected whose id is `id`: from its head down to its knees, as wide as half that.
+fn seen_of(png: &[u8], editor: &Clocked, id: u64, size_px: [u32; 2]) -> Seen {
+    let (width, height, rgba) = decode(png);
+    assert_eq!([width, height], size_px);
+    let character = editor
+        .model
+        .other_characters()
+        .iter()
+        .find(|c| c.id() == id)
+        .unwrap();
+    let place = character.placement().scene_from_character();
+    let at = |joint: &str| {
+        let point = place.transform_point3(character.session().joint_position(joint).unwrap());
+        OrbitCamera::default()
+            .project(
+                point.as_vec3(),
+                glam::Vec2::new(width as f32, height as f32),
+            )
+            .expect("in front of the camera")
+    };
+    let (pelvis, knee, head) = (at("sacroiliac"), at("l_knee"), at("skullbase"));
+    let tall = (knee.y - head.y).abs();
+    let top = (head.y.min(knee.y) - 0.15 * tall).max(0.0);
+    let mut seen = Seen::default();
+    for y in top as u32..head.y.max(knee.y) as u32 {
+        for x in (pelvis.x - tall / 4.0).max(0.0) as u32..(pelvis.x + tall / 4.0) as u32 {
+            let i = ((y * width + x) * 4) as usize;
+            let pixel: [u8; 4] = rgba[i..i + 4].try_into().unwrap();
+            if pixel[3] < 255 {
+                continue;
+            }
+            let [r, g, b, _] = pixel.map(i32::from);
+            seen.opaque += 1;
+            seen.grey += usize::from(capsule_grey(pixel));
+            seen.skin += usize::from(r > g && g > b && r >= b + 25);
+            seen.jeans += usize::from(b >= r + 20);
+        }
+    }
+    seen
+}
+
+#[test]
+fn characters_on_an_avatar_not_the_selected_ones_are_drawn_on_it_and_its_model_goes_with_them() {
+    // Catches: a character drawn as grey capsules because its avatar is not the selected
+    // one's body (here the mannequin), its avatar uploaded once per character on it, its
+    // model kept on the GPU after the last character on it is removed.
+    use stance_editor::Command;
+    use stance_editor::model::SceneCommand;
+    let host = MemoryHost::default();
+    let (mut editor, on_avatar) = avatar_beside_the_mannequin(&host);
+    // A second character on the same avatar file, 0.7 m to the left (+X); the mannequin
+    // selected again.
+    let mannequin = editor.model.character().id();
+    editor.apply(Command::Scene(SceneCommand::Select(on_avatar)));
+    editor.apply(Command::Scene(SceneCommand::Duplicate));
+    let copy = editor.model.character().id();
+    let placement = stance_document::Placement::at([0.7, 0.0, 0.0]);
+    editor.apply(Command::Scene(SceneCommand::Place(copy, placement)));
+    editor.apply(Command::Scene(SceneCommand::Select(mannequin)));
+    editor.settle();
+    let gpu = headless_gpu().expect("an adapter (lavapipe)");
+    let mut renderer = SceneRenderer::new(&gpu.device);
+    let mut cast = CastModels::default();
+    models_up(&editor, &gpu, &mut renderer, &mut cast, true);
+    assert_eq!(
+        renderer.cast_model_count(),
+        1,
+        "one model for the avatar file"
+    );
+    // Nothing more to upload the next frame.
+    models_up(&editor, &gpu, &mut renderer, &mut cast, true);
+    cast.update(&editor.model, &mut renderer, &gpu.device, &gpu.queue, true)
+        .unwrap();
+    assert!(!cast.is_uploading());
+    assert_eq!(renderer.cast_model_count(), 1);
+    let started = std::time::Instant::now();
+    let others = cast.others(&editor.model, Some(&renderer));
+    eprintln!(
+        "the others' poses (two on the avatar) in {:.2} ms",
+        started.elapsed().as_secs_f64() * 1e3
+    );
+    assert_eq!(
+        (others.cast_poses.len(), others.capsules.len()),
+        (2, 0),
+        "both characters on the avatar drawn on its model"
+    );
+    let size_px = [480, 360];
+    let options = ImageOptions {
+        size_px,
+        transparent: true,
+        overlays: false,
+    };
+    let png = save_image_on(&mut editor, &host, options, (&gpu, &mut renderer, &cast));
+    if let Ok(path) = std::env::var("STANCE_CAST_PNG") {
+        std::fs::write(path, &png).unwrap();
+    }
+    for id in [on_avatar, copy] {
+        let seen = seen_of(&png, &editor, id, size_px);
+        eprintln!("character {id}: {seen:?}");
+        // Drawn as capsules, every opaque pixel there would have their hue.
+        assert!(
+            seen.skin > 100 && seen.jeans > 300 && seen.grey * 2 < seen.opaque,
+            "character {id}, not drawn on its avatar: {seen:?}"
+        );
+    }
+    // The model stays while a character is on it, and goes with the last one.
+    editor.apply(Command::Scene(SceneCommand::Remove(copy)));
+    models_up(&editor, &gpu, &mut renderer, &mut cast, true);
+    assert_eq!(renderer.cast_model_count(), 1);
+    editor.apply(Command::Scene(SceneCommand::Remove(on_avatar)));
+    models_up(&editor, &gpu, &mut renderer, &mut cast, true);
+    assert_eq!(renderer.cast_model_count(), 0, "the avatar's model dropped");
+    assert!(!cast.is_uploading());
+}
+
+#[test]
+fn selecting_another_character_hands_the_models_over_without_uploading_them_again() {
+    // Catches: the selected character's avatar uploaded again when it is on the GPU already
+    // (among the cast's models), the figure lost from the GPU (uploaded again) when an avatar
+    // takes the avatar's place, a model drawn from both places.
+    use stance_editor::Command;
+    use stance_editor::cast_models::ModelKey;
+    use stance_editor::model::SceneCommand;
+    let host = MemoryHost::default();
+    let (mut editor, on_avatar) = avatar_beside_the_mannequin(&host);
+    let gpu = headless_gpu().expect("an adapter (lavapipe)");
+    let mut renderer = SceneRenderer::new(&gpu.device);
+    let mut cast = CastModels::default();
+    models_up(&editor, &gpu, &mut renderer, &mut cast, true);
+    assert!(
+        renderer.avatar().is_some(),
+        "the figure in the avatar's place"
+    );
+    assert_eq!(
+        renderer.cast_model_count(),
+        1,
+        "the avatar among the cast's"
+    );
+    // The avatar's character selected: its model, made again by the model, is handed over
+    // as the viewport hands it (`begin_avatar_upload`).
+    editor.apply(Command::Scene(SceneCommand::Select(on_avatar)));
+    let avatar = editor.model.avatar().unwrap();
+    let mesh = avatar.mesh().cloned().expect("its model, to upload");
+    let uploading = cast.begin_selected(&mut renderer, ModelKey::of_avatar(avatar), mesh);
+    assert!(!uploading, "taken from the cast's models");
+    assert!(!renderer.is_uploading_avatar());
+    assert_eq!(
+        renderer.avatar().map(|gpu| gpu.triangle_count()),
+        Some(avatar.triangle_count)
+    );
+    // The figure, now the other character's, went to the cast's models: nothing to upload.
+    cast.update(&editor.model, &mut renderer, &gpu.device, &gpu.queue, true)
+        .unwrap();
+    assert!(!cast.is_uploading(), "the figure uploaded again");
+    assert_eq!(renderer.cast_model_count(), 1);
+    let others = cast.others(&editor.model, Some(&renderer));
+    assert_eq!(
+        (others.cast_poses.len(), others.more_avatar_poses.len()),
+        (1, 0)
+    );
 }

@@ -207,14 +207,16 @@ pub struct Scene {
     pub show_floor: bool,
     /// Draw the uploaded avatar (see `SceneRenderer::set_avatar`).
     pub show_avatar: bool,
-    /// This frame's matrix palettes of the avatar (mesh space -> H-Anim world), one per palette.
+    /// This frame's matrix palettes of the avatar (mesh space -> H-Anim world), one per palette
+    /// (none: this pose is not drawn, [`Scene::more_avatar_poses`] are).
     pub avatar_palettes: Vec<Vec<glam::Mat4>>,
     /// More poses of the same uploaded avatar, drawn beside the first (other characters on the
     /// same model), each its palettes as `avatar_palettes`.
     pub more_avatar_poses: Vec<Vec<Vec<glam::Mat4>>>,
-    /// Characters each on a model of its own among the cast's (`SceneRenderer::set_cast_models`:
-    /// several avatars in one frame), drawn whatever `show_avatar` says; a pose of a model not
-    /// uploaded is left out.
+    /// Characters each on a model of its own among the cast's (`SceneRenderer::set_cast_models`,
+    /// or each model kept by its key: `SceneRenderer::insert_cast_model`; several avatars in
+    /// one frame), drawn whatever `show_avatar` says; a pose of a model not uploaded is left
+    /// out.
     pub cast_poses: Vec<CastPose>,
     /// The scene's props (boxes, spheres, cylinders), shaded like the bodies.
     pub props: Vec<PropInstance>,

@@ -7,7 +7,10 @@ use wgpu::util::DeviceExt;
 use crate::props::{MeshPropInstance, PropInstance, PropTemplate, normal_matrix, prop_mesh};
 use crate::skinned::SkinnedModel;
 use crate::skinned_gpu::{AvatarGpu, AvatarUpload, SkinnedPipeline};
-use crate::{CastPose, MAX_CONTACT_SHADOWS, OrbitCamera, SHADERS, Scene};
+use crate::{MAX_CONTACT_SHADOWS, OrbitCamera, SHADERS, Scene};
+
+mod cast;
+use cast::CastModel;
 
 /// Colour format of the render target: what egui can show as a native texture. The shaders
 /// write sRGB-encoded values into it.
@@ -408,8 +411,9 @@ pub struct SceneRenderer {
     capsule_pipeline: wgpu::RenderPipeline,
     skinned_pipeline: SkinnedPipeline,
     avatar: Option<AvatarGpu>,
-    /// The cast's models: characters on avatars of their own ([`Scene::cast_poses`]).
-    cast: Vec<AvatarGpu>,
+    /// The cast's models: characters on avatars of their own ([`Scene::cast_poses`]), each
+    /// known by its key.
+    cast: Vec<CastModel>,
     /// An avatar being uploaded over frames, drawn once complete.
     upload: Option<AvatarUpload>,
     floor_pipeline: wgpu::RenderPipeline,
@@ -675,48 +679,6 @@ impl SceneRenderer {
             model.map(|model| AvatarGpu::new(device, queue, &self.skinned_pipeline, model));
     }
 
-    /// Uploads the models of a cast whose characters are each on an avatar of their own
-    /// (replacing those uploaded before; none: dropped), drawn in [`Scene::cast_poses`].
-    pub fn set_cast_models(
-        &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        models: &[&SkinnedModel],
-    ) {
-        self.cast = models
-            .iter()
-            .map(|model| AvatarGpu::new(device, queue, &self.skinned_pipeline, model))
-            .collect();
-    }
-
-    /// Writes `poses`' palettes, each into the next pose of its model; returns how many poses
-    /// of each model to draw.
-    fn write_cast_poses(
-        &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        poses: &[CastPose],
-    ) -> Vec<usize> {
-        let mut counts = vec![0; self.cast.len()];
-        for pose in poses {
-            if let Some(count) = counts.get_mut(pose.model) {
-                *count += 1;
-            }
-        }
-        for (model, count) in self.cast.iter_mut().zip(&counts) {
-            model.ensure_poses(device, &self.skinned_pipeline, *count);
-        }
-        let mut next = vec![0; self.cast.len()];
-        for pose in poses {
-            if let (Some(model), Some(slot)) = (self.cast.get(pose.model), next.get_mut(pose.model))
-            {
-                model.write_palettes(queue, *slot, &pose.palettes);
-                *slot += 1;
-            }
-        }
-        counts
-    }
-
     /// Draws the uploaded avatar's `poses` (none: `0`) and the cast's (`cast_poses`: how many
     /// of each model), then sets the frame's bind group back for the other pipelines.
     fn draw_skinned(&self, pass: &mut wgpu::RenderPass<'_>, poses: usize, cast_poses: &[usize]) {
@@ -727,7 +689,7 @@ impl SceneRenderer {
         }
         for (model, &count) in self.cast.iter().zip(cast_poses) {
             for pose in 0..count {
-                model.draw(pass, &self.skinned_pipeline, pose);
+                model.gpu.draw(pass, &self.skinned_pipeline, pose);
             }
         }
         pass.set_bind_group(0, &self.frame_bind_group, &[]);
@@ -883,13 +845,16 @@ impl SceneRenderer {
         let Some(avatar) = self.avatar.as_mut().filter(|_| scene.show_avatar) else {
             return 0;
         };
-        let poses = 1 + scene.more_avatar_poses.len();
-        avatar.ensure_poses(device, &self.skinned_pipeline, poses);
-        avatar.write_palettes(queue, 0, &scene.avatar_palettes);
-        for (pose, palettes) in scene.more_avatar_poses.iter().enumerate() {
-            avatar.write_palettes(queue, pose + 1, palettes);
+        // No palettes of its own: the avatar's first pose is not drawn, the others are (the
+        // characters on the same model while the selected one is drawn otherwise).
+        let first = Some(&scene.avatar_palettes).filter(|palettes| !palettes.is_empty());
+        let poses: Vec<&Vec<Vec<glam::Mat4>>> =
+            first.into_iter().chain(&scene.more_avatar_poses).collect();
+        avatar.ensure_poses(device, &self.skinned_pipeline, poses.len());
+        for (pose, palettes) in poses.iter().enumerate() {
+            avatar.write_palettes(queue, pose, palettes);
         }
-        poses
+        poses.len()
     }
 
     /// Writes the instances of the scene's capsules and markers; returns how many.

@@ -6,18 +6,18 @@ use crate::model::{GestureCommand, PostureCommand, SceneCommand, TaskCommand, Vi
 use egui::{Color32, RichText, Sense};
 use glam::{DAffine3, DVec3};
 use stance_document::CameraSpec;
-use stance_hanim::{LevelOfArticulation, LimbName, readable_name};
+use stance_hanim::{LimbName, readable_name};
 use stance_render::{BODY_COLOR_LINEAR, OrbitCamera, Scene, ViewPreset, pick_capsule};
 
 use super::handles::Handles;
 use super::lens::Lens;
 use super::overlay::Overlay;
 use super::prop_gizmo::{PropGizmo, pick_prop};
+use crate::cast_models::{CastModels, ModelKey};
 use crate::cast_view::{
-    Uploaded, mesh_prop_instances, other_figures, pick_other, placed_capsule, placed_palettes,
-    prop_instances, scene_from_character,
+    mesh_prop_instances, pick_other, placed_capsule, placed_palettes, prop_instances,
+    scene_from_character,
 };
-use crate::figure::MannequinFigure;
 use crate::image::ImageExport;
 use crate::model::{AvatarCommand, Command, EditorModel, NewBetween, NewTask, heat_color};
 use crate::viewport::{ViewportInput, ViewportRenderer, apply_gestures};
@@ -70,8 +70,9 @@ pub(super) struct ViewportPanel {
     pub avatar_upload_tasks: usize,
     /// The mannequin drawn as a skinned figure (else as capsules).
     pub show_figure: bool,
-    /// The mannequin's figure, and the level of articulation whose mesh is on the GPU.
-    figure: Option<(MannequinFigure, LevelOfArticulation)>,
+    /// Which GPU model is where: the selected character's in the renderer's avatar place, the
+    /// other characters' among the cast's, and the figures that pose those on the mannequin.
+    cast: CastModels,
     first_frame_reported: bool,
     /// CPU time of this frame's scene (mannequin capsules, or the avatar's skinning palettes).
     pub scene_ms: f64,
@@ -113,7 +114,7 @@ impl ViewportPanel {
             avatar_upload_ms: 0.0,
             avatar_upload_tasks: 0,
             show_figure: true,
-            figure: None,
+            cast: CastModels::default(),
             first_frame_reported: false,
             scene_ms: 0.0,
             render_ms: 0.0,
@@ -507,11 +508,13 @@ impl ViewportPanel {
         self.photo_rect = Some(rect);
     }
 
-    /// Puts on the GPU what the body is drawn with: a loaded avatar's mesh, else the
-    /// mannequin's figure (made again when the level of articulation changes or after an
-    /// avatar took its place). An avatar goes up a few MB of texture at a time, at most
+    /// Puts on the GPU what the characters are drawn with: the selected one's avatar, else the
+    /// mannequin's figure, in the renderer's avatar place; the others' models beside it
+    /// ([`CastModels`]). An avatar goes up a few MB of texture at a time, at most
     /// [`UPLOAD_MS_PER_SHARE`] a frame (or in the host's tasks), so that no frame carries the
-    /// whole load; its body shows as capsules meanwhile.
+    /// whole load; its body shows as capsules meanwhile. The others' models that are not on
+    /// the GPU yet go up in the same steps, by the frames alone, in a frame whose share the
+    /// selected avatar's upload did not take (see `crate::cast_models`).
     fn upload_meshes(
         &mut self,
         ctx: &egui::Context,
@@ -519,16 +522,19 @@ impl ViewportPanel {
         model: &EditorModel,
         outbox: &mut Outbox,
     ) {
-        if self.renderer.is_none() || frame.wgpu_render_state().is_none() {
+        let Some(render_state) = frame.wgpu_render_state() else {
+            return;
+        };
+        if self.renderer.is_none() {
             return;
         }
         self.begin_avatar_upload(model, outbox);
-        if self
+        let selected_uploading = self
             .renderer
             .as_ref()
             .is_some_and(|r| r.is_uploading_avatar())
-            && model.avatar().is_some()
-        {
+            && model.avatar().is_some();
+        if selected_uploading {
             if self.upload_in_tasks {
                 ctx.request_repaint_after(std::time::Duration::from_secs_f32(UPLOAD_FALLBACK_S));
             } else {
@@ -539,49 +545,66 @@ impl ViewportPanel {
         // Finished by this frame's share or by the host's tasks since the last frame.
         if std::mem::take(&mut self.upload_finished) {
             self.avatar_uploaded = true;
-            self.figure = None;
         }
-        let (Some(renderer), Some(render_state)) = (&mut self.renderer, frame.wgpu_render_state())
-        else {
+        let Some(renderer) = &mut self.renderer else {
             return;
         };
-        if model.avatar().is_some() {
-            return;
+        let renderer = renderer.scene_renderer_mut();
+        let (device, queue) = (&render_state.device, &render_state.queue);
+        if model.avatar().is_none() {
+            renderer.cancel_avatar_upload();
+            self.avatar_uploaded = false;
         }
-        renderer.cancel_avatar_upload();
-        self.avatar_uploaded = false;
-        let loa = model.session().level_of_articulation();
-        if !self.show_figure || self.figure.as_ref().is_some_and(|(_, at)| *at == loa) {
-            return;
+        if let Err(error) = self
+            .cast
+            .update(model, renderer, device, queue, self.show_figure)
+        {
+            log::warn!("the mannequin's figure could not be made: {error}");
+            self.show_figure = false;
         }
-        match MannequinFigure::new(loa) {
-            Ok(mut figure) => {
-                renderer.set_avatar(render_state, figure.take_model().as_deref());
-                self.figure = Some((figure, loa));
-            }
-            Err(error) => {
-                log::warn!("the mannequin's figure could not be made: {error}");
-                self.show_figure = false;
-            }
+        if !selected_uploading
+            && self.cast.upload_share(
+                renderer,
+                device,
+                queue,
+                UPLOAD_STEPS_PER_SHARE,
+                UPLOAD_MS_PER_SHARE,
+            )
+        {
+            ctx.request_repaint();
         }
     }
 
-    /// Begins the upload of a newly opened avatar's GPU model (the model hands it over once).
-    /// Frames that repaint the canvas are slow to come while a large avatar arrives (a
+    /// Begins the upload of a newly opened avatar's GPU model (the model hands it over once),
+    /// or puts it in place at once where it is on the GPU already (another character's, or
+    /// this one's when it was selected before: [`CastModels::begin_selected`]). Frames that
+    /// repaint the canvas are slow to come while a large avatar arrives (a
     /// software-composited canvas is read back each time): the page steps the upload in tasks
     /// of its own where it can. Returns whether it does.
     pub(super) fn begin_avatar_upload(&mut self, model: &EditorModel, outbox: &mut Outbox) -> bool {
         let Some(renderer) = &mut self.renderer else {
             return false;
         };
-        let Some(mesh) = model.avatar().and_then(|avatar| avatar.mesh()).cloned() else {
+        let Some(avatar) = model.avatar() else {
             return false;
         };
-        renderer.begin_avatar_upload(mesh);
+        let Some(mesh) = avatar.mesh().cloned() else {
+            return false;
+        };
         outbox.send(Command::Avatar(AvatarCommand::MeshTaken));
         self.avatar_uploaded = false;
         self.avatar_upload_ms = 0.0;
         self.avatar_upload_tasks = 0;
+        let key = ModelKey::of_avatar(avatar);
+        if !self
+            .cast
+            .begin_selected(renderer.scene_renderer_mut(), key, mesh)
+        {
+            // On the GPU already: drawn from the next frame, nothing to step.
+            self.upload_in_tasks = false;
+            self.upload_finished = true;
+            return false;
+        }
         self.upload_in_tasks = model.hooks().upload_in_tasks();
         self.upload_in_tasks
     }
@@ -648,12 +671,7 @@ impl ViewportPanel {
         if !self.image.is_busy() {
             return;
         }
-        // The image shows the figure when the viewport does (its mesh is the renderer's).
-        let figure = self
-            .figure
-            .as_ref()
-            .map(|(figure, _)| figure)
-            .filter(|_| self.figure_shown(model));
+        // The image draws the characters on the models the viewport holds, as it does.
         if let (Some(renderer), Some(render_state)) =
             (&mut self.renderer, frame.wgpu_render_state())
         {
@@ -662,7 +680,7 @@ impl ViewportPanel {
             let device = &render_state.device;
             if self
                 .image
-                .advance(model, outbox, device, queue, renderer, figure)
+                .advance(model, outbox, device, queue, renderer, &self.cast)
             {
                 ui.ctx().request_repaint();
             }
@@ -672,15 +690,16 @@ impl ViewportPanel {
     /// Whether the mannequin is drawn as its figure this frame (not with an avatar, nor with
     /// the heat map, which colours the capsules, nor while the collision capsules are shown).
     pub(super) fn figure_shown(&self, model: &EditorModel) -> bool {
-        model.avatar().is_none()
-            && self.show_figure
-            && self.figure.is_some()
-            && !model.comfort().heat_map()
-            && !model.show_capsules()
+        self.show_figure
+            && self.renderer.as_ref().is_some_and(|renderer| {
+                self.cast
+                    .selected_as_figure(model, renderer.scene_renderer())
+            })
     }
 
-    /// What the renderer draws: the mannequin's figure, or its capsules (selection and hover
-    /// coloured), or the avatar's skinning palettes once its mesh is on the GPU.
+    /// What the renderer draws: the selected character as the mannequin's figure, or its
+    /// capsules (selection and hover coloured), or its avatar's skinning palettes once its
+    /// mesh is on the GPU; the others each on its model ([`CastModels::others`]).
     fn scene(&self, model: &EditorModel) -> Scene {
         // The collision capsules shown on request: the body drawn as its capsules.
         let show_avatar =
@@ -688,35 +707,19 @@ impl ViewportPanel {
         let show_figure = self.figure_shown(model);
         // With an avatar or the figure the capsules are hidden; the skeleton overlay shows the
         // bones of a selection.
-        let heat = model.comfort().heat_shares(model.session().skeleton());
         let capsules = if show_avatar || show_figure {
             Vec::new()
         } else {
-            model
-                .bones()
-                .iter()
-                .map(|bone| {
-                    let mut capsule = bone.capsule;
-                    capsule.color_linear = if Some(bone.owner) == model.selected_joint() {
-                        SELECTED_COLOR_LINEAR
-                    } else if Some(bone.owner) == model.hovered_joint() {
-                        HOVERED_COLOR_LINEAR
-                    } else if let Some(share) = heat.as_ref().and_then(|h| h.get(bone.owner)) {
-                        heat_color(*share, BODY_COLOR_LINEAR)
-                    } else {
-                        BODY_COLOR_LINEAR
-                    };
-                    capsule
-                })
-                .collect()
+            self.selected_capsules(model)
         };
         let session = model.session();
         let place = scene_from_character(model.character());
-        let avatar_palettes = match (model.avatar(), &self.figure) {
-            (Some(avatar), _) => avatar.palettes(session.humanoid(), session.posture()),
-            (None, Some((figure, _))) if show_figure => {
-                figure.palettes(session.skeleton(), session.posture())
-            }
+        let avatar_palettes = match model.avatar() {
+            Some(avatar) if show_avatar => avatar.palettes(session.humanoid(), session.posture()),
+            None if show_figure => self
+                .cast
+                .figure(session.level_of_articulation())
+                .and_then(|figure| figure.palettes(session.skeleton(), session.posture())),
             _ => None,
         }
         .map(|palettes| placed_palettes(palettes, place))
@@ -725,13 +728,9 @@ impl ViewportPanel {
             .into_iter()
             .map(|capsule| placed_capsule(capsule, place))
             .collect();
-        let uploaded = match &self.figure {
-            _ if show_avatar => Uploaded::Avatar,
-            Some((figure, _)) if show_figure => Uploaded::Figure(figure),
-            _ => Uploaded::None,
-        };
-        let (others, more_avatar_poses) = other_figures(model, uploaded);
-        capsules.extend(others);
+        let renderer = self.renderer.as_ref().map(ViewportRenderer::scene_renderer);
+        let others = self.cast.others(model, renderer);
+        capsules.extend(others.capsules);
         // Over the reference photo: no background, floor or shadows, which would cover it.
         let photo = model.photo_shown();
         Scene {
@@ -745,11 +744,35 @@ impl ViewportPanel {
             capsules,
             show_floor: self.show_floor && !photo,
             transparent_background: photo,
-            show_avatar: show_avatar || show_figure,
+            show_avatar: show_avatar || show_figure || !others.more_avatar_poses.is_empty(),
             avatar_palettes,
-            more_avatar_poses,
+            more_avatar_poses: others.more_avatar_poses,
+            cast_poses: others.cast_poses,
             ..Scene::default()
         }
+    }
+
+    /// The selected character's capsules in its own frame, coloured by selection, hover and
+    /// the heat map.
+    fn selected_capsules(&self, model: &EditorModel) -> Vec<stance_render::Capsule> {
+        let heat = model.comfort().heat_shares(model.session().skeleton());
+        model
+            .bones()
+            .iter()
+            .map(|bone| {
+                let mut capsule = bone.capsule;
+                capsule.color_linear = if Some(bone.owner) == model.selected_joint() {
+                    SELECTED_COLOR_LINEAR
+                } else if Some(bone.owner) == model.hovered_joint() {
+                    HOVERED_COLOR_LINEAR
+                } else if let Some(share) = heat.as_ref().and_then(|h| h.get(bone.owner)) {
+                    heat_color(*share, BODY_COLOR_LINEAR)
+                } else {
+                    BODY_COLOR_LINEAR
+                };
+                capsule
+            })
+            .collect()
     }
 }
 
