@@ -274,16 +274,29 @@ fn the_casts_models_are_kept_by_key_and_pass_to_and_from_the_avatars_place() {
             <[u8; 3]>::try_from(&pixels.rgba[offset..offset + 3]).unwrap()
         }
     };
-    // The avatar without palettes of its own: only its second pose (at the right) is drawn.
+    let green_model = |x: f32| CastPose {
+        model: 0,
+        palettes: pose(x),
+    };
+    let pixel = draw(
+        &mut renderer,
+        Scene {
+            show_avatar: true,
+            avatar_palettes: pose(0.0),
+            cast_poses: vec![green_model(-0.8)],
+            ..Scene::default()
+        },
+    );
+    assert_eq!(pixel(0.0), [0, 0, 255]);
+    assert_eq!(pixel(-0.8), [0, 255, 0]);
+    // The avatar without palettes of its own: only its second pose (at the right) is drawn,
+    // not the first where the frame before left it.
     let pixel = draw(
         &mut renderer,
         Scene {
             show_avatar: true,
             more_avatar_poses: vec![pose(0.8)],
-            cast_poses: vec![CastPose {
-                model: 0,
-                palettes: pose(-0.8),
-            }],
+            cast_poses: vec![green_model(-0.8)],
             ..Scene::default()
         },
     );
