@@ -69,6 +69,16 @@ impl ModelKey {
     }
 }
 
+/// Where a model is, once it has taken the avatar's place.
+enum Placed {
+    /// There, complete.
+    Complete,
+    /// On its way there (`SceneRenderer::continue_avatar_upload` steps it).
+    Uploading,
+    /// Neither: to be uploaded.
+    Missing,
+}
+
 /// How the characters other than the selected one are drawn this frame.
 #[derive(Debug, Default)]
 pub struct OtherFigures {
@@ -101,19 +111,23 @@ pub struct CastModels {
 impl CastModels {
     /// Puts the selected character's avatar (`key`, its GPU model `mesh`) in the renderer's
     /// avatar place: from the cast when it is there (or left in place when it is there
-    /// already), the model there before going to the cast; else its upload is begun
-    /// (`SceneRenderer::continue_avatar_upload` steps it). Returns whether it was begun.
+    /// already), the model there before going to the cast; else its upload goes on (one
+    /// under way for the cast, or in place) or is begun (`SceneRenderer::continue_avatar_upload`
+    /// steps it). Returns whether it is on its way (else it is in place, complete).
     pub fn begin_selected(
         &mut self,
         renderer: &mut SceneRenderer,
         key: ModelKey,
         mesh: Arc<SkinnedModel>,
     ) -> bool {
-        if self.take_place(renderer, key) {
-            return false;
+        match self.take_place(renderer, key) {
+            Placed::Complete => false,
+            Placed::Uploading => true,
+            Placed::Missing => {
+                renderer.begin_avatar_upload(mesh);
+                true
+            }
         }
-        renderer.begin_avatar_upload(mesh);
-        true
     }
 
     /// Brings the models in line with the scene, once a frame before it is drawn (with
@@ -263,34 +277,45 @@ impl CastModels {
         Some((model, palettes))
     }
 
-    /// Makes `key` the model of the avatar's place: there already, or from the cast (the
-    /// model there before goes to the cast, an upload under way is dropped). Returns whether
-    /// it is in place, complete (else the caller uploads it).
-    fn take_place(&mut self, renderer: &mut SceneRenderer, key: ModelKey) -> bool {
-        if self.place.as_ref() == Some(&key) && renderer.avatar().is_some() {
-            renderer.cancel_avatar_upload();
-            return true;
+    /// Makes `key` the model of the avatar's place: there already, or from the cast, or its
+    /// upload for the cast going on there (the model there before, or its upload, goes to the
+    /// cast).
+    fn take_place(&mut self, renderer: &mut SceneRenderer, key: ModelKey) -> Placed {
+        if self.place.as_ref() == Some(&key) {
+            if renderer.avatar().is_some() {
+                renderer.cancel_avatar_upload();
+                return Placed::Complete;
+            }
+            if renderer.is_uploading_avatar() {
+                return Placed::Uploading;
+            }
         }
         self.leave_place(renderer);
-        // Its own upload for the cast, if under way, begins again in the avatar's place.
-        self.uploads.retain(|(k, _)| *k != key);
         let from_cast = renderer.remove_cast_model(key.id());
+        let uploading = self.uploads.iter().position(|(k, _)| *k == key);
+        let upload = uploading.map(|at| self.uploads.remove(at).1);
         self.place = Some(key);
-        match from_cast {
-            Some(gpu) => {
+        match (from_cast, upload) {
+            (Some(gpu), _) => {
                 renderer.put_avatar(gpu);
-                true
+                Placed::Complete
             }
-            None => false,
+            (None, Some(upload)) => {
+                renderer.resume_avatar_upload(upload);
+                Placed::Uploading
+            }
+            (None, None) => Placed::Missing,
         }
     }
 
-    /// Empties the avatar's place: its model, complete, goes to the cast (the next update
-    /// drops it if no character is on it); an upload under way is dropped.
+    /// Empties the avatar's place: its model, complete, goes to the cast, or its upload under
+    /// way to the cast's uploads (the next update drops either if no character is on it).
     fn leave_place(&mut self, renderer: &mut SceneRenderer) {
-        renderer.cancel_avatar_upload();
-        if let (Some(key), Some(gpu)) = (self.place.take(), renderer.take_avatar()) {
-            renderer.insert_cast_model(key.id(), gpu);
+        let upload = renderer.take_avatar_upload();
+        match (self.place.take(), renderer.take_avatar(), upload) {
+            (Some(key), Some(gpu), _) => renderer.insert_cast_model(key.id(), gpu),
+            (Some(key), None, Some(upload)) => self.uploads.push((key, upload)),
+            _ => {}
         }
     }
 
@@ -301,9 +326,13 @@ impl CastModels {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<(), String> {
-        if self.take_place(renderer, ModelKey::Figure) {
+        if matches!(
+            self.take_place(renderer, ModelKey::Figure),
+            Placed::Complete
+        ) {
             return Ok(());
         }
+        // Small: uploaded at once (an upload of it under way for the cast is dropped).
         let mesh = self
             .figures
             .iter()

@@ -687,3 +687,45 @@ fn selecting_another_character_hands_the_models_over_without_uploading_them_agai
         (1, 0)
     );
 }
+
+#[test]
+fn an_avatar_on_its_way_when_another_character_is_selected_goes_on_among_the_casts() {
+    // Catches: the upload of the avatar left dropped (begun again from the start, its model
+    // made again from the file) when the selection changes before it is complete.
+    use stance_editor::Command;
+    use stance_editor::cast_models::ModelKey;
+    use stance_editor::model::SceneCommand;
+    let host = MemoryHost::default();
+    let (mut editor, on_avatar) = avatar_beside_the_mannequin(&host);
+    let mannequin = editor.model.character().id();
+    let gpu = headless_gpu().expect("an adapter (lavapipe)");
+    let (device, queue) = (&gpu.device, &gpu.queue);
+    let mut renderer = SceneRenderer::new(device);
+    let mut cast = CastModels::default();
+    editor.apply(Command::Scene(SceneCommand::Select(on_avatar)));
+    let avatar = editor.model.avatar().unwrap();
+    let mesh = avatar.mesh().cloned().unwrap();
+    // The steps of its whole upload.
+    let mut fresh = stance_render::AvatarUpload::new(mesh.clone());
+    let whole = (1..100)
+        .find(|_| renderer.step_upload(&mut fresh, device, queue).is_some())
+        .unwrap();
+    assert!(cast.begin_selected(&mut renderer, ModelKey::of_avatar(avatar), mesh));
+    for _ in 0..2 {
+        assert!(!renderer.continue_avatar_upload(device, queue));
+    }
+    // The mannequin selected: the figure takes the avatar's place, the avatar goes on.
+    editor.apply(Command::Scene(SceneCommand::Select(mannequin)));
+    cast.update(&editor.model, &mut renderer, device, queue, true)
+        .unwrap();
+    assert!(renderer.avatar().is_some() && !renderer.is_uploading_avatar());
+    let mut steps = 0;
+    while cast.upload_share(&mut renderer, device, queue, 1, f64::INFINITY) {
+        steps += 1;
+        assert!(steps < 100, "the upload never ends");
+    }
+    assert_eq!(steps + 1, whole - 2, "the steps left, of {whole}");
+    assert_eq!(renderer.cast_model_count(), 1);
+    let others = cast.others(&editor.model, Some(&renderer));
+    assert_eq!(others.cast_poses.len(), 1);
+}

@@ -552,7 +552,7 @@ impl ViewportPanel {
         let renderer = renderer.scene_renderer_mut();
         let (device, queue) = (&render_state.device, &render_state.queue);
         if model.avatar().is_none() {
-            renderer.cancel_avatar_upload();
+            // (An avatar's upload under way there goes on for the cast: `CastModels::update`.)
             self.avatar_uploaded = false;
         }
         if let Err(error) = self

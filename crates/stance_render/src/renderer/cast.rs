@@ -88,6 +88,19 @@ impl SceneRenderer {
         self.avatar = Some(avatar);
     }
 
+    /// Takes the avatar's upload under way out, to go on with it elsewhere (among the cast's
+    /// uploads, stepped by [`SceneRenderer::step_upload`]).
+    pub fn take_avatar_upload(&mut self) -> Option<AvatarUpload> {
+        self.upload.take()
+    }
+
+    /// Goes on with `upload` (begun for the cast) as the avatar's
+    /// ([`SceneRenderer::continue_avatar_upload`]); the avatar in place stays until it is
+    /// complete.
+    pub fn resume_avatar_upload(&mut self, upload: AvatarUpload) {
+        self.upload = Some(upload);
+    }
+
     /// One step of `upload` (a model on its way to the cast, stepped by the caller as
     /// [`SceneRenderer::continue_avatar_upload`] steps the avatar's): the model once complete.
     pub fn step_upload(
