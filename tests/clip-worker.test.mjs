@@ -116,11 +116,7 @@ const describeTask = (t, origin) => `${t.duration.toFixed(0)} ms at +${(t.start 
     ? `, with ${t.calls.length} call(s) of ${t.callsMs.toFixed(1)} ms in all: ${[...new Set(t.calls)].join(" ")}` : ""}`;
 
 describe("a long clip opens in the loading worker", () => {
-  // TODO (2026-11-28): the page's call into the editor that opens the long clip takes 50.7-50.9 ms
-  // in CI (over the 50 ms a long task is), since this stop's merges (the clip's file reference
-  // now shared with the props' files is the first suspect); marked todo until it is traced, so
-  // that CI reports it without failing.
-  test("progress and Cancel, no main-thread task over 50 ms, the clip on the timeline", { todo: true }, async () => {
+  test("progress and Cancel, no main-thread task over 50 ms, the clip on the timeline", async () => {
     const page = await context.newPage();
     const { errors } = await openEditor(context, served.url, page);
     await observeLongTasks(page);
