@@ -426,10 +426,14 @@ fn placed_start(
             LIFT_TOLERANCE_M,
             false,
         )?;
+        // A torso behind the eye meets the rays too (the lines go on through it), and can
+        // meet them better than the one before the camera: never taken.
+        let root = Frames::new(skeleton, &posture).joint_position.first().copied();
         let residual = report
             .levels
             .iter()
             .find(|l| l.level == IMAGE_LEVEL)
+            .filter(|_| root.is_some_and(|p| view.in_front(p)))
             .map_or(f64::INFINITY, |l| l.residual_after);
         torsos.push((posture, residual));
     }
@@ -631,6 +635,13 @@ impl View {
         let (origin, direction) = self.ray(pixel);
         let along = direction.dot(forward).max(1e-6);
         origin + direction * ((depth - (origin - eye).dot(forward)) / along)
+    }
+
+    /// Whether `p` lies before the eye (any point does in orthographic projection).
+    fn in_front(&self, p: DVec3) -> bool {
+        let eye = self.camera.eye_world().as_dvec3();
+        let forward = (self.camera.target_world.as_dvec3() - eye).normalize_or(DVec3::NEG_Z);
+        self.camera.orthographic || (p - eye).dot(forward) > 0.0
     }
 
     /// Pixels per metre at `depth` from the eye (for orthographic projection, at any depth).
