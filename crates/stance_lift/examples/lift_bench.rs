@@ -95,7 +95,11 @@ fn seeds(name: &str, default: u64) -> Vec<u64> {
         .split(',')
         .filter_map(parse)
         .collect();
-    if given.is_empty() { vec![default] } else { given }
+    if given.is_empty() {
+        vec![default]
+    } else {
+        given
+    }
 }
 
 /// A small seeded generator (xorshift), uniform in [0, 1).
@@ -193,7 +197,9 @@ fn worst_px(
         let mut off = String::new();
         for (n, a, b) in parts {
             for (k, (a, b)) in a.iter().zip(b).enumerate() {
-                if let (Some(a), Some(b)) = (a, b) && a.distance(*b) > 1.5 {
+                if let (Some(a), Some(b)) = (a, b)
+                    && a.distance(*b) > 1.5
+                {
                     off += &format!(" {n}{k}:{:.1}", a.distance(*b));
                 }
             }

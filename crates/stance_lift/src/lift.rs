@@ -428,7 +428,10 @@ fn placed_start(
         )?;
         // A torso behind the eye meets the rays too (the lines go on through it), and can
         // meet them better than the one before the camera: never taken.
-        let root = Frames::new(skeleton, &posture).joint_position.first().copied();
+        let root = Frames::new(skeleton, &posture)
+            .joint_position
+            .first()
+            .copied();
         let residual = report
             .levels
             .iter()
