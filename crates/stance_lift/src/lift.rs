@@ -158,20 +158,30 @@ pub fn lift(
         ON_PIXEL_PX
     };
     if worst > on_pixel {
-        // What the stages leave off where a hand needs its elbow moved (the hand's stage holds
-        // the hinge): each arm with its hand solved alone before any flip is tried. (The whole
-        // problem's iterations here before took 3 to 8 times as long for no better keypoints
-        // on the random family of `examples/lift_bench`.)
-        let (arms, arms_report) = crate::stages::solve_arms(
+        // What the stages leave off: each arm or leg whose keypoints are off solved alone
+        // before any flip is tried (a hand whose elbow must move: the hand's stage holds the
+        // hinge; a nearly straight knee, where the body stage stalls). (The whole problem's
+        // iterations here before took 3 to 8 times as long for no better keypoints on the
+        // random family of `examples/lift_bench`.)
+        let off_limbs: Vec<&LimbKeypoints> = LIMBS
+            .iter()
+            .filter(|limb| {
+                skeleton
+                    .joint_index(limb.joints[1])
+                    .is_some_and(|middle| off(&posture, Some(middle)) > on_pixel)
+            })
+            .collect();
+        let (limbs, limbs_report) = crate::stages::solve_limbs(
             skeleton,
             &document,
             &posture,
-            ARM_ITERATIONS,
+            &off_limbs,
+            LIMB_ITERATIONS,
             LIFT_TOLERANCE_M,
         )?;
-        let arms_worst = off(&arms, None);
-        if arms_worst < worst {
-            (posture, report, worst) = (arms, arms_report, arms_worst);
+        let limbs_worst = off(&limbs, None);
+        if limbs_worst < worst {
+            (posture, report, worst) = (limbs, limbs_report, limbs_worst);
         }
     }
     for _ in 0..MAX_FLIPS {
@@ -221,9 +231,9 @@ pub fn lift(
 /// the whole problem's iterations and the flips.
 const LOST_PX: f64 = 20.0;
 
-/// Iterations of each arm's solve (with its hand) after the stages when a keypoint is left off
-/// its pixel.
-const ARM_ITERATIONS: usize = 30;
+/// Iterations of each limb's solve (an arm with its hand, a leg) after the stages when a
+/// keypoint of it is left off its pixel.
+const LIMB_ITERATIONS: usize = 30;
 
 /// At most this many limbs are flipped in depth to meet the image level.
 const MAX_FLIPS: usize = 3;
@@ -332,28 +342,33 @@ fn turned(skeleton: &Skeleton, posture: &Posture, placed: &PlacedLimb) -> f64 {
         .sum()
 }
 
-/// The limb placed at each of its four depth choices from `posture` ([`PlacedLimb`]): the
-/// postures, with how far its joints land from their rays (m) and how far it turns from rest.
-fn limb_choices(
-    skeleton: &Skeleton,
-    posture: &Posture,
-    placed: &PlacedLimb,
+/// A limb to place on its keypoints' rays: its closed form, the rays of its middle and end
+/// joints, and the floor's height when its end joint stands on it.
+struct LimbOnRays {
+    placed: PlacedLimb,
     rays: [Ray; 2],
     floor: Option<f64>,
-) -> Vec<(usize, Posture, f64, f64)> {
-    let frames = Frames::new(skeleton, posture);
-    placed
-        .candidates(&frames, rays, floor)
-        .into_iter()
-        .enumerate()
-        .map(|(choice, goal)| {
-            let mut trial = posture.clone();
-            placed.place(skeleton, &mut trial, goal);
-            let off = off_rays(&Frames::new(skeleton, &trial), placed, rays);
-            let turn = turned(skeleton, &trial, placed);
-            (choice, trial, off, turn)
-        })
-        .collect()
+}
+
+impl LimbOnRays {
+    /// The limb placed at each of its four depth choices from `posture` ([`PlacedLimb`]): the
+    /// postures, with how far its joints land from their rays (m) and how far it turns from
+    /// rest.
+    fn choices(&self, skeleton: &Skeleton, posture: &Posture) -> Vec<(usize, Posture, f64, f64)> {
+        let frames = Frames::new(skeleton, posture);
+        self.placed
+            .candidates(&frames, self.rays, self.floor)
+            .into_iter()
+            .enumerate()
+            .map(|(choice, goal)| {
+                let mut trial = posture.clone();
+                self.placed.place(skeleton, &mut trial, goal);
+                let off = off_rays(&Frames::new(skeleton, &trial), &self.placed, self.rays);
+                let turn = turned(skeleton, &trial, &self.placed);
+                (choice, trial, off, turn)
+            })
+            .collect()
+    }
 }
 
 /// Off the rays by no more than this more than the best choice (m), a limb's depth choices
@@ -384,14 +399,14 @@ fn placed_start(
             .flatten()
             .map(|j| rest.joint_position[j].y)
     };
-    let limbs: Vec<(PlacedLimb, [Ray; 2], Option<f64>)> = LIMBS
+    let limbs: Vec<LimbOnRays> = LIMBS
         .iter()
         .filter_map(|limb| {
-            Some((
-                PlacedLimb::new(skeleton, limb.joints)?,
-                limb_rays(person, view, limb)?,
-                floor(limb),
-            ))
+            Some(LimbOnRays {
+                placed: PlacedLimb::new(skeleton, limb.joints)?,
+                rays: limb_rays(person, view, limb)?,
+                floor: floor(limb),
+            })
         })
         .collect();
     let middles: Vec<usize> = LIMBS
@@ -443,8 +458,9 @@ fn placed_start(
     let Some((mut posture, _)) = torsos.into_iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
         return Ok(starts[0].clone());
     };
-    for (placed, rays, floor) in &limbs {
-        let best = limb_choices(skeleton, &posture, placed, *rays, *floor)
+    for limb in &limbs {
+        let best = limb
+            .choices(skeleton, &posture)
             .into_iter()
             .map(|(_, p, off, turn)| (p, off, turn))
             .reduce(|a, b| {
