@@ -117,8 +117,6 @@ pub fn lift(
         camera: Some(camera_spec(&camera)),
         ..Document::default()
     };
-    let off =
-        |p: &Posture, below: Option<usize>| worst_pixel(skeleton, &finder, p, &view, person, below);
     // The feet on the floor where their rays meet it: only through the camera the keypoints were
     // seen with (a fitted one sees the floor at another pitch).
     let on_floor = if camera_fitted {
@@ -126,92 +124,17 @@ pub fn lift(
     } else {
         &standing[..]
     };
-    let placed = placed_start(
+    let search = Search {
         skeleton,
-        &document,
-        [&start, &about_face],
+        document: &document,
+        finder: &finder,
+        view: &view,
         person,
-        &view,
-        on_floor,
-    )?;
-    let (mut posture, mut report) = solve_pose(skeleton, &document, &placed, POSE_ITERATIONS)?;
-    let mut flips = Vec::new();
-    let mut worst = off(&posture, None);
-    let lost = worst > LOST_PX;
-    if lost {
-        // The placed start led astray (the torso's solve can run off along the rays from a
-        // start turned the wrong way): the plain start solved as the lift did before its
-        // stages, the solver's restarts), where it does better: first in stages (tens of
-        // milliseconds); the whole problem with restarts (up to seconds) only when neither
-        // this nor the depth flips below find the keypoints.
-        let (plain, plain_report) = solve_pose(skeleton, &document, &start, POSE_ITERATIONS)?;
-        let plain_worst = off(&plain, None);
-        if plain_worst < worst {
-            (posture, report, worst) = (plain, plain_report, plain_worst);
-        }
-    }
-    // Through a fitted camera no posture lands every keypoint on its pixel: more is tried only
-    // for what a wrong depth leaves (a limb's keypoints many pixels off).
-    let on_pixel = if camera_fitted {
-        FITTED_OFF_PX
-    } else {
-        ON_PIXEL_PX
+        camera_fitted,
     };
-    if worst > on_pixel {
-        // What the stages leave off: each arm or leg whose keypoints are off solved alone
-        // before any flip is tried (a hand whose elbow must move: the hand's stage holds the
-        // hinge; a nearly straight knee, where the body stage stalls). (The whole problem's
-        // iterations here before took 3 to 8 times as long for no better keypoints on the
-        // random family of `examples/lift_bench`.)
-        let off_limbs: Vec<&LimbKeypoints> = LIMBS
-            .iter()
-            .filter(|limb| {
-                skeleton
-                    .joint_index(limb.joints[1])
-                    .is_some_and(|middle| off(&posture, Some(middle)) > on_pixel)
-            })
-            .collect();
-        let (limbs, limbs_report) = crate::stages::solve_limbs(
-            skeleton,
-            &document,
-            &posture,
-            &off_limbs,
-            LIMB_ITERATIONS,
-            LIFT_TOLERANCE_M,
-        )?;
-        let limbs_worst = off(&limbs, None);
-        if limbs_worst < worst {
-            (posture, report, worst) = (limbs, limbs_report, limbs_worst);
-        }
-    }
-    for _ in 0..MAX_FLIPS {
-        if worst <= on_pixel {
-            break;
-        }
-        let Some((joints, flipped, flipped_report, flipped_worst)) =
-            best_flip(skeleton, &document, &posture, &camera, &report, &off)?
-        else {
-            break;
-        };
-        flips.extend(joints);
-        (posture, report, worst) = (flipped, flipped_report, flipped_worst);
-    }
-    // Still far off (more than a fitted camera's misfit) after a start that led astray.
-    if lost && worst > FITTED_OFF_PX {
-        let (plain, plain_report) = crate::stages::solve_whole(
-            skeleton,
-            &document,
-            &start,
-            POSE_ITERATIONS,
-            LIFT_TOLERANCE_M,
-        )?;
-        if off(&plain, None) < worst {
-            (posture, report) = (plain, plain_report);
-            flips.clear();
-        }
-    }
+    let (found, flips) = search.run([&start, &about_face], on_floor)?;
     // Comfort last, once, from the posture the image, the floor and balance chose.
-    let (posture, report) = settle_comfort(skeleton, &document, &posture, report)?;
+    let (posture, report) = settle_comfort(skeleton, &document, &found.posture, found.report)?;
     document.posture = PostureValues::from_posture(skeleton, &posture);
     Ok(Lifted {
         document,
@@ -223,6 +146,158 @@ pub fn lift(
         flips,
         report,
     })
+}
+
+/// A posture the lift's search found: its solve's report and how far its worst keypoint lands
+/// from its pixel (px).
+struct Found {
+    posture: Posture,
+    report: SolveReport,
+    worst: f64,
+}
+
+impl Found {
+    /// `other` in place of this one where its worst keypoint is nearer its pixel; whether it is.
+    fn keep_better(&mut self, other: Found) -> bool {
+        let better = other.worst < self.worst;
+        if better {
+            *self = other;
+        }
+        better
+    }
+}
+
+/// What the lift's search solves: the document's tasks on the body, the keypoints seen through
+/// the view.
+struct Search<'a> {
+    skeleton: &'a Skeleton,
+    document: &'a Document,
+    finder: &'a KeypointFinder,
+    view: &'a View,
+    person: &'a OpenPosePerson,
+    camera_fitted: bool,
+}
+
+impl Search<'_> {
+    /// The largest distance of a keypoint from its pixel in `posture` (px; see
+    /// [`worst_pixel`]): all, or with `below` those of that joint's limb.
+    fn off(&self, posture: &Posture, below: Option<usize>) -> f64 {
+        let Search {
+            skeleton,
+            finder,
+            view,
+            person,
+            ..
+        } = *self;
+        worst_pixel(skeleton, finder, posture, view, person, below)
+    }
+
+    /// A solve's posture with how far it lands from the keypoints.
+    fn found(&self, (posture, report): (Posture, SolveReport)) -> Found {
+        let worst = self.off(&posture, None);
+        Found {
+            posture,
+            report,
+            worst,
+        }
+    }
+
+    /// A keypoint this close to its pixel counts as on it (px): through a fitted camera no
+    /// posture lands every keypoint on its pixel, so more is tried only for what a wrong
+    /// depth leaves (a limb's keypoints many pixels off).
+    fn on_pixel(&self) -> f64 {
+        if self.camera_fitted {
+            FITTED_OFF_PX
+        } else {
+            ON_PIXEL_PX
+        }
+    }
+
+    /// The search from `starts` (the plain start, and turned about), the feet of `on_floor`
+    /// standing where their rays meet the floor: the placed start solved; from the plain start
+    /// too when that led astray; the limbs left off solved alone; the flips in depth that
+    /// bring limbs onto their keypoints; and the whole problem with the solver's restarts as
+    /// the last resort. Returns the posture found and the joints flipped.
+    fn run(
+        &self,
+        starts: [&Posture; 2],
+        on_floor: &[String],
+    ) -> Result<(Found, Vec<String>), LiftError> {
+        let (skeleton, document) = (self.skeleton, self.document);
+        let placed = placed_start(skeleton, document, starts, self.person, self.view, on_floor)?;
+        let mut found = self.found(solve_pose(skeleton, document, &placed, POSE_ITERATIONS)?);
+        let lost = found.worst > LOST_PX;
+        if lost {
+            // The placed start led astray (the torso's solve can run off along the rays from a
+            // start turned the wrong way): the plain start solved in stages (tens of
+            // milliseconds), where it does better; the whole problem with restarts (up to
+            // seconds) only when neither this nor the depth flips below find the keypoints.
+            found.keep_better(self.found(solve_pose(
+                skeleton,
+                document,
+                starts[0],
+                POSE_ITERATIONS,
+            )?));
+        }
+        if found.worst > self.on_pixel() {
+            found.keep_better(self.limbs_alone(&found)?);
+        }
+        let flips = self.flip_limbs(&mut found)?;
+        // Still far off (more than a fitted camera's misfit) after a start that led astray.
+        if lost && found.worst > FITTED_OFF_PX {
+            let whole = self.found(crate::stages::solve_whole(
+                skeleton,
+                document,
+                starts[0],
+                POSE_ITERATIONS,
+                LIFT_TOLERANCE_M,
+            )?);
+            if found.keep_better(whole) {
+                return Ok((found, Vec::new()));
+            }
+        }
+        Ok((found, flips))
+    }
+
+    /// What the stages leave off: each arm or leg whose keypoints are off solved alone (a hand
+    /// whose elbow must move: the hand's stage holds the hinge; a nearly straight knee, where
+    /// the body stage stalls). (The whole problem's iterations here before took 3 to 8 times
+    /// as long for no better keypoints on the random family of `examples/lift_bench`.)
+    fn limbs_alone(&self, found: &Found) -> Result<Found, LiftError> {
+        let off_limbs: Vec<&LimbKeypoints> = LIMBS
+            .iter()
+            .filter(|limb| {
+                self.skeleton
+                    .joint_index(limb.joints[1])
+                    .is_some_and(|middle| self.off(&found.posture, Some(middle)) > self.on_pixel())
+            })
+            .collect();
+        Ok(self.found(crate::stages::solve_limbs(
+            self.skeleton,
+            self.document,
+            &found.posture,
+            &off_limbs,
+            LIMB_ITERATIONS,
+            LIFT_TOLERANCE_M,
+        )?))
+    }
+
+    /// Up to [`MAX_FLIPS`] limbs flipped in depth ([`Search::best_flip`]) while a keypoint is
+    /// off its pixel; returns the joints flipped, in order.
+    fn flip_limbs(&self, found: &mut Found) -> Result<Vec<String>, LiftError> {
+        let mut flips = Vec::new();
+        for _ in 0..MAX_FLIPS {
+            if found.worst <= self.on_pixel() {
+                break;
+            }
+            let Some((joints, flipped)) = self.best_flip(found)? else {
+                break;
+            };
+            flips.extend(joints);
+            *found = flipped;
+        }
+        Ok(flips)
+    }
 }
 
 /// A lift from the placed start leaving a keypoint this far off its pixel (px) is solved again
@@ -389,6 +464,36 @@ fn placed_start(
     view: &View,
     standing: &[String],
 ) -> Result<Posture, LiftError> {
+    let Some(mut posture) =
+        best_torso(skeleton, &torso_document(skeleton, document), starts, view)?
+    else {
+        return Ok(starts[0].clone());
+    };
+    for limb in limbs_on_rays(skeleton, person, view, standing) {
+        let best = limb
+            .choices(skeleton, &posture)
+            .into_iter()
+            .map(|(_, p, off, turn)| (p, off, turn))
+            .reduce(|a, b| {
+                let better =
+                    b.1 < a.1 - CHOICE_SLACK_M || (b.1 <= a.1 + CHOICE_SLACK_M && b.2 < a.2);
+                if better { b } else { a }
+            });
+        if let Some((p, _, _)) = best {
+            posture = p;
+        }
+    }
+    Ok(posture)
+}
+
+/// The arms and legs whose middle and end keypoints are seen, with their rays; a leg's foot
+/// on the floor where its ankle is of `standing`.
+fn limbs_on_rays(
+    skeleton: &Skeleton,
+    person: &OpenPosePerson,
+    view: &View,
+    standing: &[String],
+) -> Vec<LimbOnRays> {
     let rest = Frames::new(skeleton, &Posture::rest(skeleton));
     let floor = |limb: &LimbKeypoints| {
         let ankle = limb.joints[2];
@@ -399,7 +504,7 @@ fn placed_start(
             .flatten()
             .map(|j| rest.joint_position[j].y)
     };
-    let limbs: Vec<LimbOnRays> = LIMBS
+    LIMBS
         .iter()
         .filter_map(|limb| {
             Some(LimbOnRays {
@@ -408,7 +513,11 @@ fn placed_start(
                 floor: floor(limb),
             })
         })
-        .collect();
+        .collect()
+}
+
+/// `document` with only the torso's keypoints (those on no limb's middle joint or below it).
+fn torso_document(skeleton: &Skeleton, document: &Document) -> Document {
     let middles: Vec<usize> = LIMBS
         .iter()
         .filter_map(|limb| skeleton.joint_index(limb.joints[1]))
@@ -419,7 +528,7 @@ fn placed_start(
             .is_some_and(|j| !middles.iter().any(|&m| descends_from(skeleton, j, m))),
         _ => false,
     };
-    let torso = Document {
+    Document {
         tasks: document
             .tasks
             .iter()
@@ -427,15 +536,24 @@ fn placed_start(
             .cloned()
             .collect(),
         ..document.clone()
-    };
-    // From the start facing as the keypoints say, and turned about: the torso's solve keeps
-    // to the side it starts on, and the image's left and right can mislead (a twisted trunk,
-    // a head turned over a shoulder).
+    }
+}
+
+/// `torso`'s keypoints solved from each of `starts` (facing as the keypoints say, and turned
+/// about: the torso's solve keeps to the side it starts on, and the image's left and right
+/// can mislead, a twisted trunk, a head turned over a shoulder): the posture that meets them
+/// best before the camera.
+fn best_torso(
+    skeleton: &Skeleton,
+    torso: &Document,
+    starts: [&Posture; 2],
+    view: &View,
+) -> Result<Option<Posture>, LiftError> {
     let mut torsos = Vec::with_capacity(2);
     for start in starts {
         let (posture, report) = crate::stages::solve_staged(
             skeleton,
-            &torso,
+            torso,
             start,
             TORSO_ITERATIONS,
             LIFT_TOLERANCE_M,
@@ -455,106 +573,91 @@ fn placed_start(
             .map_or(f64::INFINITY, |l| l.residual_after);
         torsos.push((posture, residual));
     }
-    let Some((mut posture, _)) = torsos.into_iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
-        return Ok(starts[0].clone());
-    };
-    for limb in &limbs {
-        let best = limb
-            .choices(skeleton, &posture)
-            .into_iter()
-            .map(|(_, p, off, turn)| (p, off, turn))
-            .reduce(|a, b| {
-                let better =
-                    b.1 < a.1 - CHOICE_SLACK_M || (b.1 <= a.1 + CHOICE_SLACK_M && b.2 < a.2);
-                if better { b } else { a }
-            });
-        if let Some((p, _, _)) = best {
-            posture = p;
-        }
-    }
-    Ok(posture)
+    Ok(torsos
+        .into_iter()
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(posture, _)| posture))
 }
 
-/// A flip the lift keeps: the joints flipped, the solved posture, its report and its worst
-/// keypoint's distance (px).
-type Flipped = (Vec<String>, Posture, SolveReport, f64);
-
-/// The first limb whose keypoints are off their rays that a flip in depth
-/// ([`crate::flip_depth`]) brings nearer: flipped at its middle joint, its end joint, and
-/// both, each candidate solved again on the limb alone (its keypoints on its DOF: a leg's
-/// flip solves no hand, an arm's no torso; a third of the whole pose's cost), the one that
-/// brings the limb's keypoints nearest their pixels kept if it does better than half their
-/// distance before and keeps the feet where they stood; that one solved as the whole pose
-/// too (the torso may have to move with the limb), the better of the two, with the joints
-/// flipped.
-fn best_flip(
-    skeleton: &Skeleton,
-    document: &Document,
-    posture: &Posture,
-    camera: &OrbitCamera,
-    report: &SolveReport,
-    off: &dyn Fn(&Posture, Option<usize>) -> f64,
-) -> Result<Option<Flipped>, LiftError> {
-    for limb in &LIMBS {
-        let [_, middle, end] = limb.joints;
-        let Some(limb_top) = skeleton.joint_index(middle) else {
-            continue;
-        };
-        let limb_off = off(posture, Some(limb_top));
-        if limb_off <= ON_PIXEL_PX {
-            continue;
+impl Search<'_> {
+    /// The first limb whose keypoints are off their rays that a flip in depth
+    /// ([`crate::flip_depth`]) brings nearer: flipped at its middle joint, its end joint, and
+    /// both, each candidate solved again on the limb alone (its keypoints on its DOF: a leg's
+    /// flip solves no hand, an arm's no torso; a third of the whole pose's cost), the one that
+    /// brings the limb's keypoints nearest their pixels kept if it does better than half their
+    /// distance before and keeps the feet where they stood; that one solved as the whole pose
+    /// too (the torso may have to move with the limb), the better of the two, with the joints
+    /// flipped.
+    fn best_flip(&self, found: &Found) -> Result<Option<(Vec<String>, Found)>, LiftError> {
+        for limb in &LIMBS {
+            let Some(limb_top) = self.skeleton.joint_index(limb.joints[1]) else {
+                continue;
+            };
+            let limb_off = self.off(&found.posture, Some(limb_top));
+            if limb_off <= ON_PIXEL_PX {
+                continue;
+            }
+            let mut best: Option<(Vec<&str>, Posture, f64, Found)> = None;
+            for (joints, trial) in self.flip_candidates(&found.posture, limb) {
+                let solved = self.found(crate::stages::solve_limbs(
+                    self.skeleton,
+                    self.document,
+                    &trial,
+                    &[limb],
+                    CANDIDATE_ITERATIONS,
+                    LIFT_TOLERANCE_M,
+                )?);
+                let solved_off = self.off(&solved.posture, Some(limb_top));
+                let floor_kept =
+                    floor_residual(&solved.report) <= floor_residual(&found.report) + FLOOR_KEPT_M;
+                if floor_kept && solved_off < 0.5 * best.as_ref().map_or(limb_off, |b| b.2) {
+                    best = Some((joints, trial, solved_off, solved));
+                }
+            }
+            if let Some((joints, trial, _, mut solved)) = best {
+                // The torso may have to move with the limb: the whole pose from the flip too.
+                solved.keep_better(self.found(solve_pose(
+                    self.skeleton,
+                    self.document,
+                    &trial,
+                    CANDIDATE_ITERATIONS,
+                )?));
+                let joints = joints.into_iter().map(str::to_owned).collect();
+                return Ok(Some((joints, solved)));
+            }
         }
-        // A flip that does not fit within the joints' ranges is no candidate.
-        let flip = |p: &Posture, joint: &str| crate::flip_depth(skeleton, p, camera, joint).ok();
+        Ok(None)
+    }
+
+    /// `posture` with `limb` flipped in depth at its end joint, at both joints and at its
+    /// middle joint, with the joints flipped; a flip that does not fit within the joints'
+    /// ranges is no candidate.
+    fn flip_candidates(
+        &self,
+        posture: &Posture,
+        limb: &LimbKeypoints,
+    ) -> Vec<(Vec<&'static str>, Posture)> {
+        let [_, middle, end] = limb.joints;
+        let flip = |p: &Posture, joint: &str| {
+            crate::flip_depth(self.skeleton, p, &self.view.camera, joint).ok()
+        };
         let flipped_middle = flip(posture, middle);
-        let candidates = [
+        [
             (vec![end], flip(posture, end)),
             (
                 vec![middle, end],
                 flipped_middle.as_ref().and_then(|p| flip(p, end)),
             ),
             (vec![middle], flipped_middle),
-        ];
-        let mut best: Option<(Flipped, f64, Posture)> = None;
-        for (joints, trial) in candidates {
-            let Some(trial) = trial else {
-                continue;
-            };
-            let (solved, solved_report) = crate::stages::solve_limbs(
-                skeleton,
-                document,
-                &trial,
-                &[limb],
-                CANDIDATE_ITERATIONS,
-                LIFT_TOLERANCE_M,
-            )?;
-            let solved_off = off(&solved, Some(limb_top));
-            let floor_kept = floor_residual(&solved_report) <= floor_residual(report) + 0.005;
-            if floor_kept && solved_off < 0.5 * best.as_ref().map_or(limb_off, |b| b.1) {
-                let joints = joints.into_iter().map(str::to_owned).collect();
-                let solved_worst = off(&solved, None);
-                best = Some((
-                    (joints, solved, solved_report, solved_worst),
-                    solved_off,
-                    trial,
-                ));
-            }
-        }
-        if let Some(((joints, solved, solved_report, solved_worst), _, trial)) = best {
-            // The flip kept, solved as a whole from the flip too (the torso may move with the
-            // limb): the better of the two.
-            let (whole, whole_report) =
-                solve_pose(skeleton, document, &trial, CANDIDATE_ITERATIONS)?;
-            let whole_worst = off(&whole, None);
-            return Ok(Some(if whole_worst < solved_worst {
-                (joints, whole, whole_report, whole_worst)
-            } else {
-                (joints, solved, solved_report, solved_worst)
-            }));
-        }
+        ]
+        .into_iter()
+        .filter_map(|(joints, trial)| Some((joints, trial?)))
+        .collect()
     }
-    Ok(None)
 }
+
+/// A flip that takes the feet further than this from the floor than before (m) is refused.
+const FLOOR_KEPT_M: f64 = 0.005;
 
 /// Solves `document`'s tasks on `skeleton` from `start` (a lift's, or one flipped by
 /// [`crate::flip_depth`]): the image, the floor and balance first ([`solve_pose`]), then a few

@@ -191,25 +191,9 @@ pub(crate) fn solve_staged(
     let mut iterations = body_report.iterations;
     let mut status = body_report.status;
     for &hand in &hands {
-        let Some(forearm) = body.joints()[hand].parent else {
+        let Some((hand_tasks, held)) = hand_stage(body, &tasks, hand) else {
             continue;
         };
-        let on_forearm = |j: usize| descends_from(body, j, forearm);
-        let hand_tasks: Vec<Task> = tasks
-            .iter()
-            .filter(|t| !is_comfort(t) && task_joint(t).is_some_and(on_forearm))
-            .cloned()
-            .collect();
-        if !hand_tasks
-            .iter()
-            .filter_map(task_joint)
-            .any(|j| j != hand && descends_from(body, j, hand))
-        {
-            continue;
-        }
-        // The elbow's hinge held too: it would move the wrist, which the body stage placed.
-        let mut held = dofs_where(body, on_forearm);
-        held.extend(elbow_hinge(body, hand));
         let mut stage = solver(&held, max_iterations)?;
         let report = stage
             .solve(body, &hand_tasks, &mut posture)
@@ -221,6 +205,30 @@ pub(crate) fn solve_staged(
     }
     let report = report_at(solver(&[], 0)?, body, &tasks, &posture, iterations, status)?;
     Ok((posture, report))
+}
+
+/// The stage of the hand below the wrist `hand` (module docs): the tasks on its forearm and
+/// below (comfort aside), and the DOF held (all but the forearm's and below, and the elbow's
+/// hinge: it would move the wrist, which the body stage placed); `None` when no keypoint of
+/// the hand is among `tasks`.
+fn hand_stage(body: &Skeleton, tasks: &[Task], hand: usize) -> Option<(Vec<Task>, Vec<usize>)> {
+    let forearm = body.joints().get(hand)?.parent?;
+    let on_forearm = |j: usize| descends_from(body, j, forearm);
+    let hand_tasks: Vec<Task> = tasks
+        .iter()
+        .filter(|t| !is_comfort(t) && task_joint(t).is_some_and(on_forearm))
+        .cloned()
+        .collect();
+    let has_hand_point = hand_tasks
+        .iter()
+        .filter_map(task_joint)
+        .any(|j| j != hand && descends_from(body, j, hand));
+    if !has_hand_point {
+        return None;
+    }
+    let mut held = dofs_where(body, on_forearm);
+    held.extend(elbow_hinge(body, hand));
+    Some((hand_tasks, held))
 }
 
 /// The whole problem's levels at `posture`, without a step (`whole`: a solver of no
