@@ -579,42 +579,23 @@ fn two_people_in_one_image_become_two_characters_where_they_stood() {
             DVec3::new(-0.3, 0.85, -0.1) + apart,
         ],
     );
-    let camera = OrbitCamera {
-        target_world: Vec3::new(0.45, 0.9, 0.0),
-        ..camera(0.3, 0.1, 4.2)
-    };
+    let camera = two_people_camera();
     let people = vec![seen(&s, &first, &camera), seen(&s, &second, &camera)];
-    let json = OpenPose {
-        size_px: SIZE,
-        people: people.clone(),
-    }
-    .to_json_seen_by(KeypointUnits::Pixels, &camera);
-    let read = ObservedPose::from_json(&json, None).unwrap();
     let started = std::time::Instant::now();
-    let lifted = stance_lift::lift_people(&s, &read, None).unwrap();
+    let lifted = stance_lift::lift_people(&s, &read_back(people.clone(), &camera), None).unwrap();
     assert_eq!(lifted.len(), 2);
     println!(
         "two people lifted in {:.0} ms (debug build)",
         started.elapsed().as_secs_f64() * 1e3
     );
-    // Where each stands: the middle of its ankles (on the floor, so fixed by their rays; a
-    // pelvis's depth over its feet is what a single image leaves open).
-    let (left, right) = (
-        s.joint_index("l_talocrural").unwrap(),
-        s.joint_index("r_talocrural").unwrap(),
-    );
-    let stands = |p: &Posture| {
-        let f = Frames::new(&s, p);
-        (f.joint_position[left] + f.joint_position[right]) / 2.0
-    };
     let mut places = Vec::new();
     for (observed, person) in people.iter().zip(&lifted) {
         let (worst, count) = worst_px(observed, &seen(&s, &person.posture, &camera));
         println!("two people: {count} keypoints back within {worst:.3} px");
         assert!(worst <= 2.0, "a keypoint {worst} px off");
-        places.push(stands(&person.posture));
+        places.push(stands(&s, &person.posture));
     }
-    let drawn_apart = stands(&second) - stands(&first);
+    let drawn_apart = stands(&s, &second) - stands(&s, &first);
     let lifted_apart = places[1] - places[0];
     assert!(
         // Measured 3.1 cm (8 mm of it an ankle's height): within 5 cm at 4.2 m.
@@ -626,16 +607,41 @@ fn two_people_in_one_image_become_two_characters_where_they_stood() {
     assert_eq!(names, ["Person 1", "Person 2"]);
     let back = stance_document::Scene::from_json(&scene.to_json(false)).unwrap();
     assert_eq!(back.characters.len(), 2);
-    // A second person with nothing seen is named in the error.
-    let mut empty = people;
-    empty[1] = OpenPosePerson::EMPTY;
+}
+
+/// The camera of the two people's image: both in view, 4.2 m away.
+fn two_people_camera() -> OrbitCamera {
+    OrbitCamera {
+        target_world: Vec3::new(0.45, 0.9, 0.0),
+        ..camera(0.3, 0.1, 4.2)
+    }
+}
+
+/// `people` seen by `camera` through the JSON the renderer writes, read back.
+fn read_back(people: Vec<OpenPosePerson>, camera: &OrbitCamera) -> ObservedPose {
     let json = OpenPose {
         size_px: SIZE,
-        people: empty,
+        people,
     }
-    .to_json_seen_by(KeypointUnits::Pixels, &camera);
-    let read = ObservedPose::from_json(&json, None).unwrap();
-    let error = stance_lift::lift_people(&s, &read, None)
+    .to_json_seen_by(KeypointUnits::Pixels, camera);
+    ObservedPose::from_json(&json, None).unwrap()
+}
+
+/// Where a posture stands: the middle of its ankles (on the floor, so fixed by their rays; a
+/// pelvis's depth over its feet is what a single image leaves open).
+fn stands(s: &Skeleton, p: &Posture) -> DVec3 {
+    let f = Frames::new(s, p);
+    let ankle = |name: &str| f.joint_position[s.joint_index(name).unwrap()];
+    (ankle("l_talocrural") + ankle("r_talocrural")) / 2.0
+}
+
+/// Catches an error for one person of several that does not say which.
+#[test]
+fn a_second_person_with_nothing_seen_is_named_in_the_error() {
+    let s = body();
+    let camera = two_people_camera();
+    let people = vec![seen(&s, &Posture::rest(&s), &camera), OpenPosePerson::EMPTY];
+    let error = stance_lift::lift_people(&s, &read_back(people, &camera), None)
         .unwrap_err()
         .to_string();
     assert!(error.starts_with("person 2:"), "{error}");
