@@ -583,11 +583,11 @@ impl Search<'_> {
     /// The first limb whose keypoints are off their rays that a flip in depth
     /// ([`crate::flip_depth`]) brings nearer: flipped at its middle joint, its end joint, and
     /// both, each candidate solved again on the limb alone (its keypoints on its DOF: a leg's
-    /// flip solves no hand, an arm's no torso; a third of the whole pose's cost), the one that
-    /// brings the limb's keypoints nearest their pixels kept if it does better than half their
-    /// distance before and keeps the feet where they stood; that one solved as the whole pose
-    /// too (the torso may have to move with the limb), the better of the two, with the joints
-    /// flipped.
+    /// flip solves no hand, an arm's no torso; a third of the whole pose's cost); the one that
+    /// brings the limb's keypoints nearest their pixels solved as the whole pose too (the torso
+    /// may have to move with the limb), the better of the two kept if it halves the distance
+    /// of the worst keypoint, or of the limb's (the others no further), and keeps the feet
+    /// where they stood; with the joints flipped.
     fn best_flip(&self, found: &Found) -> Result<Option<(Vec<String>, Found)>, LiftError> {
         for limb in &LIMBS {
             let Some(limb_top) = self.skeleton.joint_index(limb.joints[1]) else {
@@ -597,6 +597,9 @@ impl Search<'_> {
             if limb_off <= ON_PIXEL_PX {
                 continue;
             }
+            let floor_kept = |solved: &Found| {
+                floor_residual(&solved.report) <= floor_residual(&found.report) + FLOOR_KEPT_M
+            };
             let mut best: Option<(Vec<&str>, Posture, f64, Found)> = None;
             for (joints, trial) in self.flip_candidates(&found.posture, limb) {
                 let solved = self.found(crate::stages::solve_limbs(
@@ -608,20 +611,25 @@ impl Search<'_> {
                     LIFT_TOLERANCE_M,
                 )?);
                 let solved_off = self.off(&solved.posture, Some(limb_top));
-                let floor_kept =
-                    floor_residual(&solved.report) <= floor_residual(&found.report) + FLOOR_KEPT_M;
-                if floor_kept && solved_off < 0.5 * best.as_ref().map_or(limb_off, |b| b.2) {
+                if floor_kept(&solved) && best.as_ref().is_none_or(|b| solved_off < b.2) {
                     best = Some((joints, trial, solved_off, solved));
                 }
             }
-            if let Some((joints, trial, _, mut solved)) = best {
-                // The torso may have to move with the limb: the whole pose from the flip too.
-                solved.keep_better(self.found(solve_pose(
-                    self.skeleton,
-                    self.document,
-                    &trial,
-                    CANDIDATE_ITERATIONS,
-                )?));
+            let Some((joints, trial, _, mut solved)) = best else {
+                continue;
+            };
+            // The torso may have to move with the limb: the whole pose from the flip too.
+            let whole = self.found(solve_pose(
+                self.skeleton,
+                self.document,
+                &trial,
+                CANDIDATE_ITERATIONS,
+            )?);
+            if floor_kept(&whole) {
+                solved.keep_better(whole);
+            }
+            let limb_halved = self.off(&solved.posture, Some(limb_top)) < 0.5 * limb_off;
+            if solved.worst < 0.5 * found.worst || (limb_halved && solved.worst < found.worst) {
                 let joints = joints.into_iter().map(str::to_owned).collect();
                 return Ok(Some((joints, solved)));
             }
