@@ -69,12 +69,11 @@ pub enum LiftError {
 }
 
 // Known limits (measured, docs/control-maps.md): a flip of an arm whose hand's keypoints are
-// given can leave the hand's keypoints 5-11 px off (the mirrored arm needs the hand turned
-// where the forearm's and wrist's ranges do not reach); a fitted camera leaves keypoints a few
+// given can leave the hand's keypoints 9-11 px off (the flip moves the wrist in depth, and the
+// rigid palm cannot match its keypoints at another size in the image: no turn of it does); a fitted camera leaves keypoints a few
 // pixels off (its pitch and distance are the default's); on a random family of standing
-// postures (examples/lift_bench) 5 of 20 lifts end over 2 px off (up to 5.9 px: a hand's
-// keypoints, where its arm's depth or the wrist's range leaves them) and 5 of 20 take over
-// 50 ms of CPU on a shared 2-core machine (the arms' solve and the flip search); on a second
-// family (arms raised, crouched, seated-looking) 6 of 21 end over 2 px (up to 13.5 px) and a
-// seated one seen from behind takes 1.3 s (its start leads astray: the whole problem's
-// restarts find it).
+// postures (examples/lift_bench, held-out seed) 4 of 20 lifts end over 2 px off (up to 10.3
+// px: a hand's keypoints, where its arm's depth or the wrist's range leaves them; hips 2-3 px)
+// and 4 of 20 take over 50 ms of CPU on a shared 2-core machine (the pose stage and the flip
+// search); on a second family (arms raised, crouched, seated-looking) 4 of 21 end over 2 px
+// (up to 19.4 px: a seated one seen from behind, whose start leads astray).

@@ -117,8 +117,6 @@ pub fn lift(
         camera: Some(camera_spec(&camera)),
         ..Document::default()
     };
-    let off =
-        |p: &Posture, below: Option<usize>| worst_pixel(skeleton, &finder, p, &view, person, below);
     // The feet on the floor where their rays meet it: only through the camera the keypoints were
     // seen with (a fitted one sees the floor at another pitch).
     let on_floor = if camera_fitted {
@@ -126,82 +124,17 @@ pub fn lift(
     } else {
         &standing[..]
     };
-    let placed = placed_start(
+    let search = Search {
         skeleton,
-        &document,
-        [&start, &about_face],
+        document: &document,
+        finder: &finder,
+        view: &view,
         person,
-        &view,
-        on_floor,
-    )?;
-    let (mut posture, mut report) = solve_pose(skeleton, &document, &placed, POSE_ITERATIONS)?;
-    let mut flips = Vec::new();
-    let mut worst = off(&posture, None);
-    let lost = worst > LOST_PX;
-    if lost {
-        // The placed start led astray (the torso's solve can run off along the rays from a
-        // start turned the wrong way): the plain start solved as the lift did before its
-        // stages, the solver's restarts), where it does better: first in stages (tens of
-        // milliseconds); the whole problem with restarts (up to seconds) only when neither
-        // this nor the depth flips below find the keypoints.
-        let (plain, plain_report) = solve_pose(skeleton, &document, &start, POSE_ITERATIONS)?;
-        let plain_worst = off(&plain, None);
-        if plain_worst < worst {
-            (posture, report, worst) = (plain, plain_report, plain_worst);
-        }
-    }
-    // Through a fitted camera no posture lands every keypoint on its pixel: more is tried only
-    // for what a wrong depth leaves (a limb's keypoints many pixels off).
-    let on_pixel = if camera_fitted {
-        FITTED_OFF_PX
-    } else {
-        ON_PIXEL_PX
+        camera_fitted,
     };
-    if worst > on_pixel {
-        // What the stages leave off where a hand needs its elbow moved (the hand's stage holds
-        // the hinge): each arm with its hand solved alone before any flip is tried. (The whole
-        // problem's iterations here before took 3 to 8 times as long for no better keypoints
-        // on the random family of `examples/lift_bench`.)
-        let (arms, arms_report) = crate::stages::solve_arms(
-            skeleton,
-            &document,
-            &posture,
-            ARM_ITERATIONS,
-            LIFT_TOLERANCE_M,
-        )?;
-        let arms_worst = off(&arms, None);
-        if arms_worst < worst {
-            (posture, report, worst) = (arms, arms_report, arms_worst);
-        }
-    }
-    for _ in 0..MAX_FLIPS {
-        if worst <= on_pixel {
-            break;
-        }
-        let Some((joints, flipped, flipped_report, flipped_worst)) =
-            best_flip(skeleton, &document, &posture, &camera, &report, worst, &off)?
-        else {
-            break;
-        };
-        flips.extend(joints);
-        (posture, report, worst) = (flipped, flipped_report, flipped_worst);
-    }
-    // Still far off (more than a fitted camera's misfit) after a start that led astray.
-    if lost && worst > FITTED_OFF_PX {
-        let (plain, plain_report) = crate::stages::solve_whole(
-            skeleton,
-            &document,
-            &start,
-            POSE_ITERATIONS,
-            LIFT_TOLERANCE_M,
-        )?;
-        if off(&plain, None) < worst {
-            (posture, report) = (plain, plain_report);
-            flips.clear();
-        }
-    }
+    let (found, flips) = search.run([&start, &about_face], on_floor)?;
     // Comfort last, once, from the posture the image, the floor and balance chose.
-    let (posture, report) = settle_comfort(skeleton, &document, &posture, report)?;
+    let (posture, report) = settle_comfort(skeleton, &document, &found.posture, found.report)?;
     document.posture = PostureValues::from_posture(skeleton, &posture);
     Ok(Lifted {
         document,
@@ -215,15 +148,167 @@ pub fn lift(
     })
 }
 
+/// A posture the lift's search found: its solve's report and how far its worst keypoint lands
+/// from its pixel (px).
+struct Found {
+    posture: Posture,
+    report: SolveReport,
+    worst: f64,
+}
+
+impl Found {
+    /// `other` in place of this one where its worst keypoint is nearer its pixel; whether it is.
+    fn keep_better(&mut self, other: Found) -> bool {
+        let better = other.worst < self.worst;
+        if better {
+            *self = other;
+        }
+        better
+    }
+}
+
+/// What the lift's search solves: the document's tasks on the body, the keypoints seen through
+/// the view.
+struct Search<'a> {
+    skeleton: &'a Skeleton,
+    document: &'a Document,
+    finder: &'a KeypointFinder,
+    view: &'a View,
+    person: &'a OpenPosePerson,
+    camera_fitted: bool,
+}
+
+impl Search<'_> {
+    /// The largest distance of a keypoint from its pixel in `posture` (px; see
+    /// [`worst_pixel`]): all, or with `below` those of that joint's limb.
+    fn off(&self, posture: &Posture, below: Option<usize>) -> f64 {
+        let Search {
+            skeleton,
+            finder,
+            view,
+            person,
+            ..
+        } = *self;
+        worst_pixel(skeleton, finder, posture, view, person, below)
+    }
+
+    /// A solve's posture with how far it lands from the keypoints.
+    fn found(&self, (posture, report): (Posture, SolveReport)) -> Found {
+        let worst = self.off(&posture, None);
+        Found {
+            posture,
+            report,
+            worst,
+        }
+    }
+
+    /// A keypoint this close to its pixel counts as on it (px): through a fitted camera no
+    /// posture lands every keypoint on its pixel, so more is tried only for what a wrong
+    /// depth leaves (a limb's keypoints many pixels off).
+    fn on_pixel(&self) -> f64 {
+        if self.camera_fitted {
+            FITTED_OFF_PX
+        } else {
+            ON_PIXEL_PX
+        }
+    }
+
+    /// The search from `starts` (the plain start, and turned about), the feet of `on_floor`
+    /// standing where their rays meet the floor: the placed start solved; from the plain start
+    /// too when that led astray; the limbs left off solved alone; the flips in depth that
+    /// bring limbs onto their keypoints; and the whole problem with the solver's restarts as
+    /// the last resort. Returns the posture found and the joints flipped.
+    fn run(
+        &self,
+        starts: [&Posture; 2],
+        on_floor: &[String],
+    ) -> Result<(Found, Vec<String>), LiftError> {
+        let (skeleton, document) = (self.skeleton, self.document);
+        let placed = placed_start(skeleton, document, starts, self.person, self.view, on_floor)?;
+        let mut found = self.found(solve_pose(skeleton, document, &placed, POSE_ITERATIONS)?);
+        let lost = found.worst > LOST_PX;
+        if lost {
+            // The placed start led astray (the torso's solve can run off along the rays from a
+            // start turned the wrong way): the plain start solved in stages (tens of
+            // milliseconds), where it does better; the whole problem with restarts (up to
+            // seconds) only when neither this nor the depth flips below find the keypoints.
+            found.keep_better(self.found(solve_pose(
+                skeleton,
+                document,
+                starts[0],
+                POSE_ITERATIONS,
+            )?));
+        }
+        if found.worst > self.on_pixel() {
+            found.keep_better(self.limbs_alone(&found)?);
+        }
+        let flips = self.flip_limbs(&mut found)?;
+        // Still far off (more than a fitted camera's misfit) after a start that led astray.
+        if lost && found.worst > FITTED_OFF_PX {
+            let whole = self.found(crate::stages::solve_whole(
+                skeleton,
+                document,
+                starts[0],
+                POSE_ITERATIONS,
+                LIFT_TOLERANCE_M,
+            )?);
+            if found.keep_better(whole) {
+                return Ok((found, Vec::new()));
+            }
+        }
+        Ok((found, flips))
+    }
+
+    /// What the stages leave off: each arm or leg whose keypoints are off solved alone (a hand
+    /// whose elbow must move: the hand's stage holds the hinge; a nearly straight knee, where
+    /// the body stage stalls). (The whole problem's iterations here before took 3 to 8 times
+    /// as long for no better keypoints on the random family of `examples/lift_bench`.)
+    fn limbs_alone(&self, found: &Found) -> Result<Found, LiftError> {
+        let off_limbs: Vec<&LimbKeypoints> = LIMBS
+            .iter()
+            .filter(|limb| {
+                self.skeleton
+                    .joint_index(limb.joints[1])
+                    .is_some_and(|middle| self.off(&found.posture, Some(middle)) > self.on_pixel())
+            })
+            .collect();
+        Ok(self.found(crate::stages::solve_limbs(
+            self.skeleton,
+            self.document,
+            &found.posture,
+            &off_limbs,
+            LIMB_ITERATIONS,
+            LIFT_TOLERANCE_M,
+        )?))
+    }
+
+    /// Up to [`MAX_FLIPS`] limbs flipped in depth ([`Search::best_flip`]) while a keypoint is
+    /// off its pixel; returns the joints flipped, in order.
+    fn flip_limbs(&self, found: &mut Found) -> Result<Vec<String>, LiftError> {
+        let mut flips = Vec::new();
+        for _ in 0..MAX_FLIPS {
+            if found.worst <= self.on_pixel() {
+                break;
+            }
+            let Some((joints, flipped)) = self.best_flip(found)? else {
+                break;
+            };
+            flips.extend(joints);
+            *found = flipped;
+        }
+        Ok(flips)
+    }
+}
+
 /// A lift from the placed start leaving a keypoint this far off its pixel (px) is solved again
 /// from the plain start (the rest body turned and placed): in stages first, and as the whole
 /// problem with the solver's restarts if a keypoint is still over [`FITTED_OFF_PX`] off after
 /// the whole problem's iterations and the flips.
 const LOST_PX: f64 = 20.0;
 
-/// Iterations of each arm's solve (with its hand) after the stages when a keypoint is left off
-/// its pixel.
-const ARM_ITERATIONS: usize = 30;
+/// Iterations of each limb's solve (an arm with its hand, a leg) after the stages when a
+/// keypoint of it is left off its pixel.
+const LIMB_ITERATIONS: usize = 30;
 
 /// At most this many limbs are flipped in depth to meet the image level.
 const MAX_FLIPS: usize = 3;
@@ -332,28 +417,33 @@ fn turned(skeleton: &Skeleton, posture: &Posture, placed: &PlacedLimb) -> f64 {
         .sum()
 }
 
-/// The limb placed at each of its four depth choices from `posture` ([`PlacedLimb`]): the
-/// postures, with how far its joints land from their rays (m) and how far it turns from rest.
-fn limb_choices(
-    skeleton: &Skeleton,
-    posture: &Posture,
-    placed: &PlacedLimb,
+/// A limb to place on its keypoints' rays: its closed form, the rays of its middle and end
+/// joints, and the floor's height when its end joint stands on it.
+struct LimbOnRays {
+    placed: PlacedLimb,
     rays: [Ray; 2],
     floor: Option<f64>,
-) -> Vec<(usize, Posture, f64, f64)> {
-    let frames = Frames::new(skeleton, posture);
-    placed
-        .candidates(&frames, rays, floor)
-        .into_iter()
-        .enumerate()
-        .map(|(choice, goal)| {
-            let mut trial = posture.clone();
-            placed.place(skeleton, &mut trial, goal);
-            let off = off_rays(&Frames::new(skeleton, &trial), placed, rays);
-            let turn = turned(skeleton, &trial, placed);
-            (choice, trial, off, turn)
-        })
-        .collect()
+}
+
+impl LimbOnRays {
+    /// The limb placed at each of its four depth choices from `posture` ([`PlacedLimb`]): the
+    /// postures, with how far its joints land from their rays (m) and how far it turns from
+    /// rest.
+    fn choices(&self, skeleton: &Skeleton, posture: &Posture) -> Vec<(usize, Posture, f64, f64)> {
+        let frames = Frames::new(skeleton, posture);
+        self.placed
+            .candidates(&frames, self.rays, self.floor)
+            .into_iter()
+            .enumerate()
+            .map(|(choice, goal)| {
+                let mut trial = posture.clone();
+                self.placed.place(skeleton, &mut trial, goal);
+                let off = off_rays(&Frames::new(skeleton, &trial), &self.placed, self.rays);
+                let turn = turned(skeleton, &trial, &self.placed);
+                (choice, trial, off, turn)
+            })
+            .collect()
+    }
 }
 
 /// Off the rays by no more than this more than the best choice (m), a limb's depth choices
@@ -374,70 +464,14 @@ fn placed_start(
     view: &View,
     standing: &[String],
 ) -> Result<Posture, LiftError> {
-    let rest = Frames::new(skeleton, &Posture::rest(skeleton));
-    let floor = |limb: &LimbKeypoints| {
-        let ankle = limb.joints[2];
-        standing
-            .iter()
-            .any(|s| s == ankle)
-            .then(|| skeleton.joint_index(ankle))
-            .flatten()
-            .map(|j| rest.joint_position[j].y)
-    };
-    let limbs: Vec<(PlacedLimb, [Ray; 2], Option<f64>)> = LIMBS
-        .iter()
-        .filter_map(|limb| {
-            Some((
-                PlacedLimb::new(skeleton, limb.joints)?,
-                limb_rays(person, view, limb)?,
-                floor(limb),
-            ))
-        })
-        .collect();
-    let middles: Vec<usize> = LIMBS
-        .iter()
-        .filter_map(|limb| skeleton.joint_index(limb.joints[1]))
-        .collect();
-    let on_torso = |task: &TaskSpec| match &task.kind {
-        TaskKindSpec::Line { joint, .. } => skeleton
-            .joint_index(joint)
-            .is_some_and(|j| !middles.iter().any(|&m| descends_from(skeleton, j, m))),
-        _ => false,
-    };
-    let torso = Document {
-        tasks: document
-            .tasks
-            .iter()
-            .filter(|t| on_torso(t))
-            .cloned()
-            .collect(),
-        ..document.clone()
-    };
-    // From the start facing as the keypoints say, and turned about: the torso's solve keeps
-    // to the side it starts on, and the image's left and right can mislead (a twisted trunk,
-    // a head turned over a shoulder).
-    let mut torsos = Vec::with_capacity(2);
-    for start in starts {
-        let (posture, report) = crate::stages::solve_staged(
-            skeleton,
-            &torso,
-            start,
-            TORSO_ITERATIONS,
-            LIFT_TOLERANCE_M,
-            false,
-        )?;
-        let residual = report
-            .levels
-            .iter()
-            .find(|l| l.level == IMAGE_LEVEL)
-            .map_or(f64::INFINITY, |l| l.residual_after);
-        torsos.push((posture, residual));
-    }
-    let Some((mut posture, _)) = torsos.into_iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
+    let Some(mut posture) =
+        best_torso(skeleton, &torso_document(skeleton, document), starts, view)?
+    else {
         return Ok(starts[0].clone());
     };
-    for (placed, rays, floor) in &limbs {
-        let best = limb_choices(skeleton, &posture, placed, *rays, *floor)
+    for limb in limbs_on_rays(skeleton, person, view, standing) {
+        let best = limb
+            .choices(skeleton, &posture)
             .into_iter()
             .map(|(_, p, off, turn)| (p, off, turn))
             .reduce(|a, b| {
@@ -452,62 +486,186 @@ fn placed_start(
     Ok(posture)
 }
 
-/// A flip the lift keeps: the joints flipped, the solved posture, its report and its worst
-/// keypoint's distance (px).
-type Flipped = (Vec<String>, Posture, SolveReport, f64);
-
-/// Each limb whose keypoints are off their rays flipped in depth ([`crate::flip_depth`]) at
-/// its middle joint, its end joint, and both, and the tasks solved again: the flip that brings
-/// the keypoints nearest their pixels, if any does better than half of `worst` (px) and keeps
-/// the feet where they stood, with the joints flipped.
-fn best_flip(
+/// The arms and legs whose middle and end keypoints are seen, with their rays; a leg's foot
+/// on the floor where its ankle is of `standing`.
+fn limbs_on_rays(
     skeleton: &Skeleton,
-    document: &Document,
-    posture: &Posture,
-    camera: &OrbitCamera,
-    report: &SolveReport,
-    worst: f64,
-    off: &dyn Fn(&Posture, Option<usize>) -> f64,
-) -> Result<Option<Flipped>, LiftError> {
-    let mut best: Option<Flipped> = None;
-    for limb in &LIMBS {
-        let [_, middle, end] = limb.joints;
-        let Some(limb_top) = skeleton.joint_index(middle) else {
-            continue;
-        };
-        if off(posture, Some(limb_top)) <= ON_PIXEL_PX {
-            continue;
+    person: &OpenPosePerson,
+    view: &View,
+    standing: &[String],
+) -> Vec<LimbOnRays> {
+    let rest = Frames::new(skeleton, &Posture::rest(skeleton));
+    let floor = |limb: &LimbKeypoints| {
+        let ankle = limb.joints[2];
+        standing
+            .iter()
+            .any(|s| s == ankle)
+            .then(|| skeleton.joint_index(ankle))
+            .flatten()
+            .map(|j| rest.joint_position[j].y)
+    };
+    LIMBS
+        .iter()
+        .filter_map(|limb| {
+            Some(LimbOnRays {
+                placed: PlacedLimb::new(skeleton, limb.joints)?,
+                rays: limb_rays(person, view, limb)?,
+                floor: floor(limb),
+            })
+        })
+        .collect()
+}
+
+/// `document` with only the torso's keypoints (those on no limb's middle joint or below it).
+fn torso_document(skeleton: &Skeleton, document: &Document) -> Document {
+    let middles: Vec<usize> = LIMBS
+        .iter()
+        .filter_map(|limb| skeleton.joint_index(limb.joints[1]))
+        .collect();
+    let on_torso = |task: &TaskSpec| match &task.kind {
+        TaskKindSpec::Line { joint, .. } => skeleton
+            .joint_index(joint)
+            .is_some_and(|j| !middles.iter().any(|&m| descends_from(skeleton, j, m))),
+        _ => false,
+    };
+    Document {
+        tasks: document
+            .tasks
+            .iter()
+            .filter(|t| on_torso(t))
+            .cloned()
+            .collect(),
+        ..document.clone()
+    }
+}
+
+/// `torso`'s keypoints solved from each of `starts` (facing as the keypoints say, and turned
+/// about: the torso's solve keeps to the side it starts on, and the image's left and right
+/// can mislead, a twisted trunk, a head turned over a shoulder): the posture that meets them
+/// best before the camera.
+fn best_torso(
+    skeleton: &Skeleton,
+    torso: &Document,
+    starts: [&Posture; 2],
+    view: &View,
+) -> Result<Option<Posture>, LiftError> {
+    let mut torsos = Vec::with_capacity(2);
+    for start in starts {
+        let (posture, report) = crate::stages::solve_staged(
+            skeleton,
+            torso,
+            start,
+            TORSO_ITERATIONS,
+            LIFT_TOLERANCE_M,
+            false,
+        )?;
+        // A torso behind the eye meets the rays too (the lines go on through it), and can
+        // meet them better than the one before the camera: never taken.
+        let root = Frames::new(skeleton, &posture)
+            .joint_position
+            .first()
+            .copied();
+        let residual = report
+            .levels
+            .iter()
+            .find(|l| l.level == IMAGE_LEVEL)
+            .filter(|_| root.is_some_and(|p| view.in_front(p)))
+            .map_or(f64::INFINITY, |l| l.residual_after);
+        torsos.push((posture, residual));
+    }
+    Ok(torsos
+        .into_iter()
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(posture, _)| posture))
+}
+
+impl Search<'_> {
+    /// The first limb whose keypoints are off their rays that a flip in depth
+    /// ([`crate::flip_depth`]) brings nearer: flipped at its middle joint, its end joint, and
+    /// both, each candidate solved again on the limb alone (its keypoints on its DOF: a leg's
+    /// flip solves no hand, an arm's no torso; a third of the whole pose's cost); the one that
+    /// brings the limb's keypoints nearest their pixels solved as the whole pose too (the torso
+    /// may have to move with the limb), the better of the two kept if it halves the distance
+    /// of the worst keypoint, or of the limb's (the others no further), and keeps the feet
+    /// where they stood; with the joints flipped.
+    fn best_flip(&self, found: &Found) -> Result<Option<(Vec<String>, Found)>, LiftError> {
+        for limb in &LIMBS {
+            let Some(limb_top) = self.skeleton.joint_index(limb.joints[1]) else {
+                continue;
+            };
+            let limb_off = self.off(&found.posture, Some(limb_top));
+            if limb_off <= ON_PIXEL_PX {
+                continue;
+            }
+            let floor_kept = |solved: &Found| {
+                floor_residual(&solved.report) <= floor_residual(&found.report) + FLOOR_KEPT_M
+            };
+            let mut best: Option<(Vec<&str>, Posture, f64, Found)> = None;
+            for (joints, trial) in self.flip_candidates(&found.posture, limb) {
+                let solved = self.found(crate::stages::solve_limbs(
+                    self.skeleton,
+                    self.document,
+                    &trial,
+                    &[limb],
+                    CANDIDATE_ITERATIONS,
+                    LIFT_TOLERANCE_M,
+                )?);
+                let solved_off = self.off(&solved.posture, Some(limb_top));
+                if floor_kept(&solved) && best.as_ref().is_none_or(|b| solved_off < b.2) {
+                    best = Some((joints, trial, solved_off, solved));
+                }
+            }
+            let Some((joints, trial, _, mut solved)) = best else {
+                continue;
+            };
+            // The torso may have to move with the limb: the whole pose from the flip too.
+            let whole = self.found(solve_pose(
+                self.skeleton,
+                self.document,
+                &trial,
+                CANDIDATE_ITERATIONS,
+            )?);
+            if floor_kept(&whole) {
+                solved.keep_better(whole);
+            }
+            let limb_halved = self.off(&solved.posture, Some(limb_top)) < 0.5 * limb_off;
+            if solved.worst < 0.5 * found.worst || (limb_halved && solved.worst < found.worst) {
+                let joints = joints.into_iter().map(str::to_owned).collect();
+                return Ok(Some((joints, solved)));
+            }
         }
-        // A flip that does not fit within the joints' ranges is no candidate.
-        let flip = |p: &Posture, joint: &str| crate::flip_depth(skeleton, p, camera, joint).ok();
+        Ok(None)
+    }
+
+    /// `posture` with `limb` flipped in depth at its end joint, at both joints and at its
+    /// middle joint, with the joints flipped; a flip that does not fit within the joints'
+    /// ranges is no candidate.
+    fn flip_candidates(
+        &self,
+        posture: &Posture,
+        limb: &LimbKeypoints,
+    ) -> Vec<(Vec<&'static str>, Posture)> {
+        let [_, middle, end] = limb.joints;
+        let flip = |p: &Posture, joint: &str| {
+            crate::flip_depth(self.skeleton, p, &self.view.camera, joint).ok()
+        };
         let flipped_middle = flip(posture, middle);
-        let candidates = [
+        [
             (vec![end], flip(posture, end)),
             (
                 vec![middle, end],
                 flipped_middle.as_ref().and_then(|p| flip(p, end)),
             ),
             (vec![middle], flipped_middle),
-        ];
-        for (joints, trial) in candidates {
-            let Some(trial) = trial else {
-                continue;
-            };
-            let (solved, solved_report) =
-                solve_pose(skeleton, document, &trial, CANDIDATE_ITERATIONS)?;
-            let solved_worst = off(&solved, None);
-            let floor_kept = floor_residual(&solved_report) <= floor_residual(report) + 0.005;
-            if floor_kept && solved_worst < 0.5 * best.as_ref().map_or(worst, |b| b.3) {
-                let joints = joints.into_iter().map(str::to_owned).collect();
-                best = Some((joints, solved, solved_report, solved_worst));
-            }
-        }
-        if best.as_ref().is_some_and(|b| b.3 <= ON_PIXEL_PX) {
-            break;
-        }
+        ]
+        .into_iter()
+        .filter_map(|(joints, trial)| Some((joints, trial?)))
+        .collect()
     }
-    Ok(best)
 }
+
+/// A flip that takes the feet further than this from the floor than before (m) is refused.
+const FLOOR_KEPT_M: f64 = 0.005;
 
 /// Solves `document`'s tasks on `skeleton` from `start` (a lift's, or one flipped by
 /// [`crate::flip_depth`]): the image, the floor and balance first ([`solve_pose`]), then a few
@@ -554,7 +712,9 @@ fn solve_pose(
 
 /// Comfort among the postures that keep the image, the floor and balance: a few iterations
 /// from `posture`; the pose stage's result (`report`) stands when the document has no comfort
-/// task or the comfort stage loses a higher level.
+/// task or the comfort stage loses a higher level. The first [`COMFORT_PROBE_ITERATIONS`] tell
+/// whether comfort has anything to change: where they lose a level, or move no DOF by more
+/// than [`COMFORT_STILL`], the rest are not taken.
 fn settle_comfort(
     skeleton: &Skeleton,
     document: &Document,
@@ -568,30 +728,51 @@ fn settle_comfort(
     {
         return Ok((posture.clone(), report));
     }
-    let (settled, settled_report) = crate::stages::solve_staged(
-        skeleton,
-        document,
-        posture,
-        COMFORT_ITERATIONS,
-        LIFT_TOLERANCE_M,
-        true,
-    )?;
-    // Strict priority keeps the higher levels; a level that was met and no longer is (the
-    // iteration budget cut a correction short) keeps the pose stage's posture.
-    // Nor does one that takes a level above comfort further from its goal (a stage whose
-    // start was far off can run away in 12 iterations).
-    let lost = report.levels.iter().any(|before| {
-        settled_report.levels.iter().any(|after| {
+    let comfort = |from: &Posture, iterations: usize| {
+        crate::stages::solve_staged(skeleton, document, from, iterations, LIFT_TOLERANCE_M, true)
+    };
+    let (probed, probe_report) = comfort(posture, COMFORT_PROBE_ITERATIONS)?;
+    let moved = posture
+        .values()
+        .iter()
+        .zip(probed.values())
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    if loses_a_level(&report, &probe_report) {
+        return Ok((posture.clone(), report));
+    }
+    if moved <= COMFORT_STILL {
+        return Ok((probed, probe_report));
+    }
+    let (settled, mut settled_report) =
+        comfort(&probed, COMFORT_ITERATIONS - COMFORT_PROBE_ITERATIONS)?;
+    if loses_a_level(&report, &settled_report) {
+        Ok((posture.clone(), report))
+    } else {
+        settled_report.iterations += probe_report.iterations;
+        Ok((settled, settled_report))
+    }
+}
+
+/// Iterations of comfort that tell whether it has anything to change ([`settle_comfort`]).
+const COMFORT_PROBE_ITERATIONS: usize = 3;
+/// Comfort that moves no DOF by more than this in its first iterations (rad, or m for the
+/// root's place) has nothing to change: on lift_bench's random family half the comfort stages
+/// moved the posture by less than 0.01 rad in all their iterations.
+const COMFORT_STILL: f64 = 0.01;
+
+/// Whether the comfort stage's result (`after`) loses a level of the pose stage's (`before`):
+/// strict priority keeps the higher levels, but a level that was met and no longer is (the
+/// iteration budget cut a correction short), or one above comfort taken further from its goal
+/// (a stage whose start was far off can run away in a few iterations), is lost.
+fn loses_a_level(before: &SolveReport, after: &SolveReport) -> bool {
+    before.levels.iter().any(|before| {
+        after.levels.iter().any(|after| {
             after.level == before.level
                 && ((before.met && !after.met)
                     || after.residual_after > before.residual_after + LIFT_TOLERANCE_M)
         })
-    });
-    if lost {
-        Ok((posture.clone(), report))
-    } else {
-        Ok((settled, settled_report))
-    }
+    })
 }
 
 /// The document's saved view of `camera` (its field of view is the default one's).
@@ -631,6 +812,13 @@ impl View {
         let (origin, direction) = self.ray(pixel);
         let along = direction.dot(forward).max(1e-6);
         origin + direction * ((depth - (origin - eye).dot(forward)) / along)
+    }
+
+    /// Whether `p` lies before the eye (any point does in orthographic projection).
+    fn in_front(&self, p: DVec3) -> bool {
+        let eye = self.camera.eye_world().as_dvec3();
+        let forward = (self.camera.target_world.as_dvec3() - eye).normalize_or(DVec3::NEG_Z);
+        self.camera.orthographic || (p - eye).dot(forward) > 0.0
     }
 
     /// Pixels per metre at `depth` from the eye (for orthographic projection, at any depth).

@@ -204,54 +204,12 @@ impl ObservedPose {
             (_, _, Some(size)) => size,
             _ => return Err(LiftError::NoImageSize),
         };
-        let mut read = Vec::with_capacity(people.len());
-        for (i, person) in people.iter().enumerate() {
-            let at = format!("people[{i}]");
-            let p = person.as_object().ok_or_else(|| {
-                LiftError::NotOpenPose(format!("{at} is {}, not an object", kind_of(person)))
-            })?;
-            let list =
-                |name: &str, count: usize| points(p.get(name), count, &format!("{at}.{name}"));
-            let mut out = OpenPosePerson::EMPTY;
-            if let Some(body) = list("pose_keypoints_2d", BODY_KEYPOINTS)? {
-                out.body.copy_from_slice(&body);
-            }
-            if let Some(hand) = list("hand_left_keypoints_2d", HAND_KEYPOINTS)? {
-                out.left_hand.copy_from_slice(&hand);
-            }
-            if let Some(hand) = list("hand_right_keypoints_2d", HAND_KEYPOINTS)? {
-                out.right_hand.copy_from_slice(&hand);
-            }
-            read.push(out);
-        }
-        let every = || {
-            read.iter().flat_map(|p| {
-                p.body
-                    .iter()
-                    .chain(&p.left_hand)
-                    .chain(&p.right_hand)
-                    .flatten()
-            })
-        };
-        let fractions = every().next().is_some()
-            && every().all(|p| (0.0..=1.0).contains(&p.x) && (0.0..=1.0).contains(&p.y));
-        let units = if fractions {
-            let scale = DVec2::new(f64::from(size_px[0]), f64::from(size_px[1]));
-            for person in &mut read {
-                for p in person
-                    .body
-                    .iter_mut()
-                    .chain(&mut person.left_hand)
-                    .chain(&mut person.right_hand)
-                    .flatten()
-                {
-                    *p *= scale;
-                }
-            }
-            KeypointUnits::Normalized
-        } else {
-            KeypointUnits::Pixels
-        };
+        let mut read = people
+            .iter()
+            .enumerate()
+            .map(|(i, person)| read_person(i, person))
+            .collect::<Result<Vec<_>, _>>()?;
+        let units = to_pixels(&mut read, size_px);
         let camera = match o.get("stance_camera") {
             None | Some(Value::Null) => None,
             Some(c) => Some(camera(c)?),
@@ -263,4 +221,57 @@ impl ObservedPose {
             units,
         })
     }
+}
+
+/// Person `i` of the file's `people` list (`person`), its keypoints as the file gives them.
+fn read_person(i: usize, person: &Value) -> Result<OpenPosePerson, LiftError> {
+    let at = format!("people[{i}]");
+    let p = person.as_object().ok_or_else(|| {
+        LiftError::NotOpenPose(format!("{at} is {}, not an object", kind_of(person)))
+    })?;
+    let list = |name: &str, count: usize| points(p.get(name), count, &format!("{at}.{name}"));
+    let mut out = OpenPosePerson::EMPTY;
+    if let Some(body) = list("pose_keypoints_2d", BODY_KEYPOINTS)? {
+        out.body.copy_from_slice(&body);
+    }
+    if let Some(hand) = list("hand_left_keypoints_2d", HAND_KEYPOINTS)? {
+        out.left_hand.copy_from_slice(&hand);
+    }
+    if let Some(hand) = list("hand_right_keypoints_2d", HAND_KEYPOINTS)? {
+        out.right_hand.copy_from_slice(&hand);
+    }
+    Ok(out)
+}
+
+/// The keypoints of `read` in pixels of an image of `size_px`: normalised ones (every
+/// keypoint within 0 to 1) scaled to it. Returns the units the file gave.
+fn to_pixels(read: &mut [OpenPosePerson], size_px: [u32; 2]) -> KeypointUnits {
+    let every = |read: &[OpenPosePerson]| -> Vec<DVec2> {
+        read.iter()
+            .flat_map(|p| p.body.iter().chain(&p.left_hand).chain(&p.right_hand))
+            .flatten()
+            .copied()
+            .collect()
+    };
+    let seen = every(read);
+    let fractions = !seen.is_empty()
+        && seen
+            .iter()
+            .all(|p| (0.0..=1.0).contains(&p.x) && (0.0..=1.0).contains(&p.y));
+    if !fractions {
+        return KeypointUnits::Pixels;
+    }
+    let scale = DVec2::new(f64::from(size_px[0]), f64::from(size_px[1]));
+    for person in read {
+        for p in person
+            .body
+            .iter_mut()
+            .chain(&mut person.left_hand)
+            .chain(&mut person.right_hand)
+            .flatten()
+        {
+            *p *= scale;
+        }
+    }
+    KeypointUnits::Normalized
 }

@@ -191,25 +191,9 @@ pub(crate) fn solve_staged(
     let mut iterations = body_report.iterations;
     let mut status = body_report.status;
     for &hand in &hands {
-        let Some(forearm) = body.joints()[hand].parent else {
+        let Some((hand_tasks, held)) = hand_stage(body, &tasks, hand) else {
             continue;
         };
-        let on_forearm = |j: usize| descends_from(body, j, forearm);
-        let hand_tasks: Vec<Task> = tasks
-            .iter()
-            .filter(|t| !is_comfort(t) && task_joint(t).is_some_and(on_forearm))
-            .cloned()
-            .collect();
-        if !hand_tasks
-            .iter()
-            .filter_map(task_joint)
-            .any(|j| j != hand && descends_from(body, j, hand))
-        {
-            continue;
-        }
-        // The elbow's hinge held too: it would move the wrist, which the body stage placed.
-        let mut held = dofs_where(body, on_forearm);
-        held.extend(elbow_hinge(body, hand));
         let mut stage = solver(&held, max_iterations)?;
         let report = stage
             .solve(body, &hand_tasks, &mut posture)
@@ -221,6 +205,30 @@ pub(crate) fn solve_staged(
     }
     let report = report_at(solver(&[], 0)?, body, &tasks, &posture, iterations, status)?;
     Ok((posture, report))
+}
+
+/// The stage of the hand below the wrist `hand` (module docs): the tasks on its forearm and
+/// below (comfort aside), and the DOF held (all but the forearm's and below, and the elbow's
+/// hinge: it would move the wrist, which the body stage placed); `None` when no keypoint of
+/// the hand is among `tasks`.
+fn hand_stage(body: &Skeleton, tasks: &[Task], hand: usize) -> Option<(Vec<Task>, Vec<usize>)> {
+    let forearm = body.joints().get(hand)?.parent?;
+    let on_forearm = |j: usize| descends_from(body, j, forearm);
+    let hand_tasks: Vec<Task> = tasks
+        .iter()
+        .filter(|t| !is_comfort(t) && task_joint(t).is_some_and(on_forearm))
+        .cloned()
+        .collect();
+    let has_hand_point = hand_tasks
+        .iter()
+        .filter_map(task_joint)
+        .any(|j| j != hand && descends_from(body, j, hand));
+    if !has_hand_point {
+        return None;
+    }
+    let mut held = dofs_where(body, on_forearm);
+    held.extend(elbow_hinge(body, hand));
+    Some((hand_tasks, held))
 }
 
 /// The whole problem's levels at `posture`, without a step (`whole`: a solver of no
@@ -244,15 +252,20 @@ fn report_at(
     Ok(report)
 }
 
-/// Each arm with a hand solved alone from `start`: the keypoints from the shoulder down (the
-/// elbow's, the wrist's, the hand's) on the shoulder's, the elbow's, the wrist's and the
-/// fingers' DOF, everything else held, at most `max_iterations` each. What the stages leave
-/// off when a hand's keypoints need the elbow moved (the hand stage holds its hinge), at a
-/// fraction of the whole problem's cost (about 45 rows on 30 DOF against 118 on 132).
-pub(crate) fn solve_arms(
+/// Each limb of `limbs` (arms and legs, [`crate::place::LIMBS`]) solved alone from `start`:
+/// the tasks from its upper joint down (an arm's elbow, wrist and hand keypoints; a leg's
+/// knee and ankle keypoints and its ankle on the floor) on the DOF from its upper joint down,
+/// everything else held, at most `max_iterations` each. What the stages leave off where a
+/// hand needs its elbow moved (the hand stage holds its hinge), and where a nearly straight
+/// knee stalls the body stage (its 38 rows, the torso's among them, move the leg no further
+/// while the leg alone, 5 rows on about 10 DOF, meets its rays within a few iterations), at
+/// a fraction of the whole problem's cost (an arm: about 45 rows on 30 DOF against 118 on
+/// 132).
+pub(crate) fn solve_limbs(
     skeleton: &Skeleton,
     document: &Document,
     start: &Posture,
+    limbs: &[&crate::place::LimbKeypoints],
     max_iterations: usize,
     tolerance: f64,
 ) -> Result<(Posture, SolveReport), LiftError> {
@@ -262,27 +275,22 @@ pub(crate) fn solve_arms(
     let tasks = without_comfort(&problem);
     let mut posture = start.clone();
     let (mut iterations, mut status) = (0, SolveStatus::Converged);
-    for hand in hand_roots(body) {
-        let wrist = body.joints().get(hand).map(|j| j.name.as_str());
-        let Some(shoulder) = crate::place::LIMBS
+    let uppers = limbs
+        .iter()
+        .filter_map(|limb| body.joint_index(limb.joints[0]));
+    for upper in uppers {
+        let on_limb = |j: usize| descends_from(body, j, upper);
+        let limb_tasks: Vec<Task> = tasks
             .iter()
-            .find(|limb| Some(limb.joints[2]) == wrist)
-            .and_then(|limb| body.joint_index(limb.joints[0]))
-        else {
-            continue;
-        };
-        let on_arm = |j: usize| descends_from(body, j, shoulder);
-        let arm_tasks: Vec<Task> = tasks
-            .iter()
-            .filter(|t| task_joint(t).is_some_and(on_arm))
+            .filter(|t| task_joint(t).is_some_and(on_limb))
             .cloned()
             .collect();
         let mut solver = problem
             .solver(settings)
             .map_err(|e| LiftError::Problem(e.to_string()))?;
-        solver.set_locked_dofs(&dofs_where(body, on_arm));
+        solver.set_locked_dofs(&dofs_where(body, on_limb));
         let report = solver
-            .solve(body, &arm_tasks, &mut posture)
+            .solve(body, &limb_tasks, &mut posture)
             .map_err(|e| LiftError::Problem(e.to_string()))?;
         iterations += report.iterations;
         if status == SolveStatus::Converged {
