@@ -3,8 +3,8 @@
 //! comfort), the start posture (the rest body turned and placed to match the keypoints) and
 //! the solve.
 
-use glam::{DQuat, DVec2, DVec3, Vec2};
-use stance_document::{CameraSpec, Document, PostureValues, TaskKindSpec, TaskSpec};
+use glam::{DQuat, DVec2, DVec3};
+use stance_document::{Document, PostureValues, TaskKindSpec, TaskSpec};
 use stance_hanim::keypoints::{
     HAND_KEYPOINTS, KeypointFinder, KeypointSource, NECK, PoseKeypoints,
 };
@@ -14,6 +14,13 @@ use stance_render::{OpenPosePerson, OrbitCamera};
 use crate::LiftError;
 use crate::place::{LIMBS, LimbKeypoints, PlacedLimb, Ray};
 use crate::stages::descends_from;
+
+mod tasks;
+mod view;
+
+use tasks::{floor_tasks, image_plane_tasks, standing_feet};
+pub use view::camera_spec;
+use view::{Scale, View, fit_camera};
 
 /// COCO-18 indices.
 const NOSE: usize = 0;
@@ -773,270 +780,6 @@ fn loses_a_level(before: &SolveReport, after: &SolveReport) -> bool {
                     || after.residual_after > before.residual_after + LIFT_TOLERANCE_M)
         })
     })
-}
-
-/// The document's saved view of `camera` (its field of view is the default one's).
-pub fn camera_spec(camera: &OrbitCamera) -> CameraSpec {
-    let t = camera.target_world;
-    CameraSpec {
-        target: [f64::from(t.x), f64::from(t.y), f64::from(t.z)],
-        yaw: f64::from(camera.yaw),
-        pitch: f64::from(camera.pitch),
-        distance: f64::from(camera.distance_m),
-        orthographic: camera.orthographic,
-    }
-}
-
-/// A camera and the image it sees.
-#[derive(Debug, Clone, Copy)]
-struct View {
-    camera: OrbitCamera,
-    size_px: [u32; 2],
-}
-
-impl View {
-    fn size(&self) -> Vec2 {
-        Vec2::new(self.size_px[0] as f32, self.size_px[1] as f32)
-    }
-
-    /// The ray through `pixel`: origin and unit direction.
-    fn ray(&self, pixel: DVec2) -> (DVec3, DVec3) {
-        let (origin, direction) = self.camera.ray_through(pixel.as_vec2(), self.size());
-        (origin.as_dvec3(), direction.as_dvec3())
-    }
-
-    /// The point seen at `pixel` at `depth` metres from the eye along the view axis.
-    fn at_depth(&self, pixel: DVec2, depth: f64) -> DVec3 {
-        let eye = self.camera.eye_world().as_dvec3();
-        let forward = (self.camera.target_world.as_dvec3() - eye).normalize_or(DVec3::NEG_Z);
-        let (origin, direction) = self.ray(pixel);
-        let along = direction.dot(forward).max(1e-6);
-        origin + direction * ((depth - (origin - eye).dot(forward)) / along)
-    }
-
-    /// Whether `p` lies before the eye (any point does in orthographic projection).
-    fn in_front(&self, p: DVec3) -> bool {
-        let eye = self.camera.eye_world().as_dvec3();
-        let forward = (self.camera.target_world.as_dvec3() - eye).normalize_or(DVec3::NEG_Z);
-        self.camera.orthographic || (p - eye).dot(forward) > 0.0
-    }
-
-    /// Pixels per metre at `depth` from the eye (for orthographic projection, at any depth).
-    fn focal_px(&self) -> f64 {
-        f64::from(self.size_px[1]) * 0.5 / f64::from(self.camera.vertical_fov * 0.5).tan()
-    }
-}
-
-/// The body's scale in the image: pixels per metre at its depth, the largest ratio of a
-/// visible bone's length in the image to its rest length (a bone seen side-on is not
-/// shortened; any other is), and the keypoints' centroid in the image.
-struct Scale {
-    px_per_m: f64,
-    centroid_px: DVec2,
-}
-
-impl Scale {
-    fn new(person: &OpenPosePerson, rest: &PoseKeypoints) -> Result<Scale, LiftError> {
-        let visible: Vec<DVec2> = person.body.iter().flatten().copied().collect();
-        let px_per_m = SCALE_BONES
-            .iter()
-            .filter_map(|&(a, b)| {
-                let image = (person.body[a]? - person.body[b]?).length();
-                let length = (rest.body[a]? - rest.body[b]?).length();
-                (length > 1e-3).then_some(image / length)
-            })
-            .fold(0.0, f64::max);
-        if visible.len() < 2 || px_per_m <= 0.0 {
-            return Err(LiftError::TooFewKeypoints(visible.len()));
-        }
-        let centroid_px = visible.iter().sum::<DVec2>() / visible.len() as f64;
-        Ok(Scale {
-            px_per_m,
-            centroid_px,
-        })
-    }
-}
-
-/// A perspective camera of the default field of view, level with the editor's default pitch
-/// and looking at the body's front (yaw 0: the body turns instead), placed so that the rest
-/// body's bones match the keypoints in scale ([`Scale`]: the distance at which a metre spans
-/// that many pixels) and position: the keypoints' centroid seen over the world origin, and
-/// the lowest ankle's keypoint at the rest ankle's height (without an ankle, the centroid at
-/// the rest keypoints' centroid height).
-fn fit_camera(
-    person: &OpenPosePerson,
-    size_px: [u32; 2],
-    rest: &PoseKeypoints,
-    scale: &Scale,
-) -> OrbitCamera {
-    let provisional = OrbitCamera {
-        target_world: glam::Vec3::ZERO,
-        yaw: 0.0,
-        ..OrbitCamera::default()
-    };
-    let view = View {
-        camera: provisional,
-        size_px,
-    };
-    let depth = view.focal_px() / scale.px_per_m;
-    let distance = depth as f32;
-    let view = View {
-        camera: OrbitCamera {
-            distance_m: distance,
-            ..provisional
-        },
-        size_px,
-    };
-    let centre = view.at_depth(scale.centroid_px, depth);
-    let lowest_ankle = [R_ANKLE, L_ANKLE]
-        .into_iter()
-        .filter_map(|k| Some((k, person.body[k]?)))
-        .max_by(|a, b| a.1.y.total_cmp(&b.1.y));
-    let lift_y = match lowest_ankle {
-        Some((k, pixel)) => {
-            let height = rest.body[k].map_or(0.08, |p| p.y);
-            height - view.at_depth(pixel, depth).y
-        }
-        None => {
-            let visible: Vec<DVec3> = person
-                .body
-                .iter()
-                .zip(rest.body)
-                .filter_map(|(seen, at)| seen.and(at))
-                .collect();
-            let height = visible.iter().map(|p| p.y).sum::<f64>() / visible.len().max(1) as f64;
-            height - centre.y
-        }
-    };
-    let shift = DVec3::new(-centre.x, lift_y, -centre.z);
-    OrbitCamera {
-        target_world: shift.as_vec3(),
-        distance_m: distance,
-        ..provisional
-    }
-}
-
-/// The joint name of an effector.
-fn joint_name(skeleton: &Skeleton, effector: &Effector) -> Option<String> {
-    Some(skeleton.joints().get(effector.joint)?.name.clone())
-}
-
-/// The level-1 tasks: every visible keypoint's body point on the camera ray through its
-/// pixel. The neck is the shoulders' midpoint, not a point of one segment: with both shoulders
-/// seen it adds no task (their rays place it); with one shoulder missing, that shoulder is
-/// taken at the neck's mirror of the other's pixel (exact in orthographic projection, within
-/// about a pixel at the usual distances). Returns the tasks and how many keypoints they hold.
-fn image_plane_tasks(
-    skeleton: &Skeleton,
-    finder: &KeypointFinder,
-    person: &OpenPosePerson,
-    view: &View,
-) -> (Vec<TaskSpec>, usize) {
-    let sources = finder.sources(skeleton);
-    let mut body = person.body;
-    if let Some(neck) = body[NECK] {
-        match (body[R_SHOULDER], body[L_SHOULDER]) {
-            (Some(r), None) => body[L_SHOULDER] = Some(neck * 2.0 - r),
-            (None, Some(l)) => body[R_SHOULDER] = Some(neck * 2.0 - l),
-            _ => {}
-        }
-    }
-    let mut tasks = Vec::new();
-    let mut used = 0;
-    let mut on_ray = |effector: &Effector, pixel: DVec2| {
-        let Some(joint) = joint_name(skeleton, effector) else {
-            return false;
-        };
-        let (origin, direction) = view.ray(pixel);
-        let mut task = TaskSpec::new(TaskKindSpec::Line {
-            joint,
-            point: effector.point.to_array(),
-            origin: origin.to_array(),
-            direction: direction.to_array(),
-        });
-        task.level = IMAGE_LEVEL;
-        tasks.push(task);
-        true
-    };
-    for (k, (pixel, source)) in body.iter().zip(sources.body).enumerate() {
-        if let (Some(pixel), Some(KeypointSource::On(effector))) = (pixel, source)
-            && on_ray(&effector, *pixel)
-            && person.body[k].is_some()
-        {
-            used += 1;
-        }
-    }
-    used += usize::from(person.body[NECK].is_some());
-    for (hand, effectors) in [
-        (&person.left_hand, sources.left_hand),
-        (&person.right_hand, sources.right_hand),
-    ] {
-        for (pixel, effector) in hand.iter().zip(effectors).take(HAND_KEYPOINTS) {
-            if let (Some(pixel), Some(effector)) = (pixel, effector)
-                && on_ray(&effector, *pixel)
-            {
-                used += 1;
-            }
-        }
-    }
-    (tasks, used)
-}
-
-/// The ankles (COCO indices) taken to stand on the floor: those seen within
-/// [`STANDING_SLACK_M`] of the lowest ankle in the image.
-fn standing_ankles(person: &OpenPosePerson, scale: &Scale) -> Vec<usize> {
-    let ankles: Vec<(usize, f64)> = [R_ANKLE, L_ANKLE]
-        .into_iter()
-        .filter_map(|k| Some((k, person.body[k]?.y)))
-        .collect();
-    let lowest = ankles.iter().map(|a| a.1).fold(f64::NEG_INFINITY, f64::max);
-    ankles
-        .into_iter()
-        .filter(|&(_, y)| y >= lowest - STANDING_SLACK_M * scale.px_per_m)
-        .map(|(k, _)| k)
-        .collect()
-}
-
-const ANKLE_JOINTS: [(usize, &str); 2] = [(R_ANKLE, "r_talocrural"), (L_ANKLE, "l_talocrural")];
-
-fn standing_feet(person: &OpenPosePerson, scale: &Scale) -> Vec<String> {
-    let standing = standing_ankles(person, scale);
-    ANKLE_JOINTS
-        .iter()
-        .filter(|(k, _)| standing.contains(k))
-        .map(|(_, name)| (*name).to_owned())
-        .collect()
-}
-
-/// Level 2: each ankle at its rest height over the floor when it stands, else on or above
-/// that height; level 3: balance over the standing feet.
-fn floor_tasks(skeleton: &Skeleton, rest: &Frames, standing: &[String]) -> Vec<TaskSpec> {
-    let mut tasks = Vec::new();
-    for (_, name) in ANKLE_JOINTS {
-        let Some(j) = skeleton.joint_index(name) else {
-            continue;
-        };
-        let height = rest.joint_position.get(j).map_or(0.0, |p| p.y);
-        let mut task = TaskSpec::new(TaskKindSpec::Plane {
-            joint: name.to_owned(),
-            point: [0.0; 3],
-            origin: [0.0, height, 0.0],
-            normal: [0.0, 1.0, 0.0],
-            above: !standing.iter().any(|s| s == name),
-        });
-        task.level = FLOOR_LEVEL;
-        tasks.push(task);
-    }
-    if !standing.is_empty() {
-        let mut balance = TaskSpec::balance();
-        balance.kind = TaskKindSpec::Balance {
-            support: Some(standing.to_vec()),
-            margin: stance_document::DEFAULT_BALANCE_MARGIN,
-        };
-        balance.level = BALANCE_LEVEL;
-        tasks.push(balance);
-    }
-    tasks
 }
 
 /// The rest body turned about the vertical to face as the keypoints say (its left and right
