@@ -356,6 +356,48 @@ describe("avatars in the page", () => {
     await opened.close();
   });
 
+  test("a character on another avatar file than the selected one is drawn skinned on its own", async () => {
+    // Catches: the editor drawing an unselected character whose avatar file is not the
+    // selected one's as the cast's grey capsules (or on the selected one's model). The
+    // mannequin's file on the first character, the shared avatar on the second (selected):
+    // the first is drawn in the mannequin's own materials around its pelvis.
+    const page = await context.newPage();
+    const { errors } = await openEditor(context, `${site.url}?avatar=default-avatar.glb`, page);
+    await avatarShown(page);
+    await clickButton(page, "scene_panel", { until: (s) => Boolean(s.buttons?.scene_duplicate) });
+    await clickButton(page, "scene_duplicate", { until: (s) => s.characters?.length === 2 });
+    await clickButton(page, "character_1", { until: (s) => s.characters?.[1]?.selected === true });
+    await clickButton(page, "scene_panel", { until: (s) => !s.buttons?.scene_duplicate });
+    await page.setInputFiles("input[type=file]", SHARED_AVATAR);
+    await waitForState(page, (s, previous) => s.characters?.[1]?.avatar === "Black_F_2_Casual.glb"
+      && s.avatar?.uploaded && s.settled && previous?.avatar?.uploaded,
+    { timeout: 120_000, what: "the shared avatar on the second character" });
+    const inView = (s, p) => p && p[0] > s.viewport[0] + 10 && p[0] < s.viewport[0] + s.viewport[2] - 10
+      && p[1] > s.viewport[1] + 10 && p[1] < s.viewport[1] + s.viewport[3] - 10;
+    let view = await waitForSettled(page, { timeout: 30_000, still: true });
+    const { viewport: [vx, vy, vw, vh] } = view;
+    await page.mouse.move(vx + vw / 2, vy + vh / 2);
+    for (let notch = 0; notch < 6 && !view.characters.every((c) => inView(view, c.pelvis_screen)); notch += 1) {
+      await page.mouse.wheel(0, 120);
+      view = await waitForSettled(page, { timeout: 30_000, still: true });
+    }
+    const [first, second] = view.characters;
+    assert.equal(first.avatar, "default-avatar.glb");
+    assert.equal(second.selected, true);
+    assert.ok(inView(view, first.pelvis_screen), `the first character in the view: ${first.pelvis_screen}`);
+    const shot = await page.screenshot();
+    saveArtifact("avatar-cast-webgl2.png", shot);
+    const image = decodePng(shot);
+    const mannequin = shareNear(image, first.pelvis_screen, isFigureColour, 5);
+    const drawn = shareNear(image, second.pelvis_screen, isAvatarPixel, 5);
+    console.log(`[cast] the unselected mannequin file: ${(mannequin * 100).toFixed(0)} % of the pixels round its pelvis in its `
+      + `materials; the selected shared avatar: ${(drawn * 100).toFixed(0)} % drawn round its pelvis`);
+    assert.ok(mannequin > 0.6, `the unselected character drawn in the mannequin's materials: ${(mannequin * 100).toFixed(0)} %`);
+    assert.ok(drawn > 0.6, `the selected avatar drawn: ${(drawn * 100).toFixed(0)} %`);
+    assert.deepEqual(errors, [], `console errors: ${errors.join(" / ")}`);
+    await page.close();
+  });
+
   test("a glTF prop imported from the File menu is drawn where it stands, and its link names the file", async () => {
     // Catches: File > Import prop… not reaching the model, the mesh not drawn in the page (or
     // drawn as its wood-coloured box), a link that drops the prop or its file's name, a link
