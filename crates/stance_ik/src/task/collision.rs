@@ -793,7 +793,7 @@ impl NearList {
         };
         task.broad_pairs(placed, &mut sink);
         self.pairs = sink.pairs;
-        self.pairs.sort_by(|x, y| x.2.total_cmp(&y.2));
+        self.pairs.sort_unstable_by(|x, y| x.2.total_cmp(&y.2));
     }
 }
 
