@@ -265,14 +265,13 @@ impl Collision {
         self
     }
 
-    /// Whether `other` is this task by its shared data (the same capsules, pairs, solids and
-    /// parts left off them, margin and rows): a [`NearList`] made for one serves the other.
+    /// Whether `other` is this task: the same capsules and pairs (shared, as clones share
+    /// them), margin and rows: a [`NearList`] made for one serves the other, whose pairs it
+    /// lists (the floor and the solids, which a frame's tasks may build afresh, are searched
+    /// apart).
     fn same_data(&self, other: &Collision) -> bool {
         Arc::ptr_eq(&self.capsules, &other.capsules)
             && Arc::ptr_eq(&self.pairs, &other.pairs)
-            && Arc::ptr_eq(&self.floor, &other.floor)
-            && Arc::ptr_eq(&self.obstacles, &other.obstacles)
-            && Arc::ptr_eq(&self.exempt, &other.exempt)
             && self.margin == other.margin
             && self.rows == other.rows
     }
