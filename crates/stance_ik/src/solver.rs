@@ -29,7 +29,7 @@ use crate::kernel::prioritized_step;
 use crate::limb::Limb;
 use crate::posture::clamp_and_wrap;
 use crate::priority::{Damping, LevelSystem, StepWorkspace, prioritized_step_nalgebra};
-use crate::task::StepLimits;
+use crate::task::{NearList, StepLimits};
 use crate::{Frames, IkError, Posture, Skeleton, Task};
 use active_set::Candidates;
 use comfort_step::StepLimitsAt;
@@ -94,6 +94,9 @@ pub struct Solver {
     systems: Vec<LevelSystem>,
     /// Each level's inequality rows not yet held (see `active_set`).
     candidates: Vec<Candidates>,
+    /// Each task's pairs near enough to search (collision), kept from one linearisation to
+    /// the next while the body moves little.
+    near: Vec<NearList>,
     residual_sq: Vec<f64>,
     workspace: StepWorkspace,
     fixed: DVector<f64>,
@@ -504,6 +507,7 @@ impl Solver {
         }
         self.candidates
             .resize_with(self.layout.len(), Candidates::default);
+        self.near.resize_with(tasks.len(), NearList::default);
         self.residual_sq = vec![0.0; self.layout.len()];
         self.weighted_sq = vec![0.0; self.layout.len()];
         self.comfort_gain = 1.0;
@@ -585,6 +589,7 @@ impl Solver {
                         support,
                         (err, jt, n),
                         Some(limits),
+                        &mut self.near[ti],
                     )
                 };
                 let (r, used, held) = match at_once {

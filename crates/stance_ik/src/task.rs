@@ -14,6 +14,7 @@ mod rows;
 use glam::{DQuat, DVec3};
 
 pub use balance::BALANCE_BAND;
+pub(crate) use collision::NearList;
 pub use collision::{
     COLLISION_AIM, COLLISION_BAND, COLLISION_LOOKAHEAD, CONTACT_REACH, Capsule, Collision, Contact,
     closest_points, collision_pairs, floor_capsules,

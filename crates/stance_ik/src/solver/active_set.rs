@@ -87,7 +87,7 @@ impl Candidates {
             if added {
                 continue;
             }
-            let change: f64 = column.iter().zip(step.iter()).map(|(j, s)| j * s).sum();
+            let change: f64 = column.iter().zip(step.as_slice()).map(|(j, s)| j * s).sum();
             // The value left above the bound after the step.
             let left = change - bound;
             if left < -PAST_BOUND && deepest.is_none_or(|(_, d)| left < d) {

@@ -265,6 +265,17 @@ impl Collision {
         self
     }
 
+    /// Whether `other` is this task: the same capsules and pairs (shared, as clones share
+    /// them), margin and rows: a [`NearList`] made for one serves the other, whose pairs it
+    /// lists (the floor and the solids, which a frame's tasks may build afresh, are searched
+    /// apart).
+    fn same_data(&self, other: &Collision) -> bool {
+        Arc::ptr_eq(&self.capsules, &other.capsules)
+            && Arc::ptr_eq(&self.pairs, &other.pairs)
+            && self.margin == other.margin
+            && self.rows == other.rows
+    }
+
     /// Whether capsule `i` is held off `solid` (an obstacle's index; `None`: the floor).
     fn holds(&self, solid: Option<usize>, i: usize) -> bool {
         !self.exempt.contains(&(solid, i))
@@ -382,130 +393,142 @@ impl Collision {
     }
 
     /// The constraints at `frames` whose distance is under `reach`, nearest first, at most
-    /// `rows`.
+    /// `rows`. The search keeps only the nearest `rows` found so far and, once it has them,
+    /// looks no further than the last of them ([`Nearest`]): far pairs are skipped by their
+    /// groups' boxes, their own boxes and bounding spheres.
     pub(super) fn constraints_within(&self, frames: &Frames, reach: f64) -> Vec<Constraint> {
-        let capsules = &self.capsules;
-        let broad = &self.broad;
-        // Each capsule's ends in the world and its box, once; each group's box.
-        let ends: Vec<(DVec3, DVec3)> = capsules.iter().map(|c| c.world(frames)).collect();
-        let boxes: Vec<Aabb> = capsules
-            .iter()
-            .zip(&ends)
-            .map(|(c, &(a, b))| Aabb::capsule(a, b, c.radius))
-            .collect();
-        // Bounding spheres: tighter than the boxes for a capsule across the axes.
-        let spheres: Vec<(DVec3, f64)> = capsules
-            .iter()
-            .zip(&ends)
-            .map(|(c, &(a, b))| ((a + b) * 0.5, (b - a).length() * 0.5 + c.radius))
-            .collect();
-        let mut group_boxes = vec![Aabb::EMPTY; broad.groups];
-        for (&g, b) in broad.group.iter().zip(&boxes) {
-            if let Some(gb) = group_boxes.get_mut(g) {
-                *gb = gb.union(*b);
+        let placed = self.placed(frames);
+        let mut nearest = Nearest::new(self.rows, reach);
+        self.broad_pairs(&placed, &mut nearest);
+        self.search_floor(&placed, &mut nearest);
+        self.search_obstacles(&placed, &mut nearest);
+        nearest.found
+    }
+
+    /// [`Collision::constraints_within`] by way of `list`: the pairs it holds where it
+    /// still serves this task, `reach` and the posture (see [`NearList`]), else made
+    /// afresh at `frames`. The same constraints, the pairs further off not looked at.
+    pub(super) fn constraints_listed(
+        &self,
+        frames: &Frames,
+        reach: f64,
+        list: &mut NearList,
+    ) -> Vec<Constraint> {
+        let placed = self.placed(frames);
+        if !list.serves(self, reach, &placed) {
+            list.make(self, reach, &placed);
+        }
+        let mut nearest = Nearest::new(self.rows, reach);
+        let most = list.most_moved();
+        for &(i, j, was) in &list.pairs {
+            // The surfaces have come closer by at most their capsules' moves; the pairs are
+            // in the order of their distances then.
+            if was - most >= nearest.reach() {
+                break;
+            }
+            let (Some(&mi), Some(&mj)) = (list.moved.get(i), list.moved.get(j)) else {
+                continue;
+            };
+            if was - mi - mj < nearest.reach() {
+                self.offer_pair(&placed, i, j, &mut nearest);
             }
         }
-        let mut found = Vec::new();
+        self.search_floor(&placed, &mut nearest);
+        self.search_obstacles(&placed, &mut nearest);
+        nearest.found
+    }
+
+    /// Each capsule where `frames` puts it.
+    fn placed(&self, frames: &Frames) -> Vec<Placed> {
+        self.capsules
+            .iter()
+            .map(|c| Placed::new(c, frames))
+            .collect()
+    }
+
+    /// Each pair whose groups' boxes come within `sink`'s reach to `sink`: the broad phase.
+    fn broad_pairs(&self, placed: &[Placed], sink: &mut impl PairSink) {
+        let broad = &self.broad;
+        let mut group_boxes = vec![Aabb::EMPTY; broad.groups];
+        for (&g, p) in broad.group.iter().zip(placed) {
+            if let Some(gb) = group_boxes.get_mut(g) {
+                *gb = gb.union(p.aabb);
+            }
+        }
         for (ga, gb, range) in &broad.runs {
             let (Some(box_a), Some(box_b)) = (group_boxes.get(*ga), group_boxes.get(*gb)) else {
                 continue;
             };
-            if !box_a.near(box_b, reach) {
+            if !box_a.near(box_b, sink.reach()) {
                 continue;
             }
             for &(i, j) in broad.pairs.get(range.clone()).unwrap_or(&[]) {
-                let (Some(a), Some(b), Some(ba), Some(bb)) =
-                    (capsules.get(i), capsules.get(j), boxes.get(i), boxes.get(j))
-                else {
-                    continue;
-                };
-                let ((ca, ra), (cb, rb)) = (spheres[i], spheres[j]);
-                let apart = ra + rb + reach;
-                if !ba.near(bb, reach) || (ca - cb).length_squared() > apart * apart {
-                    continue;
-                }
-                let (distance, pa, pb) = surface_distance(a, ends[i], b, ends[j]);
-                let mut push = |distance: f64, pa: DVec3, pb: DVec3| {
-                    let gap = pa - pb;
-                    if distance < reach && gap.length() > 1e-9 {
-                        let normal = gap.normalize();
-                        found.push(Constraint {
-                            distance,
-                            a: (a.joint, pa),
-                            b: Some((b.joint, pb)),
-                            normal,
-                            surface: (pa - normal * a.radius, pb + normal * b.radius),
-                        });
-                    }
-                };
-                push(distance, pa, pb);
-                // Nearly parallel axes (an arm hanging by the thigh): the closest points
-                // jump from one end to the other as the axes tilt, so each end of either
-                // axis against the other is a constraint too (`PARALLEL_ENDS`).
-                let ((a0, a1), (b0, b1)) = (ends[i], ends[j]);
-                let (u, v) = ((a1 - a0).normalize_or_zero(), (b1 - b0).normalize_or_zero());
-                if u.dot(v).abs() > PARALLEL_ENDS {
-                    let radii = a.radius + b.radius;
-                    for end in [a0, a1] {
-                        let (_, q) = closest_points(end, end, b0, b1);
-                        if (end - pa).length() > ENDS_APART {
-                            push((end - q).length() - radii, end, q);
-                        }
-                    }
-                    for end in [b0, b1] {
-                        let (q, _) = closest_points(a0, a1, end, end);
-                        if (end - pb).length() > ENDS_APART {
-                            push((q - end).length() - radii, q, end);
-                        }
-                    }
-                }
+                sink.pair(self, placed, i, j);
             }
         }
+    }
+
+    /// The constraints of the pair `(i, j)` into `nearest` where its boxes and bounding
+    /// spheres come within its reach.
+    fn offer_pair(&self, placed: &[Placed], i: usize, j: usize, nearest: &mut Nearest) {
+        let capsules = &self.capsules;
+        let (Some(a), Some(b), Some(pa), Some(pb)) = (
+            capsules.get(i),
+            capsules.get(j),
+            placed.get(i),
+            placed.get(j),
+        ) else {
+            return;
+        };
+        if pa.near(pb, nearest.reach()) {
+            pair_constraints(a, pa.ends, b, pb.ends, nearest);
+        }
+    }
+
+    /// The floor's constraints into `nearest`: each floor capsule's lower end against
+    /// `y = 0`.
+    fn search_floor(&self, placed: &[Placed], nearest: &mut Nearest) {
         for &i in self.floor.iter().filter(|&&i| self.holds(None, i)) {
-            let (Some(c), Some(&(p0, p1))) = (capsules.get(i), ends.get(i)) else {
+            let (Some(c), Some(p)) = (self.capsules.get(i), placed.get(i)) else {
                 continue;
             };
+            let (p0, p1) = p.ends;
             let low = if p0.y <= p1.y { p0 } else { p1 };
-            let distance = low.y - c.radius;
-            if distance < reach {
-                found.push(Constraint {
-                    distance,
-                    a: (c.joint, low),
-                    b: None,
-                    normal: DVec3::Y,
-                    surface: (low - DVec3::Y * c.radius, DVec3::new(low.x, 0.0, low.z)),
-                });
-            }
+            nearest.offer(Constraint {
+                distance: low.y - c.radius,
+                a: (c.joint, low),
+                b: None,
+                normal: DVec3::Y,
+                surface: (low - DVec3::Y * c.radius, DVec3::new(low.x, 0.0, low.z)),
+            });
         }
+    }
+
+    /// The obstacles' constraints into `nearest`: each capsule held off an obstacle whose
+    /// bounding ball comes within reach of its own, at the nearest point of its axis.
+    fn search_obstacles(&self, placed: &[Placed], nearest: &mut Nearest) {
         for (k, obstacle) in self.obstacles.iter().enumerate() {
             let (centre, bound) = (obstacle.position, obstacle.bounding_radius());
             for &i in self.against.iter().filter(|&&i| self.holds(Some(k), i)) {
-                let (Some(c), Some(&(p0, p1)), Some(&(sc, sr))) =
-                    (capsules.get(i), ends.get(i), spheres.get(i))
-                else {
+                let (Some(c), Some(p)) = (self.capsules.get(i), placed.get(i)) else {
                     continue;
                 };
                 // Bounding balls apart: nothing to compute.
-                if (sc - centre).length() > sr + bound + reach {
+                if (p.centre - centre).length() > p.radius + bound + nearest.reach() {
                     continue;
                 }
+                let (p0, p1) = p.ends;
                 let (point, signed, gradient) = obstacle.nearest_on_segment(p0, p1);
-                let distance = signed - c.radius;
-                if distance < reach {
-                    let outward = gradient.normalize_or(DVec3::Y);
-                    found.push(Constraint {
-                        distance,
-                        a: (c.joint, point),
-                        b: None,
-                        normal: gradient,
-                        surface: (point - outward * c.radius, point - outward * signed),
-                    });
-                }
+                let outward = gradient.normalize_or(DVec3::Y);
+                nearest.offer(Constraint {
+                    distance: signed - c.radius,
+                    a: (c.joint, point),
+                    b: None,
+                    normal: gradient,
+                    surface: (point - outward * c.radius, point - outward * signed),
+                });
             }
         }
-        found.sort_by(|x, y| x.distance.total_cmp(&y.distance));
-        found.truncate(self.rows);
-        found
     }
 
     /// The contacts at `frames`: the constraints the task holds there (every pair and floor
@@ -665,6 +688,240 @@ pub fn floor_capsules(capsules: &[Capsule], rest: &Frames) -> Vec<usize> {
         })
         .map(|(i, _)| i)
         .collect()
+}
+
+/// A capsule where the posture puts it: its axis's ends in the world, its box and its
+/// bounding sphere (tighter than the box for a capsule across the axes).
+#[derive(Debug, Clone, Copy)]
+struct Placed {
+    ends: (DVec3, DVec3),
+    aabb: Aabb,
+    centre: DVec3,
+    radius: f64,
+}
+
+impl Placed {
+    fn new(c: &Capsule, frames: &Frames) -> Self {
+        let (a, b) = c.world(frames);
+        Self {
+            ends: (a, b),
+            aabb: Aabb::capsule(a, b, c.radius),
+            centre: (a + b) * 0.5,
+            radius: (b - a).length() * 0.5 + c.radius,
+        }
+    }
+
+    /// Whether the boxes and bounding spheres of two capsules come within `reach`.
+    fn near(&self, other: &Placed, reach: f64) -> bool {
+        let apart = self.radius + other.radius + reach;
+        self.aabb.near(&other.aabb, reach)
+            && (self.centre - other.centre).length_squared() <= apart * apart
+    }
+}
+
+/// How much further than asked a [`NearList`] looks (m): the list serves while no two
+/// capsules have moved more than this together since it was made.
+const LIST_SKIN: f64 = 0.03;
+
+/// The pairs of a collision task near enough to matter at a posture, kept for the searches
+/// that follow while the body moves little (a solver's iterations): the pairs whose surfaces
+/// were within `reach` and [`LIST_SKIN`], with their distances then, nearest first, and the
+/// capsules' ends then. While no two capsules have moved more than the skin together since
+/// (a capsule's move: the longer of its ends'), no pair left out can have come within
+/// `reach` (two surfaces come closer by at most their capsules' moves), so a search of the
+/// listed pairs finds what a search of all would; it stops at the first pair whose distance
+/// then, less the two largest moves, is past what it keeps.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct NearList {
+    /// The task it was made for (its shared data compared, see [`Collision::same_data`]).
+    task: Option<Collision>,
+    reach: f64,
+    ends: Vec<(DVec3, DVec3)>,
+    /// Two capsules and the distance of their surfaces when the list was made.
+    pairs: Vec<(usize, usize, f64)>,
+    /// How far each capsule's ends have moved since, the furthest of the two (m).
+    moved: Vec<f64>,
+}
+
+impl NearList {
+    /// Whether the list serves `task`'s search to `reach` with its capsules at `placed`;
+    /// notes how far each has moved.
+    fn serves(&mut self, task: &Collision, reach: f64, placed: &[Placed]) -> bool {
+        if !(self.task.as_ref().is_some_and(|t| t.same_data(task))
+            && self.reach == reach
+            && self.ends.len() == placed.len())
+        {
+            return false;
+        }
+        self.moved.clear();
+        self.moved.extend(
+            self.ends
+                .iter()
+                .zip(placed)
+                .map(|(&(a, b), p)| a.distance(p.ends.0).max(b.distance(p.ends.1))),
+        );
+        self.most_moved() <= LIST_SKIN
+    }
+
+    /// The most two capsules have moved together since the list was made: the two largest
+    /// moves (m).
+    fn most_moved(&self) -> f64 {
+        let (mut first, mut second) = (0.0f64, 0.0f64);
+        for &m in &self.moved {
+            if m > first {
+                (first, second) = (m, first);
+            } else if m > second {
+                second = m;
+            }
+        }
+        first + second
+    }
+
+    /// Makes the list afresh for `task`'s search to `reach` with its capsules at `placed`.
+    fn make(&mut self, task: &Collision, reach: f64, placed: &[Placed]) {
+        self.task = Some(task.clone());
+        self.reach = reach;
+        self.ends.clear();
+        self.ends.extend(placed.iter().map(|p| p.ends));
+        self.moved.clear();
+        self.moved.resize(placed.len(), 0.0);
+        self.pairs.clear();
+        let mut sink = ListSink {
+            reach: reach + LIST_SKIN,
+            pairs: std::mem::take(&mut self.pairs),
+        };
+        task.broad_pairs(placed, &mut sink);
+        self.pairs = sink.pairs;
+        self.pairs.sort_unstable_by(|x, y| x.2.total_cmp(&y.2));
+    }
+}
+
+/// What the broad phase hands its pairs to: how far it looks, and each pair within it.
+trait PairSink {
+    fn reach(&self) -> f64;
+    fn pair(&mut self, task: &Collision, placed: &[Placed], i: usize, j: usize);
+}
+
+impl PairSink for Nearest {
+    fn reach(&self) -> f64 {
+        Nearest::reach(self)
+    }
+
+    fn pair(&mut self, task: &Collision, placed: &[Placed], i: usize, j: usize) {
+        task.offer_pair(placed, i, j, self);
+    }
+}
+
+/// The pairs whose surfaces are within `reach`, with their distances (a [`NearList`] in the
+/// making).
+struct ListSink {
+    reach: f64,
+    pairs: Vec<(usize, usize, f64)>,
+}
+
+impl PairSink for ListSink {
+    fn reach(&self) -> f64 {
+        self.reach
+    }
+
+    fn pair(&mut self, task: &Collision, placed: &[Placed], i: usize, j: usize) {
+        let capsules = task.capsules();
+        let (Some(a), Some(b), Some(pa), Some(pb)) = (
+            capsules.get(i),
+            capsules.get(j),
+            placed.get(i),
+            placed.get(j),
+        ) else {
+            return;
+        };
+        if pa.near(pb, self.reach) {
+            let distance = surface_distance(a, pa.ends, b, pb.ends).0;
+            if distance < self.reach {
+                self.pairs.push((i, j, distance));
+            }
+        }
+    }
+}
+
+/// The nearest constraints a search has found so far, nearest first (in the order found
+/// among equal distances), at most `rows`, each under `reach`.
+struct Nearest {
+    found: Vec<Constraint>,
+    rows: usize,
+    reach: f64,
+}
+
+impl Nearest {
+    fn new(rows: usize, reach: f64) -> Self {
+        Self {
+            found: Vec::with_capacity(rows + 1),
+            rows,
+            reach,
+        }
+    }
+
+    /// How far a constraint may be and still be kept: `reach`, or once `rows` are found,
+    /// the distance of the furthest of them.
+    fn reach(&self) -> f64 {
+        match self.found.last() {
+            Some(last) if self.found.len() >= self.rows => last.distance.min(self.reach),
+            _ => self.reach,
+        }
+    }
+
+    /// Keeps `c` where it is nearer than [`Nearest::reach`], after those found before it at
+    /// its distance.
+    fn offer(&mut self, c: Constraint) {
+        if c.distance < self.reach() {
+            let at = self.found.partition_point(|f| f.distance <= c.distance);
+            self.found.insert(at, c);
+            self.found.truncate(self.rows);
+        }
+    }
+}
+
+/// The constraints of the capsules `a` and `b` whose axes' ends are given (in the world)
+/// into `nearest`: along their axes' closest points; for nearly parallel axes (an arm
+/// hanging by the thigh), whose closest points jump from one end to the other as the axes
+/// tilt, each end of either axis against the other too ([`PARALLEL_ENDS`]).
+fn pair_constraints(
+    a: &Capsule,
+    (a0, a1): (DVec3, DVec3),
+    b: &Capsule,
+    (b0, b1): (DVec3, DVec3),
+    nearest: &mut Nearest,
+) {
+    let mut offer = |distance: f64, pa: DVec3, pb: DVec3| {
+        let gap = pa - pb;
+        if distance < nearest.reach() && gap.length() > 1e-9 {
+            let normal = gap.normalize();
+            nearest.offer(Constraint {
+                distance,
+                a: (a.joint, pa),
+                b: Some((b.joint, pb)),
+                normal,
+                surface: (pa - normal * a.radius, pb + normal * b.radius),
+            });
+        }
+    };
+    let (distance, pa, pb) = surface_distance(a, (a0, a1), b, (b0, b1));
+    offer(distance, pa, pb);
+    let (u, v) = ((a1 - a0).normalize_or_zero(), (b1 - b0).normalize_or_zero());
+    if u.dot(v).abs() > PARALLEL_ENDS {
+        let radii = a.radius + b.radius;
+        for end in [a0, a1] {
+            let (_, q) = closest_points(end, end, b0, b1);
+            if (end - pa).length() > ENDS_APART {
+                offer((end - q).length() - radii, end, q);
+            }
+        }
+        for end in [b0, b1] {
+            let (q, _) = closest_points(a0, a1, end, end);
+            if (end - pb).length() > ENDS_APART {
+                offer((q - end).length() - radii, q, end);
+            }
+        }
+    }
 }
 
 /// The distance between the surfaces of `a` and `b` whose axes' ends are given (in the
@@ -859,5 +1116,84 @@ mod tests {
                 "case {case}: {got} vs {expected}"
             );
         }
+    }
+
+    /// A body of six legs of three joints round a turning root, each leg's bones a capsule.
+    fn spider() -> (Skeleton, Collision) {
+        use crate::{Dof, JointDef};
+        let mut defs = vec![JointDef::new(
+            "root",
+            None,
+            DVec3::new(0.0, 0.5, 0.0),
+            &[Dof::Rx, Dof::Ry, Dof::Rz],
+        )];
+        for leg in 0..6 {
+            let turn = leg as f64 * std::f64::consts::TAU / 6.0;
+            let out = DVec3::new(turn.cos(), -0.3, turn.sin()) * 0.15;
+            let mut parent = "root".to_owned();
+            for k in 0..3 {
+                let name = format!("leg{leg}_{k}");
+                let offset = if k == 0 { out * 0.5 } else { out };
+                let dofs = [Dof::Rx, Dof::Rz];
+                defs.push(JointDef::new(&name, Some(&parent), offset, &dofs));
+                parent = name;
+            }
+        }
+        let skeleton = Skeleton::new(defs).unwrap();
+        let capsules: Vec<Capsule> = skeleton
+            .joints()
+            .iter()
+            .enumerate()
+            .skip(1)
+            .map(|(j, joint)| Capsule {
+                joint: j,
+                start: DVec3::ZERO,
+                end: joint.offset.normalize() * 0.15,
+                radius: 0.03,
+            })
+            .collect();
+        let rest = Frames::new(&skeleton, &Posture::rest(&skeleton));
+        let pairs = collision_pairs(&skeleton, &capsules, &rest, f64::NEG_INFINITY);
+        let floor = floor_capsules(&capsules, &rest);
+        let task = Collision::new(&skeleton, capsules, pairs, floor, 0.01, 16);
+        (skeleton, task)
+    }
+
+    /// Catches a list of near pairs kept past its use (a pair left out that has come within
+    /// reach, a stop at a pair too early): the legs of a body wander, by small steps and
+    /// large, and at each posture the search by the list kept from the last finds the
+    /// constraints a search of every pair finds.
+    #[test]
+    fn a_kept_list_finds_what_a_full_search_finds() {
+        let (skeleton, task) = spider();
+        let mut r = StdRng::seed_from_u64(7);
+        let mut posture = Posture::rest(&skeleton);
+        let mut list = NearList::default();
+        let reach = task.margin() + COLLISION_LOOKAHEAD;
+        let (mut kept, mut made, mut found) = (0, 0, 0);
+        for step in 0..600 {
+            let size = [0.005, 0.02, 0.3][step % 3];
+            for v in posture.values_mut().iter_mut() {
+                *v = (*v + r.random_range(-size..size)).clamp(-1.2, 1.2);
+            }
+            let frames = Frames::new(&skeleton, &posture);
+            let ends = list.ends.clone();
+            let listed = task.constraints_listed(&frames, reach, &mut list);
+            let all = task.constraints_within(&frames, reach);
+            if list.ends == ends {
+                kept += 1;
+            } else {
+                made += 1;
+            }
+            found += all.len();
+            let key = |c: &Constraint| (c.distance, c.a.0, c.b.map(|b| b.0));
+            let (listed, all): (Vec<_>, Vec<_>) = (
+                listed.iter().map(key).collect(),
+                all.iter().map(key).collect(),
+            );
+            assert_eq!(listed, all, "step {step}");
+        }
+        assert!(kept > 100 && made > 100, "kept {kept}, made {made}");
+        assert!(found > 500, "{found} constraints in all");
     }
 }

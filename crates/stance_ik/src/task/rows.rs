@@ -4,7 +4,7 @@
 use glam::{DQuat, DVec3};
 
 use super::balance::{BalanceGeometry, convex_hull, floor_points};
-use super::collision;
+use super::collision::{self, NearList};
 use super::gaze::{GazeGeometry, direction_error};
 use super::locus::{line_basis, line_offset, plane_active, plane_distance, plane_error};
 use super::{
@@ -503,7 +503,8 @@ impl Task {
     /// error, the margin less the distance; the others, the candidates of the solver's active
     /// set, hold the margin less the distance, negative: the change that brings them to the
     /// margin; the rows past those found stay empty and the solver leaves them out of the
-    /// level). `None` for other kinds.
+    /// level; the search goes by `near`, which the caller keeps from one linearisation to the
+    /// next, see [`NearList`]). `None` for other kinds.
     pub(crate) fn system_at_once(
         &self,
         skeleton: &Skeleton,
@@ -512,6 +513,7 @@ impl Task {
         support: &[usize],
         (err, jac_t, n): (&mut [f64], &mut [f64], usize),
         limits: Option<StepLimits>,
+        near: &mut NearList,
     ) -> Option<(f64, usize, usize)> {
         match &self.kind {
             TaskKind::Comfort { model } => {
@@ -521,7 +523,7 @@ impl Task {
                 Some((cost, 1, 1))
             }
             TaskKind::Collision(c) => {
-                let found = c.constraints_within(frames, c.margin() + COLLISION_LOOKAHEAD);
+                let found = c.constraints_listed(frames, c.margin() + COLLISION_LOOKAHEAD, near);
                 let held = found.partition_point(|f| f.distance < c.margin());
                 let norm = collision::errors(&found[..held], c.margin(), err);
                 // Each row aims a little past the margin (the steps' second-order motion).
