@@ -35,6 +35,9 @@ use stance_ik::{Frames, Posture, Skeleton, Solver, SolverSettings, Task};
 use stance_lift::{ObservedPose, lift};
 use stance_render::{HiddenKeypoints, OpenPosePerson, OrbitCamera};
 
+#[path = "../tests/postures.rs"]
+mod postures;
+
 const SIZE: [u32; 2] = [768, 768];
 
 /// A posture with the feet pinned and the wrists pulled to `hands`, as the round-trip test
@@ -344,39 +347,9 @@ impl Bench {
         timed(self.runs, name, &self.s, &person, SIZE, Some(camera))
     }
 
-    /// The round-trip test's four postures.
-    fn tuned_postures(&self) -> [(&'static str, Posture); 4] {
-        let (s, [lf, rf]) = (&self.s, self.feet);
-        [
-            ("standing", Posture::rest(s)),
-            (
-                "hands toward the camera",
-                drawn(
-                    s,
-                    [lf, rf],
-                    [DVec3::new(0.15, 1.25, 0.5), DVec3::new(-0.2, 1.1, 0.45)],
-                ),
-            ),
-            (
-                "arm up, arm across",
-                drawn(
-                    s,
-                    [lf, rf],
-                    [DVec3::new(0.3, 1.85, 0.1), DVec3::new(0.1, 1.1, 0.3)],
-                ),
-            ),
-            (
-                "a step, a hand forward",
-                drawn(
-                    s,
-                    [
-                        lf + DVec3::new(0.0, 0.0, 0.3),
-                        rf - DVec3::new(0.0, 0.0, 0.15),
-                    ],
-                    [DVec3::new(0.25, 1.0, 0.55), DVec3::new(-0.3, 0.85, -0.1)],
-                ),
-            ),
-        ]
+    /// The round-trip test's four postures (drawn as the test draws them).
+    fn tuned_postures(&self) -> Vec<(&'static str, Posture)> {
+        postures::postures(&self.s)
     }
 
     /// The tuned set from three views: through the true camera, and through a fitted one.

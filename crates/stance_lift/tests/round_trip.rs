@@ -8,9 +8,11 @@ use glam::{DVec2, DVec3, Vec3};
 use stance_document::Document;
 use stance_hanim::keypoints::{KeypointFinder, PoseKeypoints};
 use stance_hanim::{SkeletonOptions, default_skeleton};
-use stance_ik::{Frames, Posture, Skeleton, Solver, SolverSettings, Task};
+use stance_ik::{Frames, Posture, Skeleton};
 use stance_lift::{LiftError, ObservedPose, flip_depth, lift, solve};
 use stance_render::{HiddenKeypoints, KeypointUnits, OpenPose, OpenPosePerson, OrbitCamera};
+
+use crate::postures::{drawn, postures};
 
 const SIZE: [u32; 2] = [768, 768];
 
@@ -29,30 +31,6 @@ fn camera(yaw: f32, pitch: f32, distance: f32) -> OrbitCamera {
         distance_m: distance,
         ..OrbitCamera::default()
     }
-}
-
-/// A posture drawn from the default body: the feet pinned where `feet` put them (y at the
-/// rest ankle height: on the floor), the wrists pulled to `hands` (world), the rest below.
-fn drawn(s: &Skeleton, feet: [DVec3; 2], hands: [DVec3; 2]) -> Posture {
-    let at = |name: &str| s.joint_index(name).unwrap();
-    let mut tasks = vec![
-        Task::position(at("l_talocrural"), DVec3::ZERO, feet[0]),
-        Task::position(at("r_talocrural"), DVec3::ZERO, feet[1]),
-        Task::position(at("l_radiocarpal"), DVec3::ZERO, hands[0]).at_level(2),
-        Task::position(at("r_radiocarpal"), DVec3::ZERO, hands[1]).at_level(2),
-    ];
-    tasks.push(Task::rest_posture(s).at_level(3).with_weight(0.05));
-    let mut posture = Posture::rest(s);
-    // The drawn postures of these tests, as they were drawn before whole solves took the
-    // falling damping (the lift's figures are measured on them).
-    let mut solver = Solver::new(SolverSettings {
-        max_iterations: 300,
-        damping: stance_ik::CONSTANT_DAMPING,
-        ..SolverSettings::default()
-    })
-    .unwrap();
-    solver.solve(s, &tasks, &mut posture).unwrap();
-    posture
 }
 
 fn keypoints(s: &Skeleton, posture: &Posture) -> PoseKeypoints {
@@ -90,44 +68,6 @@ fn worst_px(a: &OpenPosePerson, b: &OpenPosePerson) -> (f64, usize) {
         }
     }
     (worst, count)
-}
-
-/// The postures of the round trip: standing, reaching toward the camera with both hands, one
-/// arm up and one across the body, a step with a hand forward.
-fn postures(s: &Skeleton) -> Vec<(&'static str, Posture)> {
-    let rest = Frames::new(s, &Posture::rest(s));
-    let at = |name: &str| rest.joint_position[s.joint_index(name).unwrap()];
-    let (lf, rf) = (at("l_talocrural"), at("r_talocrural"));
-    vec![
-        ("standing", Posture::rest(s)),
-        (
-            "hands toward the camera",
-            drawn(
-                s,
-                [lf, rf],
-                [DVec3::new(0.15, 1.25, 0.5), DVec3::new(-0.2, 1.1, 0.45)],
-            ),
-        ),
-        (
-            "arm up, arm across",
-            drawn(
-                s,
-                [lf, rf],
-                [DVec3::new(0.3, 1.85, 0.1), DVec3::new(0.1, 1.1, 0.3)],
-            ),
-        ),
-        (
-            "a step, a hand forward",
-            drawn(
-                s,
-                [
-                    lf + DVec3::new(0.0, 0.0, 0.3),
-                    rf - DVec3::new(0.0, 0.0, 0.15),
-                ],
-                [DVec3::new(0.25, 1.0, 0.55), DVec3::new(-0.3, 0.85, -0.1)],
-            ),
-        ),
-    ]
 }
 
 /// Catches a lift whose keypoints do not land back on their pixels (a task on the wrong
