@@ -31,7 +31,7 @@ use std::time::Instant;
 use glam::{DVec3, Vec3};
 use stance_hanim::keypoints::KeypointFinder;
 use stance_hanim::{SkeletonOptions, default_skeleton};
-use stance_ik::{Frames, Posture, Skeleton, Solver, SolverSettings, Task};
+use stance_ik::{Frames, Posture, Skeleton, SolverSettings};
 use stance_lift::{ObservedPose, lift};
 use stance_render::{HiddenKeypoints, OpenPosePerson, OrbitCamera};
 
@@ -40,43 +40,16 @@ mod postures;
 
 const SIZE: [u32; 2] = [768, 768];
 
-/// A posture with the feet pinned and the wrists pulled to `hands`, as the round-trip test
-/// draws them.
-fn drawn(s: &Skeleton, feet: [DVec3; 2], hands: [DVec3; 2]) -> Posture {
-    drawn_with_pelvis(s, feet, hands, None)
-}
-
-/// [`drawn`], the root pulled to `pelvis` too (under the wrists, over the rest posture): a
-/// crouch or a seat.
+/// A posture with the feet pinned and the wrists pulled to `hands`, the root to `pelvis`
+/// when given (a crouch or a seat), drawn with the default damping (the random families'
+/// draw; the round trip's own postures take the test's, `postures::drawn`).
 fn drawn_with_pelvis(
     s: &Skeleton,
     feet: [DVec3; 2],
     hands: [DVec3; 2],
     pelvis: Option<DVec3>,
 ) -> Posture {
-    let at = |name: &str| s.joint_index(name).unwrap();
-    let mut tasks = vec![
-        Task::position(at("l_talocrural"), DVec3::ZERO, feet[0]),
-        Task::position(at("r_talocrural"), DVec3::ZERO, feet[1]),
-        Task::position(at("l_radiocarpal"), DVec3::ZERO, hands[0]).at_level(2),
-        Task::position(at("r_radiocarpal"), DVec3::ZERO, hands[1]).at_level(2),
-    ];
-    // The rest posture below all (at 3 without a pelvis: the first family's draw unchanged).
-    let rest_level = if let Some(pelvis) = pelvis {
-        tasks.push(Task::position(at("humanoid_root"), DVec3::ZERO, pelvis).at_level(3));
-        4
-    } else {
-        3
-    };
-    tasks.push(Task::rest_posture(s).at_level(rest_level).with_weight(0.05));
-    let mut posture = Posture::rest(s);
-    let mut solver = Solver::new(SolverSettings {
-        max_iterations: 300,
-        ..SolverSettings::default()
-    })
-    .unwrap();
-    solver.solve(s, &tasks, &mut posture).unwrap();
-    posture
+    postures::drawn_with(s, feet, hands, pelvis, SolverSettings::default())
 }
 
 /// The random standing family's seed when none is given: the draw held out of the lift's
@@ -128,7 +101,7 @@ fn random_posture(s: &Skeleton, feet: [DVec3; 2], random: &mut Random) -> Postur
     let feet = [foot(feet[0], &mut within), foot(feet[1], &mut within)];
     let mut hand = || DVec3::new(within(-0.6, 0.6), within(0.6, 1.9), within(-0.3, 0.6));
     let hands = [hand(), hand()];
-    drawn(s, feet, hands)
+    drawn_with_pelvis(s, feet, hands, None)
 }
 
 /// The second random family's kinds, drawn in turn.
@@ -156,7 +129,7 @@ fn kind_posture(
                 DVec3::new(within(0.15, 0.7), within(1.7, 2.2), within(-0.2, 0.4)),
                 DVec3::new(within(-0.7, -0.15), within(1.7, 2.2), within(-0.2, 0.4)),
             ];
-            drawn(s, feet, hands)
+            drawn_with_pelvis(s, feet, hands, None)
         }
         1 => {
             let feet = [

@@ -8,6 +8,25 @@ use stance_ik::{Frames, Posture, Skeleton, Solver, SolverSettings, Task};
 /// A posture drawn from the default body: the feet pinned where `feet` put them (y at the
 /// rest ankle height: on the floor), the wrists pulled to `hands` (world), the rest below.
 pub fn drawn(s: &Skeleton, feet: [DVec3; 2], hands: [DVec3; 2]) -> Posture {
+    // The drawn postures of these tests, as they were drawn before whole solves took the
+    // falling damping (the lift's figures are measured on them).
+    let settings = SolverSettings {
+        damping: stance_ik::CONSTANT_DAMPING,
+        ..SolverSettings::default()
+    };
+    drawn_with(s, feet, hands, None, settings)
+}
+
+/// A posture with the feet pinned at `feet` (level 1), the wrists pulled to `hands` (level
+/// 2), the root to `pelvis` when given (level 3: a crouch or a seat) and the rest posture
+/// below all, solved from rest with `settings` (up to 300 iterations).
+pub fn drawn_with(
+    s: &Skeleton,
+    feet: [DVec3; 2],
+    hands: [DVec3; 2],
+    pelvis: Option<DVec3>,
+    settings: SolverSettings,
+) -> Posture {
     let at = |name: &str| s.joint_index(name).unwrap();
     let mut tasks = vec![
         Task::position(at("l_talocrural"), DVec3::ZERO, feet[0]),
@@ -15,14 +34,17 @@ pub fn drawn(s: &Skeleton, feet: [DVec3; 2], hands: [DVec3; 2]) -> Posture {
         Task::position(at("l_radiocarpal"), DVec3::ZERO, hands[0]).at_level(2),
         Task::position(at("r_radiocarpal"), DVec3::ZERO, hands[1]).at_level(2),
     ];
-    tasks.push(Task::rest_posture(s).at_level(3).with_weight(0.05));
+    let rest_level = if let Some(pelvis) = pelvis {
+        tasks.push(Task::position(at("humanoid_root"), DVec3::ZERO, pelvis).at_level(3));
+        4
+    } else {
+        3
+    };
+    tasks.push(Task::rest_posture(s).at_level(rest_level).with_weight(0.05));
     let mut posture = Posture::rest(s);
-    // The drawn postures of these tests, as they were drawn before whole solves took the
-    // falling damping (the lift's figures are measured on them).
     let mut solver = Solver::new(SolverSettings {
         max_iterations: 300,
-        damping: stance_ik::CONSTANT_DAMPING,
-        ..SolverSettings::default()
+        ..settings
     })
     .unwrap();
     solver.solve(s, &tasks, &mut posture).unwrap();
