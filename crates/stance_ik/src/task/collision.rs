@@ -362,18 +362,23 @@ impl Collision {
     /// The constraints of the pair `(i, j)` into `nearest` where its boxes and bounding
     /// spheres come within its reach.
     fn offer_pair(&self, placed: &[Placed], i: usize, j: usize, nearest: &mut Nearest) {
-        let capsules = &self.capsules;
-        let (Some(a), Some(b), Some(pa), Some(pb)) = (
-            capsules.get(i),
-            capsules.get(j),
-            placed.get(i),
-            placed.get(j),
-        ) else {
-            return;
-        };
-        if pa.near(pb, nearest.reach()) {
+        if let Some([(a, pa), (b, pb)]) = self.near_pair(placed, i, j, nearest.reach()) {
             pair_constraints(a, pa.ends, b, pb.ends, nearest);
         }
+    }
+
+    /// The capsules `i` and `j` with their placements, where their boxes and bounding
+    /// spheres come within `reach` of each other.
+    fn near_pair<'a>(
+        &'a self,
+        placed: &'a [Placed],
+        i: usize,
+        j: usize,
+        reach: f64,
+    ) -> Option<[(&'a Capsule, &'a Placed); 2]> {
+        let (a, b) = (self.capsules.get(i)?, self.capsules.get(j)?);
+        let (pa, pb) = (placed.get(i)?, placed.get(j)?);
+        pa.near(pb, reach).then_some([(a, pa), (b, pb)])
     }
 
     /// The floor's constraints into `nearest`: each floor capsule's lower end against
@@ -716,16 +721,7 @@ impl PairSink for ListSink {
     }
 
     fn pair(&mut self, task: &Collision, placed: &[Placed], i: usize, j: usize) {
-        let capsules = task.capsules();
-        let (Some(a), Some(b), Some(pa), Some(pb)) = (
-            capsules.get(i),
-            capsules.get(j),
-            placed.get(i),
-            placed.get(j),
-        ) else {
-            return;
-        };
-        if pa.near(pb, self.reach) {
+        if let Some([(a, pa), (b, pb)]) = task.near_pair(placed, i, j, self.reach) {
             let distance = surface_distance(a, pa.ends, b, pb.ends).0;
             if distance < self.reach {
                 self.pairs.push((i, j, distance));
